@@ -1,0 +1,194 @@
+"""Design-level analysis of the arm: torque functions, stiffness, maximum load.
+
+Reproduces the design figures of thesis chapter 2 as data:
+
+* torque functions m_tau,i over the working area (fig. 2.11);
+* joint stiffness (2.18) over the working area with static Delta-p pressures;
+* the maximum load the arm can hold anywhere (fig. 2.15, Appendix A.4).
+
+All functions return result objects holding pandas DataFrames; plotting lives
+in :mod:`ppamsafety.report.figures` (``result.plot()`` delegates there).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+from ._validation import check_int, check_range
+from .params.inertia import LINK_PRIORS, RADIUS_OF_GYRATION, LinkInertia
+from .plant import geometry as geo
+from .plant import pneumatics as pn
+from .plant import torque
+from .units import BAR, DEG
+
+
+def _grid(arm, n1: int, n2: int):
+    n1 = check_int("n1", n1, 2, 2000)
+    n2 = check_int("n2", n2, 2, 2000)
+    g = arm.geometry
+    q1, q2 = np.meshgrid(np.linspace(g.q1_min, g.q1_max, n1),
+                         np.linspace(g.q2_min, g.q2_max, n2), indexing="ij")
+    return np.stack([q1.ravel(), q2.ravel()], axis=-1)
+
+
+@dataclass(frozen=True)
+class TorqueFunctions:
+    """Torque functions along the driven joint (fig. 2.11).
+
+    ``data`` columns: ``group`` (1..4), ``angle_rad`` (q1 for groups 1-2, q2
+    for 3-4), ``m_tau_Nm_per_Pa``, ``eps`` (contraction).
+    """
+
+    data: pd.DataFrame
+
+    def to_pandas(self) -> pd.DataFrame:
+        return self.data.copy()
+
+    def plot(self, **kwargs):
+        from .report.figures import plot_torque_functions
+        return plot_torque_functions(self, **kwargs)
+
+
+def torque_function_curves(arm, *, n: int = 201) -> TorqueFunctions:
+    """Torque functions m_tau,i over the working range of their joint."""
+    n = check_int("n", n, 2, 100000)
+    g = arm.geometry
+    q1 = np.linspace(g.q1_min, g.q1_max, n)
+    q2 = np.linspace(g.q2_min, g.q2_max, n)
+    qa = np.stack([q1, np.full(n, -80 * DEG)], -1)
+    qb = np.stack([np.full(n, 50 * DEG), q2], -1)
+    rows = []
+    for k in range(4):
+        q = qa if k < 2 else qb
+        ang = q1 if k < 2 else q2
+        rows.append(pd.DataFrame({"group": k + 1, "angle_rad": ang,
+                                  "m_tau_Nm_per_Pa": torque.torque_functions(q, arm)[:, k],
+                                  "eps": geo.contractions(q, arm)[:, k]}))
+    return TorqueFunctions(pd.concat(rows, ignore_index=True))
+
+
+@dataclass(frozen=True)
+class StiffnessMap:
+    """Joint stiffness (2.18) over the working area.
+
+    ``data`` columns: ``q1_rad``, ``q2_rad``, ``K1_Nm_per_rad``,
+    ``K2_Nm_per_rad``, ``p1_Pa`` .. ``p4_Pa`` (static Delta-p pressures,
+    clipped to [0, p_max]) and ``holdable`` (True where the static pressures
+    are within [0, p_max] without clipping, i.e. the Delta-p approach with the
+    chosen p_m can hold the arm there).
+    """
+
+    data: pd.DataFrame
+
+    def to_pandas(self) -> pd.DataFrame:
+        return self.data.copy()
+
+    def plot(self, **kwargs):
+        from .report.figures import plot_stiffness_map
+        return plot_stiffness_map(self, **kwargs)
+
+
+def stiffness_map(arm, *, n1: int = 61, n2: int = 61) -> StiffnessMap:
+    """Joint stiffness with static gravity-compensation pressures on a grid."""
+    q = _grid(arm, n1, n2)
+    p = pn.static_pressures(q, arm)
+    pmax = arm.pneumatics.p_max
+    holdable = np.all((p >= 0) & (p <= pmax), axis=1)
+    pc = np.clip(p, 0.0, pmax)
+    K = pn.joint_stiffness(q, pc, arm)
+    df = pd.DataFrame({"q1_rad": q[:, 0], "q2_rad": q[:, 1], "K1_Nm_per_rad": K[:, 0],
+                       "K2_Nm_per_rad": K[:, 1]})
+    for i in range(4):
+        df[f"p{i + 1}_Pa"] = pc[:, i]
+    df["holdable"] = holdable
+    return StiffnessMap(df)
+
+
+def cad_links() -> LinkInertia:
+    """Link mass properties as the design chapter knew them (text masses + CAD CoG).
+
+    m1 = 1.5 kg, m2 = 1.05 kg (§6.3.3), centres of gravity of Table 2.2;
+    inertias from the slender-bar radii of gyration.  Used to recompute the
+    maximum-load map the way §2.3.3.5 did (with CAD estimates).
+    """
+    p = {k: v[0] for k, v in LINK_PRIORS.items()}
+    k1, k2 = RADIUS_OF_GYRATION
+    return LinkInertia(m1=p["m1"], m2=p["m2"], LG1=p["LG1"], dG1=p["dG1"], LG2=p["LG2"],
+                       dG2=p["dG2"], IG1=p["m1"] * k1 ** 2, IG2=p["m2"] * k2 ** 2)
+
+
+@dataclass(frozen=True)
+class MaxLoadMap:
+    """Maximum load (A.43)-(A.45) over the working area.
+
+    ``data`` columns: ``q1_rad``, ``q2_rad``, ``xL_m``, ``yL_m`` (load point
+    A_L), ``M1_kg`` (limit of joint 1), ``M2_kg`` (limit of joint 2 with the
+    carrying muscle), ``carrying_2`` (3 or 4), ``M_max_kg`` = min(M1, M2).
+    """
+
+    data: pd.DataFrame
+    p_max: float
+
+    def to_pandas(self) -> pd.DataFrame:
+        return self.data.copy()
+
+    @property
+    def minimum(self) -> float:
+        """The arm's true maximum load: the minimum of M_max over the working area [kg]."""
+        return float(self.data["M_max_kg"].min())
+
+    @property
+    def argmin(self) -> tuple:
+        """Configuration (q1, q2) [rad] where the minimum occurs."""
+        r = self.data.loc[self.data["M_max_kg"].idxmin()]
+        return float(r["q1_rad"]), float(r["q2_rad"])
+
+    def plot(self, **kwargs):
+        from .report.figures import plot_max_load
+        return plot_max_load(self, **kwargs)
+
+
+def max_load_map(arm, *, links: LinkInertia | None = None, p_max: float | None = None,
+                 n1: int = 171, n2: int = 201) -> MaxLoadMap:
+    """Maximum load at the load point A_L anywhere in the working area (§2.3.3.5).
+
+    The carrying muscle (1 for joint 1; 3, or 4 where (A.44) is negative) is
+    at ``p_max``, its antagonist at zero gauge pressure.
+
+    Parameters
+    ----------
+    arm : ArmParameters
+    links : LinkInertia, optional
+        Mass properties; default the plant's.  Pass :func:`cad_links` for the
+        design-time (CAD) values the thesis used.
+    p_max : float, optional
+        Carrying pressure [Pa]; default ``arm.pneumatics.p_max`` (3 bar).
+    n1, n2 : int
+        Grid size over q1 and q2.
+    """
+    links = arm.links if links is None else links
+    p_max = arm.pneumatics.p_max if p_max is None else check_range(
+        "p_max", p_max, 0.0, 10 * BAR, lo_open=True, unit="Pa")
+    g = arm.geometry
+    grav = 9.81
+    q = _grid(arm, n1, n2)
+    q1, q12 = q[:, 0], q[:, 0] + q[:, 1]
+    c1, s1, c12, s12 = np.cos(q1), np.sin(q1), np.cos(q12), np.sin(q12)
+    xS = g.L1 * c1
+    xG1 = links.LG1 * c1 + links.dG1 * s1
+    xG2 = xS + links.LG2 * c12 + links.dG2 * s12
+    xL = xS + g.LL * c12 + g.dL * s12
+    yL = g.L1 * s1 + g.LL * s12 - g.dL * c12
+    mt = torque.torque_functions(q, arm)
+    M1 = (p_max * mt[:, 0] - grav * (links.m1 * xG1 + links.m2 * xG2)) / (grav * xL)
+    M2a = (p_max * mt[:, 2] - grav * links.m2 * (xG2 - xS)) / (grav * (xL - xS))
+    M2b = (p_max * mt[:, 3] - grav * links.m2 * (xG2 - xS)) / (grav * (xL - xS))
+    use_b = M2a < 0
+    M2 = np.where(use_b, M2b, M2a)
+    df = pd.DataFrame({"q1_rad": q[:, 0], "q2_rad": q[:, 1], "xL_m": xL, "yL_m": yL,
+                       "M1_kg": M1, "M2_kg": M2, "carrying_2": np.where(use_b, 4, 3),
+                       "M_max_kg": np.minimum(M1, M2)})
+    return MaxLoadMap(df, p_max)

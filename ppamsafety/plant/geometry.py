@@ -1,0 +1,266 @@
+"""Arm geometry: attachment points, muscle lengths, lever arms, kinematics.
+
+Implements thesis Appendix A: attachment points (A.13)-(A.22), muscle group
+lengths (A.31)-(A.34), connection lengths (A.35)-(A.42), and the lever arm
+of each group about its joint, (e_i x OA_i2) . 1_z as in (A.1)-(A.4).  Also
+the forward kinematics and Jacobian of the tool centre point (TCP, end of
+link 2) and the elbow-up inverse kinematics.
+
+The low-level functions are ``numba.njit`` kernels working on scalars and the
+packed parameter vector of :mod:`ppamsafety.plant.layout`; the public
+functions accept arrays of configurations ``q`` with shape (..., 2) [rad]
+and an :class:`~ppamsafety.params.ArmParameters`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from .._jit import kernel, leaf
+
+from .._validation import as_float_array
+from . import layout as lay
+from .layout import (D12, D22, D32, D33, D42, D43, DL, L1, L2, L12, L22, L32, L33, L42, L43,
+                     LL, X11, X21, Y11, Y21)
+
+
+@leaf
+def group_points(k, c1, s1, c12, s12, P):
+    """Attachment points of muscle group ``k`` (0..3) and the pivot it turns.
+
+    Returns ``(ax, ay, bx, by, px, py)``: the proximal point A (base for
+    groups 1-2, upper arm for 3-4), the distal point B and the pivot P of the
+    joint that moves B relative to A (O for groups 1-2, S for 3-4) [m].
+    Eqs. (A.13)-(A.20); ``c1 = cos q1``, ``c12 = cos(q1 + q2)`` etc.
+    """
+    sx = P[L1] * c1
+    sy = P[L1] * s1
+    if k == 0:
+        return (-P[X11], P[Y11], c1 * P[L12] - s1 * P[D12], s1 * P[L12] + c1 * P[D12], 0.0, 0.0)
+    if k == 1:
+        return (P[X21], -P[Y21], c1 * P[L22] + s1 * P[D22], s1 * P[L22] - c1 * P[D22], 0.0, 0.0)
+    if k == 2:
+        return (c1 * P[L32] - s1 * P[D32], s1 * P[L32] + c1 * P[D32],
+                sx + c12 * P[L33] - s12 * P[D33], sy + s12 * P[L33] + c12 * P[D33], sx, sy)
+    return (c1 * P[L42] + s1 * P[D42], s1 * P[L42] - c1 * P[D42],
+            sx + c12 * P[L43] + s12 * P[D43], sy + s12 * P[L43] - c12 * P[D43], sx, sy)
+
+
+@leaf
+def group_length_lever(k, c1, s1, c12, s12, P):
+    """Length d, lever arm h and dh/dq of muscle group ``k``.
+
+    ``h = (e x r) . 1_z`` with ``e`` the unit vector from A to B and ``r`` the
+    vector from the pivot to B: the torque about the joint per newton of
+    muscle pull, (A.1)-(A.4).  By virtual work ``h = -dd/dq``; with
+    ``d'' = (|r|^2 - u.r - d'^2)/d`` (u = B - A) we get ``dh/dq = -d''``.
+    Units: m, m, m/rad.
+    """
+    ax, ay, bx, by, px, py = group_points(k, c1, s1, c12, s12, P)
+    ux = bx - ax
+    uy = by - ay
+    rx = bx - px
+    ry = by - py
+    d = math.sqrt(ux * ux + uy * uy)
+    h = (ux * ry - uy * rx) / d
+    dd = -h
+    ddd = (rx * rx + ry * ry - (ux * rx + uy * ry) - dd * dd) / d
+    return d, h, -ddd
+
+
+@leaf
+def tcp_position(q1, q2, P):
+    """TCP (end of link 2) position (x, y) [m]."""
+    return (P[L1] * math.cos(q1) + P[L2] * math.cos(q1 + q2),
+            P[L1] * math.sin(q1) + P[L2] * math.sin(q1 + q2))
+
+
+@leaf
+def tcp_jacobian(q1, q2, P):
+    """TCP Jacobian entries (j11, j12, j21, j22) [m/rad]."""
+    s1, c1 = math.sin(q1), math.cos(q1)
+    s12, c12 = math.sin(q1 + q2), math.cos(q1 + q2)
+    return (-P[L1] * s1 - P[L2] * s12, -P[L2] * s12, P[L1] * c1 + P[L2] * c12, P[L2] * c12)
+
+
+@leaf
+def load_point(q1, q2, P):
+    """Load point A_L (A.21) [m]."""
+    c1, s1 = math.cos(q1), math.sin(q1)
+    c12, s12 = math.cos(q1 + q2), math.sin(q1 + q2)
+    return (P[L1] * c1 + c12 * P[LL] + s12 * P[DL], P[L1] * s1 + s12 * P[LL] - c12 * P[DL])
+
+
+@kernel
+def _lengths_many(q, P, d, h, dh):
+    for n in range(q.shape[0]):
+        c1, s1 = math.cos(q[n, 0]), math.sin(q[n, 0])
+        c12, s12 = math.cos(q[n, 0] + q[n, 1]), math.sin(q[n, 0] + q[n, 1])
+        for k in range(4):
+            d[n, k], h[n, k], dh[n, k] = group_length_lever(k, c1, s1, c12, s12, P)
+
+
+@kernel
+def _points_many(q, P, out):
+    for n in range(q.shape[0]):
+        c1, s1 = math.cos(q[n, 0]), math.sin(q[n, 0])
+        c12, s12 = math.cos(q[n, 0] + q[n, 1]), math.sin(q[n, 0] + q[n, 1])
+        for k in range(4):
+            ax, ay, bx, by, _, _ = group_points(k, c1, s1, c12, s12, P)
+            out[n, 2 * k, 0], out[n, 2 * k, 1] = ax, ay
+            out[n, 2 * k + 1, 0], out[n, 2 * k + 1, 1] = bx, by
+
+
+def _flat_q(q):
+    q = as_float_array("q", q, shape_tail=(2,))
+    return q.reshape(-1, 2), q.shape[:-1]
+
+
+def attachment_points(q, arm) -> np.ndarray:
+    """Muscle attachment points for configurations ``q`` [rad], shape (..., 2).
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 8, 2)
+        Points in the order A11, A12, A21, A22, A32, A33, A42, A43 [m].
+    """
+    qf, lead = _flat_q(q)
+    out = np.empty((qf.shape[0], 8, 2))
+    _points_many(qf, lay.pack(arm), out)
+    return out.reshape(lead + (8, 2))
+
+
+def muscle_lengths(q, arm, *, with_derivatives: bool = False):
+    """Muscle group lengths d_i(q) (A.31)-(A.34) [m], shape (..., 4).
+
+    With ``with_derivatives=True`` also returns the lever arms h_i = -dd_i/dq
+    [m] and dh_i/dq [m/rad] (derivative with respect to the joint the group
+    drives: q1 for groups 1-2, q2 for groups 3-4).
+    """
+    qf, lead = _flat_q(q)
+    n = qf.shape[0]
+    d, h, dh = np.empty((n, 4)), np.empty((n, 4)), np.empty((n, 4))
+    _lengths_many(qf, lay.pack(arm), d, h, dh)
+    shp = lead + (4,)
+    if with_derivatives:
+        return d.reshape(shp), h.reshape(shp), dh.reshape(shp)
+    return d.reshape(shp)
+
+
+def lever_arms(q, arm) -> np.ndarray:
+    """Lever arms (e_i x OA_i) . 1_z of the four groups [m], shape (..., 4)."""
+    return muscle_lengths(q, arm, with_derivatives=True)[1]
+
+
+def design_connection_lengths(P, geometry, eps_min: float, eps_max: float) -> np.ndarray:
+    """Connection lengths L_conn,i of (A.35)-(A.38) [m].
+
+    Groups 1 and 3 reach ``eps_min`` at their longest length in the working
+    area, groups 2 and 4 reach ``eps_max`` at their shortest.  The extremes
+    (A.39)-(A.42) are found on a dense grid refined by a bounded scalar
+    search.  Lengths of groups 1-2 depend on q1 only, of 3-4 on q2 only.
+    """
+    from scipy.optimize import minimize_scalar
+
+    g = geometry
+    out = np.empty(4)
+    for k, (lo, hi, sign, eps) in enumerate((
+            (g.q1_min, g.q1_max, -1.0, eps_min), (g.q1_min, g.q1_max, 1.0, eps_max),
+            (g.q2_min, g.q2_max, -1.0, eps_min), (g.q2_min, g.q2_max, 1.0, eps_max))):
+        joint = 0 if k < 2 else 1
+        other = 0.5 * (g.q2_min + g.q2_max) if joint == 0 else 0.5 * (g.q1_min + g.q1_max)
+
+        def lengths(x, k=k, joint=joint, other=other):
+            x = np.atleast_1d(np.asarray(x, dtype=float))
+            q = np.empty((x.size, 2))
+            q[:, joint], q[:, 1 - joint] = x, other
+            d, h, dh = np.empty((x.size, 4)), np.empty((x.size, 4)), np.empty((x.size, 4))
+            _lengths_many(q, P, d, h, dh)
+            return sign * d[:, k]
+
+        grid = np.linspace(lo, hi, 2001)
+        vals = lengths(grid)
+        j = int(np.argmin(vals))
+        a, b = grid[max(j - 1, 0)], grid[min(j + 1, grid.size - 1)]
+        res = minimize_scalar(lambda x: float(lengths(x)[0]), bounds=(a, b), method="bounded",
+                              options={"xatol": 1e-12})
+        extreme = min(vals[j], res.fun) * sign
+        nm, l0 = P[lay.NM + k], P[lay.L0 + k]
+        out[k] = extreme - nm * l0 * (1.0 - eps)
+    return out
+
+
+def connection_lengths(arm) -> np.ndarray:
+    """Connection lengths L_conn,i of the arm (Table A.1) [m], shape (4,)."""
+    return np.array(lay.pack(arm)[lay.LCONN:lay.LCONN + 4])
+
+
+def contractions(q, arm) -> np.ndarray:
+    """Contraction of one muscle in each group, eq. (2.12), shape (..., 4) [-]."""
+    P = lay.pack(arm)
+    d = muscle_lengths(q, arm)
+    nm, l0, lc = P[lay.NM:lay.NM + 4], P[lay.L0:lay.L0 + 4], P[lay.LCONN:lay.LCONN + 4]
+    return (lc + nm * l0 - d) / (nm * l0)
+
+
+@kernel
+def _fk_many(q, P, out, jac):
+    for n in range(q.shape[0]):
+        out[n, 0], out[n, 1] = tcp_position(q[n, 0], q[n, 1], P)
+        jac[n, 0, 0], jac[n, 0, 1], jac[n, 1, 0], jac[n, 1, 1] = tcp_jacobian(q[n, 0], q[n, 1], P)
+
+
+def forward_kinematics(q, arm) -> np.ndarray:
+    """TCP position for configurations ``q`` [rad], shape (..., 2) [m]."""
+    qf, lead = _flat_q(q)
+    out, jac = np.empty((qf.shape[0], 2)), np.empty((qf.shape[0], 2, 2))
+    _fk_many(qf, lay.pack(arm), out, jac)
+    return out.reshape(lead + (2,))
+
+
+def jacobian(q, arm) -> np.ndarray:
+    """TCP Jacobian dr/dq for configurations ``q``, shape (..., 2, 2) [m/rad]."""
+    qf, lead = _flat_q(q)
+    out, jac = np.empty((qf.shape[0], 2)), np.empty((qf.shape[0], 2, 2))
+    _fk_many(qf, lay.pack(arm), out, jac)
+    return jac.reshape(lead + (2, 2))
+
+
+def inverse_kinematics(r, arm) -> np.ndarray:
+    """Elbow-up (q2 < 0) inverse kinematics of the TCP.
+
+    Parameters
+    ----------
+    r : array_like, shape (..., 2)
+        TCP positions [m].
+    arm : ArmParameters
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 2)
+        Joint angles [rad] with q2 in (-pi, 0).
+
+    Raises
+    ------
+    ValueError
+        If a point is out of reach (|r| > L1 + L2 or < |L1 - L2|).
+    """
+    r = as_float_array("r", r, shape_tail=(2,))
+    a, b = arm.geometry.L1, arm.geometry.L2
+    x, y = r[..., 0], r[..., 1]
+    c2 = (x ** 2 + y ** 2 - a ** 2 - b ** 2) / (2 * a * b)
+    if np.any(np.abs(c2) > 1.0):
+        raise ValueError("inverse_kinematics: a target point is out of reach of the arm "
+                         f"(distance from O must be in [{abs(a - b):g}, {a + b:g}] m)")
+    q2 = -np.arccos(c2)
+    q1 = np.arctan2(y, x) - np.arctan2(b * np.sin(q2), a + b * np.cos(q2))
+    return np.stack([q1, q2], axis=-1)
+
+
+def in_working_area(q, arm) -> np.ndarray:
+    """True where q lies inside the working area (2.6)-(2.7)."""
+    q = as_float_array("q", q, shape_tail=(2,))
+    g = arm.geometry
+    return ((q[..., 0] >= g.q1_min) & (q[..., 0] <= g.q1_max)
+            & (q[..., 1] >= g.q2_min) & (q[..., 1] <= g.q2_max))

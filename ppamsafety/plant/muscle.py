@@ -1,0 +1,134 @@
+"""PPAM force law (3.9) and the volume function derived from it.
+
+Force of one muscle (all muscles of a group are in series, so this is also
+the group force)::
+
+    F = p f(eps),   f(eps) = max(0, a0/eps + a1 + a2 eps + a3 eps^2 + a4 eps^3)
+
+with p the gauge pressure [Pa] and f in N/Pa = m^2.  The polynomial fit goes
+negative beyond full contraction; a muscle cannot push, so f is clipped at
+zero (the contraction where this happens, ``EPS_F0`` in the packed vector, is
+where the volume is maximal).
+
+Volume.  The thesis gives no volume coefficients (2.5).  Eq. (2.1),
+F = -p dV/dl with l = l0 (1 - eps), gives for one muscle::
+
+    dV/deps = l0 F/p = l0 f(eps)
+
+so V(eps) = V(eps_a) + l0 * integral_{eps_a}^{eps} f, integrated in closed
+form (a0 ln(eps/eps_a) + a1 (eps - eps_a) + ...).  The anchor V(eps_a) is
+explained in :func:`ppamsafety.plant.layout.anchor_volume`.  A group of
+n_m muscles holds n_m V.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from .._jit import kernel, leaf
+
+from .._validation import as_float_array, check_int
+from . import layout as lay
+from .layout import COEF, EPS_F0, EPS_FLOOR, L0, V_C
+
+
+@leaf
+def _poly(k, e, P):
+    b = COEF + 5 * k
+    return P[b] / e + P[b + 1] + e * (P[b + 2] + e * (P[b + 3] + e * P[b + 4]))
+
+
+@leaf
+def force_per_pressure(k, eps, P):
+    """f_k(eps) of group ``k`` [N/Pa]: muscle force per unit gauge pressure."""
+    e = max(eps, EPS_FLOOR)
+    if e >= P[EPS_F0 + k]:
+        return 0.0
+    return max(_poly(k, e, P), 0.0)
+
+
+@leaf
+def dforce_deps(k, eps, P):
+    """d f_k / d eps [N/Pa] (zero where f is clipped)."""
+    e = max(eps, EPS_FLOOR)
+    if e >= P[EPS_F0 + k] or eps < EPS_FLOOR or _poly(k, e, P) <= 0.0:
+        return 0.0
+    b = COEF + 5 * k
+    return -P[b] / (e * e) + P[b + 2] + e * (2.0 * P[b + 3] + 3.0 * e * P[b + 4])
+
+
+@leaf
+def integral(k, e, P):
+    """Antiderivative of the force polynomial without the constant (log form)."""
+    b = COEF + 5 * k
+    e2 = e * e
+    return (P[b] * math.log(e) + P[b + 1] * e + P[b + 2] * e2 / 2.0
+            + P[b + 3] * e2 * e / 3.0 + P[b + 4] * e2 * e2 / 4.0)
+
+
+@leaf
+def muscle_volume(k, eps, P):
+    """Volume of one muscle of group ``k`` at contraction ``eps`` [m^3].
+
+    Satisfies dV/deps = l0 f_k(eps) exactly (also in the clipped regions:
+    constant beyond the zero-force contraction, linear below the floor).
+    """
+    e = min(max(eps, EPS_FLOOR), P[EPS_F0 + k])
+    v = P[V_C + k] + P[L0 + k] * integral(k, e, P)
+    if eps < EPS_FLOOR:
+        v += P[L0 + k] * force_per_pressure(k, EPS_FLOOR, P) * (eps - EPS_FLOOR)
+    return v
+
+
+@kernel
+def _eval_many(kind, k, eps, P, out):
+    for n in range(eps.shape[0]):
+        if kind == 0:
+            out[n] = force_per_pressure(k, eps[n], P)
+        elif kind == 1:
+            out[n] = dforce_deps(k, eps[n], P)
+        else:
+            out[n] = muscle_volume(k, eps[n], P)
+
+
+def _evaluate(kind, group, eps, arm):
+    k = check_int("group", group, 1, 4) - 1
+    e = as_float_array("eps", eps)
+    flat = np.ascontiguousarray(e.reshape(-1))
+    out = np.empty_like(flat)
+    _eval_many(kind, k, flat, lay.pack(arm), out)
+    return out.reshape(e.shape)
+
+
+def muscle_force(group: int, eps, pressure, arm) -> np.ndarray:
+    """Force of one muscle (= the group force) by (3.9) [N].
+
+    Parameters
+    ----------
+    group : int
+        Muscle group 1..4.
+    eps : array_like
+        Contraction [-].
+    pressure : array_like
+        Gauge pressure [Pa] (broadcast against ``eps``).
+    arm : ArmParameters
+    """
+    p = as_float_array("pressure", pressure)
+    return p * _evaluate(0, group, eps, arm)
+
+
+def force_function(group: int, eps, arm) -> np.ndarray:
+    """Force per unit gauge pressure f(eps) of one muscle [N/Pa = m^2]."""
+    return _evaluate(0, group, eps, arm)
+
+
+def muscle_volume_of(group: int, eps, arm) -> np.ndarray:
+    """Volume of one muscle of ``group`` at contraction ``eps`` [m^3]."""
+    return _evaluate(2, group, eps, arm)
+
+
+def group_volume(group: int, eps, arm) -> np.ndarray:
+    """Volume of the whole group (n_m muscles) [m^3]."""
+    n = arm.muscles.groups[check_int("group", group, 1, 4) - 1].n_muscles
+    return n * muscle_volume_of(group, eps, arm)

@@ -1,0 +1,216 @@
+"""Valves, pressure dynamics, the Delta-p approach and joint stiffness.
+
+* Valve (3.2) with static error (3.12): the delivered pressure settles at
+  v1 + v2 p_s for a set value p_s, with first-order time constant T.
+* Polytropic volume coupling (3.3)-(3.6), n = 1.4, P_atm::
+
+      dp_i/dt = (v1_i + v2_i p_s,i - p_i)/T_i - n (P_atm + p_i)/V_i dV_i/dq qd
+
+  with dV_i/dq = m_tau,i (see :mod:`ppamsafety.plant.torque`).
+* Delta-p approach (3.7): p_1,3 = p_m + Delta p, p_2,4 = p_m - Delta p.
+* Static gravity compensation (3.18)-(3.19).
+* Joint stiffness (2.18) including dp/dq of (3.4): the stiffness a fast
+  disturbance feels before the valves react::
+
+      K_j = sum_i [ n (P_atm + p_i) m_tau,i^2 / V_i - p_i d m_tau,i/dq_j ]
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from .._jit import kernel, leaf
+
+from .._validation import as_float_array, check_range
+from ..units import DEG
+from . import layout as lay
+from .dynamics import gravity_torque
+from .layout import NPOLY, PATM, PM1, PM2, PMAX, TV, V1, V2
+from .torque import torque_kernel
+
+
+@leaf
+def pressure_rates(p, u, qd1, qd2, mt, vol, P, out):
+    """Gauge-pressure derivatives of (3.6) with the static valve model [Pa/s].
+
+    ``p`` pressures [Pa], ``u`` valve set values [Pa], ``mt``/``vol`` from
+    :func:`~ppamsafety.plant.torque.torque_kernel`.
+    """
+    n = P[NPOLY]
+    for i in range(4):
+        w = qd1 if i < 2 else qd2
+        out[i] = ((P[V1 + i] + P[V2 + i] * u[i] - p[i]) / P[TV + i]
+                  - n * (P[PATM] + p[i]) * mt[i] * w / vol[i])
+
+
+@leaf
+def stiffness_from(p, mt, dmt, vol, P):
+    """Joint stiffnesses (K1, K2) of (2.18) [N m/rad] from torque-kernel outputs."""
+    n = P[NPOLY]
+    k = np.zeros(2)
+    for i in range(4):
+        j = 0 if i < 2 else 1
+        k[j] += n * (P[PATM] + p[i]) * mt[i] * mt[i] / vol[i] - p[i] * dmt[i]
+    return k[0], k[1]
+
+
+@leaf
+def set_value(i, p_desired, P):
+    """Valve set value giving ``p_desired`` by inverting (3.12), clipped to [0, p_max]."""
+    ps = (p_desired - P[V1 + i]) / P[V2 + i]
+    return min(max(ps, 0.0), P[PMAX])
+
+
+@kernel
+def delta_p_to_set_values(dp1, dp2, P, out):
+    """Delta-p approach (3.7): desired pressures p_m +- dp, clipped, then set values."""
+    pmax = P[PMAX]
+    for i in range(4):
+        pm = P[PM1] if i < 2 else P[PM2]
+        dp = dp1 if i < 2 else dp2
+        pd = pm + dp if i % 2 == 0 else pm - dp
+        out[i] = set_value(i, min(max(pd, 0.0), pmax), P)
+
+
+@kernel
+def gravity_compensation_dp(q1, q2, Pc, mt, dmt, vol):
+    """Delta-p for static gravity compensation (3.18)-(3.19) [Pa].
+
+    ``Pc`` is the controller's packed view (identified gravity terms, see
+    :func:`ppamsafety.plant.layout.controller_view`).  Scratch arrays
+    ``mt``, ``dmt``, ``vol`` of length 4 are overwritten.
+    """
+    torque_kernel(q1, q2, Pc, mt, dmt, vol)
+    g1, g2 = gravity_torque(q1, q2, Pc)
+    dp1 = (g1 - Pc[PM1] * (mt[0] + mt[1])) / (mt[0] - mt[1])
+    dp2 = (g2 - Pc[PM2] * (mt[2] + mt[3])) / (mt[2] - mt[3])
+    return dp1, dp2
+
+
+@kernel
+def _stiffness_many(q, p, P, out):
+    mt, dmt, vol = np.empty(4), np.empty(4), np.empty(4)
+    for n in range(q.shape[0]):
+        torque_kernel(q[n, 0], q[n, 1], P, mt, dmt, vol)
+        out[n, 0], out[n, 1] = stiffness_from(p[n], mt, dmt, vol, P)
+
+
+@kernel
+def _gc_many(q, Pc, out):
+    mt, dmt, vol = np.empty(4), np.empty(4), np.empty(4)
+    for n in range(q.shape[0]):
+        out[n, 0], out[n, 1] = gravity_compensation_dp(q[n, 0], q[n, 1], Pc, mt, dmt, vol)
+
+
+def joint_stiffness(q, pressures, arm) -> np.ndarray:
+    """Joint stiffness (2.18) incl. the closed-valve dp/dq terms [N m/rad].
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 2)
+        Joint angles [rad].
+    pressures : array_like, shape (..., 4)
+        Gauge pressures of groups 1..4 [Pa].
+    arm : ArmParameters
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 2)
+    """
+    q = as_float_array("q", q, shape_tail=(2,))
+    p = as_float_array("pressures", pressures, shape_tail=(4,))
+    shape = np.broadcast_shapes(q.shape[:-1], p.shape[:-1])
+    qf = np.ascontiguousarray(np.broadcast_to(q, shape + (2,)).reshape(-1, 2))
+    pf = np.ascontiguousarray(np.broadcast_to(p, shape + (4,)).reshape(-1, 4))
+    out = np.empty((qf.shape[0], 2))
+    _stiffness_many(qf, pf, lay.pack(arm), out)
+    return out.reshape(shape + (2,))
+
+
+def gravity_compensation(q, arm, *, params=None) -> np.ndarray:
+    """Delta-p of the static gravity compensation (3.18)-(3.19) [Pa], shape (..., 2).
+
+    ``params`` are the rigid-body parameters the compensation believes in;
+    default the identified static gravity terms (Table 3.1).  Pass
+    ``arm.plant_base`` for an exact compensation of the plant.
+    """
+    q = as_float_array("q", q, shape_tail=(2,))
+    Pc = lay.pack(arm, arm.model_gravity if params is None else params)
+    qf = np.ascontiguousarray(q.reshape(-1, 2))
+    out = np.empty((qf.shape[0], 2))
+    _gc_many(qf, Pc, out)
+    return out.reshape(q.shape[:-1] + (2,))
+
+
+def delta_p_pressures(dp, arm, *, clip: bool = True) -> np.ndarray:
+    """Desired pressures [p_m1 + dp1, p_m1 - dp1, p_m2 + dp2, p_m2 - dp2] [Pa] (3.7)."""
+    dp = as_float_array("dp", dp, shape_tail=(2,))
+    pm = arm.pneumatics.p_mean
+    p = np.stack([pm[0] + dp[..., 0], pm[0] - dp[..., 0], pm[1] + dp[..., 1],
+                  pm[1] - dp[..., 1]], axis=-1)
+    return np.clip(p, 0.0, arm.pneumatics.p_max) if clip else p
+
+
+def valve_pressure(set_values, arm) -> np.ndarray:
+    """Static delivered pressure p = v1 + v2 p_s (3.12) [Pa], shape (..., 4)."""
+    u = as_float_array("set_values", set_values, shape_tail=(4,))
+    v1 = np.array([v.v1 for v in arm.valves.valves])
+    v2 = np.array([v.v2 for v in arm.valves.valves])
+    return v1 + v2 * u
+
+
+def valve_set_values(pressures, arm) -> np.ndarray:
+    """Set values that deliver ``pressures`` by inverting (3.12), clipped to [0, p_max] [Pa]."""
+    p = as_float_array("pressures", pressures, shape_tail=(4,))
+    v1 = np.array([v.v1 for v in arm.valves.valves])
+    v2 = np.array([v.v2 for v in arm.valves.valves])
+    return np.clip((p - v1) / v2, 0.0, arm.pneumatics.p_max)
+
+
+def static_pressures(q, arm, *, params=None) -> np.ndarray:
+    """Gauge pressures holding ``q`` in static equilibrium with the Delta-p approach [Pa].
+
+    Uses (3.18)-(3.19) with ``params`` (default: the *plant*, so the result is
+    a true equilibrium of the simulated arm).  Not clipped, so that an
+    infeasible configuration shows up as a pressure outside [0, p_max].
+    """
+    dp = gravity_compensation(q, arm, params=arm.plant_base if params is None else params)
+    return delta_p_pressures(dp, arm, clip=False)
+
+
+def calibrate_mean_pressures(arm, *, q=(50.0 * DEG, -80.0 * DEG),
+                             target_stiffness=(43.0, 27.0)) -> tuple:
+    """Mean pressures p_m (per joint) giving a target joint stiffness.
+
+    Solves K_j(q, p(p_m)) = target_j for p_m,j, with p the static
+    gravity-compensation pressures of the plant at ``q`` (thesis §6.3.3:
+    K1 = 43, K2 = 27 Nm/rad at the step-response impact instant).
+
+    Returns
+    -------
+    tuple of 2 float
+        (p_m1, p_m2) [Pa].
+    """
+    from scipy.optimize import brentq
+
+    q = np.asarray(q, dtype=float)
+    for j, k in enumerate(target_stiffness):
+        check_range(f"target_stiffness[{j}]", k, 0.0, 1e4, lo_open=True, unit="N m/rad")
+    pm = list(arm.pneumatics.p_mean)
+    pmax = arm.pneumatics.p_max
+
+    def stiffness(j, value):
+        trial = list(pm)
+        trial[j] = value
+        a = arm.replace(pneumatics=arm.pneumatics.replace(p_mean=tuple(trial)))
+        return joint_stiffness(q, static_pressures(q, a), a)[j]
+
+    out = []
+    for j in range(2):
+        f = lambda v, j=j: stiffness(j, v) - target_stiffness[j]  # noqa: E731
+        lo, hi = 0.05 * pmax, pmax
+        if f(lo) * f(hi) > 0:
+            raise ValueError(f"calibrate_mean_pressures: stiffness {target_stiffness[j]} N m/rad "
+                             f"of joint {j + 1} is not reachable with p_m in [{lo:g}, {hi:g}] Pa")
+        out.append(brentq(f, lo, hi, xtol=1.0))
+        pm[j] = out[-1]
+    return tuple(out)

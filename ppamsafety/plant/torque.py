@@ -1,0 +1,91 @@
+"""Torque functions m_tau,i(q) (2.10), joint torques (2.17) and group volumes.
+
+The torque function of group i is its torque per unit gauge pressure::
+
+    m_tau,i(q) = f_i(eps_i(q)) * h_i(q)          [N m / Pa = m^3]
+
+with f_i the force law (3.9) and h_i = (e_i x OA_i) . 1_z the lever arm
+(A.1)-(A.4).  Joint torques are tau = [p1 m1 + p2 m2, p3 m3 + p4 m4] (2.17).
+Because dV_group/dq = n_m l0 f de/dq = f h, the torque function is also the
+volume derivative: dV_group,i/dq = m_tau,i (virtual work).
+
+The kernel :func:`torque_kernel` returns in one pass everything the plant
+needs: m_tau, its derivative along the driven joint, and the group volumes.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from .._jit import kernel, leaf
+
+from .geometry import _flat_q, group_length_lever
+from . import layout as lay
+from .layout import L0, LCONN, NM
+from .muscle import dforce_deps, force_per_pressure, muscle_volume
+
+
+@kernel
+def torque_kernel(q1, q2, P, mt, dmt, vol):
+    """:func:`torque_kernel_cs` for angles ``q1``, ``q2`` [rad]."""
+    torque_kernel_cs(math.cos(q1), math.sin(q1), math.cos(q1 + q2), math.sin(q1 + q2),
+                     P, mt, dmt, vol)
+
+
+@leaf
+def torque_kernel_cs(c1, s1, c12, s12, P, mt, dmt, vol):
+    """Fill m_tau (4) [m^3], d m_tau/dq (4) [m^3/rad] and group volumes (4) [m^3].
+
+    The derivative is along the driven joint (q1 for groups 1-2, q2 for
+    groups 3-4):  d m_tau/dq = f'(eps) h^2/(n_m l0) + f dh/dq, using
+    d eps/dq = h/(n_m l0).
+    """
+    for k in range(4):
+        d, h, dh = group_length_lever(k, c1, s1, c12, s12, P)
+        nl = P[NM + k] * P[L0 + k]
+        eps = (P[LCONN + k] + nl - d) / nl
+        f = force_per_pressure(k, eps, P)
+        mt[k] = f * h
+        dmt[k] = dforce_deps(k, eps, P) * h * h / nl + f * dh
+        vol[k] = P[NM + k] * muscle_volume(k, eps, P)
+
+
+@kernel
+def _many(q, P, mt, dmt, vol):
+    for n in range(q.shape[0]):
+        torque_kernel(q[n, 0], q[n, 1], P, mt[n], dmt[n], vol[n])
+
+
+def _eval(q, P):
+    qf, lead = _flat_q(q)
+    n = qf.shape[0]
+    mt, dmt, vol = np.empty((n, 4)), np.empty((n, 4)), np.empty((n, 4))
+    _many(qf, P, mt, dmt, vol)
+    shp = lead + (4,)
+    return mt.reshape(shp), dmt.reshape(shp), vol.reshape(shp)
+
+
+def torque_functions(q, arm, *, with_derivative: bool = False):
+    """Torque functions m_tau,i(q) [N m/Pa], shape (..., 4).
+
+    Multiply by 1e5 for the thesis' Nm/bar (fig. 2.11).  With
+    ``with_derivative=True`` also returns d m_tau,i/dq along the driven joint.
+    """
+    mt, dmt, _ = _eval(q, lay.pack(arm))
+    return (mt, dmt) if with_derivative else mt
+
+
+def group_volumes(q, arm) -> np.ndarray:
+    """Volumes of the four muscle groups at configuration ``q`` [m^3], shape (..., 4)."""
+    return _eval(q, lay.pack(arm))[2]
+
+
+def joint_torques(q, pressures, arm) -> np.ndarray:
+    """Actuator torques (2.17) [N m] for gauge pressures ``pressures`` [Pa] (..., 4)."""
+    from .._validation import as_float_array
+
+    p = as_float_array("pressures", pressures, shape_tail=(4,))
+    mt = torque_functions(q, arm)
+    tau = mt * p
+    return np.stack([tau[..., 0] + tau[..., 1], tau[..., 2] + tau[..., 3]], axis=-1)

@@ -1,0 +1,117 @@
+"""Design figures of thesis chapter 2: torque functions, stiffness, maximum load."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from .. import design
+from ..params import thesis_arm
+from ..plant import geometry as geo
+from ..plant import pneumatics as pn
+from ..report.figures import save
+from ..report.tables import markdown_table
+from ..units import BAR, DEG, MM
+from . import StudyResult
+
+
+def _table_a1(arm) -> pd.DataFrame:
+    g = arm.geometry
+    q1 = np.linspace(g.q1_min, g.q1_max, 4001)
+    q2 = np.linspace(g.q2_min, g.q2_max, 4001)
+    da = geo.muscle_lengths(np.stack([q1, np.full_like(q1, -80 * DEG)], -1), arm)
+    db = geo.muscle_lengths(np.stack([np.full_like(q2, 50 * DEG), q2], -1), arm)
+    ours = np.concatenate([[da[:, 0].max(), da[:, 1].min(), db[:, 2].max(), db[:, 3].min()],
+                           geo.connection_lengths(arm)]) / MM
+    thesis = np.array([345.0, 200.5, 322.3, 265.8, 117.0, 74.5, 94.3, 139.8])
+    names = ["d1,max", "d2,min", "d3,max", "d4,min", "Lconn,1", "Lconn,2", "Lconn,3", "Lconn,4"]
+    return pd.DataFrame({"quantity": names, "thesis Table A.1 [mm]": thesis,
+                         "computed [mm]": ours.round(2), "difference [mm]": (ours - thesis).round(2)})
+
+
+def run(outdir, *, quick: bool = False) -> StudyResult:
+    """Write the design figures and tables into ``outdir``."""
+    out = Path(outdir)
+    arm = thesis_arm()
+    n = 41 if quick else 121
+    arts = []
+
+    tf = design.torque_function_curves(arm)
+    arts.append(save(tf.plot(), out / "design_torque_functions.png"))
+
+    sm = design.stiffness_map(arm, n1=n, n2=n)
+    arts.append(save(sm.plot(), out / "design_stiffness_map.png"))
+    q_step = np.array([50 * DEG, -80 * DEG])
+    K_step = pn.joint_stiffness(q_step, pn.static_pressures(q_step, arm), arm)
+
+    ml = design.max_load_map(arm, n1=2 * n, n2=2 * n)
+    ml_cad = design.max_load_map(arm, links=design.cad_links(), n1=2 * n, n2=2 * n)
+    arts.append(save(ml.plot(), out / "design_max_load.png"))
+    d = ml.data
+    inner = d[(d.q1_rad > arm.geometry.q1_min + 5 * DEG) & (d.q1_rad < arm.geometry.q1_max - 5 * DEG)
+              & (d.q2_rad > arm.geometry.q2_min + 5 * DEG) & (d.q2_rad < arm.geometry.q2_max - 5 * DEG)]
+    m1_min = d["M1_kg"].min()
+    m2a = d[d.carrying_2 == 3]["M2_kg"].min()
+    m2b = d[d.carrying_2 == 4]["M2_kg"].min()
+
+    from ..plant.muscle import force_function
+    eps = geo.contractions(d[["q1_rad", "q2_rad"]].to_numpy(), arm)
+    e1max, e4max = eps[:, 0].max(), eps[:, 3].max()
+    f1_edge = float(force_function(1, e1max, arm)) * BAR
+    f4_raw = float(np.polyval(arm.muscles.groups[3].coefficients[:0:-1], e4max)
+                   + arm.muscles.groups[3].coefficients[0] / e4max) * BAR
+    ta1 = _table_a1(arm)
+    ta1.to_csv(out / "design_table_A1.csv", index=False)
+    arts.append(str(out / "design_table_A1.csv"))
+    qmin = np.array(ml.argmin) / DEG
+    pm = np.array(arm.pneumatics.p_mean) / BAR
+    md = f"""Geometry of Table 2.1 with the identified muscle model of Table B.1 (all SI inside).
+
+**Table A.1 reproduced** (acceptance: +-0.5 mm):
+
+{markdown_table(ta1, digits=2)}
+
+**Torque functions** (cf. fig. 2.11): ![torque functions](design_torque_functions.png)
+
+**Joint stiffness** (2.18) including the closed-valve polytropic term, with static
+gravity-compensation pressures and the calibrated mean pressures p_m = ({pm[0]:.3f}, {pm[1]:.3f}) bar.
+At the step-response impact configuration q = (50, -80) deg: K = ({K_step[0]:.1f}, {K_step[1]:.1f}) Nm/rad
+(thesis §6.3.3: 43 and 27 Nm/rad). Over the working area K1 ranges
+{sm.data.K1_Nm_per_rad.min():.1f}-{sm.data.K1_Nm_per_rad.max():.1f} and K2
+{sm.data.K2_Nm_per_rad.min():.1f}-{sm.data.K2_Nm_per_rad.max():.1f} Nm/rad. With the Delta-p approach
+at these p_m the arm can hold itself statically in {100 * sm.data.holdable.mean():.0f} % of the working
+area (hatched: a pressure would leave [0, 3] bar).
+
+![stiffness](design_stiffness_map.png)
+
+**Maximum load** (fig. 2.15, App. A.4), carrying muscle at 3 bar, antagonist at 0:
+
+| | minimum over the working area | where (q1, q2) [deg] |
+|---|---|---|
+| thesis fig. 2.15 | "just over 2 kg" | |
+| this toolkit, plant links | {ml.minimum:.2f} kg | ({qmin[0]:.0f}, {qmin[1]:.0f}) |
+| this toolkit, CAD links (m1 = 1.5, m2 = 1.05 kg) | {ml_cad.minimum:.2f} kg | |
+| joint-1 limit (A.43) alone | {m1_min:.2f} kg | |
+| joint-2 limit, muscle 3 carrying (A.44) | {m2a:.2f} kg | |
+| joint-2 limit, muscle 4 carrying (A.45) | {m2b:.2f} kg | |
+| 5 deg away from every edge | {inner.M_max_kg.min():.2f} kg | |
+
+The minimum differs from the thesis because the thesis computed fig. 2.15 at design time with the
+*theoretical* PPAM force function f_t0(eps, l0/R = 6) of Daerden's model (eq. 2.2, fig. 2.2),
+whereas the toolkit uses the force law identified afterwards on the built arm (3.9, Table B.1).
+The identified fits fall to about zero force near 30 % contraction: f1({100 * e1max:.1f} %) =
+{f1_edge:.1f} N/bar for group 1 at q1 = 105 deg, and f4({100 * e4max:.1f} %) = {f4_raw:.2f} N/bar
+(clipped to 0) for group 4 at q2 = -130 deg, where the design puts those muscles. At those edges the arm cannot carry a load (at
+q2 = -130 deg muscle 4 cannot even hold the forearm: negative maximum load). In the interior the
+map agrees in magnitude with the thesis (median {d.M_max_kg.median():.1f} kg).
+{'' if not quick else '(quick mode: coarse grids)'}
+
+![max load](design_max_load.png)
+"""
+    metrics = {"table_A1_max_abs_diff_mm": float(ta1["difference [mm]"].abs().max()),
+               "K_step": K_step.tolist(), "max_load_min_kg": ml.minimum,
+               "max_load_min_cad_kg": ml_cad.minimum,
+               "max_load_interior_min_kg": float(inner.M_max_kg.min())}
+    return StudyResult("Design of the arm (thesis chapter 2)", md, arts, metrics)

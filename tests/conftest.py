@@ -1,0 +1,27 @@
+"""Shared fixtures."""
+
+import numpy as np
+import pytest
+
+from ppamsafety.params import thesis_arm
+from ppamsafety.units import DEG
+
+
+@pytest.fixture(scope="session")
+def arm():
+    """The thesis arm (plant + identified model)."""
+    return thesis_arm()
+
+
+@pytest.fixture(scope="session")
+def workspace_grid(arm):
+    """A 23 x 21 grid over the working area (2.6)-(2.7), shape (N, 2) [rad]."""
+    g = arm.geometry
+    q1, q2 = np.meshgrid(np.linspace(g.q1_min, g.q1_max, 23), np.linspace(g.q2_min, g.q2_max, 21))
+    return np.stack([q1.ravel(), q2.ravel()], axis=-1)
+
+
+@pytest.fixture(scope="session")
+def step_config():
+    """Configuration of the step-response impact (thesis §6.3.3) [rad]."""
+    return np.array([50.0 * DEG, -80.0 * DEG])
