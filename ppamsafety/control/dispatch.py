@@ -27,7 +27,7 @@ def controller_step(kind, C, S, Pm, k, dt, qm, qdm, pm, ref, dp, internals, scra
     elif kind == KIND_SMC:
         smc_step(C, S, Pm, dt, qm, qdm, pm, ref, dp, internals, scratch)
     elif kind == KIND_GC:
-        gc_step(Pm, ref, dp, scratch)
+        gc_step(C, Pm, qm, ref, dp, scratch)
     else:
         dp[0] = 0.0
         dp[1] = 0.0

@@ -20,7 +20,7 @@ import numpy as np
 from .._jit import leaf
 from ..units import BAR
 from .base import KIND_PID, Controller, pair
-from .gravity import add_gravity_compensation
+from .gravity import add_gravity_compensation, gc_mode
 
 #: Table 5.1 (a): Kp [bar/rad], Ki [bar/(rad s)], Kd [bar s/rad] per joint.
 TABLE_5_1_PID = {"kp": (2.0, 1.5), "ki": (2.0, 2.0), "kd": (0.1, 0.1)}
@@ -40,7 +40,7 @@ def pid_step(C, S, Pm, dt, qm, qdm, ref, dp, internals, scratch):
         dp[j] = C[j] * e + C[2 + j] * S[j] + C[4 + j] * ed
         internals[j] = dp[j]
         internals[2 + j] = S[j]
-    add_gravity_compensation(C[7], Pm, ref, dp, scratch)
+    add_gravity_compensation(C[7], Pm, qm, ref, 0.0, 0.0, dp, scratch)
 
 
 class PID(Controller):
@@ -52,8 +52,9 @@ class PID(Controller):
         Gains per joint in Pa/rad, Pa/(rad s), Pa s/rad (default Table 5.1 (a)).
     derivative : {"velocity", "difference"}
         Derivative from the measured velocity or from the error difference.
-    gravity_compensation : bool
-        Add the static gravity compensation (3.18)-(3.19).
+    gravity_compensation : {"desired", "measured", "off"}
+        Static gravity compensation (3.18)-(3.19) at the set angles (default),
+        at the measured angles, or none (see :mod:`ppamsafety.control.gravity`).
 
     Internals logged: PID output (2) and integral state (2).
     """
@@ -62,7 +63,7 @@ class PID(Controller):
     name = "PID"
 
     def __init__(self, *, kp=None, ki=None, kd=None, derivative: str = "velocity",
-                 gravity_compensation: bool = True):
+                 gravity_compensation="desired"):
         super().__init__()
         g = TABLE_5_1_PID
         self.kp = pair("PID.kp", np.asarray(g["kp"]) * BAR if kp is None else kp, unit="Pa/rad")
@@ -73,11 +74,12 @@ class PID(Controller):
         if derivative not in ("velocity", "difference"):
             raise ValueError(f"PID.derivative = {derivative!r} is not 'velocity' or 'difference'")
         self.derivative = derivative
-        self.gravity_compensation = bool(gravity_compensation)
+        self.gravity_compensation = gravity_compensation
+        self.gc = gc_mode(gravity_compensation)
 
     def pack(self) -> np.ndarray:
         return np.array([*self.kp, *self.ki, *self.kd, float(self.derivative == "difference"),
-                         float(self.gravity_compensation)])
+                         self.gc])
 
     def describe(self) -> dict:
         return {"controller": self.name, "Ki_bar_per_rad_s": self.ki[0] / BAR, "lambda_s": np.nan}

@@ -28,11 +28,11 @@ import numpy as np
 
 from .._jit import leaf
 from .._validation import check_range
-from ..plant.geometry import tcp_jacobian, tcp_position
+from ..plant.geometry import inverse_kinematics_elbow_up, tcp_jacobian, tcp_position
 from ..plant.torque import torque_kernel
 from ..units import BAR
 from .base import KIND_PSMC_JOINT, KIND_PSMC_TASK, Controller, pair
-from .gravity import add_gravity_compensation
+from .gravity import add_gravity_compensation, gc_mode
 from .pid import TABLE_5_1_PID
 
 #: Table 5.1 (c), joint space: lambda [s], Delta p_lm [bar]; gains as PID.
@@ -74,7 +74,9 @@ def psmc_joint_step(C, S, Pm, dt, qm, qdm, ref, dp, internals, scratch):
         internals[2 + j] = (dt + lam) / (ki * dt * dt + kp * dt + kd) * (fs - f)
         internals[4 + j] = 1.0 if abs(fs) <= lim else 0.0
         internals[6 + j] = a_new
-    add_gravity_compensation(C[10], Pm, ref, dp, scratch)
+    # proxy angles q_p = q + Nabla a / T (a is the integral of q_p - q)
+    add_gravity_compensation(C[10], Pm, qm, ref, qm[0] + S[2] / dt, qm[1] + S[3] / dt, dp,
+                             scratch)
 
 
 @leaf
@@ -112,7 +114,11 @@ def psmc_task_step(C, S, Pm, dt, qm, qdm, ref, dp, internals, scratch):
     internals[4] = 1.0 if norm <= F else 0.0
     internals[5] = norm
     internals[6], internals[7] = ax, ay
-    add_gravity_compensation(C[5], Pm, ref, dp, scratch[12:24])
+    # proxy position r_p = r + Nabla a / T, in joint space by inverse kinematics
+    qp1, qp2, ok = inverse_kinematics_elbow_up(x + S[2] / dt, y + S[3] / dt, Pm)
+    if not ok:
+        qp1, qp2 = qm[0], qm[1]
+    add_gravity_compensation(C[5], Pm, qm, ref, qp1, qp2, dp, scratch[12:24])
 
 
 class JointPSMC(Controller):
@@ -127,14 +133,16 @@ class JointPSMC(Controller):
         Virtual-coupling gains [Pa/rad, Pa/(rad s), Pa s/rad] (default as PID).
     dp_limit : float or pair
         Delta p_lm [Pa] (Table 5.1: 0.2 bar).
-    gravity_compensation : bool
+    gravity_compensation : {"proxy", "desired", "measured", "off"}
+        Where (3.18)-(3.19) is evaluated; default the proxy position (see
+        :mod:`ppamsafety.control.gravity`).
     """
 
     kind = KIND_PSMC_JOINT
     name = "PSMC joint"
 
     def __init__(self, *, lam=TABLE_5_1_JOINT["lambda"], kp=None, ki=None, kd=None,
-                 dp_limit=TABLE_5_1_JOINT["dp_lm"] * BAR, gravity_compensation: bool = True):
+                 dp_limit=TABLE_5_1_JOINT["dp_lm"] * BAR, gravity_compensation="proxy"):
         super().__init__()
         g = TABLE_5_1_PID
         self.lam = pair("JointPSMC.lam", lam, unit="s")
@@ -149,11 +157,12 @@ class JointPSMC(Controller):
             raise ValueError("JointPSMC.dp_limit must be positive [Pa]")
         if min(self.kd) == 0 and min(self.lam) == 0 and min(self.kp) == 0:
             raise ValueError("JointPSMC: Kp, Kd and lambda cannot all be zero")
-        self.gravity_compensation = bool(gravity_compensation)
+        self.gravity_compensation = gravity_compensation
+        self.gc = gc_mode(gravity_compensation, ("off", "measured", "desired", "proxy"))
 
     def pack(self) -> np.ndarray:
         return np.array([*self.kp, *self.ki, *self.kd, *self.lam, *self.dp_limit,
-                         float(self.gravity_compensation)])
+                         self.gc])
 
     def describe(self) -> dict:
         return {"controller": self.name, "Ki_bar_per_rad_s": self.ki[0] / BAR,
@@ -171,7 +180,9 @@ class TaskPSMC(Controller):
         Virtual coupling [N/m, N/(m s), N s/m] (Table 5.1: 200, 100, 10).
     force_limit : float
         F [N] (Table 5.1: 15).
-    gravity_compensation : bool
+    gravity_compensation : {"proxy", "desired", "measured", "off"}
+        Where (3.18)-(3.19) is evaluated; default the proxy position (see
+        :mod:`ppamsafety.control.gravity`).
     """
 
     kind = KIND_PSMC_TASK
@@ -179,7 +190,7 @@ class TaskPSMC(Controller):
 
     def __init__(self, *, lam=TABLE_5_1_TASK["lambda"], kp=TABLE_5_1_TASK["kp"],
                  ki=TABLE_5_1_TASK["ki"], kd=TABLE_5_1_TASK["kd"],
-                 force_limit=TABLE_5_1_TASK["F"], gravity_compensation: bool = True):
+                 force_limit=TABLE_5_1_TASK["F"], gravity_compensation="proxy"):
         super().__init__()
         self.lam = check_range("TaskPSMC.lam", lam, 0.0, 100.0, unit="s")
         self.kp = check_range("TaskPSMC.kp", kp, 0.0, 1e7, unit="N/m")
@@ -187,11 +198,12 @@ class TaskPSMC(Controller):
         self.kd = check_range("TaskPSMC.kd", kd, 0.0, 1e7, unit="N s/m")
         self.force_limit = check_range("TaskPSMC.force_limit", force_limit, 0.0, 1e7,
                                        lo_open=True, unit="N")
-        self.gravity_compensation = bool(gravity_compensation)
+        self.gravity_compensation = gravity_compensation
+        self.gc = gc_mode(gravity_compensation, ("off", "measured", "desired", "proxy"))
 
     def pack(self) -> np.ndarray:
         return np.array([self.kp, self.ki, self.kd, self.lam, self.force_limit,
-                         float(self.gravity_compensation)])
+                         self.gc])
 
     def describe(self) -> dict:
         return {"controller": self.name, "Ki_bar_per_rad_s": np.nan, "lambda_s": self.lam}

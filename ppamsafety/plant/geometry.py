@@ -92,6 +92,18 @@ def load_point(q1, q2, P):
     return (P[L1] * c1 + c12 * P[LL] + s12 * P[DL], P[L1] * s1 + s12 * P[LL] - c12 * P[DL])
 
 
+@leaf
+def inverse_kinematics_elbow_up(x, y, P):
+    """Elbow-up (q2 < 0) inverse kinematics of the TCP: (q1, q2, reachable)."""
+    a, b = P[L1], P[L2]
+    c2 = (x * x + y * y - a * a - b * b) / (2.0 * a * b)
+    if c2 > 1.0 or c2 < -1.0:
+        return 0.0, 0.0, False
+    q2 = -math.acos(c2)
+    q1 = math.atan2(y, x) - math.atan2(b * math.sin(q2), a + b * math.cos(q2))
+    return q1, q2, True
+
+
 @kernel
 def _lengths_many(q, P, d, h, dh):
     for n in range(q.shape[0]):
