@@ -1,0 +1,368 @@
+"""Head Injury Criterion (thesis eq. 6.1): exact fast evaluation and closed forms.
+
+For a head acceleration magnitude a(t) >= 0 [g] and a window limit W [s]
+(36 ms for HIC36, 15 ms for HIC15)::
+
+    HIC = max_{t1 < t2, t2 - t1 <= W} (t2 - t1) * [ int_{t1}^{t2} a dt / (t2 - t1) ]^2.5
+
+On uniform samples a_k = a(k dt) the integral is the trapezoidal rule, i.e. the
+difference of the cumulative trapezoid S (S_0 = 0, S_{k+1} = S_k + dt (a_k + a_{k+1})/2),
+and windows are index pairs (i, j) with 1 <= j - i <= Wn.
+
+**Exact fast algorithm** (:func:`hic_kernel`).  Branch and bound over blocks
+I x J = [i0, i1] x [j0, j1] of index pairs.  For every pair in a block, with
+area D = S_j - S_i and length L = j - i, HIC = D * m^1.5 = dt L m^2.5 with the
+mean m = D / (dt L).  Because a >= 0, S is non-decreasing, so D <= S_j1 - S_i0,
+L >= max(j0 - i1, 1), L <= min(j1 - i0, Wn) and m <= min(max a on [i0, j1],
+(S_j1 - S_i0) / (dt L_min)); inserting these gives an upper bound for the block
+(range maxima come from a sparse table).  Starting from the best window centred
+on the peak sample, blocks are split depth-first (higher bound first) and dropped
+when their bound cannot beat the best exact value found; blocks of at most
+``_LEAF`` pairs are evaluated exactly.  Before bounding, every block is shrunk
+to starts i with S_{i+1} > S_i and ends j with S_j > S_{j-1}: moving a window
+end across a zero-area segment keeps D and shortens L, so such windows are
+dominated (never strictly better) -- this discards the zero record around a
+contact pulse at no cost.  Nothing else is approximated, so the result is the
+brute-force maximum over all pairs; the bounds are inflated by 1e-12 relative so
+that their own rounding cannot discard the maximum.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .._jit import kernel, leaf
+from .._validation import as_float_array, check_nonnegative, check_positive
+
+_SLACK = 1.0 + 1e-12  # bounds are inflated by this factor against their own rounding
+_LEAF = 64  # blocks with at most this many index pairs are evaluated exactly
+_STACK = 256  # depth-first stack; it holds <= 2 log2(N) + 2 < 130 blocks for any int64 N
+
+
+@leaf
+def _window_hic(area, width):
+    """HIC of one window of ``area`` [g s] and ``width`` [s]: width * (area/width)^2.5."""
+    m = area / width
+    return width * m * m * math.sqrt(m)
+
+
+@kernel
+def _cumulative_area(a, dt):
+    """Cumulative trapezoid S [g s], S[0] = 0, shape (N,)."""
+    s = np.empty(a.shape[0])
+    s[0] = 0.0
+    for k in range(a.shape[0] - 1):
+        s[k + 1] = s[k] + 0.5 * dt * (a[k] + a[k + 1])
+    return s
+
+
+@kernel
+def hic_bruteforce_kernel(a, dt, max_window_samples):
+    """Reference O(N Wn) HIC: ``(value, i, j)`` over all pairs 1 <= j - i <= Wn.
+
+    ``a`` [g], ``dt`` [s]; returns the first maximising pair in (i, j) order
+    and ``(0.0, 0, 0)`` if there is no pair (N < 2 or Wn < 1).
+    """
+    n = a.shape[0]
+    s = _cumulative_area(a, dt)
+    best, bi, bj = -1.0, 0, 0
+    for i in range(n - 1):
+        for j in range(i + 1, min(i + max_window_samples, n - 1) + 1):
+            v = _window_hic(s[j] - s[i], dt * (j - i))
+            if v > best:
+                best, bi, bj = v, i, j
+    return (best, bi, bj) if best >= 0.0 else (0.0, 0, 0)
+
+
+@kernel
+def _positive_segments(s):
+    """nxt[k] / prv[k]: first / last segment i >= k / <= k with S[i+1] > S[i] (N / -1 if none)."""
+    n = s.shape[0]
+    nxt = np.empty(n, np.int64)
+    prv = np.empty(n, np.int64)
+    last = -1
+    for k in range(n):
+        if k < n - 1 and s[k + 1] > s[k]:
+            last = k
+        prv[k] = last
+    last = n
+    for k in range(n - 1, -1, -1):
+        if k < n - 1 and s[k + 1] > s[k]:
+            last = k
+        nxt[k] = last
+    return nxt, prv
+
+
+@kernel
+def _range_max_table(a):
+    """Sparse table t[k, p] = max a[p : p + 2^k] and floor-log2 table for O(1) range maxima."""
+    n = a.shape[0]
+    levels = 1
+    while (1 << levels) <= n:
+        levels += 1
+    t = np.empty((levels, n))
+    t[0] = a
+    for k in range(1, levels):
+        h = 1 << (k - 1)
+        for p in range(n - (1 << k) + 1):
+            t[k, p] = max(t[k - 1, p], t[k - 1, p + h])
+    lg = np.zeros(n + 1, np.int64)
+    for m in range(2, n + 1):
+        lg[m] = lg[m // 2] + 1
+    return t, lg
+
+
+@leaf
+def _clip(i0, i1, j0, j1, wn, nxt, prv):
+    """Shrink a block to valid, non-dominated pairs (empty: i0 > i1 or j0 > j1 on return)."""
+    i0 = nxt[max(i0, j0 - wn)]
+    i1 = prv[min(i1, j1 - 1)]
+    if i0 > i1:
+        return i0, i1, j0, j1
+    j0 = nxt[max(j0, i0 + 1) - 1] + 1
+    j1 = prv[min(j1, i1 + wn) - 1] + 1
+    return i0, i1, j0, j1
+
+
+@leaf
+def _bound(c, s, dt, wn, t, lg, offset):
+    """Upper bound of HIC over a clipped block ``c = (i0, i1, j0, j1)``; 0 if it is empty.
+
+    ``t``, ``lg`` is the range-maximum table of ``a[offset:]``.
+    """
+    i0, i1, j0, j1 = c
+    if i0 > i1 or j0 > j1:
+        return 0.0
+    area = s[j1] - s[i0]
+    k = lg[j1 - i0 + 1]
+    amax = max(t[k, i0 - offset], t[k, j1 - offset - (1 << k) + 1])
+    mean = min(amax, area / (dt * max(j0 - i1, 1)))
+    return mean * math.sqrt(mean) * min(area, dt * min(j1 - i0, wn) * mean) * _SLACK
+
+
+@leaf
+def _push(blocks, bounds, top, c, b, best):
+    """Push block ``c`` with bound ``b`` unless it cannot beat ``best``; return the new top."""
+    if b <= best:
+        return top
+    for q in range(4):
+        blocks[top, q] = c[q]
+    bounds[top] = b
+    return top + 1
+
+
+@kernel
+def hic_kernel(a, dt, max_window_samples):
+    """Exact HIC by branch and bound (module docstring): ``(value, i, j)``.
+
+    ``a`` [g] non-negative samples, ``dt`` [s], windows 1 <= j - i <= ``max_window_samples``.
+    Same maximum as :func:`hic_bruteforce_kernel` (the pair may differ on exact ties);
+    ``(0.0, 0, 1)`` for an all-zero record and ``(0.0, 0, 0)`` if there is no pair.
+    """
+    n = a.shape[0]
+    wn = min(max_window_samples, n - 1)
+    if wn < 1:
+        return 0.0, 0, 0
+    s = _cumulative_area(a, dt)
+    nxt, prv = _positive_segments(s)
+    if nxt[0] >= n - 1:  # no positive area anywhere: every window has HIC 0
+        return 0.0, 0, 1
+    first, last = nxt[0], prv[n - 2] + 1  # every useful window lies in [first, last]
+    t, lg = _range_max_table(a[first:last + 1])
+    best, bi, bj = 0.0, 0, 1
+    peak = np.argmax(a)
+    for w in range(1, min(wn, last - first) + 1):  # lower bound: windows centred on the peak
+        i = min(max(peak - w // 2, 0), n - 1 - w)
+        v = _window_hic(s[i + w] - s[i], dt * w)
+        if v > best:
+            best, bi, bj = v, i, i + w
+    blocks = np.empty((_STACK, 4), np.int64)
+    bounds = np.empty(_STACK)
+    root = _clip(0, n - 2, 1, n - 1, wn, nxt, prv)
+    top = _push(blocks, bounds, 0, root, _bound(root, s, dt, wn, t, lg, first), best)
+    while top > 0:
+        top -= 1
+        if bounds[top] <= best:
+            continue
+        i0, i1, j0, j1 = blocks[top, 0], blocks[top, 1], blocks[top, 2], blocks[top, 3]
+        if (i1 - i0 + 1) * (j1 - j0 + 1) <= _LEAF:
+            for i in range(i0, i1 + 1):
+                for j in range(max(j0, i + 1), min(j1, i + wn) + 1):
+                    v = _window_hic(s[j] - s[i], dt * (j - i))
+                    if v > best:
+                        best, bi, bj = v, i, j
+            continue
+        if i1 - i0 >= j1 - j0:  # split the longer side
+            m = (i0 + i1) // 2
+            lo = _clip(i0, m, j0, j1, wn, nxt, prv)
+            hi = _clip(m + 1, i1, j0, j1, wn, nxt, prv)
+        else:
+            m = (j0 + j1) // 2
+            lo = _clip(i0, i1, j0, m, wn, nxt, prv)
+            hi = _clip(i0, i1, m + 1, j1, wn, nxt, prv)
+        blo, bhi = _bound(lo, s, dt, wn, t, lg, first), _bound(hi, s, dt, wn, t, lg, first)
+        if blo > bhi:  # push the more promising half last so that it is explored first
+            lo, hi, blo, bhi = hi, lo, bhi, blo
+        top = _push(blocks, bounds, top, lo, blo, best)
+        top = _push(blocks, bounds, top, hi, bhi, best)
+    return best, bi, bj
+
+
+@kernel
+def hic_batch_kernel(A, dt, max_window_samples, out_value, out_i, out_j):
+    """:func:`hic_kernel` for every record (row) of ``A``, written to the ``out_*`` arrays."""
+    for r in range(A.shape[0]):
+        out_value[r], out_i[r], out_j[r] = hic_kernel(A[r], dt, max_window_samples)
+
+
+@kernel
+def _bruteforce_batch_kernel(A, dt, max_window_samples, out_value, out_i, out_j):
+    for r in range(A.shape[0]):
+        out_value[r], out_i[r], out_j[r] = hic_bruteforce_kernel(A[r], dt, max_window_samples)
+
+
+@dataclass(frozen=True)
+class HICResult:
+    """HIC and its maximising window; arrays (one entry per record) for 2-D input.
+
+    Attributes
+    ----------
+    value : float or ndarray
+        HIC [-] (accelerations in g, times in s, as is conventional).
+    t1, t2 : float or ndarray
+        Start and end of the maximising window [s], measured from the first sample.
+    window : float
+        Window limit W used [s].
+    """
+
+    value: float | np.ndarray
+    t1: float | np.ndarray
+    t2: float | np.ndarray
+    window: float
+
+
+def _evaluate(single, batch, a, dt, window) -> HICResult:
+    arr = as_float_array("a", a)
+    if arr.ndim not in (1, 2) or arr.shape[-1] < 2:
+        raise ValueError(f"a must be 1-D or 2-D (records along the last axis) with at least "
+                         f"2 samples per record, got shape {arr.shape}")
+    if np.any(arr < 0.0):
+        raise ValueError(f"a must be non-negative (acceleration magnitudes in g), "
+                         f"minimum is {arr.min():g}")
+    dt = check_positive("dt", dt, unit="s")
+    window = check_positive("window", window, unit="s")
+    wn = math.floor(window / dt * (1.0 + 1e-9))  # whole sample intervals; 1e-9 absorbs rounding
+    if wn < 1:
+        raise ValueError(f"window = {window:g} s is shorter than one sample interval dt = {dt:g} s")
+    if arr.ndim == 1:
+        v, i, j = single(np.ascontiguousarray(arr), dt, wn)
+        return HICResult(float(v), i * dt, j * dt, window)
+    v = np.empty(arr.shape[0])
+    i, j = np.empty(arr.shape[0], np.int64), np.empty(arr.shape[0], np.int64)
+    batch(np.ascontiguousarray(arr), dt, wn, v, i, j)
+    return HICResult(v, i * dt, j * dt, window)
+
+
+def hic(a, dt, *, window=0.036) -> HICResult:
+    """Head Injury Criterion (6.1) of uniformly sampled acceleration magnitudes, exact.
+
+    Parameters
+    ----------
+    a : array_like, shape (N,) or (R, N)
+        Head acceleration magnitude [g], non-negative, finite; records along the last axis.
+    dt : float
+        Sample spacing [s].
+    window : float, keyword-only
+        Window limit W [s]: 0.036 for HIC36 (default), 0.015 for HIC15.  Rounded down to a
+        whole number of sample intervals (1e-9 relative tolerance).
+
+    Returns
+    -------
+    HICResult
+        The maximum over all sample windows (trapezoidal integral), computed by the
+        branch and bound of :func:`hic_kernel`; identical to :func:`hic_bruteforce`.
+    """
+    return _evaluate(hic_kernel, hic_batch_kernel, a, dt, window)
+
+
+def hic_bruteforce(a, dt, *, window=0.036) -> HICResult:
+    """:func:`hic` by brute force over all O(N W/dt) windows (reference for tests and timing)."""
+    return _evaluate(hic_bruteforce_kernel, _bruteforce_batch_kernel, a, dt, window)
+
+
+def _half_sine_g(beta):
+    """HIC / (A^2.5 T) of the window of width beta T centred on the peak of a half-sine."""
+    return beta * (2.0 * np.sin(np.pi * beta / 2.0) / (np.pi * beta)) ** 2.5
+
+
+@functools.cache
+def _half_sine_optimum() -> tuple[float, float]:
+    from scipy.optimize import minimize_scalar
+
+    res = minimize_scalar(lambda b: -_half_sine_g(b), bounds=(1e-9, 1.0), method="bounded",
+                          options={"xatol": 1e-12})
+    return float(res.x), float(-res.fun)
+
+
+def half_sine_optimal_width() -> float:
+    """Optimal HIC window of a half-sine pulse relative to its duration, beta* = 0.6702.
+
+    beta* maximises g(beta) = beta (2 sin(pi beta/2) / (pi beta))^2.5, see
+    :func:`hic_half_sine`; g(beta*) = 0.414646.
+    """
+    return _half_sine_optimum()[0]
+
+
+def hic_half_sine(amplitude, duration, *, window=0.036) -> float:
+    """HIC of a(t) = A sin(pi t/T) on [0, T] (zero elsewhere), in closed form.
+
+    Derivation: with I the integral over [t1, t2], L = t2 - t1 and mean m = I/L,
+    d(L m^2.5)/dt2 = m^1.5 (2.5 a(t2) - 1.5 m) and d(L m^2.5)/dt1 = -m^1.5 (2.5 a(t1)
+    - 1.5 m), so an unconstrained optimum has a(t1) = a(t2) = 0.6 m: for the symmetric
+    pulse t1 + t2 = T, the window is centred on the peak (windows reaching outside
+    [0, T] only gain width, never area).  A centred window of width beta T has
+    I = (2 A T/pi) sin(pi beta/2), hence HIC = A^2.5 T g(beta) with
+    g(beta) = beta (2 sin(pi beta/2)/(pi beta))^2.5, maximised numerically at
+    beta* = 0.6702 (:func:`half_sine_optimal_width`), g(beta*) = 0.414646.  If
+    beta* T > W, g increases on (0, beta*) (unimodal, checked numerically), so the best admissible window is the
+    widest, W, centred on the peak: HIC = W (2 A T/(pi W) sin(pi W/(2T)))^2.5.
+
+    Parameters
+    ----------
+    amplitude : float
+        Peak acceleration A [g], >= 0.
+    duration : float
+        Pulse duration T [s], > 0.
+    window : float, keyword-only
+        Window limit W [s].
+
+    Returns
+    -------
+    float
+        HIC [-].
+    """
+    A = check_nonnegative("amplitude", amplitude, unit="g")
+    T = check_positive("duration", duration, unit="s")
+    W = check_positive("window", window, unit="s")
+    beta, g = _half_sine_optimum()
+    if beta * T <= W:
+        return g * A ** 2.5 * T
+    return W * (2.0 * A * T / (math.pi * W) * math.sin(math.pi * W / (2.0 * T))) ** 2.5
+
+
+def hic_rectangular(amplitude, duration, *, window=0.036) -> float:
+    """HIC of a rectangular pulse a(t) = A on [0, T], in closed form: A^2.5 min(T, W).
+
+    Derivation: the mean over any window is <= A, so HIC <= A^2.5 L <= A^2.5 W, and a
+    window longer than T has I <= A T, so HIC = I^2.5 / L^1.5 < A^2.5 T; a window of
+    width min(T, W) inside the pulse attains A^2.5 min(T, W).  ``amplitude`` [g] >= 0, ``duration`` and
+    ``window`` [s] > 0; returns HIC [-].
+    """
+    A = check_nonnegative("amplitude", amplitude, unit="g")
+    T = check_positive("duration", duration, unit="s")
+    W = check_positive("window", window, unit="s")
+    return A ** 2.5 * min(T, W)
