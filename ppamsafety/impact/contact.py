@@ -1,0 +1,93 @@
+"""Hunt-Crossley contact (thesis eq. 6.2) and its closed-form phase-plane solution.
+
+    F = k delta^n + b delta^n d(delta)/dt   for delta > 0,   F = max(F, 0),   F = 0 otherwise
+
+(Hunt & Crossley 1975; the thesis writes the damping coefficient as b, Marhefka
+& Orin 1999 as lambda).  For one mass m hitting a fixed surface with speed
+v0 > 0 (or two bodies with reduced mass m), m v dv/d(delta) = -(k + b v)
+delta^n integrates in closed form (Marhefka & Orin 1999, eqs. 11-14)::
+
+    m [v/b - (k/b^2) ln(k + b v)] + delta^(n+1)/(n+1) = const
+
+giving the maximum penetration and the exit velocity (restitution) below.
+Along this solution k + b v > 0, so the force never needs clipping.
+"""
+
+from __future__ import annotations
+
+import math
+
+from .._jit import leaf
+from .._validation import check_nonnegative, check_positive, check_range
+
+
+@leaf
+def hunt_crossley_force(delta, delta_dot, k, n, b):
+    """Contact force [N] for penetration ``delta`` [m] and its rate [m/s]; never negative."""
+    if delta <= 0.0:
+        return 0.0
+    dn = delta ** n
+    return max(k * dn + b * dn * delta_dot, 0.0)
+
+
+def _check(mass, v0, k, n, b):
+    return (check_positive("mass", mass, unit="kg"), check_positive("v0", v0, unit="m/s"),
+            check_positive("k", k, unit="N/m^n"), check_range("n", n, 0.5, 5.0),
+            check_nonnegative("b", b, unit="N s/m^(n+1)"))
+
+
+def max_penetration(mass, v0, k, n, b=0.0) -> float:
+    """Maximum penetration [m] of a Hunt-Crossley impact (Marhefka & Orin 1999).
+
+    delta_max = [(n+1) m/b^2 (b v0 - k ln(1 + b v0/k))]^(1/(n+1)), which tends to
+    [(n+1) m v0^2/(2k)]^(1/(n+1)) for b -> 0.
+
+    Parameters
+    ----------
+    mass : float
+        Impacting (or reduced) mass [kg].
+    v0 : float
+        Approach speed [m/s], > 0.
+    k, n, b : float
+        Contact parameters: stiffness [N/m^n], exponent [-], damping [N s/m^(n+1)].
+    """
+    m, v0, k, n, b = _check(mass, v0, k, n, b)
+    x = b * v0 / k
+    if x < 1e-3:   # x - ln(1 + x) = x^2/2 - x^3/3 + x^4/4 - ..., avoids cancellation
+        level = m * v0 * v0 / (2.0 * k) * (1.0 - 2.0 * x / 3.0 + x * x / 2.0 - 2.0 * x ** 3 / 5.0)
+    else:
+        level = m / (b * b) * (b * v0 - k * math.log1p(x))   # = delta_max^(n+1)/(n+1)
+    return ((n + 1.0) * level) ** (1.0 / (n + 1.0))
+
+
+def exit_velocity(mass, v0, k, n, b=0.0) -> float:
+    """Rebound speed [m/s] (positive) of a Hunt-Crossley impact with approach speed v0.
+
+    The phase-plane invariant at delta = 0 on entry (velocity v0) and exit
+    (velocity u = -v_out in (-k/b, 0)) gives, with x = b v0/k and y = b u/k,
+    x - ln(1 + x) = y - ln(1 + y), solved for y in (-1, 0).  Independent of m
+    and n; the restitution is e = v_out/v0.  ``mass`` and ``n`` are only
+    validated.
+    """
+    from scipy.optimize import brentq
+
+    _, v0, k, n, b = _check(mass, v0, k, n, b)
+    if b == 0.0:
+        return v0
+    x = b * v0 / k
+    target = _x_minus_log1p(x)
+    y = brentq(lambda y: _x_minus_log1p(y) - target, -1.0 + 1e-15, 0.0, xtol=1e-300,
+               rtol=1e-15, maxiter=500)
+    return -k / b * y
+
+
+def _x_minus_log1p(x: float) -> float:
+    """x - ln(1 + x), accurate also for small |x| (series below 1e-3)."""
+    if abs(x) < 1e-3:
+        return x * x * (0.5 - x / 3.0 + x * x / 4.0 - x ** 3 / 5.0)
+    return x - math.log1p(x)
+
+
+def restitution(v0, k, b) -> float:
+    """Coefficient of restitution e = v_out / v0 of a Hunt-Crossley impact [-]."""
+    return exit_velocity(1.0, v0, k, 1.0, b) / check_positive("v0", v0, unit="m/s")

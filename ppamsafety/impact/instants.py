@@ -1,0 +1,96 @@
+"""From a closed-loop experiment to impact cases (thesis §6.3.2-6.3.3).
+
+For an impact at t0 the arm model starts from the link angles and velocities
+of the experiment at t0, with the joint stiffnesses (2.18) computed from the
+pressures at t0 (assumed constant during the impact).  The thesis evaluated
+only four instants per experiment (largest TCP speed, largest |qd1|, largest
+|qd2|, largest ||qd||) and kept the worst; :func:`evaluate_experiment` can
+evaluate those or every sample of the record.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from .._validation import check_choice, check_int
+from ..plant import geometry as geo
+from ..plant.pneumatics import joint_stiffness
+from .model import ImpactResults, simulate_impacts
+
+HEURISTICS = ("max TCP speed", "max |qd1|", "max |qd2|", "max ||qd||")
+
+
+def impact_states(result, arm) -> pd.DataFrame:
+    """Per-sample impact initial conditions of an :class:`ExperimentResult`.
+
+    Columns: t [s], q1, q2 [rad], qd1, qd2 [rad/s], K1, K2 [N m/rad]
+    (2.18 with the simulated pressures), tcp_speed [m/s].
+    """
+    log = result.log
+    ok = np.isfinite(log[:, 1])
+    q, qd, p = log[ok, 1:3], log[ok, 3:5], log[ok, 5:9]
+    K = joint_stiffness(q, p, arm)
+    v = np.einsum("nij,nj->ni", geo.jacobian(q, arm), qd)
+    return pd.DataFrame({"t": log[ok, 0], "q1": q[:, 0], "q2": q[:, 1], "qd1": qd[:, 0],
+                         "qd2": qd[:, 1], "K1": K[:, 0], "K2": K[:, 1],
+                         "tcp_speed": np.linalg.norm(v, axis=1)})
+
+
+def heuristic_instants(states: pd.DataFrame) -> dict:
+    """Row indices of the four impact instants of §6.3.3 (name -> index)."""
+    qd = states[["qd1", "qd2"]].to_numpy()
+    return {HEURISTICS[0]: int(np.argmax(states["tcp_speed"].to_numpy())),
+            HEURISTICS[1]: int(np.argmax(np.abs(qd[:, 0]))),
+            HEURISTICS[2]: int(np.argmax(np.abs(qd[:, 1]))),
+            HEURISTICS[3]: int(np.argmax(np.linalg.norm(qd, axis=1)))}
+
+
+def evaluate_experiment(result, arm, *, instants: str = "heuristic", every: int = 1,
+                        head=None, dt: float = 2e-5, duration: float = 0.05,
+                        min_speed: float = 0.0, history=False) -> ImpactResults:
+    """Simulate head impacts at instants of an experiment.
+
+    Parameters
+    ----------
+    result : ExperimentResult
+        The closed-loop record.
+    arm : ArmParameters
+    instants : {"heuristic", "all"}, keyword-only
+        The four instants of §6.3.3, or every ``every``-th sample.
+    every : int
+        Sample stride for ``instants="all"`` (1 = every control period, 1 ms).
+    head : HeadContactModel or str, optional
+    dt, duration : float
+        Impact integration step and length [s].
+    min_speed : float
+        With ``"all"``, instants whose TCP speed is below this [m/s] are
+        skipped (reported with zero force), e.g. 1e-4 to skip the arm at rest.
+    history : bool or sequence of int
+        Passed to :func:`simulate_impacts` (indices into the evaluated rows).
+
+    Returns
+    -------
+    ImpactResults
+        Summary with an extra column ``t0`` (impact instant) and, for the
+        heuristic, ``instant`` (its name).
+    """
+    check_choice("instants", instants, ("heuristic", "all"))
+    every = check_int("every", every, 1, 10 ** 6)
+    st = impact_states(result, arm)
+    if instants == "heuristic":
+        h = heuristic_instants(st)
+        idx = np.array(list(h.values()))
+        names = list(h.keys())
+    else:
+        idx = np.arange(0, len(st), every)
+        idx = idx[st["tcp_speed"].to_numpy()[idx] >= min_speed] if min_speed > 0 else idx
+        names = None
+    sub = st.iloc[idx]
+    res = simulate_impacts(arm, sub[["q1", "q2"]].to_numpy(), sub[["qd1", "qd2"]].to_numpy(),
+                           sub[["K1", "K2"]].to_numpy(), head=head, dt=dt, duration=duration,
+                           history=history)
+    res.summary.insert(0, "t0", sub["t"].to_numpy())
+    if names is not None:
+        res.summary.insert(0, "instant", names)
+    return res

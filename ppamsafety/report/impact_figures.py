@@ -1,0 +1,175 @@
+"""Figures of the collision and safety analysis (thesis chapter 6).
+
+Each function takes computed data (DataFrames, result objects) and returns a
+matplotlib Figure; nothing here simulates.
+"""
+
+from __future__ import annotations
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+
+from ..params.head import MAXILLA_FRACTURE_N  # noqa: E402
+
+FAMILY_COLORS = {"PID": "tab:red", "PSMC joint Ki=2": "tab:blue", "PSMC joint Ki=12": "tab:green",
+                 "PSMC task": "tab:purple"}
+
+
+def plot_impact_history(hist, *, head=None, title: str = "", ax=None):
+    """Contact force, head acceleration and penetration of one impact."""
+    fig, axes = plt.subplots(3, 1, figsize=(7, 6.5), sharex=True)
+    t = hist["t"] * 1e3
+    axes[0].plot(t, hist["F"], color="k")
+    axes[0].axhline(MAXILLA_FRACTURE_N, color="r", ls="--", lw=1, label="maxilla 660 N")
+    axes[0].set_ylabel("contact force [N]")
+    axes[0].legend(loc="upper right")
+    axes[1].plot(t, hist["a_head_g"], color="tab:blue")
+    axes[1].set_ylabel("head acceleration [g]")
+    axes[2].plot(t, hist["delta"] * 1e3, color="tab:green")
+    axes[2].axhline(0, color="k", lw=0.5)
+    axes[2].set_ylabel("penetration [mm]")
+    axes[2].set_xlabel("time after impact [ms]")
+    for a in axes:
+        a.grid(alpha=0.3)
+    fig.suptitle(title or "impact time history")
+    fig.tight_layout()
+    return fig
+
+
+def plot_worst_histories(items, *, title: str = ""):
+    """Force and head-acceleration histories of several impacts: items = [(label, hist)]."""
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4))
+    for label, h in items:
+        axes[0].plot(h["t"] * 1e3, h["F"], label=label)
+        axes[1].plot(h["t"] * 1e3, h["a_head_g"], label=label)
+    axes[0].axhline(MAXILLA_FRACTURE_N, color="r", ls="--", lw=1, label="maxilla 660 N")
+    axes[0].set_ylabel("contact force [N]")
+    axes[1].set_ylabel("head acceleration [g]")
+    for a in axes:
+        a.set_xlabel("time after impact [ms]")
+        a.set_xlim(0, 25)
+        a.grid(alpha=0.3)
+    axes[0].legend(fontsize=7)
+    fig.suptitle(title or "worst impacts")
+    fig.tight_layout()
+    return fig
+
+
+def plot_safety_table(table, *, experiments=("step", "switch")):
+    """F_max and HIC per controller variant with the thesis values and the 660 N line.
+
+    ``table`` needs columns label, family, experiment, F_max, HIC36, Fmax_thesis, HIC_thesis.
+    """
+    fig, axes = plt.subplots(2, len(experiments), figsize=(6 * len(experiments), 7.5))
+    axes = np.atleast_2d(axes).reshape(2, len(experiments))
+    for j, exp in enumerate(experiments):
+        sub = table[table["experiment"] == exp].reset_index(drop=True)
+        x = np.arange(len(sub))
+        colors = [FAMILY_COLORS.get(f, "gray") for f in sub["family"]]
+        for i, (col, thcol, ylab) in enumerate((("F_max", "Fmax_thesis", "F_max [N]"),
+                                                  ("HIC36", "HIC_thesis", "HIC36"))):
+            a = axes[i, j]
+            a.bar(x, sub[col], color=colors, alpha=0.8, label="toolkit")
+            a.plot(x, sub[thcol], "k_", ms=18, mew=2, label="thesis Table 6.1")
+            if col == "F_max":
+                a.axhline(MAXILLA_FRACTURE_N, color="r", ls="--", lw=1.2, label="maxilla 660 N")
+            else:
+                a.set_yscale("log")
+            a.set_ylabel(ylab)
+            a.set_xticks(x)
+            a.set_xticklabels(sub["label"], rotation=70, ha="right", fontsize=7)
+            a.grid(alpha=0.3, axis="y")
+            a.set_title(f"{exp}: {ylab.split()[0]}")
+            if i == 0 and j == 0:
+                a.legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def plot_fmax_over_time(items, *, title: str = ""):
+    """F_max of an impact at every instant of experiments: items = [(label, summary, marks)].
+
+    ``summary`` has columns t0 and F_max; ``marks`` maps heuristic names to t0.
+    """
+    fig, axes = plt.subplots(len(items), 1, figsize=(10, 2.4 * len(items) + 0.5), sharex=True,
+                             squeeze=False)
+    for a, (label, s, marks) in zip(axes[:, 0], items):
+        a.plot(s["t0"], s["F_max"], color="k", lw=1)
+        for name, t0 in marks.items():
+            a.axvline(t0, color="tab:orange", lw=0.8, alpha=0.8)
+        a.axhline(MAXILLA_FRACTURE_N, color="r", ls="--", lw=1)
+        a.set_ylabel("F_max [N]")
+        a.set_title(label, fontsize=9)
+        a.grid(alpha=0.3)
+    axes[-1, 0].set_xlabel("impact instant t0 [s] (orange: the four heuristic instants)")
+    fig.suptitle(title or "peak force of an impact at every instant")
+    fig.tight_layout()
+    return fig
+
+
+def plot_stiffness_sweep(df, *, reference=None, two_body=None):
+    """F_max against joint stiffness (cf. fig. 6.3), with the two-body prediction."""
+    fig, ax = plt.subplots(figsize=(7, 4))
+    ax.semilogx(df["k"], df["F_max"], "o-", color="k", label="flexible-joint arm model")
+    if two_body is not None:
+        ax.axhline(two_body, color="tab:blue", ls="--",
+                   label=f"two-body, effective mass ({two_body:.0f} N)")
+    if reference is not None:
+        ax.axvline(reference[0], color="tab:gray", lw=0.8)
+        ax.axvline(reference[1], color="tab:gray", lw=0.8, label="K1, K2 of the experiment")
+    ax.set_xlabel("joint stiffness k (both joints) [Nm/rad]")
+    ax.set_ylabel("F_max [N]")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def plot_head_fit(pairs, curve, *, drop=None, title: str = ""):
+    """Table 6.1 (HIC, F_max) pairs against the fitted model's HIC(F_max) curve."""
+    fig, ax = plt.subplots(figsize=(6.5, 4.5))
+    for exp, marker in (("step", "o"), ("switch", "s")):
+        sub = pairs[pairs["experiment"] == exp]
+        ax.loglog(sub["F_max"], sub["HIC"], marker, ls="none", label=f"Table 6.1, {exp}")
+    ax.loglog(curve["F_max"], curve["HIC36"], "k-", label="fitted Hunt-Crossley model")
+    ax.set_xlabel("F_max [N]")
+    ax.set_ylabel("HIC36")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=8)
+    ax.set_title(title or "one contact model: HIC vs F_max")
+    fig.tight_layout()
+    return fig
+
+
+def plot_lambda_sweep(df, *, tracking=None):
+    """Step-impact F_max and HIC against lambda for each Ki (and tracking error)."""
+    ncol = 3 if tracking is not None else 2
+    fig, axes = plt.subplots(1, ncol, figsize=(5 * ncol, 4))
+    for ki, sub in df.groupby("Ki_bar"):
+        sub = sub.sort_values("lam")
+        axes[0].plot(sub["lam"], sub["F_max"], "o-", label=f"Ki = {ki:g} bar/(rad s)")
+        axes[1].semilogy(sub["lam"], sub["HIC36"], "o-", label=f"Ki = {ki:g}")
+        if tracking is not None:
+            axes[2].plot(sub["lam"], sub[tracking] * 1e3, "o-", label=f"Ki = {ki:g}")
+    axes[0].axhline(MAXILLA_FRACTURE_N, color="r", ls="--", lw=1, label="maxilla 660 N")
+    axes[0].set_ylabel("worst F_max in the step [N]")
+    axes[1].set_ylabel("worst HIC36 in the step")
+    if tracking is not None:
+        axes[2].set_ylabel("mean circle error, P = 10 s [mm]")
+    for a in axes:
+        a.set_xlabel("lambda [s]")
+        a.grid(alpha=0.3, which="both")
+        a.legend(fontsize=8)
+    fig.suptitle("joint-space PSMC: safety and tracking against lambda and Ki")
+    fig.tight_layout()
+    return fig
+
+
+def save(fig, path) -> str:
+    """Save as PNG (150 dpi), close, return the path."""
+    fig.savefig(path, dpi=150)
+    plt.close(fig)
+    return str(path)

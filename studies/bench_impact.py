@@ -1,0 +1,73 @@
+"""Benchmark of the impact engine (issue 4, item 7).
+
+Prints the wall time of one impact with its HIC, of a batch of 5000 impacts,
+of the same impacts with one scipy.integrate.solve_ivp call each (measured on
+a sample and extrapolated), and of the exact HIC against brute force on a
+50 ms record.  Run:  python studies/bench_impact.py
+"""
+
+import time
+
+import numpy as np
+
+from ppamsafety.impact.hic import hic, hic_bruteforce
+from ppamsafety.impact.model import simulate_impacts
+from ppamsafety.impact.reference import simulate_impact_scipy
+from ppamsafety.params import thesis_arm
+from ppamsafety.units import DEG
+
+
+def best_of(f, repeats=3):
+    best = np.inf
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        out = f()
+        best = min(best, time.perf_counter() - t0)
+    return best, out
+
+
+def cases(n, seed=0):
+    """n impact cases spread over the working area, tool speeds 0.1-3 m/s."""
+    rng = np.random.default_rng(seed)
+    q = np.stack([rng.uniform(30, 95, n), rng.uniform(-120, -40, n)], 1) * DEG
+    qd = rng.normal(scale=2.0, size=(n, 2))
+    K = np.stack([rng.uniform(30, 60, n), rng.uniform(15, 35, n)], 1)
+    return q, qd, K
+
+
+def main(n_batch=5000, n_scipy=40):
+    arm = thesis_arm()
+    q, qd, K = cases(n_batch)
+    simulate_impacts(arm, q[:2], qd[:2], K[:2])                    # compile
+    t_one, _ = best_of(lambda: simulate_impacts(arm, q[0], qd[0], K[0]), 10)
+    t_batch, res = best_of(lambda: simulate_impacts(arm, q, qd, K), 2)
+    simulate_impact_scipy(arm, q[0], qd[0], K[0])                  # compile the rhs
+    t0 = time.perf_counter()
+    for i in range(n_scipy):
+        simulate_impact_scipy(arm, q[i], qd[i], K[i])
+    t_scipy = (time.perf_counter() - t0) / n_scipy * n_batch
+    s = res.summary
+    a = np.zeros(2501)
+    h = s.loc[s.HIC36.idxmax()]
+    r = simulate_impacts(arm, q[s.HIC36.idxmax()], qd[s.HIC36.idxmax()], K[s.HIC36.idxmax()],
+                         dt=2e-5, history=True)
+    a = r.histories[0]["a_head_g"].to_numpy()
+    hic(a, 2e-5), hic_bruteforce(a, 2e-5)
+    t_hic, _ = best_of(lambda: hic(a, 2e-5), 20)
+    t_bf, _ = best_of(lambda: hic_bruteforce(a, 2e-5), 3)
+    rows = [("one impact + HIC36/HIC15", t_one, "<= 0.010 s"),
+            (f"{n_batch} impacts (batched kernel)", t_batch, "<= 10 s"),
+            (f"{n_batch} impacts, one solve_ivp each (extrapolated from {n_scipy})", t_scipy, ""),
+            ("speed-up batched vs solve_ivp", t_scipy / t_batch, ">= 20x"),
+            (f"exact HIC, 50 ms at 20 us (worst case, HIC {h.HIC36:.2f})", t_hic, ""),
+            ("brute-force HIC, same record", t_bf, ""),
+            ("speed-up exact vs brute force", t_bf / t_hic, ">= 100x")]
+    print(f"{'quantity':<70s} {'value':>12s}  target")
+    for name, v, target in rows:
+        unit = "x" if "speed-up" in name else "s"
+        print(f"{name:<70s} {v:12.4g}{unit}  {target}")
+    return dict((name, v) for name, v, _ in rows)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,51 @@
+"""Head contact models and the reconstruction of the thesis' parameters."""
+
+import math
+
+import numpy as np
+import pytest
+
+from ppamsafety.impact import head_fit as hf
+from ppamsafety.params.head import HeadContactModel, head_model, head_model_names
+from ppamsafety.units import G0
+
+
+def test_named_models_and_errors():
+    names = head_model_names()
+    assert {"thesis-frontal", "iso15066-forehead", "iso15066-face", "child-frontal"} <= set(names)
+    assert head_model("iso15066-forehead").stiffness == pytest.approx(150e3)   # 150 N/mm
+    assert head_model().mass == 5.0                                          # thesis §6.3.2
+    with pytest.raises(ValueError, match="unknown head model"):
+        head_model("alien")
+    with pytest.raises(ValueError, match="exponent"):
+        head_model().replace(exponent=0.2)
+    with pytest.raises(ValueError, match="x.mass"):
+        HeadContactModel("x", mass=-1, radius=0.1, stiffness=1e5, exponent=1, damping=0)
+
+
+def test_force_is_never_negative():
+    h = head_model()
+    f = h.force(np.linspace(-1e-3, 5e-3, 50), -100.0)
+    assert np.all(f >= 0) and np.all(f[:9] == 0)
+
+
+def test_drop_test_oracle_for_a_linear_spring():
+    """Linear undamped contact: peak force v sqrt(k m) exactly (energy balance)."""
+    v = math.sqrt(2 * G0 * hf.HYBRID3_DROP_HEIGHT)
+    m = hf.HYBRID3_HEAD_MASS
+    k = (250 * m * G0) ** 2 / (m * v * v)
+    assert hf.hybrid3_drop_peak_g(k, 1.0, 0.0, dt=1e-7) == pytest.approx(250.0, rel=1e-5)
+
+
+def test_iso_effective_spring_of_a_linear_contact_is_k():
+    assert hf.iso_effective_spring(150e3, 1.0, 130.0) == pytest.approx(150e3)
+
+
+def test_stored_thesis_model_is_the_fit_output(arm):
+    """params.head stores the rounded output of fit_thesis_head (provenance check)."""
+    fit = hf.fit_thesis_head(arm)
+    h = head_model()
+    assert h.exponent == fit.exponent == 1.5
+    assert h.stiffness == pytest.approx(fit.stiffness, rel=0.03)
+    assert h.damping == pytest.approx(fit.damping, rel=0.03)
+    assert fit.rms_sigma < 1.0                         # Table 6.1 pairs within 1 sd on average
