@@ -1,5 +1,22 @@
-"""Impact analysis.
+"""Collision and safety analysis (thesis chapter 6).
 
-Modules: :mod:`.hic` (Head Injury Criterion, thesis eq. 6.1: exact fast evaluation of
-sampled records and closed forms for half-sine and rectangular pulses).
+Modules (one concept each):
+
+* :mod:`.contact` -- Hunt-Crossley contact law and its closed-form solution;
+* :mod:`.engine` -- the compiled batch kernel: flexible-joint arm against a free head;
+* :mod:`.model` -- :func:`simulate_impacts`, :class:`ImpactResults`, :func:`effective_mass`;
+* :mod:`.instants` -- impact cases from a closed-loop experiment (four instants or all);
+* :mod:`.hic` -- Head Injury Criterion: exact fast evaluation and closed forms;
+* :mod:`.twobody` -- the one-dimensional effective-mass impact;
+* :mod:`.head_fit` -- reconstruction of the thesis' head contact parameters;
+* :mod:`.reference` -- the same impact with scipy's adaptive integrator;
+* :mod:`.pymunk_engine` -- the same impact built from pymunk bodies, pivots and rotary
+  springs, an independent cross-check of the main engine;
+* :mod:`.thesis_data` -- Table 6.1 and fig. 6.3 reference values.
 """
+
+from .hic import hic
+from .instants import evaluate_experiment
+from .model import ImpactResults, effective_mass, simulate_impacts
+
+__all__ = ["hic", "evaluate_experiment", "ImpactResults", "effective_mass", "simulate_impacts"]
