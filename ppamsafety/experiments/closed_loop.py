@@ -156,7 +156,7 @@ class ExperimentResult:
         return np.hypot(self.log[:, 21], self.log[:, 22])
 
     def plot(self, **kwargs):
-        from ..report.figures import plot_experiment
+        from ..report.control_figures import plot_experiment
         return plot_experiment(self, **kwargs)
 
 

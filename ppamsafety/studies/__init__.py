@@ -33,4 +33,5 @@ class StudyResult:
 
 
 #: Study modules in report order (module names inside ppamsafety.studies).
-REGISTRY = ["design"]
+REGISTRY = ["design", "tracking", "responses", "smc", "head_model", "safety", "stiffness",
+            "lambda_sweep"]

@@ -1,0 +1,215 @@
+"""Scalar measures of closed-loop runs: tracking error, recovery, step response, chattering.
+
+All functions take :class:`~ppamsafety.experiments.closed_loop.ExperimentResult`
+objects (or plain arrays) and return numbers or DataFrames in SI units; none
+of them plots.  Times are measured from the event (step, switch) that caused
+the error.  A run that never meets a tolerance inside its window gets NaN
+(see the docstrings for how callers should read it).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from .._validation import check_positive, check_range
+from .catalog import STEP_TIMES, SWITCH_TIME
+
+
+def _window(t, t_from, t_to):
+    t_to = np.inf if t_to is None else t_to
+    return (t >= t_from - 1e-12) & (t < t_to - 1e-12)
+
+
+def tracking_stats(result, *, t_from: float = 0.0, t_to: float | None = None) -> dict:
+    """Mean, max and RMS of the task-space error ||r_d - r|| [m] over [t_from, t_to).
+
+    Parameters
+    ----------
+    result : ExperimentResult
+    t_from, t_to : float
+        Evaluation window [s] (``t_to`` None: to the end).
+
+    Returns
+    -------
+    dict
+        ``mean``, ``max``, ``rms`` [m] (NaN if the run diverged).
+    """
+    m = _window(result.t, t_from, t_to)
+    if not m.any():
+        raise ValueError(f"tracking_stats: empty window [{t_from}, {t_to}) s")
+    e = result.tracking_error()[m]
+    if result.diverged or not np.all(np.isfinite(e)):
+        return {"mean": np.nan, "max": np.nan, "rms": np.nan}
+    return {"mean": float(e.mean()), "max": float(e.max()), "rms": float(np.sqrt(np.mean(e ** 2)))}
+
+
+def time_to_within(t, err, t_event: float, tol: float, *, t_end: float | None = None) -> float:
+    """Time after ``t_event`` until ``err`` first drops to ``tol`` or below [s].
+
+    NaN if it does not happen before ``t_end`` (read: "longer than
+    t_end - t_event").
+    """
+    check_positive("tol", tol)
+    m = _window(np.asarray(t), t_event, t_end)
+    tt, ee = np.asarray(t)[m], np.asarray(err)[m]
+    ok = np.nonzero(ee <= tol)[0]
+    return float(tt[ok[0]] - t_event) if ok.size else np.nan
+
+
+def settling_time(t, err, t_event: float, tol: float, *, t_end: float | None = None) -> float:
+    """Time after ``t_event`` from which ``err`` stays within ``tol`` until ``t_end`` [s].
+
+    NaN if the error is outside the band at the end of the window (not
+    settled).
+    """
+    check_positive("tol", tol)
+    m = _window(np.asarray(t), t_event, t_end)
+    tt, ee = np.asarray(t)[m], np.asarray(err)[m]
+    if ee.size == 0 or not ee[-1] <= tol:
+        return np.nan
+    out = np.nonzero(~(ee <= tol))[0]
+    return float(tt[out[-1] + 1] - t_event) if out.size else 0.0
+
+
+def peak_speeds(result, *, t_from: float = 0.0, t_to: float | None = None) -> dict:
+    """Peak TCP speed [m/s] and peak |qd1|, |qd2| [rad/s] (true values) in a window."""
+    m = _window(result.t, t_from, t_to)
+    v = result.tcp_speed()[m]
+    qd = np.abs(result.log[m][:, 3:5])
+    return {"peak_tcp_speed": float(np.nanmax(v)), "peak_qd1": float(np.nanmax(qd[:, 0])),
+            "peak_qd2": float(np.nanmax(qd[:, 1]))}
+
+
+def step_metrics(result, *, t_event: float, t_end: float, joint: int = 0,
+                 tol: float = np.radians(1.0)) -> dict:
+    """Response of one joint to a step of its reference at ``t_event``.
+
+    Parameters
+    ----------
+    result : ExperimentResult
+    t_event, t_end : float
+        Step time and end of the window (next step or end of record) [s].
+    joint : {0, 1}
+        Stepped joint.
+    tol : float
+        Band around the new set angle [rad] for the reach / settling times.
+
+    Returns
+    -------
+    dict
+        ``step`` (signed size [rad]), ``overshoot`` [rad] (beyond the new set
+        angle in the direction of the step, 0 if none), ``overshoot_pct``
+        [% of the step], ``t_90`` (time to 90 % of the step [s]),
+        ``t_reach`` (first time within ``tol`` [s]), ``t_settle`` (stays
+        within ``tol`` until ``t_end`` [s]); NaN where not reached.
+    """
+    check_range("joint", joint, 0, 1)
+    t = result.t
+    q = result.log[:, 1 + joint]
+    qd_ref = result.reference.data[:, joint]
+    k0 = int(np.searchsorted(t, t_event - 1e-12))
+    if k0 < 1 or k0 >= t.size:
+        raise ValueError(f"step_metrics: t_event = {t_event} s is outside the record")
+    q_from, q_to = qd_ref[k0 - 1], qd_ref[k0]
+    size = q_to - q_from
+    if size == 0:
+        raise ValueError("step_metrics: the reference does not step at t_event")
+    m = _window(t, t_event, t_end)
+    direction = np.sign(size)
+    progress = (q[m] - q_from) * direction
+    over = max(0.0, float(np.nanmax(progress) - abs(size)))
+    reached90 = np.nonzero(progress >= 0.9 * abs(size))[0]
+    err = np.abs(q - q_to)
+    return {"step": float(size), "overshoot": over, "overshoot_pct": 100.0 * over / abs(size),
+            "t_90": float(t[m][reached90[0]] - t_event) if reached90.size else np.nan,
+            "t_reach": time_to_within(t, err, t_event, tol, t_end=t_end),
+            "t_settle": settling_time(t, err, t_event, tol, t_end=t_end)}
+
+
+def chattering_index(dp, dt: float, *, f_cut: float = 5.0) -> float:
+    """RMS of the commanded Delta p above ``f_cut`` [Pa], both joints combined.
+
+    The command is detrended (mean removed per joint), transformed with an
+    FFT, all components below ``f_cut`` are removed and the RMS of what is
+    left is taken, summed over the joints in quadrature.  The default 5 Hz
+    lies well above the reference's content (circle harmonics at
+    multiples of 1/P) and above the valves' bandwidth (1/(2 pi T) = 2.7 Hz
+    for T = 60 ms), so what it measures is switching the valves cannot
+    follow: chattering.
+
+    Parameters
+    ----------
+    dp : array_like, shape (n, 2)
+        Commanded Delta p per joint [Pa] at the control rate.
+    dt : float
+        Sample period [s].
+    f_cut : float
+        Cut-off frequency [Hz].
+    """
+    x = np.asarray(dp, dtype=float)
+    if x.ndim != 2 or x.shape[0] < 4:
+        raise ValueError("chattering_index: dp must have shape (n >= 4, joints)")
+    check_positive("dt", dt, unit="s")
+    check_positive("f_cut", f_cut, unit="Hz")
+    if not np.all(np.isfinite(x)):
+        return np.nan
+    n = x.shape[0]
+    F = np.fft.rfft(x - x.mean(axis=0), axis=0)
+    F[np.fft.rfftfreq(n, dt) < f_cut] = 0.0
+    hp = np.fft.irfft(F, n=n, axis=0)
+    return float(np.sqrt(np.sum(np.mean(hp ** 2, axis=0))))
+
+
+def command_increment_rms(dp) -> float:
+    """RMS of the sample-to-sample change of the commanded Delta p [Pa], joints combined."""
+    x = np.asarray(dp, dtype=float)
+    if x.ndim != 2 or x.shape[0] < 2:
+        raise ValueError("command_increment_rms: dp must have shape (n >= 2, joints)")
+    return float(np.sqrt(np.sum(np.mean(np.diff(x, axis=0) ** 2, axis=0))))
+
+
+def response_table(results, *, experiment: str, tol_angle: float = np.radians(1.0),
+                   tol_tcp: float = 0.005, step_times=STEP_TIMES,
+                   switch_time: float = SWITCH_TIME) -> pd.DataFrame:
+    """One row of response measures per run of a step or switch experiment.
+
+    Step (``experiment="step"``): peaks over t >= first step; overshoot,
+    90 % time, reach and settling times (band ``tol_angle`` around the new
+    q1 set angle) of the *upward* q1 step, evaluated until the downward step.
+    Switch: peaks over t >= switch; reach and settling times of the TCP error
+    into ``tol_tcp`` after the switch.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns ``variant``, ``peak_tcp_speed_m_s``, ``peak_qd1_rad_s``,
+        ``peak_qd2_rad_s``, and for the step ``overshoot_deg``,
+        ``overshoot_pct``, ``t90_s``; for both ``t_reach_s``,
+        ``t_settle_s`` (NaN: not within the band in the window).
+    """
+    if experiment not in ("step", "switch"):
+        raise ValueError(f"response_table: experiment = {experiment!r} is not 'step' or 'switch'")
+    rows = []
+    for r in results:
+        label = r.meta.get("label", r.name)
+        t_ev = step_times[0] if experiment == "step" else switch_time
+        pk = peak_speeds(r, t_from=t_ev)
+        row = {"variant": label, "peak_tcp_speed_m_s": pk["peak_tcp_speed"],
+               "peak_qd1_rad_s": pk["peak_qd1"], "peak_qd2_rad_s": pk["peak_qd2"]}
+        if experiment == "step":
+            sm = step_metrics(r, t_event=step_times[0], t_end=step_times[1], joint=0,
+                              tol=tol_angle)
+            row.update({"overshoot_deg": np.degrees(sm["overshoot"]),
+                        "overshoot_pct": sm["overshoot_pct"], "t90_s": sm["t_90"],
+                        "t_reach_s": sm["t_reach"], "t_settle_s": sm["t_settle"]})
+        else:
+            e = r.tracking_error()
+            row.update({"t_reach_s": time_to_within(r.t, e, switch_time, tol_tcp),
+                        "t_settle_s": settling_time(r.t, e, switch_time, tol_tcp)})
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+__all__ = ["tracking_stats", "time_to_within", "settling_time", "peak_speeds", "step_metrics",
+           "chattering_index", "command_increment_rms", "response_table"]

@@ -1,0 +1,38 @@
+"""The impact studies run end to end in quick mode and write their artifacts."""
+
+import pytest
+
+from ppamsafety.studies import head_model, lambda_sweep, safety, stiffness
+
+
+@pytest.fixture(scope="module")
+def safety_run(tmp_path_factory):
+    out = tmp_path_factory.mktemp("safety")
+    return out, safety.run(out, quick=True)
+
+
+def test_safety_study_writes_its_artifacts(safety_run):
+    out, res = safety_run
+    for f in ["safety_table_6_1.csv", "safety_table_6_1.png", "safety_every_instant.csv",
+              "safety_fmax_over_time.png", "safety_worst_histories.png"]:
+        assert (out / f).exists(), f
+    assert "Table 6.1 reproduced" in res.markdown
+
+
+def test_safety_study_reproduces_the_thesis_ordering(safety_run):
+    """PID is far more dangerous than PSMC on the step, and PID breaks 660 N (§6.3.3)."""
+    _, res = safety_run
+    assert res.metrics["pid_step_F_max"] > 660.0
+    assert res.metrics["conclusions_hold"] >= res.metrics["conclusions"] - 1
+
+
+@pytest.mark.parametrize("module, files", [
+    (stiffness, ["stiffness_sweep.csv", "stiffness_sweep.png"]),
+    (head_model, ["head_model_fit.png", "head_model_fits.csv", "head_model_sensitivity.csv"]),
+    (lambda_sweep, ["lambda_sweep.csv", "lambda_sweep.png"]),
+])
+def test_impact_study_quick(tmp_path, module, files):
+    res = module.run(tmp_path, quick=True)
+    for f in files:
+        assert (tmp_path / f).exists(), f
+    assert res.markdown.strip()
