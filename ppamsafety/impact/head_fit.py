@@ -116,7 +116,12 @@ class HeadFit:
 
 def _model_hic_at(F, k, n, b, arm_mass, head_mass):
     c = hic_curve(k, n, b, arm_mass=arm_mass, head_mass=head_mass)
-    return np.exp(np.interp(np.log(F), np.log(c["F_max"]), np.log(np.maximum(c["HIC36"], 1e-15))))
+    ok = (c["F_max"] > 0) & (c["HIC36"] > 0)      # trial parameters may give empty points
+    if ok.sum() < 2:
+        return np.full(np.shape(F), 1e-15)
+    c = c[ok]
+    return np.exp(np.interp(np.log(F), np.log(c["F_max"].to_numpy()),
+                            np.log(c["HIC36"].to_numpy())))
 
 
 def fit_thesis_head(arm, *, exponent: float = 1.5, arm_mass: float | None = None,
