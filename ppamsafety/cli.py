@@ -56,6 +56,7 @@ def _cmd_info(args) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    """The argparse parser of the ``ppamsafety`` command."""
     p = argparse.ArgumentParser(
         prog="ppamsafety",
         description="Safety and impact analysis of a 2-DOF arm driven by pleated pneumatic "
@@ -83,6 +84,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv=None) -> int:
+    """Entry point of the ``ppamsafety`` command; returns the exit status."""
     parser = build_parser()
     args = parser.parse_args(argv)
     try:

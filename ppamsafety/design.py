@@ -45,9 +45,11 @@ class TorqueFunctions:
     data: pd.DataFrame
 
     def to_pandas(self) -> pd.DataFrame:
+        """The data as a pandas DataFrame (SI units)."""
         return self.data.copy()
 
     def plot(self, **kwargs):
+        """Plot with :mod:`ppamsafety.report`; returns a matplotlib Figure."""
         from .report.figures import plot_torque_functions
         return plot_torque_functions(self, **kwargs)
 
@@ -84,9 +86,11 @@ class StiffnessMap:
     data: pd.DataFrame
 
     def to_pandas(self) -> pd.DataFrame:
+        """The data as a pandas DataFrame (SI units)."""
         return self.data.copy()
 
     def plot(self, **kwargs):
+        """Plot with :mod:`ppamsafety.report`; returns a matplotlib Figure."""
         from .report.figures import plot_stiffness_map
         return plot_stiffness_map(self, **kwargs)
 
@@ -133,6 +137,7 @@ class MaxLoadMap:
     p_max: float
 
     def to_pandas(self) -> pd.DataFrame:
+        """The data as a pandas DataFrame (SI units)."""
         return self.data.copy()
 
     @property
@@ -147,6 +152,7 @@ class MaxLoadMap:
         return float(r["q1_rad"]), float(r["q2_rad"])
 
     def plot(self, **kwargs):
+        """Plot with :mod:`ppamsafety.report`; returns a matplotlib Figure."""
         from .report.figures import plot_max_load
         return plot_max_load(self, **kwargs)
 

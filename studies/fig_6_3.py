@@ -1,14 +1,9 @@
-"""Joint-stiffness sweep of the step-response impact (thesis §6.3.4, fig. 6.3).
+"""Joint-stiffness sweep of the step-response impact (fig. 6.3).
 
-Run alone:  python studies/fig_6_3.py [outdir]
+Run alone:  python studies/fig_6_3.py [outdir] [--quick]
 """
 
-import pathlib
-import sys
-
-from ppamsafety.studies import stiffness
+from ppamsafety.studies import main
 
 if __name__ == "__main__":
-    out = pathlib.Path(sys.argv[1] if len(sys.argv) > 1 else "reports")
-    out.mkdir(parents=True, exist_ok=True)
-    print(stiffness.run(out).markdown)
+    main("stiffness")

@@ -95,4 +95,5 @@ class GravityCompensation(Controller):
         self.at = at
 
     def pack(self) -> np.ndarray:
+        """Parameter vector of the compiled step function (SI units)."""
         return np.array([gc_mode(self.at)])

@@ -78,8 +78,10 @@ class PID(Controller):
         self.gc = gc_mode(gravity_compensation)
 
     def pack(self) -> np.ndarray:
+        """Parameter vector of the compiled step function (SI units)."""
         return np.array([*self.kp, *self.ki, *self.kd, float(self.derivative == "difference"),
                          self.gc])
 
     def describe(self) -> dict:
+        """Parameters as a flat dict for result tables."""
         return {"controller": self.name, "Ki_bar_per_rad_s": self.ki[0] / BAR, "lambda_s": np.nan}

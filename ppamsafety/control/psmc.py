@@ -161,10 +161,12 @@ class JointPSMC(Controller):
         self.gc = gc_mode(gravity_compensation, ("off", "measured", "desired", "proxy"))
 
     def pack(self) -> np.ndarray:
+        """Parameter vector of the compiled step function (SI units)."""
         return np.array([*self.kp, *self.ki, *self.kd, *self.lam, *self.dp_limit,
                          self.gc])
 
     def describe(self) -> dict:
+        """Parameters as a flat dict for result tables."""
         return {"controller": self.name, "Ki_bar_per_rad_s": self.ki[0] / BAR,
                 "lambda_s": self.lam[0]}
 
@@ -202,8 +204,10 @@ class TaskPSMC(Controller):
         self.gc = gc_mode(gravity_compensation, ("off", "measured", "desired", "proxy"))
 
     def pack(self) -> np.ndarray:
+        """Parameter vector of the compiled step function (SI units)."""
         return np.array([self.kp, self.ki, self.kd, self.lam, self.force_limit,
                          self.gc])
 
     def describe(self) -> dict:
+        """Parameters as a flat dict for result tables."""
         return {"controller": self.name, "Ki_bar_per_rad_s": np.nan, "lambda_s": self.lam}

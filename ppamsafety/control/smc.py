@@ -192,10 +192,12 @@ class SlidingModeControl(Controller):
         self.model_links = model_links
 
     def pack(self) -> np.ndarray:
+        """Parameter vector of the compiled step function (SI units)."""
         return np.array([*self.alpha0, *self.alpha1, *self.gain, *self.boundary_layer,
                          float(self.coupling == "mimo")])
 
     def model_row(self, arm) -> np.ndarray:
+        """Packed arm parameters the controller believes in (its model)."""
         a = arm
         if self.model_time_constants is not None:
             a = a.replace(valves=a.valves.with_time_constants(self.model_time_constants))
@@ -203,5 +205,6 @@ class SlidingModeControl(Controller):
         return lay.pack(a, links.base_parameters(arm.geometry.L1))
 
     def describe(self) -> dict:
+        """Parameters as a flat dict for result tables."""
         return {"controller": self.name, "Ki_bar_per_rad_s": np.nan, "lambda_s": np.nan,
                 "boundary_layer": self.boundary_layer[0]}

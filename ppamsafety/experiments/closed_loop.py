@@ -144,6 +144,7 @@ class ExperimentResult:
 
     @property
     def t(self) -> np.ndarray:
+        """Sample times [s]."""
         return self.log[:, 0]
 
     def tracking_error(self) -> np.ndarray:
@@ -156,6 +157,7 @@ class ExperimentResult:
         return np.hypot(self.log[:, 21], self.log[:, 22])
 
     def plot(self, **kwargs):
+        """Plot with :mod:`ppamsafety.report`; returns a matplotlib Figure."""
         from ..report.control_figures import plot_experiment
         return plot_experiment(self, **kwargs)
 

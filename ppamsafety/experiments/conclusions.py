@@ -78,6 +78,7 @@ class Conclusion:
     numbers: dict = field(default_factory=dict)
 
     def as_row(self) -> dict:
+        """The conclusion as a flat dict (one table row)."""
         return {"": f"({self.key})", "thesis claim": self.claim,
                 "verdict": "holds" if self.holds else "does not hold",
                 "criterion": self.criterion, "evidence": self.evidence}

@@ -53,13 +53,16 @@ class Reference:
 
     @property
     def n_steps(self) -> int:
+        """Number of samples."""
         return self.t.size
 
     @property
     def duration(self) -> float:
+        """Length [s]."""
         return self.t.size * self.dt
 
     def to_pandas(self) -> pd.DataFrame:
+        """The data as a pandas DataFrame (SI units)."""
         df = pd.DataFrame(self.data, columns=REF_COLUMNS)
         df.insert(0, "t", self.t)
         return df

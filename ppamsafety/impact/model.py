@@ -80,6 +80,7 @@ class ImpactResults:
     duration: float = 0.05
 
     def to_pandas(self) -> pd.DataFrame:
+        """The data as a pandas DataFrame (SI units)."""
         return self.summary.copy()
 
     def __len__(self) -> int:
@@ -90,6 +91,7 @@ class ImpactResults:
         return self.summary.loc[self.summary[metric].idxmax()]
 
     def plot(self, index=None, **kwargs):
+        """Plot with :mod:`ppamsafety.report`; returns a matplotlib Figure."""
         from ..report.impact_figures import plot_impact_history
         i = index if index is not None else next(iter(self.histories))
         return plot_impact_history(self.histories[i], head=self.head, **kwargs)

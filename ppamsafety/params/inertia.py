@@ -55,6 +55,17 @@ from .._validation import check_nonnegative, check_positive, check_range
 from ..units import MM
 
 
+def _check_friction(obj) -> None:
+    """Validate the per-joint friction pairs of ``obj`` in place (non-negative, 2 entries)."""
+    cls = type(obj).__name__
+    for name in ("coulomb", "viscous"):
+        vals = getattr(obj, name)
+        if len(vals) != 2:
+            raise ValueError(f"{cls}.{name} must have 2 entries (joint 1, joint 2)")
+        object.__setattr__(obj, name, tuple(
+            check_nonnegative(f"{cls}.{name}[{i}]", v) for i, v in enumerate(vals)))
+
+
 @dataclass(frozen=True)
 class BaseParameters:
     """Base parameters theta of (B.5)/(B.6) plus friction (3.30).
@@ -95,12 +106,7 @@ class BaseParameters:
         check_range("BaseParameters.m2LG2", self.m2LG2, -10, 10, unit="kg m")
         check_range("BaseParameters.m2dG2", self.m2dG2, -10, 10, unit="kg m")
         check_positive("BaseParameters.IS2", self.IS2, unit="kg m^2")
-        for name in ("coulomb", "viscous"):
-            vals = getattr(self, name)
-            if len(vals) != 2:
-                raise ValueError(f"BaseParameters.{name} must have 2 entries (joint 1, joint 2)")
-            object.__setattr__(self, name, tuple(
-                check_nonnegative(f"BaseParameters.{name}[{i}]", v) for i, v in enumerate(vals)))
+        _check_friction(self)
 
     def as_vector(self) -> np.ndarray:
         """theta as in (B.5): [theta1 .. theta6]."""
@@ -147,12 +153,7 @@ class LinkInertia:
             check_range(f"LinkInertia.{name}", getattr(self, name), -2.0, 2.0, unit="m")
         check_positive("LinkInertia.IG1", self.IG1, unit="kg m^2")
         check_positive("LinkInertia.IG2", self.IG2, unit="kg m^2")
-        for name in ("coulomb", "viscous"):
-            vals = getattr(self, name)
-            if len(vals) != 2:
-                raise ValueError(f"LinkInertia.{name} must have 2 entries (joint 1, joint 2)")
-            object.__setattr__(self, name, tuple(
-                check_nonnegative(f"LinkInertia.{name}[{i}]", v) for i, v in enumerate(vals)))
+        _check_friction(self)
 
     def base_parameters(self, L1: float) -> BaseParameters:
         """Base parameters (B.5) by the parallel-axis (Steiner) relations."""

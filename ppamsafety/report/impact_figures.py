@@ -13,6 +13,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 from ..params.head import MAXILLA_FRACTURE_N  # noqa: E402
+from .figures import save  # noqa: E402,F401  (re-exported for the studies)
 
 FAMILY_COLORS = {"PID": "tab:red", "PSMC joint Ki=2": "tab:blue", "PSMC joint Ki=12": "tab:green",
                  "PSMC task": "tab:purple"}
@@ -167,9 +168,3 @@ def plot_lambda_sweep(df, *, tracking=None):
     fig.tight_layout()
     return fig
 
-
-def save(fig, path) -> str:
-    """Save as PNG (150 dpi), close, return the path."""
-    fig.savefig(path, dpi=150)
-    plt.close(fig)
-    return str(path)

@@ -35,3 +35,18 @@ class StudyResult:
 #: Study modules in report order (module names inside ppamsafety.studies).
 REGISTRY = ["design", "tracking", "responses", "smc", "head_model", "safety", "stiffness",
             "lambda_sweep"]
+
+
+def main(name: str, argv=None) -> None:
+    """Run one study alone: ``python studies/<script>.py [outdir] [--quick]``."""
+    import importlib
+    import pathlib
+    import sys
+
+    args = list(sys.argv[1:] if argv is None else argv)
+    quick = "--quick" in args
+    args = [a for a in args if a != "--quick"]
+    out = pathlib.Path(args[0] if args else "reports")
+    out.mkdir(parents=True, exist_ok=True)
+    res = importlib.import_module(f"ppamsafety.studies.{name}").run(out, quick=quick)
+    print(f"# {res.title}\n\n{res.markdown}")
