@@ -92,8 +92,6 @@ def pack(arm, dynamics=None) -> np.ndarray:
     numpy.ndarray, shape (NP,)
         Read-only vector (cached per argument pair).
     """
-    from . import geometry as geo  # local import: geometry kernels need this module
-
     P = np.zeros(NP)
     _fill_geometry(P, arm.geometry)
     groups = arm.muscles.groups
@@ -101,13 +99,11 @@ def pack(arm, dynamics=None) -> np.ndarray:
         P[NM + i] = grp.n_muscles
         P[L0 + i] = grp.l0
         P[COEF + 5 * i: COEF + 5 * i + 5] = grp.coefficients
-    P[LCONN:LCONN + 4] = geo.design_connection_lengths(P, arm.geometry, arm.muscles.eps_min,
-                                                       arm.muscles.eps_max)
-    for i, grp in enumerate(groups):
-        eps_a = arm.muscles.eps_min
-        P[EPS_A + i] = eps_a
-        P[EPS_F0 + i] = _force_root(grp.coefficients, eps_a)
-        P[V_C + i] = anchor_volume(grp, eps_a) - grp.l0 * _antiderivative(grp.coefficients, eps_a)
+    lconn, eps_a, eps_f0, v_c = _muscle_terms(arm.geometry, arm.muscles)
+    P[LCONN:LCONN + 4] = lconn
+    P[EPS_A:EPS_A + 4] = eps_a
+    P[EPS_F0:EPS_F0 + 4] = eps_f0
+    P[V_C:V_C + 4] = v_c
     for i, v in enumerate(arm.valves.valves):
         P[TV + i], P[V1 + i], P[V2 + i] = v.time_constant, v.v1, v.v2
     pn = arm.pneumatics
@@ -121,6 +117,29 @@ def pack(arm, dynamics=None) -> np.ndarray:
     P[VFRIC] = arm.friction_velocity
     P.setflags(write=False)
     return P
+
+
+@lru_cache(maxsize=64)
+def _muscle_terms(geometry, muscles) -> tuple:
+    """Derived muscle data (connection lengths, volume constants), cached per geometry.
+
+    Only these need a search over the working area; caching them makes packing
+    a parameter variant that differs elsewhere (valves, pressures, inertia)
+    cheap.
+    """
+    from . import geometry as geo  # local import: the geometry kernels need this module
+
+    P = np.zeros(NP)
+    _fill_geometry(P, geometry)
+    for i, grp in enumerate(muscles.groups):
+        P[NM + i] = grp.n_muscles
+        P[L0 + i] = grp.l0
+    lconn = geo.design_connection_lengths(P, geometry, muscles.eps_min, muscles.eps_max)
+    eps_a = [muscles.eps_min] * 4
+    eps_f0 = [_force_root(g.coefficients, muscles.eps_min) for g in muscles.groups]
+    v_c = [anchor_volume(g, muscles.eps_min) - g.l0 * _antiderivative(g.coefficients, muscles.eps_min)
+           for g in muscles.groups]
+    return tuple(lconn), tuple(eps_a), tuple(eps_f0), tuple(v_c)
 
 
 def anchor_volume(group, eps_a: float) -> float:

@@ -84,12 +84,17 @@ def _simulate_batch(X0, U, TAU, dt, substeps, P, out):
     work = np.empty(NWORK)
     x = np.empty(NX)
     h = dt / substeps
+    u = np.empty(NU)
+    tau = np.empty(2)
     for b in range(nb):
         x[:] = X0[b]
+        Pb = P[b].copy()
         out[b, 0] = x
         for k in range(nsteps):
+            u[:] = U[b, k]
+            tau[:] = TAU[b, k]
             for _ in range(substeps):
-                rk4_step(x, U[b, k], TAU[b, k], h, P[b], work)
+                rk4_step(x, u, tau, h, Pb, work)
             out[b, k + 1] = x
 
 
