@@ -1,4 +1,4 @@
-"""The two decorators used for every compiled kernel.
+"""The two decorators used for every compiled kernel, and where they are cached.
 
 * :data:`kernel` -- ``numba.njit`` with on-disk caching (compiled once per
   machine, reused by later processes and by sweep workers) and numpy's
@@ -11,13 +11,50 @@
   lever arms took 160 ns per evaluation as separate functions, 27 ns
   inlined).
 
-Set the environment variable ``NUMBA_DISABLE_JIT=1`` to run the kernels as
-plain Python for debugging.
+Cache location.  numba invalidates a cached function only when *its own*
+source file changes, not when a kernel it calls in another module does, so a
+stale cache could silently run old physics after an edit.  The cache
+therefore lives in a directory named after a hash of every source file of
+the package (``~/.cache/ppamsafety/numba-<hash>``, or
+``$PPAMSAFETY_CACHE_DIR/numba-<hash>``): any edit gives a fresh cache.  An
+explicit ``NUMBA_CACHE_DIR`` set by the user is respected.
+
+Set ``NUMBA_DISABLE_JIT=1`` to run the kernels as plain Python for debugging.
 """
 
+import hashlib
+import os
+from pathlib import Path
+
+import numba
 from numba import njit
 
+
+def _source_hash() -> str:
+    h = hashlib.sha1()
+    root = Path(__file__).resolve().parent
+    for f in sorted(root.rglob("*.py")):
+        h.update(f.relative_to(root).as_posix().encode())
+        h.update(f.read_bytes())
+    return h.hexdigest()[:16]
+
+
+def _configure_cache() -> None:
+    if os.environ.get("NUMBA_CACHE_DIR"):
+        return
+    base = os.environ.get("PPAMSAFETY_CACHE_DIR") or os.path.join(
+        os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "ppamsafety")
+    path = os.path.join(base, f"numba-{_source_hash()}")
+    try:
+        os.makedirs(path, exist_ok=True)
+    except OSError:          # read-only home: fall back to numba's default locations
+        return
+    numba.config.CACHE_DIR = path
+
+
+_configure_cache()
+
 kernel = njit(cache=True, error_model="numpy")
-leaf = njit(error_model="numpy", inline="always")
+leaf = njit(cache=True, error_model="numpy", inline="always")
 
 __all__ = ["kernel", "leaf"]
