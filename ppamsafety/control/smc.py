@@ -34,7 +34,7 @@ import numpy as np
 from .._jit import leaf
 from .._validation import check_choice, check_range
 from ..plant import layout as lay
-from ..plant.dynamics import forward_dynamics
+from ..plant.dynamics import forward_dynamics, mass_matrix_cs
 from ..plant.torque import torque_kernel
 from .base import KIND_SMC, Controller, pair
 
@@ -79,11 +79,7 @@ def smc_step(C, S, Pm, dt, qm, qdm, pm, ref, dp, internals, scratch):
         fp[i] = (pmean - pm[i]) / T - n * (Pm[lay.PATM] + pm[i]) * mt[i] * w / vol[i]
         gp[i] = (1.0 if i % 2 == 0 else -1.0) / T
     # d qdd / d p (only through the joint torques): H^-1 columns times m_tau
-    h11 = Pm[lay.TH + 2] + Pm[lay.TH + 5] + 2.0 * Pm[lay.L1] * (
-        Pm[lay.TH + 3] * math.cos(q2) + Pm[lay.TH + 4] * math.sin(q2))
-    h12 = Pm[lay.TH + 5] + Pm[lay.L1] * (Pm[lay.TH + 3] * math.cos(q2)
-                                         + Pm[lay.TH + 4] * math.sin(q2))
-    h22 = Pm[lay.TH + 5]
+    h11, h12, h22 = mass_matrix_cs(math.cos(q2), math.sin(q2), Pm)
     det = h11 * h22 - h12 * h12
     hi11, hi12, hi22 = h22 / det, -h12 / det, h11 / det
     # sensitivities of qdd to q and qd by central differences

@@ -28,7 +28,8 @@ import math
 import numpy as np
 
 from .._jit import kernel, leaf
-from ..plant.layout import L1, L2, TH
+from ..plant.dynamics import coriolis_cs, mass_matrix_cs
+from ..plant.geometry import tcp_kinematics_cs
 from ..units import G0
 from .contact import hunt_crossley_force
 from .hic import hic_kernel
@@ -51,23 +52,19 @@ NHIST = len(HIST_COLUMNS)
 
 @leaf
 def _arm_terms(y, P):
+    """cos/sin of q2, inertia matrix entries and TCP kinematics at state ``y``."""
     c1, s1 = math.cos(y[0]), math.sin(y[0])
     c2, s2 = math.cos(y[1]), math.sin(y[1])
     c12, s12 = c1 * c2 - s1 * s2, s1 * c2 + c1 * s2
-    a = P[L1] * (P[TH + 3] * c2 + P[TH + 4] * s2)
-    h11, h12, h22 = P[TH + 2] + P[TH + 5] + 2.0 * a, P[TH + 5] + a, P[TH + 5]
-    hq = P[L1] * (P[TH + 3] * s2 - P[TH + 4] * c2)
-    x = P[L1] * c1 + P[L2] * c12
-    yy = P[L1] * s1 + P[L2] * s12
-    j11, j12 = -P[L1] * s1 - P[L2] * s12, -P[L2] * s12
-    j21, j22 = P[L1] * c1 + P[L2] * c12, P[L2] * c12
-    return h11, h12, h22, hq, x, yy, j11, j12, j21, j22
+    h11, h12, h22 = mass_matrix_cs(c2, s2, P)
+    x, yy, j11, j12, j21, j22 = tcp_kinematics_cs(c1, s1, c12, s12, P)
+    return c2, s2, h11, h12, h22, x, yy, j11, j12, j21, j22
 
 
 @leaf
 def impact_rhs(y, case, P, hp, dy):
     """Derivative of the impact state; returns (F, delta, delta_dot, |tcp velocity|)."""
-    h11, h12, h22, hq, x, yy, j11, j12, j21, j22 = _arm_terms(y, P)
+    c2, s2, h11, h12, h22, x, yy, j11, j12, j21, j22 = _arm_terms(y, P)
     w1, w2 = y[2], y[3]
     if case[C_FIXED] > 0.5:
         w1, w2 = 0.0, 0.0
@@ -82,9 +79,10 @@ def impact_rhs(y, case, P, hp, dy):
         dy[0], dy[1], dy[2], dy[3] = 0.0, 0.0, 0.0, 0.0
     else:
         dy[0], dy[1] = w1, w2
-        t1 = -case[C_K] * (y[0] - case[C_Q]) - (j11 * nx + j21 * ny) * f + hq * w2 * w1 \
-            + hq * (w1 + w2) * w2
-        t2 = -case[C_K + 1] * (y[1] - case[C_Q + 1]) - (j12 * nx + j22 * ny) * f - hq * w1 * w1
+        c11, c12, c21, c22 = coriolis_cs(c2, s2, w1, w2, P)
+        t1 = -case[C_K] * (y[0] - case[C_Q]) - (j11 * nx + j21 * ny) * f - c11 * w1 - c12 * w2
+        t2 = -case[C_K + 1] * (y[1] - case[C_Q + 1]) - (j12 * nx + j22 * ny) * f \
+            - c21 * w1 - c22 * w2
         det = h11 * h22 - h12 * h12
         dy[2] = (h22 * t1 - h12 * t2) / det
         dy[3] = (h11 * t2 - h12 * t1) / det
@@ -98,7 +96,7 @@ def impact_rhs(y, case, P, hp, dy):
 @leaf
 def _energy(y, case, P, hp):
     """Kinetic + spring + contact potential energy [J] (dissipation not included)."""
-    h11, h12, h22, _, x, yy, _, _, _, _ = _arm_terms(y, P)
+    _, _, h11, h12, h22, x, yy, _, _, _, _ = _arm_terms(y, P)
     w1, w2 = y[2], y[3]
     e = 0.5 * (h11 * w1 * w1 + 2.0 * h12 * w1 * w2 + h22 * w2 * w2)
     if case[C_FIXED] > 0.5:
@@ -117,7 +115,7 @@ def initial_state(case, P, hp, y):
     """Arm at q0 with qd0, head centre at r_tcp + R u, head velocity v_h0."""
     y[0], y[1] = case[C_Q], case[C_Q + 1]
     y[2], y[3] = case[C_QD], case[C_QD + 1]
-    _, _, _, _, x, yy, _, _, _, _ = _arm_terms(y, P)
+    _, _, _, _, _, x, yy, _, _, _, _ = _arm_terms(y, P)
     y[4] = x + hp[H_R] * case[C_U]
     y[5] = yy + hp[H_R] * case[C_U + 1]
     y[6], y[7] = case[C_VH], case[C_VH + 1]
@@ -181,12 +179,11 @@ def impact_batch(CASES, P, hp, dt, nsteps, w36, w15, SUM, HIST, hist_of):
                 h[0], h[1], h[2], h[3] = s * dt, f, delta, acc[s]
                 h[4], h[5] = y[0] - case[C_Q], y[1] - case[C_Q + 1]
                 h[6] = y[6] * case[C_U] + y[7] * case[C_U + 1]
-                _, _, _, _, _, _, j11, j12, j21, j22 = _arm_terms(y, P)
+                _, _, _, _, _, x, yy, j11, j12, j21, j22 = _arm_terms(y, P)
                 h[7] = ((j11 * y[2] + j12 * y[3]) * case[C_U]
                         + (j21 * y[2] + j22 * y[3]) * case[C_U + 1])
                 h[8] = _energy(y, case, P, hp) + y[8]
                 h[9], h[10] = y[2], y[3]
-                _, _, _, _, x, yy, _, _, _, _ = _arm_terms(y, P)
                 dist = math.sqrt((y[4] - x) ** 2 + (y[5] - yy) ** 2)
                 h[11], h[12] = (y[4] - x) / dist, (y[5] - yy) / dist
                 h[13], h[14] = y[6], y[7]

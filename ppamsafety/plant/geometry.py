@@ -70,18 +70,24 @@ def group_length_lever(k, c1, s1, c12, s12, P):
 
 
 @leaf
+def tcp_kinematics_cs(c1, s1, c12, s12, P):
+    """TCP position and Jacobian from cos/sin of q1 and q1 + q2: (x, y, j11, j12, j21, j22)."""
+    return (P[L1] * c1 + P[L2] * c12, P[L1] * s1 + P[L2] * s12,
+            -P[L1] * s1 - P[L2] * s12, -P[L2] * s12, P[L1] * c1 + P[L2] * c12, P[L2] * c12)
+
+
+@leaf
 def tcp_position(q1, q2, P):
     """TCP (end of link 2) position (x, y) [m]."""
-    return (P[L1] * math.cos(q1) + P[L2] * math.cos(q1 + q2),
-            P[L1] * math.sin(q1) + P[L2] * math.sin(q1 + q2))
+    k = tcp_kinematics_cs(math.cos(q1), math.sin(q1), math.cos(q1 + q2), math.sin(q1 + q2), P)
+    return k[0], k[1]
 
 
 @leaf
 def tcp_jacobian(q1, q2, P):
     """TCP Jacobian entries (j11, j12, j21, j22) [m/rad]."""
-    s1, c1 = math.sin(q1), math.cos(q1)
-    s12, c12 = math.sin(q1 + q2), math.cos(q1 + q2)
-    return (-P[L1] * s1 - P[L2] * s12, -P[L2] * s12, P[L1] * c1 + P[L2] * c12, P[L2] * c12)
+    k = tcp_kinematics_cs(math.cos(q1), math.sin(q1), math.cos(q1 + q2), math.sin(q1 + q2), P)
+    return k[2], k[3], k[4], k[5]
 
 
 @leaf

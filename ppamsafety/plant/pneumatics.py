@@ -46,11 +46,15 @@ def pressure_rates(p, u, qd1, qd2, mt, vol, P, out):
 def stiffness_from(p, mt, dmt, vol, P):
     """Joint stiffnesses (K1, K2) of (2.18) [N m/rad] from torque-kernel outputs."""
     n = P[NPOLY]
-    k = np.zeros(2)
+    k1 = 0.0
+    k2 = 0.0
     for i in range(4):
-        j = 0 if i < 2 else 1
-        k[j] += n * (P[PATM] + p[i]) * mt[i] * mt[i] / vol[i] - p[i] * dmt[i]
-    return k[0], k[1]
+        ki = n * (P[PATM] + p[i]) * mt[i] * mt[i] / vol[i] - p[i] * dmt[i]
+        if i < 2:
+            k1 += ki
+        else:
+            k2 += ki
+    return k1, k2
 
 
 @leaf

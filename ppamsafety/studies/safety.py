@@ -36,13 +36,14 @@ def every_instant_case(experiment: str, index: int, every: int) -> pd.DataFrame:
 
 
 def _heuristic_table(arm, head):
-    rows, states, results = [], {}, {}
+    rows, states, worst = [], {}, {}
     t61 = table_6_1()
     for exp in EXPERIMENTS:
         res = run_thesis_experiment(arm, exp)
         for i, r in enumerate(res):
             label = r.meta["label"]
-            ev = evaluate_experiment(r, arm, head=head, history=True).summary
+            res_ev = evaluate_experiment(r, arm, head=head, history=True)
+            ev = res_ev.summary
             w = ev.loc[ev["HIC36"].idxmax()]
             wf = ev.loc[ev["F_max"].idxmax()]
             th = t61.iloc[i]
@@ -52,11 +53,11 @@ def _heuristic_table(arm, head):
                          "tcp_speed": wf.tcp_speed, "K1": wf.K1, "K2": wf.K2,
                          "HIC_thesis": th[f"HIC_{exp}"], "Fmax_thesis": th[f"Fmax_{exp}"]})
             states[(exp, label)] = impact_states(r, arm)
-            results[(exp, label)] = r
+            worst[(exp, label)] = res_ev.histories[int(ev["HIC36"].idxmax())]
     df = pd.DataFrame(rows)
     df["HIC_ratio"] = df["HIC36"] / df["HIC_thesis"]
     df["Fmax_ratio"] = df["F_max"] / df["Fmax_thesis"]
-    return df, states, results
+    return df, states, worst
 
 
 def _conclusions(df) -> pd.DataFrame:
@@ -93,7 +94,7 @@ def run(outdir, *, quick: bool = False, processes: int | None = None) -> StudyRe
     arm = thesis_arm()
     head = head_model()
     t0 = time.perf_counter()
-    df, states, results = _heuristic_table(arm, head)
+    df, states, worst = _heuristic_table(arm, head)
     t_table = time.perf_counter() - t0
     show = df[["experiment", "label", "HIC36", "HIC_thesis", "HIC_ratio", "F_max", "Fmax_thesis",
                "Fmax_ratio", "instant_HIC", "tcp_speed", "K1", "K2"]].copy()
@@ -104,13 +105,9 @@ def run(outdir, *, quick: bool = False, processes: int | None = None) -> StudyRe
             save(plot_safety_table(df), out / "safety_table_6_1.png")]
 
     # worst histories (step) of PID and the lambda = 0.4 PSMC variants
-    items = []
-    for exp, label in (("step", "PID"), ("step", "PSMC joint Ki=2 λ=0.4"),
-                       ("step", "PSMC joint Ki=12 λ=0.4"), ("step", "PSMC task λ=0.4")):
-        r = results[(exp, label)]
-        ev = evaluate_experiment(r, arm, head=head, history=True)
-        i = int(ev.summary["HIC36"].idxmax())
-        items.append((f"{exp}: {label}", ev.histories[i]))
+    items = [(f"step: {label}", worst[("step", label)])
+             for label in ("PID", "PSMC joint Ki=2 λ=0.4", "PSMC joint Ki=12 λ=0.4",
+                           "PSMC task λ=0.4")]
     arts.append(save(plot_worst_histories(items, title="worst step-response impacts"),
                      out / "safety_worst_histories.png"))
 

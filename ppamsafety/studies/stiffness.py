@@ -56,8 +56,8 @@ def run(outdir, *, quick: bool = False) -> StudyResult:
     dF = float(df["F_max"].max() - df["F_max"].min())
     small = df[df.k <= 500]
     dF_small = float(small["F_max"].max() - small["F_max"].min())
-    k_5N = float(df.k[(df["F_max"] - df["F_max"].iloc[0]).abs() > FIG_6_3["max_change_N"]].min()) \
-        if (df["F_max"] - df["F_max"].iloc[0]).abs().max() > FIG_6_3["max_change_N"] else float("inf")
+    beyond = (df["F_max"] - df["F_max"].iloc[0]).abs() > FIG_6_3["max_change_N"]
+    k_5N = float(df.k[beyond].min()) if beyond.any() else float("inf")
     arts = [str(out / "stiffness_sweep.csv"),
             save(plot_stiffness_sweep(df, reference=tuple(row[["K1", "K2"]]), two_body=f_two),
                  out / "stiffness_sweep.png")]
