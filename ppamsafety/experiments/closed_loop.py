@@ -131,13 +131,40 @@ class ExperimentResult:
     diverged: bool = False
     meta: dict = field(default_factory=dict)
 
-    def to_pandas(self) -> pd.DataFrame:
-        """All signals as a DataFrame (SI units), reference columns included."""
+    def _log_names(self) -> list:
         names = list(LOG_COLUMNS)
         internal = INTERNAL_NAMES.get(self.controller.get("kind"), [])
+        first = LOG_COLUMNS.index("int0")
         for i, nm in enumerate(internal):
-            names[23 + i] = nm
-        df = pd.DataFrame(self.log, columns=names)
+            names[first + i] = nm
+        return names
+
+    def signal_names(self) -> list:
+        """Names accepted by :meth:`signal`: logged signals, controller internals, reference."""
+        return [c for c in self._log_names() if not c.startswith("int")] + list(REF_COLUMNS)
+
+    def signal(self, name: str) -> np.ndarray:
+        """One signal by name, shape (n,), SI units.
+
+        Names are those of :meth:`to_pandas`: ``t``, ``q1``, ``q2``, ``qd1``,
+        ``qd2``, ``p1``..``p4``, ``q1_meas``, ..., ``u1``..``u4``, ``dp1``,
+        ``dp2``, ``x``, ``y``, ``xd``, ``yd``, the controller's internals
+        (e.g. ``s1`` for PSMC) and the reference columns (``q1_d``, ``x_d``, ...).
+        """
+        names = self._log_names()
+        if isinstance(name, str) and name in names and not name.startswith("int"):
+            return self.log[:, names.index(name)]
+        if isinstance(name, str) and name in REF_COLUMNS:
+            return self.reference.data[:, REF_COLUMNS.index(name)]
+        raise KeyError(f"unknown signal {name!r}; choose from {self.signal_names()}")
+
+    def signals(self, *names: str) -> np.ndarray:
+        """Several signals by name as columns, shape (n, len(names))."""
+        return np.stack([self.signal(n) for n in names], axis=1)
+
+    def to_pandas(self) -> pd.DataFrame:
+        """All signals as a DataFrame (SI units), reference columns included."""
+        df = pd.DataFrame(self.log, columns=self._log_names())
         df = df[[c for c in df.columns if not c.startswith("int")]]
         ref = pd.DataFrame(self.reference.data, columns=REF_COLUMNS)
         return pd.concat([df, ref], axis=1)
