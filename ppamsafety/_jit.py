@@ -22,21 +22,12 @@ explicit ``NUMBA_CACHE_DIR`` set by the user is respected.
 Set ``NUMBA_DISABLE_JIT=1`` to run the kernels as plain Python for debugging.
 """
 
-import hashlib
 import os
-from pathlib import Path
 
 import numba
 from numba import njit
 
-
-def _source_hash() -> str:
-    h = hashlib.sha1()
-    root = Path(__file__).resolve().parent
-    for f in sorted(root.rglob("*.py")):
-        h.update(f.relative_to(root).as_posix().encode())
-        h.update(f.read_bytes())
-    return h.hexdigest()[:16]
+from ._sourcehash import source_hash as _source_hash
 
 
 def _configure_cache() -> None:

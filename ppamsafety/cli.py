@@ -1,31 +1,148 @@
-"""Command-line interface: ``ppamsafety report``, ``ppamsafety info``."""
+"""Command-line interface: ``ppamsafety report``, ``ppamsafety impact``, ``ppamsafety info``.
+
+Exit status
+-----------
+0
+    Success.
+2
+    Bad usage or input: a wrong option or value, an output folder or file that
+    cannot be written without losing user data, a missing file.  A one-line
+    ``ppamsafety: error: ...`` message on stderr says what and why.
+1
+    A failure that is not the user's (a bug): a one-line message asking to
+    report it.  Set ``PPAMSAFETY_DEBUG=1`` to see the Python traceback.
+130
+    Interrupted (Ctrl-C).
+
+No user error ends in a Python traceback.  Output never overwrites a user's
+file: see :mod:`ppamsafety.output` and the ``--overwrite`` options.
+
+Negative numbers, also in scientific notation, are accepted as option values
+(``--q -1e1 -80``, ``--q=-10 -80``).
+"""
 
 from __future__ import annotations
 
 import argparse
+import math
+import os
+import re
 import sys
+import traceback
+
+EXIT_OK, EXIT_FAILURE, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
+
+_EPILOG = """\
+exit status:
+  0    success
+  2    bad usage or input (message on stderr: "ppamsafety: error: ...")
+  1    failure that is not the user's (please report it; PPAMSAFETY_DEBUG=1 shows the traceback)
+  130  interrupted
+
+output: a folder is created if missing; a non-empty folder is used only if it is a previous
+ppamsafety output (marker file .ppamsafety-output) holding nothing but files ppamsafety wrote,
+and is replaced only with --overwrite. An existing file is never overwritten without --overwrite.
+"""
+
+#: Options taking several values; ``--q=-1 -80`` is split into ``--q -1 -80`` for them.
+_MULTI_VALUE = ("--q", "--qd", "--stiffness")
+
+
+class _Parser(argparse.ArgumentParser):
+    """ArgumentParser that reads ``-1e5`` and ``-.5E-3`` as numbers, not as options.
+
+    argparse (Python < 3.13) recognises negative numbers only without an
+    exponent; this widens its number pattern (the same idea as Python 3.13's
+    own, which accepts any ``-`` followed by a digit).  The parser has no
+    option that looks like a number, so nothing is shadowed.
+    """
+
+    def __init__(self, *args, **kwargs):
+        kwargs.setdefault("formatter_class", argparse.RawDescriptionHelpFormatter)
+        super().__init__(*args, **kwargs)
+        self._negative_number_matcher = re.compile(
+            r"^-(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$|^-(inf|infinity|nan)$", re.IGNORECASE)
+
+
+def _split_multi_value(argv: list[str]) -> list[str]:
+    out = []
+    for i, a in enumerate(argv):
+        if a == "--":
+            return out + argv[i:]
+        opt, eq, val = a.partition("=")
+        if eq and opt in _MULTI_VALUE:
+            out += [opt, val]
+        else:
+            out.append(a)
+    return out
+
+
+def _finite(text: str) -> float:
+    try:
+        v = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a number") from None
+    if not math.isfinite(v):
+        raise argparse.ArgumentTypeError(f"{text!r} is not a finite number")
+    return v
+
+
+def _angle_deg(text: str) -> float:
+    v = _finite(text)
+    if abs(v) > 360.0:
+        raise argparse.ArgumentTypeError(
+            f"{v:g} deg is outside [-360, 360] deg (link angles are given in degrees)")
+    return v
+
+
+def _positive(text: str) -> float:
+    v = _finite(text)
+    if v <= 0.0:
+        raise argparse.ArgumentTypeError(f"{v:g} is not positive (allowed: > 0)")
+    return v
+
+
+def _nonnegative(text: str) -> float:
+    v = _finite(text)
+    if v < 0.0:
+        raise argparse.ArgumentTypeError(f"{v:g} is negative (allowed: >= 0)")
+    return v
+
+
+def _study_names(text: str) -> list[str]:
+    from .studies import REGISTRY
+
+    names = [n.strip() for n in text.split(",") if n.strip()]
+    if not names:
+        raise argparse.ArgumentTypeError(
+            f"{text!r} names no study; give comma-separated names from {', '.join(REGISTRY)} "
+            f"(omit --only to run them all)")
+    return names
 
 
 def _cmd_report(args) -> int:
     from .report.build import build_report
 
-    only = args.only.split(",") if args.only else None
-    index = build_report(args.outdir, quick=args.quick, only=only)
+    index = build_report(args.outdir, quick=args.quick, only=args.only,
+                         overwrite=args.overwrite)
     print(f"report written to {index}")
-    return 0
+    return EXIT_OK
 
 
 def _cmd_impact(args) -> int:
     import numpy as np
 
     from .impact.model import simulate_impacts
+    from .output import atomic_write, check_new_file
     from .params import thesis_arm
     from .units import DEG
 
+    if args.history is not None:        # fail before simulating, not after
+        check_new_file(args.history, overwrite=args.overwrite, name="--history")
     arm = thesis_arm()
     q = np.array(args.q, dtype=float) * DEG
     res = simulate_impacts(arm, q, args.qd, args.stiffness, head=args.head, dt=args.dt,
-                           history=bool(args.history))
+                           history=args.history is not None)
     s = res.summary.iloc[0]
     print(f"head model      {res.head.name}")
     print(f"tool speed      {s.tcp_speed:.4g} m/s")
@@ -34,10 +151,12 @@ def _cmd_impact(args) -> int:
     print(f"HIC15           {s.HIC15:.4g}  window [{1e3 * s.HIC15_t1:.3g}, {1e3 * s.HIC15_t2:.3g}] ms")
     print(f"max penetration {1e3 * s.delta_max:.4g} mm, peak head acceleration {s.a_max_g:.4g} g")
     print(f"energy to head  {s.E_head_final:.4g} J of {s.E_initial:.4g} J")
-    if args.history:
-        res.histories[0].to_csv(args.history, index=False)
+    if args.history is not None:
+        hist = res.histories[0]
+        atomic_write(args.history, lambda tmp: hist.to_csv(tmp, index=False),
+                     overwrite=args.overwrite, name="--history")
         print(f"time history written to {args.history}")
-    return 0
+    return EXIT_OK
 
 
 def _cmd_info(args) -> int:
@@ -52,46 +171,97 @@ def _cmd_info(args) -> int:
     print(f"  link masses m1 = {L.m1:.3f} kg, m2 = {L.m2:.3f} kg")
     print(f"  mean pressures p_m = {np.array(arm.pneumatics.p_mean) / BAR} bar")
     print(f"  valve time constants = {[v.time_constant for v in arm.valves.valves]} s")
-    return 0
+    return EXIT_OK
 
 
 def build_parser() -> argparse.ArgumentParser:
     """The argparse parser of the ``ppamsafety`` command."""
-    p = argparse.ArgumentParser(
+    p = _Parser(
         prog="ppamsafety",
         description="Safety and impact analysis of a 2-DOF arm driven by pleated pneumatic "
-                    "artificial muscles (PPAMs).")
+                    "artificial muscles (PPAMs).",
+        epilog=_EPILOG)
     sub = p.add_subparsers(dest="command", required=True)
-    r = sub.add_parser("report", help="regenerate the report folder from scratch")
+    r = sub.add_parser("report", help="regenerate the report folder from scratch", epilog=_EPILOG)
     r.add_argument("--outdir", default="reports", help="output folder (default: reports)")
     r.add_argument("--quick", action="store_true", help="coarse grids and short sweeps")
-    r.add_argument("--only", default="", help="comma-separated study names to run")
+    r.add_argument("--only", type=_study_names, default=None, metavar="NAMES",
+                   help="comma-separated study names to run (default: all)")
+    r.add_argument("--overwrite", action="store_true",
+                   help="replace a previous ppamsafety report in OUTDIR (never other files)")
     r.set_defaults(func=_cmd_report)
-    m = sub.add_parser("impact", help="simulate one impact of the thesis arm with a head")
-    m.add_argument("--q", nargs=2, type=float, required=True, metavar=("Q1", "Q2"),
-                   help="link angles at impact [deg]")
-    m.add_argument("--qd", nargs=2, type=float, required=True, metavar=("QD1", "QD2"),
+    m = sub.add_parser("impact", help="simulate one impact of the thesis arm with a head",
+                       epilog=_EPILOG)
+    m.add_argument("--q", nargs=2, type=_angle_deg, required=True, metavar=("Q1", "Q2"),
+                   help="link angles at impact [deg], each in [-360, 360]")
+    m.add_argument("--qd", nargs=2, type=_finite, required=True, metavar=("QD1", "QD2"),
                    help="link angular velocities at impact [rad/s]")
-    m.add_argument("--stiffness", nargs=2, type=float, default=(43.0, 27.0),
-                   metavar=("K1", "K2"), help="joint stiffnesses [Nm/rad] (default 43 27)")
+    m.add_argument("--stiffness", nargs=2, type=_nonnegative, default=(43.0, 27.0),
+                   metavar=("K1", "K2"), help="joint stiffnesses [Nm/rad], >= 0 (default 43 27)")
     m.add_argument("--head", default="thesis-frontal", help="head model name")
-    m.add_argument("--dt", type=float, default=2e-5, help="integration step [s]")
-    m.add_argument("--history", default="", help="write the time history to this CSV file")
+    m.add_argument("--dt", type=_positive, default=2e-5, help="integration step [s], > 0")
+    m.add_argument("--history", default=None, metavar="FILE",
+                   help="write the time history to this new CSV file")
+    m.add_argument("--overwrite", action="store_true",
+                   help="allow --history to replace an existing file")
     m.set_defaults(func=_cmd_impact)
     i = sub.add_parser("info", help="print the thesis arm's key parameters")
     i.set_defaults(func=_cmd_info)
     return p
 
 
-def main(argv=None) -> int:
-    """Entry point of the ``ppamsafety`` command; returns the exit status."""
-    parser = build_parser()
-    args = parser.parse_args(argv)
+def _error(msg: str) -> None:
+    print(f"ppamsafety: error: {msg}", file=sys.stderr)
+
+
+def run_guarded(parser: argparse.ArgumentParser, func, argv=None) -> int:
+    """Parse ``argv`` and run ``func(args)``, turning every error into an exit status.
+
+    Usage errors print argparse's message and give 2 (``--help`` gives 0); a
+    ``ValueError``, ``TypeError`` or ``OSError`` (bad input, including
+    :class:`ppamsafety.output.OutputError`) prints ``ppamsafety: error: ...``
+    and gives 2; any other exception prints one line asking to report it and
+    gives 1.  No traceback unless the environment sets ``PPAMSAFETY_DEBUG=1``.
+    """
+    argv = list(sys.argv[1:] if argv is None else argv)
+    debug = os.environ.get("PPAMSAFETY_DEBUG", "") not in ("", "0")
     try:
-        return args.func(args)
-    except ValueError as exc:          # bad input: clear message, non-zero exit
-        print(f"ppamsafety: error: {exc}", file=sys.stderr)
-        return 2
+        args = parser.parse_args(_split_multi_value([str(a) for a in argv]))
+    except SystemExit as exc:          # argparse: --help (0) or a usage error (2)
+        return exc.code if isinstance(exc.code, int) else EXIT_USAGE
+    try:
+        return func(args)
+    except KeyboardInterrupt:
+        print("ppamsafety: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    except (ValueError, TypeError, OSError) as exc:
+        if debug:
+            traceback.print_exc()
+        _error(str(exc) or type(exc).__name__)
+        return EXIT_USAGE
+    except Exception as exc:           # not the user's fault
+        if debug:
+            traceback.print_exc()
+        _error(f"internal failure ({type(exc).__name__}: {exc}); please report this with the "
+               f"command line used (PPAMSAFETY_DEBUG=1 shows the traceback)")
+        return EXIT_FAILURE
+
+
+def main(argv=None) -> int:
+    """Entry point of the ``ppamsafety`` command; returns the exit status.
+
+    Parameters
+    ----------
+    argv : sequence of str, optional
+        Arguments without the program name (default ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        0 success, 2 bad usage or input, 1 failure that is not the user's,
+        130 interrupted (see the module docstring).
+    """
+    return run_guarded(build_parser(), lambda args: args.func(args), argv)
 
 
 if __name__ == "__main__":

@@ -1,9 +1,9 @@
 """Design figures of thesis chapter 2 (torque functions, stiffness, maximum load).
 
-Run alone:  python studies/design_figures.py [outdir] [--quick]
+Run alone:  python studies/design_figures.py [outdir] [--quick] [--overwrite]
 """
 
 from ppamsafety.studies import main
 
 if __name__ == "__main__":
-    main("design")
+    raise SystemExit(main("design"))

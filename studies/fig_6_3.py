@@ -1,9 +1,9 @@
 """Joint-stiffness sweep of the step-response impact (fig. 6.3).
 
-Run alone:  python studies/fig_6_3.py [outdir] [--quick]
+Run alone:  python studies/fig_6_3.py [outdir] [--quick] [--overwrite]
 """
 
 from ppamsafety.studies import main
 
 if __name__ == "__main__":
-    main("stiffness")
+    raise SystemExit(main("stiffness"))

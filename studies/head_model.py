@@ -1,9 +1,9 @@
 """Reconstruction of the thesis' head contact model and its evidence.
 
-Run alone:  python studies/head_model.py [outdir] [--quick]
+Run alone:  python studies/head_model.py [outdir] [--quick] [--overwrite]
 """
 
 from ppamsafety.studies import main
 
 if __name__ == "__main__":
-    main("head_model")
+    raise SystemExit(main("head_model"))

@@ -1,9 +1,9 @@
 """Sliding mode control: chattering against boundary layer and valve time constant.
 
-Run alone:  python studies/smc_chattering.py [outdir] [--quick]
+Run alone:  python studies/smc_chattering.py [outdir] [--quick] [--overwrite]
 """
 
 from ppamsafety.studies import main
 
 if __name__ == "__main__":
-    main("smc")
+    raise SystemExit(main("smc"))

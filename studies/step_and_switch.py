@@ -1,9 +1,9 @@
 """Step and trajectory-switch responses (figs. 5.15-5.19).
 
-Run alone:  python studies/step_and_switch.py [outdir] [--quick]
+Run alone:  python studies/step_and_switch.py [outdir] [--quick] [--overwrite]
 """
 
 from ppamsafety.studies import main
 
 if __name__ == "__main__":
-    main("responses")
+    raise SystemExit(main("responses"))

@@ -1,9 +1,9 @@
 """Table 5.2: circle tracking errors of the thesis' controller variants, with ratios.
 
-Run alone:  python studies/table_5_2.py [outdir] [--quick]
+Run alone:  python studies/table_5_2.py [outdir] [--quick] [--overwrite]
 """
 
 from ppamsafety.studies import main
 
 if __name__ == "__main__":
-    main("tracking")
+    raise SystemExit(main("tracking"))

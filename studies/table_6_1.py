@@ -1,9 +1,9 @@
 """Collision safety: Table 6.1 reproduction and the every-instant impact scan.
 
-Run alone:  python studies/table_6_1.py [outdir] [--quick]
+Run alone:  python studies/table_6_1.py [outdir] [--quick] [--overwrite]
 """
 
 from ppamsafety.studies import main
 
 if __name__ == "__main__":
-    main("safety")
+    raise SystemExit(main("safety"))

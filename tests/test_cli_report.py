@@ -1,9 +1,14 @@
 """Command line and report generation."""
 
+import json
+import os
 import subprocess
 import sys
 
-from ppamsafety.cli import main
+import pytest
+
+from ppamsafety.cli import _split_multi_value, build_parser, main
+from ppamsafety.output import MARKER
 
 
 def test_help_exits_cleanly():
@@ -20,9 +25,96 @@ def test_unknown_study_is_a_clear_error(tmp_path, capsys):
 
 def test_report_regenerates_from_scratch(tmp_path):
     out = tmp_path / "rep"
-    out.mkdir()
-    (out / "stale.txt").write_text("old")
     assert main(["report", "--outdir", str(out), "--quick", "--only", "design"]) == 0
-    assert not (out / "stale.txt").exists()
+    (out / "design_stale.png").write_text("old")          # toolkit-written, listed as such
+    m = json.loads((out / MARKER).read_text())
+    (out / MARKER).write_text(json.dumps({**m, "files": m["files"] + ["design_stale.png"]}))
+    assert main(["report", "--outdir", str(out), "--quick", "--only", "design",
+                 "--overwrite"]) == 0
+    assert not (out / "design_stale.png").exists()
     text = (out / "index.md").read_text()
     assert "Table A.1" in text and (out / "design_max_load.png").exists()
+
+
+def test_help_documents_exit_codes_and_overwrite():
+    r = subprocess.run([sys.executable, "-m", "ppamsafety.cli", "report", "--help"],
+                       capture_output=True, text=True)
+    assert r.returncode == 0
+    for text in ("exit status", "0    success", "2    bad usage", "1    failure", "--overwrite"):
+        assert text in r.stdout
+
+
+def test_user_error_in_a_real_process_has_no_traceback(tmp_path):
+    (tmp_path / "mine.txt").write_text("keep")
+    r = subprocess.run([sys.executable, "-m", "ppamsafety.cli", "report", "--outdir",
+                        str(tmp_path), "--overwrite"], capture_output=True, text=True,
+                       env={**os.environ, "PPAMSAFETY_DEBUG": "0"})
+    assert r.returncode == 2
+    assert r.stderr.startswith("ppamsafety: error:") and "Traceback" not in r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1
+    assert (tmp_path / "mine.txt").read_text() == "keep"
+
+
+def test_unexpected_failure_exits_1_without_traceback(monkeypatch, capsys):
+    import ppamsafety.cli as cli
+
+    def boom(args):
+        raise KeyError("internal")
+    monkeypatch.setattr(cli, "_cmd_info", boom)
+    monkeypatch.delenv("PPAMSAFETY_DEBUG", raising=False)
+    assert main(["info"]) == 1
+    err = capsys.readouterr().err
+    assert "please report" in err and "KeyError" in err and "Traceback" not in err
+    monkeypatch.setenv("PPAMSAFETY_DEBUG", "1")
+    assert main(["info"]) == 1
+    assert "Traceback" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("argv", [
+    ["--q", "-1e1", "-80", "--qd", "-3", "-1"],
+    ["--q=-1e-3", "-80", "--qd", "-3", "-1"],
+    ["--q", "50", "-8E1", "--qd=-3", "-1.5e0", "--stiffness", "4.3e1", "27"],
+    ["--q", "-.5", "-80", "--qd", "3", "-1", "--dt", "1e-5"],
+])
+def test_negative_numbers_parse_as_values(argv):
+    args = build_parser().parse_args(_split_multi_value(["impact", *argv]))
+    assert len(args.q) == 2 and len(args.qd) == 2
+    assert any(v < 0 for v in (*args.q, *args.qd))
+    assert all(isinstance(v, float) for v in (*args.q, *args.qd))
+
+
+def test_negative_scientific_angle_gives_a_clear_error(capsys):
+    assert main(["impact", "--q", "-1e5", "-80", "--qd", "-3", "-1"]) == 2
+    err = capsys.readouterr().err
+    assert "--q" in err and "-100000 deg" in err and "[-360, 360]" in err
+
+
+@pytest.mark.parametrize("argv, words", [
+    (["--q", "nan", "0", "--qd", "0", "0"], ["--q", "'nan'", "finite"]),
+    (["--q", "0", "0", "--qd", "inf", "0"], ["--qd", "'inf'", "finite"]),
+    (["--q", "0", "0", "--qd", "0", "0", "--dt", "-1e-5"], ["--dt", "-1e-05", "> 0"]),
+    (["--q", "0", "0", "--qd", "0", "0", "--stiffness", "-1", "27"], ["--stiffness", ">= 0"]),
+    (["--q", "abc", "0", "--qd", "0", "0"], ["--q", "'abc'", "not a number"]),
+])
+def test_bad_impact_values_are_refused(argv, words, capsys):
+    assert main(["impact", *argv]) == 2
+    err = capsys.readouterr().err
+    assert all(w in err for w in words), err
+
+
+@pytest.mark.parametrize("only", ["", ",", " , "])
+def test_empty_only_is_an_error_not_everything(only, tmp_path, capsys):
+    out = tmp_path / "r"
+    assert main(["report", "--outdir", str(out), "--only", only]) == 2
+    assert "names no study" in capsys.readouterr().err
+    assert not out.exists()
+
+
+def test_build_report_checks_only(tmp_path):
+    from ppamsafety.report.build import build_report
+
+    with pytest.raises(ValueError, match="names no study"):
+        build_report(tmp_path / "r", only=[])
+    with pytest.raises(TypeError, match="list of study names"):
+        build_report(tmp_path / "r", only="design")
+    assert not (tmp_path / "r").exists()

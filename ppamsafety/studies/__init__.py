@@ -37,16 +37,43 @@ REGISTRY = ["design", "tracking", "responses", "smc", "head_model", "safety", "s
             "lambda_sweep"]
 
 
-def main(name: str, argv=None) -> None:
-    """Run one study alone: ``python studies/<script>.py [outdir] [--quick]``."""
-    import importlib
-    import pathlib
-    import sys
+def main(name: str, argv=None) -> int:
+    """Run one study alone: ``python studies/<script>.py [outdir] [--quick] [--overwrite]``.
 
-    args = list(sys.argv[1:] if argv is None else argv)
-    quick = "--quick" in args
-    args = [a for a in args if a != "--quick"]
-    out = pathlib.Path(args[0] if args else "reports")
-    out.mkdir(parents=True, exist_ok=True)
-    res = importlib.import_module(f"ppamsafety.studies.{name}").run(out, quick=quick)
-    print(f"# {res.title}\n\n{res.markdown}")
+    The study writes into ``outdir`` (default ``reports``) under the rules of
+    :mod:`ppamsafety.output`: a missing or empty folder is used; a previous
+    ppamsafety output is updated only with ``--overwrite`` (files of the same
+    name are replaced, the other toolkit files are kept); a folder holding
+    files ppamsafety did not write is refused.
+
+    Returns
+    -------
+    int
+        Exit status: 0 success, 2 bad usage or input, 1 failure (see
+        :func:`ppamsafety.cli.main`).
+    """
+    import argparse
+    import importlib
+
+    from ..cli import run_guarded
+    from ..output import OutputFolder
+
+    if name not in REGISTRY:
+        raise ValueError(f"unknown study {name!r}; choose from {REGISTRY}")
+    p = argparse.ArgumentParser(prog=f"studies/{name}.py",
+                                description=f"Run the study {name!r} alone.")
+    p.add_argument("outdir", nargs="?", default="reports",
+                   help="output folder (default: reports)")
+    p.add_argument("--quick", action="store_true", help="coarse grids and short sweeps")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace files of a previous ppamsafety output in OUTDIR")
+
+    def run(args):
+        mod = importlib.import_module(f"ppamsafety.studies.{name}")
+        with OutputFolder(args.outdir, kind="study", overwrite=args.overwrite,
+                          clean=False) as stage:
+            res = mod.run(stage, quick=args.quick)
+        print(f"# {res.title}\n\n{res.markdown}")
+        return 0
+
+    return run_guarded(p, run, argv)

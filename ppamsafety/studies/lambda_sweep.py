@@ -48,7 +48,8 @@ def run(outdir, *, quick: bool = False, processes: int | None = None) -> StudyRe
     dur = 10.0 if quick else 45.0
     cases = [{"lam": lam, "ki_bar": ki, "circle_duration": dur} for ki in kis for lam in lams]
     procs = processes or min(2, os.cpu_count() or 1)
-    df = run_sweep(lambda_case, cases, name="lambda-sweep", processes=procs, progress=False)
+    df = run_sweep(lambda_case, cases, name="lambda-sweep", processes=procs, progress=False,
+                   on_error="raise")
     df = df.rename(columns={"ki_bar": "Ki_bar"})
     df.to_csv(out / "lambda_sweep.csv", index=False)
     arts = [str(out / "lambda_sweep.csv"),

@@ -119,7 +119,7 @@ def run(outdir, *, quick: bool = False, processes: int | None = None) -> StudyRe
     procs = processes or min(2, os.cpu_count() or 1)
     t1 = time.perf_counter()
     scan = run_sweep(every_instant_case, cases, name="safety-every-instant", processes=procs,
-                     progress=False)
+                     progress=False, on_error="raise")
     t_scan = time.perf_counter() - t1
     n_impacts = int(len(scan))
     miss_rows = []

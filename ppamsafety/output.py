@@ -1,0 +1,322 @@
+"""Safe output: what the toolkit writes never deletes or overwrites a user's file.
+
+Every writer of the package (``ppamsafety report``, the study scripts,
+``ppamsafety impact --history``) goes through this module.
+
+Output folders (:class:`OutputFolder`)
+    * A missing folder is created; an empty folder is used.
+    * A non-empty folder is used only if it is a previous ppamsafety output,
+      recognised by the marker file ``.ppamsafety-output`` (JSON: ``tool``,
+      ``version``, ``kind`` such as ``"report"``, and ``files``, the files the
+      toolkit wrote there), and only when the caller asks for it explicitly
+      (``--overwrite`` on the command line, ``overwrite=True`` in Python).
+    * A folder that holds any file the marker does not list ("foreign" files)
+      is refused, with or without the flag: those files are never touched.
+    * A non-empty folder without a marker, or with a marker that is not valid,
+      is refused.
+    * The toolkit writes into a staging folder inside the target; only when
+      everything succeeded are the files moved into place with
+      :func:`os.replace` (atomic per file), so a failed run leaves the previous
+      output untouched.  When replacing (``clean=True``), previous toolkit
+      files that the new run did not write are removed -- only files the marker
+      lists, and only folders that became empty.
+
+Single files (:func:`atomic_write`)
+    An existing file is an error unless ``overwrite=True`` (``--overwrite``);
+    the content is written to a temporary file in the same folder and moved
+    into place with :func:`os.replace`.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import secrets
+import shutil
+import tempfile
+from pathlib import Path, PurePosixPath
+
+MARKER = ".ppamsafety-output"
+"""Name of the marker file of a ppamsafety output folder."""
+
+_STAGING_PREFIX = ".ppamsafety-staging-"
+_FLAG = "--overwrite (overwrite=True in Python)"
+
+
+class OutputError(ValueError):
+    """An output folder or file cannot be written without losing user data."""
+
+
+def _few(items, n: int = 5) -> str:
+    items = list(items)
+    more = f" and {len(items) - n} more" if len(items) > n else ""
+    return ", ".join(repr(i) for i in items[:n]) + more
+
+
+def _as_path(name: str, value) -> Path:
+    if isinstance(value, bool) or not isinstance(value, (str, os.PathLike)):
+        raise TypeError(f"{name} must be a path (str or os.PathLike), got "
+                        f"{type(value).__name__} {value!r}")
+    if str(value) == "":
+        raise ValueError(f"{name} must be a non-empty path, got ''")
+    return Path(value)
+
+
+def _valid_relpath(f) -> bool:
+    if not isinstance(f, str) or not f or f == MARKER:
+        return False
+    p = PurePosixPath(f)
+    return not p.is_absolute() and ".." not in p.parts and "\\" not in f
+
+
+def read_marker(folder) -> dict | None:
+    """The marker of ``folder`` as a dict, or None if it is missing or not valid.
+
+    Valid means: a JSON object with ``tool == "ppamsafety"``, a string ``kind``
+    and ``files``, a list of relative paths (``/``-separated, no ``..``).
+    """
+    f = Path(folder) / MARKER
+    try:
+        data = json.loads(f.read_text(encoding="utf-8"))
+    except (OSError, ValueError, UnicodeDecodeError):
+        return None
+    if not (isinstance(data, dict) and data.get("tool") == "ppamsafety"
+            and isinstance(data.get("kind"), str) and isinstance(data.get("files"), list)
+            and all(_valid_relpath(x) for x in data["files"])):
+        return None
+    return data
+
+
+def _entries(folder: Path, exclude: str | None = None) -> list[str]:
+    """Relative paths of everything in ``folder`` that is not a directory (recursively).
+
+    Symbolic links to folders count as entries (they are not followed); empty
+    sub-folders are not listed.
+    """
+    out = []
+    for root, dirs, files in os.walk(folder, followlinks=False):
+        rel = Path(root).relative_to(folder)
+        if exclude is not None and rel == Path("."):
+            dirs[:] = [d for d in dirs if d != exclude]
+        for d in list(dirs):
+            if os.path.islink(os.path.join(root, d)):
+                out.append((rel / d).as_posix())
+                dirs.remove(d)
+        out.extend((rel / f).as_posix() for f in files)
+    return sorted(out)
+
+
+def inspect_output_folder(folder, *, overwrite: bool = False, _exclude: str | None = None) -> dict:
+    """Check that ``folder`` may receive toolkit output; raise :class:`OutputError` if not.
+
+    Parameters
+    ----------
+    folder : path-like
+        Output folder (need not exist).
+    overwrite : bool
+        Whether the user asked to replace a previous ppamsafety output.
+
+    Returns
+    -------
+    dict
+        ``{"files": set of toolkit files present, "kind": str or None}``.
+    """
+    p = _as_path("outdir", folder)
+    if p.exists() and not p.is_dir():
+        raise OutputError(f"output folder '{p}' exists and is not a folder")
+    if not p.exists():
+        return {"files": set(), "kind": None}
+    entries = _entries(p, exclude=_exclude)
+    if not entries:
+        return {"files": set(), "kind": None}
+    marker = read_marker(p)
+    if marker is None:
+        why = ("its marker file %s is not valid" % MARKER if (p / MARKER).exists()
+               else "it has no marker file %s" % MARKER)
+        raise OutputError(
+            f"output folder '{p}' is not empty and {why}, so it is not a ppamsafety output "
+            f"folder (it holds e.g. {_few(entries, 3)}); ppamsafety never deletes or overwrites "
+            f"files it did not write: choose a new or empty folder")
+    listed = set(marker["files"])
+    foreign = [e for e in entries if e not in listed and e != MARKER]
+    if foreign:
+        raise OutputError(
+            f"output folder '{p}' holds {len(foreign)} file(s) ppamsafety did not write: "
+            f"{_few(foreign)}; they are never deleted or overwritten, so the folder is not "
+            f"used (not even with --overwrite): move them away or choose another folder")
+    present = listed & set(entries)
+    if not overwrite:
+        raise OutputError(
+            f"output folder '{p}' holds a previous ppamsafety {marker['kind']} "
+            f"({len(present)} files); pass {_FLAG} to replace it, or choose another folder")
+    return {"files": present, "kind": marker["kind"]}
+
+
+def _write_marker(folder: Path, kind: str, files) -> None:
+    from . import __version__
+
+    data = {"tool": "ppamsafety", "version": __version__, "kind": kind,
+            "files": sorted(set(files))}
+    atomic_write(folder / MARKER, lambda t: t.write_text(json.dumps(data, indent=1) + "\n",
+                                                         encoding="utf-8"),
+                 overwrite=True)
+
+
+class OutputFolder:
+    """Context manager that writes a folder of results without losing user data.
+
+    ``with OutputFolder(outdir, kind="report", overwrite=flag) as staging:``
+    checks ``outdir`` (see the module docstring), creates it if missing and
+    yields a staging folder inside it; write every file into ``staging``.  On a
+    normal exit the files are moved into ``outdir`` and the marker is updated;
+    on an exception ``outdir`` is left as it was (only the staging folder, which
+    this object created, is removed).
+
+    Parameters
+    ----------
+    outdir : path-like
+        Output folder.
+    kind : str
+        What is written (``"report"``, ``"study"``), recorded in the marker.
+    overwrite : bool
+        Allow replacing a previous ppamsafety output in ``outdir``.
+    clean : bool
+        True: the new output replaces the previous one (previous toolkit files
+        not written again are removed).  False: the new files are added to the
+        previous output, replacing only files of the same name.
+    """
+
+    def __init__(self, outdir, *, kind: str, overwrite: bool = False, clean: bool = True):
+        self.path = _as_path("outdir", outdir)
+        if not isinstance(kind, str) or not kind:
+            raise ValueError(f"kind must be a non-empty str, got {kind!r}")
+        for nm, v in (("overwrite", overwrite), ("clean", clean)):
+            if not isinstance(v, bool):
+                raise TypeError(f"{nm} must be True or False, got {type(v).__name__} {v!r}")
+        self.kind, self.overwrite, self.clean = kind, overwrite, clean
+        self.staging: Path | None = None
+        self.written: list[str] = []
+
+    def __enter__(self) -> Path:
+        inspect_output_folder(self.path, overwrite=self.overwrite)
+        self._created = not self.path.exists()
+        self.path.mkdir(parents=True, exist_ok=True)
+        self.staging = Path(tempfile.mkdtemp(prefix=_STAGING_PREFIX, dir=self.path))
+        return self.staging
+
+    def __exit__(self, exc_type, exc, tb) -> bool:
+        try:
+            if exc_type is None:
+                self._commit()
+        finally:
+            shutil.rmtree(self.staging, ignore_errors=True)   # our own temporary folder
+            if exc_type is not None and self._created:
+                try:
+                    self.path.rmdir()                         # only if still empty
+                except OSError:
+                    pass
+        return False
+
+    def _commit(self) -> None:
+        # check again: a user may have put files into the folder meanwhile
+        prev = inspect_output_folder(self.path, overwrite=self.overwrite,
+                                     _exclude=self.staging.name)
+        new = _entries(self.staging)
+        kind = self.kind if self.clean or prev["kind"] is None else prev["kind"]
+        # the marker lists every toolkit file before any is moved, so an interrupted
+        # commit never leaves files that a later run would take for the user's
+        _write_marker(self.path, kind, prev["files"] | set(new))
+        for f in new:
+            dst = self.path / f
+            dst.parent.mkdir(parents=True, exist_ok=True)
+            os.replace(self.staging / f, dst)
+        final = set(new)
+        if self.clean:
+            for f in sorted(prev["files"] - final):
+                _remove_listed(self.path, f)
+        else:
+            final |= prev["files"]
+        _write_marker(self.path, kind, final)
+        self.written = sorted(final)
+
+
+def _remove_listed(folder: Path, rel: str) -> None:
+    """Remove one toolkit-written file, then its parent folders if they became empty."""
+    p = folder / rel
+    try:
+        p.unlink()
+    except FileNotFoundError:
+        return
+    parent = p.parent
+    while parent != folder and folder in parent.parents:
+        try:
+            parent.rmdir()
+        except OSError:
+            break
+        parent = parent.parent
+
+
+def check_new_file(path, *, overwrite: bool = False, name: str = "output file") -> Path:
+    """Check that a single output file may be written; return it as a Path.
+
+    Raises :class:`OutputError` if the file exists and ``overwrite`` is False,
+    if it is a folder, or if its folder does not exist.
+    """
+    p = _as_path(name, path)
+    if not isinstance(overwrite, bool):
+        raise TypeError(f"overwrite must be True or False, got {overwrite!r}")
+    parent = p.parent if str(p.parent) else Path(".")
+    if not parent.is_dir():
+        raise OutputError(f"{name} '{p}': folder '{parent}' does not exist")
+    if p.is_dir():
+        raise OutputError(f"{name} '{p}' is a folder")
+    if (p.exists() or p.is_symlink()) and not overwrite:
+        raise OutputError(f"{name} '{p}' already exists; ppamsafety does not overwrite files "
+                          f"unless asked: pass {_FLAG} or choose another name")
+    return p
+
+
+def atomic_write(path, write, *, overwrite: bool = False, name: str = "output file") -> Path:
+    """Write one file atomically, never replacing an existing file unless asked.
+
+    Parameters
+    ----------
+    path : path-like
+        Destination file; its folder must exist.
+    write : callable
+        ``write(tmp_path)`` writes the whole content to ``tmp_path`` (a new
+        file in the same folder).
+    overwrite : bool
+        Replace an existing file.
+    name : str
+        How the file is named in error messages (e.g. ``"--history"``).
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
+    p = check_new_file(path, overwrite=overwrite, name=name)
+    tmp = p.with_name(f".{p.name}.{secrets.token_hex(4)}.tmp")
+    open(tmp, "x").close()                # new file with the user's umask, never clobbers
+    try:
+        write(tmp)
+        if overwrite:
+            os.replace(tmp, p)
+        else:
+            try:
+                os.link(tmp, p)           # atomic and fails if the file appeared meanwhile
+            except FileExistsError:
+                raise OutputError(f"{name} '{p}' appeared while it was being written; "
+                                  f"it was left untouched") from None
+            except OSError:               # file system without hard links
+                check_new_file(p, overwrite=False, name=name)
+                os.replace(tmp, p)
+    finally:
+        if os.path.lexists(tmp):
+            os.unlink(tmp)
+    return p
+
+
+__all__ = ["MARKER", "OutputError", "OutputFolder", "atomic_write", "check_new_file",
+           "inspect_output_folder", "read_marker"]
