@@ -59,6 +59,34 @@ def test_regressor_times_theta_equals_equations_of_motion(arm, which):
     np.testing.assert_allclose(lhs, rhs, rtol=1e-12, atol=1e-12)
 
 
+def test_numpy_api_broadcasts_and_equals_the_regressor_oracle(arm):
+    """H/C/G/friction of the NumPy API (the kernels) vs the independent regressor (B.5)-(B.6),
+    with q, qd, qdd broadcast against each other."""
+    q = RNG.uniform([0.3, -2.2], [1.8, -0.5], size=(7, 1, 2))
+    qd = RNG.normal(scale=2.0, size=(5, 2))
+    qdd = RNG.normal(scale=5.0, size=(2,))
+    p = arm.plant_base
+    theta = np.concatenate([p.as_vector(), p.coulomb, p.viscous])
+    lhs = dyn.regressor(q, qd, qdd, arm) @ theta
+    H = dyn.inertia_matrix(q, arm)
+    C = dyn.coriolis(q, qd, arm)
+    assert H.shape == (7, 1, 2, 2) and C.shape == (7, 5, 2, 2)
+    rhs = (H @ qdd + np.einsum("...ij,...j->...i", C, qd) + dyn.gravity(q, arm)
+           + dyn.friction(qd, arm, smooth=False))
+    np.testing.assert_allclose(lhs, rhs, rtol=1e-12, atol=1e-12)
+
+
+def test_smooth_friction_is_tanh_coulomb_plus_viscous(arm):
+    """(3.30) with the plant's smooth Coulomb term c tanh(qd / v_s)."""
+    qd = np.array([[0.0, 0.0], [0.003, -0.02], [1.5, -2.0]])
+    c, b = np.array(arm.plant_base.coulomb), np.array(arm.plant_base.viscous)
+    expected = c * np.tanh(qd / arm.friction_velocity) + b * qd
+    np.testing.assert_allclose(dyn.friction(qd, arm), expected, rtol=1e-14, atol=1e-15)
+    np.testing.assert_array_equal(dyn.friction(qd, arm, smooth=False)[0], [0.0, 0.0])
+    with pytest.raises(TypeError, match="smooth"):
+        dyn.friction(qd, arm, smooth="yes")
+
+
 def _conservative_arm(arm):
     """No gravity, no friction, all valves closed (sealed polytropic muscles)."""
     links = arm.links.replace(coulomb=(0.0, 0.0), viscous=(0.0, 0.0))

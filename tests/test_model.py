@@ -72,3 +72,49 @@ def test_simulate_validates_inputs(arm):
     bad[3, 1] = np.nan
     with pytest.raises(ValueError, match="NaN"):
         model.simulate(arm, x0, bad)
+
+
+# --- effect state z (issue 7, item 2) ------------------------------------------------------
+
+def test_explicit_zero_effect_state_equals_the_default(arm):
+    x0, U = _step_inputs(arm, 400)
+    default = model.simulate(arm, x0, U)
+    X, z = model.simulate(arm, x0, U, effect_state=np.zeros(0), return_effect_state=True)
+    np.testing.assert_array_equal(X, default)
+    assert z.shape == (0,)                       # every effect off: empty effect state
+
+
+def test_effect_state_is_sized_per_row_and_untouched_with_effects_off(arm):
+    """Rows may ask for different z lengths; with no effect on, z and x are unaffected."""
+    from ppamsafety.plant import layout as lay
+
+    x0, U = _step_inputs(arm, 400)
+    default = model.simulate(arm, x0, U)
+    rows = np.stack([lay.with_effects(lay.pack(arm), effect_state_length=3),
+                     lay.with_effects(lay.pack(arm), effect_state_length=1)])
+    np.testing.assert_array_equal(lay.effect_state_lengths(rows), [3, 1])
+    z0 = np.array([[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]])
+    X, z = model.simulate(None, np.stack([x0, x0]), U, params=rows, effect_state=z0,
+                          return_effect_state=True)
+    np.testing.assert_array_equal(X[0], default)
+    np.testing.assert_array_equal(X[1], default)
+    np.testing.assert_array_equal(z, z0)
+    with pytest.raises(ValueError, match="effect_state"):
+        model.simulate(None, x0, U, params=rows[0], effect_state=np.zeros(2))
+
+
+def test_effect_parameters_are_validated(arm):
+    from ppamsafety.plant import layout as lay
+
+    P = lay.pack(arm)
+    assert lay.PLANT.read(P, "effect_state_length") == 0.0           # all effects off
+    for bad in (-1, 2.5, True, "3"):
+        with pytest.raises(ValueError, match="effect_state_length"):
+            lay.with_effects(P, effect_state_length=bad)
+    with pytest.raises(KeyError, match="no field"):
+        lay.with_effects(P, hysteresis=1)
+    row = np.array(P)
+    row[lay.NZ] = 0.5
+    x0, U = _step_inputs(arm, 10)
+    with pytest.raises(ValueError, match="effect_state_length"):
+        model.simulate(None, x0, U, params=row)

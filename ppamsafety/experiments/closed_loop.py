@@ -27,7 +27,7 @@ from ..control.sensors import (NSENSOR, SensorConfig, initial_sensor_state, sens
                                sensor_read, sensor_track)
 from ..plant import layout as lay
 from ..plant.geometry import tcp_jacobian, tcp_position
-from ..plant.model import NWORK, NX, rk4_step
+from ..plant.model import NWORK, NX, effect_state_length, rk4_step
 from ..plant.pneumatics import delta_p_to_set_values
 from .trajectories import REF_COLUMNS, Reference
 
@@ -68,6 +68,7 @@ def _run_batch(X0, REFS, ref_idx, PP, PM, KIND, CP, SCFG, NOISE, noise_idx, dt, 
         st[2:6] = -1.0e9
         internals[:] = 0.0
         Pp, Pm, cfg, C, R = PP[b], PM[b], SCFG[b], CP[b], REFS[ref_idx[b]]
+        z = np.zeros(effect_state_length(Pp))     # plant effect state (empty: effects off)
         noise = NOISE[noise_idx[b]]
         sensor_init(x[0], x[1], cfg, st)
         for k in range(n):
@@ -93,7 +94,7 @@ def _run_batch(X0, REFS, ref_idx, PP, PM, KIND, CP, SCFG, NOISE, noise_idx, dt, 
             row[23:23 + NINT] = internals
             for i in range(substeps):
                 q_old0, q_old1 = x[0], x[1]
-                rk4_step(x, u, tau0, h, Pp, work)
+                rk4_step(x, z, u, tau0, h, Pp, work)
                 sensor_track(0, q_old0, x[0], t + i * h, h, cfg, st)
                 sensor_track(1, q_old1, x[1], t + i * h, h, cfg, st)
             if not (np.isfinite(x[0]) and np.isfinite(x[1]) and abs(x[2]) < 1e3

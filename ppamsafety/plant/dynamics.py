@@ -12,9 +12,15 @@ m1 d_G1, I_zO,1 + m2 L1^2, m2 L_G2, m2 d_G2, I_zS,2]::
     G   = g [theta1 c1 + theta2 s1 + theta4 c12 + theta5 s12, theta4 c12 + theta5 s12]
 
 Friction (3.30) is Coulomb + viscous; the plant uses a smooth Coulomb term
-c tanh(qd / v_s) (see ``ArmParameters.friction_velocity``).  The regressor
-:func:`regressor` implements (B.5)/(B.6) independently of these kernels so
-the two can be tested against each other.
+c tanh(qd / v_s) (see ``ArmParameters.friction_velocity``).
+
+Each formula exists once, as a compiled leaf (``mass_matrix_cs``,
+``coriolis_cs``, ``gravity_cs``, ``friction_cs``, ``potential_cs``); the
+NumPy-level functions (:func:`inertia_matrix`, :func:`coriolis`,
+:func:`gravity`, :func:`friction`, :func:`potential_energy`) evaluate those
+same leaves in a batched kernel over the configurations.  The exception is
+:func:`regressor`, which implements (B.5)/(B.6) deliberately independently
+of the kernels, as the test oracle they are checked against.
 """
 
 from __future__ import annotations
@@ -26,20 +32,20 @@ from .._jit import kernel, leaf
 
 from .._validation import as_float_array
 from . import layout as lay
-from .layout import COUL, GRAV, L1, TH, VFRIC, VISC
+from .layout import COUL, GRAV, L1, THETA1, THETA2, THETA3, THETA4, THETA5, THETA6, VFRIC, VISC
 
 
 @leaf
 def mass_matrix_cs(c2, s2, P):
     """Inertia matrix entries (h11, h12, h22) [kg m^2] from cos q2, sin q2."""
-    a = P[L1] * (P[TH + 3] * c2 + P[TH + 4] * s2)
-    return P[TH + 2] + P[TH + 5] + 2.0 * a, P[TH + 5] + a, P[TH + 5]
+    a = P[L1] * (P[THETA4] * c2 + P[THETA5] * s2)
+    return P[THETA3] + P[THETA6] + 2.0 * a, P[THETA6] + a, P[THETA6]
 
 
 @leaf
 def coriolis_cs(c2, s2, w1, w2, P):
     """Centrifugal/Coriolis matrix entries (c11, c12, c21, c22) [kg m^2/s]."""
-    hq = P[L1] * (P[TH + 3] * s2 - P[TH + 4] * c2)
+    hq = P[L1] * (P[THETA4] * s2 - P[THETA5] * c2)
     return -hq * w2, -hq * (w1 + w2), hq * w1, 0.0
 
 
@@ -47,8 +53,17 @@ def coriolis_cs(c2, s2, w1, w2, P):
 def gravity_cs(c1, s1, c12, s12, P):
     """Gravity torques (g1, g2) [N m] from cos/sin of q1 and q1 + q2."""
     g = P[GRAV]
-    g2 = g * (P[TH + 3] * c12 + P[TH + 4] * s12)
-    return g * (P[TH] * c1 + P[TH + 1] * s1) + g2, g2
+    g2 = g * (P[THETA4] * c12 + P[THETA5] * s12)
+    return g * (P[THETA1] * c1 + P[THETA2] * s1) + g2, g2
+
+
+@leaf
+def potential_cs(c1, s1, c12, s12, P):
+    """Gravitational potential energy (B.1) up to a constant [J]; its gradient is G.
+
+    In base parameters: U = g (theta1 s1 - theta2 c1 + theta4 s12 - theta5 c12).
+    """
+    return P[GRAV] * (P[THETA1] * s1 - P[THETA2] * c1 + P[THETA4] * s12 - P[THETA5] * c12)
 
 
 @leaf
@@ -58,11 +73,31 @@ def gravity_torque(q1, q2, P):
 
 
 @leaf
+def _sign(w):
+    return 1.0 if w > 0.0 else (-1.0 if w < 0.0 else 0.0)
+
+
+@leaf
+def friction_cs(w1, w2, smooth, P):
+    """Joint friction (3.30) [N m]: Coulomb c s(qd) + viscous b qd.
+
+    ``smooth=True``: s = tanh(qd / v_s) (the plant); ``False``: the ideal
+    sign function.
+    """
+    if smooth:
+        vs = P[VFRIC]
+        s1 = math.tanh(w1 / vs)
+        s2 = math.tanh(w2 / vs)
+    else:
+        s1 = _sign(w1)
+        s2 = _sign(w2)
+    return P[COUL] * s1 + P[VISC] * w1, P[COUL + 1] * s2 + P[VISC + 1] * w2
+
+
+@leaf
 def friction_torque(w1, w2, P):
     """Joint friction (smooth Coulomb + viscous) [N m]."""
-    vs = P[VFRIC]
-    return (P[COUL] * math.tanh(w1 / vs) + P[VISC] * w1,
-            P[COUL + 1] * math.tanh(w2 / vs) + P[VISC + 1] * w2)
+    return friction_cs(w1, w2, True, P)
 
 
 @leaf
@@ -89,6 +124,43 @@ def _params_vector(arm, params):
     return lay.pack(arm) if params is None else lay.pack(arm, params)
 
 
+@kernel
+def _dyn_many(kind, q, qd, P, out):
+    """Batched evaluation of the leaves above (kind 0 H, 1 C, 2 G, 3/4 friction, 5 U)."""
+    for n in range(q.shape[0]):
+        c1, s1 = math.cos(q[n, 0]), math.sin(q[n, 0])
+        c2, s2 = math.cos(q[n, 1]), math.sin(q[n, 1])
+        c12, s12 = math.cos(q[n, 0] + q[n, 1]), math.sin(q[n, 0] + q[n, 1])
+        o = out[n]
+        if kind == 0:
+            o[0], o[1], o[3] = mass_matrix_cs(c2, s2, P)
+            o[2] = o[1]
+        elif kind == 1:
+            o[0], o[1], o[2], o[3] = coriolis_cs(c2, s2, qd[n, 0], qd[n, 1], P)
+        elif kind == 2:
+            o[0], o[1] = gravity_cs(c1, s1, c12, s12, P)
+        elif kind == 3 or kind == 4:
+            o[0], o[1] = friction_cs(qd[n, 0], qd[n, 1], kind == 3, P)
+        else:
+            o[0] = potential_cs(c1, s1, c12, s12, P)
+
+
+_WIDTH = (4, 4, 2, 2, 2, 1)
+
+
+def _evaluate(kind, q, qd, arm, params):
+    """Broadcast q, qd (..., 2), run :func:`_dyn_many`; returns (out (n, w), lead shape)."""
+    lead = np.broadcast_shapes(q.shape[:-1], qd.shape[:-1])
+    qf = np.ascontiguousarray(np.broadcast_to(q, lead + (2,)).reshape(-1, 2))
+    qdf = np.ascontiguousarray(np.broadcast_to(qd, lead + (2,)).reshape(-1, 2))
+    out = np.empty((qf.shape[0], _WIDTH[kind]))
+    _dyn_many(kind, qf, qdf, _params_vector(arm, params), out)
+    return out, lead
+
+
+_NO_Q = np.zeros(2)
+
+
 def inertia_matrix(q, arm, *, params=None) -> np.ndarray:
     """H(q) [kg m^2], shape (..., 2, 2).
 
@@ -101,52 +173,84 @@ def inertia_matrix(q, arm, *, params=None) -> np.ndarray:
         Rigid-body parameters; default the physical plant.
     """
     q = as_float_array("q", q, shape_tail=(2,))
-    P = _params_vector(arm, params)
-    a = P[L1] * (P[TH + 3] * np.cos(q[..., 1]) + P[TH + 4] * np.sin(q[..., 1]))
-    H = np.empty(q.shape[:-1] + (2, 2))
-    H[..., 0, 0] = P[TH + 2] + P[TH + 5] + 2 * a
-    H[..., 0, 1] = H[..., 1, 0] = P[TH + 5] + a
-    H[..., 1, 1] = P[TH + 5]
-    return H
+    out, lead = _evaluate(0, q, _NO_Q, arm, params)
+    return out.reshape(lead + (2, 2))
 
 
 def coriolis(q, qd, arm, *, params=None) -> np.ndarray:
-    """C(q, qd) [kg m^2/s], shape (..., 2, 2) (Christoffel form, so Hdot - 2C is skew)."""
+    """C(q, qd) [kg m^2/s], shape (..., 2, 2) (Christoffel form, so Hdot - 2C is skew).
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 2)
+        Joint angles [rad].
+    qd : array_like, shape (..., 2)
+        Joint velocities [rad/s] (broadcast against ``q``).
+    arm : ArmParameters
+    params : BaseParameters, optional
+        Rigid-body parameters; default the physical plant.
+    """
     q = as_float_array("q", q, shape_tail=(2,))
     qd = as_float_array("qd", qd, shape_tail=(2,))
-    P = _params_vector(arm, params)
-    hq = P[L1] * (P[TH + 3] * np.sin(q[..., 1]) - P[TH + 4] * np.cos(q[..., 1]))
-    C = np.zeros(np.broadcast_shapes(q.shape, qd.shape)[:-1] + (2, 2))
-    C[..., 0, 0] = -hq * qd[..., 1]
-    C[..., 0, 1] = -hq * (qd[..., 0] + qd[..., 1])
-    C[..., 1, 0] = hq * qd[..., 0]
-    return C
+    out, lead = _evaluate(1, q, qd, arm, params)
+    return out.reshape(lead + (2, 2))
 
 
 def gravity(q, arm, *, params=None) -> np.ndarray:
-    """G(q) [N m], shape (..., 2)."""
+    """G(q) [N m], shape (..., 2).
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 2)
+        Joint angles [rad].
+    arm : ArmParameters
+    params : BaseParameters, optional
+        Rigid-body parameters; default the physical plant.
+    """
     q = as_float_array("q", q, shape_tail=(2,))
-    P = _params_vector(arm, params)
-    g = P[GRAV]
-    c12, s12 = np.cos(q[..., 0] + q[..., 1]), np.sin(q[..., 0] + q[..., 1])
-    g2 = g * (P[TH + 3] * c12 + P[TH + 4] * s12)
-    g1 = g * (P[TH] * np.cos(q[..., 0]) + P[TH + 1] * np.sin(q[..., 0])) + g2
-    return np.stack([g1, g2], axis=-1)
+    out, lead = _evaluate(2, q, _NO_Q, arm, params)
+    return out.reshape(lead + (2,))
 
 
 def friction(qd, arm, *, params=None, smooth: bool = True) -> np.ndarray:
-    """Joint friction (3.30) [N m]; ``smooth=False`` uses the ideal sign function."""
+    """Joint friction (3.30) [N m], shape (..., 2).
+
+    Parameters
+    ----------
+    qd : array_like, shape (..., 2)
+        Joint velocities [rad/s].
+    arm : ArmParameters
+    params : BaseParameters, optional
+        Rigid-body parameters; default the physical plant.
+    smooth : bool, keyword-only
+        True (default): smooth Coulomb term c tanh(qd / v_s) as in the plant;
+        False: the ideal sign function of (3.30).
+    """
     qd = as_float_array("qd", qd, shape_tail=(2,))
-    P = _params_vector(arm, params)
-    c, b = P[COUL:COUL + 2], P[VISC:VISC + 2]
-    s = np.tanh(qd / P[VFRIC]) if smooth else np.sign(qd)
-    return c * s + b * qd
+    if not isinstance(smooth, (bool, np.bool_)):
+        raise TypeError(f"smooth must be a bool, got {smooth!r}")
+    out, lead = _evaluate(3 if smooth else 4, _NO_Q, qd, arm, params)
+    return out.reshape(lead + (2,))
 
 
 def regressor(q, qd, qdd, arm, *, gravity_acc: float | None = None) -> np.ndarray:
     """Observation matrix K(q, qd, qdd) of (B.5) extended with friction (B.6).
 
     K @ [theta1..theta6, c1, c2, b1, b2] = H qdd + C qd + G + c sgn(qd) + b qd.
+
+    Written out from (B.5)/(B.6) in NumPy, deliberately independent of the
+    compiled leaves (``mass_matrix_cs`` ...): it is the test oracle those
+    kernels are checked against (``tests/test_dynamics.py``), so do not
+    rewrite it in terms of them.
+
+    Parameters
+    ----------
+    q, qd, qdd : array_like, shape (..., 2)
+        Joint angles [rad], velocities [rad/s], accelerations [rad/s^2].
+    arm : ArmParameters
+        Supplies L1 and the gravitational acceleration.
+    gravity_acc : float, optional
+        Gravitational acceleration [m/s^2]; default ``arm.gravity``.
 
     Returns
     -------
@@ -188,13 +292,19 @@ def kinetic_energy(q, qd, arm, *, params=None) -> np.ndarray:
 
 
 def potential_energy(q, arm, *, params=None) -> np.ndarray:
-    """Gravitational potential energy (B.1) up to a constant [J].
+    """Gravitational potential energy (B.1) up to a constant [J], shape (...).
 
-    In base parameters: P = g (theta1 s1 - theta2 c1 + theta4 s12 - theta5 c12),
-    so that dP/dq = G.
+    In base parameters: U = g (theta1 s1 - theta2 c1 + theta4 s12 - theta5 c12),
+    so that dU/dq = G.
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 2)
+        Joint angles [rad].
+    arm : ArmParameters
+    params : BaseParameters, optional
+        Rigid-body parameters; default the physical plant.
     """
     q = as_float_array("q", q, shape_tail=(2,))
-    P = _params_vector(arm, params)
-    q1, q12 = q[..., 0], q[..., 0] + q[..., 1]
-    return P[GRAV] * (P[TH] * np.sin(q1) - P[TH + 1] * np.cos(q1)
-                      + P[TH + 3] * np.sin(q12) - P[TH + 4] * np.cos(q12))
+    out, lead = _evaluate(5, q, _NO_Q, arm, params)
+    return out.reshape(lead)

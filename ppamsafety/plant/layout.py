@@ -1,14 +1,33 @@
-"""Flat parameter vector shared by all compiled (numba) kernels.
+"""Flat parameter row shared by all compiled (numba) plant kernels.
 
 The simulation core is written as small ``numba.njit`` kernels so that a
 closed-loop experiment or a batch of impacts runs without per-step Python
-overhead.  Kernels take the parameters as one float64 vector ``P`` and read
-fields by the integer offsets defined here (compile-time constants for
-numba).  :func:`pack` builds ``P`` from an :class:`~ppamsafety.params.ArmParameters`;
-a batch of parameter variants is simply a 2-D array of such rows.
+overhead.  Kernels take the parameters as one float64 row ``P`` whose
+contents are declared once, here, as the :class:`~ppamsafety.layouts.Layout`
+:data:`PLANT` (name, length, unit, meaning and thesis reference of every
+field).  The module-level integer constants (``L1``, ``COEF``, ``THETA4``
+...) are generated from that declaration and frozen by numba at compile
+time.  :func:`pack` builds ``P`` from an
+:class:`~ppamsafety.params.ArmParameters` by field name; a batch of
+parameter variants is simply a 2-D array of such rows.
 
-All entries are SI.  Derived quantities (connection lengths, volume anchors)
-are computed here once from the geometry and muscle data.
+Vector fields are indexed ``P[FIELD + i]`` only with a loop/group index
+(``P[COEF + 5 * k + i]``, ``P[TV + i]``); a slot with its own meaning has its
+own constant: the six base parameters are the field ``theta`` (length 6)
+with the named constants ``THETA1`` .. ``THETA6``, the mean pressures the
+field ``p_mean`` with ``PM1``, ``PM2``.
+
+The row ends with the **effect section** (:data:`EFFECTS`): parameters of
+optional plant effects (hysteresis, valve dead time, payload ...) and the
+length of the per-row effect-state vector ``z`` they need; every effect is
+off by default and the section then changes nothing.  The contents of ``z``
+are declared in :data:`EFFECT_STATE`.  How to add an effect: see
+:mod:`ppamsafety.plant.model`.
+
+All entries are SI.  Derived quantities (connection lengths, volume anchors,
+zero-force contractions) are computed here once from the geometry and muscle
+data; the force polynomial is evaluated by the same compiled kernels the
+plant uses (:mod:`ppamsafety.plant.muscle`).
 """
 
 from __future__ import annotations
@@ -17,66 +36,136 @@ from functools import lru_cache
 
 import numpy as np
 
-# --- geometry (Table 2.1 / 2.2) [m] -------------------------------------
-X11, Y11, X21, Y21 = 0, 1, 2, 3
-L12, D12, L22, D22, L32, D32, L42, D42 = 4, 5, 6, 7, 8, 9, 10, 11
-L33, D33, L43, D43 = 12, 13, 14, 15
-L1, L2, LL, DL = 16, 17, 18, 19
-# --- muscles --------------------------------------------------------------
-LCONN = 20          # 4 connection lengths [m]            (A.35)-(A.38)
-NM = 24             # 4 numbers of muscles in series [-]
-L0 = 28             # 4 membrane lengths l0 [m]
-COEF = 32           # 4 x 5 force coefficients a0..a4 [N/Pa]  (3.9)
-EPS_A = 52          # 4 volume anchor contractions [-]
-V_C = 56            # 4 volume constants: V(eps) = V_C + l0 * antiderivative(eps) [m^3]
-EPS_F0 = 60         # 4 contraction where the force law reaches zero [-]
-# --- valves ----------------------------------------------------------------
-TV = 64             # 4 time constants [s]                (3.2)
-V1 = 68             # 4 static offsets [Pa]               (3.12)
-V2 = 72             # 4 static gains [-]
-# --- pneumatics -----------------------------------------------------------
-PM1, PM2, PMAX, PATM, NPOLY = 76, 77, 78, 79, 80
-# --- rigid-body dynamics: base parameters (B.5) + friction (3.30) -----------
-TH = 81             # 6 base parameters theta1..theta6
-COUL = 87           # 2 Coulomb [N m]
-VISC = 89           # 2 viscous [N m s/rad]
-GRAV = 91           # gravity [m/s^2]
-VFRIC = 92          # friction velocity scale [rad/s]
-NP = 93             # length of the vector
+from ..layouts import Field, Layout
+
+#: Geometry fields, named as the :class:`~ppamsafety.params.ArmGeometry` attributes.
+GEOMETRY_FIELDS = (
+    Field("X11", 1, "m", "x-distance of base attachment A11 = (-X11, Y11), Table 2.1"),
+    Field("Y11", 1, "m", "y of base attachment A11, Table 2.1"),
+    Field("X21", 1, "m", "x of base attachment A21 = (X21, -Y21), Table 2.1"),
+    Field("Y21", 1, "m", "y-distance of base attachment A21, Table 2.1"),
+    Field("L12", 1, "m", "position of A12 along link 1, Table 2.1, (A.14)"),
+    Field("d12", 1, "m", "offset of A12 from link 1, Table 2.1, (A.14)"),
+    Field("L22", 1, "m", "position of A22 along link 1, Table 2.1, (A.16)"),
+    Field("d22", 1, "m", "offset of A22 from link 1, Table 2.1, (A.16)"),
+    Field("L32", 1, "m", "position of A32 along link 1, Table 2.1, (A.17)"),
+    Field("d32", 1, "m", "offset of A32 from link 1, Table 2.1, (A.17)"),
+    Field("L42", 1, "m", "position of A42 along link 1, Table 2.1, (A.19)"),
+    Field("d42", 1, "m", "offset of A42 from link 1, Table 2.1, (A.19)"),
+    Field("L33", 1, "m", "position of A33 along link 2, Table 2.1, (A.18)"),
+    Field("d33", 1, "m", "offset of A33 from link 2, Table 2.1, (A.18)"),
+    Field("L43", 1, "m", "position of A43 along link 2, Table 2.1, (A.20)"),
+    Field("d43", 1, "m", "offset of A43 from link 2, Table 2.1, (A.20)"),
+    Field("L1", 1, "m", "length of link 1 (O to joint S), Table 2.1"),
+    Field("L2", 1, "m", "length of link 2 (S to TCP), Table 2.1"),
+    Field("LL", 1, "m", "position of the load point A_L along link 2, Table 2.2, (A.21)"),
+    Field("dL", 1, "m", "offset of the load point A_L from link 2, Table 2.2, (A.21)"),
+)
+
+#: Effect parameters at the end of the plant row (all effects off by default).
+EFFECT_FIELDS = (
+    Field("effect_state_length", 1, "-",
+          "length of the effect-state vector z this row needs (0: no effect with state), "
+          "issue 7 item 2", default=0.0),
+)
+
+PLANT = Layout("plant parameters", GEOMETRY_FIELDS + (
+    # --- muscles -----------------------------------------------------------------------
+    Field("lconn", 4, "m", "connection lengths L_conn,i per group, (A.35)-(A.38), Table A.1"),
+    Field("n_muscles", 4, "-", "number of muscles in series per group, Table 2.1"),
+    Field("l0", 4, "m", "membrane length l0 of one muscle per group, §2.2"),
+    Field("coef", 20, "N/Pa", "force-law coefficients a0..a4 per group (group-major), (3.9), "
+          "Table B.1", columns=tuple(f"a{i}_g{k}" for k in range(1, 5) for i in range(5))),
+    Field("eps_anchor", 4, "-", "volume anchor contraction per group (muscles.eps_min), "
+          "see anchor_volume"),
+    Field("v_c", 4, "m^3", "volume constant: V(eps) = v_c + l0 * antiderivative(eps), "
+          "from (2.1) and (3.9)"),
+    Field("eps_f0", 4, "-", "first contraction above the anchor where the force law (3.9) "
+          "reaches zero (maximal volume)"),
+    # --- valves ------------------------------------------------------------------------
+    Field("tv", 4, "s", "valve time constants T_i, (3.2), Table 3.2"),
+    Field("v1", 4, "Pa", "static valve offsets v1_i, (3.12)"),
+    Field("v2", 4, "-", "static valve gains v2_i, (3.12)"),
+    # --- pneumatics --------------------------------------------------------------------
+    Field("p_mean", 2, "Pa", "mean pressures p_m of joints 1, 2 (Delta-p approach), (3.7)"),
+    Field("p_max", 1, "Pa", "maximum gauge pressure (valve range), §3.1"),
+    Field("p_atm", 1, "Pa", "atmospheric pressure, (3.3)"),
+    Field("n_poly", 1, "-", "polytropic exponent n, (3.3)"),
+    # --- rigid-body dynamics: base parameters (B.5) + friction (3.30) ------------------
+    Field("theta", 6, "kg m, kg m, kg m^2, kg m, kg m, kg m^2",
+          "base parameters theta1..theta6 = [m1 L_G1 + m2 L1, m1 d_G1, I_zO1 + m2 L1^2, "
+          "m2 L_G2, m2 d_G2, I_zS2], (B.5)"),
+    Field("coulomb", 2, "N m", "Coulomb friction c_j, (3.30)"),
+    Field("viscous", 2, "N m s/rad", "viscous friction b_j, (3.30)"),
+    Field("gravity", 1, "m/s^2", "gravitational acceleration g"),
+    Field("v_friction", 1, "rad/s", "velocity scale v_s of the smooth Coulomb term c tanh(qd/v_s)"),
+) + EFFECT_FIELDS)
+
+#: The effect section of :data:`PLANT` on its own (same fields, offsets relative to the section).
+EFFECTS = Layout("plant effect parameters", EFFECT_FIELDS)
+
+#: Contents of the effect-state vector z (empty: no effect with state is implemented yet).
+#: The row's ``effect_state_length`` may exceed ``EFFECT_STATE.size`` (variable-length
+#: memories such as Preisach reversal stacks); z is then laid out by the effect itself.
+EFFECT_STATE = Layout("plant effect state", [])
+
+# --- module constants for the kernels (frozen by numba at compile time) ----------------
+(X11, Y11, X21, Y21, L12, D12, L22, D22, L32, D32, L42, D42, L33, D33, L43, D43,
+ L1, L2, LL, DL) = PLANT.offsets(*(f.name for f in GEOMETRY_FIELDS))
+LCONN, NM, L0, COEF, EPS_A, V_C, EPS_F0 = PLANT.offsets(
+    "lconn", "n_muscles", "l0", "coef", "eps_anchor", "v_c", "eps_f0")
+TV, V1, V2 = PLANT.offsets("tv", "v1", "v2")
+PM, PMAX, PATM, NPOLY = PLANT.offsets("p_mean", "p_max", "p_atm", "n_poly")
+PM1, PM2 = PM, PM + 1                  #: mean pressure of joint 1, joint 2
+TH, COUL, VISC, GRAV, VFRIC = PLANT.offsets("theta", "coulomb", "viscous", "gravity",
+                                            "v_friction")
+#: the six base parameters theta1..theta6 of (B.5), one constant each
+THETA1, THETA2, THETA3, THETA4, THETA5, THETA6 = (TH + i for i in range(6))
+#: first slot of the effect section, and the effect-state length
+EFFECTS_START = PLANT.offset(EFFECT_FIELDS[0].name)
+NZ = PLANT.offset("effect_state_length")
+NP = PLANT.size                        #: length of the row
 
 #: Contraction floor used by the force/volume kernels (eps <= 0 is undefined).
 EPS_FLOOR = 1e-3
 
 
+def _partial_row(values) -> np.ndarray:
+    """A row with the given fields set and every other slot at its default (0)."""
+    P = PLANT.empty()
+    for name, v in values.items():
+        P[PLANT.slice(name)] = v
+    return P
+
+
+def _geometry_values(g) -> dict:
+    return {f.name: getattr(g, f.name) for f in GEOMETRY_FIELDS}
+
+
 def _force_root(coef, eps_a: float, eps_hi: float = 0.6) -> float:
-    """First contraction above ``eps_a`` where the force polynomial is zero."""
+    """First contraction above ``eps_a`` where the force polynomial (3.9) is zero.
+
+    The polynomial is evaluated by the plant's own kernel
+    (:func:`ppamsafety.plant.muscle.poly_value`).
+    """
+    from scipy.optimize import brentq
+
+    from .muscle import poly_value, polynomial
+
     e = np.linspace(eps_a, eps_hi, 5001)
-    a0, a1, a2, a3, a4 = coef
-    f = a0 / e + a1 + a2 * e + a3 * e ** 2 + a4 * e ** 3
+    f = polynomial(coef, e)
     idx = np.nonzero(f <= 0.0)[0]
     if idx.size == 0:
         return eps_hi
-    from scipy.optimize import brentq
     j = idx[0]
-    fun = lambda x: a0 / x + a1 + a2 * x + a3 * x ** 2 + a4 * x ** 3  # noqa: E731
+    a0, a1, a2, a3, a4 = (float(c) for c in coef)
+    fun = lambda x: poly_value(a0, a1, a2, a3, a4, x)  # noqa: E731
     return float(brentq(fun, e[j - 1], e[j])) if j > 0 else float(e[0])
-
-
-def _antiderivative(coef, e: float) -> float:
-    """Antiderivative of the force polynomial (same as ``muscle.integral``)."""
-    a0, a1, a2, a3, a4 = coef
-    return float(a0 * np.log(e) + a1 * e + a2 * e ** 2 / 2 + a3 * e ** 3 / 3 + a4 * e ** 4 / 4)
-
-
-def _fill_geometry(P, g):
-    vals = (g.X11, g.Y11, g.X21, g.Y21, g.L12, g.d12, g.L22, g.d22, g.L32, g.d32, g.L42, g.d42,
-            g.L33, g.d33, g.L43, g.d43, g.L1, g.L2, g.LL, g.dL)
-    P[:20] = vals
 
 
 @lru_cache(maxsize=128)
 def pack(arm, dynamics=None) -> np.ndarray:
-    """Pack an :class:`ArmParameters` into the flat kernel vector ``P``.
+    """Pack an :class:`ArmParameters` into the flat kernel row ``P`` (layout :data:`PLANT`).
 
     Parameters
     ----------
@@ -90,33 +179,75 @@ def pack(arm, dynamics=None) -> np.ndarray:
     Returns
     -------
     numpy.ndarray, shape (NP,)
-        Read-only vector (cached per argument pair).
+        Read-only row (cached per argument pair); every effect off (use
+        :func:`with_effects` for a row with effect parameters).
     """
-    P = np.zeros(NP)
-    _fill_geometry(P, arm.geometry)
     groups = arm.muscles.groups
-    for i, grp in enumerate(groups):
-        P[NM + i] = grp.n_muscles
-        P[L0 + i] = grp.l0
-        P[COEF + 5 * i: COEF + 5 * i + 5] = grp.coefficients
     lconn, eps_a, eps_f0, v_c = _muscle_terms(arm.geometry, arm.muscles)
-    P[LCONN:LCONN + 4] = lconn
-    P[EPS_A:EPS_A + 4] = eps_a
-    P[EPS_F0:EPS_F0 + 4] = eps_f0
-    P[V_C:V_C + 4] = v_c
-    for i, v in enumerate(arm.valves.valves):
-        P[TV + i], P[V1 + i], P[V2 + i] = v.time_constant, v.v1, v.v2
+    valves = arm.valves.valves
     pn = arm.pneumatics
-    P[PM1], P[PM2], P[PMAX], P[PATM], P[NPOLY] = (pn.p_mean[0], pn.p_mean[1], pn.p_max,
-                                                  pn.p_atm, pn.polytropic_n)
     dyn = arm.plant_base if dynamics is None else dynamics
-    P[TH:TH + 6] = dyn.as_vector()
-    P[COUL:COUL + 2] = dyn.coulomb
-    P[VISC:VISC + 2] = dyn.viscous
-    P[GRAV] = arm.gravity
-    P[VFRIC] = arm.friction_velocity
+    values = _geometry_values(arm.geometry)
+    values.update(
+        lconn=lconn, n_muscles=[grp.n_muscles for grp in groups], l0=[grp.l0 for grp in groups],
+        coef=[c for grp in groups for c in grp.coefficients], eps_anchor=eps_a, v_c=v_c,
+        eps_f0=eps_f0, tv=[v.time_constant for v in valves], v1=[v.v1 for v in valves],
+        v2=[v.v2 for v in valves], p_mean=pn.p_mean, p_max=pn.p_max, p_atm=pn.p_atm,
+        n_poly=pn.polytropic_n, theta=dyn.as_vector(), coulomb=dyn.coulomb,
+        viscous=dyn.viscous, gravity=arm.gravity, v_friction=arm.friction_velocity)
+    P = PLANT.pack(values)
     P.setflags(write=False)
     return P
+
+
+#: Largest effect-state length a row may ask for.
+MAX_EFFECT_STATE = 1_000_000
+
+
+def with_effects(P, **effects) -> np.ndarray:
+    """Copy of plant row(s) ``P`` with effect parameters set by name.
+
+    Parameters
+    ----------
+    P : array_like, shape (NP,) or (B, NP)
+        Packed plant row(s) (:func:`pack`).
+    **effects
+        Fields of :data:`EFFECTS` and their values, e.g.
+        ``effect_state_length=3``.
+
+    Returns
+    -------
+    numpy.ndarray
+        A new writable array of the shape of ``P``.
+
+    Raises
+    ------
+    KeyError
+        For a name that is not an effect field.
+    ValueError
+        For a row of the wrong length or an invalid value.
+    """
+    out = np.array(P, dtype=float)
+    if out.ndim not in (1, 2) or out.shape[-1] != NP:
+        raise ValueError(f"P must have shape ({NP},) or (B, {NP}), got {out.shape}")
+    for name, value in effects.items():
+        EFFECTS.field(name)                      # KeyError naming the fields
+        if name == "effect_state_length":
+            if (isinstance(value, bool) or not isinstance(value, (int, np.integer, float))
+                    or not float(value).is_integer() or not 0 <= value <= MAX_EFFECT_STATE):
+                raise ValueError(f"effect_state_length = {value!r} must be an integer in "
+                                 f"[0, {MAX_EFFECT_STATE}]")
+        out[..., PLANT.slice(name)] = value
+    return out
+
+
+def effect_state_lengths(rows) -> np.ndarray:
+    """Effect-state length of each plant row, validated; int array of shape (B,)."""
+    n = np.atleast_2d(rows)[:, NZ]
+    if not np.all((n == np.round(n)) & (n >= 0) & (n <= MAX_EFFECT_STATE)):
+        raise ValueError(f"params: effect_state_length must be an integer in "
+                         f"[0, {MAX_EFFECT_STATE}], got {n}")
+    return n.astype(np.int64)
 
 
 @lru_cache(maxsize=64)
@@ -127,18 +258,17 @@ def _muscle_terms(geometry, muscles) -> tuple:
     a parameter variant that differs elsewhere (valves, pressures, inertia)
     cheap.
     """
-    from . import geometry as geo  # local import: the geometry kernels need this module
+    from . import geometry as geo  # local imports: these kernels need this module
+    from .muscle import antiderivative
 
-    P = np.zeros(NP)
-    _fill_geometry(P, geometry)
-    for i, grp in enumerate(muscles.groups):
-        P[NM + i] = grp.n_muscles
-        P[L0 + i] = grp.l0
+    groups = muscles.groups
+    P = _partial_row({**_geometry_values(geometry), "n_muscles": [g.n_muscles for g in groups],
+                      "l0": [g.l0 for g in groups]})
     lconn = geo.design_connection_lengths(P, geometry, muscles.eps_min, muscles.eps_max)
     eps_a = [muscles.eps_min] * 4
-    eps_f0 = [_force_root(g.coefficients, muscles.eps_min) for g in muscles.groups]
-    v_c = [anchor_volume(g, muscles.eps_min) - g.l0 * _antiderivative(g.coefficients, muscles.eps_min)
-           for g in muscles.groups]
+    eps_f0 = [_force_root(g.coefficients, muscles.eps_min) for g in groups]
+    v_c = [anchor_volume(g, muscles.eps_min)
+           - g.l0 * float(antiderivative(g.coefficients, muscles.eps_min)) for g in groups]
     return tuple(lconn), tuple(eps_a), tuple(eps_f0), tuple(v_c)
 
 
@@ -152,17 +282,18 @@ def anchor_volume(group, eps_a: float) -> float:
     gives V(eps_a) = pi R^2 l0 + 2 eps_a l0 f(eps_a), with the cylinder of
     radius R = l0/slenderness as the eps = 0 value (thesis fig. 2.4 scale).
     """
-    a0, a1, a2, a3, a4 = group.coefficients
-    f_a = a0 / eps_a + a1 + a2 * eps_a + a3 * eps_a ** 2 + a4 * eps_a ** 3
+    from .muscle import polynomial
+
+    f_a = float(polynomial(group.coefficients, eps_a))
     r = group.radius
     return float(np.pi * r ** 2 * group.l0 + 2.0 * eps_a * group.l0 * max(f_a, 0.0))
 
 
 def controller_view(arm) -> np.ndarray:
-    """Packed vector with the controllers' identified gravity model (Table 3.1)."""
+    """Packed row with the controllers' identified gravity model (Table 3.1)."""
     return pack(arm, arm.model_gravity)
 
 
 def model_view(arm) -> np.ndarray:
-    """Packed vector with the identified dynamic model (Table 3.5)."""
+    """Packed row with the identified dynamic model (Table 3.5)."""
     return pack(arm, arm.model)

@@ -12,6 +12,57 @@ the input held constant over the step (zero-order hold), the natural scheme
 for a 1 kHz digital control loop: one control period is ``substeps`` RK4
 steps.  Everything is a numba kernel; :func:`simulate` also accepts a leading
 batch axis (one row of parameters, initial state and inputs per variant).
+
+Effect state (issue 7, item 2)
+------------------------------
+Beside the 8 physical states every plant kernel carries an **effect-state
+vector** ``z`` (float64, length ``effect_state_length`` of the parameter
+row, read with :func:`effect_state_length`; zero-length when no effect with
+state is on -- numba handles the empty array, no minimum length is needed).
+It is the memory of optional plant effects that are not part of the ODE
+state: Preisach hysteresis reversal points per muscle group, valve dead-time
+delay lines, a payload that can be dropped ...  The kernels' signatures are
+fixed once and for all::
+
+    plant_rhs(x, z, u, tau_ext, P, dx, work)     # z read-only inside the RK4 stages
+    rk4_step(x, z, u, tau_ext, h, P, work)       # ends with effects_update(x, z, u, P)
+    effects_update(x, z, u, P)                   # once per RK4 step, after the step
+
+With every effect off (the default of :func:`~ppamsafety.plant.layout.pack`)
+``z`` is empty, :func:`effects_update` does nothing and the results are
+bitwise those of the plant without the extension point
+(``tests/test_golden.py``).
+
+How to add an effect
+~~~~~~~~~~~~~~~~~~~~
+1. *Parameters.*  Add its fields to ``EFFECT_FIELDS`` in
+   :mod:`ppamsafety.plant.layout` (name, length, unit, meaning with thesis
+   reference), including an on/off (or mode) flag ``Field("<name>_mode", 1,
+   "code", ..., default=0)`` whose codes are an ``enum.IntEnum`` declared
+   there (``OFF = 0``).  Every default must mean "effect off".  The fields
+   land in the plant row after the existing ones (nothing else moves), and
+   ``tests/test_layouts.py`` round-trips them automatically.  Give the
+   effect a way to be switched on (:func:`~ppamsafety.plant.layout.with_effects`
+   for packed rows, later an ``ArmParameters`` option read by ``pack``).
+2. *State.*  Declare the contents of its state in ``EFFECT_STATE`` (fixed
+   size), or, for a variable-length memory, an offset/length pair in its
+   parameters.  Whoever switches the effect on sets ``effect_state_length``
+   of the row to cover it.
+3. *Kernels.*  In :func:`effects_update` add ``if int(P[<NAME>_MODE]) ==
+   <Enum>.ON: ...`` updating ``z`` from the step's end state ``x`` and input
+   ``u`` (discrete memories: reversal points, delay-line shift).  Where the
+   effect changes the dynamics, read ``z`` (and the flag) in
+   :func:`plant_rhs` or in the leaf it concerns (the force law, the valve
+   model), passing ``z`` down; ``z`` is constant over the four RK4 stages.
+   A continuous-time effect state would instead need ``dz`` in the RK4
+   stages (extend ``NWORK`` and :func:`rk4_step`).  Never change the
+   signatures above.
+4. *Initial state.*  :func:`simulate` starts from ``effect_state`` (default
+   zeros), the closed loop (:mod:`ppamsafety.experiments.closed_loop`) from
+   zeros; if zero is not the effect's rest state, set it there.
+5. *Tests.*  With the effect off, ``tests/test_golden.py`` must still pass
+   bitwise; add a test of the effect itself, and a benchmark run
+   (``studies/bench_plant.py``) showing the cost of the check when off.
 """
 
 from __future__ import annotations
@@ -25,6 +76,7 @@ from .._jit import kernel, leaf
 from .._validation import as_float_array, check_int, check_range
 from . import layout as lay
 from .dynamics import forward_dynamics_cs
+from .layout import NZ
 from .pneumatics import pressure_rates
 from .torque import torque_kernel_cs
 
@@ -34,9 +86,29 @@ NU = 4          #: input dimension
 NWORK = 5 * NX + 12
 
 
+@leaf
+def effect_state_length(P):
+    """Length of the effect-state vector z that plant row ``P`` needs."""
+    return int(P[NZ])
+
+
+@leaf
+def effects_update(x, z, u, P):
+    """Update the effect state ``z`` after an integration step ending in state ``x``.
+
+    Called once per RK4 step (by :func:`rk4_step`) with the step's input
+    ``u``.  No effect is implemented yet, so this does nothing (and, being
+    inlined, costs nothing); see the module docstring for how to add one.
+    """
+    return
+
+
 @kernel
-def plant_rhs(x, u, tau_ext, P, dx, work):
-    """State derivative of the plant; writes ``dx`` (8,).  ``work`` >= 12 floats."""
+def plant_rhs(x, z, u, tau_ext, P, dx, work):
+    """State derivative of the plant; writes ``dx`` (8,).  ``work`` >= 12 floats.
+
+    ``z`` is the effect state (read-only here; see the module docstring).
+    """
     mt = work[0:4]
     dmt = work[4:8]
     vol = work[8:12]
@@ -55,30 +127,35 @@ def plant_rhs(x, u, tau_ext, P, dx, work):
 
 
 @kernel
-def rk4_step(x, u, tau_ext, h, P, work):
-    """Advance ``x`` in place by one RK4 step of length ``h`` [s] (inputs held)."""
+def rk4_step(x, z, u, tau_ext, h, P, work):
+    """Advance ``x`` in place by one RK4 step of length ``h`` [s] (inputs held).
+
+    The effect state ``z`` is held over the stages and updated once at the
+    end by :func:`effects_update`.
+    """
     k1 = work[0:8]
     k2 = work[8:16]
     k3 = work[16:24]
     k4 = work[24:32]
     xt = work[32:40]
     buf = work[40:52]
-    plant_rhs(x, u, tau_ext, P, k1, buf)
+    plant_rhs(x, z, u, tau_ext, P, k1, buf)
     for i in range(NX):
         xt[i] = x[i] + 0.5 * h * k1[i]
-    plant_rhs(xt, u, tau_ext, P, k2, buf)
+    plant_rhs(xt, z, u, tau_ext, P, k2, buf)
     for i in range(NX):
         xt[i] = x[i] + 0.5 * h * k2[i]
-    plant_rhs(xt, u, tau_ext, P, k3, buf)
+    plant_rhs(xt, z, u, tau_ext, P, k3, buf)
     for i in range(NX):
         xt[i] = x[i] + h * k3[i]
-    plant_rhs(xt, u, tau_ext, P, k4, buf)
+    plant_rhs(xt, z, u, tau_ext, P, k4, buf)
     for i in range(NX):
         x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
+    effects_update(x, z, u, P)
 
 
 @kernel
-def _simulate_batch(X0, U, TAU, dt, substeps, P, out):
+def _simulate_batch(X0, Z, U, TAU, dt, substeps, P, out):
     nb = X0.shape[0]
     nsteps = U.shape[1]
     work = np.empty(NWORK)
@@ -89,17 +166,18 @@ def _simulate_batch(X0, U, TAU, dt, substeps, P, out):
     for b in range(nb):
         x[:] = X0[b]
         Pb = P[b].copy()
+        z = Z[b, :effect_state_length(Pb)]      # in place: Z returns the final effect states
         out[b, 0] = x
         for k in range(nsteps):
             u[:] = U[b, k]
             tau[:] = TAU[b, k]
             for _ in range(substeps):
-                rk4_step(x, u, tau, h, Pb, work)
+                rk4_step(x, z, u, tau, h, Pb, work)
             out[b, k + 1] = x
 
 
 def simulate(arm, x0, set_values, *, dt: float = 1e-3, substeps: int = 2,
-             tau_ext=None, params=None) -> np.ndarray:
+             tau_ext=None, params=None, effect_state=None, return_effect_state: bool = False):
     """Simulate the plant with piecewise-constant valve set values.
 
     Parameters
@@ -118,13 +196,24 @@ def simulate(arm, x0, set_values, *, dt: float = 1e-3, substeps: int = 2,
         External joint torques [N m].
     params : numpy.ndarray, shape (NP,) or (B, NP), optional
         Pre-packed parameter rows (overrides ``arm``; for sweeps).
+    effect_state : array_like, shape (nz,) or (B, nz), optional
+        Initial effect state z (see the module docstring); ``nz`` must be at
+        least the largest ``effect_state_length`` of the rows (each row uses
+        its first ``effect_state_length`` entries).  Default zeros.
+    return_effect_state : bool, keyword-only
+        Also return the final effect states.
 
     Returns
     -------
     numpy.ndarray, shape (N + 1, 8) or (B, N + 1, 8)
         States at t = 0, dt, ..., N dt.
+    numpy.ndarray, shape (nz,) or (B, nz)
+        Only with ``return_effect_state``: the effect states after the last
+        step (entries beyond a row's ``effect_state_length`` unchanged).
     """
     check_range("dt", dt, 1e-6, 1.0, unit="s")
+    if not isinstance(return_effect_state, (bool, np.bool_)):
+        raise TypeError(f"return_effect_state must be a bool, got {return_effect_state!r}")
     substeps = check_int("substeps", substeps, 1, 10000)
     x0 = as_float_array("x0", x0, shape_tail=(NX,))
     U = as_float_array("set_values", set_values, shape_tail=(NU,))
@@ -147,9 +236,21 @@ def simulate(arm, x0, set_values, *, dt: float = 1e-3, substeps: int = 2,
     else:
         T = as_float_array("tau_ext", tau_ext, shape_tail=(2,))
         T = np.array(np.broadcast_to(T if T.ndim == 3 else T[None], (B, U.shape[1], 2)))
+    nz = int(lay.effect_state_lengths(rows).max())
+    if effect_state is None:
+        Z = np.zeros((B, nz))
+    else:
+        Z = as_float_array("effect_state", effect_state)
+        if Z.ndim not in (1, 2) or Z.shape[-1] < nz or (Z.ndim == 2 and Z.shape[0] not in (1, B)):
+            raise ValueError(f"effect_state must have shape (nz,) or ({B}, nz) with nz >= {nz} "
+                             f"(the rows' effect_state_length), got {Z.shape}")
+        batched = batched or Z.ndim == 2
+        Z = np.array(np.broadcast_to(Z if Z.ndim == 2 else Z[None], (B, Z.shape[-1])))
     out = np.empty((B, U.shape[1] + 1, NX))
-    _simulate_batch(X0, U, T, float(dt), substeps, rows, out)
-    return out if batched or B > 1 else out[0]
+    _simulate_batch(X0, Z, U, T, float(dt), substeps, rows, out)
+    if not (batched or B > 1):
+        out, Z = out[0], Z[0]
+    return (out, Z) if return_effect_state else out
 
 
 def state_derivative(x, set_values, arm, *, tau_ext=None) -> np.ndarray:
@@ -169,8 +270,9 @@ def state_derivative(x, set_values, arm, *, tau_ext=None) -> np.ndarray:
 @kernel
 def _rhs_many(X, U, T, P, out):
     work = np.empty(12)
+    z = np.zeros(effect_state_length(P))
     for n in range(X.shape[0]):
-        plant_rhs(X[n], U[n], T[n], P, out[n], work)
+        plant_rhs(X[n], z, U[n], T[n], P, out[n], work)
 
 
 def rest_state(q, arm) -> tuple[np.ndarray, np.ndarray]:

@@ -33,10 +33,36 @@ from . import layout as lay
 from .layout import COEF, EPS_F0, EPS_FLOOR, L0, V_C
 
 
+# --- the force polynomial (3.9): the one implementation --------------------------------
+# Everything that evaluates the polynomial, its derivative or its antiderivative -- the
+# plant kernels below and, through :func:`polynomial` / :func:`antiderivative`, the
+# pack-time derived data in :mod:`ppamsafety.plant.layout` and the design studies --
+# goes through these three leaves.
+
+@leaf
+def poly_value(a0, a1, a2, a3, a4, e):
+    """a0/e + a1 + a2 e + a3 e^2 + a4 e^3 [N/Pa] (Horner form), unclipped."""
+    return a0 / e + a1 + e * (a2 + e * (a3 + e * a4))
+
+
+@leaf
+def poly_slope(a0, a1, a2, a3, a4, e):
+    """Derivative of :func:`poly_value` with respect to e [N/Pa]."""
+    return -a0 / (e * e) + a2 + e * (2.0 * a3 + 3.0 * e * a4)
+
+
+@leaf
+def poly_integral(a0, a1, a2, a3, a4, e):
+    """Antiderivative of :func:`poly_value` without the constant (log form) [N/Pa]."""
+    e2 = e * e
+    return (a0 * math.log(e) + a1 * e + a2 * e2 / 2.0
+            + a3 * e2 * e / 3.0 + a4 * e2 * e2 / 4.0)
+
+
 @leaf
 def _poly(k, e, P):
     b = COEF + 5 * k
-    return P[b] / e + P[b + 1] + e * (P[b + 2] + e * (P[b + 3] + e * P[b + 4]))
+    return poly_value(P[b], P[b + 1], P[b + 2], P[b + 3], P[b + 4], e)
 
 
 @leaf
@@ -55,16 +81,14 @@ def dforce_deps(k, eps, P):
     if e >= P[EPS_F0 + k] or eps < EPS_FLOOR or _poly(k, e, P) <= 0.0:
         return 0.0
     b = COEF + 5 * k
-    return -P[b] / (e * e) + P[b + 2] + e * (2.0 * P[b + 3] + 3.0 * e * P[b + 4])
+    return poly_slope(P[b], P[b + 1], P[b + 2], P[b + 3], P[b + 4], e)
 
 
 @leaf
 def integral(k, e, P):
-    """Antiderivative of the force polynomial without the constant (log form)."""
+    """Antiderivative of the force polynomial of group ``k`` without the constant."""
     b = COEF + 5 * k
-    e2 = e * e
-    return (P[b] * math.log(e) + P[b + 1] * e + P[b + 2] * e2 / 2.0
-            + P[b + 3] * e2 * e / 3.0 + P[b + 4] * e2 * e2 / 4.0)
+    return poly_integral(P[b], P[b + 1], P[b + 2], P[b + 3], P[b + 4], e)
 
 
 @leaf
@@ -88,8 +112,10 @@ def _eval_many(kind, k, eps, P, out):
             out[n] = force_per_pressure(k, eps[n], P)
         elif kind == 1:
             out[n] = dforce_deps(k, eps[n], P)
-        else:
+        elif kind == 2:
             out[n] = muscle_volume(k, eps[n], P)
+        else:
+            out[n] = _poly(k, eps[n], P)
 
 
 def _evaluate(kind, group, eps, arm):
@@ -99,6 +125,57 @@ def _evaluate(kind, group, eps, arm):
     out = np.empty_like(flat)
     _eval_many(kind, k, flat, lay.pack(arm), out)
     return out.reshape(e.shape)
+
+
+@kernel
+def _coef_many(kind, a0, a1, a2, a3, a4, eps, out):
+    for n in range(eps.shape[0]):
+        if kind == 0:
+            out[n] = poly_value(a0, a1, a2, a3, a4, eps[n])
+        else:
+            out[n] = poly_integral(a0, a1, a2, a3, a4, eps[n])
+
+
+def _coef_eval(kind, coefficients, eps):
+    c = as_float_array("coefficients", coefficients, shape_tail=(5,))
+    if c.shape != (5,):
+        raise ValueError(f"coefficients must be 5 numbers a0..a4, got shape {c.shape}")
+    e = as_float_array("eps", eps)
+    flat = np.ascontiguousarray(e.reshape(-1))
+    out = np.empty_like(flat)
+    _coef_many(kind, float(c[0]), float(c[1]), float(c[2]), float(c[3]), float(c[4]), flat, out)
+    return out.reshape(e.shape)
+
+
+def polynomial(coefficients, eps) -> np.ndarray:
+    """The force polynomial (3.9) a0/eps + a1 + ... + a4 eps^3, unclipped [N/Pa].
+
+    Parameters
+    ----------
+    coefficients : array_like, shape (5,)
+        a0..a4 in SI (N/Pa), as ``MuscleGroup.coefficients``.
+    eps : array_like
+        Contraction [-] (nonzero).
+
+    Returns
+    -------
+    numpy.ndarray of the shape of ``eps``
+        Evaluated by the plant kernel :func:`poly_value`.
+    """
+    return _coef_eval(0, coefficients, eps)
+
+
+def antiderivative(coefficients, eps) -> np.ndarray:
+    """Antiderivative of :func:`polynomial` without the constant [N/Pa] (``eps`` > 0).
+
+    Parameters
+    ----------
+    coefficients : array_like, shape (5,)
+        a0..a4 in SI (N/Pa).
+    eps : array_like
+        Contraction [-], > 0.
+    """
+    return _coef_eval(1, coefficients, eps)
 
 
 def muscle_force(group: int, eps, pressure, arm) -> np.ndarray:
@@ -121,6 +198,23 @@ def muscle_force(group: int, eps, pressure, arm) -> np.ndarray:
 def force_function(group: int, eps, arm) -> np.ndarray:
     """Force per unit gauge pressure f(eps) of one muscle [N/Pa = m^2]."""
     return _evaluate(0, group, eps, arm)
+
+
+def force_polynomial(group: int, eps, arm) -> np.ndarray:
+    """The raw force polynomial of ``group`` at ``eps``, without the clipping [N/Pa].
+
+    Unlike :func:`force_function` this is negative beyond the zero-force
+    contraction (used to diagnose where the fit stops being physical).
+
+    Parameters
+    ----------
+    group : int
+        Muscle group 1..4.
+    eps : array_like
+        Contraction [-] (nonzero).
+    arm : ArmParameters
+    """
+    return _evaluate(3, group, eps, arm)
 
 
 def muscle_volume_of(group: int, eps, arm) -> np.ndarray:

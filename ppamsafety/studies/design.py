@@ -56,12 +56,11 @@ def run(outdir, *, quick: bool = False) -> StudyResult:
     m2a = d[d.carrying_2 == 3]["M2_kg"].min()
     m2b = d[d.carrying_2 == 4]["M2_kg"].min()
 
-    from ..plant.muscle import force_function
+    from ..plant.muscle import force_function, force_polynomial
     eps = geo.contractions(d[["q1_rad", "q2_rad"]].to_numpy(), arm)
     e1max, e4max = eps[:, 0].max(), eps[:, 3].max()
     f1_edge = float(force_function(1, e1max, arm)) * BAR
-    f4_raw = float(np.polyval(arm.muscles.groups[3].coefficients[:0:-1], e4max)
-                   + arm.muscles.groups[3].coefficients[0] / e4max) * BAR
+    f4_raw = float(force_polynomial(4, e4max, arm)) * BAR
     ta1 = _table_a1(arm)
     ta1.to_csv(out / "design_table_A1.csv", index=False)
     arts.append(str(out / "design_table_A1.csv"))
