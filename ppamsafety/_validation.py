@@ -310,8 +310,7 @@ def as_float_array(name: str, value, *, shape_tail: tuple[int, ...] | None = Non
         n = len(shape_tail)
         if arr.ndim < n or tuple(arr.shape[arr.ndim - n:]) != tuple(shape_tail):
             lead = "(..., " + ", ".join(map(str, shape_tail)) + ")"
-            raise ValueError(f"{name} must have shape {lead} (last axis: "
-                             f"{', '.join(map(str, shape_tail))}), got shape {arr.shape}")
+            raise ValueError(f"{name} must have trailing shape {lead}, got shape {arr.shape}")
     if min_len is not None and (arr.ndim == 0 or arr.shape[-1] < min_len):
         got = "a scalar" if arr.ndim == 0 else f"{arr.shape[-1]}"
         raise ValueError(f"{name} needs at least {min_len} entries along its last axis, "
