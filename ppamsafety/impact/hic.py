@@ -36,8 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._jit import kernel, leaf
-from .._validation import (as_float_array, check_finite_result, check_nonnegative, check_positive,
-                           check_range_array)
+from .._validation import as_float_array, check_finite_result, check_nonnegative, check_positive
 
 _SLACK = 1.0 + 1e-12  # bounds are inflated by this factor against their own rounding
 _LEAF = 64  # blocks with at most this many index pairs are evaluated exactly
@@ -250,8 +249,14 @@ _LOG_MAX = math.log(np.finfo(float).max)
 
 
 def _evaluate(single, batch, a, dt, window) -> HICResult:
-    arr = as_float_array("a", a, ndim=(1, 2), min_len=2)
-    check_range_array("a", arr, 0.0, math.inf, unit="g")
+    arr = as_float_array("a", a)
+    if arr.ndim not in (1, 2) or arr.shape[-1] < 2:
+        raise ValueError(f"a must be 1-D or 2-D (records along the last axis) with at least "
+                         f"2 samples per record, got shape {arr.shape}")
+    if np.any(arr < 0.0):
+        k = tuple(int(x) for x in np.argwhere(arr < 0.0)[0])
+        raise ValueError(f"a must be non-negative (acceleration magnitudes in g), "
+                         f"a[{', '.join(map(str, k))}] = {arr[k]:g}")
     dt = check_positive("dt", dt, unit="s")
     window = check_positive("window", window, unit="s")
     n = arr.shape[-1]
