@@ -130,8 +130,8 @@ def check_range(name: str, value, lo: float = -math.inf, hi: float = math.inf,
     below = v <= lo if lo_open else v < lo
     above = v >= hi if hi_open else v > hi
     if below or above:
-        lb = "(" if lo_open else "["
-        rb = ")" if hi_open else "]"
+        lb = "(" if lo_open or lo == -math.inf else "["
+        rb = ")" if hi_open or hi == math.inf else "]"
         u = f" {unit}" if unit else ""
         raise ValueError(f"{name} = {_fmt(v)}{u} is outside {lb}{_fmt(lo)}, {_fmt(hi)}{rb}{u}")
     return v
