@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from ._validation import check_int, check_range
+from ._validation import check_instance, check_int, check_range
 from .params.inertia import LINK_PRIORS, RADIUS_OF_GYRATION, LinkInertia
 from .plant import geometry as geo
 from .plant import pneumatics as pn
@@ -25,7 +25,13 @@ from .plant import torque
 from .units import BAR, DEG
 
 
+def _arm(arm):
+    from .params import ArmParameters
+    return check_instance("arm", arm, ArmParameters)
+
+
 def _grid(arm, n1: int, n2: int):
+    arm = _arm(arm)
     n1 = check_int("n1", n1, 2, 2000)
     n2 = check_int("n2", n2, 2, 2000)
     g = arm.geometry
@@ -55,7 +61,15 @@ class TorqueFunctions:
 
 
 def torque_function_curves(arm, *, n: int = 201) -> TorqueFunctions:
-    """Torque functions m_tau,i over the working range of their joint."""
+    """Torque functions m_tau,i over the working range of their joint.
+
+    Parameters
+    ----------
+    arm : ArmParameters
+    n : int, keyword-only
+        Samples per joint range, in [2, 100000].
+    """
+    arm = _arm(arm)
     n = check_int("n", n, 2, 100000)
     g = arm.geometry
     q1 = np.linspace(g.q1_min, g.q1_max, n)
@@ -96,7 +110,14 @@ class StiffnessMap:
 
 
 def stiffness_map(arm, *, n1: int = 61, n2: int = 61) -> StiffnessMap:
-    """Joint stiffness with static gravity-compensation pressures on a grid."""
+    """Joint stiffness with static gravity-compensation pressures on a grid.
+
+    Parameters
+    ----------
+    arm : ArmParameters
+    n1, n2 : int, keyword-only
+        Grid size over q1 and q2, each in [2, 2000].
+    """
     q = _grid(arm, n1, n2)
     p = pn.static_pressures(q, arm)
     pmax = arm.pneumatics.p_max
@@ -171,11 +192,18 @@ def max_load_map(arm, *, links: LinkInertia | None = None, p_max: float | None =
         Mass properties; default the plant's.  Pass :func:`cad_links` for the
         design-time (CAD) values the thesis used.
     p_max : float, optional
-        Carrying pressure [Pa]; default ``arm.pneumatics.p_max`` (3 bar).
+        Carrying pressure [Pa] in (0, 10] bar; default ``arm.pneumatics.p_max`` (3 bar).
     n1, n2 : int
-        Grid size over q1 and q2.
+        Grid size over q1 and q2, each in [2, 2000].
+
+    Raises
+    ------
+    ValueError
+        Besides bad arguments, if the load point passes exactly over a joint on
+        the grid (zero moment arm: the load limit there is unbounded).
     """
-    links = arm.links if links is None else links
+    arm = _arm(arm)
+    links = arm.links if links is None else check_instance("links", links, LinkInertia)
     p_max = arm.pneumatics.p_max if p_max is None else check_range(
         "p_max", p_max, 0.0, 10 * BAR, lo_open=True, unit="Pa")
     g = arm.geometry
@@ -189,11 +217,18 @@ def max_load_map(arm, *, links: LinkInertia | None = None, p_max: float | None =
     xL = xS + g.LL * c12 + g.dL * s12
     yL = g.L1 * s1 + g.LL * s12 - g.dL * c12
     mt = torque.torque_functions(q, arm)
-    M1 = (p_max * mt[:, 0] - grav * (links.m1 * xG1 + links.m2 * xG2)) / (grav * xL)
-    M2a = (p_max * mt[:, 2] - grav * links.m2 * (xG2 - xS)) / (grav * (xL - xS))
-    M2b = (p_max * mt[:, 3] - grav * links.m2 * (xG2 - xS)) / (grav * (xL - xS))
+    with np.errstate(divide="ignore", invalid="ignore"):   # checked below
+        M1 = (p_max * mt[:, 0] - grav * (links.m1 * xG1 + links.m2 * xG2)) / (grav * xL)
+        M2a = (p_max * mt[:, 2] - grav * links.m2 * (xG2 - xS)) / (grav * (xL - xS))
+        M2b = (p_max * mt[:, 3] - grav * links.m2 * (xG2 - xS)) / (grav * (xL - xS))
     use_b = M2a < 0
     M2 = np.where(use_b, M2b, M2a)
+    bad = ~(np.isfinite(M1) & np.isfinite(M2))
+    if bad.any():
+        k = int(np.argmax(bad))
+        raise ValueError(f"max_load_map: the load point A_L passes over a joint at q = "
+                         f"({np.degrees(q[k, 0]):.4g}, {np.degrees(q[k, 1]):.4g}) deg (zero "
+                         f"moment arm, unbounded load); change n1/n2 or ArmGeometry.LL/dL")
     df = pd.DataFrame({"q1_rad": q[:, 0], "q2_rad": q[:, 1], "xL_m": xL, "yL_m": yL,
                        "M1_kg": M1, "M2_kg": M2, "carrying_2": np.where(use_b, 4, 3),
                        "M_max_kg": np.minimum(M1, M2)})

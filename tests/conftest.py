@@ -25,3 +25,16 @@ def workspace_grid(arm):
 def step_config():
     """Configuration of the step-response impact (thesis §6.3.3) [rad]."""
     return np.array([50.0 * DEG, -80.0 * DEG])
+
+
+# Property tests (tests/test_properties.py): a reproducible, derandomized profile for CI.
+try:
+    import os as _os
+
+    from hypothesis import settings as _hyp_settings
+
+    _hyp_settings.register_profile("ci", derandomize=True, print_blob=True)
+    if _os.environ.get("CI"):
+        _hyp_settings.load_profile("ci")
+except ImportError:  # hypothesis is in the `test` extra; without it test_properties is skipped
+    pass

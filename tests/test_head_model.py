@@ -19,7 +19,7 @@ def test_named_models_and_errors():
         head_model("alien")
     with pytest.raises(ValueError, match="exponent"):
         head_model().replace(exponent=0.2)
-    with pytest.raises(ValueError, match="x.mass"):
+    with pytest.raises(ValueError, match=r"HeadContactModel.mass \(model 'x'\) = -1 kg"):
         HeadContactModel("x", mass=-1, radius=0.1, stiffness=1e5, exponent=1, damping=0)
 
 

@@ -37,8 +37,8 @@ def test_parameter_sets_are_immutable():
     (lambda: thesis_geometry().replace(q1_min=2.0, q1_max=1.0), "q1_min"),
     (lambda: Valve(v1=0.0, v2=0.99, time_constant=-0.1), "Valve.time_constant"),
     (lambda: Valve(v1=0.0, v2=7.0, time_constant=0.05), "Valve.v2"),
-    (lambda: MuscleGroup("g", 0, (1, 1, 1, 1, 1)), "g.n_muscles"),
-    (lambda: MuscleGroup("g", 3, (1, 1, 1)), "g.coefficients"),
+    (lambda: MuscleGroup("g", 0, (1, 1, 1, 1, 1)), "MuscleGroup.n_muscles"),
+    (lambda: MuscleGroup("g", 3, (1, 1, 1)), "MuscleGroup.coefficients"),
     (lambda: PneumaticParams(p_mean=(4 * BAR, 1 * BAR)), "PneumaticParams.p_mean[0]"),
     (lambda: LinkInertia(m1=-1, m2=1, LG1=0.1, dG1=0, LG2=0.1, dG2=0, IG1=0.01, IG2=0.01),
      "LinkInertia.m1"),
@@ -51,7 +51,7 @@ def test_invalid_values_raise_value_error_naming_the_field(make, field):
 
 
 def test_range_error_states_the_allowed_interval():
-    with pytest.raises(ValueError, match=r"outside \[0.0001, 10\] s"):
+    with pytest.raises(ValueError, match=r"Valve.time_constant = 20 s is outside \[0.001, 10\] s"):
         Valve(v1=0.0, v2=1.0, time_constant=20.0)
 
 

@@ -33,7 +33,8 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from .._validation import check_range
+from .._validation import (as_float_array, check_finite_result, check_instance, check_positive,
+                           check_range, check_range_array, check_real)
 from ..units import DEG, G0
 from .thesis_data import table_6_1_pairs
 from .twobody import two_body_impact
@@ -45,12 +46,38 @@ ISO_TS_15066_FOREHEAD = 150.0e3     # N/m (150 N/mm)
 ISO_TS_15066_FOREHEAD_FORCE = 130.0  # N, quasi-static permissible force, skull/forehead
 
 
+def _arm(arm):
+    from ..params import ArmParameters   # local: params is imported by the impact package
+    return check_instance("arm", arm, ArmParameters)
+
+
+def _contact(stiffness, exponent, damping):
+    """Validated Hunt-Crossley (k, n, b); same ranges as :class:`HeadContactModel`."""
+    return (check_range("stiffness", stiffness, 0.0, 1e20, lo_open=True, unit="N/m^n"),
+            check_range("exponent", exponent, 1.0, 3.0),
+            check_range("damping", damping, 0.0, 1e20, unit="N s/m^(n+1)"))
+
+
+def _step(dt):
+    """Integration step of the two-body model: [1e-8, 1e-4] s (0.02-0.05 s records)."""
+    return check_range("dt", dt, 1e-8, 1e-4, unit="s")
+
+
+def _finite_results(r: dict, what: str) -> dict:
+    for key in ("F_max", "HIC36", "HIC15"):
+        check_finite_result(f"{key} of {what}", r[key],
+                            "these contact parameters (the impact is too violent to integrate)")
+    return r
+
+
 def default_arm_mass(arm) -> float:
     """Effective mass of the thesis arm at the tool for the step-response impact [kg].
 
     At q = (50, -80) deg with the tool moving as joint 1 turns (the step moves
-    q1), see :func:`ppamsafety.impact.model.effective_mass`.
+    q1), see :func:`ppamsafety.impact.model.effective_mass`.  ``arm`` is an
+    :class:`~ppamsafety.params.ArmParameters`.
     """
+    arm = _arm(arm)
     from ..plant import geometry as geo
     from .model import effective_mass
 
@@ -59,26 +86,66 @@ def default_arm_mass(arm) -> float:
 
 
 def hybrid3_drop_peak_g(stiffness, exponent, damping, *, dt=1e-6) -> float:
-    """Peak head acceleration [g] of the Hybrid III drop test with this contact."""
+    """Peak head acceleration [g] of the Hybrid III drop test with this contact.
+
+    ``stiffness`` k [N/m^n] > 0, ``exponent`` n in [1, 3], ``damping`` b
+    [N s/m^(n+1)] >= 0 (the ranges of :class:`~ppamsafety.params.head.HeadContactModel`),
+    ``dt`` integration step [s] in [1e-8, 1e-4].
+    """
+    stiffness, exponent, damping = _contact(stiffness, exponent, damping)
+    dt = _step(dt)
     v = math.sqrt(2.0 * G0 * HYBRID3_DROP_HEIGHT)
-    r = two_body_impact([v], arm_mass=np.inf, head_mass=HYBRID3_HEAD_MASS, stiffness=stiffness,
-                        exponent=exponent, damping=damping, dt=dt, duration=0.02)
+    r = _finite_results(two_body_impact([v], arm_mass=np.inf, head_mass=HYBRID3_HEAD_MASS, stiffness=stiffness,
+                        exponent=exponent, damping=damping, dt=dt, duration=0.02),
+        "the drop test")
     return float(r["F_max"][0] / (HYBRID3_HEAD_MASS * G0))
 
 
 def iso_effective_spring(stiffness, exponent, force) -> float:
-    """Energy-equivalent linear spring F^2/(2E) of the elastic part at ``force`` [N/m]."""
+    """Energy-equivalent linear spring F^2/(2E) of the elastic part at ``force`` [N/m].
+
+    ``stiffness`` k [N/m^n] > 0, ``exponent`` n in [1, 3], ``force`` [N] in (0, 1e6].
+    """
+    stiffness = check_range("stiffness", stiffness, 0.0, 1e20, lo_open=True, unit="N/m^n")
+    exponent = check_range("exponent", exponent, 1.0, 3.0)
+    force = check_range("force", force, 0.0, 1e6, lo_open=True, unit="N")
     delta = (force / stiffness) ** (1.0 / exponent)
     energy = stiffness * delta ** (exponent + 1.0) / (exponent + 1.0)
-    return force ** 2 / (2.0 * energy)
+    return float(check_finite_result("iso_effective_spring", force ** 2 / (2.0 * energy),
+                                     f"stiffness = {stiffness:g}, exponent = {exponent:g}"))
 
 
 def hic_curve(stiffness, exponent, damping, *, arm_mass, head_mass=5.0, dt=1e-5,
               speeds=None) -> pd.DataFrame:
-    """Model (F_max, HIC36) over a range of impact speeds (the 'one curve' of (a))."""
-    v = np.geomspace(0.02, 8.0, 40) if speeds is None else np.asarray(speeds, dtype=float)
-    r = two_body_impact(v, arm_mass=arm_mass, head_mass=head_mass, stiffness=stiffness,
-                        exponent=exponent, damping=damping, dt=dt)
+    """Model (F_max, HIC36) over a range of impact speeds (the 'one curve' of (a)).
+
+    Parameters
+    ----------
+    stiffness, exponent, damping : float
+        Hunt-Crossley k [N/m^n] > 0, n in [1, 3], b [N s/m^(n+1)] >= 0.
+    arm_mass : float, keyword-only
+        Effective arm mass at the tool [kg], > 0 (``math.inf``: rigid arm).
+    head_mass : float
+        Head mass [kg], in (0, 100].
+    dt : float
+        Integration step [s], in [1e-8, 1e-4].
+    speeds : array_like, optional
+        1-D impact speeds [m/s] in (0, 20]; default 40 speeds from 0.02 to 8 m/s.
+    """
+    stiffness, exponent, damping = _contact(stiffness, exponent, damping)
+    ma = check_real("arm_mass", arm_mass, unit="kg")
+    if ma != math.inf:
+        ma = check_positive("arm_mass", ma, unit="kg")
+    head_mass = check_range("head_mass", head_mass, 0.0, 100.0, lo_open=True, unit="kg")
+    dt = _step(dt)
+    if speeds is None:
+        v = np.geomspace(0.02, 8.0, 40)
+    else:
+        v = as_float_array("speeds", speeds, ndim=1, min_len=1)
+        check_range_array("speeds", v, 1e-6, 20.0, unit="m/s")
+    r = _finite_results(two_body_impact(v, arm_mass=ma, head_mass=head_mass,
+                                        stiffness=stiffness, exponent=exponent,
+                                        damping=damping, dt=dt), "the impacts")
     return pd.DataFrame({"speed": v, "F_max": r["F_max"], "HIC36": r["HIC36"]})
 
 
@@ -135,13 +202,15 @@ def fit_thesis_head(arm, *, exponent: float = 1.5, arm_mass: float | None = None
     exponent : float, keyword-only
         Fixed exponent n (default 1.5, Hertz).
     arm_mass : float, optional
-        Effective arm mass at the tool [kg].
+        Effective arm mass at the tool [kg], in (0, 1000].
     head_mass : float
-        Head mass [kg] (thesis: 5).
+        Head mass [kg] (thesis: 5), in (0, 100].
     """
     from scipy.optimize import least_squares
 
+    arm = _arm(arm)
     n = check_range("exponent", exponent, 1.0, 3.0)
+    head_mass = check_range("head_mass", head_mass, 0.0, 100.0, lo_open=True, unit="kg")
     ma = default_arm_mass(arm) if arm_mass is None else check_range(
         "arm_mass", arm_mass, 0.0, 1e3, lo_open=True, unit="kg")
     pairs = table_6_1_pairs()

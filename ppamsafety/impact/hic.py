@@ -36,7 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._jit import kernel, leaf
-from .._validation import as_float_array, check_nonnegative, check_positive
+from .._validation import as_float_array, check_finite_result, check_nonnegative, check_positive
 
 _SLACK = 1.0 + 1e-12  # bounds are inflated by this factor against their own rounding
 _LEAF = 64  # blocks with at most this many index pairs are evaluated exactly
@@ -245,26 +245,51 @@ class HICResult:
     window: float
 
 
+_LOG_MAX = math.log(np.finfo(float).max)
+
+
 def _evaluate(single, batch, a, dt, window) -> HICResult:
     arr = as_float_array("a", a)
     if arr.ndim not in (1, 2) or arr.shape[-1] < 2:
         raise ValueError(f"a must be 1-D or 2-D (records along the last axis) with at least "
                          f"2 samples per record, got shape {arr.shape}")
     if np.any(arr < 0.0):
+        k = tuple(int(x) for x in np.argwhere(arr < 0.0)[0])
         raise ValueError(f"a must be non-negative (acceleration magnitudes in g), "
-                         f"minimum is {arr.min():g}")
+                         f"a[{', '.join(map(str, k))}] = {arr[k]:g}")
     dt = check_positive("dt", dt, unit="s")
     window = check_positive("window", window, unit="s")
-    wn = math.floor(window / dt * (1.0 + 1e-9))  # whole sample intervals; 1e-9 absorbs rounding
-    if wn < 1:
+    n = arr.shape[-1]
+    ratio = window / dt * (1.0 + 1e-9)   # whole sample intervals; 1e-9 absorbs rounding
+    if ratio < 1.0:
         raise ValueError(f"window = {window:g} s is shorter than one sample interval dt = {dt:g} s")
+    wn = n - 1 if ratio >= n - 1 else math.floor(ratio)   # longer windows cannot occur
+    # HIC <= max(a)^2.5 * (longest window): refuse records whose HIC would overflow float64
+    amax = float(arr.max())
+    span = min(window, dt * (n - 1))
+    if amax > 0.0 and (2.5 * math.log(amax) + math.log(span) > _LOG_MAX - 1.0
+                       or math.log(dt) + math.log(amax) + math.log(n) > _LOG_MAX - 1.0):
+        raise ValueError(f"a (max {amax:g} g) with dt = {dt:g} s and window = {window:g} s "
+                         f"gives a HIC beyond the float64 range")
     if arr.ndim == 1:
         v, i, j = single(np.ascontiguousarray(arr), dt, wn)
+        check_finite_result("HIC", v, f"a (max {amax:g} g) and dt = {dt:g} s")
         return HICResult(float(v), i * dt, j * dt, window)
     v = np.empty(arr.shape[0])
     i, j = np.empty(arr.shape[0], np.int64), np.empty(arr.shape[0], np.int64)
     batch(np.ascontiguousarray(arr), dt, wn, v, i, j)
+    check_finite_result("HIC", v, f"a (max {amax:g} g) and dt = {dt:g} s")
     return HICResult(v, i * dt, j * dt, window)
+
+
+def _closed_form(fun, A, T, W) -> float:
+    """Evaluate a closed form; overflow -> ValueError naming the arguments."""
+    try:
+        v = fun()
+    except OverflowError:
+        v = math.inf
+    return float(check_finite_result(
+        "HIC", v, f"amplitude = {A:g} g, duration = {T:g} s, window = {W:g} s"))
 
 
 def hic(a, dt, *, window=0.036) -> HICResult:
@@ -273,12 +298,23 @@ def hic(a, dt, *, window=0.036) -> HICResult:
     Parameters
     ----------
     a : array_like, shape (N,) or (R, N)
-        Head acceleration magnitude [g], non-negative, finite; records along the last axis.
+        Head acceleration magnitude [g], non-negative, finite, N >= 2; records along the
+        last axis.
     dt : float
         Sample spacing [s].
     window : float, keyword-only
         Window limit W [s]: 0.036 for HIC36 (default), 0.015 for HIC15.  Rounded down to a
         whole number of sample intervals (1e-9 relative tolerance).
+
+    Raises
+    ------
+    TypeError
+        ``a`` not an array of real numbers (strings, bools, complex, None ...), ``dt`` or
+        ``window`` not a real number.
+    ValueError
+        ``a`` with NaN/inf, negative entries, fewer than 2 samples or more than 2
+        dimensions; ``dt``/``window`` not positive and finite; ``window < dt``; a record
+        whose HIC would overflow float64.
 
     Returns
     -------
@@ -350,8 +386,10 @@ def hic_half_sine(amplitude, duration, *, window=0.036) -> float:
     W = check_positive("window", window, unit="s")
     beta, g = _half_sine_optimum()
     if beta * T <= W:
-        return g * A ** 2.5 * T
-    return W * (2.0 * A * T / (math.pi * W) * math.sin(math.pi * W / (2.0 * T))) ** 2.5
+        return _closed_form(lambda: g * A ** 2.5 * T, A, T, W)
+    return _closed_form(
+        lambda: W * (2.0 * A * T / (math.pi * W) * math.sin(math.pi * W / (2.0 * T))) ** 2.5,
+        A, T, W)
 
 
 def hic_rectangular(amplitude, duration, *, window=0.036) -> float:
@@ -365,4 +403,4 @@ def hic_rectangular(amplitude, duration, *, window=0.036) -> float:
     A = check_nonnegative("amplitude", amplitude, unit="g")
     T = check_positive("duration", duration, unit="s")
     W = check_positive("window", window, unit="s")
-    return A ** 2.5 * min(T, W)
+    return _closed_form(lambda: A ** 2.5 * min(T, W), A, T, W)

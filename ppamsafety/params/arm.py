@@ -24,7 +24,9 @@ from __future__ import annotations
 from dataclasses import dataclass, replace
 from functools import lru_cache
 
-from .._validation import check_range
+import numpy as np
+
+from .._validation import check_instance, check_range
 from .geometry import ArmGeometry, thesis_geometry
 from .inertia import (BaseParameters, LinkInertia, derive_physical_links, identified_dynamic,
                       identified_static_gravity)
@@ -56,6 +58,15 @@ class ArmParameters:
         [rad/s].  A fixed-step integrator cannot resolve an ideal sign
         function; 0.01 rad/s is below the encoder velocity dead band
         (0.025 rad/s, §2.4.5.3).
+
+    Notes
+    -----
+    Besides the types and ranges of ``gravity`` ([0, 30] m/s^2) and
+    ``friction_velocity`` ([1e-5, 1] rad/s), construction refuses sets that
+    cannot be built: non-positive connection lengths or contractions outside
+    [0, 0.4] anywhere in the working area (e.g. ``L22 = 0``), and a plant
+    inertia matrix that is numerically singular.  The identified ``model``
+    sets are not required to be positive definite (Table 3.5 is not).
     """
 
     geometry: ArmGeometry
@@ -72,11 +83,13 @@ class ArmParameters:
         for name, cls in (("geometry", ArmGeometry), ("muscles", MuscleSet), ("valves", ValveSet),
                           ("pneumatics", PneumaticParams), ("links", LinkInertia),
                           ("model", BaseParameters), ("model_gravity", BaseParameters)):
-            if not isinstance(getattr(self, name), cls):
-                raise ValueError(f"ArmParameters.{name} must be a {cls.__name__}")
-        check_range("ArmParameters.gravity", self.gravity, 0.0, 30.0, unit="m/s^2")
-        check_range("ArmParameters.friction_velocity", self.friction_velocity, 1e-5, 1.0,
-                    unit="rad/s")
+            check_instance(f"ArmParameters.{name}", getattr(self, name), cls)
+        object.__setattr__(self, "gravity", check_range("ArmParameters.gravity", self.gravity,
+                                                        0.0, 30.0, unit="m/s^2"))
+        object.__setattr__(self, "friction_velocity", check_range(
+            "ArmParameters.friction_velocity", self.friction_velocity, 1e-5, 1.0, unit="rad/s"))
+        _check_muscles_fit(self.geometry, self.muscles)
+        _check_plant_inertia(self.geometry, self.links)
 
     def replace(self, **changes) -> "ArmParameters":
         """Return a copy with some fields changed (validated again)."""
@@ -86,6 +99,74 @@ class ArmParameters:
     def plant_base(self) -> BaseParameters:
         """Base parameters (B.5) of the physical plant links."""
         return self.links.base_parameters(self.geometry.L1)
+
+
+#: Smallest admissible relative determinant det H / (H11 H22) of the plant's inertia
+#: matrix in the working area (1 would be decoupled links; the thesis arm has > 0.3).
+#: Physical links are always positive definite (LinkInertia notes); this refuses
+#: matrices so close to singular that the integrators would be ill-conditioned.
+MIN_INERTIA_DET_RATIO = 1e-6
+
+
+@lru_cache(maxsize=128)
+def _check_muscles_fit(geometry: ArmGeometry, muscles: MuscleSet) -> None:
+    """Refuse geometry/muscle combinations that cannot be built (cached per pair).
+
+    With the design connection lengths L_conn of (A.35)-(A.38) (groups 1, 3 at
+    ``eps_min`` at their longest, groups 2, 4 at ``eps_max`` at their shortest,
+    §2.3.2.4) every group must have L_conn > 0 (a rod cannot have negative
+    length) and its contraction must stay in [0, MAX_CONTRACTION] over the whole
+    working area (a PPAM cannot be stretched beyond l0, and contracts at most
+    40 %, §2.2).  Then every membrane and group length is positive.
+    """
+    from ..plant.layout import _muscle_terms   # local: plant imports params
+    from .geometry import GROUP_FIELDS, group_length_range
+    from .muscles import MAX_CONTRACTION
+
+    ranges = group_length_range(geometry)
+    lconn = _muscle_terms(geometry, muscles)[0]
+    for k, (grp, lc, (dmin, dmax)) in enumerate(zip(muscles.groups, lconn, ranges)):
+        joint = 1 if k < 2 else 2
+        flds = ", ".join(f"ArmGeometry.{n}" for n in GROUP_FIELDS[k + 1])
+        area = (f"q{joint} in [{np.degrees(getattr(geometry, f'q{joint}_min')):.4g}, "
+                f"{np.degrees(getattr(geometry, f'q{joint}_max')):.4g}] deg")
+        membrane = grp.n_muscles * grp.l0
+        what = (f"ArmParameters: muscle group {k + 1} ({grp.name!r}; {grp.n_muscles} x l0 = "
+                f"{grp.l0:g} m; group length {dmin:.4g} to {dmax:.4g} m over {area})")
+        if not (np.isfinite(lc) and lc > 0.0):
+            eps, at = (muscles.eps_min, "longest") if k in (0, 2) else (muscles.eps_max,
+                                                                       "shortest")
+            raise ValueError(
+                f"{what} has connection length L_conn = {lc:.4g} m <= 0 (A.35)-(A.38): its "
+                f"attachment points are too close for the muscles at contraction {eps:g} at "
+                f"the {at} length (needs a group length above {membrane * (1 - eps):.4g} m). "
+                f"Change {flds}, the working area, MuscleGroup.n_muscles/l0 or "
+                f"MuscleSet.eps_min/eps_max")
+        e_lo = (lc + membrane - dmax) / membrane
+        e_hi = (lc + membrane - dmin) / membrane
+        tol = 1e-6
+        if e_lo < -tol or e_hi > MAX_CONTRACTION + tol:
+            raise ValueError(
+                f"{what} would need contractions from {e_lo:.3g} to {e_hi:.3g}, outside "
+                f"[0, {MAX_CONTRACTION:g}] (a PPAM cannot be stretched beyond l0 and contracts "
+                f"at most 40 %, thesis §2.2): the length change over the working area is too "
+                f"large for these muscles.  Change {flds}, the working area, "
+                f"MuscleGroup.n_muscles/l0 or MuscleSet.eps_min/eps_max")
+
+
+def _check_plant_inertia(geometry: ArmGeometry, links: LinkInertia) -> None:
+    """Refuse a plant inertia matrix that is (numerically) singular in the working area."""
+    b = links.base_parameters(geometry.L1)
+    q2 = np.linspace(geometry.q2_min, geometry.q2_max, 181)
+    a = geometry.L1 * (b.m2LG2 * np.cos(q2) + b.m2dG2 * np.sin(q2))
+    h11, h12, h22 = b.IO1_m2L1sq + b.IS2 + 2.0 * a, b.IS2 + a, b.IS2
+    ratio = (h11 * h22 - h12 * h12) / (np.abs(h11) * h22)
+    j = int(np.argmin(ratio))
+    if not (h11[j] > 0 and ratio[j] >= MIN_INERTIA_DET_RATIO):
+        raise ValueError(
+            f"ArmParameters.links: the plant inertia matrix is (nearly) singular at q2 = "
+            f"{np.degrees(q2[j]):.4g} deg (det H / (H11 H22) = {ratio[j]:.3g}, needs >= "
+            f"{MIN_INERTIA_DET_RATIO:g}); check LinkInertia.IG1/IG2 (too small for the masses?)")
 
 
 @lru_cache(maxsize=1)

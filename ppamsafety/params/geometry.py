@@ -8,10 +8,24 @@ millimetres and degrees are converted here, at the boundary.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, fields, replace
+from functools import lru_cache
 
-from .._validation import check_range, check_nonnegative
+import numpy as np
+
+from .._validation import check_range
 from ..units import DEG, MM
+
+#: Geometry fields that place each muscle group's two attachment points (groups 1..4).
+GROUP_FIELDS = {1: ("X11", "Y11", "L12", "d12"), 2: ("X21", "Y21", "L22", "d22"),
+                3: ("L1", "L32", "d32", "L33", "d33"), 4: ("L1", "L42", "d42", "L43", "d43")}
+
+#: Smallest admissible muscle group length (attachment point distance) anywhere in the
+#: working area [m].  At zero length the direction of the pull and the lever arm
+#: (A.1)-(A.4) are undefined (division by zero); 1 mm is far below any real
+#: PPAM (l0 = 6 cm, §2.3.3.1), so this check only refuses degenerate geometry.
+MIN_GROUP_LENGTH = 1.0e-3
 
 
 @dataclass(frozen=True)
@@ -39,7 +53,18 @@ class ArmGeometry:
     LL, dL : float
         Load point A_L on the forearm (Table 2.2) [m].
     q1_min, q1_max, q2_min, q2_max : float
-        Working area (2.6)-(2.7) [rad].
+        Working area (2.6)-(2.7) [rad], inside (-pi, pi), min < max.
+
+    Notes
+    -----
+    Every field is converted to float on construction; wrong types raise
+    ``TypeError`` naming ``ArmGeometry.<field>``.  Ranges: offsets ``d*`` in
+    [-0.5, 0.5] m, lengths in [0, 5] m (``L1``, ``L2`` > 0) -- an order of
+    magnitude around the thesis arm (Tables 2.1, 2.2).  A geometry in which a
+    muscle group's attachment points come closer than
+    :data:`MIN_GROUP_LENGTH` anywhere in the working area is refused; whether
+    the muscles fit (positive connection lengths) is checked by
+    :class:`~ppamsafety.params.ArmParameters`, which knows the muscles.
     """
 
     X11: float
@@ -71,23 +96,75 @@ class ArmGeometry:
         for f in fields(self):
             name = f.name
             v = getattr(self, name)
+            label = f"ArmGeometry.{name}"
             if name.startswith("q"):
-                check_range(f"ArmGeometry.{name}", v, -3.2, 3.2, unit="rad")
+                # joint angles are modulo 2 pi: an interval must lie inside (-pi, pi)
+                v = check_range(label, v, -math.pi, math.pi, lo_open=True, hi_open=True,
+                                unit="rad")
             elif name.startswith("d"):
-                check_range(f"ArmGeometry.{name}", v, -0.5, 0.5, unit="m")
+                v = check_range(label, v, -0.5, 0.5, unit="m")
             elif name in ("L1", "L2"):
-                check_range(f"ArmGeometry.{name}", v, 0.0, 5.0, lo_open=True, unit="m")
+                v = check_range(label, v, 0.0, 5.0, lo_open=True, unit="m")
             else:
-                check_range(f"ArmGeometry.{name}", v, 0.0, 5.0, unit="m")
-        if not self.q1_min < self.q1_max:
-            raise ValueError("ArmGeometry: q1_min must be smaller than q1_max")
-        if not self.q2_min < self.q2_max:
-            raise ValueError("ArmGeometry: q2_min must be smaller than q2_max")
-        check_nonnegative("ArmGeometry.L33", self.L33, unit="m")
+                v = check_range(label, v, 0.0, 5.0, unit="m")
+            object.__setattr__(self, name, v)
+        for j in (1, 2):
+            lo, hi = getattr(self, f"q{j}_min"), getattr(self, f"q{j}_max")
+            if not lo < hi:
+                raise ValueError(f"ArmGeometry: q{j}_min = {lo:g} rad must be smaller than "
+                                 f"q{j}_max = {hi:g} rad (working area (2.6)-(2.7))")
+        ranges = group_length_range(self)
+        for k, (dmin, _) in enumerate(ranges):
+            if not dmin > MIN_GROUP_LENGTH:
+                flds = ", ".join(f"ArmGeometry.{n}" for n in GROUP_FIELDS[k + 1])
+                raise ValueError(
+                    f"ArmGeometry: muscle group {k + 1} has length {dmin:.3g} m somewhere in the "
+                    f"working area (its two attachment points coincide); must stay above "
+                    f"{MIN_GROUP_LENGTH:g} m.  Fields involved: {flds} and the working area "
+                    f"q{1 if k < 2 else 2}_min/max")
 
     def replace(self, **changes) -> "ArmGeometry":
         """Return a copy with some fields changed (validated again)."""
         return replace(self, **changes)
+
+
+def group_lengths(geometry: ArmGeometry, q1, q2) -> np.ndarray:
+    """Muscle group lengths d_1..d_4 (A.31)-(A.34) [m] at q1, q2 [rad] (numpy), shape (..., 4).
+
+    Same attachment points (A.13)-(A.20) as the compiled
+    :func:`ppamsafety.plant.geometry.group_points` (a test checks they agree); kept
+    here in plain numpy so that parameter sets can be checked without the kernels.
+    """
+    g = geometry
+    q1, q2 = np.broadcast_arrays(np.asarray(q1, float), np.asarray(q2, float))
+    c1, s1, c12, s12 = np.cos(q1), np.sin(q1), np.cos(q1 + q2), np.sin(q1 + q2)
+    sx, sy = g.L1 * c1, g.L1 * s1
+    pts = (
+        ((-g.X11, g.Y11), (c1 * g.L12 - s1 * g.d12, s1 * g.L12 + c1 * g.d12)),
+        ((g.X21, -g.Y21), (c1 * g.L22 + s1 * g.d22, s1 * g.L22 - c1 * g.d22)),
+        ((c1 * g.L32 - s1 * g.d32, s1 * g.L32 + c1 * g.d32),
+         (sx + c12 * g.L33 - s12 * g.d33, sy + s12 * g.L33 + c12 * g.d33)),
+        ((c1 * g.L42 + s1 * g.d42, s1 * g.L42 - c1 * g.d42),
+         (sx + c12 * g.L43 + s12 * g.d43, sy + s12 * g.L43 - c12 * g.d43)),
+    )
+    return np.stack([np.hypot(bx - ax, by - ay) for (ax, ay), (bx, by) in pts], axis=-1)
+
+
+@lru_cache(maxsize=128)
+def group_length_range(geometry: ArmGeometry, n: int = 721) -> tuple:
+    """(min, max) length of each muscle group over the working area [m], 4 pairs.
+
+    Groups 1-2 depend on q1 only, groups 3-4 on q2 only (the relative angle), so
+    one grid of ``n`` points per joint range suffices (the extremes of these
+    smooth functions are found to about 1e-6 relative; used for validation).
+    """
+    g = geometry
+    q1 = np.linspace(g.q1_min, g.q1_max, n)
+    q2 = np.linspace(g.q2_min, g.q2_max, n)
+    d1 = group_lengths(g, q1, 0.5 * (g.q2_min + g.q2_max))
+    d2 = group_lengths(g, 0.5 * (g.q1_min + g.q1_max), q2)
+    return tuple((float(d[:, k].min()), float(d[:, k].max()))
+                 for k, d in ((0, d1), (1, d1), (2, d2), (3, d2)))
 
 
 def thesis_geometry() -> ArmGeometry:
@@ -102,4 +179,5 @@ def thesis_geometry() -> ArmGeometry:
     )
 
 
-__all__ = ["ArmGeometry", "thesis_geometry"]
+__all__ = ["ArmGeometry", "thesis_geometry", "group_lengths", "group_length_range",
+           "GROUP_FIELDS", "MIN_GROUP_LENGTH"]

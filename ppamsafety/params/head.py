@@ -13,12 +13,46 @@ Users pick a model by name (:func:`head_model`) or build their own
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 
-from .._validation import check_nonnegative, check_range
+from .._validation import check_range, check_str
 
 #: Maxilla fracture tolerance [N] (Haddadin et al. 2007a, quoted in thesis §6.3.3).
 MAXILLA_FRACTURE_N = 660.0
+
+#: Approach speed [m/s] at which a head model is checked on construction: the
+#: impact engine puts the head centre at distance ``radius`` from the tool point,
+#: so the model must stop a tool that hits a free head at this speed before it
+#: reaches the centre, in a contact long enough to integrate.  5 m/s is well
+#: above the arm's impact speeds (thesis §6.3, Table 6.1: below 2 m/s) and the
+#: ISO/TS 15066 transient-contact speeds.
+CHECK_SPEED = 5.0
+#: Smallest head surface radius [m]: a human head's frontal bone has a radius of
+#: curvature of several cm (thesis: 0.1 m); 5 mm admits local features (nose,
+#: brow) and refuses degenerate values.
+MIN_RADIUS = 5.0e-3
+#: Shortest admissible contact time scale delta_max / v at :data:`CHECK_SPEED` [s]:
+#: ten steps of the impact engine's default 10 us RK4 step.  Stiffer or more
+#: damped contacts end within a few steps and give meaningless forces and HIC.
+MIN_CONTACT_TIME = 1.0e-4
+
+
+def hunt_crossley_max_penetration(mass: float, v0: float, k: float, n: float, b: float) -> float:
+    """Maximum penetration [m] of a mass hitting a rigid wall, Hunt-Crossley contact.
+
+    Closed form of Marhefka & Orin (1999) (same as
+    :func:`ppamsafety.impact.contact.max_penetration`, repeated here so that the
+    parameter sets do not import the impact engine): delta_max =
+    [(n+1) m/b^2 (b v0 - k ln(1 + b v0/k))]^(1/(n+1)), -> [(n+1) m v0^2/(2k)]^(1/(n+1))
+    for b -> 0.  Inputs already validated (positive, finite).
+    """
+    x = b * v0 / k
+    if x < 1e-3:
+        level = mass * v0 * v0 / (2.0 * k) * (1.0 - 2.0 * x / 3.0 + x * x / 2.0 - 0.4 * x ** 3)
+    else:
+        level = mass / (b * b) * (b * v0 - k * math.log1p(x))
+    return ((n + 1.0) * level) ** (1.0 / (n + 1.0))
 
 
 @dataclass(frozen=True)
@@ -41,6 +75,22 @@ class HeadContactModel:
         b [N s/m^(n+1)] (thesis eq. 6.2 writes F = k delta^n + b delta^n delta_dot).
     source : str
         Provenance of the values.
+
+    Notes
+    -----
+    Ranges: mass (0, 100] kg, radius [5 mm, 1 m] (:data:`MIN_RADIUS`),
+    stiffness (0, 1e20] N/m^n, exponent [1, 3] (Hertz: 1.5), damping
+    [0, 1e20].  With F = delta^n (k + b d(delta)/dt) the force is positive
+    whenever the tool approaches, so damping never makes it negative; what
+    goes wrong with absurd values is the geometry and the time scale.  The
+    engine starts the head centre at distance ``radius`` from the tool point,
+    so construction requires that a tool hitting the free head (rigid arm) at
+    :data:`CHECK_SPEED` = 5 m/s stops before the centre (maximum penetration
+    < radius; refuses e.g. ``radius=1e-9``) and that this takes at least
+    :data:`MIN_CONTACT_TIME` = 0.1 ms (delta_max / v; refuses e.g.
+    ``damping=1e15``, which stops the tool within about 1 us).  The named
+    models pass with margin (thesis-frontal: 12 mm, 2.4 ms; iso15066-face: 41 mm,
+    8 ms).
     """
 
     name: str
@@ -52,12 +102,33 @@ class HeadContactModel:
     source: str = ""
 
     def __post_init__(self):
-        check_range(f"{self.name}.mass", self.mass, 0.0, 100.0, lo_open=True, unit="kg")
-        check_range(f"{self.name}.radius", self.radius, 0.0, 1.0, lo_open=True, unit="m")
-        check_range(f"{self.name}.stiffness", self.stiffness, 0.0, 1e20, lo_open=True,
-                    unit="N/m^n")
-        check_range(f"{self.name}.exponent", self.exponent, 1.0, 3.0)
-        check_nonnegative(f"{self.name}.damping", self.damping, unit="N s/m^(n+1)")
+        check_str("HeadContactModel.name", self.name)
+        check_str("HeadContactModel.source", self.source)
+        model = f" (model {self.name!r})"
+        for field, lo, hi, lo_open, unit in (
+                ("mass", 0.0, 100.0, True, "kg"),
+                ("radius", MIN_RADIUS, 1.0, False, "m"),
+                ("stiffness", 0.0, 1e20, True, "N/m^n"),
+                ("exponent", 1.0, 3.0, False, ""),
+                ("damping", 0.0, 1e20, False, "N s/m^(n+1)")):
+            object.__setattr__(self, field, check_range(
+                f"HeadContactModel.{field}{model}", getattr(self, field), lo, hi, lo_open=lo_open,
+                unit=unit))
+        d = hunt_crossley_max_penetration(self.mass, CHECK_SPEED, self.stiffness, self.exponent,
+                                          self.damping)
+        params = (f"mass = {self.mass:g} kg, stiffness = {self.stiffness:g} N/m^n, "
+                  f"exponent = {self.exponent:g}, damping = {self.damping:g} N s/m^(n+1)")
+        if not d < self.radius:
+            raise ValueError(
+                f"HeadContactModel{model}: a tool hitting the free head at {CHECK_SPEED:g} m/s "
+                f"would penetrate {d:.3g} m, beyond HeadContactModel.radius = {self.radius:g} m "
+                f"(the head centre): HeadContactModel.stiffness too small for this radius ({params})")
+        if not d / CHECK_SPEED >= MIN_CONTACT_TIME:
+            raise ValueError(
+                f"HeadContactModel{model}: at {CHECK_SPEED:g} m/s the contact stops the tool "
+                f"within {d:.3g} m, i.e. in about {d / CHECK_SPEED:.3g} s, shorter than "
+                f"{MIN_CONTACT_TIME:g} s (10 impact-engine steps): HeadContactModel.stiffness or "
+                f"HeadContactModel.damping too large (or .mass too small) to be integrated ({params})")
 
     def replace(self, **changes) -> "HeadContactModel":
         """Return a copy with some fields changed (validated again)."""
@@ -97,6 +168,7 @@ def _models() -> dict:
 
 def head_model(name: str = "thesis-frontal") -> HeadContactModel:
     """A named head contact model: one of :func:`head_model_names`."""
+    check_str("name", name)
     models = _models()
     if name not in models:
         raise ValueError(f"unknown head model {name!r}; choose from {sorted(models)}")

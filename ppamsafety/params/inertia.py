@@ -51,19 +51,24 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .._validation import check_nonnegative, check_positive, check_range
+from .._validation import check_instance, check_range, check_vector
 from ..units import MM
 
 
 def _check_friction(obj) -> None:
-    """Validate the per-joint friction pairs of ``obj`` in place (non-negative, 2 entries)."""
+    """Validate and store the per-joint friction pairs of ``obj`` (2 non-negative entries)."""
     cls = type(obj).__name__
-    for name in ("coulomb", "viscous"):
-        vals = getattr(obj, name)
-        if len(vals) != 2:
-            raise ValueError(f"{cls}.{name} must have 2 entries (joint 1, joint 2)")
-        object.__setattr__(obj, name, tuple(
-            check_nonnegative(f"{cls}.{name}[{i}]", v) for i, v in enumerate(vals)))
+    for name, unit in (("coulomb", "N m"), ("viscous", "N m s/rad")):
+        object.__setattr__(obj, name, check_vector(f"{cls}.{name}", getattr(obj, name), 2,
+                                                   0.0, 100.0, unit=unit))
+
+
+def _set_ranges(obj, spec) -> None:
+    """Validate and store float fields: ``spec`` is (field, lo, hi, lo_open, unit) tuples."""
+    cls = type(obj).__name__
+    for name, lo, hi, lo_open, unit in spec:
+        object.__setattr__(obj, name, check_range(f"{cls}.{name}", getattr(obj, name), lo, hi,
+                                                  lo_open=lo_open, unit=unit))
 
 
 @dataclass(frozen=True)
@@ -88,6 +93,13 @@ class BaseParameters:
         Coulomb friction c per joint [N m].
     viscous : tuple of 2 float
         Viscous friction b per joint [N m s/rad].
+
+    Notes
+    -----
+    Ranges: first moments [-10, 10] kg m, theta3 and theta6 (0, 100] kg m^2,
+    friction [0, 100].  The inertia matrix built from identified parameters
+    may be indefinite (thesis Table 3.5 is); this is *not* refused, because the
+    controllers use them as the thesis did.
     """
 
     m1LG1_m2L1: float
@@ -100,12 +112,15 @@ class BaseParameters:
     viscous: tuple = (0.0, 0.0)
 
     def __post_init__(self):
-        check_range("BaseParameters.m1LG1_m2L1", self.m1LG1_m2L1, -10, 10, unit="kg m")
-        check_range("BaseParameters.m1dG1", self.m1dG1, -10, 10, unit="kg m")
-        check_positive("BaseParameters.IO1_m2L1sq", self.IO1_m2L1sq, unit="kg m^2")
-        check_range("BaseParameters.m2LG2", self.m2LG2, -10, 10, unit="kg m")
-        check_range("BaseParameters.m2dG2", self.m2dG2, -10, 10, unit="kg m")
-        check_positive("BaseParameters.IS2", self.IS2, unit="kg m^2")
+        # Identified parameters need not be physically consistent (Table 3.5 gives an
+        # indefinite inertia matrix, see the module docstring), so only signs that every
+        # identification must get right are enforced: theta3, theta6 > 0.
+        _set_ranges(self, (("m1LG1_m2L1", -10.0, 10.0, False, "kg m"),
+                           ("m1dG1", -10.0, 10.0, False, "kg m"),
+                           ("IO1_m2L1sq", 0.0, 100.0, True, "kg m^2"),
+                           ("m2LG2", -10.0, 10.0, False, "kg m"),
+                           ("m2dG2", -10.0, 10.0, False, "kg m"),
+                           ("IS2", 0.0, 100.0, True, "kg m^2")))
         _check_friction(self)
 
     def as_vector(self) -> np.ndarray:
@@ -133,6 +148,18 @@ class LinkInertia:
         Centroidal moments of inertia about z [kg m^2].
     coulomb, viscous : tuple of 2 float
         Joint friction (3.30) [N m], [N m s/rad].
+
+    Notes
+    -----
+    Positive masses and centroidal inertias make the inertia matrix positive
+    definite for *every* q: the kinetic energy
+    1/2 (IG1 w1^2 + IG2 (w1 + w2)^2 + m1 |v_G1|^2 + m2 |v_G2|^2) vanishes only
+    for w = 0.  (Equivalently det H = theta3 theta6 - L1^2 m2^2 (L_G2 cos q2 +
+    d_G2 sin q2)^2 > 0 because theta3 > m2 L1^2 and theta6 > m2 (L_G2^2 + d_G2^2).)
+    :class:`~ppamsafety.params.ArmParameters` additionally refuses a matrix
+    that is numerically near singular in the working area.
+    Ranges: masses (0, 100] kg, CoG coordinates [-2, 2] m, inertias
+    (0, 100] kg m^2, friction [0, 100].
     """
 
     m1: float
@@ -147,16 +174,19 @@ class LinkInertia:
     viscous: tuple = (0.0, 0.0)
 
     def __post_init__(self):
-        check_range("LinkInertia.m1", self.m1, 0.0, 100.0, lo_open=True, unit="kg")
-        check_range("LinkInertia.m2", self.m2, 0.0, 100.0, lo_open=True, unit="kg")
-        for name in ("LG1", "dG1", "LG2", "dG2"):
-            check_range(f"LinkInertia.{name}", getattr(self, name), -2.0, 2.0, unit="m")
-        check_positive("LinkInertia.IG1", self.IG1, unit="kg m^2")
-        check_positive("LinkInertia.IG2", self.IG2, unit="kg m^2")
+        _set_ranges(self, (("m1", 0.0, 100.0, True, "kg"), ("m2", 0.0, 100.0, True, "kg"),
+                           ("LG1", -2.0, 2.0, False, "m"), ("dG1", -2.0, 2.0, False, "m"),
+                           ("LG2", -2.0, 2.0, False, "m"), ("dG2", -2.0, 2.0, False, "m"),
+                           ("IG1", 0.0, 100.0, True, "kg m^2"),
+                           ("IG2", 0.0, 100.0, True, "kg m^2")))
         _check_friction(self)
 
     def base_parameters(self, L1: float) -> BaseParameters:
-        """Base parameters (B.5) by the parallel-axis (Steiner) relations."""
+        """Base parameters (B.5) by the parallel-axis (Steiner) relations.
+
+        ``L1`` is the upper-arm length [m], in (0, 5].
+        """
+        L1 = check_range("L1", L1, 0.0, 5.0, lo_open=True, unit="m")
         IO1 = self.IG1 + self.m1 * (self.LG1 ** 2 + self.dG1 ** 2)
         IS2 = self.IG2 + self.m2 * (self.LG2 ** 2 + self.dG2 ** 2)
         return BaseParameters(
@@ -229,8 +259,11 @@ def derive_physical_links(*, L1: float = 0.3, static: BaseParameters | None = No
     """
     from scipy.optimize import least_squares
 
-    static = static or identified_static_gravity()
-    dynamic = dynamic or identified_dynamic()
+    L1 = check_range("L1", L1, 0.0, 5.0, lo_open=True, unit="m")
+    static = identified_static_gravity() if static is None else check_instance(
+        "static", static, BaseParameters)
+    dynamic = identified_dynamic() if dynamic is None else check_instance(
+        "dynamic", dynamic, BaseParameters)
     keys = ("m1", "m2", "LG1", "dG1", "LG2", "dG2")
     prior = np.array([LINK_PRIORS[k][0] for k in keys])
     prior_sd = np.array([LINK_PRIORS[k][1] for k in keys])

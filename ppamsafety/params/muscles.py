@@ -16,8 +16,15 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
-from .._validation import check_finite, check_int, check_range
+from .._validation import (InvalidTypeError, check_instance, check_int, check_range, check_str,
+                           check_vector)
 from ..units import BAR, CM
+
+
+#: Largest contraction a PPAM reaches: "up to 40% of the muscle's maximum length"
+#: (thesis §2.2).  Upper bound of ``MuscleSet.eps_max`` and of every contraction in
+#: the working area (checked by ArmParameters).
+MAX_CONTRACTION = 0.4
 
 
 @dataclass(frozen=True)
@@ -37,6 +44,9 @@ class MuscleGroup:
     slenderness : float
         l0/R, dimensionless.  R = l0/slenderness is the minimum radius, used to
         anchor the volume function (see :mod:`ppamsafety.plant.muscle`).
+
+    Ranges: ``n_muscles`` in [1, 20], ``l0`` in (0, 1] m, ``slenderness`` in
+    [1, 50] (thesis: 4/3 muscles of 6 cm, l0/R = 6, §2.3.3.1), a0 >= 0.
     """
 
     name: str
@@ -46,25 +56,27 @@ class MuscleGroup:
     slenderness: float = 6.0
 
     def __post_init__(self):
-        check_int(f"{self.name}.n_muscles", self.n_muscles, 1, 20)
-        if len(self.coefficients) != 5:
-            raise ValueError(f"{self.name}.coefficients must have 5 entries (a0..a4), "
-                             f"got {len(self.coefficients)}")
-        coeffs = tuple(check_finite(f"{self.name}.coefficients[{i}]", c)
-                       for i, c in enumerate(self.coefficients))
+        check_str("MuscleGroup.name", self.name)
+        group = f" (group {self.name!r})"
+        object.__setattr__(self, "n_muscles",
+                           check_int(f"MuscleGroup.n_muscles{group}", self.n_muscles, 1, 20))
+        coeffs = check_vector(f"MuscleGroup.coefficients{group}", self.coefficients, 5,
+                              unit="m^2")
         object.__setattr__(self, "coefficients", coeffs)
         if coeffs[0] < 0:
-            raise ValueError(f"{self.name}.coefficients[0] (a0) = {coeffs[0]:g} m^2 is "
+            raise ValueError(f"MuscleGroup.coefficients[0] (a0){group} = {coeffs[0]:g} m^2 is "
                              "outside [0, inf): the 1/eps term must pull")
-        check_range(f"{self.name}.l0", self.l0, 0.0, 1.0, lo_open=True, unit="m")
-        check_range(f"{self.name}.slenderness", self.slenderness, 1.0, 50.0)
+        object.__setattr__(self, "l0", check_range(f"MuscleGroup.l0{group}", self.l0, 0.0, 1.0,
+                                                   lo_open=True, unit="m"))
+        object.__setattr__(self, "slenderness", check_range(
+            f"MuscleGroup.slenderness{group}", self.slenderness, 1.0, 50.0))
 
     @classmethod
     def from_newton_per_bar(cls, name: str, n_muscles: int, coefficients_n_per_bar,
                             **kwargs) -> "MuscleGroup":
         """Build a group from Table B.1-style coefficients in N/bar."""
-        return cls(name=name, n_muscles=n_muscles,
-                   coefficients=tuple(float(c) / BAR for c in coefficients_n_per_bar),
+        c = check_vector("coefficients_n_per_bar", coefficients_n_per_bar, 5, unit="N/bar")
+        return cls(name=name, n_muscles=n_muscles, coefficients=tuple(x / BAR for x in c),
                    **kwargs)
 
     @property
@@ -87,7 +99,8 @@ class MuscleSet:
         in the working area (2.14).  Dimensionless (0.05 = 5 %).
     eps_max : float
         Maximum contraction of the bottom groups 2 and 4 at their shortest
-        length in the working area (A.36), (A.38).
+        length in the working area (A.36), (A.38); at most
+        :data:`MAX_CONTRACTION` = 0.4 (§2.2).
     """
 
     groups: tuple
@@ -95,13 +108,21 @@ class MuscleSet:
     eps_max: float = 0.30
 
     def __post_init__(self):
-        if len(self.groups) != 4 or not all(isinstance(g, MuscleGroup) for g in self.groups):
-            raise ValueError("MuscleSet.groups must be a tuple of 4 MuscleGroup")
+        if not isinstance(self.groups, (tuple, list)):
+            raise InvalidTypeError(f"MuscleSet.groups must be a tuple of 4 MuscleGroup, "
+                                   f"got {type(self.groups).__name__}")
+        if len(self.groups) != 4:
+            raise ValueError(f"MuscleSet.groups must have 4 MuscleGroup, got {len(self.groups)}")
+        for i, g in enumerate(self.groups):
+            check_instance(f"MuscleSet.groups[{i}]", g, MuscleGroup)
         object.__setattr__(self, "groups", tuple(self.groups))
-        check_range("MuscleSet.eps_min", self.eps_min, 0.0, 0.5, lo_open=True)
-        check_range("MuscleSet.eps_max", self.eps_max, 0.0, 0.6, lo_open=True)
+        object.__setattr__(self, "eps_min", check_range("MuscleSet.eps_min", self.eps_min, 0.0,
+                                                        0.4, lo_open=True, hi_open=True))
+        object.__setattr__(self, "eps_max", check_range("MuscleSet.eps_max", self.eps_max, 0.0,
+                                                        MAX_CONTRACTION, lo_open=True))
         if not self.eps_min < self.eps_max:
-            raise ValueError("MuscleSet: eps_min must be smaller than eps_max")
+            raise ValueError(f"MuscleSet: eps_min = {self.eps_min:g} must be smaller than "
+                             f"eps_max = {self.eps_max:g}")
 
     def replace(self, **changes) -> "MuscleSet":
         """Return a copy with some fields changed (validated again)."""
@@ -127,4 +148,4 @@ def thesis_muscles() -> MuscleSet:
     return MuscleSet(groups=groups, eps_min=0.05, eps_max=0.30)
 
 
-__all__ = ["MuscleGroup", "MuscleSet", "thesis_muscles", "TABLE_B1_N_PER_BAR"]
+__all__ = ["MuscleGroup", "MuscleSet", "thesis_muscles", "TABLE_B1_N_PER_BAR", "MAX_CONTRACTION"]

@@ -17,7 +17,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 
-from .._validation import check_range
+from .._validation import check_range, check_vector
 from ..units import BAR, P_ATM
 
 
@@ -35,7 +35,12 @@ class PneumaticParams:
     p_atm : float
         Atmospheric pressure [Pa].
     polytropic_n : float
-        Polytropic exponent n of (3.3), 1 (isothermal) to 1.4 (isentropic).
+        Polytropic exponent n of (3.3), 1 (isothermal) to 1.4 (isentropic
+        air); up to 1.67 (monatomic gas) is accepted.
+
+    Ranges: ``p_max`` in (0, 6] bar (PPAMs tolerate 4 bar, §2.2.2; 6 bar
+    is the industrial supply), ``p_mean`` in [0, p_max], ``p_atm`` in
+    [0.5, 1.5] bar.
     """
 
     p_mean: tuple
@@ -44,14 +49,14 @@ class PneumaticParams:
     polytropic_n: float = 1.4
 
     def __post_init__(self):
-        if len(self.p_mean) != 2:
-            raise ValueError("PneumaticParams.p_mean must have 2 entries (joint 1, joint 2) [Pa]")
-        check_range("PneumaticParams.p_max", self.p_max, 0.0, 6.0 * BAR, lo_open=True, unit="Pa")
-        pm = tuple(check_range(f"PneumaticParams.p_mean[{i}]", p, 0.0, self.p_max, unit="Pa")
-                   for i, p in enumerate(self.p_mean))
-        object.__setattr__(self, "p_mean", pm)
-        check_range("PneumaticParams.p_atm", self.p_atm, 0.5 * BAR, 1.5 * BAR, unit="Pa")
-        check_range("PneumaticParams.polytropic_n", self.polytropic_n, 1.0, 1.67)
+        object.__setattr__(self, "p_max", check_range("PneumaticParams.p_max", self.p_max, 0.0,
+                                                      6.0 * BAR, lo_open=True, unit="Pa"))
+        object.__setattr__(self, "p_mean", check_vector("PneumaticParams.p_mean", self.p_mean, 2,
+                                                        0.0, self.p_max, unit="Pa"))
+        object.__setattr__(self, "p_atm", check_range("PneumaticParams.p_atm", self.p_atm,
+                                                      0.5 * BAR, 1.5 * BAR, unit="Pa"))
+        object.__setattr__(self, "polytropic_n", check_range("PneumaticParams.polytropic_n",
+                                                             self.polytropic_n, 1.0, 1.67))
 
     def replace(self, **changes) -> "PneumaticParams":
         """Return a copy with some fields changed (validated again)."""

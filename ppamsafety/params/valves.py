@@ -24,7 +24,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 
-from .._validation import check_range
+from .._validation import (InvalidTypeError, check_instance, check_range, check_real,
+                           check_vector)
 from ..units import BAR
 
 
@@ -39,8 +40,12 @@ class Valve:
     v2 : float
         Static gain of the delivered pressure, dimensionless.
     time_constant : float
-        First-order time constant T of (3.2) [s].  ``math.inf`` models a
-        closed valve (the muscle is a sealed polytropic volume).
+        First-order time constant T of (3.2) [s], in [1 ms, 10 s]
+        (:data:`MIN_TIME_CONSTANT`).  ``math.inf`` models a closed valve (the
+        muscle is a sealed polytropic volume).
+
+    Ranges: ``v1`` in [-0.5, 0.5] bar, ``v2`` in [0.5, 1.5] (Table B.2 values
+    are within 0.05 bar and 3 % of ideal).
     """
 
     v1: float
@@ -48,10 +53,29 @@ class Valve:
     time_constant: float
 
     def __post_init__(self):
-        check_range("Valve.v1", self.v1, -0.5 * BAR, 0.5 * BAR, unit="Pa")
-        check_range("Valve.v2", self.v2, 0.5, 1.5)
-        if self.time_constant != math.inf:
-            check_range("Valve.time_constant", self.time_constant, 1e-4, 10.0, unit="s")
+        object.__setattr__(self, "v1", check_range("Valve.v1", self.v1, -0.5 * BAR, 0.5 * BAR,
+                                                   unit="Pa"))
+        object.__setattr__(self, "v2", check_range("Valve.v2", self.v2, 0.5, 1.5))
+        object.__setattr__(self, "time_constant",
+                           check_time_constant("Valve.time_constant", self.time_constant))
+
+
+#: Smallest valve time constant [s].  The closed loop integrates the valve lag (3.2)
+#: with classical RK4 at h = 1 ms / ``substeps`` (1 kHz control loop); RK4 is stable
+#: for h/T < 2.78, so T >= 1 ms keeps every supported step stable with margin and the
+#: response resolved by at least one step per time constant.  Real pressure valves are
+#: much slower (tens of ms, module docstring).
+MIN_TIME_CONSTANT = 1.0e-3
+#: Largest finite time constant [s]; ``math.inf`` (a closed valve) is also allowed.
+MAX_TIME_CONSTANT = 10.0
+
+
+def check_time_constant(name: str, value) -> float:
+    """A valve time constant in [1 ms, 10 s] or ``math.inf`` (closed valve); returns a float."""
+    t = check_real(name, value, unit="s")
+    if t == math.inf:
+        return t
+    return check_range(name, t, MIN_TIME_CONSTANT, MAX_TIME_CONSTANT, unit="s")
 
 
 @dataclass(frozen=True)
@@ -61,8 +85,13 @@ class ValveSet:
     valves: tuple
 
     def __post_init__(self):
-        if len(self.valves) != 4 or not all(isinstance(v, Valve) for v in self.valves):
-            raise ValueError("ValveSet.valves must be a tuple of 4 Valve")
+        if not isinstance(self.valves, (tuple, list)):
+            raise InvalidTypeError(f"ValveSet.valves must be a tuple of 4 Valve, "
+                                   f"got {type(self.valves).__name__}")
+        if len(self.valves) != 4:
+            raise ValueError(f"ValveSet.valves must have 4 Valve, got {len(self.valves)}")
+        for i, v in enumerate(self.valves):
+            check_instance(f"ValveSet.valves[{i}]", v, Valve)
         object.__setattr__(self, "valves", tuple(self.valves))
 
     def replace(self, **changes) -> "ValveSet":
@@ -70,11 +99,13 @@ class ValveSet:
         return replace(self, **changes)
 
     def with_time_constants(self, time_constants) -> "ValveSet":
-        """Return a copy with new time constants [s] (one per valve)."""
-        if len(time_constants) != 4:
-            raise ValueError("with_time_constants needs 4 values [s]")
-        return ValveSet(tuple(replace(v, time_constant=float(t))
-                              for v, t in zip(self.valves, time_constants)))
+        """Return a copy with new time constants [s] (one per valve, see :class:`Valve`)."""
+        if isinstance(time_constants, (tuple, list)) and len(time_constants) == 4:
+            ts = [check_time_constant(f"valve {i + 1} time_constant", t)
+                  for i, t in enumerate(time_constants)]
+        else:   # refuse with the standard message (type or length)
+            ts = check_vector("time_constants", time_constants, 4, unit="s")
+        return ValveSet(tuple(replace(v, time_constant=t) for v, t in zip(self.valves, ts)))
 
 
 #: Table B.2: v1 [bar] and v2 [-] per valve.
@@ -90,4 +121,5 @@ def thesis_valves() -> ValveSet:
                           for (v1, v2), t in zip(TABLE_B2, DEFAULT_TIME_CONSTANTS)))
 
 
-__all__ = ["Valve", "ValveSet", "thesis_valves", "TABLE_B2", "DEFAULT_TIME_CONSTANTS"]
+__all__ = ["Valve", "ValveSet", "thesis_valves", "TABLE_B2", "DEFAULT_TIME_CONSTANTS",
+           "MIN_TIME_CONSTANT", "MAX_TIME_CONSTANT", "check_time_constant"]
