@@ -1,14 +1,19 @@
-"""Regenerate the report folder from scratch by running every registered study."""
+"""Regenerate the report folder from scratch by running every registered study.
+
+Each study is computed, rendered and its artifacts written by
+:func:`ppamsafety.studies.run_study`.  Figures are pyplot-free
+:class:`matplotlib.figure.Figure` objects (see :mod:`ppamsafety.report.figures`),
+so no matplotlib backend is selected here or anywhere in the package.
+"""
 
 from __future__ import annotations
 
-import importlib
 import json
 import shutil
 import time
 from pathlib import Path
 
-from ..studies import REGISTRY
+from ..studies import REGISTRY, run_study
 
 
 def build_report(outdir="reports", *, quick: bool = False, only=None, progress: bool = True) -> Path:
@@ -41,8 +46,7 @@ def build_report(outdir="reports", *, quick: bool = False, only=None, progress: 
     sections, metrics = [], {}
     for name in names:
         t0 = time.perf_counter()
-        mod = importlib.import_module(f"ppamsafety.studies.{name}")
-        res = mod.run(out, quick=quick)
+        res = run_study(name, out, quick=quick)      # compute -> render -> write
         dt = time.perf_counter() - t0
         metrics[name] = {**res.metrics, "wall_time_s": round(dt, 2)}
         sections.append(f"## {res.title}\n\n{res.markdown.strip()}\n\n*Study `{name}` ran in {dt:.1f} s.*\n")
