@@ -55,7 +55,13 @@ class TorqueFunctions:
         return self.data.copy()
 
     def plot(self, **kwargs):
-        """Plot with :mod:`ppamsafety.report`; returns a matplotlib Figure."""
+        """Plot with :mod:`ppamsafety.report`; returns a matplotlib Figure.
+
+        Parameters
+        ----------
+        **kwargs
+            Passed to :func:`ppamsafety.report.figures.plot_torque_functions`.
+        """
         from .report.figures import plot_torque_functions
         return plot_torque_functions(self, **kwargs)
 
@@ -104,7 +110,13 @@ class StiffnessMap:
         return self.data.copy()
 
     def plot(self, **kwargs):
-        """Plot with :mod:`ppamsafety.report`; returns a matplotlib Figure."""
+        """Plot with :mod:`ppamsafety.report`; returns a matplotlib Figure.
+
+        Parameters
+        ----------
+        **kwargs
+            Passed to :func:`ppamsafety.report.figures.plot_stiffness_map`.
+        """
         from .report.figures import plot_stiffness_map
         return plot_stiffness_map(self, **kwargs)
 
@@ -173,7 +185,13 @@ class MaxLoadMap:
         return float(r["q1_rad"]), float(r["q2_rad"])
 
     def plot(self, **kwargs):
-        """Plot with :mod:`ppamsafety.report`; returns a matplotlib Figure."""
+        """Plot with :mod:`ppamsafety.report`; returns a matplotlib Figure.
+
+        Parameters
+        ----------
+        **kwargs
+            Passed to :func:`ppamsafety.report.figures.plot_max_load`.
+        """
         from .report.figures import plot_max_load
         return plot_max_load(self, **kwargs)
 

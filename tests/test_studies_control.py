@@ -1,11 +1,13 @@
 """The control studies (quick mode) and the evaluation of the thesis' conclusions."""
 
+import pathlib
+
 import numpy as np
 import pandas as pd
 import pytest
 
 from ppamsafety.experiments import conclusions as cc
-from ppamsafety.studies import REGISTRY, StudyResult
+from ppamsafety.studies import REGISTRY, Section, StudyResult, run_study
 
 
 def test_registry_order():
@@ -24,15 +26,55 @@ def test_registry_order():
              "smc_chattering_sweep.csv"]),
 ])
 def test_study_runs_quick_and_writes_its_files(tmp_path, name, files):
-    import importlib
-
-    mod = importlib.import_module(f"ppamsafety.studies.{name}")
-    res = mod.run(tmp_path, quick=True)
+    res = run_study(name, tmp_path, quick=True)
     assert isinstance(res, StudyResult) and res.title and res.markdown
     for f in files:
         assert (tmp_path / f).exists(), f
         assert f in res.markdown or f.endswith(".csv") or f in " ".join(res.artifacts)
+    assert sorted(p.name for p in tmp_path.iterdir()) == sorted(
+        pathlib.Path(a).name for a in res.artifacts)
     assert all(np.isfinite(v) for v in res.metrics.values() if isinstance(v, float))
+
+
+def test_responses_in_three_parts_compute_writes_nothing(tmp_path, monkeypatch):
+    """compute -> study object (no files, no figures), plot -> Figures, render -> Section."""
+    from matplotlib.figure import Figure
+
+    from ppamsafety.studies import responses
+
+    monkeypatch.chdir(tmp_path)
+    study = responses.compute(quick=True)
+    assert list(tmp_path.iterdir()) == []
+    assert isinstance(study, responses.ResponsesStudy)
+    table = study.to_pandas()
+    assert len(table) == 20 and set(table.experiment) == {"step", "switch"}
+    assert np.isfinite(study.oscillation_hz) and study.oscillation_hz > 0
+    figs = study.plot()
+    assert set(figs) == {"responses_step.png", "responses_step_ki12.png",
+                         "responses_step_lambda.png", "responses_switch.png",
+                         "responses_switch_lambda.png"}
+    assert all(isinstance(f, Figure) for f in figs.values())
+    sec = responses.render(study)
+    assert isinstance(sec, Section) and "**Step**" in sec.markdown
+    names = [n for n, _ in sec.artifacts]
+    assert set(figs) | {"responses_step.csv", "responses_switch.csv"} == set(names)
+    assert all(n in sec.markdown for n in figs)
+    assert sec.metrics["step_pid_overshoot_pct"] == study.metrics["step_pid_overshoot_pct"]
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_study_arguments_are_checked():
+    from ppamsafety.studies import lambda_sweep, resolve_arm, safety, study_module, write_artifact
+
+    with pytest.raises(ValueError, match="unknown study name='nope'"):
+        study_module("nope")
+    with pytest.raises(TypeError, match="arm must be an ArmParameters"):
+        resolve_arm("thesis")
+    for mod in (safety, lambda_sweep):
+        with pytest.raises(ValueError, match="arm="):
+            mod.compute(quick=True, arm=resolve_arm(None))
+    with pytest.raises(TypeError, match="expected a matplotlib Figure or a pandas DataFrame"):
+        write_artifact("text", "x.txt")
 
 
 def test_tracking_table_has_thesis_values_and_ratios(tmp_path):

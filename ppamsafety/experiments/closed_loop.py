@@ -185,7 +185,14 @@ class ExperimentResult:
         return np.hypot(self.log[:, 21], self.log[:, 22])
 
     def plot(self, **kwargs):
-        """Plot with :mod:`ppamsafety.report`; returns a matplotlib Figure."""
+        """Plot with :mod:`ppamsafety.report`; returns a matplotlib Figure.
+
+        Parameters
+        ----------
+        **kwargs
+            Passed to :func:`ppamsafety.report.control_figures.plot_experiment`
+            (``title``, ``t_range``).
+        """
         from ..report.control_figures import plot_experiment
         return plot_experiment(self, **kwargs)
 

@@ -91,7 +91,16 @@ class ImpactResults:
         return self.summary.loc[self.summary[metric].idxmax()]
 
     def plot(self, index=None, **kwargs):
-        """Plot with :mod:`ppamsafety.report`; returns a matplotlib Figure."""
+        """Plot with :mod:`ppamsafety.report`; returns a matplotlib Figure.
+
+        Parameters
+        ----------
+        index : int, optional
+            Case whose time history is plotted (default: the first with a
+            history).
+        **kwargs
+            Passed to :func:`ppamsafety.report.impact_figures.plot_impact_history`.
+        """
         from ..report.impact_figures import plot_impact_history
         i = index if index is not None else next(iter(self.histories))
         return plot_impact_history(self.histories[i], head=self.head, **kwargs)

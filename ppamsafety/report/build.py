@@ -1,5 +1,10 @@
 """Regenerate the report folder from scratch by running every registered study.
 
+Each study is computed, rendered and its artifacts written by
+:func:`ppamsafety.studies.run_study`.  Figures are pyplot-free
+:class:`matplotlib.figure.Figure` objects (see :mod:`ppamsafety.report.figures`),
+so no matplotlib backend is selected here or anywhere in the package.
+
 The folder is written through :class:`ppamsafety.output.OutputFolder`: a
 previous report is replaced only with ``overwrite=True`` and a folder holding
 files ppamsafety did not write is never used.
@@ -7,13 +12,12 @@ files ppamsafety did not write is never used.
 
 from __future__ import annotations
 
-import importlib
 import json
 import time
 from pathlib import Path
 
 from ..output import OutputFolder
-from ..studies import REGISTRY
+from ..studies import REGISTRY, run_study
 
 
 def build_report(outdir="reports", *, quick: bool = False, only=None, progress: bool = True,
@@ -54,8 +58,7 @@ def build_report(outdir="reports", *, quick: bool = False, only=None, progress: 
         sections, metrics = [], {}
         for name in names:
             t0 = time.perf_counter()
-            mod = importlib.import_module(f"ppamsafety.studies.{name}")
-            res = mod.run(stage, quick=quick)
+            res = run_study(name, stage, quick=quick)      # compute -> render -> write
             dt = time.perf_counter() - t0
             metrics[name] = {**res.metrics, "wall_time_s": round(dt, 2)}
             sections.append(f"## {res.title}\n\n{res.markdown.strip()}\n\n*Study `{name}` ran in "

@@ -10,13 +10,10 @@ angular velocities in rad/s, distances in mm.
 
 from __future__ import annotations
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from ..units import BAR, DEG  # noqa: E402
+from ..units import BAR, DEG
+from .figures import new_figure
 
 FAMILY_COLORS = {"PID": "black", "PSMC joint Ki=2": "tab:blue", "PSMC joint Ki=12": "tab:green",
                  "PSMC task": "tab:red", "SMC": "tab:purple"}
@@ -55,21 +52,21 @@ def plot_experiment(result, *, title: str | None = None, t_range=None):
         Time window [s] to show.
     """
     t = result.t
-    ref = result.reference.data
-    log = result.log
-    fig, axes = plt.subplots(3, 1, figsize=(10.5, 7.5), sharex=True)
+    fig, axes = new_figure(3, 1, figsize=(10.5, 7.5), sharex=True)
     a = axes[0]
     for j, c in enumerate(("tab:blue", "tab:orange")):
-        a.plot(t, ref[:, j] / DEG, color=c, ls="--", lw=1, label=f"$q_{j + 1}$ desired")
-        a.plot(t, log[:, 1 + j] / DEG, color=c, lw=1.3, label=f"$q_{j + 1}$")
+        a.plot(t, result.signal(f"q{j + 1}_d") / DEG, color=c, ls="--", lw=1,
+               label=f"$q_{j + 1}$ desired")
+        a.plot(t, result.signal(f"q{j + 1}") / DEG, color=c, lw=1.3, label=f"$q_{j + 1}$")
     a.set_ylabel("angle [deg]")
     a.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
     axes[1].plot(t, result.tracking_error() * 1e3, color="k", lw=1)
     axes[1].set_ylabel(r"$\|r_d - r\|$ [mm]")
     for j, c in enumerate(("tab:blue", "tab:orange")):
-        axes[2].plot(t, log[:, 11 + j], color=c, lw=0.6, alpha=0.6,
+        axes[2].plot(t, result.signal(f"qd{j + 1}_meas"), color=c, lw=0.6, alpha=0.6,
                      label=fr"$\dot q_{j + 1}$ measured")
-        axes[2].plot(t, log[:, 3 + j], color=c, lw=1.2, label=fr"$\dot q_{j + 1}$")
+        axes[2].plot(t, result.signal(f"qd{j + 1}"), color=c, lw=1.2,
+                     label=fr"$\dot q_{j + 1}$")
     axes[2].set_ylabel("angular velocity [rad/s]")
     axes[2].set_xlabel("t [s]")
     axes[2].legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.01, 1.0))
@@ -86,22 +83,35 @@ def plot_experiment(result, *, title: str | None = None, t_range=None):
 def plot_step_comparison(results, *, title: str, events=(), t_range=None):
     """Step responses: q1, q2 [deg] and qd1, qd2 [rad/s] of several runs (figs. 5.17-5.19).
 
-    ``results`` are ExperimentResults of the same step reference; the
-    reference is drawn dashed grey.  ``events`` are vertical markers [s].
+    Parameters
+    ----------
+    results : sequence of ExperimentResult
+        Runs of the same step reference (drawn dashed grey from the first).
+    title : str
+        Figure title.
+    events : sequence of float
+        Times [s] marked with vertical lines.
+    t_range : (float, float), optional
+        Time window [s] to show.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
     """
     results = list(results)
     if not results:
         raise ValueError("plot_step_comparison: no results")
-    fig, axes = plt.subplots(2, 2, figsize=(11, 6.5), sharex=True)
+    fig, axes = new_figure(2, 2, figsize=(11, 6.5), sharex=True)
     t = results[0].t
-    ref = results[0].reference.data
     for j in range(2):
-        axes[0, j].plot(t, ref[:, j] / DEG, color="0.5", ls="--", lw=1.2, label="desired")
+        axes[0, j].plot(t, results[0].signal(f"q{j + 1}_d") / DEG, color="0.5", ls="--", lw=1.2,
+                        label="desired")
     for r in results:
         st = _style(r)
         for j in range(2):
-            axes[0, j].plot(r.t, r.log[:, 1 + j] / DEG, lw=1.3, label=_label(r), **st)
-            axes[1, j].plot(r.t, r.log[:, 3 + j], lw=1.1, label=_label(r), **st)
+            axes[0, j].plot(r.t, r.signal(f"q{j + 1}") / DEG, lw=1.3, label=_label(r), **st)
+            axes[1, j].plot(r.t, r.signal(f"qd{j + 1}"), lw=1.1, label=_label(r), **st)
     for j in range(2):
         axes[0, j].set_ylabel(f"$q_{j + 1}$ [deg]")
         axes[1, j].set_ylabel(fr"$\dot q_{j + 1}$ [rad/s]")
@@ -123,22 +133,42 @@ def plot_switch(results, *, title: str, t_switch: float, circle_center, circle_r
 
     Panels: TCP path from the switch on (target circle dashed), TCP error
     [mm], TCP speed [m/s] and q1 [deg] against time.
+
+    Parameters
+    ----------
+    results : sequence of ExperimentResult
+        Runs of the same switch reference.
+    title : str
+        Figure title.
+    t_switch : float
+        Switch time [s].
+    circle_center : (float, float)
+        Centre of the target circle [m].
+    circle_radius : float
+        Radius of the target circle [m].
+    t_range : (float, float), optional
+        Time window [s] of the time plots.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
     """
     results = list(results)
     if not results:
         raise ValueError("plot_switch: no results")
-    fig, axes = plt.subplots(2, 2, figsize=(11, 7.5))
+    fig, axes = new_figure(2, 2, figsize=(11, 7.5))
     a = axes[0, 0]
     ang = np.linspace(0, 2 * np.pi, 361)
     a.plot(circle_center[0] + circle_radius * np.cos(ang), circle_center[1]
            + circle_radius * np.sin(ang), color="0.5", ls="--", lw=1, label="desired circle")
-    ref = results[0].reference.data
+    ref_xy = results[0].signals("x_d", "y_d")
     k_sw = int(np.searchsorted(results[0].t, t_switch))
-    a.plot(*ref[k_sw - 1, 8:10], "o", color="0.3", ms=5, label="desired, before switch")
-    a.plot(*ref[k_sw, 8:10], "s", color="0.3", ms=5, label="desired, after switch")
+    a.plot(*ref_xy[k_sw - 1], "o", color="0.3", ms=5, label="desired, before switch")
+    a.plot(*ref_xy[k_sw], "s", color="0.3", ms=5, label="desired, after switch")
     for r in results:
         m = r.t >= t_switch
-        a.plot(r.log[m, 19], r.log[m, 20], lw=1.2, label=_label(r), **_style(r))
+        a.plot(r.signal("x")[m], r.signal("y")[m], lw=1.2, label=_label(r), **_style(r))
     a.set_aspect("equal")
     a.set_xlabel("x [m]")
     a.set_ylabel("y [m]")
@@ -148,8 +178,9 @@ def plot_switch(results, *, title: str, t_switch: float, circle_center, circle_r
         st = _style(r)
         axes[0, 1].plot(r.t, r.tracking_error() * 1e3, lw=1.2, **st)
         axes[1, 0].plot(r.t, r.tcp_speed(), lw=1.2, **st)
-        axes[1, 1].plot(r.t, r.log[:, 1] / DEG, lw=1.2, **st)
-    axes[1, 1].plot(results[0].t, ref[:, 0] / DEG, color="0.5", ls="--", lw=1, label="desired")
+        axes[1, 1].plot(r.t, r.signal("q1") / DEG, lw=1.2, **st)
+    axes[1, 1].plot(results[0].t, results[0].signal("q1_d") / DEG, color="0.5", ls="--", lw=1,
+                    label="desired")
     axes[1, 1].legend(fontsize=8)
     axes[0, 1].set_ylabel(r"$\|r_d - r\|$ [mm]")
     axes[1, 0].set_ylabel("TCP speed [m/s]")
@@ -173,6 +204,26 @@ def plot_lambda_recovery(results, *, experiment: str, title: str, events=(), tol
     ``experiment="step"`` plots q1 [deg] (reference dashed), ``"switch"`` the
     TCP error [mm] on a log scale with the tolerance band ``tol`` [m].  PID
     (if among the results) is drawn in every panel in grey for comparison.
+
+    Parameters
+    ----------
+    results : sequence of ExperimentResult
+        Runs with ``meta`` ``family`` and ``lambda_s`` (thesis variants).
+    experiment : {"step", "switch"}
+        Which quantity to plot (see above).
+    title : str
+        Figure title.
+    events : sequence of float
+        Times [s] marked with vertical lines.
+    tol : float, optional
+        Tolerance band [m] drawn for ``"switch"``.
+    t_range : (float, float), optional
+        Time window [s] to show.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
     """
     if experiment not in ("step", "switch"):
         raise ValueError(f"experiment = {experiment!r} is not 'step' or 'switch'")
@@ -182,17 +233,17 @@ def plot_lambda_recovery(results, *, experiment: str, title: str, events=(), tol
     if not fams:
         raise ValueError("plot_lambda_recovery: no PSMC results")
     pid = [r for r in results if r.meta.get("family") == "PID"]
-    fig, axes = plt.subplots(1, len(fams), figsize=(4.2 * len(fams), 4), sharey=True,
+    fig, axes = new_figure(1, len(fams), figsize=(4.2 * len(fams), 4), sharey=True,
                              squeeze=False)
     for a, fam in zip(axes[0], fams):
         for r in pid + [r for r in results if r.meta.get("family") == fam]:
             is_pid = r.meta.get("family") == "PID"
             st = {"color": "0.6", "ls": "-"} if is_pid else _style(r, by="lambda")
-            y = r.log[:, 1] / DEG if experiment == "step" else r.tracking_error() * 1e3
+            y = r.signal("q1") / DEG if experiment == "step" else r.tracking_error() * 1e3
             lab = "PID" if is_pid else f"λ = {r.meta.get('lambda_s'):g} s"
             a.plot(r.t, y, lw=1.2, label=lab, **st)
         if experiment == "step":
-            a.plot(results[0].t, results[0].reference.data[:, 0] / DEG, color="k", ls="--",
+            a.plot(results[0].t, results[0].signal("q1_d") / DEG, color="k", ls="--",
                    lw=0.8, label="desired")
             a.set_ylabel("$q_1$ [deg]")
         else:
@@ -222,10 +273,23 @@ def plot_error_traces(panels, *, title: str, t_range=None, sharey: bool = True,
         Panel title -> list of (label, ExperimentResult) or (label,
         ExperimentResult, line-style dict) (figs. 5.11, 5.14).  Without a
         style dict the family/lambda style of the run is used.
+    title : str
+        Figure title.
+    t_range : (float, float), optional
+        Time window [s] to show.
+    sharey : bool
+        Share the error axis between panels.
+    ylabel : str
+        Label of the error axes.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
     """
     if not panels:
         raise ValueError("plot_error_traces: no panels")
-    fig, axes = plt.subplots(len(panels), 1, figsize=(12, 2.6 * len(panels) + 0.6),
+    fig, axes = new_figure(len(panels), 1, figsize=(12, 2.6 * len(panels) + 0.6),
                              sharey=sharey, squeeze=False)
     for a, (name, runs) in zip(axes[:, 0], panels.items()):
         for entry in runs:
@@ -257,7 +321,7 @@ def plot_tracking_comparison(table):
     periods = sorted(table.period_s.unique())
     variants = list(dict.fromkeys(table.variant))
     x = np.arange(len(variants))
-    fig, axes = plt.subplots(1, len(periods), figsize=(5 * len(periods), 4.8), sharey=True,
+    fig, axes = new_figure(1, len(periods), figsize=(5 * len(periods), 4.8), sharey=True,
                              squeeze=False)
     for a, P in zip(axes[0], periods):
         g = table[table.period_s == P].set_index("variant").loc[variants]
@@ -296,7 +360,7 @@ def plot_smc_chattering(sweep, *, default_gamma: float | None = None, reference=
         Chattering index [Pa] and mean error [m] of a reference controller
         and its label, drawn as horizontal dashed lines.
     """
-    fig, axes = plt.subplots(1, 2, figsize=(12, 4.8))
+    fig, axes = new_figure(1, 2, figsize=(12, 4.8))
     Ts = sorted(sweep.plant_T.unique())
     colors = dict(zip(Ts, ("tab:blue", "tab:orange", "tab:red", "tab:purple", "tab:green")))
     models = list(dict.fromkeys(sweep.model))
@@ -335,13 +399,25 @@ def plot_smc_chattering(sweep, *, default_gamma: float | None = None, reference=
 def plot_smc_commands(panels, *, title: str, t_range=None):
     """Commanded Delta p1 [bar] against time, one line per (label, result) entry.
 
-    ``panels`` maps a panel title to a list of (label, ExperimentResult).
+    Parameters
+    ----------
+    panels : dict
+        Panel title -> list of (label, ExperimentResult).
+    title : str
+        Figure title.
+    t_range : (float, float), optional
+        Time window [s] to show.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
     """
-    fig, axes = plt.subplots(len(panels), 1, figsize=(10, 2.5 * len(panels) + 0.6),
+    fig, axes = new_figure(len(panels), 1, figsize=(10, 2.5 * len(panels) + 0.6),
                              sharex=True, squeeze=False)
     for a, (name, runs) in zip(axes[:, 0], panels.items()):
         for label, r in runs:
-            a.plot(r.t, r.log[:, 17] / BAR, lw=0.7, label=label)
+            a.plot(r.t, r.signal("dp1") / BAR, lw=0.7, label=label)
         a.set_title(name, fontsize=10)
         a.set_ylabel(r"$\Delta p_1$ command [bar]")
         a.grid(alpha=0.3)
@@ -355,6 +431,129 @@ def plot_smc_commands(panels, *, title: str, t_range=None):
     return fig
 
 
+def _by_label(results) -> dict:
+    return {r.meta["label"]: r for r in results}
+
+
+def plot_tracking_study(study) -> dict:
+    """Figures of the circle-tracking study (figs. 5.10, 5.11, 5.14, Table 5.2, sensors).
+
+    Parameters
+    ----------
+    study : ppamsafety.studies.tracking.TrackingStudy
+        Output of :func:`ppamsafety.studies.tracking.compute`.
+
+    Returns
+    -------
+    dict
+        File name -> Figure.
+    """
+    warmup, evaluate = study.warmup, study.evaluate
+    figs = {"tracking_table_5_2.png": plot_tracking_comparison(study.comparison)}
+    rb, ri = study.runs["timing board"], study.runs["ideal velocity"]
+    lab = _by_label(rb[10.0])
+    t_win = (warmup, warmup + min(20.0, evaluate))
+    figs["tracking_joint_angles.png"] = plot_experiment(
+        lab["PSMC joint Ki=2 λ=0.4"], t_range=t_win,
+        title="Circle P = 10 s, joint PSMC (Ki = 2, λ = 0.4 s), realistic sensors (cf. fig. 5.10)")
+    main = ("PID", "PSMC joint Ki=2 λ=0.4", "PSMC task λ=0.4")
+    panels = {f"P = {P:g} s": [(r.meta["label"], r) for r in rb[P] if r.meta["label"] in main]
+              for P in (10.0, 5.0)}
+    figs["tracking_circle_errors.png"] = plot_error_traces(
+        panels, t_range=t_win, title="Position error on the circle (cf. fig. 5.11)")
+    ki = ("PSMC joint Ki=2 λ=0.4", "PSMC joint Ki=12 λ=0.4", "PSMC joint Ki=12 λ=0.8",
+          "PSMC joint Ki=12 λ=1.5")
+    panels = {f"P = {P:g} s": [(r.meta["label"], r) for r in rb[P] if r.meta["label"] in ki]
+              for P in study.periods}
+    figs["tracking_circle_errors_ki12.png"] = plot_error_traces(
+        panels, t_range=t_win,
+        title="Position error with high integral gain Ki = 12 bar/(rad s) (cf. fig. 5.14)")
+    k = "PSMC joint Ki=12 λ=0.4"
+    s_ipt, s_id = {"color": "tab:green"}, {"color": "k", "lw": 1.3}
+    panels = {f"P = {P:g} s": [("timing board", _by_label(rb[P])[k], s_ipt),
+                               ("ideal velocity", _by_label(ri[P])[k], s_id)]
+              for P in (20.0, 10.0)}
+    figs["tracking_sensor_ablation.png"] = plot_error_traces(
+        panels, t_range=(warmup, warmup + evaluate),
+        title="Joint PSMC Ki = 12, λ = 0.4 s: inter-pulse-timing velocity vs ideal velocity")
+    return figs
+
+
+def plot_responses_study(study) -> dict:
+    """Figures of the step and switch study (figs. 5.15-5.19).
+
+    Parameters
+    ----------
+    study : ppamsafety.studies.responses.ResponsesStudy
+        Output of :func:`ppamsafety.studies.responses.compute`.
+
+    Returns
+    -------
+    dict
+        File name -> Figure.
+    """
+    from ..experiments import catalog
+    from ..experiments.trajectories import CIRCLE_CENTER, CIRCLE_RADIUS
+    from ..studies.responses import MAIN_VARIANTS, TOL_TCP
+
+    figs = {}
+    step, switch = study.step, study.switch
+    by_label = _by_label(step)
+    main = [by_label[k] for k in MAIN_VARIANTS if k in by_label]
+    ev = catalog.STEP_TIMES
+    figs["responses_step.png"] = plot_step_comparison(
+        main, events=ev, title="Step response (cf. figs. 5.17, 5.18): q1_d 30° → 70° → 30°, "
+        "q2_d = -80°, realistic sensors")
+    ki12 = [r for r in step if r.meta["family"] == "PSMC joint Ki=12"]
+    figs["responses_step_ki12.png"] = plot_step_comparison(
+        ki12, events=ev, title="Step response, joint PSMC with Ki = 12 bar/(rad s), "
+        "λ = 0.4 / 0.8 / 1.5 s (cf. fig. 5.19)")
+    figs["responses_step_lambda.png"] = plot_lambda_recovery(
+        step, experiment="step", events=ev, title="Step: recovery for λ = 0.4, 0.8, 1.5 s "
+        "(PID grey)")
+    by_label = _by_label(switch)
+    main = [by_label[k] for k in MAIN_VARIANTS if k in by_label]
+    figs["responses_switch.png"] = plot_switch(
+        main, t_switch=catalog.SWITCH_TIME, circle_center=CIRCLE_CENTER,
+        circle_radius=CIRCLE_RADIUS, t_range=(catalog.SWITCH_TIME - 2.5, switch[0].t[-1]),
+        title="Trajectory switch (cf. fig. 5.15): 3.33 s circle → 10 s circle at "
+              f"t = {catalog.SWITCH_TIME:g} s (half a turn ahead)")
+    figs["responses_switch_lambda.png"] = plot_lambda_recovery(
+        switch, experiment="switch", events=[catalog.SWITCH_TIME], tol=TOL_TCP,
+        t_range=(catalog.SWITCH_TIME - 1.0, switch[0].t[-1]),
+        title="Trajectory switch: recovery for λ = 0.4, 0.8, 1.5 s (cf. fig. 5.16; PID grey)")
+    return figs
+
+
+def plot_smc_study(study) -> dict:
+    """Figures of the sliding-mode-control study (chattering sweep, command traces).
+
+    Parameters
+    ----------
+    study : ppamsafety.studies.smc.SmcStudy
+        Output of :func:`ppamsafety.studies.smc.compute`.
+
+    Returns
+    -------
+    dict
+        File name -> Figure.
+    """
+    ps, g_def = study.psmc, study.default.boundary_layer[0]
+    figs = {"smc_chattering.png": plot_smc_chattering(
+        study.sweep, default_gamma=g_def,
+        reference=(ps["chattering_Pa"], ps["mean_error_m"], "joint PSMC (Table 5.1), T = 60 ms"))}
+    panels = {f"SMC, Γ = {k[2]:.3g} rad/s²" + (" (default)" if np.isclose(k[2], g_def) else "")
+              + ", plant T = 60 ms, exact model": [("SMC", study.kept[k])]
+              for k in sorted(study.kept, key=lambda k: k[2])}
+    panels["joint PSMC (Table 5.1), same circle"] = [("joint PSMC", ps["result"])]
+    t1 = study.warmup + min(study.evaluate, 2.0)
+    figs["smc_commands.png"] = plot_smc_commands(
+        panels, t_range=(study.warmup, t1),
+        title="Commanded Δp₁ on the circle (P = 5 s), realistic sensors")
+    return figs
+
+
 __all__ = ["plot_experiment", "plot_step_comparison", "plot_switch", "plot_lambda_recovery",
            "plot_error_traces", "plot_tracking_comparison", "plot_smc_chattering",
-           "plot_smc_commands"]
+           "plot_smc_commands", "plot_tracking_study", "plot_responses_study",
+           "plot_smc_study"]

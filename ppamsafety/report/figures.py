@@ -1,27 +1,69 @@
 """Plot functions: each takes a result object (or DataFrame) and returns a Figure.
 
 Nothing here computes physics; everything plotted was computed elsewhere and
-passed in.  matplotlib is imported with the non-interactive Agg backend so
-report generation works on machines without a display.
+passed in.
+
+Figures are built with the object-oriented API (:class:`matplotlib.figure.Figure`),
+never with :mod:`matplotlib.pyplot`: they need no GUI backend, so importing
+:mod:`ppamsafety` neither selects a backend nor imports pyplot (the user's
+interactive session keeps its own), report generation works on machines
+without a display, and no figure is left registered in pyplot's figure
+manager.  In Jupyter a returned Figure displays like any other; in a
+pyplot script, ``fig.savefig(...)`` writes it.
 """
 
 from __future__ import annotations
 
-import matplotlib
+import numpy as np
+from matplotlib.figure import Figure
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from ..units import BAR, DEG  # noqa: E402
+from ..units import BAR, DEG
 
 GROUP_COLORS = ("tab:blue", "tab:orange", "tab:green", "tab:red")
 
 
+def new_figure(nrows: int = 1, ncols: int = 1, *, figsize=None, **kwargs):
+    """A pyplot-free Figure with a grid of axes, like ``pyplot.subplots``.
+
+    Parameters
+    ----------
+    nrows, ncols : int
+        Grid of axes.
+    figsize : (float, float), optional
+        Figure size [inch] (default: rcParams).
+    **kwargs
+        Passed to :meth:`matplotlib.figure.Figure.subplots` (``sharex``,
+        ``sharey``, ``squeeze``, ...).
+
+    Returns
+    -------
+    fig : matplotlib.figure.Figure
+        The new figure.
+    axes : Axes or numpy.ndarray of Axes
+        As returned by ``Figure.subplots``.
+    """
+    fig = Figure(figsize=figsize)
+    return fig, fig.subplots(nrows, ncols, **kwargs)
+
+
 def plot_torque_functions(result, *, ax=None):
-    """Torque functions m_tau,i [Nm/bar] against the driven joint angle (cf. fig. 2.11)."""
+    """Torque functions m_tau,i [Nm/bar] against the driven joint angle (cf. fig. 2.11).
+
+    Parameters
+    ----------
+    result : ppamsafety.design.TorqueFunctions
+        Output of :func:`ppamsafety.design.torque_function_curves`.
+    ax : matplotlib.axes.Axes, optional
+        Draw all four groups into this axes (default: a new figure with a
+        panel per joint).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     df = result.data
-    fig, axes = (ax.figure, [ax, ax]) if ax is not None else plt.subplots(1, 2, figsize=(9, 3.6))
+    fig, axes = (ax.figure, [ax, ax]) if ax is not None else new_figure(1, 2, figsize=(9, 3.6))
     for k in range(4):
         sub = df[df["group"] == k + 1]
         a = axes[0] if k < 2 else axes[1]
@@ -47,9 +89,23 @@ def _joint_grid(df, col):
 
 
 def plot_stiffness_map(result, *, ax=None):
-    """Joint stiffness K1, K2 (2.18) over the working area, unholdable region hatched."""
+    """Joint stiffness K1, K2 (2.18) over the working area, unholdable region hatched.
+
+    Parameters
+    ----------
+    result : ppamsafety.design.StiffnessMap
+        Output of :func:`ppamsafety.design.stiffness_map`.
+    ax : None
+        Not supported (the map needs two panels); kept for a uniform
+        ``plot(ax=...)`` signature and ignored.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     df = result.data
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4))
+    fig, axes = new_figure(1, 2, figsize=(10, 4))
     for j, a in enumerate(axes):
         q1, q2, Z = _joint_grid(df, f"K{j + 1}_Nm_per_rad")
         cs = a.contourf(q1, q2, Z, levels=20, cmap="viridis")
@@ -85,9 +141,23 @@ def _task_space_triangulation(df, xcol, ycol):
 
 
 def plot_max_load(result, *, reference_kg: float | None = 2.0):
-    """Maximum load (fig. 2.15 / A.2) in joint space and at the load point in task space."""
+    """Maximum load (fig. 2.15 / A.2) in joint space and at the load point in task space.
+
+    Parameters
+    ----------
+    result : ppamsafety.design.MaxLoadMap
+        Output of :func:`ppamsafety.design.max_load_map`.
+    reference_kg : float or None
+        Load [kg] drawn as a contour line (the thesis' "just over 2 kg");
+        None: no line.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     df = result.data
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.3))
+    fig, axes = new_figure(1, 2, figsize=(11, 4.3))
     q1, q2, Z = _joint_grid(df, "M_max_kg")
     levels = np.arange(np.floor(min(Z.min(), 0)), np.ceil(Z.max()) + 0.5, 0.5)
     cs = axes[0].contourf(q1, q2, Z, levels=levels, cmap="RdYlGn")
@@ -115,7 +185,19 @@ def plot_max_load(result, *, reference_kg: float | None = 2.0):
 
 
 def save(fig, path) -> str:
-    """Save a figure as PNG (150 dpi) and close it; returns the path."""
+    """Save a figure as PNG (150 dpi); returns the path.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure.
+    path : path-like
+        Target file.
+
+    Returns
+    -------
+    str
+        ``str(path)``.
+    """
     fig.savefig(path, dpi=150)
-    plt.close(fig)
     return str(path)

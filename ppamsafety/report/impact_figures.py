@@ -6,22 +6,37 @@ matplotlib Figure; nothing here simulates.
 
 from __future__ import annotations
 
-import matplotlib
+import numpy as np
 
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
-
-from ..params.head import MAXILLA_FRACTURE_N  # noqa: E402
-from .figures import save  # noqa: E402,F401  (re-exported for the studies)
+from ..params.head import MAXILLA_FRACTURE_N
+from .figures import new_figure, save  # noqa: F401  (save re-exported)
 
 FAMILY_COLORS = {"PID": "tab:red", "PSMC joint Ki=2": "tab:blue", "PSMC joint Ki=12": "tab:green",
                  "PSMC task": "tab:purple"}
 
 
 def plot_impact_history(hist, *, head=None, title: str = "", ax=None):
-    """Contact force, head acceleration and penetration of one impact."""
-    fig, axes = plt.subplots(3, 1, figsize=(7, 6.5), sharex=True)
+    """Contact force, head acceleration and penetration of one impact.
+
+    Parameters
+    ----------
+    hist : pandas.DataFrame
+        Time history with columns ``t`` [s], ``F`` [N], ``a_head_g`` [g]
+        and ``delta`` [m] (:attr:`ImpactResults.histories` entry).
+    head : HeadContactModel, optional
+        Head model of the impact (accepted for the caller's convenience;
+        not drawn).
+    title : str
+        Figure title (default "impact time history").
+    ax : None
+        Not supported (three panels are drawn); ignored.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
+    fig, axes = new_figure(3, 1, figsize=(7, 6.5), sharex=True)
     t = hist["t"] * 1e3
     axes[0].plot(t, hist["F"], color="k")
     axes[0].axhline(MAXILLA_FRACTURE_N, color="r", ls="--", lw=1, label="maxilla 660 N")
@@ -41,8 +56,21 @@ def plot_impact_history(hist, *, head=None, title: str = "", ax=None):
 
 
 def plot_worst_histories(items, *, title: str = ""):
-    """Force and head-acceleration histories of several impacts: items = [(label, hist)]."""
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4))
+    """Force and head-acceleration histories of several impacts.
+
+    Parameters
+    ----------
+    items : sequence of (str, pandas.DataFrame)
+        (label, time history with ``t`` [s], ``F`` [N], ``a_head_g`` [g]).
+    title : str
+        Figure title (default "worst impacts").
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
+    fig, axes = new_figure(1, 2, figsize=(11, 4))
     for label, h in items:
         axes[0].plot(h["t"] * 1e3, h["F"], label=label)
         axes[1].plot(h["t"] * 1e3, h["a_head_g"], label=label)
@@ -62,9 +90,20 @@ def plot_worst_histories(items, *, title: str = ""):
 def plot_safety_table(table, *, experiments=("step", "switch")):
     """F_max and HIC per controller variant with the thesis values and the 660 N line.
 
-    ``table`` needs columns label, family, experiment, F_max, HIC36, Fmax_thesis, HIC_thesis.
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        Columns ``label``, ``family``, ``experiment``, ``F_max`` [N],
+        ``HIC36``, ``Fmax_thesis``, ``HIC_thesis``.
+    experiments : sequence of str
+        Experiments to show, one column of panels each.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
     """
-    fig, axes = plt.subplots(2, len(experiments), figsize=(6 * len(experiments), 7.5))
+    fig, axes = new_figure(2, len(experiments), figsize=(6 * len(experiments), 7.5))
     axes = np.atleast_2d(axes).reshape(2, len(experiments))
     for j, exp in enumerate(experiments):
         sub = table[table["experiment"] == exp].reset_index(drop=True)
@@ -93,9 +132,20 @@ def plot_safety_table(table, *, experiments=("step", "switch")):
 def plot_fmax_over_time(items, *, title: str = ""):
     """F_max of an impact at every instant of experiments: items = [(label, summary, marks)].
 
-    ``summary`` has columns t0 and F_max; ``marks`` maps heuristic names to t0.
+    Parameters
+    ----------
+    items : sequence of (str, pandas.DataFrame, dict)
+        (panel label, table with columns ``t0`` [s] and ``F_max`` [N],
+        {heuristic name: instant t0 [s]} drawn as vertical lines).
+    title : str
+        Figure title (default "peak force of an impact at every instant").
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
     """
-    fig, axes = plt.subplots(len(items), 1, figsize=(10, 2.4 * len(items) + 0.5), sharex=True,
+    fig, axes = new_figure(len(items), 1, figsize=(10, 2.4 * len(items) + 0.5), sharex=True,
                              squeeze=False)
     for a, (label, s, marks) in zip(axes[:, 0], items):
         a.plot(s["t0"], s["F_max"], color="k", lw=1)
@@ -112,8 +162,23 @@ def plot_fmax_over_time(items, *, title: str = ""):
 
 
 def plot_stiffness_sweep(df, *, reference=None, two_body=None):
-    """F_max against joint stiffness (cf. fig. 6.3), with the two-body prediction."""
-    fig, ax = plt.subplots(figsize=(7, 4))
+    """F_max against joint stiffness (cf. fig. 6.3), with the two-body prediction.
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        Columns ``k`` [Nm/rad] and ``F_max`` [N].
+    reference : (float, float), optional
+        The experiment's joint stiffnesses K1, K2 [Nm/rad], drawn as lines.
+    two_body : float, optional
+        Two-body F_max [N], drawn as a horizontal line.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
+    fig, ax = new_figure(figsize=(7, 4))
     ax.semilogx(df["k"], df["F_max"], "o-", color="k", label="flexible-joint arm model")
     if two_body is not None:
         ax.axhline(two_body, color="tab:blue", ls="--",
@@ -130,8 +195,25 @@ def plot_stiffness_sweep(df, *, reference=None, two_body=None):
 
 
 def plot_head_fit(pairs, curve, *, drop=None, title: str = ""):
-    """Table 6.1 (HIC, F_max) pairs against the fitted model's HIC(F_max) curve."""
-    fig, ax = plt.subplots(figsize=(6.5, 4.5))
+    """Table 6.1 (HIC, F_max) pairs against the fitted model's HIC(F_max) curve.
+
+    Parameters
+    ----------
+    pairs : pandas.DataFrame
+        Columns ``experiment``, ``F_max`` [N], ``HIC``.
+    curve : pandas.DataFrame
+        Columns ``F_max`` [N] and ``HIC36`` of the fitted model.
+    drop : None
+        Reserved (drop-test marker); ignored.
+    title : str
+        Axes title (default "one contact model: HIC vs F_max").
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
+    fig, ax = new_figure(figsize=(6.5, 4.5))
     for exp, marker in (("step", "o"), ("switch", "s")):
         sub = pairs[pairs["experiment"] == exp]
         ax.loglog(sub["F_max"], sub["HIC"], marker, ls="none", label=f"Table 6.1, {exp}")
@@ -146,9 +228,23 @@ def plot_head_fit(pairs, curve, *, drop=None, title: str = ""):
 
 
 def plot_lambda_sweep(df, *, tracking=None):
-    """Step-impact F_max and HIC against lambda for each Ki (and tracking error)."""
+    """Step-impact F_max and HIC against lambda for each Ki (and tracking error).
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        Columns ``lam`` [s], ``Ki_bar`` [bar/(rad s)], ``F_max`` [N],
+        ``HIC36`` (and ``tracking``).
+    tracking : str, optional
+        Column of a tracking error [m] to plot in a third panel.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        The figure.
+    """
     ncol = 3 if tracking is not None else 2
-    fig, axes = plt.subplots(1, ncol, figsize=(5 * ncol, 4))
+    fig, axes = new_figure(1, ncol, figsize=(5 * ncol, 4))
     for ki, sub in df.groupby("Ki_bar"):
         sub = sub.sort_values("lam")
         axes[0].plot(sub["lam"], sub["F_max"], "o-", label=f"Ki = {ki:g} bar/(rad s)")
@@ -168,3 +264,28 @@ def plot_lambda_sweep(df, *, tracking=None):
     fig.tight_layout()
     return fig
 
+
+
+def plot_safety_study(study) -> dict:
+    """Figures of the collision-safety study (Table 6.1, worst histories, every instant).
+
+    Parameters
+    ----------
+    study : ppamsafety.studies.safety.SafetyStudy
+        Output of :func:`ppamsafety.studies.safety.compute`.
+
+    Returns
+    -------
+    dict
+        File name -> Figure.
+    """
+    from ..studies.safety import FMAX_OVER_TIME_RUNS, WORST_HISTORY_VARIANTS
+
+    items = [(f"step: {label}", study.worst[("step", label)]) for label in WORST_HISTORY_VARIANTS]
+    scan = study.scan
+    plot_items = [(f"{exp}: {label}", scan[(scan.experiment == exp) & (scan.label == label)],
+                   study.heuristic_marks[(exp, label)]) for exp, label in FMAX_OVER_TIME_RUNS]
+    return {"safety_table_6_1.png": plot_safety_table(study.table),
+            "safety_worst_histories.png": plot_worst_histories(
+                items, title="worst step-response impacts"),
+            "safety_fmax_over_time.png": plot_fmax_over_time(plot_items)}

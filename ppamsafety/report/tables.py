@@ -24,7 +24,24 @@ def _fmt(v, digits: int) -> str:
 
 
 def markdown_table(df: pd.DataFrame, *, digits: int = 4, index: bool = False) -> str:
-    """Render a DataFrame as a GitHub-flavoured Markdown table."""
+    """Render a DataFrame as a GitHub-flavoured Markdown table.
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        The table.
+    digits : int
+        Decimals of floats (trailing zeros dropped; very large or small
+        values in ``g`` format); NaN renders as an empty cell, bools as
+        yes/no.
+    index : bool
+        Include the index as leading column(s).
+
+    Returns
+    -------
+    str
+        The Markdown table.
+    """
     d = df.reset_index() if index else df
     cols = [str(c) for c in d.columns]
     lines = ["| " + " | ".join(cols) + " |", "|" + "|".join("---" for _ in cols) + "|"]

@@ -2,19 +2,17 @@
 
 from __future__ import annotations
 
-from pathlib import Path
+from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
 
 from .. import design
-from ..params import thesis_arm
 from ..plant import geometry as geo
 from ..plant import pneumatics as pn
-from ..report.figures import save
 from ..report.tables import markdown_table
 from ..units import BAR, DEG, MM
-from . import StudyResult
+from . import Section, resolve_arm
 
 
 def _table_a1(arm) -> pd.DataFrame:
@@ -31,30 +29,83 @@ def _table_a1(arm) -> pd.DataFrame:
                          "computed [mm]": ours.round(2), "difference [mm]": (ours - thesis).round(2)})
 
 
-def run(outdir, *, quick: bool = False) -> StudyResult:
-    """Write the design figures and tables into ``outdir``."""
-    out = Path(outdir)
-    arm = thesis_arm()
+@dataclass
+class DesignStudy:
+    """Result of :func:`compute`: the chapter-2 design maps and Table A.1.
+
+    Attributes
+    ----------
+    quick : bool
+        Coarse grids were used.
+    torque_functions : ppamsafety.design.TorqueFunctions
+        Torque functions of the four muscle groups (fig. 2.11).
+    stiffness : ppamsafety.design.StiffnessMap
+        Joint stiffness (2.18) over the working area.
+    max_load, max_load_cad : ppamsafety.design.MaxLoadMap
+        Maximum load with the plant links and with the CAD links (fig. 2.15).
+    table_a1 : pandas.DataFrame
+        Table A.1 (muscle lengths) computed vs thesis [mm].
+    K_step : numpy.ndarray
+        Joint stiffness at the step-response impact configuration [Nm/rad].
+    p_mean : numpy.ndarray
+        Calibrated mean pressures [Pa].
+    edge : dict
+        Force functions at the working-area edges: ``e1max``, ``e4max``
+        (largest contractions of groups 1 and 4 [-]), ``f1_edge`` [N/bar] and
+        ``f4_raw`` [N/bar, before clipping to 0] (force functions there).
+    metrics : dict
+        Headline numbers.
+    """
+
+    quick: bool
+    torque_functions: object
+    stiffness: object
+    max_load: object
+    max_load_cad: object
+    table_a1: pd.DataFrame
+    K_step: np.ndarray
+    p_mean: np.ndarray
+    edge: dict
+    metrics: dict = field(default_factory=dict)
+
+    def to_pandas(self) -> pd.DataFrame:
+        """Table A.1 (computed vs thesis muscle lengths [mm])."""
+        return self.table_a1.copy()
+
+    def plot(self) -> dict:
+        """The study's figures, ``{file name: Figure}``."""
+        return {"design_torque_functions.png": self.torque_functions.plot(),
+                "design_stiffness_map.png": self.stiffness.plot(),
+                "design_max_load.png": self.max_load.plot()}
+
+
+def compute(*, quick: bool = False, arm=None) -> DesignStudy:
+    """Torque functions, stiffness and maximum-load maps, Table A.1.
+
+    Parameters
+    ----------
+    quick : bool
+        Coarse grids (41 x 41 instead of 121 x 121 for the stiffness map).
+    arm : ppamsafety.params.ArmParameters, optional
+        Arm (default: the thesis arm).
+
+    Returns
+    -------
+    DesignStudy
+        Maps, tables and metrics.
+    """
+    arm = resolve_arm(arm)
     n = 41 if quick else 121
-    arts = []
-
     tf = design.torque_function_curves(arm)
-    arts.append(save(tf.plot(), out / "design_torque_functions.png"))
-
     sm = design.stiffness_map(arm, n1=n, n2=n)
-    arts.append(save(sm.plot(), out / "design_stiffness_map.png"))
     q_step = np.array([50 * DEG, -80 * DEG])
     K_step = pn.joint_stiffness(q_step, pn.static_pressures(q_step, arm), arm)
-
     ml = design.max_load_map(arm, n1=2 * n, n2=2 * n)
     ml_cad = design.max_load_map(arm, links=design.cad_links(), n1=2 * n, n2=2 * n)
-    arts.append(save(ml.plot(), out / "design_max_load.png"))
     d = ml.data
-    inner = d[(d.q1_rad > arm.geometry.q1_min + 5 * DEG) & (d.q1_rad < arm.geometry.q1_max - 5 * DEG)
-              & (d.q2_rad > arm.geometry.q2_min + 5 * DEG) & (d.q2_rad < arm.geometry.q2_max - 5 * DEG)]
-    m1_min = d["M1_kg"].min()
-    m2a = d[d.carrying_2 == 3]["M2_kg"].min()
-    m2b = d[d.carrying_2 == 4]["M2_kg"].min()
+    g = arm.geometry
+    inner = d[(d.q1_rad > g.q1_min + 5 * DEG) & (d.q1_rad < g.q1_max - 5 * DEG)
+              & (d.q2_rad > g.q2_min + 5 * DEG) & (d.q2_rad < g.q2_max - 5 * DEG)]
 
     from ..plant.muscle import force_function, force_polynomial
     eps = geo.contractions(d[["q1_rad", "q2_rad"]].to_numpy(), arm)
@@ -62,10 +113,42 @@ def run(outdir, *, quick: bool = False) -> StudyResult:
     f1_edge = float(force_function(1, e1max, arm)) * BAR
     f4_raw = float(force_polynomial(4, e4max, arm)) * BAR
     ta1 = _table_a1(arm)
-    ta1.to_csv(out / "design_table_A1.csv", index=False)
-    arts.append(str(out / "design_table_A1.csv"))
+    metrics = {"table_A1_max_abs_diff_mm": float(ta1["difference [mm]"].abs().max()),
+               "K_step": K_step.tolist(), "max_load_min_kg": ml.minimum,
+               "max_load_min_cad_kg": ml_cad.minimum,
+               "max_load_interior_min_kg": float(inner.M_max_kg.min())}
+    return DesignStudy(quick=quick, torque_functions=tf, stiffness=sm, max_load=ml,
+                       max_load_cad=ml_cad, table_a1=ta1, K_step=K_step,
+                       p_mean=np.array(arm.pneumatics.p_mean),
+                       edge={"e1max": e1max, "e4max": e4max, "f1_edge": f1_edge,
+                             "f4_raw": f4_raw},
+                       metrics=metrics)
+
+
+def render(study: DesignStudy) -> Section:
+    """The report section of the design study (formatting only).
+
+    Parameters
+    ----------
+    study : DesignStudy
+        Output of :func:`compute`.
+
+    Returns
+    -------
+    Section
+        Markdown and artifacts (figures, ``design_table_A1.csv``).
+    """
+    sm, ml, ml_cad, ta1 = study.stiffness, study.max_load, study.max_load_cad, study.table_a1
+    K_step, quick = study.K_step, study.quick
+    d = ml.data
+    m1_min = d["M1_kg"].min()
+    m2a = d[d.carrying_2 == 3]["M2_kg"].min()
+    m2b = d[d.carrying_2 == 4]["M2_kg"].min()
+    e1max, e4max = study.edge["e1max"], study.edge["e4max"]
+    f1_edge, f4_raw = study.edge["f1_edge"], study.edge["f4_raw"]
     qmin = np.array(ml.argmin) / DEG
-    pm = np.array(arm.pneumatics.p_mean) / BAR
+    pm = study.p_mean / BAR
+    inner_min = study.metrics["max_load_interior_min_kg"]
     md = f"""Geometry of Table 2.1 with the identified muscle model of Table B.1 (all SI inside).
 
 **Table A.1 reproduced** (acceptance: +-0.5 mm):
@@ -95,7 +178,7 @@ area (hatched: a pressure would leave [0, 3] bar).
 | joint-1 limit (A.43) alone | {m1_min:.2f} kg | |
 | joint-2 limit, muscle 3 carrying (A.44) | {m2a:.2f} kg | |
 | joint-2 limit, muscle 4 carrying (A.45) | {m2b:.2f} kg | |
-| 5 deg away from every edge | {inner.M_max_kg.min():.2f} kg | |
+| 5 deg away from every edge | {inner_min:.2f} kg | |
 
 The minimum differs from the thesis because the thesis computed fig. 2.15 at design time with the
 *theoretical* PPAM force function f_t0(eps, l0/R = 6) of Daerden's model (eq. 2.2, fig. 2.2),
@@ -109,8 +192,5 @@ map agrees in magnitude with the thesis (median {d.M_max_kg.median():.1f} kg).
 
 ![max load](design_max_load.png)
 """
-    metrics = {"table_A1_max_abs_diff_mm": float(ta1["difference [mm]"].abs().max()),
-               "K_step": K_step.tolist(), "max_load_min_kg": ml.minimum,
-               "max_load_min_cad_kg": ml_cad.minimum,
-               "max_load_interior_min_kg": float(inner.M_max_kg.min())}
-    return StudyResult("Design of the arm (thesis chapter 2)", md, arts, metrics)
+    arts = [*study.plot().items(), ("design_table_A1.csv", ta1)]
+    return Section("Design of the arm (thesis chapter 2)", md, arts, dict(study.metrics))

@@ -2,27 +2,81 @@
 
 from __future__ import annotations
 
-from pathlib import Path
+from dataclasses import dataclass, field
 
-import numpy as np
 import pandas as pd
 
 from ..impact import head_fit as hf
 from ..impact.instants import evaluate_experiment
-from ..params import thesis_arm
 from ..params.head import head_model, head_model_names
-from ..report.impact_figures import plot_head_fit, save
 from ..report.tables import markdown_table
-from . import StudyResult
+from . import Section, resolve_arm
 
 
-def run(outdir, *, quick: bool = False) -> StudyResult:
-    """Fit the head model to Table 6.1 and check it against the drop test and ISO/TS 15066."""
+@dataclass
+class HeadModelStudy:
+    """Result of :func:`compute`: the head-model fits and their checks.
+
+    Attributes
+    ----------
+    fits : dict
+        Exponent n -> :class:`~ppamsafety.impact.head_fit.HeadFit`
+        (n = 1.5 only in quick mode).
+    stored : HeadContactModel
+        The toolkit's named model ``thesis-frontal``.
+    evidence : pandas.DataFrame
+        One row per exponent: fitted k, b, residual, drop-test peak and
+        ISO-equivalent spring (display strings and rounded numbers).
+    curve : pandas.DataFrame
+        HIC(F_max) curve of the n = 1.5 fit.
+    sensitivity : pandas.DataFrame
+        Worst PID step impact with each named head model.
+    metrics : dict
+        Headline numbers.
+    """
+
+    fits: dict
+    stored: object
+    evidence: pd.DataFrame
+    curve: pd.DataFrame
+    sensitivity: pd.DataFrame
+    metrics: dict = field(default_factory=dict)
+
+    @property
+    def fit(self):
+        """The n = 1.5 (Hertz) fit used by the toolkit."""
+        return self.fits[1.5]
+
+    def to_pandas(self) -> pd.DataFrame:
+        """The fits table (one row per exponent)."""
+        return self.evidence.copy()
+
+    def plot(self) -> dict:
+        """The study's figures, ``{file name: Figure}``."""
+        from ..report.impact_figures import plot_head_fit
+
+        return {"head_model_fit.png": plot_head_fit(self.fit.pairs, self.curve)}
+
+
+def compute(*, quick: bool = False, arm=None) -> HeadModelStudy:
+    """Fit the head model to Table 6.1 and check it against the drop test and ISO/TS 15066.
+
+    Parameters
+    ----------
+    quick : bool
+        Fit only the exponent n = 1.5 (not 1, 1.5 and 2).
+    arm : ppamsafety.params.ArmParameters, optional
+        Arm (default: the thesis arm).
+
+    Returns
+    -------
+    HeadModelStudy
+        Fits, tables and metrics.
+    """
     from ..control import PID
     from ..experiments.catalog import run_thesis_experiment
 
-    out = Path(outdir)
-    arm = thesis_arm()
+    arm = resolve_arm(arm)
     stored = head_model()
     fits = {n: hf.fit_thesis_head(arm, exponent=n) for n in ((1.5,) if quick else (1.0, 1.5, 2.0))}
     fit = fits[1.5]
@@ -34,12 +88,7 @@ def run(outdir, *, quick: bool = False) -> StudyResult:
                      "energy-equivalent spring at 130 N [N/mm] (ISO: 150)":
                          round(f.iso_spring / 1e3, 1)})
     evidence = pd.DataFrame(rows)
-    evidence.to_csv(out / "head_model_fits.csv", index=False)
     curve = hf.hic_curve(fit.stiffness, fit.exponent, fit.damping, arm_mass=fit.arm_mass)
-    arts = [save(plot_head_fit(fit.pairs, curve), out / "head_model_fit.png"),
-            str(out / "head_model_fits.csv")]
-    fit.pairs.to_csv(out / "head_model_pairs.csv", index=False)
-    arts.append(str(out / "head_model_pairs.csv"))
 
     # sensitivity of the PID step impact to the head model
     res = run_thesis_experiment(arm, "step", [("PID", PID())])[0]
@@ -51,8 +100,27 @@ def run(outdir, *, quick: bool = False) -> StudyResult:
                      "n": hm.exponent, "b": f"{hm.damping:.3g}", "F_max [N]": round(s.F_max.max(), 1),
                      "HIC36": round(s.HIC36.max(), 3)})
     sens = pd.DataFrame(sens)
-    sens.to_csv(out / "head_model_sensitivity.csv", index=False)
-    arts.append(str(out / "head_model_sensitivity.csv"))
+    metrics = {"k": fit.stiffness, "n": fit.exponent, "b": fit.damping, "rms_sigma": fit.rms_sigma,
+               "drop_peak_g": fit.drop_peak_g, "iso_spring_N_per_mm": fit.iso_spring / 1e3,
+               "arm_mass": fit.arm_mass}
+    return HeadModelStudy(fits=fits, stored=stored, evidence=evidence, curve=curve,
+                          sensitivity=sens, metrics=metrics)
+
+
+def render(study: HeadModelStudy) -> Section:
+    """The report section of the head-model study (formatting only).
+
+    Parameters
+    ----------
+    study : HeadModelStudy
+        Output of :func:`compute`.
+
+    Returns
+    -------
+    Section
+        Markdown and artifacts (figure, fits, pairs and sensitivity CSVs).
+    """
+    fit, stored, evidence, sens = study.fit, study.stored, study.evidence, study.sensitivity
     res_step = fit.pairs[fit.pairs.experiment == "step"].residual_sigma.mean()
     res_switch = fit.pairs[fit.pairs.experiment == "switch"].residual_sigma.mean()
     rel_k = stored.stiffness / fit.stiffness - 1
@@ -93,7 +161,6 @@ Other head models are one argument away (`simulate_impacts(..., head="iso15066-f
 
 ![head model fit](head_model_fit.png)
 """
-    metrics = {"k": fit.stiffness, "n": fit.exponent, "b": fit.damping, "rms_sigma": fit.rms_sigma,
-               "drop_peak_g": fit.drop_peak_g, "iso_spring_N_per_mm": fit.iso_spring / 1e3,
-               "arm_mass": fit.arm_mass}
-    return StudyResult("Head contact model (thesis §6.3.1)", md, arts, metrics)
+    arts = [("head_model_fits.csv", evidence), *study.plot().items(),
+            ("head_model_pairs.csv", fit.pairs), ("head_model_sensitivity.csv", sens)]
+    return Section("Head contact model (thesis §6.3.1)", md, arts, dict(study.metrics))

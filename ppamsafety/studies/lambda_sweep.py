@@ -10,23 +10,39 @@ several processes).
 from __future__ import annotations
 
 import os
-from pathlib import Path
+from dataclasses import dataclass, field
 
 import numpy as np
+import pandas as pd
 
 from ..control import JointPSMC
 from ..experiments.catalog import CIRCLE_WARMUP, run_thesis_experiment
 from ..impact.instants import evaluate_experiment
 from ..params import thesis_arm
-from ..report.impact_figures import plot_lambda_sweep, save
 from ..report.tables import markdown_table
 from ..sweep import run_sweep
 from ..units import BAR
-from . import StudyResult
+from . import Section
 
 
 def lambda_case(lam: float, ki_bar: float, circle_duration: float) -> dict:
-    """Worst step impact and circle tracking error of one joint PSMC tuning (sweep case)."""
+    """Worst step impact and circle tracking error of one joint PSMC tuning (sweep case).
+
+    Parameters
+    ----------
+    lam : float
+        PSMC lambda [s].
+    ki_bar : float
+        Integral gain [bar/(rad s)].
+    circle_duration : float
+        Length of the circle run (P = 10 s) [s].
+
+    Returns
+    -------
+    dict
+        ``F_max`` [N], ``HIC36``, ``tcp_speed`` [m/s] of the worst step
+        impact, ``circle_err_mean`` and ``circle_err_max`` [m].
+    """
     arm = thesis_arm()
     c = JointPSMC(lam=lam, ki=ki_bar * BAR)
     step = run_thesis_experiment(arm, "step", [("c", c)])[0]
@@ -40,9 +56,67 @@ def lambda_case(lam: float, ki_bar: float, circle_duration: float) -> dict:
             "circle_err_max": float(np.nanmax(err))}
 
 
-def run(outdir, *, quick: bool = False, processes: int | None = None) -> StudyResult:
-    """Sweep lambda x Ki of joint PSMC: step-impact safety against circle tracking."""
-    out = Path(outdir)
+@dataclass
+class LambdaSweepStudy:
+    """Result of :func:`compute`: step-impact safety and circle tracking per (lambda, Ki).
+
+    Attributes
+    ----------
+    lambdas : tuple of float
+        PSMC lambda values [s].
+    kis : tuple of float
+        Integral gains [bar/(rad s)].
+    circle_duration : float
+        Length of each circle run [s].
+    processes : int
+        Worker processes of the sweep.
+    table : pandas.DataFrame
+        One row per case: ``lam``, ``Ki_bar``, ``circle_duration``, ``F_max``
+        [N], ``HIC36``, ``tcp_speed`` [m/s], ``circle_err_mean``,
+        ``circle_err_max`` [m].
+    metrics : dict
+        Headline numbers.
+    """
+
+    lambdas: tuple
+    kis: tuple
+    circle_duration: float
+    processes: int
+    table: pd.DataFrame
+    metrics: dict = field(default_factory=dict)
+
+    def to_pandas(self) -> pd.DataFrame:
+        """The sweep table."""
+        return self.table.copy()
+
+    def plot(self) -> dict:
+        """The study's figures, ``{file name: Figure}``."""
+        from ..report.impact_figures import plot_lambda_sweep
+
+        return {"lambda_sweep.png": plot_lambda_sweep(self.table, tracking="circle_err_mean")}
+
+
+def compute(*, quick: bool = False, arm=None, processes: int | None = None) -> LambdaSweepStudy:
+    """Sweep lambda x Ki of joint PSMC: step-impact safety against circle tracking.
+
+    Parameters
+    ----------
+    quick : bool
+        3 x 2 cases with 10 s circles instead of 7 x 3 with 45 s.
+    arm : None
+        Must be None: :func:`lambda_case` rebuilds the thesis arm in worker
+        processes (sweep cases are JSON-serialisable).
+    processes : int, optional
+        Worker processes (default: min(2, CPU count)).
+
+    Returns
+    -------
+    LambdaSweepStudy
+        The sweep table and metrics.
+    """
+    if arm is not None:
+        raise ValueError(f"arm={arm!r} is not supported by the lambda sweep: its cases run the "
+                         "thesis arm in worker processes; pass arm=None")
     lams = (0.1, 0.4, 1.5) if quick else (0.05, 0.1, 0.2, 0.4, 0.8, 1.5, 2.5)
     kis = (2.0, 12.0) if quick else (2.0, 6.0, 12.0)
     dur = 10.0 if quick else 45.0
@@ -51,9 +125,25 @@ def run(outdir, *, quick: bool = False, processes: int | None = None) -> StudyRe
     df = run_sweep(lambda_case, cases, name="lambda-sweep", processes=procs, progress=False,
                    on_error="raise")
     df = df.rename(columns={"ki_bar": "Ki_bar"})
-    df.to_csv(out / "lambda_sweep.csv", index=False)
-    arts = [str(out / "lambda_sweep.csv"),
-            save(plot_lambda_sweep(df, tracking="circle_err_mean"), out / "lambda_sweep.png")]
+    return LambdaSweepStudy(lambdas=lams, kis=kis, circle_duration=dur, processes=procs,
+                            table=df, metrics={"cases": len(df)})
+
+
+def render(study: LambdaSweepStudy) -> Section:
+    """The report section of the lambda sweep (formatting only).
+
+    Parameters
+    ----------
+    study : LambdaSweepStudy
+        Output of :func:`compute`.
+
+    Returns
+    -------
+    Section
+        Markdown and artifacts (figure, ``lambda_sweep.csv``).
+    """
+    df, lams, kis, dur, procs = (study.table, study.lambdas, study.kis, study.circle_duration,
+                                 study.processes)
     show = df.drop(columns=["circle_duration"])
     safe = df[df.F_max < 660.0]
     best = safe.loc[safe.circle_err_mean.idxmin()] if len(safe) else None
@@ -68,5 +158,5 @@ on {procs} processes.
 
 ![lambda sweep](lambda_sweep.png)
 """
-    return StudyResult("Safety against tracking: a lambda x Ki sweep", md, arts,
-                       {"cases": len(df)})
+    arts = [("lambda_sweep.csv", df), *study.plot().items()]
+    return Section("Safety against tracking: a lambda x Ki sweep", md, arts, dict(study.metrics))

@@ -8,19 +8,15 @@ sensors.  These are also the records the impact study evaluates.
 
 from __future__ import annotations
 
-from pathlib import Path
+from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
 
 from ..experiments import catalog
 from ..experiments.metrics import response_table
-from ..experiments.trajectories import CIRCLE_CENTER, CIRCLE_RADIUS
-from ..params import thesis_arm
-from ..report.control_figures import (plot_lambda_recovery, plot_step_comparison, plot_switch)
-from ..report.figures import save
 from ..report.tables import markdown_table
-from . import StudyResult
+from . import Section, resolve_arm
 
 TOL_ANGLE = np.radians(1.0)   #: band around the new q1 set angle for reach/settling [rad]
 TOL_TCP = 0.005               #: band around the new circle after the switch [m]
@@ -35,24 +31,100 @@ def _with_family(table: pd.DataFrame, results) -> pd.DataFrame:
     return t
 
 
-def compute(arm=None, *, variants=None, sensors=None) -> dict:
+#: Variant whose ringing after the switch is analysed (§5.3.5, fig. 5.19).
+OSCILLATING_VARIANT = "PSMC joint Ki=12 λ=0.4"
+
+
+@dataclass
+class ResponsesStudy:
+    """Result of :func:`compute`: step and switch runs of the thesis variants.
+
+    Attributes
+    ----------
+    step, switch : list of ExperimentResult
+        Runs in Table 6.1 order.
+    step_table, switch_table : pandas.DataFrame
+        :func:`~ppamsafety.experiments.metrics.response_table` outputs with
+        ``family`` and ``lambda_s`` columns (SI units).
+    oscillation_hz : float
+        Dominant frequency of the TCP error of :data:`OSCILLATING_VARIANT`
+        1-5 s after the switch [Hz] (NaN if that variant was not run).
+    metrics : dict
+        Headline numbers.
+    """
+
+    step: list
+    switch: list
+    step_table: pd.DataFrame
+    switch_table: pd.DataFrame
+    oscillation_hz: float = np.nan
+    metrics: dict = field(default_factory=dict)
+
+    def to_pandas(self) -> pd.DataFrame:
+        """Step and switch response tables, stacked with an ``experiment`` column."""
+        return pd.concat([self.step_table.assign(experiment="step"),
+                          self.switch_table.assign(experiment="switch")], ignore_index=True)
+
+    def plot(self) -> dict:
+        """The study's figures, ``{file name: Figure}``."""
+        from ..report.control_figures import plot_responses_study
+
+        return plot_responses_study(self)
+
+
+def _oscillation_frequency(switch) -> float:
+    """Dominant frequency [Hz] of the TCP error of the Ki = 12 variant 1-5 s after the switch."""
+    by = {r.meta.get("label"): r for r in switch}
+    if OSCILLATING_VARIANT not in by:
+        return np.nan
+    r12 = by[OSCILLATING_VARIANT]
+    m = (r12.t >= catalog.SWITCH_TIME + 1.0) & (r12.t < catalog.SWITCH_TIME + 5.0)
+    e = r12.tracking_error()[m]
+    spec = np.abs(np.fft.rfft(e - e.mean()))
+    freqs = np.fft.rfftfreq(e.size, r12.reference.dt)
+    return float(freqs[1:][np.argmax(spec[1:])])
+
+
+def compute(*, quick: bool = False, arm=None, variants=None, sensors=None) -> ResponsesStudy:
     """Run step and switch for the thesis variants and tabulate their responses.
+
+    Parameters
+    ----------
+    quick : bool
+        Changes nothing: the ten step and switch runs take well under a
+        second once compiled.
+    arm : ppamsafety.params.ArmParameters, optional
+        Arm (default: the thesis arm).
+    variants : list of (str, controller), optional
+        Controller variants (default: the ten of Table 6.1).
+    sensors : SensorConfig, optional
+        Sensor model (default: realistic sensors).
 
     Returns
     -------
-    dict
-        ``step``, ``switch``: lists of ExperimentResult (Table 6.1 order);
-        ``step_table``, ``switch_table``: :func:`response_table` outputs with
-        ``family`` and ``lambda_s`` columns (SI units).
+    ResponsesStudy
+        Runs, response tables and metrics.
     """
-    arm = thesis_arm() if arm is None else arm
+    arm = resolve_arm(arm)
     out = {}
     for name in ("step", "switch"):
         res = catalog.run_thesis_experiment(arm, name, variants, sensors=sensors)
         out[name] = res
         out[f"{name}_table"] = _with_family(
             response_table(res, experiment=name, tol_angle=TOL_ANGLE, tol_tcp=TOL_TCP), res)
-    return out
+    st, sw = out["step_table"], out["switch_table"]
+    metrics = {}
+    if (st.family == "PID").any() and (st.family != "PID").any():
+        pid = st[st.family == "PID"].iloc[0]
+        ps = st[st.family != "PID"]
+        metrics = {"step_pid_peak_tcp_speed": float(pid.peak_tcp_speed_m_s),
+                   "step_max_psmc_peak_tcp_speed": float(ps.peak_tcp_speed_m_s.max()),
+                   "step_pid_overshoot_pct": float(pid.overshoot_pct),
+                   "switch_pid_peak_tcp_speed":
+                       float(sw[sw.family == "PID"].peak_tcp_speed_m_s.iloc[0])}
+    return ResponsesStudy(step=out["step"], switch=out["switch"], step_table=st,
+                          switch_table=sw, oscillation_hz=_oscillation_frequency(out["switch"]),
+                          metrics=metrics)
 
 
 def _display(table: pd.DataFrame, experiment: str) -> pd.DataFrame:
@@ -78,62 +150,25 @@ def _display(table: pd.DataFrame, experiment: str) -> pd.DataFrame:
     return d
 
 
-def figures(data: dict, out: Path) -> list:
-    """Write the step and switch figures into ``out``; returns the paths."""
-    arts = []
-    step, switch = data["step"], data["switch"]
-    by_label = {r.meta["label"]: r for r in step}
-    main = [by_label[k] for k in MAIN_VARIANTS if k in by_label]
-    ev = catalog.STEP_TIMES
-    arts.append(save(plot_step_comparison(
-        main, events=ev, title="Step response (cf. figs. 5.17, 5.18): q1_d 30° → 70° → 30°, "
-        "q2_d = -80°, realistic sensors"), out / "responses_step.png"))
-    ki12 = [r for r in step if r.meta["family"] == "PSMC joint Ki=12"]
-    arts.append(save(plot_step_comparison(
-        ki12, events=ev, title="Step response, joint PSMC with Ki = 12 bar/(rad s), "
-        "λ = 0.4 / 0.8 / 1.5 s (cf. fig. 5.19)"), out / "responses_step_ki12.png"))
-    arts.append(save(plot_lambda_recovery(
-        step, experiment="step", events=ev, title="Step: recovery for λ = 0.4, 0.8, 1.5 s "
-        "(PID grey)"), out / "responses_step_lambda.png"))
-    by_label = {r.meta["label"]: r for r in switch}
-    main = [by_label[k] for k in MAIN_VARIANTS if k in by_label]
-    arts.append(save(plot_switch(
-        main, t_switch=catalog.SWITCH_TIME, circle_center=CIRCLE_CENTER,
-        circle_radius=CIRCLE_RADIUS, t_range=(catalog.SWITCH_TIME - 2.5, switch[0].t[-1]),
-        title="Trajectory switch (cf. fig. 5.15): 3.33 s circle → 10 s circle at "
-              f"t = {catalog.SWITCH_TIME:g} s (half a turn ahead)"),
-        out / "responses_switch.png"))
-    arts.append(save(plot_lambda_recovery(
-        switch, experiment="switch", events=[catalog.SWITCH_TIME], tol=TOL_TCP,
-        t_range=(catalog.SWITCH_TIME - 1.0, switch[0].t[-1]),
-        title="Trajectory switch: recovery for λ = 0.4, 0.8, 1.5 s (cf. fig. 5.16; PID grey)"),
-        out / "responses_switch_lambda.png"))
-    return arts
+def render(study: ResponsesStudy) -> Section:
+    """The report section of the responses study (formatting only).
 
+    Parameters
+    ----------
+    study : ResponsesStudy
+        Output of :func:`compute` (with the ten thesis variants).
 
-def run(outdir, *, quick: bool = False) -> StudyResult:
-    """Step and switch experiments, their figures and response tables.
-
-    ``quick`` changes nothing here: the ten step and switch runs take well
-    under a second once compiled.
+    Returns
+    -------
+    Section
+        Markdown and artifacts (figures, ``responses_step.csv``,
+        ``responses_switch.csv``).
     """
-    out = Path(outdir)
-    data = compute()
-    arts = figures(data, out)
-    for name in ("step", "switch"):
-        p = out / f"responses_{name}.csv"
-        data[f"{name}_table"].to_csv(p, index=False)
-        arts.append(str(p))
-    st, sw = data["step_table"], data["switch_table"]
+    st, sw = study.step_table, study.switch_table
     pid = st[st.family == "PID"].iloc[0]
     ps = st[st.family != "PID"]
-    osc_label = "PSMC joint Ki=12 λ=0.4"
-    r12 = {r.meta["label"]: r for r in data["switch"]}[osc_label]
-    m = (r12.t >= catalog.SWITCH_TIME + 1.0) & (r12.t < catalog.SWITCH_TIME + 5.0)
-    e = r12.tracking_error()[m]
-    spec = np.abs(np.fft.rfft(e - e.mean()))
-    freqs = np.fft.rfftfreq(e.size, r12.reference.dt)
-    osc_f = float(freqs[1:][np.argmax(spec[1:])])
+    osc_label = OSCILLATING_VARIANT
+    osc_f = study.oscillation_hz
 
     def _settle(label):
         v = sw.set_index("variant").t_settle_s[label]
@@ -178,9 +213,6 @@ for the high integral gain (§5.3.5, fig. 5.19).
 
 ![switch lambda](responses_switch_lambda.png)
 """
-    metrics = {"step_pid_peak_tcp_speed": float(pid.peak_tcp_speed_m_s),
-               "step_max_psmc_peak_tcp_speed": float(ps.peak_tcp_speed_m_s.max()),
-               "step_pid_overshoot_pct": float(pid.overshoot_pct),
-               "switch_pid_peak_tcp_speed": float(sw[sw.family == "PID"].peak_tcp_speed_m_s.iloc[0])}
-    return StudyResult("Step and trajectory-switch responses (thesis figs. 5.15-5.19)", md,
-                       arts, metrics)
+    arts = [*study.plot().items(), ("responses_step.csv", st), ("responses_switch.csv", sw)]
+    return Section("Step and trajectory-switch responses (thesis figs. 5.15-5.19)", md, arts,
+                   dict(study.metrics))

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import os
 import time
-from pathlib import Path
+from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
@@ -14,11 +14,9 @@ from ..impact.instants import HEURISTICS, evaluate_experiment, heuristic_instant
 from ..impact.thesis_data import table_6_1
 from ..params import thesis_arm
 from ..params.head import MAXILLA_FRACTURE_N, head_model
-from ..report.impact_figures import (plot_fmax_over_time, plot_safety_table, plot_worst_histories,
-                                     save)
 from ..report.tables import markdown_table
 from ..sweep import run_sweep
-from . import StudyResult
+from . import Section
 
 EXPERIMENTS = ("step", "switch")
 #: Instants with a slower tool are skipped in the every-instant scan [m/s] (F < 1 N there).
@@ -26,7 +24,23 @@ MIN_SPEED = 1e-3
 
 
 def every_instant_case(experiment: str, index: int, every: int) -> pd.DataFrame:
-    """Impacts at every ``every``-th ms of one thesis experiment variant (sweep case)."""
+    """Impacts at every ``every``-th ms of one thesis experiment variant (sweep case).
+
+    Parameters
+    ----------
+    experiment : str
+        Thesis experiment name (``"step"`` or ``"switch"``).
+    index : int
+        Variant index in :func:`~ppamsafety.experiments.catalog.thesis_variants`.
+    every : int
+        Impact instant stride [ms of the 1 ms record].
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``t0`` [s], ``tcp_speed`` [m/s], ``F_max`` [N], ``HIC36``, ``HIC15``,
+        ``label`` per impact instant.
+    """
     arm = thesis_arm()
     label, ctrl = thesis_variants()[index]
     res = run_thesis_experiment(arm, experiment, [(label, ctrl)])[0]
@@ -88,28 +102,95 @@ def _conclusions(df) -> pd.DataFrame:
     return pd.DataFrame(out)
 
 
-def run(outdir, *, quick: bool = False, processes: int | None = None) -> StudyResult:
-    """Reproduce Table 6.1 and scan every impact instant of the step and switch experiments."""
-    out = Path(outdir)
+#: Variants whose worst step-response impact histories are plotted.
+WORST_HISTORY_VARIANTS = ("PID", "PSMC joint Ki=2 λ=0.4", "PSMC joint Ki=12 λ=0.4",
+                          "PSMC task λ=0.4")
+#: (experiment, variant) pairs whose every-instant F_max is plotted.
+FMAX_OVER_TIME_RUNS = (("step", "PID"), ("step", "PSMC joint Ki=2 λ=0.4"), ("switch", "PID"),
+                       ("switch", "PSMC joint Ki=2 λ=0.4"))
+
+
+@dataclass
+class SafetyStudy:
+    """Result of :func:`compute`: Table 6.1 and the every-instant scan.
+
+    Attributes
+    ----------
+    quick : bool
+        The scan used every 20th ms instead of every ms.
+    head : HeadContactModel
+        Head model of the impacts.
+    table : pandas.DataFrame
+        Worst impacts per (experiment, variant) at the four heuristic
+        instants with the thesis values and ratios (SI units).
+    conclusions : pandas.DataFrame
+        The thesis' safety conclusions: ``conclusion``, ``holds``, ``numbers``.
+    worst : dict
+        (experiment, label) -> time history of the worst (HIC36) impact.
+    heuristic_marks : dict
+        (experiment, label) -> {heuristic name: impact instant t0 [s]}.
+    scan : pandas.DataFrame
+        Every-instant scan: ``experiment``, ``index``, ``every``, ``t0``,
+        ``tcp_speed``, ``F_max``, ``HIC36``, ``HIC15``, ``label``.
+    miss : pandas.DataFrame
+        Four-instant heuristic vs every instant, per experiment and variant.
+    processes : int
+        Worker processes of the scan.
+    metrics : dict
+        Headline numbers (including the wall times of the table and the scan).
+    """
+
+    quick: bool
+    head: object
+    table: pd.DataFrame
+    conclusions: pd.DataFrame
+    worst: dict
+    heuristic_marks: dict
+    scan: pd.DataFrame
+    miss: pd.DataFrame
+    processes: int
+    metrics: dict = field(default_factory=dict)
+
+    def to_pandas(self) -> pd.DataFrame:
+        """Table 6.1 reproduced (toolkit, thesis, ratios, impact instant and stiffness)."""
+        return self.table[["experiment", "label", "HIC36", "HIC_thesis", "HIC_ratio", "F_max",
+                           "Fmax_thesis", "Fmax_ratio", "instant_HIC", "tcp_speed", "K1",
+                           "K2"]].copy()
+
+    def plot(self) -> dict:
+        """The study's figures, ``{file name: Figure}``."""
+        from ..report.impact_figures import plot_safety_study
+
+        return plot_safety_study(self)
+
+
+def compute(*, quick: bool = False, arm=None, processes: int | None = None) -> SafetyStudy:
+    """Reproduce Table 6.1 and scan every impact instant of the step and switch experiments.
+
+    Parameters
+    ----------
+    quick : bool
+        Scan every 20th ms instead of every ms.
+    arm : None
+        Must be None: the scan's worker processes rebuild the thesis arm
+        (:func:`every_instant_case` takes JSON-serialisable cases only).
+    processes : int, optional
+        Worker processes of the scan (default: min(2, CPU count)).
+
+    Returns
+    -------
+    SafetyStudy
+        Tables, histories, scan and metrics.
+    """
+    if arm is not None:
+        raise ValueError(f"arm={arm!r} is not supported by the safety study: its scan runs the "
+                         "thesis arm in worker processes; pass arm=None")
     arm = thesis_arm()
     head = head_model()
     t0 = time.perf_counter()
     df, states, worst = _heuristic_table(arm, head)
     t_table = time.perf_counter() - t0
-    show = df[["experiment", "label", "HIC36", "HIC_thesis", "HIC_ratio", "F_max", "Fmax_thesis",
-               "Fmax_ratio", "instant_HIC", "tcp_speed", "K1", "K2"]].copy()
-    show.to_csv(out / "safety_table_6_1.csv", index=False)
     concl = _conclusions(df)
-    concl.to_csv(out / "safety_conclusions.csv", index=False)
-    arts = [str(out / "safety_table_6_1.csv"), str(out / "safety_conclusions.csv"),
-            save(plot_safety_table(df), out / "safety_table_6_1.png")]
-
-    # worst histories (step) of PID and the lambda = 0.4 PSMC variants
-    items = [(f"step: {label}", worst[("step", label)])
-             for label in ("PID", "PSMC joint Ki=2 λ=0.4", "PSMC joint Ki=12 λ=0.4",
-                           "PSMC task λ=0.4")]
-    arts.append(save(plot_worst_histories(items, title="worst step-response impacts"),
-                     out / "safety_worst_histories.png"))
 
     # every instant
     every = 20 if quick else 1
@@ -132,21 +213,37 @@ def run(outdir, *, quick: bool = False, processes: int | None = None) -> StudyRe
                           "F_max miss %": 100 * (1 - h.F_max / mf),
                           "t0 of worst": g.loc[g.HIC36.idxmax(), "t0"]})
     miss = pd.DataFrame(miss_rows)
-    miss.to_csv(out / "safety_every_instant.csv", index=False)
-    arts.append(str(out / "safety_every_instant.csv"))
     found = int(((miss["HIC miss %"] <= 0.05) & (miss["F_max miss %"] <= 0.05)).sum())
+    marks = {}
+    for key, st in states.items():
+        marks[key] = {k: float(st["t"].iloc[v]) for k, v in heuristic_instants(st).items()}
+    metrics = {"table_wall_time_s": t_table, "scan_wall_time_s": t_scan, "scan_impacts": n_impacts,
+               "heuristic_found": found, "experiments": len(miss),
+               "conclusions_hold": int(concl.holds.sum()), "conclusions": len(concl),
+               "pid_step_F_max": float(df[(df.experiment == "step") & (df.family == "PID")].F_max.iloc[0]),
+               "pid_step_HIC": float(df[(df.experiment == "step") & (df.family == "PID")].HIC36.iloc[0])}
+    return SafetyStudy(quick=quick, head=head, table=df, conclusions=concl, worst=worst,
+                       heuristic_marks=marks, scan=scan, miss=miss, processes=procs,
+                       metrics=metrics)
 
-    plot_items = []
-    for exp, label in (("step", "PID"), ("step", "PSMC joint Ki=2 λ=0.4"), ("switch", "PID"),
-                       ("switch", "PSMC joint Ki=2 λ=0.4")):
-        g = scan[(scan.experiment == exp) & (scan.label == label)]
-        st = states[(exp, label)]
-        marks = {k: float(st["t"].iloc[v]) for k, v in heuristic_instants(st).items()}
-        plot_items.append((f"{exp}: {label}", g, marks))
-    arts.append(save(plot_fmax_over_time(plot_items), out / "safety_fmax_over_time.png"))
 
-    tbl = show.copy()
-    tbl["lambda"] = df["lambda"]
+def render(study: SafetyStudy) -> Section:
+    """The report section of the safety study (formatting only).
+
+    Parameters
+    ----------
+    study : SafetyStudy
+        Output of :func:`compute`.
+
+    Returns
+    -------
+    Section
+        Markdown and artifacts (figures and CSV tables).
+    """
+    quick, head, concl, miss = study.quick, study.head, study.conclusions, study.miss
+    show = study.to_pandas()
+    n_impacts, t_scan = study.metrics["scan_impacts"], study.metrics["scan_wall_time_s"]
+    procs, found = study.processes, study.metrics["heuristic_found"]
     md = f"""Head model `{head.name}` (see the head-model section), flexible-joint arm with the stiffness
 (2.18) at the impact instant, 50 ms, RK4 at {20} us. Four impact instants per experiment as in the
 thesis (largest TCP speed, |qd1|, |qd2|, ||qd||); the worst is kept.
@@ -174,13 +271,9 @@ The heuristic finds the worst HIC and F_max (within 0.05 %) in {found} of {len(m
 
 ![F_max over time](safety_fmax_over_time.png)
 """
-    metrics = {"table_wall_time_s": t_table, "scan_wall_time_s": t_scan, "scan_impacts": n_impacts,
-               "heuristic_found": found, "experiments": len(miss),
-               "conclusions_hold": int(concl.holds.sum()), "conclusions": len(concl),
-               "pid_step_F_max": float(df[(df.experiment == "step") & (df.family == "PID")].F_max.iloc[0]),
-               "pid_step_HIC": float(df[(df.experiment == "step") & (df.family == "PID")].HIC36.iloc[0])}
-    return StudyResult("Collision safety: Table 6.1 and every impact instant (thesis §6.3.3)", md,
-                       arts, metrics)
+    arts = [("safety_table_6_1.csv", show), ("safety_conclusions.csv", concl),
+            *study.plot().items(), ("safety_every_instant.csv", miss)]
+    return Section("Collision safety: Table 6.1 and every impact instant (thesis §6.3.3)", md,
+                   arts, dict(study.metrics))
 
-
-__all__ = ["run", "every_instant_case", "HEURISTICS", "variant_family"]
+__all__ = ["compute", "render", "SafetyStudy", "every_instant_case", "HEURISTICS", "variant_family"]

@@ -26,7 +26,7 @@ three).
 from __future__ import annotations
 
 import itertools
-from pathlib import Path
+from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
@@ -37,11 +37,9 @@ from ..experiments.closed_loop import run_batch
 from ..experiments.metrics import chattering_index, command_increment_rms, tracking_stats
 from ..params import thesis_arm
 from ..params.valves import DEFAULT_TIME_CONSTANTS
-from ..report.control_figures import plot_smc_chattering, plot_smc_commands
-from ..report.figures import save
 from ..report.tables import markdown_table
 from ..units import BAR
-from . import StudyResult
+from . import Section, resolve_arm
 
 PERIOD = 5.0            #: circle period of §4.4.1 [s]
 WARMUP = 5.0            #: [s]
@@ -67,7 +65,7 @@ def _evaluate(results, warmup, dt=1e-3) -> list:
     out = []
     for r in results:
         k0 = int(round(warmup / dt))
-        dp = r.log[k0:, 17:19]
+        dp = r.signals("dp1", "dp2")[k0:]
         s = tracking_stats(r, t_from=warmup)
         out.append({"mean_error_m": s["mean"], "max_error_m": s["max"],
                     "chattering_Pa": chattering_index(dp, dt) if not r.diverged else np.nan,
@@ -85,6 +83,28 @@ def tune(arm=None, *, poles=TUNE_POLES, gain_ratios=TUNE_GAIN_RATIO, gammas=TUNE
     product ``cost`` and ``rank`` (1 = chosen; ties within 1 % of the cost
     go to the smaller K, then the smaller Gamma).  Diverged settings get an
     infinite cost.
+
+    Parameters
+    ----------
+    arm : ppamsafety.params.ArmParameters, optional
+        Arm (default: the thesis arm).
+    poles : sequence of float
+        Double pole of the linearised error dynamics [1/s].
+    gain_ratios : sequence of float
+        K / Gamma [1/s].
+    gammas : sequence of float
+        Boundary-layer widths Gamma [rad/s^2].
+    warmup : float
+        Warm-up before the error is evaluated [s].
+    evaluate : float
+        Evaluation window [s].
+    sensors : SensorConfig, optional
+        Sensor model (default: realistic sensors).
+
+    Returns
+    -------
+    pandas.DataFrame
+        The ranked grid (rank 1 first).
     """
     arm = thesis_arm() if arm is None else arm
     ref = tr.circle(arm, period=PERIOD, duration=warmup + evaluate)
@@ -124,12 +144,20 @@ def sweep(arm=None, *, gammas=None, t_scales=T_SCALES, model_factor=MODEL_FACTOR
 
     Parameters
     ----------
+    arm : ppamsafety.params.ArmParameters, optional
+        Arm (default: the thesis arm).
     gammas : sequence of float
         Boundary-layer widths [rad/s^2] (default :data:`GAMMAS`).
     t_scales : sequence of float
         Plant valve time constants relative to (0.06, 0.045, 0.06, 0.045) s.
     model_factor : float
         The second controller model uses model_factor x the plant's T.
+    warmup : float
+        Warm-up before the error is evaluated [s].
+    evaluate : float
+        Evaluation window [s].
+    sensors : SensorConfig, optional
+        Sensor model (default: realistic sensors).
     controller_kwargs : dict, optional
         Other SlidingModeControl arguments (default: its defaults).
     keep_runs : sequence of (t_scale, model label, gamma)
@@ -174,7 +202,25 @@ def sweep(arm=None, *, gammas=None, t_scales=T_SCALES, model_factor=MODEL_FACTOR
 
 
 def psmc_reference(arm=None, *, warmup=WARMUP, evaluate=EVALUATE, sensors=None) -> dict:
-    """Chattering index and mean error of joint PSMC (Table 5.1) on the same circle."""
+    """Chattering index and mean error of joint PSMC (Table 5.1) on the same circle.
+
+    Parameters
+    ----------
+    arm : ppamsafety.params.ArmParameters, optional
+        Arm (default: the thesis arm).
+    warmup : float
+        Warm-up before the error is evaluated [s].
+    evaluate : float
+        Evaluation window [s].
+    sensors : SensorConfig, optional
+        Sensor model (default: realistic sensors).
+
+    Returns
+    -------
+    dict
+        ``mean_error_m``, ``max_error_m``, ``chattering_Pa``,
+        ``increment_rms_Pa``, ``diverged`` and the run (``result``).
+    """
     arm = thesis_arm() if arm is None else arm
     ref = tr.circle(arm, period=PERIOD, duration=warmup + evaluate)
     r = run_batch([{"arm": arm, "controller": JointPSMC(), "reference": ref,
@@ -182,11 +228,88 @@ def psmc_reference(arm=None, *, warmup=WARMUP, evaluate=EVALUATE, sensors=None) 
     return {**_evaluate(r, warmup)[0], "result": r[0]}
 
 
-def run(outdir, *, quick: bool = False) -> StudyResult:
-    """SMC defaults, chattering vs boundary layer and valve time constant."""
-    out = Path(outdir)
-    arm = thesis_arm()
-    arts = []
+#: Label of the controller valve model equal to the plant's in :func:`sweep`.
+NOMINAL_MODEL = "model T = plant T"
+
+
+@dataclass
+class SmcStudy:
+    """Result of :func:`compute`: SMC tuning, chattering sweep, PSMC reference.
+
+    Attributes
+    ----------
+    quick : bool
+        Coarse grids and short runs were used.
+    warmup, evaluate : float
+        Warm-up and evaluation window on the circle [s].
+    default : SlidingModeControl
+        The controller with its default gains.
+    tuning : pandas.DataFrame
+        :func:`tune` output (rank 1 first).
+    defaults_are_best : bool
+        The defaults are the optimum of the tuning grid.
+    gammas : numpy.ndarray
+        Boundary layers of the sweep [rad/s^2] (the default included).
+    sweep : pandas.DataFrame
+        :func:`sweep` table.
+    kept : dict
+        (t_scale, model, gamma) -> ExperimentResult, for the command traces
+        (smallest, default and largest Gamma, nominal plant and model).
+    psmc : dict
+        :func:`psmc_reference` output (joint PSMC on the same circle).
+    sensor_table : pandas.DataFrame
+        Chattering [bar] and mean error [mm] of the SMC defaults per sensor
+        setting (:data:`SENSOR_CASES`).
+    metrics : dict
+        Headline numbers.
+    """
+
+    quick: bool
+    warmup: float
+    evaluate: float
+    default: SlidingModeControl
+    tuning: pd.DataFrame
+    defaults_are_best: bool
+    gammas: np.ndarray
+    sweep: pd.DataFrame
+    kept: dict
+    psmc: dict
+    sensor_table: pd.DataFrame
+    metrics: dict = field(default_factory=dict)
+
+    def to_pandas(self) -> pd.DataFrame:
+        """The chattering sweep (one row per run, SI units)."""
+        return self.sweep.copy()
+
+    def plot(self) -> dict:
+        """The study's figures, ``{file name: Figure}``."""
+        from ..report.control_figures import plot_smc_study
+
+        return plot_smc_study(self)
+
+
+def _nominal_ok(sw: pd.DataFrame) -> tuple:
+    """Nominal-plant, exact-model rows sorted by Gamma, and those that did not diverge."""
+    nom = sw[(sw.t_scale == 1.0) & (sw.model == NOMINAL_MODEL)].sort_values("gamma")
+    return nom, nom[~nom.diverged]
+
+
+def compute(*, quick: bool = False, arm=None) -> SmcStudy:
+    """SMC defaults (grid search), chattering vs boundary layer and valve time constant.
+
+    Parameters
+    ----------
+    quick : bool
+        Three boundary layers, a 2-point tuning grid and 3 s runs.
+    arm : ppamsafety.params.ArmParameters, optional
+        Arm (default: the thesis arm).
+
+    Returns
+    -------
+    SmcStudy
+        Tables, kept runs and metrics.
+    """
+    arm = resolve_arm(arm)
     if quick:
         warmup, evaluate = 1.0, 2.0
         gammas = np.array([0.3, 3.0, 30.0])
@@ -202,18 +325,13 @@ def run(outdir, *, quick: bool = False) -> StudyResult:
     gammas = np.unique(np.concatenate([gammas[~np.isclose(gammas, g_def)], [g_def]]))
 
     tuning = tune(arm, warmup=warmup, evaluate=evaluate, **tune_kw)
-    tuning.to_csv(out / "smc_tuning.csv", index=False)
-    arts.append(str(out / "smc_tuning.csv"))
     best = tuning.iloc[0]
     defaults_are_best = bool(np.isclose(best.poles_1_s, pole_def) and np.isclose(best.K_rad_s3, K_def)
                              and np.isclose(best.gamma_rad_s2, g_def))
 
     g_lo, g_hi = float(gammas[0]), float(gammas[-1])
-    nominal_m = "model T = plant T"
-    keep = [(1.0, nominal_m, g_lo), (1.0, nominal_m, g_def), (1.0, nominal_m, g_hi)]
+    keep = [(1.0, NOMINAL_MODEL, g_lo), (1.0, NOMINAL_MODEL, g_def), (1.0, NOMINAL_MODEL, g_hi)]
     sw, kept = sweep(arm, gammas=gammas, warmup=warmup, evaluate=evaluate, keep_runs=keep)
-    sw.to_csv(out / "smc_chattering_sweep.csv", index=False)
-    arts.append(str(out / "smc_chattering_sweep.csv"))
     ps = psmc_reference(arm, warmup=warmup, evaluate=evaluate)
     ref = tr.circle(arm, period=PERIOD, duration=warmup + evaluate)
     sens_ev = _evaluate(run_batch([{"arm": arm, "controller": default, "reference": ref,
@@ -221,23 +339,45 @@ def run(outdir, *, quick: bool = False) -> StudyResult:
     sens_tab = pd.DataFrame({"sensors (SMC defaults, T = 60 ms)": list(SENSOR_CASES),
                              "chattering [bar]": [e["chattering_Pa"] / BAR for e in sens_ev],
                              "mean error [mm]": [1e3 * e["mean_error_m"] for e in sens_ev]})
+    _, ok = _nominal_ok(sw)
+    gb = ok.loc[ok.mean_error_m.idxmin()]
+    metrics = {"defaults_are_grid_optimum": defaults_are_best,
+               "chattering_sensor_cases_bar": sens_tab["chattering [bar]"].tolist(),
+               "best_gamma_nominal": float(gb.gamma),
+               "best_mean_error_nominal_m": float(gb.mean_error_m),
+               "chattering_at_best_bar": float(gb.chattering_Pa / BAR),
+               "psmc_chattering_bar": float(ps["chattering_Pa"] / BAR),
+               "diverged_runs": int(sw.diverged.sum())}
+    return SmcStudy(quick=quick, warmup=warmup, evaluate=evaluate, default=default,
+                    tuning=tuning, defaults_are_best=defaults_are_best, gammas=gammas,
+                    sweep=sw, kept=kept, psmc=ps, sensor_table=sens_tab, metrics=metrics)
 
-    fig = plot_smc_chattering(sw, default_gamma=g_def,
-                              reference=(ps["chattering_Pa"], ps["mean_error_m"],
-                                         "joint PSMC (Table 5.1), T = 60 ms"))
-    arts.append(save(fig, out / "smc_chattering.png"))
-    panels = {f"SMC, Γ = {k[2]:.3g} rad/s²" + (" (default)" if np.isclose(k[2], g_def) else "")
-              + ", plant T = 60 ms, exact model": [("SMC", kept[k])] for k in keep if k in kept}
-    panels["joint PSMC (Table 5.1), same circle"] = [("joint PSMC", ps["result"])]
-    t1 = warmup + min(evaluate, 2.0)
-    arts.append(save(plot_smc_commands(panels, t_range=(warmup, t1),
-                                       title="Commanded Δp₁ on the circle (P = 5 s), "
-                                             "realistic sensors"),
-                     out / "smc_commands.png"))
+
+def render(study: SmcStudy) -> Section:
+    """The report section of the SMC study (formatting only).
+
+    Parameters
+    ----------
+    study : SmcStudy
+        Output of :func:`compute`.
+
+    Returns
+    -------
+    Section
+        Markdown and artifacts (figures, ``smc_tuning.csv``,
+        ``smc_chattering_sweep.csv``).
+    """
+    quick, warmup, evaluate = study.quick, study.warmup, study.evaluate
+    default, tuning, sw, ps = study.default, study.tuning, study.sweep, study.psmc
+    sens_tab, defaults_are_best = study.sensor_table, study.defaults_are_best
+    g_def = default.boundary_layer[0]
+    K_def = default.gain[0]
+    pole_def = float(np.sqrt(default.alpha0[0]))
+    g_lo, g_hi = float(study.gammas[0]), float(study.gammas[-1])
+    nominal_m = NOMINAL_MODEL
 
     # numbers for the text
-    nom = sw[(sw.t_scale == 1.0) & (sw.model == nominal_m)].sort_values("gamma")
-    ok = nom[~nom.diverged]
+    nom, ok = _nominal_ok(sw)
     gb = ok.loc[ok.mean_error_m.idxmin()]
     d_row = ok.iloc[int(np.argmin(np.abs(np.log(ok.gamma / g_def))))]
     lo, hi = ok.iloc[0], ok.iloc[-1]
@@ -332,12 +472,7 @@ narrow layer (high K/Γ) is needed to track, a wide one to stop the steps. The t
 wall on hardware (§4.4.2) and moved to PSMC, whose Δp stays smooth: the measured state enters
 through a proxy whose output is limited and integrated.
 """
-    metrics = {"defaults_are_grid_optimum": defaults_are_best,
-               "chattering_sensor_cases_bar": sens_tab["chattering [bar]"].tolist(),
-               "best_gamma_nominal": float(gb.gamma),
-               "best_mean_error_nominal_m": float(gb.mean_error_m),
-               "chattering_at_best_bar": float(gb.chattering_Pa / BAR),
-               "psmc_chattering_bar": float(ps["chattering_Pa"] / BAR),
-               "diverged_runs": int(sw.diverged.sum())}
-    return StudyResult("Sliding mode control: chattering vs boundary layer and valve time constant "
-                       "(thesis §4.3-4.5)", md, arts, metrics)
+    arts = [("smc_tuning.csv", tuning), ("smc_chattering_sweep.csv", sw),
+            *study.plot().items()]
+    return Section("Sliding mode control: chattering vs boundary layer and valve time constant "
+                   "(thesis §4.3-4.5)", md, arts, dict(study.metrics))

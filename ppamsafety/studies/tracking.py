@@ -12,7 +12,7 @@ measured angles).
 
 from __future__ import annotations
 
-from pathlib import Path
+from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
@@ -24,14 +24,9 @@ from ..experiments import catalog
 from ..experiments.conclusions import conclusions_table, evaluate_conclusions
 from ..experiments.metrics import peak_speeds, step_metrics, tracking_stats
 from ..experiments.trajectories import CIRCLE_CENTER
-from ..params import thesis_arm
-from ..report.control_figures import (plot_error_traces, plot_experiment,
-                                      plot_tracking_comparison)
-from ..report.figures import save
 from ..report.tables import markdown_table
 from ..units import BAR
-from . import StudyResult
-from . import responses
+from . import Section, resolve_arm, responses
 
 PERIODS = (5.0, 10.0, 20.0)
 
@@ -68,6 +63,21 @@ def circle_errors(arm, variants, *, periods=PERIODS, sensors=None, warmup=catalo
                   evaluate=catalog.CIRCLE_EVAL):
     """Mean and max tracking error of each variant on each circle (one batch per period).
 
+    Parameters
+    ----------
+    arm : ppamsafety.params.ArmParameters
+        Arm.
+    variants : list of (str, controller)
+        Labelled controller variants.
+    periods : sequence of float
+        Circle periods [s].
+    sensors : SensorConfig, optional
+        Sensor model (default: realistic sensors).
+    warmup : float
+        Warm-up before the error is evaluated [s].
+    evaluate : float
+        Evaluation window [s].
+
     Returns
     -------
     errors : pandas.DataFrame
@@ -99,7 +109,18 @@ def compare_with_thesis(errors: pd.DataFrame) -> pd.DataFrame:
 
 
 def comparison_markdown(cmp: pd.DataFrame) -> pd.DataFrame:
-    """Wide display table: one cell 'toolkit / thesis (ratio)' in mm per period and statistic."""
+    """Wide display table: one cell 'toolkit / thesis (ratio)' in mm per period and statistic.
+
+    Parameters
+    ----------
+    cmp : pandas.DataFrame
+        Output of :func:`compare_with_thesis`.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per variant, one column per (period, statistic).
+    """
     out = pd.DataFrame({"variant": list(dict.fromkeys(cmp.variant))})
     for P in sorted(cmp.period_s.unique()):
         g = cmp[cmp.period_s == P].set_index("variant").loc[out.variant]
@@ -132,6 +153,19 @@ def sensor_ablation(arm, *, periods=PERIODS, warmup=catalog.CIRCLE_WARMUP,
     Kd + Kp lambda = 0.9 bar s/rad (is it the amount of measured velocity fed
     back?).  ``base`` may hold already computed ``{sensor name: errors}``
     tables of the ten thesis variants to reuse.
+
+    Parameters
+    ----------
+    arm : ppamsafety.params.ArmParameters
+        Arm.
+    periods : sequence of float
+        Circle periods [s].
+    warmup : float
+        Warm-up before the error is evaluated [s].
+    evaluate : float
+        Evaluation window [s].
+    base : dict, optional
+        {sensor name: errors table} to reuse (see above).
 
     Returns
     -------
@@ -172,6 +206,22 @@ def gc_ablation(arm, *, warmup=catalog.CIRCLE_WARMUP, evaluate=catalog.CIRCLE_EV
     Returns one row per (variant, gc point): mean and max circle error for
     each of ``periods`` [m], and the step's peak TCP speed [m/s] and q1
     overshoot [% of the step].
+
+    Parameters
+    ----------
+    arm : ppamsafety.params.ArmParameters
+        Arm.
+    warmup : float
+        Warm-up before the error is evaluated [s].
+    evaluate : float
+        Evaluation window [s].
+    periods : sequence of float
+        Circle periods [s].
+
+    Returns
+    -------
+    pandas.DataFrame
+        The table described above.
     """
     variants = []
     for at in ("proxy", "desired", "measured"):
@@ -212,12 +262,84 @@ def _cell(errors, variant, P, stat="mean"):
     return float(g[f"{stat}_m"].iloc[0]) if len(g) else np.nan
 
 
-def run(outdir, *, quick: bool = False) -> StudyResult:
-    """Table 5.2, conclusions (a)-(f), sensor and gravity-compensation ablations."""
-    out = Path(outdir)
-    arm = thesis_arm()
+@dataclass
+class TrackingStudy:
+    """Result of :func:`compute`: circle errors, Table 5.2, conclusions, ablations.
+
+    Attributes
+    ----------
+    quick : bool
+        Short windows were used (numbers not comparable to the thesis).
+    warmup, evaluate : float
+        Warm-up and evaluation window of each circle [s].
+    periods : tuple of float
+        Circle periods [s].
+    errors : dict
+        Sensor setting (:data:`SENSORS` key) -> long table of
+        :func:`circle_errors` for the ten thesis variants.
+    runs : dict
+        Sensor setting -> {period [s]: list of ExperimentResult}.
+    comparison, comparison_ideal : pandas.DataFrame
+        :func:`compare_with_thesis` of the timing-board / ideal-velocity errors.
+    conclusions, conclusions_ideal : list of Conclusion
+        Conclusions (a)-(f) (timing board) and (a)-(d) (ideal velocity).
+    sensor_ablation : pandas.DataFrame
+        :func:`sensor_ablation` output.
+    gc_periods : tuple of float
+        Periods of the gravity-compensation ablation [s].
+    gc_ablation : pandas.DataFrame
+        :func:`gc_ablation` output.
+    pid_equivalence : float
+        Largest relative difference of joint-PSMC (Ki = 2) and PID mean
+        errors with ideal velocity, over lambda and periods [-].
+    metrics : dict
+        Headline numbers.
+    """
+
+    quick: bool
+    warmup: float
+    evaluate: float
+    periods: tuple
+    errors: dict
+    runs: dict
+    comparison: pd.DataFrame
+    comparison_ideal: pd.DataFrame
+    conclusions: list
+    conclusions_ideal: list
+    sensor_ablation: pd.DataFrame
+    gc_periods: tuple
+    gc_ablation: pd.DataFrame
+    pid_equivalence: float
+    metrics: dict = field(default_factory=dict)
+
+    def to_pandas(self) -> pd.DataFrame:
+        """Table 5.2 comparison (toolkit vs thesis, long format, SI units)."""
+        return self.comparison.copy()
+
+    def plot(self) -> dict:
+        """The study's figures, ``{file name: Figure}``."""
+        from ..report.control_figures import plot_tracking_study
+
+        return plot_tracking_study(self)
+
+
+def compute(*, quick: bool = False, arm=None) -> TrackingStudy:
+    """Table 5.2, conclusions (a)-(f), sensor and gravity-compensation ablations.
+
+    Parameters
+    ----------
+    quick : bool
+        1 s warm-up and 4 s windows instead of the thesis' 5 s and 40 s.
+    arm : ppamsafety.params.ArmParameters, optional
+        Arm (default: the thesis arm).
+
+    Returns
+    -------
+    TrackingStudy
+        Tables, runs, conclusions and metrics.
+    """
+    arm = resolve_arm(arm)
     warmup, evaluate = (1.0, 4.0) if quick else (catalog.CIRCLE_WARMUP, catalog.CIRCLE_EVAL)
-    arts = []
 
     variants = catalog.thesis_variants()
     errs, runs = {}, {}
@@ -225,73 +347,60 @@ def run(outdir, *, quick: bool = False) -> StudyResult:
         errs[sname], runs[sname] = circle_errors(arm, variants, sensors=sens, warmup=warmup,
                                                  evaluate=evaluate)
     cmp = compare_with_thesis(errs["timing board"])
-    cmp.to_csv(out / "tracking_table_5_2.csv", index=False)
-    arts.append(str(out / "tracking_table_5_2.csv"))
     cmp_ideal = compare_with_thesis(errs["ideal velocity"])
-    cmp_ideal.to_csv(out / "tracking_table_5_2_ideal_velocity.csv", index=False)
-    arts.append(str(out / "tracking_table_5_2_ideal_velocity.csv"))
-    arts.append(save(plot_tracking_comparison(cmp), out / "tracking_table_5_2.png"))
-
-    # figures in the spirit of 5.10, 5.11, 5.14
-    rb = runs["timing board"]
-    lab = {r.meta["label"]: r for r in rb[10.0]}
-    t_win = (warmup, warmup + min(20.0, evaluate))
-    arts.append(save(plot_experiment(lab["PSMC joint Ki=2 λ=0.4"], t_range=t_win,
-                                     title="Circle P = 10 s, joint PSMC (Ki = 2, λ = 0.4 s), "
-                                           "realistic sensors (cf. fig. 5.10)"),
-                     out / "tracking_joint_angles.png"))
-    main = ("PID", "PSMC joint Ki=2 λ=0.4", "PSMC task λ=0.4")
-    panels = {f"P = {P:g} s": [(r.meta["label"], r) for r in rb[P] if r.meta["label"] in main]
-              for P in (10.0, 5.0)}
-    arts.append(save(plot_error_traces(panels, t_range=t_win,
-                                       title="Position error on the circle (cf. fig. 5.11)"),
-                     out / "tracking_circle_errors.png"))
-    ki = ("PSMC joint Ki=2 λ=0.4", "PSMC joint Ki=12 λ=0.4", "PSMC joint Ki=12 λ=0.8",
-          "PSMC joint Ki=12 λ=1.5")
-    panels = {f"P = {P:g} s": [(r.meta["label"], r) for r in rb[P] if r.meta["label"] in ki]
-              for P in PERIODS}
-    arts.append(save(plot_error_traces(panels, t_range=t_win, title="Position error with high "
-                                       "integral gain Ki = 12 bar/(rad s) (cf. fig. 5.14)"),
-                     out / "tracking_circle_errors_ki12.png"))
-    ri = {r.meta["label"]: r for r in runs["ideal velocity"][20.0]}
-    r20 = {r.meta["label"]: r for r in rb[20.0]}
-    r10 = {r.meta["label"]: r for r in rb[10.0]}
-    ri10 = {r.meta["label"]: r for r in runs["ideal velocity"][10.0]}
-    k = "PSMC joint Ki=12 λ=0.4"
-    s_ipt, s_id = {"color": "tab:green"}, {"color": "k", "lw": 1.3}
-    panels = {"P = 20 s": [("timing board", r20[k], s_ipt), ("ideal velocity", ri[k], s_id)],
-              "P = 10 s": [("timing board", r10[k], s_ipt), ("ideal velocity", ri10[k], s_id)]}
-    arts.append(save(plot_error_traces(panels, t_range=(warmup, warmup + evaluate),
-                                       title="Joint PSMC Ki = 12, λ = 0.4 s: inter-pulse-timing "
-                                             "velocity vs ideal velocity"),
-                     out / "tracking_sensor_ablation.png"))
 
     # conclusions
-    resp = responses.compute(arm)
-    concl = evaluate_conclusions(errs["timing board"], resp["step_table"], resp["switch_table"])
-    concl_ideal = evaluate_conclusions(errs["ideal velocity"], resp["step_table"],
-                                       resp["switch_table"])[:4]
-    ct = conclusions_table(concl)
-    ct.to_csv(out / "tracking_conclusions.csv", index=False)
-    arts.append(str(out / "tracking_conclusions.csv"))
-    cti = conclusions_table(concl_ideal)[["", "thesis claim", "verdict", "evidence"]]
+    resp = responses.compute(arm=arm)
+    concl = evaluate_conclusions(errs["timing board"], resp.step_table, resp.switch_table)
+    concl_ideal = evaluate_conclusions(errs["ideal velocity"], resp.step_table,
+                                       resp.switch_table)[:4]
 
     # ablations
     sab = sensor_ablation(arm, warmup=warmup, evaluate=evaluate, base=errs)
-    sab.to_csv(out / "tracking_sensor_ablation.csv", index=False)
-    arts.append(str(out / "tracking_sensor_ablation.csv"))
     gcp = (10.0, 20.0)
     gc = gc_ablation(arm, warmup=warmup, evaluate=evaluate, periods=gcp)
-    gc.to_csv(out / "tracking_gc_ablation.csv", index=False)
-    arts.append(str(out / "tracking_gc_ablation.csv"))
 
-    # numbers for the diagnosis
-    e_ipt, e_id = errs["timing board"], errs["ideal velocity"]
-    r_mean = cmp.ratio_mean
+    # joint PSMC (Ki = 2) vs PID with ideal velocity
+    e_id = errs["ideal velocity"]
     pidr = e_id[e_id.family == "PID"].set_index("period_s").mean_m
     j2i = e_id[e_id.family == "PSMC joint Ki=2"]
     eq_dev = float(max(abs(j2i[j2i.period_s == P].mean_m / pidr[P] - 1).max()
                        for P in PERIODS))
+    r_mean = cmp.ratio_mean
+    metrics = {"ratio_mean_min": float(r_mean.min()), "ratio_mean_max": float(r_mean.max()),
+               "conclusions": {c.key: bool(c.holds) for c in concl},
+               "conclusions_ideal_velocity": {c.key: bool(c.holds) for c in concl_ideal},
+               "table": {f"{r.variant} P{r.period_s:g}": [r.mean_m, r.max_m]
+                         for r in cmp.itertuples()}}
+    return TrackingStudy(quick=quick, warmup=warmup, evaluate=evaluate, periods=PERIODS,
+                         errors=errs, runs=runs, comparison=cmp, comparison_ideal=cmp_ideal,
+                         conclusions=concl, conclusions_ideal=concl_ideal,
+                         sensor_ablation=sab, gc_periods=gcp, gc_ablation=gc,
+                         pid_equivalence=eq_dev, metrics=metrics)
+
+
+def render(study: TrackingStudy) -> Section:
+    """The report section of the tracking study (formatting only).
+
+    Parameters
+    ----------
+    study : TrackingStudy
+        Output of :func:`compute`.
+
+    Returns
+    -------
+    Section
+        Markdown and artifacts (figures and the CSV tables).
+    """
+    quick, warmup, evaluate = study.quick, study.warmup, study.evaluate
+    cmp, sab, gc, gcp = study.comparison, study.sensor_ablation, study.gc_ablation, study.gc_periods
+    ct = conclusions_table(study.conclusions)
+    cti = conclusions_table(study.conclusions_ideal)[["", "thesis claim", "verdict", "evidence"]]
+
+    # numbers for the diagnosis
+    e_ipt, e_id = study.errors["timing board"], study.errors["ideal velocity"]
+    r_mean = cmp.ratio_mean
+    eq_dev = study.pid_equivalence
     k12 = "PSMC joint Ki=12 λ=0.4"
     kd0, kp0, lam0 = (TABLE_5_1_PID["kd"][0], TABLE_5_1_PID["kp"][0], TABLE_5_1_JOINT["lambda"])
     kd_eff = kd0 + kp0 * lam0
@@ -411,10 +520,11 @@ muscle pair (see `ppamsafety/control/gravity.py`); task PSMC then tracks badly (
 is the only point that reproduces both the tracking of Table 5.2 and the slow PSMC steps; the
 price is the stronger Ki = 12 limit cycle with the timing board.
 """
-    metrics = {"ratio_mean_min": float(r_mean.min()), "ratio_mean_max": float(r_mean.max()),
-               "conclusions": {c.key: bool(c.holds) for c in concl},
-               "conclusions_ideal_velocity": {c.key: bool(c.holds) for c in concl_ideal},
-               "table": {f"{r.variant} P{r.period_s:g}": [r.mean_m, r.max_m]
-                         for r in cmp.itertuples()}}
-    return StudyResult("Circle tracking: Table 5.2 and the thesis' conclusions (§5.3.4-5.3.5)",
-                       md, arts, metrics)
+    arts = [("tracking_table_5_2.csv", cmp),
+            ("tracking_table_5_2_ideal_velocity.csv", study.comparison_ideal),
+            *study.plot().items(),
+            ("tracking_conclusions.csv", ct),
+            ("tracking_sensor_ablation.csv", sab),
+            ("tracking_gc_ablation.csv", gc)]
+    return Section("Circle tracking: Table 5.2 and the thesis' conclusions (§5.3.4-5.3.5)",
+                   md, arts, dict(study.metrics))
