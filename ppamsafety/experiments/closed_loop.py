@@ -122,7 +122,10 @@ class ExperimentResult:
     diverged : bool
         True if the state blew up (the log is NaN from then on).
     meta : dict
-        Free-form metadata (sensor settings, variant labels).
+        Free-form metadata of the case; runs of
+        :func:`~.catalog.run_thesis_experiment` carry ``variant`` (the
+        :class:`~.catalog.ControllerVariant`), ``label``, ``family``,
+        ``controller_family``, ``ki_bar``, ``lambda_s`` and ``experiment``.
     """
 
     name: str
