@@ -22,6 +22,7 @@ import numpy as np
 
 from ppamsafety.control import JointPSMC, SensorConfig
 from ppamsafety.experiments import closed_loop as cl
+from ppamsafety.experiments.case import ExperimentCase
 from ppamsafety.experiments import trajectories as tr
 from ppamsafety.params import thesis_arm
 from ppamsafety.plant import model
@@ -55,8 +56,7 @@ def batch_cases(arm=None, n=N_BATCH):
     ref = tr.step(arm, duration=DURATION)
     lams = np.linspace(0.1, 2.0, (n + 1) // 2)
     ctrls = [JointPSMC(lam=float(lam), ki=ki * BAR) for ki in (2.0, 12.0) for lam in lams][:n]
-    return [{"arm": arm, "controller": c, "reference": ref, "sensors": SensorConfig()}
-            for c in ctrls]
+    return [ExperimentCase(arm, c, ref, sensors=SensorConfig()) for c in ctrls]
 
 
 def bench_single(repeats=10) -> float:
@@ -74,7 +74,7 @@ def bench_batch(repeats=3) -> float:
 def breakdown(repeats=10) -> list:
     """(label, best wall time [s]) of the pieces of a 10 s closed-loop run."""
     arm, c, ref, sens = single_case()
-    x0, u = model.rest_state(ref.data[0, 0:2], arm)
+    x0, u = model.rest_state(ref.field("q_d")[0], arm)
     U = np.tile(u, (ref.n_steps, 1))
     rows = [("plant alone (10 000 RK4 steps, open loop)",
              _best(lambda: model.simulate(arm, x0, U, substeps=1), repeats)),

@@ -10,28 +10,37 @@ from ppamsafety.units import BAR, DEG
 
 def test_variants_are_table_6_1_in_order_with_si_gains():
     v = catalog.thesis_variants()
-    labels = [lab for lab, _ in v]
+    assert all(isinstance(x, catalog.ControllerVariant) for x in v)
+    labels = [x.label for x in v]
     assert labels == ["PID",
                       "PSMC joint Ki=2 λ=0.4", "PSMC joint Ki=2 λ=0.8", "PSMC joint Ki=2 λ=1.5",
                       "PSMC joint Ki=12 λ=0.4", "PSMC joint Ki=12 λ=0.8", "PSMC joint Ki=12 λ=1.5",
                       "PSMC task λ=0.4", "PSMC task λ=0.8", "PSMC task λ=1.5"]
-    pid = v[0][1]
+    pid = v[0].controller
     assert isinstance(pid, PID)
     assert pid.kp == (2 * BAR, 1.5 * BAR) and pid.ki == (2 * BAR, 2 * BAR)
     assert pid.kd == (0.1 * BAR, 0.1 * BAR)
     for i, (ki, lam) in enumerate([(2, 0.4), (2, 0.8), (2, 1.5), (12, 0.4), (12, 0.8), (12, 1.5)]):
-        c = v[1 + i][1]
+        c = v[1 + i].controller
+        assert (v[1 + i].family, v[1 + i].ki_bar, v[1 + i].lambda_s) == (
+            catalog.Family.PSMC_JOINT, ki, lam)
         assert isinstance(c, JointPSMC)
         assert c.ki == (ki * BAR, ki * BAR) and c.lam == (lam, lam)
         assert c.kp == (2 * BAR, 1.5 * BAR) and c.kd == (0.1 * BAR, 0.1 * BAR)
         assert c.dp_limit == (0.2 * BAR, 0.2 * BAR)
         assert c.gravity_compensation == "proxy"
     for i, lam in enumerate((0.4, 0.8, 1.5)):
-        c = v[7 + i][1]
+        c = v[7 + i].controller
+        assert v[7 + i].family is catalog.Family.PSMC_TASK and v[7 + i].lambda_s == lam
+        assert np.isnan(v[7 + i].ki_bar)
         assert isinstance(c, TaskPSMC)
         assert (c.kp, c.ki, c.kd, c.force_limit, c.lam) == (200.0, 100.0, 10.0, 15.0, lam)
-    assert [catalog.variant_family(c) for _, c in v] == (
-        ["PID"] + ["PSMC joint Ki=2"] * 3 + ["PSMC joint Ki=12"] * 3 + ["PSMC task"] * 3)
+    groups = ["PID"] + ["PSMC joint Ki=2"] * 3 + ["PSMC joint Ki=12"] * 3 + ["PSMC task"] * 3
+    assert [catalog.variant_family(x.controller) for x in v] == groups
+    assert [x.group for x in v] == groups
+    assert (v[0].family, v[0].ki_bar) == (catalog.Family.PID, 2.0) and np.isnan(v[0].lambda_s)
+    label, ctrl = v[4]                      # old (label, controller) unpacking still works
+    assert label == "PSMC joint Ki=12 λ=0.4" and ctrl is v[4].controller
 
 
 def test_references_of_the_named_experiments(arm):
@@ -40,10 +49,11 @@ def test_references_of_the_named_experiments(arm):
         assert ref.duration == pytest.approx(catalog.DEFAULT_DURATIONS[name])
     step = catalog.thesis_reference(arm, "step")
     k = np.searchsorted(step.t, catalog.STEP_TIMES)
-    np.testing.assert_allclose(step.data[[k[0] - 1, k[0], k[1]], 0], np.radians([30, 70, 30]))
-    np.testing.assert_allclose(step.data[:, 1], -80 * DEG)
+    q1_d = step.signal("q1_d")
+    np.testing.assert_allclose(q1_d[[k[0] - 1, k[0], k[1]]], np.radians([30, 70, 30]))
+    np.testing.assert_allclose(step.signal("q2_d"), -80 * DEG)
     c10 = catalog.thesis_reference(arm, "circle10", duration=10.0)
-    r = c10.data[:, 8:10]
+    r = c10.field("r_d")
     np.testing.assert_allclose(np.hypot(*(r - r.mean(axis=0)).T), 0.10, atol=1e-6)
     with pytest.raises(ValueError, match="unknown thesis experiment"):
         catalog.thesis_reference(arm, "circle7")
@@ -55,8 +65,11 @@ def test_run_thesis_experiment_is_one_labelled_batch(arm):
     v = catalog.thesis_variants()[:2] + catalog.thesis_variants()[-1:]
     res = catalog.run_thesis_experiment(arm, "step", v, duration=3.0,
                                         sensors=SensorConfig.ideal())
-    assert [r.meta["label"] for r in res] == [lab for lab, _ in v]
+    assert [r.meta["label"] for r in res] == [x.label for x in v]
     assert [r.meta["family"] for r in res] == ["PID", "PSMC joint Ki=2", "PSMC task"]
+    assert [r.meta["controller_family"] for r in res] == ["PID", "PSMC joint", "PSMC task"]
+    assert [r.meta["variant"] for r in res] == v
+    assert res[1].meta["ki_bar"] == 2.0 and np.isnan(res[2].meta["ki_bar"])
     assert np.isnan(res[0].meta["lambda_s"]) and res[2].meta["lambda_s"] == 1.5
     assert all(r.log.shape[0] == 3000 and not r.diverged for r in res)
     with pytest.raises(ValueError, match="pairs"):

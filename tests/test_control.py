@@ -7,6 +7,7 @@ from ppamsafety.control import (PID, GravityCompensation, JointPSMC, SensorConfi
                                 SlidingModeControl, TaskPSMC)
 from ppamsafety.control.base import NREF
 from ppamsafety.experiments import closed_loop as cl
+from ppamsafety.experiments.case import ExperimentCase
 from ppamsafety.experiments import trajectories as tr
 from ppamsafety.units import BAR, DEG
 
@@ -47,10 +48,11 @@ def test_psmc_with_zero_lambda_and_infinite_limit_is_discrete_pid(arm):
 
 def test_psmc_zero_lambda_closed_loop_equals_pid(arm):
     ref = tr.step(arm, duration=4.0)
-    runs = cl.run_batch([{"arm": arm, "controller": c, "reference": ref,
-                          "sensors": SensorConfig.ideal()}
+    runs = cl.run_batch([ExperimentCase(arm, c, ref, sensors=SensorConfig.ideal())
                          for c in (JointPSMC(lam=0.0, dp_limit=1e15), PID(derivative="difference"))])
-    np.testing.assert_allclose(runs[0].log[:, 1:9], runs[1].log[:, 1:9], rtol=1e-7, atol=1e-7)
+    state = ("q1", "q2", "qd1", "qd2", "p1", "p2", "p3", "p4")
+    np.testing.assert_allclose(runs[0].signals(*state), runs[1].signals(*state), rtol=1e-7,
+                               atol=1e-7)
 
 
 @pytest.mark.parametrize("controller, saturates", [(JointPSMC(), True),
@@ -100,8 +102,7 @@ def test_task_psmc_force_never_exceeds_limit(arm):
 def test_psmc_recovers_slower_with_larger_lambda(arm):
     """Large errors recover at the rate set by lambda (§5.2.6.3)."""
     ref = tr.step(arm, duration=7.0)
-    runs = cl.run_batch([{"arm": arm, "controller": JointPSMC(lam=lam), "reference": ref}
-                         for lam in (0.4, 0.8, 1.5)])
+    runs = cl.run_batch([ExperimentCase(arm, JointPSMC(lam=lam), ref) for lam in (0.4, 0.8, 1.5)])
     t_reach = []
     for r in runs:
         df = r.to_pandas()

@@ -29,6 +29,7 @@ from ..plant import layout as lay
 from ..plant.geometry import tcp_jacobian, tcp_position
 from ..plant.model import NWORK, NX, effect_state_length, rk4_step
 from ..plant.pneumatics import delta_p_to_set_values
+from .case import ExperimentCase, as_cases
 from .trajectories import REF_COLUMNS, Reference
 
 LOG_COLUMNS = (["t", "q1", "q2", "qd1", "qd2", "p1", "p2", "p3", "p4", "q1_meas", "q2_meas",
@@ -122,7 +123,10 @@ class ExperimentResult:
     diverged : bool
         True if the state blew up (the log is NaN from then on).
     meta : dict
-        Free-form metadata (sensor settings, variant labels).
+        Free-form metadata of the case; runs of
+        :func:`~.catalog.run_thesis_experiment` carry ``variant`` (the
+        :class:`~.catalog.ControllerVariant`), ``label``, ``family``,
+        ``controller_family``, ``ki_bar``, ``lambda_s`` and ``experiment``.
     """
 
     name: str
@@ -156,7 +160,7 @@ class ExperimentResult:
         if isinstance(name, str) and name in names and not name.startswith("int"):
             return self.log[:, names.index(name)]
         if isinstance(name, str) and name in REF_COLUMNS:
-            return self.reference.data[:, REF_COLUMNS.index(name)]
+            return self.reference.signal(name)
         raise KeyError(f"unknown signal {name!r}; choose from {self.signal_names()}")
 
     def signals(self, *names: str) -> np.ndarray:
@@ -177,12 +181,12 @@ class ExperimentResult:
 
     def tracking_error(self) -> np.ndarray:
         """Task-space position error ||r_d - r|| per sample [m]."""
-        return np.hypot(self.reference.data[:, 8] - self.log[:, 19],
-                        self.reference.data[:, 9] - self.log[:, 20])
+        return np.hypot(self.signal("x_d") - self.signal("x"),
+                        self.signal("y_d") - self.signal("y"))
 
     def tcp_speed(self) -> np.ndarray:
         """True TCP speed per sample [m/s]."""
-        return np.hypot(self.log[:, 21], self.log[:, 22])
+        return np.hypot(self.signal("xd"), self.signal("yd"))
 
     def plot(self, **kwargs):
         """Plot with :mod:`ppamsafety.report`; returns a matplotlib Figure.
@@ -207,12 +211,12 @@ def run_batch(cases, *, dt: float = 1e-3, substeps: int = 1) -> list:
 
     Parameters
     ----------
-    cases : sequence of dict
-        Each with keys ``arm`` (ArmParameters), ``controller`` (Controller),
-        ``reference`` (Reference), optional ``sensors`` (SensorConfig,
-        default realistic encoders and timing board), ``x0`` (initial state
-        (8,), default: at rest at the reference's first point), ``name`` and
-        ``meta`` (dict).
+    cases : sequence of ExperimentCase
+        The runs (plant, controller, reference, sensors, initial state,
+        name, metadata; see :class:`~.case.ExperimentCase`).  Dicts with
+        the same keys are still accepted for one release (converted with
+        :meth:`ExperimentCase.from_dict`, which rejects unknown keys) and
+        raise a ``DeprecationWarning``.
     dt : float
         Control period [s].
     substeps : int
@@ -221,19 +225,29 @@ def run_batch(cases, *, dt: float = 1e-3, substeps: int = 1) -> list:
     Returns
     -------
     list of ExperimentResult
+        In the order of ``cases``.
+
+    Raises
+    ------
+    TypeError
+        For a case that is neither an ExperimentCase nor a dict, or a
+        field of the wrong type.
+    ValueError
+        For references of different lengths or sample periods, or a bad
+        dict key.
     """
     from ..plant.model import rest_state
 
     check_range("dt", dt, 1e-5, 0.1, unit="s")
     substeps = check_int("substeps", substeps, 1, 1000)
-    cases = list(cases)
+    cases = as_cases(cases)
     if not cases:
         return []
-    n = cases[0]["reference"].n_steps
+    n = cases[0].reference.n_steps
     refs, ref_ids, noises, noise_ids = [], [], [], []
     X0, PP, PM, KIND, CPs, SC = [], [], [], [], [], []
     for c in cases:
-        ref = c["reference"]
+        ref = c.reference
         if ref.n_steps != n:
             raise ValueError("run_batch: all references must have the same number of samples")
         if abs(ref.dt - dt) > 1e-12:
@@ -244,19 +258,19 @@ def run_batch(cases, *, dt: float = 1e-3, substeps: int = 1) -> list:
             refs.append(ref)
             ids.append(key)
         ref_ids.append(ids.index(key))
-        sens = c.get("sensors", SensorConfig())
+        sens = c.sensors
         if sens.noise:
             noises.append(sens.noise_samples(n))
             noise_ids.append(len(noises) - 1)
         else:
             noise_ids.append(-1)
-        arm = c["arm"]
-        x0 = c.get("x0")
+        arm = c.arm
+        x0 = c.x0
         if x0 is None:
-            x0 = rest_state(ref.data[0, 0:2], arm)[0]
+            x0 = rest_state(ref.field("q_d")[0], arm)[0]
         X0.append(np.asarray(x0, dtype=float))
         PP.append(lay.pack(arm))
-        kind, C, Pm = _controller_rows(arm, c["controller"])
+        kind, C, Pm = _controller_rows(arm, c.controller)
         KIND.append(kind)
         CPs.append(C)
         PM.append(Pm)
@@ -274,19 +288,36 @@ def run_batch(cases, *, dt: float = 1e-3, substeps: int = 1) -> list:
                           np.array(noise_ids, dtype=np.int64), float(dt), substeps, LOG)
     out = []
     for i, c in enumerate(cases):
-        desc = {**c["controller"].describe(), "kind": c["controller"].kind}
-        out.append(ExperimentResult(c.get("name", c["reference"].name), desc, c["reference"],
-                                    LOG[i], bool(diverged[i]), dict(c.get("meta", {}))))
+        desc = {**c.controller.describe(), "kind": c.controller.kind}
+        out.append(ExperimentResult(c.name, desc, c.reference, LOG[i], bool(diverged[i]),
+                                    dict(c.meta)))
     return out
 
 
 def run(arm, controller, reference: Reference, *, sensors: SensorConfig | None = None,
         x0=None, dt: float = 1e-3, substeps: int = 1, name: str | None = None) -> ExperimentResult:
-    """Run one closed-loop experiment (see :func:`run_batch` for the arguments)."""
-    case = {"arm": arm, "controller": controller, "reference": reference,
-            "sensors": SensorConfig() if sensors is None else sensors}
-    if x0 is not None:
-        case["x0"] = x0
-    if name is not None:
-        case["name"] = name
+    """Run one closed-loop experiment.
+
+    Parameters
+    ----------
+    arm : ArmParameters
+        The plant.
+    controller : Controller
+    reference : Reference
+    sensors : SensorConfig, optional
+        Sensor models (default realistic encoders and timing board).
+    x0 : array_like, shape (8,), optional
+        Initial state (default: at rest at the reference's first angles).
+    dt : float
+        Control period [s].
+    substeps : int
+        RK4 steps per control period.
+    name : str, optional
+        Experiment name (default the reference's name).
+
+    Returns
+    -------
+    ExperimentResult
+    """
+    case = ExperimentCase(arm, controller, reference, sensors=sensors, x0=x0, name=name)
     return run_batch([case], dt=dt, substeps=substeps)[0]

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from .._validation import check_positive, check_range
+from .._validation import check_int, check_positive
 from .catalog import STEP_TIMES, SWITCH_TIME
 
 
@@ -76,7 +76,7 @@ def peak_speeds(result, *, t_from: float = 0.0, t_to: float | None = None) -> di
     """Peak TCP speed [m/s] and peak |qd1|, |qd2| [rad/s] (true values) in a window."""
     m = _window(result.t, t_from, t_to)
     v = result.tcp_speed()[m]
-    qd = np.abs(result.log[m][:, 3:5])
+    qd = np.abs(result.signals("qd1", "qd2")[m])
     return {"peak_tcp_speed": float(np.nanmax(v)), "peak_qd1": float(np.nanmax(qd[:, 0])),
             "peak_qd2": float(np.nanmax(qd[:, 1]))}
 
@@ -104,10 +104,10 @@ def step_metrics(result, *, t_event: float, t_end: float, joint: int = 0,
         ``t_reach`` (first time within ``tol`` [s]), ``t_settle`` (stays
         within ``tol`` until ``t_end`` [s]); NaN where not reached.
     """
-    check_range("joint", joint, 0, 1)
+    joint = check_int("joint", joint, 0, 1)
     t = result.t
-    q = result.log[:, 1 + joint]
-    qd_ref = result.reference.data[:, joint]
+    q = result.signal(f"q{joint + 1}")
+    qd_ref = result.reference.signal(f"q{joint + 1}_d")
     k0 = int(np.searchsorted(t, t_event - 1e-12))
     if k0 < 1 or k0 >= t.size:
         raise ValueError(f"step_metrics: t_event = {t_event} s is outside the record")

@@ -1,8 +1,10 @@
 """Reference trajectories of the thesis experiments (§5.3.4).
 
 A :class:`Reference` holds, per 1 kHz sample, the joint reference and its
-first three derivatives and the task-space reference and its velocity
-(layout of :mod:`ppamsafety.control.base`).  Task-space paths are converted
+first three derivatives and the task-space reference and its velocity: one
+row of the declared layout :data:`REFERENCE_ROW` (``"reference row"``), whose
+offsets :data:`R_Q_D`, :data:`R_QD_D`, :data:`R_QDD_D`, :data:`R_QDDD_D`,
+:data:`R_R_D`, :data:`R_RD_D` are the ones the controller kernels read.  Task-space paths are converted
 to joint space with the elbow-up inverse kinematics; joint derivatives are
 obtained by differentiating on a grid 8x finer than the control period
 (second-order central differences), separately on each smooth segment so a
@@ -29,18 +31,40 @@ import numpy as np
 import pandas as pd
 
 from .._validation import as_float_array, check_int, check_range
+from ..layouts import Field, Layout
 from ..plant import geometry as geo
 from ..units import DEG
 
 CIRCLE_CENTER = (0.44, 0.18)
 CIRCLE_RADIUS = 0.10
-REF_COLUMNS = ["q1_d", "q2_d", "qd1_d", "qd2_d", "qdd1_d", "qdd2_d", "qddd1_d", "qddd2_d",
-               "x_d", "y_d", "xd_d", "yd_d"]
+
+#: One reference sample (thesis §5.3.4): joint reference and its first three
+#: time derivatives (elbow-up inverse kinematics of the task-space path),
+#: task-space reference of the tool centre point and its velocity.
+REFERENCE_ROW = Layout("reference row", [
+    Field("q_d", 2, "rad", "desired link angles q1_d, q2_d", columns=("q1_d", "q2_d")),
+    Field("qd_d", 2, "rad/s", "desired joint velocities", columns=("qd1_d", "qd2_d")),
+    Field("qdd_d", 2, "rad/s^2", "desired joint accelerations", columns=("qdd1_d", "qdd2_d")),
+    Field("qddd_d", 2, "rad/s^3", "desired joint jerks", columns=("qddd1_d", "qddd2_d")),
+    Field("r_d", 2, "m", "desired tool-centre-point position (x, y)", columns=("x_d", "y_d")),
+    Field("rd_d", 2, "m/s", "desired tool-centre-point velocity", columns=("xd_d", "yd_d")),
+])
+#: Offsets of the fields of :data:`REFERENCE_ROW` (module constants for the kernels).
+R_Q_D, R_QD_D, R_QDD_D, R_QDDD_D, R_R_D, R_RD_D = REFERENCE_ROW.offsets(
+    "q_d", "qd_d", "qdd_d", "qddd_d", "r_d", "rd_d")
+#: Length of a reference row.
+NREF = REFERENCE_ROW.size
+#: Column names of :attr:`Reference.data` (generated from :data:`REFERENCE_ROW`).
+REF_COLUMNS = REFERENCE_ROW.columns()
 
 
 @dataclass(frozen=True)
 class Reference:
-    """A sampled reference: ``t`` (n,) [s] and ``data`` (n, 12) (see module doc)."""
+    """A sampled reference: ``t`` (n,) [s] and ``data`` (n, :data:`NREF`).
+
+    Each row of ``data`` is a :data:`REFERENCE_ROW` (columns
+    :data:`REF_COLUMNS`); read a column with :meth:`signal`.
+    """
 
     name: str
     t: np.ndarray
@@ -48,8 +72,33 @@ class Reference:
     dt: float
 
     def __post_init__(self):
-        if self.data.shape != (self.t.size, 12):
-            raise ValueError("Reference.data must have shape (len(t), 12)")
+        if self.data.shape != (self.t.size, NREF):
+            raise ValueError(f"Reference.data must have shape (len(t), {NREF}), got "
+                             f"{self.data.shape}")
+
+    def signal(self, name: str) -> np.ndarray:
+        """One reference column by name, shape (n,), SI units.
+
+        Parameters
+        ----------
+        name : str
+            A column of :data:`REF_COLUMNS`: ``q1_d``, ``q2_d`` [rad],
+            ``qd1_d``, ``qd2_d`` [rad/s], ``qdd1_d``, ``qdd2_d`` [rad/s^2],
+            ``qddd1_d``, ``qddd2_d`` [rad/s^3], ``x_d``, ``y_d`` [m],
+            ``xd_d``, ``yd_d`` [m/s].
+
+        Raises
+        ------
+        KeyError
+            For a name that is not a reference column.
+        """
+        if not (isinstance(name, str) and name in REF_COLUMNS):
+            raise KeyError(f"unknown reference signal {name!r}; choose from {REF_COLUMNS}")
+        return self.data[:, REFERENCE_ROW.column_index(name)]
+
+    def field(self, name: str) -> np.ndarray:
+        """One field of :data:`REFERENCE_ROW` for every sample, e.g. ``"r_d"`` -> (n, 2)."""
+        return self.data[:, REFERENCE_ROW.slice(name)]
 
     @property
     def n_steps(self) -> int:
@@ -81,7 +130,7 @@ def _segment(arm, path, t0, t1, dt, oversample=8):
     k0 = int(np.ceil(t0 / dt - 1e-9))
     k1 = int(np.ceil(t1 / dt - 1e-9))
     if k1 <= k0:
-        return np.empty((0, 12))
+        return np.empty((0, NREF))
     h = dt / oversample
     tf = np.arange(k0 * dt - 3 * h, (k1 - 1) * dt + 3.5 * h, h)
     r, rd = path(tf)
@@ -89,7 +138,14 @@ def _segment(arm, path, t0, t1, dt, oversample=8):
     q = np.unwrap(q, axis=0)
     d1, d2, d3 = _derivatives(q, h)
     idx = 3 + oversample * np.arange(k1 - k0)
-    return np.concatenate([q[idx], d1[idx], d2[idx], d3[idx], r[idx], rd[idx]], axis=1)
+    rows = REFERENCE_ROW.empty(k1 - k0)
+    rows[:, REFERENCE_ROW.slice("q_d")] = q[idx]
+    rows[:, REFERENCE_ROW.slice("qd_d")] = d1[idx]
+    rows[:, REFERENCE_ROW.slice("qdd_d")] = d2[idx]
+    rows[:, REFERENCE_ROW.slice("qddd_d")] = d3[idx]
+    rows[:, REFERENCE_ROW.slice("r_d")] = r[idx]
+    rows[:, REFERENCE_ROW.slice("rd_d")] = rd[idx]
+    return rows
 
 
 def circle_path(*, period: float, center=CIRCLE_CENTER, radius: float = CIRCLE_RADIUS,
@@ -136,9 +192,9 @@ def joint_steps(arm, *, q_levels, t_changes, duration: float, dt: float = 1e-3,
     t = np.arange(n) * dt
     seg = np.searchsorted(tc, t, side="right")
     q = lv[seg]
-    data = np.zeros((n, 12))
-    data[:, 0:2] = q
-    data[:, 8:10] = geo.forward_kinematics(q, arm)
+    data = REFERENCE_ROW.empty(n)
+    data[:, REFERENCE_ROW.slice("q_d")] = q
+    data[:, REFERENCE_ROW.slice("r_d")] = geo.forward_kinematics(q, arm)
     return Reference(name, t, data, dt)
 
 

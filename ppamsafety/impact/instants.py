@@ -25,14 +25,17 @@ def impact_states(result, arm) -> pd.DataFrame:
     """Per-sample impact initial conditions of an :class:`ExperimentResult`.
 
     Columns: t [s], q1, q2 [rad], qd1, qd2 [rad/s], K1, K2 [N m/rad]
-    (2.18 with the simulated pressures), tcp_speed [m/s].
+    (2.18 with the simulated pressures), tcp_speed [m/s]; samples after a
+    divergence (NaN state) are left out.  The record is read by signal name
+    (:meth:`ExperimentResult.signal`).
     """
-    log = result.log
-    ok = np.isfinite(log[:, 1])
-    q, qd, p = log[ok, 1:3], log[ok, 3:5], log[ok, 5:9]
+    ok = np.isfinite(result.signal("q1"))
+    q = result.signals("q1", "q2")[ok]
+    qd = result.signals("qd1", "qd2")[ok]
+    p = result.signals("p1", "p2", "p3", "p4")[ok]
     K = joint_stiffness(q, p, arm)
     v = np.einsum("nij,nj->ni", geo.jacobian(q, arm), qd)
-    return pd.DataFrame({"t": log[ok, 0], "q1": q[:, 0], "q2": q[:, 1], "qd1": qd[:, 0],
+    return pd.DataFrame({"t": result.t[ok], "q1": q[:, 0], "q2": q[:, 1], "qd1": qd[:, 0],
                          "qd2": qd[:, 1], "K1": K[:, 0], "K2": K[:, 1],
                          "tcp_speed": np.linalg.norm(v, axis=1)})
 

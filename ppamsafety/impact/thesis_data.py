@@ -1,12 +1,21 @@
-"""Reference results of the thesis' safety chapter (data, with citations)."""
+"""Reference results of the thesis' safety chapter (data, with citations).
+
+Table 6.1 is keyed by the fields of the controller variants
+(:data:`~ppamsafety.experiments.thesis_data.VARIANT_KEYS`: controller family,
+Ki, lambda) and joined to toolkit results on them with :func:`join_table_6_1`.
+"""
 
 from __future__ import annotations
 
+import math
+
 import pandas as pd
 
-#: Table 6.1: HIC and F_max [N] for the step response and the trajectory switch.
-#: Columns: label, controller, Ki [bar/(rad s)], lambda [s], HIC_step, Fmax_step,
-#: HIC_switch, Fmax_switch.
+#: Thesis Table 6.1 (§6.3.3): HIC and F_max [N] of the worst of four impact instants
+#: for the step response (fig. 5.17) and the trajectory switch (fig. 5.15), printed
+#: values.  Columns: label (the thesis' wording), controller (family), Ki
+#: [bar/(rad s)] (the PID's own Ki for PID, None for task PSMC), lambda [s] (None
+#: for PID), HIC_step, Fmax_step, HIC_switch, Fmax_switch.
 TABLE_6_1 = [
     ("PID", "PID", 2.0, None, 4.81, 1524.0, 3.02, 1004.0),
     ("PSMC joint, lambda 0.4, Ki 2", "PSMC joint", 2.0, 0.4, 0.23, 338.0, 0.10, 206.0),
@@ -28,9 +37,65 @@ FIG_6_3 = {"k_min": 1.0, "k_max": 6000.0, "max_change_N": 5.0, "max_change_rel":
 
 
 def table_6_1() -> pd.DataFrame:
-    """Table 6.1 as a DataFrame."""
-    return pd.DataFrame(TABLE_6_1, columns=["label", "controller", "Ki", "lambda", "HIC_step",
-                                            "Fmax_step", "HIC_switch", "Fmax_switch"])
+    """Thesis Table 6.1 (§6.3.3) as a DataFrame, one row per controller variant.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns ``label``, ``controller``, ``Ki``, ``lambda`` (as printed),
+        the keys ``controller_family``, ``ki_bar`` [bar/(rad s)],
+        ``lambda_s`` [s] (NaN where a gain does not apply), and
+        ``HIC_step``, ``Fmax_step``, ``HIC_switch``, ``Fmax_switch`` [N].
+    """
+    t = pd.DataFrame(TABLE_6_1, columns=["label", "controller", "Ki", "lambda", "HIC_step",
+                                         "Fmax_step", "HIC_switch", "Fmax_switch"])
+    nan = math.nan
+    t.insert(4, "controller_family", t["controller"])
+    t.insert(5, "ki_bar", [nan if pd.isna(k) else float(k) for k in t["Ki"]])
+    t.insert(6, "lambda_s", [nan if pd.isna(v) else float(v) for v in t["lambda"]])
+    return t
+
+
+def table_6_1_long() -> pd.DataFrame:
+    """Table 6.1 with one row per (variant, experiment), keyed for :func:`join_table_6_1`.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns ``controller_family``, ``ki_bar``, ``lambda_s``,
+        ``experiment`` (``"step"`` or ``"switch"``), ``HIC_thesis``,
+        ``Fmax_thesis`` [N].
+    """
+    t = table_6_1()
+    keys = ["controller_family", "ki_bar", "lambda_s"]
+    parts = [t[keys].assign(experiment=exp, HIC_thesis=t[f"HIC_{exp}"],
+                            Fmax_thesis=t[f"Fmax_{exp}"]) for exp in ("step", "switch")]
+    return pd.concat(parts, ignore_index=True)
+
+
+def join_table_6_1(results: pd.DataFrame, *, complete: bool | None = None) -> pd.DataFrame:
+    """Add ``HIC_thesis`` and ``Fmax_thesis`` of Table 6.1 to toolkit results.
+
+    Parameters
+    ----------
+    results : pandas.DataFrame
+        One row per (variant, experiment) with the columns
+        ``controller_family``, ``ki_bar``, ``lambda_s`` and ``experiment``.
+    complete : bool, optional
+        Require every Table 6.1 row of the experiments present to find a
+        result (default: when all ten variants ran); see
+        :func:`ppamsafety.experiments.thesis_data.join_thesis`.
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``results`` (row order kept) with ``HIC_thesis`` and ``Fmax_thesis``.
+    """
+    from ..experiments.thesis_data import join_thesis
+
+    return join_thesis(results, table_6_1_long(), on=("experiment",),
+                       take=("HIC_thesis", "Fmax_thesis"), complete=complete,
+                       what="thesis Table 6.1")
 
 
 def table_6_1_pairs() -> pd.DataFrame:

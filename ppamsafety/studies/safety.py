@@ -11,7 +11,7 @@ import pandas as pd
 
 from ..experiments.catalog import run_thesis_experiment, thesis_variants, variant_family
 from ..impact.instants import HEURISTICS, evaluate_experiment, heuristic_instants, impact_states
-from ..impact.thesis_data import table_6_1
+from ..impact.thesis_data import join_table_6_1
 from ..params import thesis_arm
 from ..params.head import MAXILLA_FRACTURE_N, head_model
 from ..report.tables import markdown_table
@@ -51,24 +51,22 @@ def every_instant_case(experiment: str, index: int, every: int) -> pd.DataFrame:
 
 def _heuristic_table(arm, head):
     rows, states, worst = [], {}, {}
-    t61 = table_6_1()
     for exp in EXPERIMENTS:
         res = run_thesis_experiment(arm, exp)
-        for i, r in enumerate(res):
+        for r in res:
             label = r.meta["label"]
             res_ev = evaluate_experiment(r, arm, head=head, history=True)
             ev = res_ev.summary
             w = ev.loc[ev["HIC36"].idxmax()]
             wf = ev.loc[ev["F_max"].idxmax()]
-            th = t61.iloc[i]
             rows.append({"experiment": exp, "label": label, "family": r.meta["family"],
                          "lambda": r.meta["lambda_s"], "HIC36": w.HIC36, "HIC15": w.HIC15,
                          "F_max": wf.F_max, "instant_HIC": w.instant, "t0_HIC": w.t0,
                          "tcp_speed": wf.tcp_speed, "K1": wf.K1, "K2": wf.K2,
-                         "HIC_thesis": th[f"HIC_{exp}"], "Fmax_thesis": th[f"Fmax_{exp}"]})
+                         **r.meta["variant"].keys()})
             states[(exp, label)] = impact_states(r, arm)
             worst[(exp, label)] = res_ev.histories[int(ev["HIC36"].idxmax())]
-    df = pd.DataFrame(rows)
+    df = join_table_6_1(pd.DataFrame(rows), complete=True)    # on the variant fields
     df["HIC_ratio"] = df["HIC36"] / df["HIC_thesis"]
     df["Fmax_ratio"] = df["F_max"] / df["Fmax_thesis"]
     return df, states, worst

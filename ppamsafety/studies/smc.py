@@ -33,6 +33,7 @@ import pandas as pd
 
 from ..control import JointPSMC, SensorConfig, SlidingModeControl
 from ..experiments import trajectories as tr
+from ..experiments.case import ExperimentCase
 from ..experiments.closed_loop import run_batch
 from ..experiments.metrics import chattering_index, command_increment_rms, tracking_stats
 from ..params import thesis_arm
@@ -113,9 +114,9 @@ def tune(arm=None, *, poles=TUNE_POLES, gain_ratios=TUNE_GAIN_RATIO, gammas=TUNE
     cases = []
     for p, kg, g in grid:
         for plant in (arm, _heavy(arm)):
-            cases.append({"arm": plant, "reference": ref, "sensors": sens,
-                          "controller": SlidingModeControl(poles=p, gain=kg * g, boundary_layer=g,
-                                                           model_links=arm.links)})
+            cases.append(ExperimentCase(
+                plant, SlidingModeControl(poles=p, gain=kg * g, boundary_layer=g,
+                                          model_links=arm.links), ref, sensors=sens))
     ev = _evaluate(run_batch(cases), warmup)
     rows = []
     for i, (p, kg, g) in enumerate(grid):
@@ -186,7 +187,7 @@ def sweep(arm=None, *, gammas=None, t_scales=T_SCALES, model_factor=MODEL_FACTOR
             for g in gammas:
                 c = SlidingModeControl(boundary_layer=float(g),
                                        model_time_constants=tuple(mf * t for t in Tp), **kw)
-                cases.append({"arm": plant, "controller": c, "reference": ref, "sensors": sens})
+                cases.append(ExperimentCase(plant, c, ref, sensors=sens))
                 keys.append((sc, mname, float(g), Tp[0], mf * Tp[0]))
     res = run_batch(cases)
     ev = _evaluate(res, warmup)
@@ -223,8 +224,7 @@ def psmc_reference(arm=None, *, warmup=WARMUP, evaluate=EVALUATE, sensors=None) 
     """
     arm = thesis_arm() if arm is None else arm
     ref = tr.circle(arm, period=PERIOD, duration=warmup + evaluate)
-    r = run_batch([{"arm": arm, "controller": JointPSMC(), "reference": ref,
-                    "sensors": SensorConfig() if sensors is None else sensors}])
+    r = run_batch([ExperimentCase(arm, JointPSMC(), ref, sensors=sensors)])
     return {**_evaluate(r, warmup)[0], "result": r[0]}
 
 
@@ -334,8 +334,8 @@ def compute(*, quick: bool = False, arm=None) -> SmcStudy:
     sw, kept = sweep(arm, gammas=gammas, warmup=warmup, evaluate=evaluate, keep_runs=keep)
     ps = psmc_reference(arm, warmup=warmup, evaluate=evaluate)
     ref = tr.circle(arm, period=PERIOD, duration=warmup + evaluate)
-    sens_ev = _evaluate(run_batch([{"arm": arm, "controller": default, "reference": ref,
-                                    "sensors": sc} for sc in SENSOR_CASES.values()]), warmup)
+    sens_ev = _evaluate(run_batch([ExperimentCase(arm, default, ref, sensors=sc)
+                                   for sc in SENSOR_CASES.values()]), warmup)
     sens_tab = pd.DataFrame({"sensors (SMC defaults, T = 60 ms)": list(SENSOR_CASES),
                              "chattering [bar]": [e["chattering_Pa"] / BAR for e in sens_ev],
                              "mean error [mm]": [1e3 * e["mean_error_m"] for e in sens_ev]})

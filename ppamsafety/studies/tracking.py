@@ -23,6 +23,7 @@ from ..control.psmc import TABLE_5_1_JOINT
 from ..experiments import catalog
 from ..experiments.conclusions import conclusions_table, evaluate_conclusions
 from ..experiments.metrics import peak_speeds, step_metrics, tracking_stats
+from ..experiments.thesis_data import join_thesis, table_5_2
 from ..experiments.trajectories import CIRCLE_CENTER
 from ..report.tables import markdown_table
 from ..units import BAR
@@ -30,33 +31,19 @@ from . import Section, resolve_arm, responses
 
 PERIODS = (5.0, 10.0, 20.0)
 
-#: Thesis Table 5.2 [m]: rows in Table 6.1 order (labels lost in the text extraction; this
-#: order is the one consistent with §5.3.5), columns P = 5, 10, 20 s x (mean, max).
-THESIS_TABLE_5_2 = np.array([
-    [0.0130, 0.0188, 0.0084, 0.0146, 0.0048, 0.0096],   # PID
-    [0.0140, 0.0197, 0.0094, 0.0161, 0.0054, 0.0104],   # PSMC joint Ki=2  lambda=0.4
-    [0.0138, 0.0193, 0.0094, 0.0167, 0.0055, 0.0104],   # PSMC joint Ki=2  lambda=0.8
-    [0.0136, 0.0189, 0.0095, 0.0168, 0.0058, 0.0115],   # PSMC joint Ki=2  lambda=1.5
-    [0.0041, 0.0082, 0.0022, 0.0053, 0.0011, 0.0039],   # PSMC joint Ki=12 lambda=0.4
-    [0.0038, 0.0078, 0.0022, 0.0059, 0.0014, 0.0057],   # PSMC joint Ki=12 lambda=0.8
-    [0.0037, 0.0080, 0.0021, 0.0061, 0.0016, 0.0060],   # PSMC joint Ki=12 lambda=1.5
-    [0.0221, 0.0447, 0.0123, 0.0277, 0.0060, 0.0144],   # PSMC task lambda=0.4
-    [0.0222, 0.0474, 0.0125, 0.0285, 0.0061, 0.0145],   # PSMC task lambda=0.8
-    [0.0222, 0.0517, 0.0125, 0.0295, 0.0063, 0.0149],   # PSMC task lambda=1.5
-])
 
 SENSORS = {"timing board": SensorConfig(), "ideal velocity": SensorConfig(velocity="ideal")}
 
 
 def thesis_table() -> pd.DataFrame:
-    """Thesis Table 5.2 in long format: ``variant``, ``period_s``, ``thesis_mean_m``, ``thesis_max_m``."""
-    labels = [lab for lab, _ in catalog.thesis_variants()]
-    rows = []
-    for i, lab in enumerate(labels):
-        for k, P in enumerate(PERIODS):
-            rows.append({"variant": lab, "period_s": P, "thesis_mean_m": THESIS_TABLE_5_2[i, 2 * k],
-                         "thesis_max_m": THESIS_TABLE_5_2[i, 2 * k + 1]})
-    return pd.DataFrame(rows)
+    """Thesis Table 5.2 (§5.3.5) in long format, keyed by the variant fields and ``period_s``.
+
+    Columns ``controller_family``, ``ki_bar``, ``lambda_s`` (the join keys,
+    :data:`~ppamsafety.experiments.thesis_data.VARIANT_KEYS`), ``variant``
+    (display label), ``period_s``, ``thesis_mean_m``, ``thesis_max_m`` [m];
+    see :func:`ppamsafety.experiments.thesis_data.table_5_2`.
+    """
+    return table_5_2()
 
 
 def circle_errors(arm, variants, *, periods=PERIODS, sensors=None, warmup=catalog.CIRCLE_WARMUP,
@@ -82,7 +69,9 @@ def circle_errors(arm, variants, *, periods=PERIODS, sensors=None, warmup=catalo
     -------
     errors : pandas.DataFrame
         Long format: ``variant``, ``family``, ``lambda_s``, ``period_s``,
-        ``mean_m``, ``max_m``, ``diverged``.
+        ``mean_m``, ``max_m``, ``diverged``, ``controller_family``,
+        ``ki_bar`` (the last two with ``lambda_s``: the keys of the thesis
+        tables).
     runs : dict
         period [s] -> list of ExperimentResult (order of ``variants``).
     """
@@ -96,13 +85,23 @@ def circle_errors(arm, variants, *, periods=PERIODS, sensors=None, warmup=catalo
             s = tracking_stats(r, t_from=warmup)
             rows.append({"variant": r.meta["label"], "family": r.meta["family"],
                          "lambda_s": r.meta["lambda_s"], "period_s": P, "mean_m": s["mean"],
-                         "max_m": s["max"], "diverged": r.diverged})
+                         "max_m": s["max"], "diverged": r.diverged,
+                         "controller_family": r.meta["controller_family"],
+                         "ki_bar": r.meta["ki_bar"]})
     return pd.DataFrame(rows), runs
 
 
 def compare_with_thesis(errors: pd.DataFrame) -> pd.DataFrame:
-    """Join toolkit errors with Table 5.2 and add the ratios toolkit / thesis."""
-    d = errors.merge(thesis_table(), on=["variant", "period_s"], how="left")
+    """Join toolkit errors with Table 5.2 and add the ratios toolkit / thesis.
+
+    The join is on the variant fields (``controller_family``, ``ki_bar``,
+    ``lambda_s``) and ``period_s``, one to one; when all thesis variants are
+    in ``errors`` every thesis cell must find its result
+    (:func:`~ppamsafety.experiments.thesis_data.join_thesis`).  Variants that
+    are not in the thesis get NaN thesis values.
+    """
+    d = join_thesis(errors, thesis_table(), on=("period_s",),
+                    take=("thesis_mean_m", "thesis_max_m"), what="thesis Table 5.2")
     d["ratio_mean"] = d.mean_m / d.thesis_mean_m
     d["ratio_max"] = d.max_m / d.thesis_max_m
     return d

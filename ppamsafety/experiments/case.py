@@ -1,0 +1,166 @@
+"""A typed closed-loop experiment case: what :func:`~.closed_loop.run_batch` runs.
+
+An :class:`ExperimentCase` names the plant, the controller, the reference,
+the sensor models and optionally the initial state of one closed-loop run.
+Every field is checked when the case is built, so a wrong argument fails
+there, with the field's name, instead of deep inside the compiled kernel::
+
+    >>> from ppamsafety.params import thesis_arm
+    >>> from ppamsafety.control import PID
+    >>> from ppamsafety.experiments import trajectories as tr
+    >>> arm = thesis_arm()
+    >>> case = ExperimentCase(arm, PID(), tr.step(arm, duration=3.0))
+    >>> case.name
+    'step'
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass, field, fields
+from typing import Mapping
+
+import numpy as np
+
+from ..control.base import Controller
+from ..control.sensors import SensorConfig
+from ..params.arm import ArmParameters
+from ..plant.model import NX
+from .trajectories import Reference
+
+
+def _type_error(name: str, value, allowed: str) -> TypeError:
+    return TypeError(f"ExperimentCase.{name} must be {allowed}, got {type(value).__name__} "
+                     f"{value!r:.80}")
+
+
+@dataclass(frozen=True, eq=False)
+class ExperimentCase:
+    """One closed-loop experiment to run.
+
+    Parameters
+    ----------
+    arm : ArmParameters
+        The plant (and, through the controller, its model).
+    controller : Controller
+        PID, joint / task PSMC, SMC or gravity compensation.
+    reference : Reference
+        The reference trajectory; its length sets the run's length.
+    sensors : SensorConfig, optional
+        Encoder and velocity-sensor models (default ``SensorConfig()``:
+        realistic encoders and timing board).
+    x0 : array_like, shape (8,), optional
+        Initial plant state (q1, q2 [rad], qd1, qd2 [rad/s], p1..p4 [Pa]);
+        default None: at rest at the reference's first joint angles.
+    name : str, optional
+        Experiment name (default: the reference's name).
+    meta : mapping, optional
+        Free-form metadata copied to ``ExperimentResult.meta``.
+
+    Raises
+    ------
+    TypeError
+        For a field of the wrong type (the message names the field).
+    ValueError
+        For an ``x0`` of the wrong shape or with non-finite values.
+    """
+
+    arm: ArmParameters
+    controller: Controller
+    reference: Reference
+    sensors: SensorConfig = field(default_factory=SensorConfig)
+    x0: np.ndarray | None = None
+    name: str | None = None
+    meta: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        if not isinstance(self.arm, ArmParameters):
+            raise _type_error("arm", self.arm, "an ArmParameters")
+        if not isinstance(self.controller, Controller):
+            raise _type_error("controller", self.controller, "a Controller (PID, JointPSMC, "
+                              "TaskPSMC, SlidingModeControl, GravityCompensation)")
+        if not isinstance(self.reference, Reference):
+            raise _type_error("reference", self.reference, "a Reference")
+        if self.sensors is None:
+            object.__setattr__(self, "sensors", SensorConfig())
+        elif not isinstance(self.sensors, SensorConfig):
+            raise _type_error("sensors", self.sensors, "a SensorConfig")
+        if self.x0 is not None:
+            try:
+                x0 = np.array(self.x0, dtype=float)
+            except (TypeError, ValueError):
+                raise ValueError(f"ExperimentCase.x0 must be {NX} numbers, got "
+                                 f"{self.x0!r:.80}") from None
+            if x0.shape != (NX,):
+                raise ValueError(f"ExperimentCase.x0 must have shape ({NX},) (q1, q2, qd1, qd2, "
+                                 f"p1..p4), got shape {x0.shape}")
+            if not np.all(np.isfinite(x0)):
+                raise ValueError(f"ExperimentCase.x0 must be finite, got {x0.tolist()}")
+            x0.setflags(write=False)
+            object.__setattr__(self, "x0", x0)
+        if self.name is None:
+            object.__setattr__(self, "name", self.reference.name)
+        elif not isinstance(self.name, str):
+            raise _type_error("name", self.name, "a str or None")
+        if self.meta is None:
+            object.__setattr__(self, "meta", {})
+        elif not isinstance(self.meta, Mapping):
+            raise _type_error("meta", self.meta, "a mapping (dict)")
+        else:
+            object.__setattr__(self, "meta", dict(self.meta))
+
+    @classmethod
+    def from_dict(cls, case: Mapping) -> "ExperimentCase":
+        """A case from the old dict form (keys = the field names).
+
+        Parameters
+        ----------
+        case : mapping
+            Keys ``arm``, ``controller``, ``reference`` (required),
+            ``sensors``, ``x0``, ``name``, ``meta`` (optional).
+
+        Raises
+        ------
+        ValueError
+            For an unknown or a missing required key (named in the message).
+        """
+        if not isinstance(case, Mapping):
+            raise TypeError(f"an experiment case must be an ExperimentCase (or, deprecated, a "
+                            f"dict), got {type(case).__name__}")
+        names = [f.name for f in fields(cls)]
+        unknown = [k for k in case if k not in names]
+        if unknown:
+            raise ValueError(f"experiment case has unknown key(s) {unknown}; allowed: {names}")
+        missing = [k for k in ("arm", "controller", "reference") if k not in case]
+        if missing:
+            raise ValueError(f"experiment case lacks the required key(s) {missing}")
+        return cls(**case)
+
+
+def as_cases(cases) -> list:
+    """Cases given as :class:`ExperimentCase` s (or deprecated dicts) -> list of ExperimentCase.
+
+    Parameters
+    ----------
+    cases : iterable of ExperimentCase or dict
+        A dict is converted with :meth:`ExperimentCase.from_dict` (one
+        ``DeprecationWarning`` per call).
+    """
+    out, warned = [], False
+    for i, c in enumerate(cases):
+        if isinstance(c, ExperimentCase):
+            out.append(c)
+            continue
+        if isinstance(c, Mapping):
+            if not warned:
+                warnings.warn("run_batch: dict cases are deprecated; pass ExperimentCase objects "
+                              "(ppamsafety.experiments.ExperimentCase)", DeprecationWarning,
+                              stacklevel=3)
+                warned = True
+            out.append(ExperimentCase.from_dict(c))
+            continue
+        raise TypeError(f"cases[{i}] must be an ExperimentCase, got {type(c).__name__}")
+    return out
+
+
+__all__ = ["ExperimentCase", "as_cases"]
