@@ -72,8 +72,11 @@ extreme first, §3.6.6), and
 A turning point of eps inside one step is thus registered at the end of the
 step instead of at its exact instant: an O(dt) error in the position of one
 reversal, of the same order as the sampling of any discrete-time record.
-Costs are measured in the final report of the issue (one Everett evaluation
-per peek without reversal, about 0.2-0.5 us).
+Cost (measured, 2-core machine under a load average of ~5.6, so upper
+bounds): one Everett evaluation per call without reversal, 0.85 us per
+:func:`preisach_update` and 1.0 us per :func:`preisach_peek` along a smooth
+contraction-like path; 2.2 us per update in the worst case of a reversal at
+every call (two Everett evaluations).
 """
 
 from __future__ import annotations
