@@ -1,0 +1,1 @@
+"""System identification of the arm (thesis §3.5)."""
