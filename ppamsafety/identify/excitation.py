@@ -296,7 +296,7 @@ def _metrics(X, dt, arm, n_period, friction, sign_velocity):
 
 
 def design_excitation(arm, *, harmonics: int = 5, period: float = 10.0, friction: bool = True,
-                      offset=None, n_random: int = 12, maxfev: int = 40, seed: int = 0,
+                      offset=None, n_random: int = 8, maxfev: int = 24, seed: int = 0,
                       dt: float = 2e-3, sign_velocity: float | None = None) -> ExcitationDesign:
     """Fourier Delta-p excitation minimising cond(normalised K_f^T K_f) (§3.5.2.4).
 
