@@ -58,6 +58,9 @@ LOG = Layout("closed-loop log", [
 LOG_COLUMNS = LOG.columns()
 NLOG = LOG.size
 #: Names of the internal log columns per controller kind (from each kind's INTERNALS layout).
+# placeholder names of internal columns a kind does not use (dropped by ExperimentResult); not
+# ``startswith("int")``, which also dropped the PID's "integral1", "integral2"
+_UNNAMED = frozenset(LOG.field("internals").column_names())
 INTERNAL_NAMES = {kind: cls.INTERNALS.columns() for kind, cls in CONTROLLER_CLASSES.items()
                   if cls.INTERNALS.size}
 
@@ -170,7 +173,7 @@ class ExperimentResult:
 
     def signal_names(self) -> list:
         """Names accepted by :meth:`signal`: logged signals, controller internals, reference."""
-        return [c for c in self._log_names() if not c.startswith("int")] + list(REF_COLUMNS)
+        return [c for c in self._log_names() if c not in _UNNAMED] + list(REF_COLUMNS)
 
     def signal(self, name: str) -> np.ndarray:
         """One signal by name, shape (n,), SI units.
@@ -181,7 +184,7 @@ class ExperimentResult:
         (e.g. ``s1`` for PSMC) and the reference columns (``q1_d``, ``x_d``, ...).
         """
         names = self._log_names()
-        if isinstance(name, str) and name in names and not name.startswith("int"):
+        if isinstance(name, str) and name in names and name not in _UNNAMED:
             return self.log[:, names.index(name)]
         if isinstance(name, str) and name in REF_COLUMNS:
             return self.reference.data[:, REF_COLUMNS.index(name)]
@@ -194,7 +197,7 @@ class ExperimentResult:
     def to_pandas(self) -> pd.DataFrame:
         """All signals as a DataFrame (SI units), reference columns included."""
         df = pd.DataFrame(self.log, columns=self._log_names())
-        df = df[[c for c in df.columns if not c.startswith("int")]]
+        df = df[[c for c in df.columns if c not in _UNNAMED]]
         ref = pd.DataFrame(self.reference.data, columns=REF_COLUMNS)
         return pd.concat([df, ref], axis=1)
 
