@@ -20,7 +20,6 @@ import pandas as pd
 
 from .._jit import kernel
 from .._validation import check_int, check_range
-from ..control.base import ControllerKind
 from ..control.dispatch import CONTROLLER_CLASSES, NINT, NSCRATCH, NSTATE, controller_step
 from ..control.sensors import (N_Q, N_QD, NSENSOR, SENSOR_NOISE, SensorConfig, sensor_init,
                                sensor_read, sensor_reset, sensor_track)
