@@ -2,15 +2,17 @@
 
 Controllers: :class:`PID`, :class:`JointPSMC`, :class:`TaskPSMC`,
 :class:`SlidingModeControl`, :class:`GravityCompensation`; sensors:
-:class:`SensorConfig`.
+:class:`SensorConfig`.  Flags: :class:`ControllerKind`, :class:`GCMode`,
+:class:`PIDDerivative`, :class:`SMCCoupling`.
 """
 
-from .base import Controller
-from .gravity import GravityCompensation
-from .pid import PID
+from .base import Controller, ControllerKind
+from .gravity import GCMode, GravityCompensation
+from .pid import PID, PIDDerivative
 from .psmc import JointPSMC, TaskPSMC
 from .sensors import SensorConfig
-from .smc import SlidingModeControl
+from .smc import SlidingModeControl, SMCCoupling
 
-__all__ = ["Controller", "GravityCompensation", "PID", "JointPSMC", "TaskPSMC",
-           "SlidingModeControl", "SensorConfig"]
+__all__ = ["Controller", "ControllerKind", "GravityCompensation", "GCMode", "PID",
+           "PIDDerivative", "JointPSMC", "TaskPSMC", "SlidingModeControl", "SMCCoupling",
+           "SensorConfig"]

@@ -1,30 +1,78 @@
 """Common machinery of the discrete-time controllers.
 
 Every controller is a small object with explicit state: ``pack()`` gives its
-parameter vector, ``state`` its internal state (a numpy array), ``reset()``
+parameter row, ``state`` its internal state (a numpy array), ``reset()``
 clears it, and ``step(...)`` computes one 1 kHz control update in Python
 (for inspection and tests).  The closed-loop runner calls the very same
-compiled step functions (:mod:`ppamsafety.control.dispatch`), so a controller
-behaves identically in a single step and inside a batched simulation.
+compiled step functions (:mod:`ppamsafety.control.dispatch`) with rows of
+exactly the same width, so a controller behaves identically in a single step
+and inside a batched simulation.
+
+Each controller class declares its flat arrays once, as
+:class:`~ppamsafety.layouts.Layout` s (issue 7):
+
+* ``PARAMS`` -- the packed parameter row (gains, limits, flag codes);
+* ``STATE`` -- the state carried from one sample to the next;
+* ``INTERNALS`` -- the signals logged per step (their column names are the
+  names of the closed-loop log's internal columns);
+* ``SCRATCH`` -- the work memory one step may use.
+
+:mod:`ppamsafety.control.dispatch` sizes every buffer from the maximum of
+these declarations.
 
 All controllers output a pressure difference Delta p per joint [Pa]
 (Delta-p approach (3.7)); the runner turns it into valve set values.
 
-Reference vector layout (per sample, 12 values): q_d (2), qd_d (2),
-qdd_d (2), qddd_d (2) [rad, rad/s, ...], r_d (2), rd_d (2) [m, m/s].
+Reference row (per sample, 12 values, :data:`REF_COLUMNS` of
+:mod:`ppamsafety.experiments.trajectories`): q_d (2), qd_d (2), qdd_d (2),
+qddd_d (2) [rad, rad/s, ...], r_d (2), rd_d (2) [m, m/s].  Kernels index it
+with the ``R_*`` constants below.
 """
 
 from __future__ import annotations
 
+from enum import IntEnum
+
 import numpy as np
 
 from .._validation import as_float_array, check_range
+from ..layouts import Layout
 
-KIND_GC, KIND_PID, KIND_PSMC_JOINT, KIND_PSMC_TASK, KIND_SMC = 0, 1, 2, 3, 4
-NSTATE = 8        #: controller state length
-NINT = 8          #: controller internals logged per step
-NREF = 12         #: reference vector length
-NSCRATCH = 32     #: scratch floats a controller step may use
+
+class ControllerKind(IntEnum):
+    """Code of a controller kind, selecting its compiled step function."""
+
+    GC = 0
+    PID = 1
+    PSMC_JOINT = 2
+    PSMC_TASK = 3
+    SMC = 4
+
+
+KIND_GC, KIND_PID, KIND_PSMC_JOINT, KIND_PSMC_TASK, KIND_SMC = (
+    ControllerKind.GC, ControllerKind.PID, ControllerKind.PSMC_JOINT, ControllerKind.PSMC_TASK,
+    ControllerKind.SMC)
+
+# -- reference row -------------------------------------------------------------------------
+# TEMPORARY: a copy of ``experiments.trajectories.REF_COLUMNS`` (tests/test_control_layouts.py
+# asserts they are equal).  It cannot be imported from there: importing
+# ``ppamsafety.experiments.trajectories`` runs ``ppamsafety/experiments/__init__.py``, which
+# imports the catalogue, which imports this package (circular import).  To be repointed to the
+# declared REF layout once it exists in a module importable from here.
+_REF_COLUMNS = ("q1_d", "q2_d", "qd1_d", "qd2_d", "qdd1_d", "qdd2_d", "qddd1_d", "qddd2_d",
+                "x_d", "y_d", "xd_d", "yd_d")
+NREF = len(_REF_COLUMNS)                  #: reference row length
+R_Q = _REF_COLUMNS.index("q1_d")          #: q_d (2) [rad]
+R_QD = _REF_COLUMNS.index("qd1_d")        #: qd_d (2) [rad/s]
+R_QDD = _REF_COLUMNS.index("qdd1_d")      #: qdd_d (2) [rad/s^2]
+R_QDDD = _REF_COLUMNS.index("qddd1_d")    #: qddd_d (2) [rad/s^3]
+R_X = _REF_COLUMNS.index("x_d")           #: x_d [m]
+R_Y = _REF_COLUMNS.index("y_d")           #: y_d [m]
+R_XD = _REF_COLUMNS.index("xd_d")         #: xd_d [m/s]
+R_YD = _REF_COLUMNS.index("yd_d")         #: yd_d [m/s]
+
+#: An empty layout, for a controller without state or internals.
+EMPTY = Layout("empty", [], register=False)
 
 
 def pair(name: str, value, *, lo: float = 0.0, hi: float = np.inf, unit: str = "") -> tuple:
@@ -34,19 +82,28 @@ def pair(name: str, value, *, lo: float = 0.0, hi: float = np.inf, unit: str = "
 
 
 class Controller:
-    """Base class: explicit state, ``reset`` and a Python-level ``step``."""
+    """Base class: declared layouts, explicit state, ``reset`` and a Python-level ``step``.
+
+    Subclasses set ``kind`` (a :class:`ControllerKind`), ``PARAMS``, ``STATE``,
+    ``INTERNALS`` (:class:`~ppamsafety.layouts.Layout`) and ``SCRATCH`` (int,
+    number of work floats one step uses), and implement :meth:`pack`.
+    """
 
     kind: int = -1
     name: str = "controller"
+    PARAMS: Layout = EMPTY
+    STATE: Layout = EMPTY
+    INTERNALS: Layout = EMPTY
+    SCRATCH: int = 0
 
     def __init__(self):
-        self.state = np.zeros(NSTATE)
-        self.internals = np.zeros(NINT)
+        self.state = self.initial_state()
+        self.internals = np.zeros(self.INTERNALS.size)
         self._k = 0
 
     # -- to be provided by subclasses ----------------------------------------
     def pack(self) -> np.ndarray:
-        """Parameter vector for the compiled step function."""
+        """Parameter row for the compiled step function (layout ``PARAMS``)."""
         raise NotImplementedError
 
     def model_row(self, arm) -> np.ndarray:
@@ -60,17 +117,22 @@ class Controller:
 
     # -- common ---------------------------------------------------------------
     def initial_state(self) -> np.ndarray:
-        """Internal state at the start of an experiment."""
-        return np.zeros(NSTATE)
+        """Internal state at the start of an experiment (layout ``STATE``)."""
+        return self.STATE.empty()
 
     def reset(self) -> None:
         """Forget all history (integrators, proxy state)."""
         self.state = self.initial_state()
-        self.internals = np.zeros(NINT)
+        self.internals = np.zeros(self.INTERNALS.size)
         self._k = 0
 
     def step(self, arm, q_meas, qd_meas, p_meas, ref, *, dt: float = 1e-3) -> np.ndarray:
         """One control update; returns Delta p per joint [Pa] (incl. feedforward).
+
+        The compiled step function receives the same rows as in the
+        closed-loop runner: the parameter row of exactly ``PARAMS.size``
+        slots, the state of ``STATE.size``, internals of ``INTERNALS.size``
+        and a scratch buffer of ``SCRATCH`` floats.
 
         Parameters
         ----------
@@ -81,7 +143,7 @@ class Controller:
         p_meas : array_like, shape (4,)
             Measured gauge pressures [Pa].
         ref : array_like, shape (12,)
-            Reference (see module docstring).
+            Reference row (see module docstring).
         dt : float
             Control period [s].
         """
@@ -93,7 +155,7 @@ class Controller:
         pm = as_float_array("p_meas", p_meas, shape_tail=(4,)).reshape(4)
         r = as_float_array("ref", ref, shape_tail=(NREF,)).reshape(NREF)
         out = np.zeros(2)
-        controller_step(self.kind, self.pack(), self.state, self.model_row(arm), self._k, dt,
-                        qm, qdm, pm, r, out, self.internals, np.zeros(NSCRATCH))
+        controller_step(int(self.kind), self.pack(), self.state, self.model_row(arm), self._k,
+                        dt, qm, qdm, pm, r, out, self.internals, np.zeros(self.SCRATCH))
         self._k += 1
         return out

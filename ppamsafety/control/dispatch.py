@@ -1,22 +1,51 @@
-"""One compiled entry point for every controller kind (used by the runner)."""
+"""One compiled entry point for every controller kind, and the buffer sizes of the runner.
+
+The sizes of the buffers the closed-loop runner and :meth:`Controller.step`
+hand to a step function are computed here from the layouts every controller
+class declares (``PARAMS``, ``STATE``, ``INTERNALS``, ``SCRATCH``), never
+written as literals: a buffer cannot be smaller than a declared need.
+"""
 
 from __future__ import annotations
 
 from .._jit import kernel
-from .base import KIND_GC, KIND_PID, KIND_PSMC_JOINT, KIND_PSMC_TASK, KIND_SMC
-from .gravity import gc_step
-from .pid import pid_step
-from .psmc import psmc_joint_step, psmc_task_step
-from .smc import smc_step
+from .base import KIND_GC, KIND_PID, KIND_PSMC_JOINT, KIND_PSMC_TASK, KIND_SMC, ControllerKind
+from .gravity import GravityCompensation, gc_step
+from .pid import PID, pid_step
+from .psmc import JointPSMC, TaskPSMC, psmc_joint_step, psmc_task_step
+from .smc import SlidingModeControl, smc_step
+
+#: The controller class of every kind.
+CONTROLLER_CLASSES = {KIND_GC: GravityCompensation, KIND_PID: PID,
+                      KIND_PSMC_JOINT: JointPSMC, KIND_PSMC_TASK: TaskPSMC,
+                      KIND_SMC: SlidingModeControl}
+assert set(CONTROLLER_CLASSES) == set(ControllerKind), "a controller kind has no class"
+
+#: Widest parameter row of any kind (width of the runner's padded parameter table).
+CONTROLLER_ROW_WIDTH = max(c.PARAMS.size for c in CONTROLLER_CLASSES.values())
+#: Longest controller state of any kind.
+NSTATE = max(c.STATE.size for c in CONTROLLER_CLASSES.values())
+#: Most internals any kind logs (width of the log's internal columns).
+NINT = max(c.INTERNALS.size for c in CONTROLLER_CLASSES.values())
+#: Largest scratch need of any kind.
+NSCRATCH = max(c.SCRATCH for c in CONTROLLER_CLASSES.values())
+
+
+def declared_sizes(kind) -> tuple:
+    """(parameter, state, internals, scratch) sizes declared by controller ``kind``."""
+    c = CONTROLLER_CLASSES[ControllerKind(kind)]
+    return c.PARAMS.size, c.STATE.size, c.INTERNALS.size, c.SCRATCH
 
 
 @kernel
 def controller_step(kind, C, S, Pm, k, dt, qm, qdm, pm, ref, dp, internals, scratch):
     """Compute Delta p (2) [Pa] for controller ``kind`` at sample ``k``.
 
-    Parameters are the controller's packed vector ``C``, its state ``S``
-    (updated in place), its model row ``Pm``, the measured angles,
-    velocities and pressures, the reference row (12) and work arrays.
+    Parameters are the controller's packed row ``C`` (its ``PARAMS``
+    layout), its state ``S`` (``STATE``, updated in place), its model row
+    ``Pm``, the measured angles, velocities and pressures, the reference row
+    (12) and the work arrays ``internals`` (``INTERNALS``) and ``scratch``
+    (``SCRATCH`` floats).
     """
     if kind == KIND_PID:
         pid_step(C, S, Pm, dt, qm, qdm, ref, dp, internals, scratch)

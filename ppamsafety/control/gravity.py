@@ -30,49 +30,95 @@ controller-design section of the report):
 
 from __future__ import annotations
 
+from enum import IntEnum
+
 import numpy as np
 
 from .._jit import leaf
+from ..layouts import Field, Layout, check_flag
 from ..plant.pneumatics import gravity_compensation_dp
-from .base import KIND_GC, Controller
+from .base import KIND_GC, R_Q, Controller
 
 
-GC_OFF, GC_MEASURED, GC_DESIRED, GC_PROXY = 0.0, 1.0, 2.0, 3.0
-GC_MODES = {"off": GC_OFF, "measured": GC_MEASURED, "desired": GC_DESIRED, "proxy": GC_PROXY}
+class GCMode(IntEnum):
+    """Where the static gravity compensation is evaluated (see the module docstring)."""
+
+    OFF = 0
+    MEASURED = 1
+    DESIRED = 2
+    PROXY = 3
+
+
+GC_OFF, GC_MEASURED, GC_DESIRED, GC_PROXY = (GCMode.OFF, GCMode.MEASURED, GCMode.DESIRED,
+                                             GCMode.PROXY)
+GC_MODES = {m.name.lower(): m for m in GCMode}
+
+#: Work memory of :func:`add_gravity_compensation` (arguments of
+#: :func:`ppamsafety.plant.pneumatics.gravity_compensation_dp`).
+GC_SCRATCH = Layout("gravity compensation scratch", [
+    Field("mt", 4, "m^3", "m_tau of the four muscle groups (B.2)"),
+    Field("dmt", 4, "m^3/rad", "d m_tau / dq"),
+    Field("vol", 4, "m^3", "group volumes"),
+])
+_G_MT, _G_DMT, _G_VOL = GC_SCRATCH.offsets("mt", "dmt", "vol")
+
+#: Parameter row of :class:`GravityCompensation`.
+GC_PARAMS = Layout("gravity compensation parameters", [
+    Field("gc", 1, "code", "GCMode: where (3.18)-(3.19) is evaluated"),
+])
+P_GC_MODE = GC_PARAMS.offset("gc")
 
 
 @leaf
 def add_gravity_compensation(mode, Pm, qm, ref, qp1, qp2, dp, scratch):
-    """Add Delta p_gc to ``dp`` in place (``scratch`` >= 12 floats).
+    """Add Delta p_gc to ``dp`` in place (``scratch``: layout ``GC_SCRATCH``).
 
-    ``mode``: 0 off, 1 at the measured angles ``qm``, 2 at the desired
-    angles ``ref[0:2]``, 3 at the proxy angles (qp1, qp2) [rad].
+    ``mode``: a :class:`GCMode` code -- off, at the measured angles ``qm``,
+    at the desired angles of the reference row ``ref``, or at the proxy
+    angles (qp1, qp2) [rad].
     """
-    if mode > 0.5:
-        if mode < 1.5:
+    if mode != GCMode.OFF:
+        if mode == GCMode.MEASURED:
             q1, q2 = qm[0], qm[1]
-        elif mode < 2.5:
-            q1, q2 = ref[0], ref[1]
+        elif mode == GCMode.DESIRED:
+            q1, q2 = ref[R_Q], ref[R_Q + 1]
         else:
             q1, q2 = qp1, qp2
-        g1, g2 = gravity_compensation_dp(q1, q2, Pm, scratch[0:4], scratch[4:8], scratch[8:12])
+        g1, g2 = gravity_compensation_dp(q1, q2, Pm, scratch[_G_MT:_G_MT + 4],
+                                         scratch[_G_DMT:_G_DMT + 4], scratch[_G_VOL:_G_VOL + 4])
         dp[0] += g1
         dp[1] += g2
 
 
-def gc_mode(value, allowed=("off", "measured", "desired")) -> float:
-    """Validate a gravity-compensation mode name and return its code."""
-    if value not in allowed:
-        raise ValueError(f"gravity_compensation = {value!r} is not one of {list(allowed)}")
-    return GC_MODES[value]
+def gc_mode(value, allowed=("off", "measured", "desired"), name: str = "gravity_compensation"
+            ) -> GCMode:
+    """Validate a gravity-compensation mode (member, name or code) and return the member.
+
+    Parameters
+    ----------
+    value : GCMode, str or int
+        The mode.
+    allowed : sequence of str
+        Names of the modes the caller supports.
+    name : str
+        Argument name for the error message.
+    """
+    allowed_codes = {int(GCMode[a.upper()]) for a in allowed}
+    try:
+        code = check_flag(GCMode, value, name)
+    except ValueError:
+        code = None
+    if code not in allowed_codes:
+        raise ValueError(f"{name} = {value!r} is not one of {list(allowed)}")
+    return GCMode(code)
 
 
 @leaf
 def gc_step(C, Pm, qm, ref, dp_out, scratch):
-    """Delta p_gc only (no feedback); C = [mode]."""
+    """Delta p_gc only (no feedback); C: layout ``GC_PARAMS``."""
     dp_out[0] = 0.0
     dp_out[1] = 0.0
-    add_gravity_compensation(C[0], Pm, qm, ref, 0.0, 0.0, dp_out, scratch)
+    add_gravity_compensation(int(C[P_GC_MODE]), Pm, qm, ref, 0.0, 0.0, dp_out, scratch)
 
 
 class GravityCompensation(Controller):
@@ -87,6 +133,8 @@ class GravityCompensation(Controller):
 
     kind = KIND_GC
     name = "gravity compensation"
+    PARAMS = GC_PARAMS
+    SCRATCH = GC_SCRATCH.size
 
     def __init__(self, *, at: str = "desired"):
         super().__init__()
@@ -94,6 +142,11 @@ class GravityCompensation(Controller):
             raise ValueError(f"GravityCompensation.at = {at!r} is not 'desired' or 'measured'")
         self.at = at
 
+    @property
+    def gc(self) -> GCMode:
+        """Gravity-compensation mode code."""
+        return gc_mode(self.at, name="GravityCompensation.at")
+
     def pack(self) -> np.ndarray:
-        """Parameter vector of the compiled step function (SI units)."""
-        return np.array([gc_mode(self.at)])
+        """Parameter row of the compiled step function (layout ``GC_PARAMS``)."""
+        return GC_PARAMS.pack(gc=int(self.gc))

@@ -15,32 +15,65 @@ Default gains: Table 5.1 (a), converted from bar to Pa.
 
 from __future__ import annotations
 
+from enum import IntEnum
+
 import numpy as np
 
 from .._jit import leaf
+from ..layouts import Field, Layout, check_flag
 from ..units import BAR
-from .base import KIND_PID, Controller, pair
-from .gravity import add_gravity_compensation, gc_mode
+from .base import KIND_PID, R_Q, R_QD, Controller, pair
+from .gravity import GC_SCRATCH, add_gravity_compensation, gc_mode
 
 #: Table 5.1 (a): Kp [bar/rad], Ki [bar/(rad s)], Kd [bar s/rad] per joint.
 TABLE_5_1_PID = {"kp": (2.0, 1.5), "ki": (2.0, 2.0), "kd": (0.1, 0.1)}
 
 
+class PIDDerivative(IntEnum):
+    """Source of the PID derivative term."""
+
+    VELOCITY = 0        #: edot = qd_d - qd_meas
+    DIFFERENCE = 1      #: edot = (e[k] - e[k-1]) / T
+
+
+PID_PARAMS = Layout("PID parameters", [
+    Field("kp", 2, "Pa/rad", "proportional gains (Table 5.1 (a))"),
+    Field("ki", 2, "Pa/(rad s)", "integral gains"),
+    Field("kd", 2, "Pa s/rad", "derivative gains"),
+    Field("derivative", 1, "code", "PIDDerivative: derivative source"),
+    Field("gc", 1, "code", "GCMode: gravity compensation"),
+])
+P_KP, P_KI, P_KD, P_DERIV, P_GC = PID_PARAMS.offsets("kp", "ki", "kd", "derivative", "gc")
+
+PID_STATE = Layout("PID state", [
+    Field("integral", 2, "rad s", "backward-Euler error integral sum(e) T"),
+    Field("e_prev", 2, "rad", "previous error e[k-1] (difference derivative)"),
+])
+S_INT, S_EPREV = PID_STATE.offsets("integral", "e_prev")
+
+PID_INTERNALS = Layout("PID internals", [
+    Field("pid", 2, "Pa", "PID output Delta p before gravity compensation"),
+    Field("integral", 2, "rad s", "error integral (state)"),
+])
+I_PID, I_INT = PID_INTERNALS.offsets("pid", "integral")
+
+
 @leaf
 def pid_step(C, S, Pm, dt, qm, qdm, ref, dp, internals, scratch):
-    """One PID update (state S: integral (2), previous error (2))."""
+    """One PID update (C: ``PID_PARAMS``, S: ``PID_STATE``, internals: ``PID_INTERNALS``)."""
+    difference = int(C[P_DERIV]) == PIDDerivative.DIFFERENCE
     for j in range(2):
-        e = ref[j] - qm[j]
-        S[j] += dt * e
-        if C[6] > 0.5:
-            ed = (e - S[2 + j]) / dt
+        e = ref[R_Q + j] - qm[j]
+        S[S_INT + j] += dt * e
+        if difference:
+            ed = (e - S[S_EPREV + j]) / dt
         else:
-            ed = ref[2 + j] - qdm[j]
-        S[2 + j] = e
-        dp[j] = C[j] * e + C[2 + j] * S[j] + C[4 + j] * ed
-        internals[j] = dp[j]
-        internals[2 + j] = S[j]
-    add_gravity_compensation(C[7], Pm, qm, ref, 0.0, 0.0, dp, scratch)
+            ed = ref[R_QD + j] - qdm[j]
+        S[S_EPREV + j] = e
+        dp[j] = C[P_KP + j] * e + C[P_KI + j] * S[S_INT + j] + C[P_KD + j] * ed
+        internals[I_PID + j] = dp[j]
+        internals[I_INT + j] = S[S_INT + j]
+    add_gravity_compensation(int(C[P_GC]), Pm, qm, ref, 0.0, 0.0, dp, scratch)
 
 
 class PID(Controller):
@@ -51,16 +84,21 @@ class PID(Controller):
     kp, ki, kd : float or pair of float, keyword-only
         Gains per joint in Pa/rad, Pa/(rad s), Pa s/rad (default Table 5.1 (a)).
     derivative : {"velocity", "difference"}
-        Derivative from the measured velocity or from the error difference.
+        Derivative from the measured velocity or from the error difference
+        (:class:`PIDDerivative`).
     gravity_compensation : {"desired", "measured", "off"}
         Static gravity compensation (3.18)-(3.19) at the set angles (default),
         at the measured angles, or none (see :mod:`ppamsafety.control.gravity`).
 
-    Internals logged: PID output (2) and integral state (2).
+    Internals logged: PID output (2) and integral state (2) (``PID_INTERNALS``).
     """
 
     kind = KIND_PID
     name = "PID"
+    PARAMS = PID_PARAMS
+    STATE = PID_STATE
+    INTERNALS = PID_INTERNALS
+    SCRATCH = GC_SCRATCH.size
 
     def __init__(self, *, kp=None, ki=None, kd=None, derivative: str = "velocity",
                  gravity_compensation="desired"):
@@ -71,16 +109,16 @@ class PID(Controller):
                        unit="Pa/(rad s)")
         self.kd = pair("PID.kd", np.asarray(g["kd"]) * BAR if kd is None else kd,
                        unit="Pa s/rad")
-        if derivative not in ("velocity", "difference"):
-            raise ValueError(f"PID.derivative = {derivative!r} is not 'velocity' or 'difference'")
-        self.derivative = derivative
+        code = check_flag(PIDDerivative, derivative, "PID.derivative")
+        self.derivative = PIDDerivative(code).name.lower()
         self.gravity_compensation = gravity_compensation
-        self.gc = gc_mode(gravity_compensation)
+        self.gc = gc_mode(gravity_compensation, name="PID.gravity_compensation")
 
     def pack(self) -> np.ndarray:
-        """Parameter vector of the compiled step function (SI units)."""
-        return np.array([*self.kp, *self.ki, *self.kd, float(self.derivative == "difference"),
-                         self.gc])
+        """Parameter row of the compiled step function (layout ``PID_PARAMS``, SI units)."""
+        return PID_PARAMS.pack(
+            kp=self.kp, ki=self.ki, kd=self.kd, gc=int(self.gc),
+            derivative=check_flag(PIDDerivative, self.derivative, "PID.derivative"))
 
     def describe(self) -> dict:
         """Parameters as a flat dict for result tables."""

@@ -30,15 +30,80 @@ from .._jit import leaf
 from .._validation import check_range
 from ..plant.geometry import inverse_kinematics_elbow_up, tcp_jacobian, tcp_position
 from ..plant.torque import torque_kernel
+from ..layouts import Field, Layout
 from ..units import BAR
-from .base import KIND_PSMC_JOINT, KIND_PSMC_TASK, Controller, pair
-from .gravity import add_gravity_compensation, gc_mode
+from .base import (KIND_PSMC_JOINT, KIND_PSMC_TASK, R_Q, R_QD, R_X, R_XD, R_Y, R_YD, Controller,
+                   pair)
+from .gravity import GC_SCRATCH, add_gravity_compensation, gc_mode
 from .pid import TABLE_5_1_PID
 
 #: Table 5.1 (c), joint space: lambda [s], Delta p_lm [bar]; gains as PID.
 TABLE_5_1_JOINT = {"lambda": 0.4, "dp_lm": 0.2}
 #: Table 5.1 (b), task space: lambda [s], Kp [N/m], Ki [N/(m s)], Kd [N s/m], F [N].
 TABLE_5_1_TASK = {"lambda": 0.4, "kp": 200.0, "ki": 100.0, "kd": 10.0, "F": 15.0}
+
+_GC_FIELD = Field("gc", 1, "code", "GCMode: gravity compensation (default at the proxy)")
+
+JOINT_PSMC_PARAMS = Layout("joint PSMC parameters", [
+    Field("kp", 2, "Pa/rad", "virtual-coupling proportional gains"),
+    Field("ki", 2, "Pa/(rad s)", "virtual-coupling integral gains"),
+    Field("kd", 2, "Pa s/rad", "virtual-coupling derivative gains"),
+    Field("lam", 2, "s", "sliding-surface time constants lambda (Table 5.1 (c))"),
+    Field("dp_limit", 2, "Pa", "output limits Delta p_lm (Table 5.1 (c))"),
+    _GC_FIELD,
+])
+PJ_KP, PJ_KI, PJ_KD, PJ_LAM, PJ_LIM, PJ_GC = JOINT_PSMC_PARAMS.offsets(
+    "kp", "ki", "kd", "lam", "dp_limit", "gc")
+
+JOINT_PSMC_STATE = Layout("joint PSMC state", [
+    Field("a", 2, "rad s", "proxy integral state a[k-1] (5.29)"),
+    Field("da", 2, "rad s", "Nabla a[k-1] = a[k-1] - a[k-2]"),
+])
+SJ_A, SJ_DA = JOINT_PSMC_STATE.offsets("a", "da")
+
+JOINT_PSMC_INTERNALS = Layout("joint PSMC internals", [
+    Field("dp_psmc", 2, "Pa", "saturated proxy output f = Delta p_psmc"),
+    Field("s", 2, "rad", "sliding variable s[k] (5.32)"),
+    Field("on_surface", 2, "-", "1 if |f*| <= Delta p_lm (proxy on its sliding surface)"),
+    Field("a", 2, "rad s", "new proxy integral state a[k]"),
+])
+IJ_F, IJ_S, IJ_ON, IJ_A = JOINT_PSMC_INTERNALS.offsets("dp_psmc", "s", "on_surface", "a")
+
+TASK_PSMC_PARAMS = Layout("task PSMC parameters", [
+    Field("kp", 1, "N/m", "virtual-coupling stiffness (Table 5.1 (b))"),
+    Field("ki", 1, "N/(m s)", "virtual-coupling integral gain"),
+    Field("kd", 1, "N s/m", "virtual-coupling damping"),
+    Field("lam", 1, "s", "sliding-surface time constant lambda"),
+    Field("force_limit", 1, "N", "force limit F of the vector saturation (D.7)"),
+    _GC_FIELD,
+])
+PT_KP, PT_KI, PT_KD, PT_LAM, PT_F, PT_GC = TASK_PSMC_PARAMS.offsets(
+    "kp", "ki", "kd", "lam", "force_limit", "gc")
+
+TASK_PSMC_STATE = Layout("task PSMC state", [
+    Field("a", 2, "m s", "proxy integral state a[k-1] (x, y)", columns=("ax", "ay")),
+    Field("da", 2, "m s", "Nabla a[k-1] (x, y)", columns=("dax", "day")),
+])
+ST_A, ST_DA = TASK_PSMC_STATE.offsets("a", "da")
+
+TASK_PSMC_INTERNALS = Layout("task PSMC internals", [
+    Field("f", 2, "N", "saturated proxy force f (x, y)", columns=("fx", "fy")),
+    Field("s", 2, "m", "sliding variable s[k] (x, y) (5.32)", columns=("sx", "sy")),
+    Field("on_surface", 1, "-", "1 if |f*| <= F (proxy on its sliding surface)"),
+    Field("f_star_norm", 1, "N", "|f*|, norm of the unsaturated force"),
+    Field("a", 2, "m s", "new proxy integral state a[k] (x, y)", columns=("ax", "ay")),
+])
+IT_F, IT_S, IT_ON, IT_NORM, IT_A = TASK_PSMC_INTERNALS.offsets(
+    "f", "s", "on_surface", "f_star_norm", "a")
+
+TASK_PSMC_SCRATCH = Layout("task PSMC scratch", [
+    Field("mt", 4, "m^3", "m_tau of the four muscle groups at q (B.2)"),
+    Field("dmt", 4, "m^3/rad", "d m_tau / dq"),
+    Field("vol", 4, "m^3", "group volumes"),
+    Field("gc", GC_SCRATCH.size, "-", "work memory of the gravity compensation"),
+])
+XT_MT, XT_DMT, XT_VOL, XT_GC = TASK_PSMC_SCRATCH.offsets("mt", "dmt", "vol", "gc")
+_NGC = GC_SCRATCH.size
 
 
 @leaf
@@ -56,69 +121,68 @@ def proxy_state(f, a, da, kp, ki, kd, T):
 
 @leaf
 def psmc_joint_step(C, S, Pm, dt, qm, qdm, ref, dp, internals, scratch):
-    """Joint-space PSMC; C = [Kp(2), Ki(2), Kd(2), lambda(2), dp_lm(2), use_gc].
-
-    State S: a (2), Nabla a (2).  Internals: Delta p_psmc (2), s (2),
-    on-surface flag (2), a (2).
+    """Joint-space PSMC; C: ``JOINT_PSMC_PARAMS``, S: ``JOINT_PSMC_STATE``,
+    internals: ``JOINT_PSMC_INTERNALS``, scratch: ``GC_SCRATCH``.
     """
     for j in range(2):
-        kp, ki, kd, lam, lim = C[j], C[2 + j], C[4 + j], C[6 + j], C[8 + j]
-        sigma = (ref[j] - qm[j]) + lam * (ref[2 + j] - qdm[j])
-        fs = proxy_update(sigma, S[j], S[2 + j], kp, ki, kd, lam, dt)
+        kp, ki, kd = C[PJ_KP + j], C[PJ_KI + j], C[PJ_KD + j]
+        lam, lim = C[PJ_LAM + j], C[PJ_LIM + j]
+        sigma = (ref[R_Q + j] - qm[j]) + lam * (ref[R_QD + j] - qdm[j])
+        fs = proxy_update(sigma, S[SJ_A + j], S[SJ_DA + j], kp, ki, kd, lam, dt)
         f = min(max(fs, -lim), lim)
-        a_new = proxy_state(f, S[j], S[2 + j], kp, ki, kd, dt)
-        S[2 + j] = a_new - S[j]
-        S[j] = a_new
+        a_new = proxy_state(f, S[SJ_A + j], S[SJ_DA + j], kp, ki, kd, dt)
+        S[SJ_DA + j] = a_new - S[SJ_A + j]
+        S[SJ_A + j] = a_new
         dp[j] = f
-        internals[j] = f
-        internals[2 + j] = (dt + lam) / (ki * dt * dt + kp * dt + kd) * (fs - f)
-        internals[4 + j] = 1.0 if abs(fs) <= lim else 0.0
-        internals[6 + j] = a_new
+        internals[IJ_F + j] = f
+        internals[IJ_S + j] = (dt + lam) / (ki * dt * dt + kp * dt + kd) * (fs - f)
+        internals[IJ_ON + j] = 1.0 if abs(fs) <= lim else 0.0
+        internals[IJ_A + j] = a_new
     # proxy angles q_p = q + Nabla a / T (a is the integral of q_p - q)
-    add_gravity_compensation(C[10], Pm, qm, ref, qm[0] + S[2] / dt, qm[1] + S[3] / dt, dp,
-                             scratch)
+    add_gravity_compensation(int(C[PJ_GC]), Pm, qm, ref, qm[0] + S[SJ_DA] / dt,
+                             qm[1] + S[SJ_DA + 1] / dt, dp, scratch)
 
 
 @leaf
 def psmc_task_step(C, S, Pm, dt, qm, qdm, ref, dp, internals, scratch):
-    """Task-space PSMC; C = [Kp, Ki, Kd, lambda, F, use_gc] (SI: N/m, N/(m s), N s/m, s, N).
-
-    State S: a (2), Nabla a (2).  Internals: f (2), s (2), on-surface flag,
-    |f*| , a (2).
+    """Task-space PSMC; C: ``TASK_PSMC_PARAMS`` (SI: N/m, N/(m s), N s/m, s, N),
+    S: ``TASK_PSMC_STATE``, internals: ``TASK_PSMC_INTERNALS``, scratch:
+    ``TASK_PSMC_SCRATCH``.
     """
-    kp, ki, kd, lam, F = C[0], C[1], C[2], C[3], C[4]
+    kp, ki, kd, lam, F = C[PT_KP], C[PT_KI], C[PT_KD], C[PT_LAM], C[PT_F]
     x, y = tcp_position(qm[0], qm[1], Pm)
     j11, j12, j21, j22 = tcp_jacobian(qm[0], qm[1], Pm)
     xd = j11 * qdm[0] + j12 * qdm[1]
     yd = j21 * qdm[0] + j22 * qdm[1]
-    sx = (ref[8] - x) + lam * (ref[10] - xd)
-    sy = (ref[9] - y) + lam * (ref[11] - yd)
-    fsx = proxy_update(sx, S[0], S[2], kp, ki, kd, lam, dt)
-    fsy = proxy_update(sy, S[1], S[3], kp, ki, kd, lam, dt)
+    sx = (ref[R_X] - x) + lam * (ref[R_XD] - xd)
+    sy = (ref[R_Y] - y) + lam * (ref[R_YD] - yd)
+    fsx = proxy_update(sx, S[ST_A], S[ST_DA], kp, ki, kd, lam, dt)
+    fsy = proxy_update(sy, S[ST_A + 1], S[ST_DA + 1], kp, ki, kd, lam, dt)
     norm = math.sqrt(fsx * fsx + fsy * fsy)
     scale = 1.0 if norm <= F else F / norm
     fx, fy = fsx * scale, fsy * scale
-    ax = proxy_state(fx, S[0], S[2], kp, ki, kd, dt)
-    ay = proxy_state(fy, S[1], S[3], kp, ki, kd, dt)
-    S[2], S[3] = ax - S[0], ay - S[1]
-    S[0], S[1] = ax, ay
+    ax = proxy_state(fx, S[ST_A], S[ST_DA], kp, ki, kd, dt)
+    ay = proxy_state(fy, S[ST_A + 1], S[ST_DA + 1], kp, ki, kd, dt)
+    S[ST_DA], S[ST_DA + 1] = ax - S[ST_A], ay - S[ST_A + 1]
+    S[ST_A], S[ST_A + 1] = ax, ay
     tau1 = j11 * fx + j21 * fy                     # tau = J^T f   (5.30)
     tau2 = j12 * fx + j22 * fy
-    mt = scratch[0:4]
-    torque_kernel(qm[0], qm[1], Pm, mt, scratch[4:8], scratch[8:12])
+    mt = scratch[XT_MT:XT_MT + 4]
+    torque_kernel(qm[0], qm[1], Pm, mt, scratch[XT_DMT:XT_DMT + 4], scratch[XT_VOL:XT_VOL + 4])
     dp[0] = tau1 / (mt[0] - mt[1])                 # (5.33)-(5.34) without the p_m/G part,
     dp[1] = tau2 / (mt[2] - mt[3])                 # which the gravity compensation adds
     c = (dt + lam) / (ki * dt * dt + kp * dt + kd)
-    internals[0], internals[1] = fx, fy
-    internals[2], internals[3] = c * (fsx - fx), c * (fsy - fy)
-    internals[4] = 1.0 if norm <= F else 0.0
-    internals[5] = norm
-    internals[6], internals[7] = ax, ay
+    internals[IT_F], internals[IT_F + 1] = fx, fy
+    internals[IT_S], internals[IT_S + 1] = c * (fsx - fx), c * (fsy - fy)
+    internals[IT_ON] = 1.0 if norm <= F else 0.0
+    internals[IT_NORM] = norm
+    internals[IT_A], internals[IT_A + 1] = ax, ay
     # proxy position r_p = r + Nabla a / T, in joint space by inverse kinematics
-    qp1, qp2, ok = inverse_kinematics_elbow_up(x + S[2] / dt, y + S[3] / dt, Pm)
+    qp1, qp2, ok = inverse_kinematics_elbow_up(x + S[ST_DA] / dt, y + S[ST_DA + 1] / dt, Pm)
     if not ok:
         qp1, qp2 = qm[0], qm[1]
-    add_gravity_compensation(C[5], Pm, qm, ref, qp1, qp2, dp, scratch[12:24])
+    add_gravity_compensation(int(C[PT_GC]), Pm, qm, ref, qp1, qp2, dp,
+                             scratch[XT_GC:XT_GC + _NGC])
 
 
 class JointPSMC(Controller):
@@ -140,6 +204,10 @@ class JointPSMC(Controller):
 
     kind = KIND_PSMC_JOINT
     name = "PSMC joint"
+    PARAMS = JOINT_PSMC_PARAMS
+    STATE = JOINT_PSMC_STATE
+    INTERNALS = JOINT_PSMC_INTERNALS
+    SCRATCH = GC_SCRATCH.size
 
     def __init__(self, *, lam=TABLE_5_1_JOINT["lambda"], kp=None, ki=None, kd=None,
                  dp_limit=TABLE_5_1_JOINT["dp_lm"] * BAR, gravity_compensation="proxy"):
@@ -158,12 +226,13 @@ class JointPSMC(Controller):
         if min(self.kd) == 0 and min(self.lam) == 0 and min(self.kp) == 0:
             raise ValueError("JointPSMC: Kp, Kd and lambda cannot all be zero")
         self.gravity_compensation = gravity_compensation
-        self.gc = gc_mode(gravity_compensation, ("off", "measured", "desired", "proxy"))
+        self.gc = gc_mode(gravity_compensation, ("off", "measured", "desired", "proxy"),
+                          name=f"{type(self).__name__}.gravity_compensation")
 
     def pack(self) -> np.ndarray:
-        """Parameter vector of the compiled step function (SI units)."""
-        return np.array([*self.kp, *self.ki, *self.kd, *self.lam, *self.dp_limit,
-                         self.gc])
+        """Parameter row of the compiled step function (SI units)."""
+        return JOINT_PSMC_PARAMS.pack(kp=self.kp, ki=self.ki, kd=self.kd, lam=self.lam,
+                                      dp_limit=self.dp_limit, gc=int(self.gc))
 
     def describe(self) -> dict:
         """Parameters as a flat dict for result tables."""
@@ -189,6 +258,10 @@ class TaskPSMC(Controller):
 
     kind = KIND_PSMC_TASK
     name = "PSMC task"
+    PARAMS = TASK_PSMC_PARAMS
+    STATE = TASK_PSMC_STATE
+    INTERNALS = TASK_PSMC_INTERNALS
+    SCRATCH = TASK_PSMC_SCRATCH.size
 
     def __init__(self, *, lam=TABLE_5_1_TASK["lambda"], kp=TABLE_5_1_TASK["kp"],
                  ki=TABLE_5_1_TASK["ki"], kd=TABLE_5_1_TASK["kd"],
@@ -201,12 +274,13 @@ class TaskPSMC(Controller):
         self.force_limit = check_range("TaskPSMC.force_limit", force_limit, 0.0, 1e7,
                                        lo_open=True, unit="N")
         self.gravity_compensation = gravity_compensation
-        self.gc = gc_mode(gravity_compensation, ("off", "measured", "desired", "proxy"))
+        self.gc = gc_mode(gravity_compensation, ("off", "measured", "desired", "proxy"),
+                          name=f"{type(self).__name__}.gravity_compensation")
 
     def pack(self) -> np.ndarray:
-        """Parameter vector of the compiled step function (SI units)."""
-        return np.array([self.kp, self.ki, self.kd, self.lam, self.force_limit,
-                         self.gc])
+        """Parameter row of the compiled step function (SI units)."""
+        return TASK_PSMC_PARAMS.pack(kp=self.kp, ki=self.ki, kd=self.kd, lam=self.lam,
+                                     force_limit=self.force_limit, gc=int(self.gc))
 
     def describe(self) -> dict:
         """Parameters as a flat dict for result tables."""

@@ -22,21 +22,67 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from enum import IntEnum
 
 import numpy as np
 
 from .._jit import leaf
 from .._validation import check_int, check_nonnegative, check_positive
+from ..layouts import Field, Layout, check_flag
 
 #: Table 3.2, first excitation signal: variances of q1, q2 [rad^2], qd1, qd2 [rad^2/s^2].
 TABLE_3_2_VARIANCES = (3.46e-6, 2.59e-6, 1.63e-4, 2.32e-5)
 
-# sensor-state layout (per joint j: index + j)
-S_COUNT, S_TLAST, S_TPREV, S_DIR, S_READ, S_NPULSE = 0, 2, 4, 6, 8, 10
-NSENSOR = 12
-# packed configuration layout
-C_RES, C_TC, C_NMAX, C_DEAD, C_ENC, C_IPT = 0, 1, 2, 3, 4, 5
-NSCFG = 6
+
+class EncoderMode(IntEnum):
+    """Angle measurement: exact angle or encoder quantisation."""
+
+    OFF = 0
+    ON = 1
+
+
+class VelocitySource(IntEnum):
+    """Velocity measurement: exact velocity or the inter-pulse-timing board."""
+
+    IDEAL = 0
+    IPT = 1
+
+
+#: Time of an edge never seen [s] (far in the past: the counter has overflowed).
+T_NEVER = -1.0e9
+
+#: Sensor state of both joints (per joint j: offset + j).
+SENSOR_STATE = Layout("sensor state", [
+    Field("count", 2, "-", "encoder counts"),
+    Field("t_last", 2, "s", "time of the last encoder edge", default=T_NEVER),
+    Field("t_prev", 2, "s", "time of the second-to-last encoder edge", default=T_NEVER),
+    Field("direction", 2, "-", "sign of the last edge (+1/-1)"),
+    Field("reading", 2, "rad/s", "velocity reading held by the timing board"),
+    Field("n_pulse", 2, "-", "number of edges seen"),
+])
+S_COUNT, S_TLAST, S_TPREV, S_DIR, S_READ, S_NPULSE = SENSOR_STATE.offsets(
+    "count", "t_last", "t_prev", "direction", "reading", "n_pulse")
+NSENSOR = SENSOR_STATE.size
+
+#: Packed sensor configuration (:meth:`SensorConfig.pack`).
+SENSOR_CONFIG = Layout("sensor configuration", [
+    Field("resolution", 1, "rad", "encoder resolution (2 pi / 8000)"),
+    Field("clock_period", 1, "s", "timing-board clock period T_c = 1/clock_hz"),
+    Field("n_max", 1, "-", "largest pulse-interval count 2^bits - 1"),
+    Field("dead_band", 1, "rad/s", "velocities below this read zero"),
+    Field("encoder", 1, "code", "EncoderMode: quantise the angles"),
+    Field("velocity", 1, "code", "VelocitySource: ideal or inter-pulse timing"),
+])
+C_RES, C_TC, C_NMAX, C_DEAD, C_ENC, C_VEL = SENSOR_CONFIG.offsets(
+    "resolution", "clock_period", "n_max", "dead_band", "encoder", "velocity")
+NSCFG = SENSOR_CONFIG.size
+
+#: One sample of measurement noise (:meth:`SensorConfig.noise_samples` rows).
+SENSOR_NOISE = Layout("sensor noise sample", [
+    Field("q", 2, "rad", "noise added to the measured angles"),
+    Field("qd", 2, "rad/s", "noise added to the measured velocities"),
+])
+N_Q, N_QD = SENSOR_NOISE.offsets("q", "qd")
 
 
 @dataclass(frozen=True)
@@ -76,8 +122,8 @@ class SensorConfig:
     noise_variances: tuple = TABLE_3_2_VARIANCES
 
     def __post_init__(self):
-        if self.velocity not in ("ipt", "ideal"):
-            raise ValueError(f"SensorConfig.velocity = {self.velocity!r} is not 'ipt' or 'ideal'")
+        code = check_flag(VelocitySource, self.velocity, "SensorConfig.velocity")
+        object.__setattr__(self, "velocity", VelocitySource(code).name.lower())
         check_int("SensorConfig.seed", self.seed, 0, 2 ** 63 - 1)
         check_positive("SensorConfig.resolution", self.resolution, unit="rad")
         check_positive("SensorConfig.clock_hz", self.clock_hz, unit="Hz")
@@ -99,12 +145,18 @@ class SensorConfig:
         return self.resolution * self.clock_hz / (2 ** self.counter_bits - 1)
 
     def pack(self) -> np.ndarray:
-        """Configuration vector for the kernels."""
-        return np.array([self.resolution, 1.0 / self.clock_hz, 2.0 ** self.counter_bits - 1,
-                         self.dead_band, float(self.encoder), float(self.velocity == "ipt")])
+        """Configuration row for the kernels (layout ``SENSOR_CONFIG``)."""
+        return SENSOR_CONFIG.pack(
+            resolution=self.resolution, clock_period=1.0 / self.clock_hz,
+            n_max=2.0 ** self.counter_bits - 1, dead_band=self.dead_band,
+            encoder=int(EncoderMode.ON if self.encoder else EncoderMode.OFF),
+            velocity=check_flag(VelocitySource, self.velocity, "SensorConfig.velocity"))
 
     def noise_samples(self, n_steps: int) -> np.ndarray:
-        """Noise to add to (q1, q2, qd1, qd2) at each of ``n_steps`` samples, shape (n, 4)."""
+        """Noise to add to (q1, q2, qd1, qd2) at each of ``n_steps`` samples, shape (n, 4).
+
+        Columns: layout ``SENSOR_NOISE``.
+        """
         n_steps = check_int("n_steps", n_steps, 0, 10 ** 9)
         if not self.noise:
             return np.zeros((n_steps, 4))
@@ -113,11 +165,20 @@ class SensorConfig:
 
 
 def initial_sensor_state(q0) -> np.ndarray:
-    """Sensor state for an arm at rest in ``q0``: no pulses seen yet."""
-    st = np.zeros(NSENSOR)
-    st[S_TLAST:S_TLAST + 2] = -1.0e9
-    st[S_TPREV:S_TPREV + 2] = -1.0e9
-    return st
+    """Sensor state (``SENSOR_STATE``) for an arm at rest in ``q0``: no pulses seen yet.
+
+    The counts are set by :func:`sensor_init`.
+    """
+    return SENSOR_STATE.empty()
+
+
+@leaf
+def sensor_reset(st):
+    """Reset the sensor state ``st`` in place: no pulses seen (see :func:`initial_sensor_state`)."""
+    st[:] = 0.0
+    for j in range(2):
+        st[S_TLAST + j] = T_NEVER
+        st[S_TPREV + j] = T_NEVER
 
 
 @leaf
@@ -170,8 +231,8 @@ def sensor_track(j, q_old, q_new, t_old, h, cfg, st):
 @leaf
 def sensor_read(j, q_true, qd_true, t, cfg, st):
     """Measured (angle, velocity) of joint ``j`` at sample time ``t``."""
-    qm = st[S_COUNT + j] * cfg[C_RES] if cfg[C_ENC] > 0.5 else q_true
-    if cfg[C_IPT] < 0.5:
+    qm = st[S_COUNT + j] * cfg[C_RES] if int(cfg[C_ENC]) == EncoderMode.ON else q_true
+    if int(cfg[C_VEL]) != VelocitySource.IPT:
         return qm, qd_true
     # counter overflow: no edge for N_max clock periods -> minimum velocity, dead-banded
     if t - st[S_TLAST + j] > cfg[C_NMAX] * cfg[C_TC]:

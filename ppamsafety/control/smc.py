@@ -28,18 +28,57 @@ chose them 20-50 % lower than measured to reduce chattering).
 from __future__ import annotations
 
 import math
+from enum import IntEnum
 
 import numpy as np
 
 from .._jit import leaf
-from .._validation import check_choice, check_range
+from .._validation import check_range
+from ..layouts import Field, Layout, check_flag
 from ..plant import layout as lay
 from ..plant.dynamics import forward_dynamics, mass_matrix_cs
 from ..plant.torque import torque_kernel
-from .base import KIND_SMC, Controller, pair
+from .base import KIND_SMC, R_Q, R_QD, R_QDD, R_QDDD, Controller, pair
 
 H_Q = 1e-6      # finite-difference steps [rad], [rad/s]
 H_W = 1e-5
+
+
+class SMCCoupling(IntEnum):
+    """Linearisation of :class:`SlidingModeControl`."""
+
+    SISO = 0        #: each link with respect to its own states (thesis)
+    MIMO = 1        #: all states and the 2x2 input matrix
+
+
+SMC_PARAMS = Layout("SMC parameters", [
+    Field("alpha0", 2, "1/s^2", "error-dynamics coefficients alpha0 = poles^2 (4.35)"),
+    Field("alpha1", 2, "1/s", "error-dynamics coefficients alpha1 = 2 poles (4.35)"),
+    Field("gain", 2, "rad/s^3", "switching gains K (4.41)"),
+    Field("boundary_layer", 2, "rad/s^2", "boundary-layer widths Gamma"),
+    Field("coupling", 1, "code", "SMCCoupling: siso or mimo linearisation"),
+])
+P_A0, P_A1, P_K, P_GAMMA, P_COUPLING = SMC_PARAMS.offsets(
+    "alpha0", "alpha1", "gain", "boundary_layer", "coupling")
+
+SMC_INTERNALS = Layout("SMC internals", [
+    Field("s", 2, "rad/s^2", "sliding variables s (4.35)"),
+    Field("a_diag", 2, "1/(s^3 Pa)", "diagonal input gains a_ii (4.33)", columns=("a11", "a22")),
+    Field("b", 2, "rad/s^3", "drift terms b_i (4.33)"),
+    Field("u_smc", 2, "Pa", "commanded Delta p (4.41)"),
+])
+I_S, I_A, I_B, I_U = SMC_INTERNALS.offsets("s", "a_diag", "b", "u_smc")
+
+SMC_SCRATCH = Layout("SMC scratch", [
+    Field("qdd_buf", 12, "-", "work memory of model_qdd (torque functions)"),
+    Field("mt", 4, "m^3", "m_tau of the four muscle groups at the measured q (B.2)"),
+    Field("vol", 4, "m^3", "group volumes"),
+    Field("dmt", 4, "m^3/rad", "d m_tau / dq"),
+    Field("fp", 4, "Pa/s", "pressure drift (valve towards p_m, polytropic coupling)"),
+    Field("gp", 4, "1/s", "pressure input direction"),
+])
+X_BUF, X_MT, X_VOL, X_DMT, X_FP, X_GP = SMC_SCRATCH.offsets(
+    "qdd_buf", "mt", "vol", "dmt", "fp", "gp")
 
 
 @leaf
@@ -58,19 +97,18 @@ def _sat(x):
 
 @leaf
 def smc_step(C, S, Pm, dt, qm, qdm, pm, ref, dp, internals, scratch):
-    """SMC update; C = [alpha0(2), alpha1(2), K(2), Gamma(2), mimo].
-
-    Internals: s (2), a_ii (2), b (2), equivalent control (2).
+    """SMC update; C: ``SMC_PARAMS``, internals: ``SMC_INTERNALS``, scratch:
+    ``SMC_SCRATCH`` (no state: S is empty).
     """
-    buf = scratch[0:12]
+    buf = scratch[X_BUF:X_BUF + 12]
     q1, q2, w1, w2 = qm[0], qm[1], qdm[0], qdm[1]
     a1, a2 = model_qdd(q1, q2, w1, w2, pm, Pm, buf)
-    mt = scratch[12:16]
-    vol = scratch[16:20]
-    torque_kernel(q1, q2, Pm, mt, scratch[20:24], vol)
+    mt = scratch[X_MT:X_MT + 4]
+    vol = scratch[X_VOL:X_VOL + 4]
+    torque_kernel(q1, q2, Pm, mt, scratch[X_DMT:X_DMT + 4], vol)
     # pressure drift (valve towards p_m, polytropic coupling) and input direction
-    fp = scratch[24:28]
-    gp = scratch[28:32]
+    fp = scratch[X_FP:X_FP + 4]
+    gp = scratch[X_GP:X_GP + 4]
     n = Pm[lay.NPOLY]
     for i in range(4):
         w = w1 if i < 2 else w2
@@ -91,7 +129,7 @@ def smc_step(C, S, Pm, dt, qm, qdm, pm, ref, dp, internals, scratch):
     d2w1 = model_qdd(q1, q2, w1 - H_W, w2, pm, Pm, buf)
     d1w2 = model_qdd(q1, q2, w1, w2 + H_W, pm, Pm, buf)
     d2w2 = model_qdd(q1, q2, w1, w2 - H_W, pm, Pm, buf)
-    mimo = C[8] > 0.5
+    mimo = int(C[P_COUPLING]) == SMCCoupling.MIMO
     acc = (a1, a2)
     hinv = ((hi11, hi12), (hi12, hi22))
     dq = ((d1q1[0] - d2q1[0], d1q2[0] - d2q2[0]), (d1q1[1] - d2q1[1], d1q2[1] - d2q2[1]))
@@ -107,15 +145,15 @@ def smc_step(C, S, Pm, dt, qm, qdm, pm, ref, dp, internals, scratch):
             for k in (2 * j, 2 * j + 1):
                 b[i] += hinv[i][j] * mt[k] * fp[k]
                 A[i, j] += hinv[i][j] * mt[k] * gp[k]
-        e = ref[i] - qm[i]
-        ed = ref[2 + i] - qdm[i]
-        edd = ref[4 + i] - acc[i]
-        s = edd + C[2 + i] * ed + C[i] * e
-        v[i] = ref[6 + i] - b[i] + C[2 + i] * edd + C[i] * ed
-        internals[i] = s
-        internals[2 + i] = A[i, i]
-        internals[4 + i] = b[i]
-        v[i] += C[4 + i] * _sat(s / C[6 + i])
+        e = ref[R_Q + i] - qm[i]
+        ed = ref[R_QD + i] - qdm[i]
+        edd = ref[R_QDD + i] - acc[i]
+        s = edd + C[P_A1 + i] * ed + C[P_A0 + i] * e
+        v[i] = ref[R_QDDD + i] - b[i] + C[P_A1 + i] * edd + C[P_A0 + i] * ed
+        internals[I_S + i] = s
+        internals[I_A + i] = A[i, i]
+        internals[I_B + i] = b[i]
+        v[i] += C[P_K + i] * _sat(s / C[P_GAMMA + i])
     if mimo:
         det_a = A[0, 0] * A[1, 1] - A[0, 1] * A[1, 0]
         dp[0] = (A[1, 1] * v[0] - A[0, 1] * v[1]) / det_a
@@ -123,8 +161,8 @@ def smc_step(C, S, Pm, dt, qm, qdm, pm, ref, dp, internals, scratch):
     else:
         dp[0] = v[0] / A[0, 0]
         dp[1] = v[1] / A[1, 1]
-    internals[6] = dp[0]
-    internals[7] = dp[1]
+    internals[I_U] = dp[0]
+    internals[I_U + 1] = dp[1]
 
 
 class SlidingModeControl(Controller):
@@ -163,6 +201,9 @@ class SlidingModeControl(Controller):
 
     kind = KIND_SMC
     name = "SMC"
+    PARAMS = SMC_PARAMS
+    INTERNALS = SMC_INTERNALS
+    SCRATCH = SMC_SCRATCH.size
 
     def __init__(self, *, poles=40.0, gain=3000.0, boundary_layer=10.0, coupling: str = "siso",
                  model_time_constants=None, model_links=None):
@@ -177,7 +218,8 @@ class SlidingModeControl(Controller):
                                    unit="rad/s^2")
         if min(self.boundary_layer) <= 0:
             raise ValueError("SlidingModeControl.boundary_layer must be positive [rad/s^2]")
-        self.coupling = check_choice("SlidingModeControl.coupling", coupling, ("siso", "mimo"))
+        code = check_flag(SMCCoupling, coupling, "SlidingModeControl.coupling")
+        self.coupling = SMCCoupling(code).name.lower()
         if model_time_constants is not None:
             if len(model_time_constants) != 4:
                 raise ValueError("SlidingModeControl.model_time_constants needs 4 values [s]")
@@ -188,9 +230,11 @@ class SlidingModeControl(Controller):
         self.model_links = model_links
 
     def pack(self) -> np.ndarray:
-        """Parameter vector of the compiled step function (SI units)."""
-        return np.array([*self.alpha0, *self.alpha1, *self.gain, *self.boundary_layer,
-                         float(self.coupling == "mimo")])
+        """Parameter row of the compiled step function (layout ``SMC_PARAMS``, SI units)."""
+        return SMC_PARAMS.pack(
+            alpha0=self.alpha0, alpha1=self.alpha1, gain=self.gain,
+            boundary_layer=self.boundary_layer,
+            coupling=check_flag(SMCCoupling, self.coupling, "SlidingModeControl.coupling"))
 
     def model_row(self, arm) -> np.ndarray:
         """Packed arm parameters the controller believes in (its model)."""

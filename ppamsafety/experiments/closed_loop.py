@@ -20,11 +20,10 @@ import pandas as pd
 
 from .._jit import kernel
 from .._validation import check_int, check_range
-from ..control.base import KIND_PID, KIND_PSMC_JOINT, KIND_PSMC_TASK, KIND_SMC, NINT, NSCRATCH
-from ..control.base import NSTATE
-from ..control.dispatch import controller_step
-from ..control.sensors import (NSENSOR, SensorConfig, initial_sensor_state, sensor_init,
-                               sensor_read, sensor_track)
+from ..control.dispatch import CONTROLLER_CLASSES, NINT, NSCRATCH, NSTATE, controller_step
+from ..control.sensors import (N_Q, N_QD, NSENSOR, SENSOR_NOISE, SensorConfig, sensor_init,
+                               sensor_read, sensor_reset, sensor_track)
+from ..layouts import Field, Layout
 from ..plant import layout as lay
 from ..plant.geometry import tcp_jacobian, tcp_position
 from ..plant.model import NWORK, NX, effect_state_length, rk4_step
@@ -32,74 +31,106 @@ from ..plant.pneumatics import delta_p_to_set_values
 from .case import ExperimentCase, as_cases
 from .trajectories import REF_COLUMNS, Reference
 
-LOG_COLUMNS = (["t", "q1", "q2", "qd1", "qd2", "p1", "p2", "p3", "p4", "q1_meas", "q2_meas",
-                "qd1_meas", "qd2_meas", "u1", "u2", "u3", "u4", "dp1", "dp2", "x", "y", "xd",
-                "yd"] + [f"int{i}" for i in range(NINT)])
-NLOG = len(LOG_COLUMNS)
-INTERNAL_NAMES = {
-    KIND_PID: ["pid1", "pid2", "integral1", "integral2"],
-    KIND_PSMC_JOINT: ["dp_psmc1", "dp_psmc2", "s1", "s2", "on_surface1", "on_surface2",
-                      "a1", "a2"],
-    KIND_PSMC_TASK: ["fx", "fy", "sx", "sy", "on_surface", "f_star_norm", "ax", "ay"],
-    KIND_SMC: ["s1", "s2", "a11", "a22", "b1", "b2", "u_smc1", "u_smc2"],
-}
+# Plant state x = (q (2), qd (2), p (4)) of ppamsafety.plant.model.  TEMPORARY names for its
+# offsets, until the plant declares its state as a Layout.
+X_Q, X_QD, X_P = 0, 2, 4
+
+#: One row of the closed-loop log, written by ``_run_batch`` once per control period.
+LOG = Layout("closed-loop log", [
+    Field("t", 1, "s", "sample time k dt"),
+    Field("q", 2, "rad", "true joint angles"),
+    Field("qd", 2, "rad/s", "true joint velocities"),
+    Field("p", 4, "Pa", "true gauge pressures of the four muscle groups"),
+    Field("q_meas", 2, "rad", "measured angles (encoder, noise)", columns=("q1_meas", "q2_meas")),
+    Field("qd_meas", 2, "rad/s", "measured velocities (timing board, noise)",
+          columns=("qd1_meas", "qd2_meas")),
+    Field("u", 4, "Pa", "valve set values (Delta-p approach (3.7), inverted (3.12))"),
+    Field("dp", 2, "Pa", "controller output Delta p per joint"),
+    Field("x", 1, "m", "true TCP x"),
+    Field("y", 1, "m", "true TCP y"),
+    Field("xd", 1, "m/s", "true TCP x velocity"),
+    Field("yd", 1, "m/s", "true TCP y velocity"),
+    Field("internals", NINT, "-", "controller internals (named per kind: INTERNAL_NAMES)",
+          columns=tuple(f"int{i}" for i in range(NINT))),
+])
+(L_T, L_Q, L_QD, L_P, L_QM, L_QDM, L_U, L_DP, L_X, L_Y, L_XD, L_YD, L_INT) = LOG.offsets(
+    "t", "q", "qd", "p", "q_meas", "qd_meas", "u", "dp", "x", "y", "xd", "yd", "internals")
+LOG_COLUMNS = LOG.columns()
+NLOG = LOG.size
+#: Names of the internal log columns per controller kind (from each kind's INTERNALS layout).
+# placeholder names of internal columns a kind does not use (dropped by ExperimentResult); not
+# ``startswith("int")``, which also dropped the PID's "integral1", "integral2"
+_UNNAMED = frozenset(LOG.field("internals").column_names())
+INTERNAL_NAMES = {kind: cls.INTERNALS.columns() for kind, cls in CONTROLLER_CLASSES.items()
+                  if cls.INTERNALS.size}
+
+#: Columns of the runner's per-case table of declared controller sizes (``_controller_rows``).
+Z_PARAMS, Z_STATE, Z_INTERNALS, Z_SCRATCH = 0, 1, 2, 3
 
 
 @kernel
-def _run_batch(X0, REFS, ref_idx, PP, PM, KIND, CP, SCFG, NOISE, noise_idx, dt, substeps, LOG):
+def _run_batch(X0, REFS, ref_idx, PP, PM, KIND, CP, CSIZE, SCFG, NOISE, noise_idx, dt, substeps,
+               LOG):
+    """Closed loop of every case b; CSIZE[b] = declared (params, state, internals, scratch)."""
     nb = X0.shape[0]
     n = LOG.shape[1]
     h = dt / substeps
     x = np.empty(NX)
     work = np.empty(NWORK)
     tau0 = np.zeros(2)
-    S = np.empty(NSTATE)
+    S_buf = np.empty(NSTATE)
     st = np.empty(NSENSOR)
     qm = np.empty(2)
     qdm = np.empty(2)
     dp = np.empty(2)
     u = np.empty(4)
     internals = np.empty(NINT)
-    scratch = np.empty(NSCRATCH)
+    scratch_buf = np.empty(NSCRATCH)
     diverged = np.zeros(nb, dtype=np.bool_)
     for b in range(nb):
         x[:] = X0[b]
-        S[:] = 0.0
-        st[:] = 0.0
-        st[2:6] = -1.0e9
+        S_buf[:] = 0.0
+        sensor_reset(st)
         internals[:] = 0.0
-        Pp, Pm, cfg, C, R = PP[b], PM[b], SCFG[b], CP[b], REFS[ref_idx[b]]
+        Pp, Pm, cfg, R = PP[b], PM[b], SCFG[b], REFS[ref_idx[b]]
         z = np.zeros(effect_state_length(Pp))     # plant effect state (empty: effects off)
+        # every row exactly as wide as the kind declares (as in Controller.step)
+        C = CP[b, :CSIZE[b, Z_PARAMS]]
+        S = S_buf[:CSIZE[b, Z_STATE]]
+        ints = internals[:CSIZE[b, Z_INTERNALS]]
+        scratch = scratch_buf[:CSIZE[b, Z_SCRATCH]]
         noise = NOISE[noise_idx[b]]
-        sensor_init(x[0], x[1], cfg, st)
+        sensor_init(x[X_Q], x[X_Q + 1], cfg, st)
         for k in range(n):
             t = k * dt
             for j in range(2):
-                a, w = sensor_read(j, x[j], x[2 + j], t, cfg, st)
-                qm[j] = a + noise[k, j]
-                qdm[j] = w + noise[k, 2 + j]
-            controller_step(KIND[b], C, S, Pm, k, dt, qm, qdm, x[4:8], R[k], dp, internals,
+                a, w = sensor_read(j, x[X_Q + j], x[X_QD + j], t, cfg, st)
+                qm[j] = a + noise[k, N_Q + j]
+                qdm[j] = w + noise[k, N_QD + j]
+            controller_step(KIND[b], C, S, Pm, k, dt, qm, qdm, x[X_P:X_P + 4], R[k], dp, ints,
                             scratch)
             delta_p_to_set_values(dp[0], dp[1], Pm, u)
             row = LOG[b, k]
-            row[0] = t
-            row[1:9] = x
-            row[9:11] = qm
-            row[11:13] = qdm
-            row[13:17] = u
-            row[17:19] = dp
-            row[19], row[20] = tcp_position(x[0], x[1], Pp)
-            j11, j12, j21, j22 = tcp_jacobian(x[0], x[1], Pp)
-            row[21] = j11 * x[2] + j12 * x[3]
-            row[22] = j21 * x[2] + j22 * x[3]
-            row[23:23 + NINT] = internals
+            row[L_T] = t
+            row[L_Q:L_Q + 2] = x[X_Q:X_Q + 2]
+            row[L_QD:L_QD + 2] = x[X_QD:X_QD + 2]
+            row[L_P:L_P + 4] = x[X_P:X_P + 4]
+            row[L_QM:L_QM + 2] = qm
+            row[L_QDM:L_QDM + 2] = qdm
+            row[L_U:L_U + 4] = u
+            row[L_DP:L_DP + 2] = dp
+            row[L_X], row[L_Y] = tcp_position(x[X_Q], x[X_Q + 1], Pp)
+            j11, j12, j21, j22 = tcp_jacobian(x[X_Q], x[X_Q + 1], Pp)
+            row[L_XD] = j11 * x[X_QD] + j12 * x[X_QD + 1]
+            row[L_YD] = j21 * x[X_QD] + j22 * x[X_QD + 1]
+            row[L_INT:L_INT + NINT] = internals
             for i in range(substeps):
-                q_old0, q_old1 = x[0], x[1]
+                q_old0, q_old1 = x[X_Q], x[X_Q + 1]
                 rk4_step(x, z, u, tau0, h, Pp, work)
-                sensor_track(0, q_old0, x[0], t + i * h, h, cfg, st)
-                sensor_track(1, q_old1, x[1], t + i * h, h, cfg, st)
-            if not (np.isfinite(x[0]) and np.isfinite(x[1]) and abs(x[2]) < 1e3
-                    and abs(x[3]) < 1e3):
+                sensor_track(0, q_old0, x[X_Q], t + i * h, h, cfg, st)
+                sensor_track(1, q_old1, x[X_Q + 1], t + i * h, h, cfg, st)
+            if not (np.isfinite(x[X_Q]) and np.isfinite(x[X_Q + 1]) and abs(x[X_QD]) < 1e3
+                    and abs(x[X_QD + 1]) < 1e3):
                 diverged[b] = True
                 LOG[b, k + 1:, :] = np.nan
                 break
@@ -146,7 +177,7 @@ class ExperimentResult:
 
     def signal_names(self) -> list:
         """Names accepted by :meth:`signal`: logged signals, controller internals, reference."""
-        return [c for c in self._log_names() if not c.startswith("int")] + list(REF_COLUMNS)
+        return [c for c in self._log_names() if c not in _UNNAMED] + list(REF_COLUMNS)
 
     def signal(self, name: str) -> np.ndarray:
         """One signal by name, shape (n,), SI units.
@@ -157,7 +188,7 @@ class ExperimentResult:
         (e.g. ``s1`` for PSMC) and the reference columns (``q1_d``, ``x_d``, ...).
         """
         names = self._log_names()
-        if isinstance(name, str) and name in names and not name.startswith("int"):
+        if isinstance(name, str) and name in names and name not in _UNNAMED:
             return self.log[:, names.index(name)]
         if isinstance(name, str) and name in REF_COLUMNS:
             return self.reference.signal(name)
@@ -170,7 +201,7 @@ class ExperimentResult:
     def to_pandas(self) -> pd.DataFrame:
         """All signals as a DataFrame (SI units), reference columns included."""
         df = pd.DataFrame(self.log, columns=self._log_names())
-        df = df[[c for c in df.columns if not c.startswith("int")]]
+        df = df[[c for c in df.columns if c not in _UNNAMED]]
         ref = pd.DataFrame(self.reference.data, columns=REF_COLUMNS)
         return pd.concat([df, ref], axis=1)
 
@@ -202,8 +233,20 @@ class ExperimentResult:
 
 
 def _controller_rows(arm, controller):
-    C = controller.pack()
-    return controller.kind, C, controller.model_row(arm)
+    """Kind code, parameter row (exactly ``PARAMS.size`` wide, checked), declared sizes
+    (params, state, internals, scratch) and model row of ``controller``."""
+    cls = CONTROLLER_CLASSES.get(controller.kind)
+    if cls is None or not isinstance(controller, cls):
+        raise TypeError(f"controller = {controller!r} is not one of the controller classes "
+                        f"{[c.__name__ for c in CONTROLLER_CLASSES.values()]}")
+    C = np.asarray(controller.pack(), dtype=float)
+    if C.shape != (cls.PARAMS.size,):
+        raise ValueError(f"{cls.__name__}.pack() gave shape {C.shape}, its layout "
+                         f"{cls.PARAMS.name!r} declares ({cls.PARAMS.size},)")
+    sizes = [0, 0, 0, 0]
+    sizes[Z_PARAMS], sizes[Z_STATE] = cls.PARAMS.size, cls.STATE.size
+    sizes[Z_INTERNALS], sizes[Z_SCRATCH] = cls.INTERNALS.size, cls.SCRATCH
+    return int(controller.kind), C, sizes, controller.model_row(arm)
 
 
 def run_batch(cases, *, dt: float = 1e-3, substeps: int = 1) -> list:
@@ -245,7 +288,7 @@ def run_batch(cases, *, dt: float = 1e-3, substeps: int = 1) -> list:
         return []
     n = cases[0].reference.n_steps
     refs, ref_ids, noises, noise_ids = [], [], [], []
-    X0, PP, PM, KIND, CPs, SC = [], [], [], [], [], []
+    X0, PP, PM, KIND, CPs, CSIZE, SC = [], [], [], [], [], [], []
     for c in cases:
         ref = c.reference
         if ref.n_steps != n:
@@ -270,12 +313,13 @@ def run_batch(cases, *, dt: float = 1e-3, substeps: int = 1) -> list:
             x0 = rest_state(ref.field("q_d")[0], arm)[0]
         X0.append(np.asarray(x0, dtype=float))
         PP.append(lay.pack(arm))
-        kind, C, Pm = _controller_rows(arm, c.controller)
+        kind, C, sizes, Pm = _controller_rows(arm, c.controller)
         KIND.append(kind)
         CPs.append(C)
+        CSIZE.append(sizes)
         PM.append(Pm)
         SC.append(sens.pack())
-    noises.append(np.zeros((n, 4)))
+    noises.append(np.zeros((n, SENSOR_NOISE.size)))
     noise_ids = [i if i >= 0 else len(noises) - 1 for i in noise_ids]
     ncp = max(c.size for c in CPs)
     CP = np.zeros((len(cases), ncp))
@@ -284,11 +328,12 @@ def run_batch(cases, *, dt: float = 1e-3, substeps: int = 1) -> list:
     LOG = np.empty((len(cases), n, NLOG))
     diverged = _run_batch(np.array(X0), np.array([r.data for r in refs]),
                           np.array(ref_ids, dtype=np.int64), np.array(PP), np.array(PM),
-                          np.array(KIND, dtype=np.int64), CP, np.array(SC), np.array(noises),
+                          np.array(KIND, dtype=np.int64), CP, np.array(CSIZE, dtype=np.int64),
+                          np.array(SC), np.array(noises),
                           np.array(noise_ids, dtype=np.int64), float(dt), substeps, LOG)
     out = []
     for i, c in enumerate(cases):
-        desc = {**c.controller.describe(), "kind": c.controller.kind}
+        desc = {**c.controller.describe(), "kind": int(c.controller.kind)}
         out.append(ExperimentResult(c.name, desc, c.reference, LOG[i], bool(diverged[i]),
                                     dict(c.meta)))
     return out
