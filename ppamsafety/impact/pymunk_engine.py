@@ -29,8 +29,10 @@ The pymunk model (horizontal plane: gravity 0, ``space.damping = 1``):
   **-q2_0** (and -q1_0 for the motor spring, whose body a has angle 0).
 * no shapes: pymunk's own collision detection never runs.
 
-The Hunt-Crossley force is computed by our code in the ``pre_solve`` callback
-of the first constraint (the pivot at O).  ``cpSpaceStep`` first integrates
+The Hunt-Crossley force is computed by our code (the compiled contact law of
+:mod:`ppamsafety.impact.contact`, the same function the main engine inlines)
+in the ``pre_solve`` callback of the first constraint (the pivot at O).
+``cpSpaceStep`` first integrates
 positions (x_{k+1} = x_k + v_k dt), then calls each constraint's pre_solve and
 preStep, then integrates velocities with the accumulated body forces
 (v_{k+1} = v_k + M^-1 f dt) and resets the forces, then runs the joint solver.
@@ -56,6 +58,7 @@ import pandas as pd
 from .._validation import as_float_array, check_int, check_nonnegative, check_range
 from ..params.head import HeadContactModel, head_model
 from ..units import G0
+from .contact import hunt_crossley_elastic, hunt_crossley_force
 from .hic import hic
 
 #: Columns of :attr:`PymunkImpact.history` (same names and meaning as the main engine's).
@@ -255,6 +258,10 @@ def simulate_impact_pymunk(arm, q, qd, stiffness, *, head: HeadContactModel | st
     state = {"k": 0, "diss": 0.0, "delta": 0.0}
     tcp_local = (L2, 0.0)
 
+    # the contact law is the engine's compiled one (one definition, see impact.contact);
+    # bound to locals for the per-step Python callback
+    hc_force, hc_elastic = hunt_crossley_force, hunt_crossley_elastic
+
     def contact(constraint, sp):
         k = state["k"] + 1
         p_tcp = b2.local_to_world(tcp_local)
@@ -268,16 +275,15 @@ def simulate_impact_pymunk(arm, q, qd, stiffness, *, head: HeadContactModel | st
             vt = b2.velocity_at_world_point(p_tcp)
             vh = bh.velocity
             ddelta = -(nx * (vh.x - vt.x) + ny * (vh.y - vt.y))
-            dn = delta ** nc
-            f = max(kc * dn + bc * dn * ddelta, 0.0)
+            f = hc_force(delta, ddelta, kc, nc, bc)
             if f > 0.0:
                 bh.apply_force_at_world_point((f * nx, f * ny), ph)
                 b2.apply_force_at_world_point((-f * nx, -f * ny), p_tcp)
         # dissipation: (F - k delta^n) d(delta), trapezoid over the step
         d_old = state["delta"]
         if delta > 0.0 or d_old > 0.0:
-            fel = kc * max(delta, 0.0) ** nc
-            fel_old = kc * max(d_old, 0.0) ** nc
+            fel = hc_elastic(delta, kc, nc)
+            fel_old = hc_elastic(d_old, kc, nc)
             state["diss"] += 0.5 * ((f - fel) + (F[k - 1] - fel_old)) * (delta - d_old)
         state["delta"] = delta
         F[k], D[k], Ediss[k] = f, delta, state["diss"]
