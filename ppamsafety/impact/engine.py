@@ -19,6 +19,14 @@ maximisation, :mod:`ppamsafety.impact.hic`).  The dissipated energy
 integral_0^t (F - k delta^n) d(delta)/dt dt is integrated alongside, so the
 energy balance can be checked.  Everything is one compiled kernel over a
 batch of impact cases.
+
+Data layouts (:mod:`ppamsafety.layouts`), declared here once: :data:`CASE`
+(one impact case; the flag ``arm_mode`` holds an :class:`ArmMode` code),
+:data:`HEAD` (head contact parameters, :func:`pack_head`), :data:`STATE`
+(integrator state y), :data:`SUMMARY` (one summary row;
+:data:`SUMMARY_COLUMNS`) and :data:`HIST` (one history sample;
+:data:`HIST_COLUMNS`).  The kernels index them only through the offsets
+generated from these declarations.
 """
 
 from __future__ import annotations
