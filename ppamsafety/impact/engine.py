@@ -138,6 +138,10 @@ HIST_COLUMNS = HIST.columns()
 NHIST = HIST.size
 
 
+_CASE_FIELDS = tuple((f.name, CASE.slice(f.name), f.length, f.default, f.doc)
+                     for f in CASE.fields)
+
+
 def pack_cases(n: int, **fields) -> np.ndarray:
     """Rows of :data:`CASE` for ``n`` cases, fields given by name.
 
@@ -147,37 +151,48 @@ def pack_cases(n: int, **fields) -> np.ndarray:
         Number of cases.
     **fields
         Field values by name; each broadcasts to ``(n, length)`` (a vector
-        field of length 2 takes shape (2,) or (n, 2)).  Fields with a default
-        (``arm_mode``) may be omitted.
+        field of length 2 takes shape (2,) or (n, 2), a scalar field a number
+        or shape (n,)).  Fields with a default (``arm_mode``) may be omitted.
 
     Returns
     -------
     numpy.ndarray, shape (n, NCASE)
+
+    Raises
+    ------
+    KeyError
+        For a name that is not a field of :data:`CASE`.
+    ValueError
+        For a missing required field or a value that does not broadcast.
     """
     unknown = [k for k in fields if k not in CASE]
     if unknown:
         raise KeyError(f"layout {CASE.name!r} has no field(s) {unknown}; fields: "
-                       f"{', '.join(f.name for f in CASE.fields)}")
-    rows = CASE.empty(n)
-    for f in CASE.fields:
-        if f.name in fields:
-            v = np.asarray(fields[f.name], dtype=float)
-            if f.length == 1:
+                       f"{', '.join(f[0] for f in _CASE_FIELDS)}")
+    rows = np.empty((n, NCASE))
+    for name, sl, length, default, doc in _CASE_FIELDS:
+        if name in fields:
+            v = np.asarray(fields[name], dtype=float)
+            if length == 1 and v.ndim:
                 v = v[..., None]
-            try:
-                rows[:, CASE.slice(f.name)] = np.broadcast_to(v, (n, f.length))
-            except ValueError:
-                raise ValueError(f"case field {f.name!r} must broadcast to ({n}, {f.length}), "
-                                 f"got shape {np.shape(fields[f.name])}") from None
-        elif f.default is None:
-            raise ValueError(f"layout {CASE.name!r}: field {f.name!r} ({f.doc}) is required")
+        elif default is not None:
+            v = default
+        else:
+            raise ValueError(f"layout {CASE.name!r}: field {name!r} ({doc}) is required")
+        try:
+            rows[:, sl] = v
+        except ValueError:
+            raise ValueError(f"case field {name!r} must broadcast to ({n}, {length}), "
+                             f"got shape {np.shape(fields[name])}") from None
     return rows
 
 
 def pack_head(head) -> np.ndarray:
     """The :data:`HEAD` row of a :class:`~ppamsafety.params.head.HeadContactModel`."""
-    return HEAD.pack(mass=head.mass, radius=head.radius, stiffness=head.stiffness,
-                     exponent=head.exponent, damping=head.damping)
+    row = np.empty(HEAD.size)
+    row[HP_M], row[HP_R], row[HP_K] = head.mass, head.radius, head.stiffness
+    row[HP_N], row[HP_B] = head.exponent, head.damping
+    return row
 
 
 @leaf
