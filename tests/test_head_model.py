@@ -49,3 +49,25 @@ def test_stored_thesis_model_is_the_fit_output(arm):
     assert h.stiffness == pytest.approx(fit.stiffness, rel=0.03)
     assert h.damping == pytest.approx(fit.damping, rel=0.03)
     assert fit.rms_sigma < 1.0                         # Table 6.1 pairs within 1 sd on average
+
+
+def test_force_is_the_engine_contact_law_and_broadcasts():
+    """HeadContactModel.force evaluates the same compiled law as the impact engine (issue 7)."""
+    from ppamsafety.impact.contact import hunt_crossley_force
+
+    h = head_model()
+    d = np.array([-1e-3, 0.0, 1e-4, 2e-3])[:, None]
+    dd = np.array([-2.0, -0.1, 0.0, 0.5, 3.0])
+    f = h.force(d, dd)
+    assert f.shape == (4, 5)
+    ref = [[hunt_crossley_force(a, b, h.stiffness, h.exponent, h.damping) for b in dd]
+           for a in d[:, 0]]
+    np.testing.assert_array_equal(f, ref)
+    # thesis eq. 6.2 by hand where it is positive
+    assert f[3, 3] == pytest.approx(2e-3 ** 1.5 * (h.stiffness + h.damping * 0.5), rel=1e-14)
+    assert np.all(f[:2] == 0.0) and f[2, 0] == 0.0            # no contact / clipped at zero
+    assert np.ndim(h.force(1e-3)) == 0 and h.force(1e-3) > 0
+    with pytest.raises(ValueError, match="delta_dot"):
+        h.force(1e-3, np.nan)
+    with pytest.raises(ValueError, match="broadcast"):
+        h.force(np.ones(3), np.ones(2))

@@ -135,3 +135,94 @@ def test_invalid_inputs(arm):
         simulate_impacts(arm, Q, QD, K, head="martian")
     with pytest.raises(ValueError, match="dt"):
         simulate_impacts(arm, Q, QD, K, dt=0.1)
+
+
+def test_history_and_summary_columns_mean_what_their_names_say(arm):
+    """Writer/column drift check: every named column of a recorded history and of the summary
+    is recomputed from the recorded state with independent NumPy code (issue 7)."""
+    from ppamsafety.impact import engine as eng
+    from ppamsafety.impact.hic import hic
+    from ppamsafety.plant import dynamics as dyn
+    from ppamsafety.units import G0
+
+    dt = 1e-5
+    r = simulate_impacts(arm, Q, QD, K, dt=dt, duration=0.02, history=[0])
+    h, s, head = r.history(0), r.summary.iloc[0], r.head
+    assert list(h.columns) == eng.HIST_COLUMNS == eng.HIST.columns()
+    assert list(r.summary.columns[-eng.NSUM:]) == eng.SUMMARY_COLUMNS
+    t, F, delta = r.signal("t", 0), r.signal("F", 0), r.signal("delta", 0)
+    q = Q + r.signals("dq1", "dq2", index=0)
+    qd = r.signals("qd1", "qd2", index=0)
+    n = r.signals("nx", "ny", index=0)
+    vh = r.signals("vhx", "vhy", index=0)
+    u = np.array([s.ux, s.uy])
+    J = geo.jacobian(q, arm)
+    v_tcp = np.einsum("nij,nj->ni", J, qd)
+    # time grid, initial state
+    np.testing.assert_array_equal(t, np.arange(t.size) * dt)
+    np.testing.assert_array_equal(q[0], Q)
+    np.testing.assert_array_equal(qd[0], QD)
+    np.testing.assert_allclose(np.hypot(n[:, 0], n[:, 1]), 1.0, rtol=1e-14)
+    # F is the contact law at the recorded penetration and its rate
+    delta_dot = -np.einsum("ni,ni->n", n, vh - v_tcp)
+    np.testing.assert_allclose(F, head.force(delta, delta_dot), rtol=1e-9,
+                               atol=1e-9 * F.max())
+    assert F.max() > 100.0 and np.count_nonzero(F) > 10          # a real contact was recorded
+    np.testing.assert_allclose(r.signal("a_head_g", 0), F / (head.mass * G0), rtol=1e-15)
+    np.testing.assert_allclose(r.signal("v_head_n", 0), vh @ u, rtol=1e-14, atol=1e-15)
+    np.testing.assert_allclose(r.signal("v_tcp_n", 0), v_tcp @ u, rtol=1e-12, atol=1e-15)
+    # E_total: kinetic + springs + contact potential + dissipated
+    H = dyn.inertia_matrix(q, arm)
+    e_arm = 0.5 * np.einsum("ni,nij,nj->n", qd, H, qd)
+    e_spring = 0.5 * ((q - Q) ** 2 @ K)
+    e_head = 0.5 * head.mass * (vh ** 2).sum(axis=1)
+    dpos = np.maximum(delta, 0.0)
+    e_contact = head.stiffness * dpos ** (head.exponent + 1) / (head.exponent + 1)
+    e_mech = e_arm + e_spring + e_head + e_contact
+    np.testing.assert_allclose(r.signal("E_total", 0)[-1] - s.E_dissipated, e_mech[-1],
+                               rtol=1e-12)
+    # summary columns against the history
+    i = int(np.argmax(F))
+    assert s.F_max == F[i] and s.t_Fmax == t[i]
+    assert s.delta_max == max(delta.max(), 0.0)
+    assert s.a_max_g == pytest.approx(s.F_max / (head.mass * G0), rel=1e-15)
+    assert s.contact_time == pytest.approx(dt * np.count_nonzero(F > 0), rel=1e-12)
+    assert s.E_initial == pytest.approx(0.5 * QD @ dyn.inertia_matrix(Q, arm) @ QD, rel=1e-12)
+    assert s.E_initial == pytest.approx(e_mech[0], rel=1e-12)
+    assert s.v_tcp0 == pytest.approx(np.linalg.norm(geo.jacobian(Q, arm) @ QD), rel=1e-12)
+    assert s.v_tcp0 == pytest.approx(r.signal("v_tcp_n", 0)[0], rel=1e-12)   # u = tool direction
+    assert s.E_head_final == pytest.approx(e_head[-1], rel=1e-12)
+    assert s.E_balance_error == pytest.approx(
+        (r.signal("E_total", 0)[-1] - s.E_initial) / s.E_initial, rel=1e-6, abs=1e-15)
+    for w, col in ((0.036, "HIC36"), (0.015, "HIC15")):
+        ref = hic(r.signal("a_head_g", 0), dt, window=w)
+        assert s[col] == pytest.approx(ref.value, rel=1e-12)
+        assert (s[col + "_t1"], s[col + "_t2"]) == pytest.approx((ref.t1, ref.t2), abs=1e-12)
+    with pytest.raises(KeyError, match="not a history signal"):
+        r.signal("F_max", 0)
+    with pytest.raises(KeyError, match="no history recorded"):
+        simulate_impacts(arm, Q, QD, K, dt=dt, duration=0.002).history(0)
+
+
+def test_case_rows_are_packed_by_name_and_the_arm_mode_is_exact(arm):
+    from ppamsafety.impact import engine as eng
+
+    rows = eng.pack_cases(3, q=Q, qd=QD, K=K, u=[1.0, 0.0], v_head=0.0,
+                          arm_mode=eng.ArmMode.FIXED)
+    assert rows.shape == (3, eng.NCASE)
+    np.testing.assert_array_equal(eng.CASE.read(rows, "K"), np.tile(K, (3, 1)))
+    np.testing.assert_array_equal(eng.CASE.read(rows, "arm_mode"), [1.0, 1.0, 1.0])
+    assert eng.CASE.read(eng.pack_cases(1, q=Q, qd=QD, K=K, u=[1, 0], v_head=0)[0],
+                         "arm_mode") == eng.ArmMode.FLEXIBLE
+    with pytest.raises(ValueError, match="'K' must broadcast"):
+        eng.pack_cases(3, q=Q, qd=QD, K=[1.0, 2.0, 3.0], u=[1, 0], v_head=0)
+    with pytest.raises(ValueError, match="'u'.*required"):
+        eng.pack_cases(3, q=Q, qd=QD, K=K, v_head=0)
+    # fixed arm: the tool point never moves
+    u = np.array([0.6, 0.8])
+    r = simulate_impacts(arm, Q, QD, K, direction=u, head_velocity=-u, fixed_arm=True,
+                         dt=1e-5, duration=0.01, history=True)
+    assert r.summary.F_max.iloc[0] > 0
+    assert np.all(r.signals("dq1", "dq2", "qd1", "qd2", "v_tcp_n", index=0) == 0.0)
+    with pytest.raises(TypeError, match="fixed_arm"):
+        simulate_impacts(arm, Q, QD, K, fixed_arm=0.7)

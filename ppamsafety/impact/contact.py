@@ -11,13 +11,19 @@ delta^n integrates in closed form (Marhefka & Orin 1999, eqs. 11-14)::
 
 giving the maximum penetration and the exit velocity (restitution) below.
 Along this solution k + b v > 0, so the force never needs clipping.
+
+The law exists once, here, as the compiled scalar :func:`hunt_crossley_force`
+(with its elastic part and potential); the impact kernels inline it, the NumPy
+level (:meth:`ppamsafety.params.head.HeadContactModel.force`) calls the batched
+:func:`hunt_crossley_force_batch`, and the pymunk cross-check calls the scalar
+function from its Python callback.
 """
 
 from __future__ import annotations
 
 import math
 
-from .._jit import leaf
+from .._jit import kernel, leaf
 from .._validation import check_nonnegative, check_positive, check_range
 
 
@@ -28,6 +34,27 @@ def hunt_crossley_force(delta, delta_dot, k, n, b):
         return 0.0
     dn = delta ** n
     return max(k * dn + b * dn * delta_dot, 0.0)
+
+
+@leaf
+def hunt_crossley_elastic(delta, k, n):
+    """Elastic part k max(delta, 0)^n [N] of the contact force (no damping)."""
+    return k * max(delta, 0.0) ** n
+
+
+@leaf
+def hunt_crossley_potential(delta, k, n):
+    """Contact potential energy k delta^(n+1)/(n+1) [J] for delta > 0, else 0."""
+    if delta <= 0.0:
+        return 0.0
+    return k * delta ** (n + 1.0) / (n + 1.0)
+
+
+@kernel
+def hunt_crossley_force_batch(delta, delta_dot, k, n, b, out):
+    """:func:`hunt_crossley_force` element-wise over 1-D arrays ``delta``, ``delta_dot``."""
+    for i in range(delta.shape[0]):
+        out[i] = hunt_crossley_force(delta[i], delta_dot[i], k, n, b)
 
 
 def _check(mass, v0, k, n, b):

@@ -19,42 +19,187 @@ maximisation, :mod:`ppamsafety.impact.hic`).  The dissipated energy
 integral_0^t (F - k delta^n) d(delta)/dt dt is integrated alongside, so the
 energy balance can be checked.  Everything is one compiled kernel over a
 batch of impact cases.
+
+Data layouts (:mod:`ppamsafety.layouts`), declared here once: :data:`CASE`
+(one impact case; the flag ``arm_mode`` holds an :class:`ArmMode` code),
+:data:`HEAD` (head contact parameters, :func:`pack_head`), :data:`STATE`
+(integrator state y), :data:`SUMMARY` (one summary row;
+:data:`SUMMARY_COLUMNS`) and :data:`HIST` (one history sample;
+:data:`HIST_COLUMNS`).  The kernels index them only through the offsets
+generated from these declarations.
 """
 
 from __future__ import annotations
 
 import math
+from enum import IntEnum
 
 import numpy as np
 
 from .._jit import kernel, leaf
+from ..layouts import Field, Layout
 from ..plant.dynamics import coriolis_cs, mass_matrix_cs
 from ..plant.geometry import tcp_kinematics_cs
 from ..units import G0
-from .contact import hunt_crossley_force
+from .contact import hunt_crossley_elastic, hunt_crossley_force, hunt_crossley_potential
 from .hic import hic_kernel
 
-NY = 9          # q1, q2, w1, w2, xh, yh, vxh, vyh, dissipated energy
-# case columns
-C_Q, C_QD, C_K, C_U, C_VH, C_FIXED = 0, 2, 4, 6, 8, 10
-NCASE = 11
-# head parameter vector
-H_M, H_R, H_K, H_N, H_B = 0, 1, 2, 3, 4
-# summary columns
-SUMMARY_COLUMNS = ["F_max", "t_Fmax", "HIC36", "HIC36_t1", "HIC36_t2", "HIC15", "HIC15_t1",
-                   "HIC15_t2", "delta_max", "a_max_g", "E_head_final", "E_dissipated",
-                   "contact_time", "v_tcp0", "E_initial", "E_balance_error"]
-NSUM = len(SUMMARY_COLUMNS)
-HIST_COLUMNS = ["t", "F", "delta", "a_head_g", "dq1", "dq2", "v_head_n", "v_tcp_n", "E_total",
-                "qd1", "qd2", "nx", "ny", "vhx", "vhy"]
-NHIST = len(HIST_COLUMNS)
+
+class ArmMode(IntEnum):
+    """How the arm moves during the impact (field ``arm_mode`` of :data:`CASE`)."""
+
+    #: Flexible-joint arm: rigid links on torsional springs about the frozen motor side.
+    FLEXIBLE = 0
+    #: Rigid, fixed arm: the tool point does not move; only the head does.
+    FIXED = 1
+
+
+# ---- declared layouts (ppamsafety.layouts) ------------------------------------------------
+#: One impact case: the arm state at the impact instant t0 and the impact geometry.
+CASE = Layout("impact case", [
+    Field("q", 2, "rad", "link angles at the impact instant t0"),
+    Field("qd", 2, "rad/s", "link angular velocities at t0 (unused for a fixed arm)"),
+    Field("K", 2, "N m/rad", "joint stiffnesses, constant during the impact (2.18)"),
+    Field("u", 2, "-", "unit vector from the tool point to the head centre at t0",
+          columns=("ux", "uy")),
+    Field("v_head", 2, "m/s", "head velocity at t0", columns=("vhx0", "vhy0")),
+    Field("arm_mode", 1, "code", "ArmMode: flexible-joint (0) or rigid fixed arm (1)",
+          default=float(ArmMode.FLEXIBLE)),
+])
+C_Q, C_QD, C_K, C_U, C_VH, C_ARM = CASE.offsets("q", "qd", "K", "u", "v_head", "arm_mode")
+NCASE = CASE.size
+
+#: Head and Hunt-Crossley contact parameters (a HeadContactModel as a kernel row).
+HEAD = Layout("head contact parameters", [
+    Field("mass", 1, "kg", "head mass (thesis §6.3.2: 5 kg)"),
+    Field("radius", 1, "m", "radius of the spherical head surface"),
+    Field("stiffness", 1, "N/m^n", "Hunt-Crossley k (6.2)"),
+    Field("exponent", 1, "-", "Hunt-Crossley n (6.2)"),
+    Field("damping", 1, "N s/m^(n+1)", "Hunt-Crossley b (6.2)"),
+])
+HP_M, HP_R, HP_K, HP_N, HP_B = HEAD.offsets("mass", "radius", "stiffness", "exponent", "damping")
+
+#: Integrator state y of one impact.
+STATE = Layout("impact integrator state", [
+    Field("q", 2, "rad", "link angles"),
+    Field("w", 2, "rad/s", "link angular velocities"),
+    Field("x_head", 2, "m", "head centre position", columns=("xh", "yh")),
+    Field("v_head", 2, "m/s", "head centre velocity", columns=("vxh", "vyh")),
+    Field("E_dissipated", 1, "J", "integral of (F - k delta^n) d(delta)/dt dt"),
+])
+Y_Q, Y_W, Y_XH, Y_VH, Y_ED = STATE.offsets("q", "w", "x_head", "v_head", "E_dissipated")
+NY = STATE.size
+
+#: One row of the summary of an impact (columns of ImpactResults.summary).
+SUMMARY = Layout("impact summary", [
+    Field("F_max", 1, "N", "peak contact force"),
+    Field("t_Fmax", 1, "s", "time of the peak force after t0"),
+    Field("HIC36", 1, "-", "HIC over windows of at most 36 ms (exact maximum)"),
+    Field("HIC36_window", 2, "s", "start and end of the HIC36 window",
+          columns=("HIC36_t1", "HIC36_t2")),
+    Field("HIC15", 1, "-", "HIC over windows of at most 15 ms (exact maximum)"),
+    Field("HIC15_window", 2, "s", "start and end of the HIC15 window",
+          columns=("HIC15_t1", "HIC15_t2")),
+    Field("delta_max", 1, "m", "maximum penetration"),
+    Field("a_max_g", 1, "g", "peak head acceleration F_max / (m_h g0)"),
+    Field("E_head_final", 1, "J", "head kinetic energy at the end"),
+    Field("E_dissipated", 1, "J", "energy dissipated by the contact damping"),
+    Field("contact_time", 1, "s", "total time with a positive contact force"),
+    Field("v_tcp0", 1, "m/s", "tool point speed |J qd| at t0"),
+    Field("E_initial", 1, "J", "energy at t0 (kinetic; springs unloaded, no contact)"),
+    Field("E_balance_error", 1, "-",
+          "(final energy + dissipated - E_initial) / E_initial"),
+])
+(R_FMAX, R_TFMAX, R_HIC36, R_W36, R_HIC15, R_W15, R_DMAX, R_AMAX, R_EHEAD, R_EDISS, R_TCONT,
+ R_VTCP0, R_E0, R_EBAL) = SUMMARY.offsets(
+    "F_max", "t_Fmax", "HIC36", "HIC36_window", "HIC15", "HIC15_window", "delta_max",
+    "a_max_g", "E_head_final", "E_dissipated", "contact_time", "v_tcp0", "E_initial",
+    "E_balance_error")
+SUMMARY_COLUMNS = SUMMARY.columns()
+NSUM = SUMMARY.size
+
+#: One sample of a recorded impact history (columns of ImpactResults.histories[i]).
+HIST = Layout("impact history row", [
+    Field("t", 1, "s", "time after the impact instant t0"),
+    Field("F", 1, "N", "contact force (Hunt-Crossley, 6.2)"),
+    Field("delta", 1, "m", "penetration R - |x_head - r_tcp| (negative: gap)"),
+    Field("a_head_g", 1, "g", "head acceleration F / (m_h g0)"),
+    Field("dq", 2, "rad", "joint deflections q - q(t0)"),
+    Field("v_head_n", 1, "m/s", "head velocity along the initial direction u"),
+    Field("v_tcp_n", 1, "m/s", "tool point velocity along the initial direction u"),
+    Field("E_total", 1, "J", "kinetic + spring + contact potential + dissipated energy"),
+    Field("qd", 2, "rad/s", "link angular velocities"),
+    Field("n", 2, "-", "contact normal (tool point -> head centre)", columns=("nx", "ny")),
+    Field("v_head", 2, "m/s", "head velocity", columns=("vhx", "vhy")),
+])
+(W_T, W_F, W_DELTA, W_AG, W_DQ, W_VHN, W_VTN, W_E, W_QD, W_N, W_VH) = HIST.offsets(
+    "t", "F", "delta", "a_head_g", "dq", "v_head_n", "v_tcp_n", "E_total", "qd", "n", "v_head")
+HIST_COLUMNS = HIST.columns()
+NHIST = HIST.size
+
+
+_CASE_FIELDS = tuple((f.name, CASE.slice(f.name), f.length, f.default, f.doc)
+                     for f in CASE.fields)
+
+
+def pack_cases(n: int, **fields) -> np.ndarray:
+    """Rows of :data:`CASE` for ``n`` cases, fields given by name.
+
+    Parameters
+    ----------
+    n : int
+        Number of cases.
+    **fields
+        Field values by name; each broadcasts to ``(n, length)`` (a vector
+        field of length 2 takes shape (2,) or (n, 2), a scalar field a number
+        or shape (n,)).  Fields with a default (``arm_mode``) may be omitted.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n, NCASE)
+
+    Raises
+    ------
+    KeyError
+        For a name that is not a field of :data:`CASE`.
+    ValueError
+        For a missing required field or a value that does not broadcast.
+    """
+    unknown = [k for k in fields if k not in CASE]
+    if unknown:
+        raise KeyError(f"layout {CASE.name!r} has no field(s) {unknown}; fields: "
+                       f"{', '.join(f[0] for f in _CASE_FIELDS)}")
+    rows = np.empty((n, NCASE))
+    for name, sl, length, default, doc in _CASE_FIELDS:
+        if name in fields:
+            v = np.asarray(fields[name], dtype=float)
+            if length == 1 and v.ndim:
+                v = v[..., None]
+        elif default is not None:
+            v = default
+        else:
+            raise ValueError(f"layout {CASE.name!r}: field {name!r} ({doc}) is required")
+        try:
+            rows[:, sl] = v
+        except ValueError:
+            raise ValueError(f"case field {name!r} must broadcast to ({n}, {length}), "
+                             f"got shape {np.shape(fields[name])}") from None
+    return rows
+
+
+def pack_head(head) -> np.ndarray:
+    """The :data:`HEAD` row of a :class:`~ppamsafety.params.head.HeadContactModel`."""
+    row = np.empty(HEAD.size)
+    row[HP_M], row[HP_R], row[HP_K] = head.mass, head.radius, head.stiffness
+    row[HP_N], row[HP_B] = head.exponent, head.damping
+    return row
 
 
 @leaf
 def _arm_terms(y, P):
     """cos/sin of q2, inertia matrix entries and TCP kinematics at state ``y``."""
-    c1, s1 = math.cos(y[0]), math.sin(y[0])
-    c2, s2 = math.cos(y[1]), math.sin(y[1])
+    c1, s1 = math.cos(y[Y_Q]), math.sin(y[Y_Q])
+    c2, s2 = math.cos(y[Y_Q + 1]), math.sin(y[Y_Q + 1])
     c12, s12 = c1 * c2 - s1 * s2, s1 * c2 + c1 * s2
     h11, h12, h22 = mass_matrix_cs(c2, s2, P)
     x, yy, j11, j12, j21, j22 = tcp_kinematics_cs(c1, s1, c12, s12, P)
@@ -65,31 +210,33 @@ def _arm_terms(y, P):
 def impact_rhs(y, case, P, hp, dy):
     """Derivative of the impact state; returns (F, delta, delta_dot, |tcp velocity|)."""
     c2, s2, h11, h12, h22, x, yy, j11, j12, j21, j22 = _arm_terms(y, P)
-    w1, w2 = y[2], y[3]
-    if case[C_FIXED] > 0.5:
+    w1, w2 = y[Y_W], y[Y_W + 1]
+    fixed = int(case[C_ARM]) == ArmMode.FIXED
+    if fixed:
         w1, w2 = 0.0, 0.0
     vx, vy = j11 * w1 + j12 * w2, j21 * w1 + j22 * w2
-    dx, dyy = y[4] - x, y[5] - yy
+    dx, dyy = y[Y_XH] - x, y[Y_XH + 1] - yy
     dist = math.sqrt(dx * dx + dyy * dyy)
     nx, ny = dx / dist, dyy / dist
-    delta = hp[H_R] - dist
-    ddelta = -(nx * (y[6] - vx) + ny * (y[7] - vy))
-    f = hunt_crossley_force(delta, ddelta, hp[H_K], hp[H_N], hp[H_B])
-    if case[C_FIXED] > 0.5:            # rigid, fixed arm: the tool point does not move
-        dy[0], dy[1], dy[2], dy[3] = 0.0, 0.0, 0.0, 0.0
+    delta = hp[HP_R] - dist
+    ddelta = -(nx * (y[Y_VH] - vx) + ny * (y[Y_VH + 1] - vy))
+    f = hunt_crossley_force(delta, ddelta, hp[HP_K], hp[HP_N], hp[HP_B])
+    if fixed:            # rigid, fixed arm: the tool point does not move
+        dy[Y_Q], dy[Y_Q + 1], dy[Y_W], dy[Y_W + 1] = 0.0, 0.0, 0.0, 0.0
     else:
-        dy[0], dy[1] = w1, w2
+        dy[Y_Q], dy[Y_Q + 1] = w1, w2
         c11, c12, c21, c22 = coriolis_cs(c2, s2, w1, w2, P)
-        t1 = -case[C_K] * (y[0] - case[C_Q]) - (j11 * nx + j21 * ny) * f - c11 * w1 - c12 * w2
-        t2 = -case[C_K + 1] * (y[1] - case[C_Q + 1]) - (j12 * nx + j22 * ny) * f \
+        t1 = -case[C_K] * (y[Y_Q] - case[C_Q]) - (j11 * nx + j21 * ny) * f - c11 * w1 - c12 * w2
+        t2 = -case[C_K + 1] * (y[Y_Q + 1] - case[C_Q + 1]) - (j12 * nx + j22 * ny) * f \
             - c21 * w1 - c22 * w2
         det = h11 * h22 - h12 * h12
-        dy[2] = (h22 * t1 - h12 * t2) / det
-        dy[3] = (h11 * t2 - h12 * t1) / det
-    dy[4], dy[5] = y[6], y[7]
-    dy[6] = f * nx / hp[H_M]
-    dy[7] = f * ny / hp[H_M]
-    dy[8] = (f - hp[H_K] * max(delta, 0.0) ** hp[H_N]) * ddelta if delta > 0.0 else 0.0
+        dy[Y_W] = (h22 * t1 - h12 * t2) / det
+        dy[Y_W + 1] = (h11 * t2 - h12 * t1) / det
+    dy[Y_XH], dy[Y_XH + 1] = y[Y_VH], y[Y_VH + 1]
+    dy[Y_VH] = f * nx / hp[HP_M]
+    dy[Y_VH + 1] = f * ny / hp[HP_M]
+    dy[Y_ED] = (f - hunt_crossley_elastic(delta, hp[HP_K], hp[HP_N])) * ddelta \
+        if delta > 0.0 else 0.0
     return f, delta, ddelta, math.sqrt(vx * vx + vy * vy)
 
 
@@ -97,29 +244,30 @@ def impact_rhs(y, case, P, hp, dy):
 def _energy(y, case, P, hp):
     """Kinetic + spring + contact potential energy [J] (dissipation not included)."""
     _, _, h11, h12, h22, x, yy, _, _, _, _ = _arm_terms(y, P)
-    w1, w2 = y[2], y[3]
+    w1, w2 = y[Y_W], y[Y_W + 1]
     e = 0.5 * (h11 * w1 * w1 + 2.0 * h12 * w1 * w2 + h22 * w2 * w2)
-    if case[C_FIXED] > 0.5:
+    if int(case[C_ARM]) == ArmMode.FIXED:
         e = 0.0
-    e += 0.5 * case[C_K] * (y[0] - case[C_Q]) ** 2 + 0.5 * case[C_K + 1] * (y[1] - case[C_Q + 1]) ** 2
-    e += 0.5 * hp[H_M] * (y[6] * y[6] + y[7] * y[7])
-    dx, dyy = y[4] - x, y[5] - yy
-    delta = hp[H_R] - math.sqrt(dx * dx + dyy * dyy)
+    e += 0.5 * case[C_K] * (y[Y_Q] - case[C_Q]) ** 2 \
+        + 0.5 * case[C_K + 1] * (y[Y_Q + 1] - case[C_Q + 1]) ** 2
+    e += 0.5 * hp[HP_M] * (y[Y_VH] * y[Y_VH] + y[Y_VH + 1] * y[Y_VH + 1])
+    dx, dyy = y[Y_XH] - x, y[Y_XH + 1] - yy
+    delta = hp[HP_R] - math.sqrt(dx * dx + dyy * dyy)
     if delta > 0.0:
-        e += hp[H_K] * delta ** (hp[H_N] + 1.0) / (hp[H_N] + 1.0)
+        e += hunt_crossley_potential(delta, hp[HP_K], hp[HP_N])
     return e
 
 
 @leaf
 def initial_state(case, P, hp, y):
     """Arm at q0 with qd0, head centre at r_tcp + R u, head velocity v_h0."""
-    y[0], y[1] = case[C_Q], case[C_Q + 1]
-    y[2], y[3] = case[C_QD], case[C_QD + 1]
+    y[Y_Q], y[Y_Q + 1] = case[C_Q], case[C_Q + 1]
+    y[Y_W], y[Y_W + 1] = case[C_QD], case[C_QD + 1]
     _, _, _, _, _, x, yy, _, _, _, _ = _arm_terms(y, P)
-    y[4] = x + hp[H_R] * case[C_U]
-    y[5] = yy + hp[H_R] * case[C_U + 1]
-    y[6], y[7] = case[C_VH], case[C_VH + 1]
-    y[8] = 0.0
+    y[Y_XH] = x + hp[HP_R] * case[C_U]
+    y[Y_XH + 1] = yy + hp[HP_R] * case[C_U + 1]
+    y[Y_VH], y[Y_VH + 1] = case[C_VH], case[C_VH + 1]
+    y[Y_ED] = 0.0
 
 
 @leaf
@@ -138,6 +286,22 @@ def _rk4(y, h, case, P, hp, k1, k2, k3, k4, yt):
         y[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
 
 
+@leaf
+def _write_history(h, s, dt, f, delta, a, y, case, P, hp):
+    """Fill the :data:`HIST` row ``h`` of step ``s`` from the state ``y``."""
+    h[W_T], h[W_F], h[W_DELTA], h[W_AG] = s * dt, f, delta, a
+    h[W_DQ], h[W_DQ + 1] = y[Y_Q] - case[C_Q], y[Y_Q + 1] - case[C_Q + 1]
+    h[W_VHN] = y[Y_VH] * case[C_U] + y[Y_VH + 1] * case[C_U + 1]
+    _, _, _, _, _, x, yy, j11, j12, j21, j22 = _arm_terms(y, P)
+    h[W_VTN] = ((j11 * y[Y_W] + j12 * y[Y_W + 1]) * case[C_U]
+                + (j21 * y[Y_W] + j22 * y[Y_W + 1]) * case[C_U + 1])
+    h[W_E] = _energy(y, case, P, hp) + y[Y_ED]
+    h[W_QD], h[W_QD + 1] = y[Y_W], y[Y_W + 1]
+    dist = math.sqrt((y[Y_XH] - x) ** 2 + (y[Y_XH + 1] - yy) ** 2)
+    h[W_N], h[W_N + 1] = (y[Y_XH] - x) / dist, (y[Y_XH + 1] - yy) / dist
+    h[W_VH], h[W_VH + 1] = y[Y_VH], y[Y_VH + 1]
+
+
 #: Free-flight steps are FREE_STRIDE times the contact step ...
 FREE_STRIDE = 20
 #: ... and are only taken while the gap exceeds this [m] plus twice the closing distance.
@@ -147,6 +311,9 @@ FREE_GAP = 5e-4
 @kernel
 def impact_batch(CASES, P, hp, dt, nsteps, w36, w15, SUM, HIST, hist_of):
     """Simulate every case; fill SUM (N, NSUM) and HIST[hist_of[c]] where hist_of[c] >= 0.
+
+    CASES rows follow :data:`CASE`, ``hp`` is a :data:`HEAD` row, SUM rows
+    follow :data:`SUMMARY` and HIST[j, s] rows :data:`HIST`.
 
     While head and tool are apart and cannot touch within a long step (gap >
     FREE_GAP + 2 x closing speed x step), the integrator takes steps of
@@ -168,25 +335,14 @@ def impact_batch(CASES, P, hp, dt, nsteps, w36, w15, SUM, HIST, hist_of):
             f, delta, ddelta, vt = impact_rhs(y, case, P, hp, k1)
             if v0 < 0.0:
                 v0 = vt
-            acc[s] = f / (hp[H_M] * G0)
+            acc[s] = f / (hp[HP_M] * G0)
             if f > fmax:
                 fmax, tmax = f, s * dt
             dmax = max(dmax, delta)
             if f > 0.0:
                 tcont += dt
             if hrow >= 0:
-                h = HIST[hrow, s]
-                h[0], h[1], h[2], h[3] = s * dt, f, delta, acc[s]
-                h[4], h[5] = y[0] - case[C_Q], y[1] - case[C_Q + 1]
-                h[6] = y[6] * case[C_U] + y[7] * case[C_U + 1]
-                _, _, _, _, _, x, yy, j11, j12, j21, j22 = _arm_terms(y, P)
-                h[7] = ((j11 * y[2] + j12 * y[3]) * case[C_U]
-                        + (j21 * y[2] + j22 * y[3]) * case[C_U + 1])
-                h[8] = _energy(y, case, P, hp) + y[8]
-                h[9], h[10] = y[2], y[3]
-                dist = math.sqrt((y[4] - x) ** 2 + (y[5] - yy) ** 2)
-                h[11], h[12] = (y[4] - x) / dist, (y[5] - yy) / dist
-                h[13], h[14] = y[6], y[7]
+                _write_history(HIST[hrow, s], s, dt, f, delta, acc[s], y, case, P, hp)
             if s == nsteps:
                 break
             m = FREE_STRIDE
@@ -200,16 +356,16 @@ def impact_batch(CASES, P, hp, dt, nsteps, w36, w15, SUM, HIST, hist_of):
                 _rk4(y, dt, case, P, hp, k1, k2, k3, k4, yt)
                 s += 1
         r = SUM[c]
-        r[0], r[1] = fmax, tmax
-        r[2], i1, i2 = hic_kernel(acc, dt, w36)
-        r[3], r[4] = i1 * dt, i2 * dt
+        r[R_FMAX], r[R_TFMAX] = fmax, tmax
+        r[R_HIC36], i1, i2 = hic_kernel(acc, dt, w36)
+        r[R_W36], r[R_W36 + 1] = i1 * dt, i2 * dt
         if i2 - i1 > w15:      # else the HIC36 window is admissible for HIC15, so they are equal
-            r[5], i1, i2 = hic_kernel(acc, dt, w15)
+            r[R_HIC15], i1, i2 = hic_kernel(acc, dt, w15)
         else:
-            r[5] = r[2]
-        r[6], r[7] = i1 * dt, i2 * dt
-        r[8], r[9] = dmax, fmax / (hp[H_M] * G0)
-        r[10] = 0.5 * hp[H_M] * (y[6] * y[6] + y[7] * y[7])
-        r[11] = y[8]
-        r[12], r[13], r[14] = tcont, v0, e0
-        r[15] = (_energy(y, case, P, hp) + y[8] - e0) / max(e0, 1e-300)
+            r[R_HIC15] = r[R_HIC36]
+        r[R_W15], r[R_W15 + 1] = i1 * dt, i2 * dt
+        r[R_DMAX], r[R_AMAX] = dmax, fmax / (hp[HP_M] * G0)
+        r[R_EHEAD] = 0.5 * hp[HP_M] * (y[Y_VH] * y[Y_VH] + y[Y_VH + 1] * y[Y_VH + 1])
+        r[R_EDISS] = y[Y_ED]
+        r[R_TCONT], r[R_VTCP0], r[R_E0] = tcont, v0, e0
+        r[R_EBAL] = (_energy(y, case, P, hp) + y[Y_ED] - e0) / max(e0, 1e-300)

@@ -86,6 +86,46 @@ class ImpactResults:
     def __len__(self) -> int:
         return len(self.summary)
 
+    def history(self, index: int) -> pd.DataFrame:
+        """Time history of case ``index`` (columns :data:`~ppamsafety.impact.engine.HIST_COLUMNS`).
+
+        Parameters
+        ----------
+        index : int
+            Case index (row of :attr:`summary`) whose history was recorded
+            (``history=`` argument of :func:`simulate_impacts`).
+
+        Raises
+        ------
+        KeyError
+            If no history was recorded for ``index``.
+        """
+        try:
+            return self.histories[index]
+        except (KeyError, TypeError):
+            raise KeyError(f"index = {index!r}: no history recorded for this case; recorded: "
+                           f"{sorted(self.histories)}") from None
+
+    def signal(self, name: str, index: int) -> np.ndarray:
+        """One history signal by name, e.g. ``signal("F", 0)`` (SI units, see
+        :data:`~ppamsafety.impact.engine.HIST`).
+
+        Parameters
+        ----------
+        name : str
+            A column of :data:`~ppamsafety.impact.engine.HIST_COLUMNS`.
+        index : int
+            Case index whose history was recorded.
+        """
+        if name not in eng.HIST_COLUMNS:
+            raise KeyError(f"name = {name!r} is not a history signal; signals: "
+                           f"{', '.join(eng.HIST_COLUMNS)}")
+        return self.history(index)[name].to_numpy()
+
+    def signals(self, *names: str, index: int) -> np.ndarray:
+        """Several history signals by name as columns of an array, shape (nsteps + 1, k)."""
+        return np.stack([self.signal(n, index) for n in names], axis=1)
+
     def worst(self, metric: str = "HIC36") -> pd.Series:
         """Row of the case with the largest ``metric``."""
         return self.summary.loc[self.summary[metric].idxmax()]
@@ -127,7 +167,8 @@ def simulate_impacts(arm, q, qd, stiffness, *, head: HeadContactModel | str | No
     head_velocity : array_like, optional
         Initial head velocity [m/s] (default at rest).
     fixed_arm : bool
-        Treat the arm as rigid and fixed (the head moves into the tool).
+        Treat the arm as rigid and fixed (the head moves into the tool; stored
+        in the case rows as :class:`~ppamsafety.impact.engine.ArmMode`).
     dt, duration : float
         Fixed RK4 step and simulated time [s] (default 20 us, 50 ms; halving
         the step changes F_max and HIC by less than 2e-4 relative, see tests).
@@ -142,6 +183,8 @@ def simulate_impacts(arm, q, qd, stiffness, *, head: HeadContactModel | str | No
     hm = head_model() if head is None else (head_model(head) if isinstance(head, str) else head)
     if not isinstance(hm, HeadContactModel):
         raise ValueError("head must be a HeadContactModel or a model name")
+    if not isinstance(fixed_arm, (bool, np.bool_)):
+        raise TypeError(f"fixed_arm = {fixed_arm!r} must be True or False")
     check_range("dt", dt, 1e-8, 1e-3, unit="s")
     check_range("duration", duration, 1e-4, 10.0, unit="s")
     q = np.atleast_2d(as_float_array("q", q, shape_tail=(2,)))
@@ -164,13 +207,9 @@ def simulate_impacts(arm, q, qd, stiffness, *, head: HeadContactModel | str | No
         speed = np.linalg.norm(vt, axis=1)
     active = (np.linalg.norm(vt - vh, axis=1) > 0) if not fixed_arm else \
         (np.linalg.norm(vh, axis=1) > 0)
-    cases = np.zeros((n, eng.NCASE))
-    cases[:, eng.C_Q:eng.C_Q + 2] = q
-    cases[:, eng.C_QD:eng.C_QD + 2] = 0.0 if fixed_arm else qd
-    cases[:, eng.C_K:eng.C_K + 2] = K
-    cases[:, eng.C_U:eng.C_U + 2] = u
-    cases[:, eng.C_VH:eng.C_VH + 2] = vh
-    cases[:, eng.C_FIXED] = float(fixed_arm)
+    mode = eng.ArmMode.FIXED if fixed_arm else eng.ArmMode.FLEXIBLE
+    cases = eng.pack_cases(n, q=q, qd=0.0 if fixed_arm else qd, K=K, u=u, v_head=vh,
+                           arm_mode=int(mode))
     nsteps = int(math.ceil(duration / dt - 1e-9))
     if history is True:
         hist_idx = np.arange(n)
@@ -182,7 +221,7 @@ def simulate_impacts(arm, q, qd, stiffness, *, head: HeadContactModel | str | No
             raise ValueError(f"history indices must be in [0, {n - 1}]")
     hist_of = np.full(n, -1, dtype=np.int64)
     hist_of[hist_idx] = np.arange(hist_idx.size)
-    hp = np.array([hm.mass, hm.radius, hm.stiffness, hm.exponent, hm.damping])
+    hp = eng.pack_head(hm)
     SUM = np.zeros((n, eng.NSUM))
     HIST = np.zeros((hist_idx.size, nsteps + 1, eng.NHIST))
     sel = np.nonzero(active)[0]
@@ -195,8 +234,7 @@ def simulate_impacts(arm, q, qd, stiffness, *, head: HeadContactModel | str | No
     df = pd.DataFrame({"q1": q[:, 0], "q2": q[:, 1], "qd1": qd[:, 0], "qd2": qd[:, 1],
                        "K1": K[:, 0], "K2": K[:, 1], "ux": u[:, 0], "uy": u[:, 1],
                        "tcp_speed": speed})
-    df = pd.concat([df, pd.DataFrame(SUM, columns=eng.SUMMARY_COLUMNS)], axis=1)
-    hists = {int(i): pd.DataFrame(HIST[j], columns=eng.HIST_COLUMNS)
-             for j, i in enumerate(hist_idx)}
+    df = pd.concat([df, eng.SUMMARY.frame(SUM)], axis=1)
+    hists = {int(i): eng.HIST.frame(HIST[j]) for j, i in enumerate(hist_idx)}
     return ImpactResults(df, hists, hm, float(dt), float(duration))
 

@@ -29,8 +29,10 @@ The pymunk model (horizontal plane: gravity 0, ``space.damping = 1``):
   **-q2_0** (and -q1_0 for the motor spring, whose body a has angle 0).
 * no shapes: pymunk's own collision detection never runs.
 
-The Hunt-Crossley force is computed by our code in the ``pre_solve`` callback
-of the first constraint (the pivot at O).  ``cpSpaceStep`` first integrates
+The Hunt-Crossley force is computed by our code (the compiled contact law of
+:mod:`ppamsafety.impact.contact`, the same function the main engine inlines)
+in the ``pre_solve`` callback of the first constraint (the pivot at O).
+``cpSpaceStep`` first integrates
 positions (x_{k+1} = x_k + v_k dt), then calls each constraint's pre_solve and
 preStep, then integrates velocities with the accumulated body forces
 (v_{k+1} = v_k + M^-1 f dt) and resets the forces, then runs the joint solver.
@@ -55,12 +57,31 @@ import pandas as pd
 
 from .._validation import as_float_array, check_int, check_nonnegative, check_range
 from ..params.head import HeadContactModel, head_model
+from ..layouts import Field, Layout
 from ..units import G0
+from .contact import hunt_crossley_elastic, hunt_crossley_force
+from .engine import HIST as _HIST
 from .hic import hic
 
-#: Columns of :attr:`PymunkImpact.history` (same names and meaning as the main engine's).
-HISTORY_COLUMNS = ["t", "F", "delta", "a_head_g", "dq1", "dq2", "v_head_n", "v_tcp_n",
-                   "E_total", "E_dissipated"]
+#: Columns of :attr:`PymunkImpact.history`: the main engine's history fields of the same
+#: names and meaning (:data:`ppamsafety.impact.engine.HIST`) and the dissipated energy.
+HISTORY_COLUMNS = [c for name in ("t", "F", "delta", "a_head_g", "dq", "v_head_n", "v_tcp_n",
+                                  "E_total") for c in _HIST.field(name).column_names()] \
+    + ["E_dissipated"]
+
+#: One recorded step of the pymunk bodies (world frame), read back by name.
+RECORD = Layout("pymunk impact record", [
+    Field("angle", 2, "rad", "body angles of link 1 and link 2 (q1, q1 + q2)"),
+    Field("omega", 2, "rad/s", "body angular velocities of link 1 and link 2"),
+    Field("v_cog1", 2, "m/s", "velocity of the centre of gravity of link 1"),
+    Field("v_cog2", 2, "m/s", "velocity of the centre of gravity of link 2"),
+    Field("x_head", 2, "m", "head centre position"),
+    Field("v_head", 2, "m/s", "head velocity"),
+    Field("x_tcp", 2, "m", "tool point of the link-2 body"),
+    Field("v_tcp", 2, "m/s", "velocity of the tool point of the link-2 body"),
+])
+_ANG, _OM, _VG1, _VG2, _XH, _VH, _XT, _VT = RECORD.offsets(
+    "angle", "omega", "v_cog1", "v_cog2", "x_head", "v_head", "x_tcp", "v_tcp")
 
 
 @dataclass
@@ -255,6 +276,10 @@ def simulate_impact_pymunk(arm, q, qd, stiffness, *, head: HeadContactModel | st
     state = {"k": 0, "diss": 0.0, "delta": 0.0}
     tcp_local = (L2, 0.0)
 
+    # the contact law is the engine's compiled one (one definition, see impact.contact);
+    # bound to locals for the per-step Python callback
+    hc_force, hc_elastic = hunt_crossley_force, hunt_crossley_elastic
+
     def contact(constraint, sp):
         k = state["k"] + 1
         p_tcp = b2.local_to_world(tcp_local)
@@ -268,16 +293,15 @@ def simulate_impact_pymunk(arm, q, qd, stiffness, *, head: HeadContactModel | st
             vt = b2.velocity_at_world_point(p_tcp)
             vh = bh.velocity
             ddelta = -(nx * (vh.x - vt.x) + ny * (vh.y - vt.y))
-            dn = delta ** nc
-            f = max(kc * dn + bc * dn * ddelta, 0.0)
+            f = hc_force(delta, ddelta, kc, nc, bc)
             if f > 0.0:
                 bh.apply_force_at_world_point((f * nx, f * ny), ph)
                 b2.apply_force_at_world_point((-f * nx, -f * ny), p_tcp)
         # dissipation: (F - k delta^n) d(delta), trapezoid over the step
         d_old = state["delta"]
         if delta > 0.0 or d_old > 0.0:
-            fel = kc * max(delta, 0.0) ** nc
-            fel_old = kc * max(d_old, 0.0) ** nc
+            fel = hc_elastic(delta, kc, nc)
+            fel_old = hc_elastic(d_old, kc, nc)
             state["diss"] += 0.5 * ((f - fel) + (F[k - 1] - fel_old)) * (delta - d_old)
         state["delta"] = delta
         F[k], D[k], Ediss[k] = f, delta, state["diss"]
@@ -286,22 +310,18 @@ def simulate_impact_pymunk(arm, q, qd, stiffness, *, head: HeadContactModel | st
     pivot_o.pre_solve = contact
 
     # ---- run ---------------------------------------------------------------------------
-    X = np.empty((n + 1, 10))   # link angles, angular and CoG velocities, head position
-    HV = np.empty((n + 1, 2))    # head velocity
-    TCP = np.empty((n + 1, 4))   # TCP position and velocity from the link-2 body
+    REC = RECORD.empty(n + 1)   # one RECORD row per step
 
     def record(i):
         v1, v2, vh, ph = b1.velocity, b2.velocity, bh.velocity, bh.position
         p_tcp = b2.local_to_world(tcp_local)
         vt = b2.velocity_at_world_point(p_tcp)
-        X[i] = (b1.angle, b2.angle, b1.angular_velocity, b2.angular_velocity,
-                v1.x, v1.y, v2.x, v2.y, ph.x, ph.y)
-        HV[i] = (vh.x, vh.y)
-        TCP[i] = (p_tcp.x, p_tcp.y, vt.x, vt.y)
+        REC[i] = (b1.angle, b2.angle, b1.angular_velocity, b2.angular_velocity,   # RECORD order
+                  v1.x, v1.y, v2.x, v2.y, ph.x, ph.y, vh.x, vh.y, p_tcp.x, p_tcp.y, vt.x, vt.y)
 
     t0 = time.perf_counter()
     record(0)
-    D[0] = R - math.hypot(X[0, 8] - TCP[0, 0], X[0, 9] - TCP[0, 1])
+    D[0] = R - math.hypot(REC[0, _XH] - REC[0, _XT], REC[0, _XH + 1] - REC[0, _XT + 1])
     state["delta"] = D[0]
     step = space.step
     for i in range(1, n + 1):
@@ -313,23 +333,27 @@ def simulate_impact_pymunk(arm, q, qd, stiffness, *, head: HeadContactModel | st
 
     # ---- outputs -----------------------------------------------------------------------
     # Energy from the state after each step (positions x_k, velocities v_k).
-    ke = 0.5 * (lk.m1 * (X[:, 4] ** 2 + X[:, 5] ** 2) + lk.IG1 * X[:, 2] ** 2
-                + lk.m2 * (X[:, 6] ** 2 + X[:, 7] ** 2) + lk.IG2 * X[:, 3] ** 2
-                + mh * (HV[:, 0] ** 2 + HV[:, 1] ** 2))
-    dq1 = X[:, 0] - q1
-    dq2 = (X[:, 1] - X[:, 0]) - q2
-    dist = np.hypot(X[:, 8] - TCP[:, 0], X[:, 9] - TCP[:, 1])
+    ang1, ang2 = REC[:, _ANG], REC[:, _ANG + 1]
+    xh, yh, vhx, vhy = REC[:, _XH], REC[:, _XH + 1], REC[:, _VH], REC[:, _VH + 1]
+    xt, yt, vtx, vty = REC[:, _XT], REC[:, _XT + 1], REC[:, _VT], REC[:, _VT + 1]
+    ke = 0.5 * (lk.m1 * (REC[:, _VG1] ** 2 + REC[:, _VG1 + 1] ** 2) + lk.IG1 * REC[:, _OM] ** 2
+                + lk.m2 * (REC[:, _VG2] ** 2 + REC[:, _VG2 + 1] ** 2)
+                + lk.IG2 * REC[:, _OM + 1] ** 2
+                + mh * (vhx ** 2 + vhy ** 2))
+    dq1 = ang1 - q1
+    dq2 = (ang2 - ang1) - q2
+    dist = np.hypot(xh - xt, yh - yt)
     dpos = np.maximum(R - dist, 0.0)
     e_tot = ke + 0.5 * K1 * dq1 ** 2 + 0.5 * K2 * dq2 ** 2 + kc * dpos ** (nc + 1) / (nc + 1)
     a_g = F / (mh * G0)
     # joint solver check: TCP of the link-2 body vs forward kinematics of the body angles
     # (a pivot that opens by e moves the body TCP by e)
-    c1, s1, c12, s12 = np.cos(X[:, 0]), np.sin(X[:, 0]), np.cos(X[:, 1]), np.sin(X[:, 1])
-    joint_err = np.hypot(TCP[:, 0] - L1 * c1 - L2 * c12, TCP[:, 1] - L1 * s1 - L2 * s12)
+    c1, s1, c12, s12 = np.cos(ang1), np.sin(ang1), np.cos(ang2), np.sin(ang2)
+    joint_err = np.hypot(xt - L1 * c1 - L2 * c12, yt - L1 * s1 - L2 * s12)
     t = np.arange(n + 1) * dt
     hist = pd.DataFrame({"t": t, "F": F, "delta": D, "a_head_g": a_g, "dq1": dq1, "dq2": dq2,
-                         "v_head_n": HV[:, 0] * u[0] + HV[:, 1] * u[1],
-                         "v_tcp_n": TCP[:, 2] * u[0] + TCP[:, 3] * u[1],
+                         "v_head_n": vhx * u[0] + vhy * u[1],
+                         "v_tcp_n": vtx * u[0] + vty * u[1],
                          "E_total": e_tot, "E_dissipated": Ediss}, columns=HISTORY_COLUMNS)
     i_max = int(np.argmax(F))
     return PymunkImpact(F_max=float(F[i_max]), t_Fmax=float(t[i_max]),

@@ -34,13 +34,10 @@ def simulate_impact_scipy(arm, q, qd, stiffness, *, head=None, method: str = "RK
     q = np.asarray(q, dtype=float)
     qd = np.asarray(qd, dtype=float)
     v = geo.jacobian(q, arm) @ qd
-    case = np.zeros(eng.NCASE)
-    case[eng.C_Q:eng.C_Q + 2] = q
-    case[eng.C_QD:eng.C_QD + 2] = qd
-    case[eng.C_K:eng.C_K + 2] = stiffness
-    case[eng.C_U:eng.C_U + 2] = v / np.linalg.norm(v)
+    case = eng.pack_cases(1, q=q, qd=qd, K=stiffness, u=v / np.linalg.norm(v),
+                          v_head=0.0, arm_mode=int(eng.ArmMode.FLEXIBLE))[0]
     P = np.array(lay.pack(arm))
-    hp = np.array([hm.mass, hm.radius, hm.stiffness, hm.exponent, hm.damping])
+    hp = eng.pack_head(hm)
     y0 = np.empty(eng.NY)
     eng.initial_state(case, P, hp, y0)
     dy = np.empty(eng.NY)

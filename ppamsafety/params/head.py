@@ -135,12 +135,49 @@ class HeadContactModel:
         return replace(self, **changes)
 
     def force(self, delta, delta_dot=0.0):
-        """Contact force [N] for penetration ``delta`` [m] and rate [m/s] (numpy)."""
+        """Hunt-Crossley contact force [N] (thesis eq. 6.2), element-wise.
+
+        F = k delta^n + b delta^n d(delta)/dt for delta > 0, clipped at 0 (the
+        contact only pushes), and 0 for delta <= 0.  Evaluated by the same
+        compiled law as the impact engine
+        (:func:`ppamsafety.impact.contact.hunt_crossley_force`).
+
+        Parameters
+        ----------
+        delta : float or array_like
+            Penetration [m] (negative: gap).
+        delta_dot : float or array_like
+            Penetration rate [m/s]; broadcast against ``delta``.
+
+        Returns
+        -------
+        numpy.ndarray
+            Force [N], shape of ``delta`` and ``delta_dot`` broadcast (0-d for scalars).
+
+        Raises
+        ------
+        ValueError
+            For non-finite values or shapes that do not broadcast.
+        """
         import numpy as np
 
-        d = np.maximum(np.asarray(delta, dtype=float), 0.0)
-        f = d ** self.exponent * (self.stiffness + self.damping * np.asarray(delta_dot))
-        return np.where(np.asarray(delta) > 0, np.maximum(f, 0.0), 0.0)
+        from ..impact.contact import hunt_crossley_force_batch
+
+        d = np.asarray(delta, dtype=float)
+        dd = np.asarray(delta_dot, dtype=float)
+        for name, a in (("delta", d), ("delta_dot", dd)):
+            if not np.all(np.isfinite(a)):
+                raise ValueError(f"{name} = {a!r} must be finite [m, m/s]")
+        try:
+            d, dd = np.broadcast_arrays(d, dd)
+        except ValueError:
+            raise ValueError(f"delta (shape {d.shape}) and delta_dot (shape {dd.shape}) "
+                             "do not broadcast") from None
+        out = np.empty(d.shape)
+        hunt_crossley_force_batch(np.ascontiguousarray(d).ravel(),
+                                  np.ascontiguousarray(dd).ravel(), float(self.stiffness),
+                                  float(self.exponent), float(self.damping), out.reshape(-1))
+        return out
 
 
 #: Reconstructed thesis head model (frontal bone, Hybrid III); see module doc and
