@@ -25,6 +25,7 @@ from dataclasses import dataclass, replace
 from functools import lru_cache
 
 from .._validation import check_range
+from .effects import Effects
 from .geometry import ArmGeometry, thesis_geometry
 from .inertia import (BaseParameters, LinkInertia, derive_physical_links, identified_dynamic,
                       identified_static_gravity)
@@ -56,6 +57,11 @@ class ArmParameters:
         [rad/s].  A fixed-step integrator cannot resolve an ideal sign
         function; 0.01 rad/s is below the encoder velocity dead band
         (0.025 rad/s, §2.4.5.3).
+    effects : Effects
+        Optional plant effects (payload, truth-vs-model friction, valves,
+        polytropic exponent), all off by default.  Read only by the plant
+        truth row ``plant.layout.pack(arm)``, never by the controllers' views
+        (see :mod:`ppamsafety.params.effects`).
     """
 
     geometry: ArmGeometry
@@ -67,6 +73,7 @@ class ArmParameters:
     model_gravity: BaseParameters
     gravity: float = 9.81
     friction_velocity: float = 0.01
+    effects: Effects = Effects()
 
     def __post_init__(self):
         for name, cls in (("geometry", ArmGeometry), ("muscles", MuscleSet), ("valves", ValveSet),
@@ -77,6 +84,8 @@ class ArmParameters:
         check_range("ArmParameters.gravity", self.gravity, 0.0, 30.0, unit="m/s^2")
         check_range("ArmParameters.friction_velocity", self.friction_velocity, 1e-5, 1.0,
                     unit="rad/s")
+        if not isinstance(self.effects, Effects):
+            raise TypeError(f"ArmParameters.effects must be an Effects, got {self.effects!r}")
 
     def replace(self, **changes) -> "ArmParameters":
         """Return a copy with some fields changed (validated again)."""
