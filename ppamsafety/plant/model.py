@@ -42,8 +42,10 @@ How to add an effect
    there (``OFF = 0``).  Every default must mean "effect off".  The fields
    land in the plant row after the existing ones (nothing else moves), and
    ``tests/test_layouts.py`` round-trips them automatically.  Give the
-   effect a way to be switched on (:func:`~ppamsafety.plant.layout.with_effects`
-   for packed rows, later an ``ArmParameters`` option read by ``pack``).
+   effect a way to be switched on: a field of
+   :class:`~ppamsafety.params.effects.Effects` (``ArmParameters.effects``)
+   that :func:`~ppamsafety.plant.layout.pack` writes into the plant-truth
+   row, and/or :func:`~ppamsafety.plant.layout.with_effects` for packed rows.
 2. *State.*  Declare the contents of its state in ``EFFECT_STATE`` (fixed
    size), or, for a variable-length memory, an offset/length pair in its
    parameters.  Whoever switches the effect on sets ``effect_state_length``
