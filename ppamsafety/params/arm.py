@@ -27,6 +27,7 @@ from functools import lru_cache
 import numpy as np
 
 from .._validation import check_instance, check_range
+from .effects import Effects
 from .geometry import ArmGeometry, thesis_geometry
 from .inertia import (BaseParameters, LinkInertia, derive_physical_links, identified_dynamic,
                       identified_static_gravity)
@@ -58,6 +59,11 @@ class ArmParameters:
         [rad/s].  A fixed-step integrator cannot resolve an ideal sign
         function; 0.01 rad/s is below the encoder velocity dead band
         (0.025 rad/s, §2.4.5.3).
+    effects : Effects
+        Optional plant effects (payload, truth-vs-model friction, valves,
+        polytropic exponent), all off by default.  Read only by the plant
+        truth row ``plant.layout.pack(arm)``, never by the controllers' views
+        (see :mod:`ppamsafety.params.effects`).
 
     Notes
     -----
@@ -78,6 +84,7 @@ class ArmParameters:
     model_gravity: BaseParameters
     gravity: float = 9.81
     friction_velocity: float = 0.01
+    effects: Effects = Effects()
 
     def __post_init__(self):
         for name, cls in (("geometry", ArmGeometry), ("muscles", MuscleSet), ("valves", ValveSet),
@@ -90,6 +97,7 @@ class ArmParameters:
             "ArmParameters.friction_velocity", self.friction_velocity, 1e-5, 1.0, unit="rad/s"))
         _check_muscles_fit(self.geometry, self.muscles)
         _check_plant_inertia(self.geometry, self.links)
+        check_instance("ArmParameters.effects", self.effects, Effects)
 
     def replace(self, **changes) -> "ArmParameters":
         """Return a copy with some fields changed (validated again)."""

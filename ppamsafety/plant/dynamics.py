@@ -12,7 +12,12 @@ m1 d_G1, I_zO,1 + m2 L1^2, m2 L_G2, m2 d_G2, I_zS,2]::
     G   = g [theta1 c1 + theta2 s1 + theta4 c12 + theta5 s12, theta4 c12 + theta5 s12]
 
 Friction (3.30) is Coulomb + viscous; the plant uses a smooth Coulomb term
-c tanh(qd / v_s) (see ``ArmParameters.friction_velocity``).
+c tanh(qd / v_s) (see ``ArmParameters.friction_velocity``).  Which
+coefficients: the plant-truth row (``layout.pack(arm)``) holds
+``arm.links.coulomb/viscous`` (by default the identified Table 3.5 values, so
+nominally truth = belief) unless ``arm.effects.friction_coulomb/viscous``
+override them; the controllers' rows hold ``arm.model`` (Table 3.5) or
+``arm.model_gravity`` friction and never see the override.
 
 Each formula exists once, as a compiled leaf (``mass_matrix_cs``,
 ``coriolis_cs``, ``gravity_cs``, ``friction_cs``, ``potential_cs``); the

@@ -32,6 +32,7 @@ plant uses (:mod:`ppamsafety.plant.muscle`).
 
 from __future__ import annotations
 
+import enum
 from functools import lru_cache
 
 import numpy as np
@@ -62,11 +63,36 @@ GEOMETRY_FIELDS = (
     Field("dL", 1, "m", "offset of the load point A_L from link 2, Table 2.2, (A.21)"),
 )
 
+class Switch(enum.IntEnum):
+    """On/off code of a plant effect, stored in its ``*_mode`` field of :data:`EFFECTS`."""
+
+    OFF = 0
+    ON = 1
+
+
 #: Effect parameters at the end of the plant row (all effects off by default).
+#: The ``*_mode`` fields hold :class:`Switch` codes.  The pack-time effects
+#: (payload and the truth overrides, see :func:`pack`) are folded into the
+#: nominal slots of the row, so no kernel reads their flags: the flags record
+#: which slots of the row differ from the nominal arm the controllers know.
 EFFECT_FIELDS = (
     Field("effect_state_length", 1, "-",
           "length of the effect-state vector z this row needs (0: no effect with state), "
           "issue 7 item 2", default=0.0),
+    Field("payload_mode", 1, "code", "Switch: a point mass at A_L is folded into theta, "
+          "(2.19), (A.21)", default=0.0),
+    Field("payload_mass", 1, "kg", "payload mass M at A_L folded into theta (0 when off), "
+          "§2.3.3.5", default=0.0),
+    Field("friction_mode", 1, "code", "Switch: coulomb/viscous hold the plant-truth override "
+          "Effects.friction_* instead of arm.links (3.30)", default=0.0),
+    Field("valve_offset_mode", 1, "code", "Switch: v1 holds the plant-truth override "
+          "Effects.valve_offset (3.12)", default=0.0),
+    Field("valve_gain_mode", 1, "code", "Switch: v2 holds the plant-truth override "
+          "Effects.valve_gain (3.12)", default=0.0),
+    Field("valve_lag_mode", 1, "code", "Switch: tv holds the plant-truth override "
+          "Effects.valve_time_constant (3.2)", default=0.0),
+    Field("polytropic_mode", 1, "code", "Switch: n_poly holds the plant-truth override "
+          "Effects.polytropic_n (3.3)", default=0.0),
 )
 
 PLANT = Layout("plant parameters", GEOMETRY_FIELDS + (
@@ -124,6 +150,15 @@ THETA1, THETA2, THETA3, THETA4, THETA5, THETA6 = (TH + i for i in range(6))
 #: first slot of the effect section, and the effect-state length
 EFFECTS_START = PLANT.offset(EFFECT_FIELDS[0].name)
 NZ = PLANT.offset("effect_state_length")
+#: effect flags and the payload mass (pack-time effects: recorded, not read by kernels)
+(PAYLOAD_MODE, PAYLOAD_MASS, FRICTION_MODE, VALVE_OFFSET_MODE, VALVE_GAIN_MODE, VALVE_LAG_MODE,
+ POLYTROPIC_MODE) = PLANT.offsets("payload_mode", "payload_mass", "friction_mode",
+                                  "valve_offset_mode", "valve_gain_mode", "valve_lag_mode",
+                                  "polytropic_mode")
+#: Effect fields applied when the row is packed (from ``ArmParameters.effects``); they
+#: cannot be changed on a packed row by :func:`with_effects`.
+PACK_TIME_EFFECTS = ("payload_mode", "payload_mass", "friction_mode", "valve_offset_mode",
+                     "valve_gain_mode", "valve_lag_mode", "polytropic_mode")
 NP = PLANT.size                        #: length of the row
 
 #: Contraction floor used by the force/volume kernels (eps <= 0 is undefined).
@@ -172,15 +207,39 @@ def pack(arm, dynamics=None) -> np.ndarray:
     arm : ArmParameters
         The arm.
     dynamics : BaseParameters, optional
-        Rigid-body parameters to store in the dynamics slots.  Default: the
-        physical plant (``arm.plant_base``).  Pass ``arm.model`` or
-        ``arm.model_gravity`` to build the *controller's* view of the arm.
+        Rigid-body parameters to store in the dynamics slots.  Default
+        (None): the **plant truth** -- the physical links ``arm.plant_base``
+        with the optional plant effects ``arm.effects`` applied (see below).
+        Pass ``arm.model`` or ``arm.model_gravity`` (or any other
+        :class:`~ppamsafety.params.BaseParameters`) to build a **belief**
+        view, e.g. the controllers' (:func:`controller_view`,
+        :func:`model_view`): it holds these parameters and the nominal
+        valves, pneumatics and friction, and ignores ``arm.effects``.
 
     Returns
     -------
     numpy.ndarray, shape (NP,)
-        Read-only row (cached per argument pair); every effect off (use
-        :func:`with_effects` for a row with effect parameters).
+        Read-only row (cached per argument pair).  The run-time effect
+        fields (``effect_state_length``) are at their defaults; use
+        :func:`with_effects` to set them.
+
+    Notes
+    -----
+    Pack-time effects (``arm.effects``, :class:`~ppamsafety.params.effects.Effects`),
+    plant truth view only, each applied only when on (so a row with every
+    effect off is bitwise the nominal row) and recorded by its
+    :class:`Switch` flag in the effect section:
+
+    * payload M at the load point A_L = (L_L, d_L) in link-2 coordinates
+      (Table 2.2, (A.21), the convention of
+      :func:`ppamsafety.plant.geometry.load_point`): a point mass changes the
+      base parameters (B.5) exactly by the parallel-axis terms
+      theta1 += M L1, theta3 += M L1^2, theta4 += M L_L, theta5 += M d_L,
+      theta6 += M (L_L^2 + d_L^2) (theta2, the link-1 offset, is unchanged),
+      so H, C and G of (3.1) include it consistently;
+    * friction (3.30), valve offsets v1 / gains v2 (3.12), valve time
+      constants T (3.2), polytropic exponent n (3.3): the override replaces
+      the nominal value in the plant row.
     """
     groups = arm.muscles.groups
     lconn, eps_a, eps_f0, v_c = _muscle_terms(arm.geometry, arm.muscles)
@@ -195,9 +254,65 @@ def pack(arm, dynamics=None) -> np.ndarray:
         v2=[v.v2 for v in valves], p_mean=pn.p_mean, p_max=pn.p_max, p_atm=pn.p_atm,
         n_poly=pn.polytropic_n, theta=dyn.as_vector(), coulomb=dyn.coulomb,
         viscous=dyn.viscous, gravity=arm.gravity, v_friction=arm.friction_velocity)
+    if dynamics is None:
+        _apply_effects(values, arm)
     P = PLANT.pack(values)
     P.setflags(write=False)
     return P
+
+
+def payload_theta(mass: float, L1: float, LL: float, dL: float) -> np.ndarray:
+    """Change of the base parameters theta1..theta6 (B.5) by a point mass at A_L.
+
+    Parameters
+    ----------
+    mass : float
+        Point mass M [kg].
+    L1 : float
+        Length of link 1 [m].
+    LL, dL : float
+        Coordinates of the load point A_L along / perpendicular to link 2
+        (Table 2.2, sign convention of (A.21)) [m].
+
+    Returns
+    -------
+    numpy.ndarray, shape (6,)
+        [M L1, 0, M L1^2, M L_L, M d_L, M (L_L^2 + d_L^2)] (kg m, kg m, kg m^2,
+        kg m, kg m, kg m^2): the mass adds to m2 L1 (theta1), m2 L1^2
+        (theta3) and, as part of link 2, to m2 L_G2, m2 d_G2 and I_zS,2.
+    """
+    return np.array([mass * L1, 0.0, mass * L1 * L1, mass * LL, mass * dL,
+                     mass * (LL * LL + dL * dL)])
+
+
+def _apply_effects(values: dict, arm) -> None:
+    """Fold ``arm.effects`` into the plant-truth ``values`` (see :func:`pack`); in place."""
+    fx = arm.effects
+    if fx.payload_mass > 0.0:
+        g = arm.geometry
+        values["theta"] = values["theta"] + payload_theta(fx.payload_mass, g.L1, g.LL, g.dL)
+        values.update(payload_mode=Switch.ON, payload_mass=fx.payload_mass)
+    if fx.friction_coulomb is not None or fx.friction_viscous is not None:
+        if fx.friction_coulomb is not None:
+            values["coulomb"] = fx.friction_coulomb
+        if fx.friction_viscous is not None:
+            values["viscous"] = fx.friction_viscous
+        values["friction_mode"] = Switch.ON
+    for field, flag, override in (("v1", "valve_offset_mode", fx.valve_offset),
+                                  ("v2", "valve_gain_mode", fx.valve_gain),
+                                  ("tv", "valve_lag_mode", fx.valve_time_constant)):
+        if override is not None:
+            values[field] = override
+            values[flag] = Switch.ON
+    if fx.polytropic_n is not None:
+        values.update(n_poly=fx.polytropic_n, polytropic_mode=Switch.ON)
+
+
+def plant_effects(P) -> dict:
+    """Which effects are on in plant row(s) ``P``: ``{mode field: bool or bool array}``."""
+    P = np.asarray(P, dtype=float)
+    return {name: P[..., PLANT.offset(name)] == Switch.ON
+            for name in PACK_TIME_EFFECTS if name.endswith("_mode")}
 
 
 #: Largest effect-state length a row may ask for.
@@ -212,8 +327,11 @@ def with_effects(P, **effects) -> np.ndarray:
     P : array_like, shape (NP,) or (B, NP)
         Packed plant row(s) (:func:`pack`).
     **effects
-        Fields of :data:`EFFECTS` and their values, e.g.
-        ``effect_state_length=3``.
+        Run-time fields of :data:`EFFECTS` and their values, e.g.
+        ``effect_state_length=3``.  The pack-time effects
+        (:data:`PACK_TIME_EFFECTS`: payload, truth overrides) are folded into
+        other slots by :func:`pack` and are set through
+        ``ArmParameters.effects`` instead.
 
     Returns
     -------
@@ -225,13 +343,17 @@ def with_effects(P, **effects) -> np.ndarray:
     KeyError
         For a name that is not an effect field.
     ValueError
-        For a row of the wrong length or an invalid value.
+        For a row of the wrong length, an invalid value or a pack-time effect.
     """
     out = np.array(P, dtype=float)
     if out.ndim not in (1, 2) or out.shape[-1] != NP:
         raise ValueError(f"P must have shape ({NP},) or (B, {NP}), got {out.shape}")
     for name, value in effects.items():
         EFFECTS.field(name)                      # KeyError naming the fields
+        if name in PACK_TIME_EFFECTS:
+            raise ValueError(f"{name} is a pack-time effect: set it through "
+                             f"ArmParameters.effects (params.effects.Effects) and pack(arm), "
+                             f"not on a packed row")
         if name == "effect_state_length":
             if (isinstance(value, bool) or not isinstance(value, (int, np.integer, float))
                     or not float(value).is_integer() or not 0 <= value <= MAX_EFFECT_STATE):

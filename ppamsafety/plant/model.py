@@ -42,8 +42,10 @@ How to add an effect
    there (``OFF = 0``).  Every default must mean "effect off".  The fields
    land in the plant row after the existing ones (nothing else moves), and
    ``tests/test_layouts.py`` round-trips them automatically.  Give the
-   effect a way to be switched on (:func:`~ppamsafety.plant.layout.with_effects`
-   for packed rows, later an ``ArmParameters`` option read by ``pack``).
+   effect a way to be switched on: a field of
+   :class:`~ppamsafety.params.effects.Effects` (``ArmParameters.effects``)
+   that :func:`~ppamsafety.plant.layout.pack` writes into the plant-truth
+   row, and/or :func:`~ppamsafety.plant.layout.with_effects` for packed rows.
 2. *State.*  Declare the contents of its state in ``EFFECT_STATE`` (fixed
    size), or, for a variable-length memory, an offset/length pair in its
    parameters.  Whoever switches the effect on sets ``effect_state_length``
@@ -63,6 +65,45 @@ How to add an effect
 5. *Tests.*  With the effect off, ``tests/test_golden.py`` must still pass
    bitwise; add a test of the effect itself, and a benchmark run
    (``studies/bench_plant.py``) showing the cost of the check when off.
+
+An effect that is a pure change of plant *parameters* needs none of steps
+2-4: it is folded into the plant-truth row by
+:func:`~ppamsafety.plant.layout.pack` from ``ArmParameters.effects``
+(:class:`~ppamsafety.params.effects.Effects`) and only flagged in the effect
+section.  That is how the implemented effects work -- payload at A_L (folded
+into theta), plant friction, valve offset/gain/time constant and polytropic
+exponent that differ from the controllers' belief -- so the kernels are
+untouched and a row with every effect off is bitwise the nominal row.
+Different rows of one batch may carry different effects (``simulate`` with
+a list of arms).
+
+Hysteresis hook (design note, not implemented)
+~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~
+The Preisach force hysteresis of (3.33)-(3.35) (``plant/hysteresis.py``,
+branch ``preisach``) is the first effect with state; wiring it:
+
+* *Parameters* (step 1): ``hysteresis_mode`` (a ``Switch`` code),
+  ``hysteresis_delta`` (4, the scale delta of (3.35) per group, thesis
+  0.139-0.299), ``hysteresis_eps_max`` (the eps -> eps_s map of (3.34),
+  thesis 35 %) and the operator's weight-function data (or an index into a
+  table owned by ``hysteresis.py``).
+* *State* (step 2): per group a reversal-point stack (variable length:
+  per group an offset into z and a capacity, declared as effect fields; the
+  row's ``effect_state_length`` covers the four stacks).  z = 0 must mean the
+  state after a descent to eps_s = -1 (the erased memory), or step 4 sets it.
+* *Force* (step 3): in :func:`plant_rhs`, the torque of group k becomes
+  ``p_k * mt[k] * (1 + delta_k (W_k[eps_s,k] - W_fit(eps_s,k)))`` -- the
+  factor of (3.35) multiplying f(eps) -- with W evaluated from the memory in
+  z (frozen over the RK4 stages) and the stage's contraction eps_k.
+  :func:`~ppamsafety.plant.torque.torque_kernel_cs` computes eps_k but does
+  not return it: give it a fifth output buffer (``work[12:16]``, NWORK + 4).
+  The factor must multiply only the torques ``tau1``, ``tau2``, NOT the
+  ``mt`` passed to :func:`~ppamsafety.plant.pneumatics.pressure_rates`: there
+  m_tau is the volume derivative dV/dq (virtual work, (3.5)), which is
+  geometric and has no force hysteresis.
+* *Memory update*: in :func:`effects_update`, once per RK4 step, from the
+  step-end state x: contractions eps_k(q) (``group_length_lever``), then
+  the Preisach wipe-out update of each group's stack.
 """
 
 from __future__ import annotations
@@ -236,6 +277,7 @@ def simulate(arm, x0, set_values, *, dt: float = 1e-3, substeps: int = 2,
     else:
         T = as_float_array("tau_ext", tau_ext, shape_tail=(2,))
         T = np.array(np.broadcast_to(T if T.ndim == 3 else T[None], (B, U.shape[1], 2)))
+    check_valve_step(rows, dt / substeps)
     nz = int(lay.effect_state_lengths(rows).max())
     if effect_state is None:
         Z = np.zeros((B, nz))
@@ -251,6 +293,37 @@ def simulate(arm, x0, set_values, *, dt: float = 1e-3, substeps: int = 2,
     if not (batched or B > 1):
         out, Z = out[0], Z[0]
     return (out, Z) if return_effect_state else out
+
+
+def check_valve_step(rows, h: float) -> None:
+    """Check that the RK4 step ``h`` resolves every valve time constant of ``rows``.
+
+    The first-order valve lag (3.2) is integrated explicitly; a time constant
+    T below the step (h/T > 1) is poorly resolved and, beyond h/T = 2.78,
+    unstable.  Plant rows whose valve time constants come from
+    ``ArmParameters.effects`` can be as fast as 1 ms
+    (:mod:`ppamsafety.params.effects`), so the integrator's step is checked
+    here rather than in the parameters.
+
+    Parameters
+    ----------
+    rows : numpy.ndarray, shape (NP,) or (B, NP)
+        Packed plant rows.
+    h : float
+        Integration step [s].
+
+    Raises
+    ------
+    ValueError
+        If a row has a valve time constant T < h (naming the row, valve and values).
+    """
+    tv = np.atleast_2d(rows)[:, lay.PLANT.slice("tv")]
+    bad = np.argwhere(tv < h)
+    if bad.size:
+        b, i = (int(v) for v in bad[0])
+        raise ValueError(f"params: row {b} valve {i + 1} time constant {tv[b, i]:g} s is below "
+                         f"the integration step h = dt/substeps = {h:g} s; use more substeps "
+                         f"(h <= T) or a slower valve")
 
 
 def state_derivative(x, set_values, arm, *, tau_ext=None) -> np.ndarray:
@@ -280,7 +353,9 @@ def rest_state(q, arm) -> tuple[np.ndarray, np.ndarray]:
 
     The pressures are the plant's exact static gravity-compensation pressures
     (Delta-p approach with the arm's mean pressures), so the state is an
-    equilibrium of the ODE.
+    equilibrium of the ODE: of the plant truth, including the payload of
+    ``arm.effects``, and the set values invert the plant's true valve
+    characteristic (3.12) (``Effects.valve_offset`` / ``valve_gain`` if set).
 
     Returns
     -------
@@ -296,6 +371,7 @@ def rest_state(q, arm) -> tuple[np.ndarray, np.ndarray]:
     if np.any(p < 0) or np.any(p > arm.pneumatics.p_max):
         raise ValueError(f"rest_state: configuration q = {q} needs pressures {p} Pa outside "
                          f"[0, {arm.pneumatics.p_max:g}] Pa")
-    v1 = np.array([v.v1 for v in arm.valves.valves])
-    v2 = np.array([v.v2 for v in arm.valves.valves])
+    P = lay.pack(arm)
+    v1 = lay.PLANT.read(P, "v1")
+    v2 = lay.PLANT.read(P, "v2")
     return np.concatenate([q, [0.0, 0.0], p]), (p - v1) / v2

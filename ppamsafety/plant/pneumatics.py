@@ -135,10 +135,17 @@ def gravity_compensation(q, arm, *, params=None) -> np.ndarray:
 
     ``params`` are the rigid-body parameters the compensation believes in;
     default the identified static gravity terms (Table 3.1).  Pass
-    ``arm.plant_base`` for an exact compensation of the plant.
+    ``arm.plant_base`` for an exact compensation of the nominal plant links
+    (without the payload of ``arm.effects``; :func:`static_pressures`
+    compensates the plant truth including it).
     """
     q = as_float_array("q", q, shape_tail=(2,))
-    Pc = lay.pack(arm, arm.model_gravity if params is None else params)
+    return _gravity_compensation_row(q, lay.pack(arm, arm.model_gravity if params is None
+                                                 else params))
+
+
+def _gravity_compensation_row(q, Pc) -> np.ndarray:
+    """:func:`gravity_compensation` for a packed row ``Pc``."""
     qf = np.ascontiguousarray(q.reshape(-1, 2))
     out = np.empty((qf.shape[0], 2))
     _gc_many(qf, Pc, out)
@@ -173,11 +180,16 @@ def valve_set_values(pressures, arm) -> np.ndarray:
 def static_pressures(q, arm, *, params=None) -> np.ndarray:
     """Gauge pressures holding ``q`` in static equilibrium with the Delta-p approach [Pa].
 
-    Uses (3.18)-(3.19) with ``params`` (default: the *plant*, so the result is
-    a true equilibrium of the simulated arm).  Not clipped, so that an
-    infeasible configuration shows up as a pressure outside [0, p_max].
+    Uses (3.18)-(3.19) with ``params`` (default: the *plant truth* row
+    ``layout.pack(arm)``, including the payload of ``arm.effects``, so the
+    result is a true equilibrium of the simulated arm).  Not clipped, so that
+    an infeasible configuration shows up as a pressure outside [0, p_max].
     """
-    dp = gravity_compensation(q, arm, params=arm.plant_base if params is None else params)
+    if params is None:
+        q = as_float_array("q", q, shape_tail=(2,))
+        dp = _gravity_compensation_row(q, lay.pack(arm))
+    else:
+        dp = gravity_compensation(q, arm, params=params)
     return delta_p_pressures(dp, arm, clip=False)
 
 
