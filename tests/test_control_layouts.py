@@ -22,6 +22,7 @@ from ppamsafety.control import base, dispatch
 from ppamsafety.control.sensors import (SENSOR_CONFIG, SENSOR_STATE, VelocitySource,
                                         initial_sensor_state)
 from ppamsafety.experiments import closed_loop as cl
+from ppamsafety.experiments.case import ExperimentCase
 from ppamsafety.experiments import trajectories as tr
 from ppamsafety.experiments.trajectories import Reference
 from ppamsafety.plant import geometry as geo
@@ -165,8 +166,8 @@ def test_controller_step_and_batched_runner_are_bitwise_equal(arm):
     controllers = [_random_controller(k, rng) for k in KINDS for _ in range(2)]
     x0 = rest_state(np.radians([50, -80]), arm)[0]
     sensors = SensorConfig(noise=True, seed=3)
-    runs = cl.run_batch([{"arm": arm, "controller": c, "reference": ref, "sensors": sensors,
-                          "x0": x0} for c in controllers])
+    runs = cl.run_batch([ExperimentCase(arm=arm, controller=c, reference=ref, sensors=sensors,
+                                        x0=x0) for c in controllers])
     kinds_seen = set()
     for c, res in zip(controllers, runs):
         assert not res.diverged
