@@ -187,7 +187,8 @@ def default_excitation(arm=None, *, seed: int = 0, amplitude: float = 3e4):
 
 
 def synthetic_excitation(arm=None, excitation=None, *, periods: float = 1.0, dt: float = 1e-3,
-                         substeps: int = 2, seed: int = 0, noise: bool = True) -> MeasuredData:
+                         substeps: int = 2, seed: int = 0, noise: bool = True,
+                         velocity_noise_var=VELOCITY_NOISE_VARIANCES) -> MeasuredData:
     """Open-loop excitation record (§3.5.2.4): q, qd, p, u sampled at ``dt``.
 
     The simulation of :func:`ppamsafety.identify.excitation.simulate_excitation`
@@ -210,6 +211,11 @@ def synthetic_excitation(arm=None, excitation=None, *, periods: float = 1.0, dt:
         Noise seed.
     noise : bool, keyword-only
         Add measurement noise.
+    velocity_noise_var : sequence of 2 float, keyword-only
+        Variances of the qd1, qd2 noise [rad^2/s^2] (Table 3.2).  White
+        velocity noise passes the high-pass omega (W1 - <W1>_F) of the
+        filtered regressor unattenuated and biases the inertia estimates
+        (errors in variables); (0, 0) leaves the velocities exact.
 
     Returns
     -------
@@ -230,6 +236,8 @@ def synthetic_excitation(arm=None, excitation=None, *, periods: float = 1.0, dt:
     substeps = check_int("substeps", substeps, 1, 1000)
     seed = check_int("seed", seed, 0)
     noise = check_bool("noise", noise)
+    vvar = np.array(check_vector("velocity_noise_var", velocity_noise_var, 2, 0.0,
+                                 unit="rad^2/s^2"))
     q0 = equilibrium_for(exc.delta_p([0.0])[0], arm)
     x0, _ = rest_state(q0, arm)
     n = int(round(periods * exc.period / dt))
@@ -240,7 +248,7 @@ def synthetic_excitation(arm=None, excitation=None, *, periods: float = 1.0, dt:
     if noise:
         rng = np.random.default_rng(seed)
         q += rng.normal(size=q.shape) * np.sqrt(ANGLE_NOISE_VARIANCES)
-        qd += rng.normal(size=qd.shape) * np.sqrt(VELOCITY_NOISE_VARIANCES)
+        qd += rng.normal(size=qd.shape) * np.sqrt(vvar)
         p += rng.normal(size=p.shape) * PRESSURE_NOISE_STD
     cols = {"t": t, "q1": q[:, 0], "q2": q[:, 1], "qd1": qd[:, 0], "qd2": qd[:, 1]}
     for i in range(4):
@@ -251,7 +259,8 @@ def synthetic_excitation(arm=None, excitation=None, *, periods: float = 1.0, dt:
             "description": f"synthetic open-loop Fourier excitation, {periods:g} period(s) of "
                            f"{exc.period:g} s",
             "source": f"ppamsafety.data.synthetic.synthetic_excitation(periods={periods:g}, "
-                      f"dt={dt:g}, seed={seed}, noise={noise})"}
+                      f"dt={dt:g}, seed={seed}, noise={noise}, "
+                      f"velocity_noise_var={[float(v) for v in vvar]})"}
     return MeasuredData(meta, pd.DataFrame(cols), source="synthetic_excitation")
 
 
