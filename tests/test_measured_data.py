@@ -221,6 +221,10 @@ def test_closed_loop_controller_and_reference():
     df2 = df.assign(q1_d=0.8, q2_d=-1.2)
     MeasuredData(noref, df2)                                  # reference as columns
     refuse(ok, df2, "given twice")
+    # a top-level key written after the [controller] header lands in that table
+    stray = dict(noref, controller={"variant": "PID", "reference": "step"})
+    with pytest.warns(MeasuredDataWarning, match=r"'reference' in \[controller\]"):
+        MeasuredData(stray, df2)
 
 
 def test_force_law_rules():
@@ -447,3 +451,45 @@ def test_synthetic_tensile_round_trip(tmp_path):
     with warnings.catch_warnings():
         warnings.simplefilter("error")                          # a clean record: no warning
         load_measured(tmp_path / "T.csv")
+
+
+def test_docs_worked_example_is_valid(tmp_path):
+    """The metadata block and the CSV example of docs/measured_data.md load as documented."""
+    import re
+    import tomllib
+
+    doc = (Path(__file__).parents[1] / "docs" / "measured_data.md").read_text(encoding="utf-8")
+    toml_blocks = re.findall(r"```toml\n(.*?)```", doc, re.S)
+    meta = tomllib.loads(toml_blocks[0])
+    assert meta["reference"] == "step" and meta["controller"]["variant"]
+    _, df = open_loop(n=20)
+    d = MeasuredData(meta, df)
+    assert d.experiment == "closed-loop" and d.meta["units"]["q1"] == "rad"
+    law = tomllib.loads(toml_blocks[1])["force_law"]
+    m, dft = tensile()
+    assert MeasuredData(dict(m, force_law=law), dft).meta["force_law"]["l0"] == 0.06
+    text = re.findall(r"```text\n(.*?)```", doc, re.S)[0]
+    lines = text.splitlines()
+    last = [float(x) for x in lines[-1].split(",")]
+    for k in range(1, 20):                            # the example shows the first rows only
+        lines.append(",".join([f"{last[0] + k * 1e-3:.3f}"] + lines[-1].split(",")[1:]))
+    f = tmp_path / "step.csv"
+    f.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    d = load_measured(f)
+    assert (d.kind, d.experiment, d.dt) == ("arm", "closed-loop", pytest.approx(1e-3))
+    assert d.meta["controller"]["variant"] == "PSMC joint Ki=2 λ=0.4"
+    assert d.channels[:4] == ("q1", "q2", "qd1", "qd2")
+
+
+def test_synthetic_static_round_trip(tmp_path, arm):
+    from ppamsafety.data import identify_measured, synthetic_static
+
+    d = synthetic_static(arm, n=31, seed=1)
+    assert len(d) == 31 and d.channels == ("q1", "q2", *(f"p{i}" for i in range(1, 5)),
+                                           *(f"u{i}" for i in range(1, 5)),
+                                           *(f"F{i}" for i in range(1, 5)))
+    back = load_measured(d.save(tmp_path / "S.csv"))
+    pd.testing.assert_frame_equal(back.frame, d.frame, check_exact=True)
+    a = identify_measured(d, "static").results["gravity"].estimates
+    b = identify_measured(back, "static").results["gravity"].estimates
+    np.testing.assert_array_equal(a, b)                   # the file loses nothing

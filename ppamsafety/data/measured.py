@@ -200,6 +200,8 @@ def _check_meta(meta: dict, src: str, columns, warn) -> dict:
     # closed loop: controller and reference
     if exp == "closed-loop":
         _check_controller(meta.get("controller"), src)
+        _stray(meta["controller"], ("variant", "family", "gains", "name"), "controller", src,
+               warn)
         ref = meta.get("reference")
         has_cols = all(c in columns for c in Q_D)
         if ref is None or ref == "columns":
@@ -226,12 +228,20 @@ def _check_meta(meta: dict, src: str, columns, warn) -> dict:
                 warn(f"{src}: metadata '{key}' is used only for closed-loop records (kept)")
     if kind == "actuator":
         _check_force_law(meta.get("force_law"), src, "position" in columns)
+        _stray(meta["force_law"], ("a", "l0", "name"), "force_law", src, warn)
     elif "force_law" in meta:
         warn(f"{src}: metadata 'force_law' is used only for kind = 'actuator' (kept)")
     unknown = [k for k in meta if k not in _META_KEYS]
     if unknown:
         warn(f"{src}: unknown metadata key(s) {', '.join(map(repr, unknown))} (kept)")
     return meta
+
+
+def _stray(table: dict, known, name, src, warn):
+    extra = [k for k in table if k not in known]
+    if extra:
+        warn(f"{src}: unknown key(s) {', '.join(map(repr, extra))} in [{name}] (kept; a TOML key "
+             f"written after a [table] header belongs to that table: put top-level keys first)")
 
 
 def _check_units(units, src, kind):
@@ -458,8 +468,8 @@ def _check_time(t: np.ndarray, meta: dict, exp: str, ctx: _Ctx, allow_gaps, orig
     return segments, gaps, med
 
 
-def _unit_hints(df, meta, ctx, strict, warn):
-    """Values that look like bar, degrees, deg/s, mm or percent."""
+def _unit_hints(df, meta, ctx, strict, warn, orig_rows):
+    """Values that look like bar, degrees, deg/s, mm or percent (rows named as in the file)."""
     kind = meta["kind"]
     checks = []
     if kind == "arm":
@@ -475,21 +485,22 @@ def _unit_hints(df, meta, ctx, strict, warn):
         x = np.abs(df[c].to_numpy())
         k = int(np.argmax(x))
         m = float(x[k])
+        row = ctx.row(orig_rows[k])
         msg = None
         if what == "pressure" and 0.0 < m < 10.0:
             msg = (f"column {c!r} peaks at {m:.4g}, which looks like bar: the format wants Pa "
                    f"(gauge); multiply by 1e5")
         elif what == "angle" and m > 2 * math.pi:
-            msg = (f"column {c!r} reaches {df[c].iloc[k]:.4g} ({ctx.row(k)}), which looks like "
+            msg = (f"column {c!r} reaches {df[c].iloc[k]:.4g} ({row}), which looks like "
                    f"degrees (|angle| > 2 pi): the format wants rad; multiply by pi/180")
         elif what == "velocity" and m > 50.0:
-            msg = (f"column {c!r} reaches {df[c].iloc[k]:.4g} ({ctx.row(k)}), which looks like "
+            msg = (f"column {c!r} reaches {df[c].iloc[k]:.4g} ({row}), which looks like "
                    f"deg/s (> 50 rad/s): the format wants rad/s; multiply by pi/180")
         elif what == "position" and m > 1.0:
-            msg = (f"column {c!r} reaches {df[c].iloc[k]:.4g} ({ctx.row(k)}), which looks like mm "
+            msg = (f"column {c!r} reaches {df[c].iloc[k]:.4g} ({row}), which looks like mm "
                    f"(> 1 m for an actuator): the format wants m; multiply by 1e-3")
         elif what == "contraction" and m > 1.0:
-            msg = (f"column {c!r} reaches {df[c].iloc[k]:.4g} ({ctx.row(k)}), which looks like "
+            msg = (f"column {c!r} reaches {df[c].iloc[k]:.4g} ({row}), which looks like "
                    f"percent (a contraction is < 1): the format wants a fraction; divide by 100")
         if msg is not None:
             if strict:
@@ -588,7 +599,7 @@ class MeasuredData:
                                     f"{extra}, a {exp} record needs at least {n_min}")
         segments, gaps, _ = _check_time(df["t"].to_numpy(), meta, exp, ctx, self.allow_gaps,
                                         orig_rows, warn)
-        _unit_hints(df, meta, ctx, self.strict_units, warn)
+        _unit_hints(df, meta, ctx, self.strict_units, warn, orig_rows)
         object.__setattr__(self, "meta", meta)
         object.__setattr__(self, "frame", df)
         object.__setattr__(self, "segments", segments)
