@@ -129,6 +129,34 @@ def _cmd_report(args) -> int:
     return EXIT_OK
 
 
+def _cmd_identify(args) -> int:
+    import warnings
+
+    from .data import MeasuredDataWarning, identify_measured, load_measured
+    from .output import inspect_output_folder
+
+    inspect_output_folder(args.out, overwrite=args.overwrite)   # fail before computing
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", MeasuredDataWarning)    # kept in data.notes
+        data = load_measured(args.data, allow_gaps=args.allow_gaps,
+                             strict_units=not args.loose_units)
+    ident = identify_measured(data, args.kind, method=args.method, friction=not args.no_friction,
+                              drop=args.drop, confidence=args.confidence,
+                              sign_velocity=args.sign_velocity)
+    for note in ident.notes:
+        print(f"ppamsafety: warning: {note}", file=sys.stderr)
+    ident.write(args.out, overwrite=args.overwrite)
+    for name in ident.results:
+        r = ident.results[name]
+        r = getattr(r, "lsq", r)
+        print(f"{name:<8} {r.method}: residual RMS {r.residual_rms:.4g}, "
+              f"condition number {r.condition_number:.4g}")
+        for n, u, e, se in zip(r.names, r.units, r.estimates, r.std_errors):
+            print(f"  {n:<18} {e: .6g} +- {se:.3g} {u}")
+    print(f"identification written to {args.out}")
+    return EXIT_OK
+
+
 def _cmd_impact(args) -> int:
     import numpy as np
 
@@ -190,6 +218,34 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--overwrite", action="store_true",
                    help="replace a previous ppamsafety report in OUTDIR (never other files)")
     r.set_defaults(func=_cmd_report)
+    d = sub.add_parser("identify", help="identify parameters from a measured data file",
+                       description="Identify parameters from a measured record (format: "
+                                   "docs/measured_data.md). static: gravity parameters from "
+                                   "equilibria, valve models, or an actuator's muscle law; "
+                                   "dynamic: base parameters from an open/closed-loop record.",
+                       epilog=_EPILOG)
+    d.add_argument("data", metavar="DATA", help="measured data file (.csv or .parquet)")
+    d.add_argument("--kind", choices=("static", "dynamic"), required=True,
+                   help="static or dynamic identification")
+    d.add_argument("--out", required=True, metavar="DIR",
+                   help="output folder for identification.json/.csv/.png")
+    d.add_argument("--method", choices=("LS", "WLS"), default="LS",
+                   help="ordinary or two-step per-joint weighted least squares (default LS)")
+    d.add_argument("--no-friction", action="store_true",
+                   help="dynamic: model without Coulomb and viscous friction (6 parameters)")
+    d.add_argument("--drop", type=int, default=300, metavar="R",
+                   help="dynamic: filtered samples dropped per segment (default 300, thesis B.7)")
+    d.add_argument("--sign-velocity", type=_positive, default=None, metavar="V",
+                   help="dynamic: Coulomb columns tanh(qd/V) [rad/s] instead of sgn(qd)")
+    d.add_argument("--confidence", type=_finite, default=0.95,
+                   help="confidence level of the intervals, in (0, 1) (default 0.95)")
+    d.add_argument("--allow-gaps", action="store_true",
+                   help="drop rows with missing values and split the record at time gaps")
+    d.add_argument("--loose-units", action="store_true",
+                   help="only warn when values look like bar, degrees or mm")
+    d.add_argument("--overwrite", action="store_true",
+                   help="replace a previous ppamsafety identification in DIR (never other files)")
+    d.set_defaults(func=_cmd_identify)
     m = sub.add_parser("impact", help="simulate one impact of the thesis arm with a head",
                        epilog=_EPILOG)
     m.add_argument("--q", nargs=2, type=_angle_deg, required=True, metavar=("Q1", "Q2"),
