@@ -317,8 +317,7 @@ class ExcitationDesign:
         Parameters
         ----------
         arm : ArmParameters, optional
-            Not used (the curve depends on the excitation only); accepted so the
-            call matches the other result objects.
+            Not used: the curve depends on the excitation only.
         """
         from matplotlib.figure import Figure
 
