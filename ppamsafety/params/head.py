@@ -58,8 +58,8 @@ def hunt_crossley_max_penetration(mass: float, v0: float, k: float, n: float, b:
     n : float
         Contact exponent [-].
     b : float
-        Hunt-Crossley damping [N s/m^(n+1)], > 0 (a series expansion is used
-        for b v0/k < 1e-3).
+        Hunt-Crossley damping [N s/m^(n+1)], >= 0 (a series expansion is used
+        for b v0/k < 1e-3, which includes b = 0).
     """
     x = b * v0 / k
     if x < 1e-3:
