@@ -150,7 +150,18 @@ class Layout:
         return self.size
 
     def field(self, name: str) -> Field:
-        """The :class:`Field` called ``name``."""
+        """The :class:`Field` called ``name``.
+
+        Parameters
+        ----------
+        name : str
+            Field name as declared.
+
+        Raises
+        ------
+        KeyError
+            If the layout has no such field (the message lists the fields).
+        """
         try:
             return self._by_name[name]
         except (KeyError, TypeError):
@@ -158,20 +169,54 @@ class Layout:
                            f"{', '.join(self._by_name)}") from None
 
     def offset(self, name: str) -> int:
-        """Index of the first slot of field ``name``."""
+        """Index of the first slot of field ``name``.
+
+        Parameters
+        ----------
+        name : str
+            Field name as declared.
+
+        Raises
+        ------
+        KeyError
+            If the layout has no such field.
+        """
         self.field(name)
         return self._offset[name]
 
     def offsets(self, *names: str) -> tuple:
-        """Offsets of several fields, for module-level kernel constants."""
+        """Offsets of several fields, for module-level kernel constants.
+
+        Parameters
+        ----------
+        *names : str
+            Field names; the offsets are returned in the same order.
+
+        Raises
+        ------
+        KeyError
+            If one of the names is not a field.
+        """
         return tuple(self.offset(n) for n in names)
 
     def length(self, name: str) -> int:
-        """Number of slots of field ``name``."""
+        """Number of slots of field ``name``.
+
+        Parameters
+        ----------
+        name : str
+            Field name as declared.
+        """
         return self.field(name).length
 
     def slice(self, name: str) -> slice:
-        """Slice of field ``name`` in a row."""
+        """Slice of field ``name`` in a row.
+
+        Parameters
+        ----------
+        name : str
+            Field name as declared.
+        """
         o = self.offset(name)
         return slice(o, o + self._by_name[name].length)
 
@@ -180,7 +225,19 @@ class Layout:
         return list(self._columns)
 
     def column_index(self, column: str) -> int:
-        """Slot index of the column called ``column`` (see :meth:`columns`)."""
+        """Slot index of the column called ``column`` (see :meth:`columns`).
+
+        Parameters
+        ----------
+        column : str
+            Column name: the field name for a scalar field, otherwise one of the
+            per-slot names of :meth:`Field.column_names`.
+
+        Raises
+        ------
+        KeyError
+            If no slot has that column name.
+        """
         try:
             return self._columns.index(column)
         except ValueError:
@@ -195,7 +252,14 @@ class Layout:
 
     # -- packing --------------------------------------------------------------------------
     def empty(self, *lead: int) -> np.ndarray:
-        """Array of shape ``lead + (size,)`` filled with the defaults (0 where none)."""
+        """Array of shape ``lead + (size,)`` filled with the defaults (0 where none).
+
+        Parameters
+        ----------
+        *lead : int
+            Leading (batch) dimensions; none gives a single row of shape
+            ``(size,)``.
+        """
         out = np.zeros(tuple(lead) + (self.size,))
         for f in self.fields:
             if f.default is not None:
@@ -262,6 +326,20 @@ class Layout:
 
         ``row`` may have leading batch dimensions; the field is taken along
         the last axis.
+
+        Parameters
+        ----------
+        row : array_like, shape (..., size)
+            One row or a batch of rows of this layout.
+        name : str
+            Field name as declared.
+
+        Raises
+        ------
+        KeyError
+            If the layout has no such field.
+        ValueError
+            If the last axis of ``row`` is not ``size`` long.
         """
         f = self.field(name)
         r = np.asarray(row)
@@ -275,11 +353,30 @@ class Layout:
         return v
 
     def unpack(self, row) -> dict:
-        """All fields of ``row`` as ``{name: value}`` (see :meth:`read`)."""
+        """All fields of ``row`` as ``{name: value}`` (see :meth:`read`).
+
+        Parameters
+        ----------
+        row : array_like, shape (..., size)
+            One row or a batch of rows of this layout.
+        """
         return {f.name: self.read(row, f.name) for f in self.fields}
 
     def frame(self, rows, *, columns: Iterable[str] | None = None):
-        """A 2-D array of rows as a DataFrame with :meth:`columns` as column names."""
+        """A 2-D array of rows as a DataFrame with :meth:`columns` as column names.
+
+        Parameters
+        ----------
+        rows : array_like, shape (n, size)
+            Rows of this layout.
+        columns : iterable of str, optional
+            Keep only these columns (in this order); default all.
+
+        Raises
+        ------
+        ValueError
+            If ``rows`` does not have shape ``(n, size)``.
+        """
         import pandas as pd
 
         a = np.asarray(rows)

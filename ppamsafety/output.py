@@ -74,6 +74,11 @@ def read_marker(folder) -> dict | None:
 
     Valid means: a JSON object with ``tool == "ppamsafety"``, a string ``kind``
     and ``files``, a list of relative paths (``/``-separated, no ``..``).
+
+    Parameters
+    ----------
+    folder : path-like
+        Folder whose marker file (``MARKER``) is read; need not exist.
     """
     f = Path(folder) / MARKER
     try:
@@ -115,6 +120,10 @@ def inspect_output_folder(folder, *, overwrite: bool = False, _exclude: str | No
         Output folder (need not exist).
     overwrite : bool
         Whether the user asked to replace a previous ppamsafety output.
+    _exclude : str, optional
+        Internal: name of a top-level sub-folder that is ignored when listing
+        the folder's contents (:class:`OutputFolder` passes its own staging
+        folder).  Default None: nothing is ignored.
 
     Returns
     -------
@@ -261,6 +270,24 @@ def check_new_file(path, *, overwrite: bool = False, name: str = "output file") 
 
     Raises :class:`OutputError` if the file exists and ``overwrite`` is False,
     if it is a folder, or if its folder does not exist.
+
+    Parameters
+    ----------
+    path : path-like
+        The file to be written.
+    overwrite : bool
+        Allow replacing an existing file (default False).
+    name : str
+        What the file is, for the error messages (default ``"output file"``).
+
+    Raises
+    ------
+    TypeError
+        If ``path`` is not a str/os.PathLike or ``overwrite`` is not a bool.
+    ValueError
+        If ``path`` is empty.
+    OutputError
+        As above.
     """
     p = _as_path(name, path)
     if not isinstance(overwrite, bool):

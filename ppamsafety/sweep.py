@@ -47,6 +47,13 @@ _STATUS_COLUMNS = ("status", "error")
 class SweepError(RuntimeError):
     """A sweep case failed with ``on_error="raise"``.
 
+    Parameters
+    ----------
+    message : str
+        The exception message.
+    index, case, error
+        Stored as the attributes below.
+
     Attributes
     ----------
     index : int
@@ -79,6 +86,12 @@ def function_hash(func) -> str:
     reloading its module does not match the loaded code.  Helper functions
     outside the ppamsafety package that ``func`` calls are *not* covered: put
     a version in the sweep ``name`` when you change them.
+
+    Parameters
+    ----------
+    func : callable
+        The case function of a sweep; a :class:`functools.partial` is hashed
+        with its bound arguments and the function it wraps.
     """
     h = hashlib.sha1()
     if isinstance(func, functools.partial):

@@ -135,7 +135,19 @@ def join_thesis(results: pd.DataFrame, thesis: pd.DataFrame, *, on=(), take=None
 
 
 def variant_keys(result) -> dict:
-    """The :data:`VARIANT_KEYS` of an ``ExperimentResult`` of :func:`run_thesis_experiment`."""
+    """The :data:`VARIANT_KEYS` of an ``ExperimentResult`` of :func:`run_thesis_experiment`.
+
+    Parameters
+    ----------
+    result : ExperimentResult
+        A result of :func:`run_thesis_experiment` (its ``meta["variant"]`` is
+        read).
+
+    Raises
+    ------
+    ValueError
+        If the result carries no variant.
+    """
     meta = getattr(result, "meta", None)
     if not isinstance(meta, dict) or "variant" not in meta:
         raise ValueError("variant_keys: the result carries no variant (run it with "

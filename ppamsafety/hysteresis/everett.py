@@ -92,6 +92,18 @@ def everett_raw(alpha, beta, c, d):
 
     Integral of exp(-(beta'-alpha'-c)^2 - (|alpha'+beta'| + d)^2) over the
     triangle beta <= beta' <= alpha' <= alpha; 0 when alpha <= beta.
+    Multiply by ``PreisachWeight.inv_z`` for the normalised E.
+
+    Parameters
+    ----------
+    alpha : float
+        Upper (switch-up) corner of the triangle on the Preisach plane, in
+        [-1, 1] [-].
+    beta : float
+        Lower (switch-down) corner of the triangle, in [-1, 1] [-].
+    c, d : float
+        Weight parameters of (3.33) [-] (thesis: c = -0.1, d = -1,
+        :data:`C_THESIS`, :data:`D_THESIS`).
     """
     length = alpha - beta
     if not length > 0.0:
@@ -209,7 +221,13 @@ THESIS_WEIGHT = PreisachWeight()
 
 
 def check_weight(weight) -> PreisachWeight:
-    """Return ``weight`` if it is a :class:`PreisachWeight`, else raise TypeError."""
+    """Return ``weight`` if it is a :class:`PreisachWeight`, else raise TypeError.
+
+    Parameters
+    ----------
+    weight : PreisachWeight
+        The object to check.
+    """
     if not isinstance(weight, PreisachWeight):
         raise TypeError(f"weight must be a PreisachWeight, got {type(weight).__name__}")
     return weight

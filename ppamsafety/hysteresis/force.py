@@ -28,7 +28,16 @@ DELTA_40_FIBRES = 0.299
 
 @leaf
 def scaled_contraction(eps, eps_max):
-    """eps_s = 2 eps/eps_max - 1 (3.34), clipped to [-1, 1] (dimensionless)."""
+    """eps_s = 2 eps/eps_max - 1 (3.34), clipped to [-1, 1] (dimensionless).
+
+    Parameters
+    ----------
+    eps : float
+        Muscle contraction [-] (0.1 = 10 %).
+    eps_max : float
+        Contraction mapped to eps_s = +1 [-] (:data:`EPS_MAX` = 0.35 in the
+        thesis, §3.6.4); must be nonzero.
+    """
     e = 2.0 * eps / eps_max - 1.0
     if e > 1.0:
         return 1.0
@@ -43,6 +52,21 @@ def hysteresis_factor(delta, w, eps_s, wfit_a, wfit_b):
 
     ``w`` is the Preisach output W[eps_s], ``wfit_a``/``wfit_b`` the slope and
     intercept of W_fit (:func:`~.preisach.w_fit`).  Dimensionless.
+
+    Parameters
+    ----------
+    delta : float
+        Per-muscle hysteresis scale delta of (3.35) [-] (e.g.
+        :data:`DELTA_25_FIBRES`).
+    w : float
+        Preisach output W[eps_s] in [-1, 1] [-], e.g. from
+        :func:`~.memory.preisach_peek`.
+    eps_s : float
+        Scaled contraction of (3.34) in [-1, 1] [-]
+        (:func:`scaled_contraction`).
+    wfit_a, wfit_b : float
+        Slope and intercept of the straight line W_fit(eps_s) = a eps_s + b
+        [-].
     """
     return 1.0 + delta * (w - (wfit_a * eps_s + wfit_b))
 

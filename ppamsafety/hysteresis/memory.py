@@ -116,7 +116,13 @@ _INV_Z = THESIS_WEIGHT.inv_z
 
 
 def state_length(capacity: int = MAX_DEPTH) -> int:
-    """Floats of a memory row holding ``capacity`` extrema (``STATE_LENGTH`` for the default)."""
+    """Floats of a memory row holding ``capacity`` extrema (``STATE_LENGTH`` for the default).
+
+    Parameters
+    ----------
+    capacity : int
+        Maximum number of stored extrema (default :data:`MAX_DEPTH`).
+    """
     return 2 + 2 * capacity
 
 
@@ -214,6 +220,17 @@ def preisach_update(state, u, offset):
     Thesis weight (3.33), capacity :data:`MAX_DEPTH`.  ``u`` is clipped to
     [-1, 1]; call once per accepted integration step (see the module
     docstring).  Output dimensionless, in [-1, 1].
+
+    Parameters
+    ----------
+    state : ndarray of float64, 1-D
+        Array holding the memory row (layout :data:`MEMORY`,
+        ``STATE_LENGTH`` floats) at ``offset``; updated in place.
+    u : float
+        New scaled input eps_s [-]; clipped to [-1, 1]; NaN keeps the current
+        input.
+    offset : int
+        Index of the row's first slot in ``state``.
     """
     return advance(state, offset, MAX_DEPTH, u, _C, _D, _INV_Z, True)
 
@@ -224,19 +241,56 @@ def preisach_peek(state, u, offset):
 
     Same result as :func:`preisach_update` would return; for the stages of
     an integration step.
+
+    Parameters
+    ----------
+    state : ndarray of float64, 1-D
+        Array holding the memory row (layout :data:`MEMORY`,
+        ``STATE_LENGTH`` floats) at ``offset``; only read.
+    u : float
+        Scaled input eps_s [-]; clipped to [-1, 1]; NaN means the current
+        input.
+    offset : int
+        Index of the row's first slot in ``state``.
     """
     return advance(state, offset, MAX_DEPTH, u, _C, _D, _INV_Z, False)
 
 
 @leaf
 def preisach_output(state, offset):
-    """Current output W of the memory row at ``state[offset:]`` (input unchanged)."""
+    """Current output W of the memory row at ``state[offset:]`` (input unchanged).
+
+    Parameters
+    ----------
+    state : ndarray of float64, 1-D
+        Array holding the memory row (layout :data:`MEMORY`,
+        ``STATE_LENGTH`` floats) at ``offset``; only read.
+    offset : int
+        Index of the row's first slot in ``state``.
+    """
     return advance(state, offset, MAX_DEPTH, state[offset + U_], _C, _D, _INV_Z, False)
 
 
 @kernel
 def run(u, z, cap, c, d, inv_z, out):
-    """Feed the samples ``u`` through the memory row ``z`` (updated), W into ``out``."""
+    """Feed the samples ``u`` through the memory row ``z`` (updated), W into ``out``.
+
+    Parameters
+    ----------
+    u : ndarray of float64, shape (n,)
+        Scaled inputs eps_s [-], in order; each is clipped to [-1, 1].
+    z : ndarray of float64, shape (2 + 2 cap,)
+        The memory row, starting at index 0 (layout :data:`MEMORY` for
+        ``cap = MAX_DEPTH``); updated in place with every sample.
+    cap : int
+        Capacity (maximum depth) of ``z``, >= 2.
+    c, d : float
+        Weight parameters of (3.33) [-] (see :func:`advance`).
+    inv_z : float
+        Normalisation 1/z of the weight (:class:`~.everett.PreisachWeight`).
+    out : ndarray of float64, shape (n,)
+        Output, overwritten: W after each sample, in [-1, 1] [-].
+    """
     for i in range(u.size):
         out[i] = advance(z, 0, cap, u[i], c, d, inv_z, True)
 

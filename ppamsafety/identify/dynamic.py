@@ -418,7 +418,14 @@ class DynamicResult:
         return self.lsq.to_pandas()
 
     def plot(self, **kwargs):
-        """Filtered torques measured vs predicted and residuals; a matplotlib Figure."""
+        """Filtered torques measured vs predicted and residuals; a matplotlib Figure.
+
+        Parameters
+        ----------
+        **kwargs
+            Passed to :meth:`ppamsafety.identify.lsq.LSQResult.plot`
+            (``max_points``).
+        """
         return self.lsq.plot(**kwargs)
 
     def to_base_parameters(self):
@@ -434,7 +441,18 @@ class DynamicResult:
                               viscous=(float(t[8]), float(t[9])))
 
     def predict_torque(self, q, qd, qdd, arm) -> np.ndarray:
-        """Model torques K(q, qd, qdd) theta_hat [N m], shape (N, 2)."""
+        """Model torques K(q, qd, qdd) theta_hat [N m], shape (N, 2).
+
+        Uses the regressor (B.5)/(B.6) with this result's ``friction`` and
+        ``sign_velocity`` settings.
+
+        Parameters
+        ----------
+        q, qd, qdd : array_like, shape (N, 2)
+            Joint angles [rad], velocities [rad/s], accelerations [rad/s^2].
+        arm : ArmParameters
+            Supplies L1 and g (see :func:`regressor`).
+        """
         K = regressor(q, qd, qdd, arm, friction=self.friction, sign_velocity=self.sign_velocity)
         return K @ self.estimates
 

@@ -84,14 +84,28 @@ class FourierExcitation:
         return np.hypot(self.a, self.b).sum(axis=0)
 
     def delta_p(self, t) -> np.ndarray:
-        """Delta p(t) [Pa], shape (N, 2) for times ``t`` (N,) [s]."""
+        """Delta p(t) [Pa], shape (N, 2) for times ``t`` (N,) [s].
+
+        Parameters
+        ----------
+        t : array_like
+            Times [s]; flattened to shape (N,).
+        """
         t = np.asarray(t, dtype=float).reshape(-1)
         k = np.arange(1, self.harmonics + 1)
         ph = 2.0 * math.pi / self.period * np.outer(t, k)
         return self.offset + np.sin(ph) @ self.a + np.cos(ph) @ self.b
 
     def set_values(self, t, arm) -> np.ndarray:
-        """Valve set values [Pa], shape (N, 4): p_m +- Delta p (clipped), inverted (3.12)."""
+        """Valve set values [Pa], shape (N, 4): p_m +- Delta p (clipped), inverted (3.12).
+
+        Parameters
+        ----------
+        t : array_like
+            Times [s]; flattened to shape (N,).
+        arm : ArmParameters
+            Supplies the mean pressures, p_max and the valve statics (3.12).
+        """
         from ..plant.pneumatics import delta_p_pressures, valve_set_values
 
         return valve_set_values(delta_p_pressures(self.delta_p(t), arm), arm)
@@ -108,7 +122,23 @@ class FourierExcitation:
 
     @classmethod
     def from_vector(cls, x, offset, period: float = 10.0) -> "FourierExcitation":
-        """Inverse of :meth:`to_vector`."""
+        """Inverse of :meth:`to_vector`.
+
+        Parameters
+        ----------
+        x : array_like, shape (4 H,)
+            ``[a.ravel(), b.ravel()]`` with ``a``, ``b`` of shape (H, 2) [Pa].
+        offset : array_like, shape (2,)
+            Constant Delta-p per joint [Pa].
+        period : float
+            Fundamental period [s] (default 10 s).
+
+        Raises
+        ------
+        ValueError
+            If the size of ``x`` is not a positive multiple of 4 (and the
+            validation of the constructor).
+        """
         x = np.asarray(x, dtype=float)
         h = x.size // 4
         if x.size != 4 * h or h == 0:
@@ -117,13 +147,29 @@ class FourierExcitation:
 
 
 def centre_configuration(arm) -> np.ndarray:
-    """Middle of the working area (2.6)-(2.7) [rad]."""
+    """Middle of the working area (2.6)-(2.7) [rad].
+
+    Parameters
+    ----------
+    arm : ArmParameters
+        Supplies the joint limits ``arm.geometry.q1_min`` .. ``q2_max`` [rad].
+    """
     g = arm.geometry
     return np.array([0.5 * (g.q1_min + g.q1_max), 0.5 * (g.q2_min + g.q2_max)])
 
 
 def default_offset(arm, q_centre=None) -> np.ndarray:
-    """Plant gravity-compensation Delta-p at ``q_centre`` (default the middle) [Pa]."""
+    """Plant gravity-compensation Delta-p at ``q_centre`` (default the middle) [Pa].
+
+    Computed with the plant's base parameters (``arm.plant_base``), shape (2,).
+
+    Parameters
+    ----------
+    arm : ArmParameters
+        The arm.
+    q_centre : array_like, shape (2,), optional
+        Configuration [rad]; default :func:`centre_configuration`.
+    """
     from ..plant.pneumatics import gravity_compensation
 
     q = centre_configuration(arm) if q_centre is None else np.asarray(q_centre, dtype=float)
@@ -131,7 +177,17 @@ def default_offset(arm, q_centre=None) -> np.ndarray:
 
 
 def amplitude_limit(arm, offset) -> np.ndarray:
-    """Largest Fourier amplitude per joint keeping p_m +- Delta p inside [0, p_max] [Pa]."""
+    """Largest Fourier amplitude per joint keeping p_m +- Delta p inside [0, p_max] [Pa].
+
+    min(p_m - |offset|, p_max - p_m - |offset|) per joint, shape (2,).
+
+    Parameters
+    ----------
+    arm : ArmParameters
+        Supplies the mean pressures p_m and p_max [Pa].
+    offset : array_like, shape (2,)
+        Constant Delta-p per joint [Pa].
+    """
     pm = np.asarray(arm.pneumatics.p_mean, dtype=float)
     pmax = arm.pneumatics.p_max
     off = np.asarray(offset, dtype=float)
@@ -256,7 +312,13 @@ class ExcitationDesign:
         return df
 
     def plot(self, arm=None):
-        """Delta-p over one period per joint; returns a matplotlib Figure."""
+        """Delta-p over one period per joint; returns a matplotlib Figure.
+
+        Parameters
+        ----------
+        arm : ArmParameters, optional
+            Not used: the curve depends on the excitation only.
+        """
         from matplotlib.figure import Figure
 
         t = np.linspace(0.0, self.excitation.period, 1001)

@@ -69,7 +69,13 @@ def as_samples(name: str, value, *, ncols: int | None = None, ndim: int = 1) -> 
 
 
 def same_length(**arrays) -> int:
-    """Common first dimension of ``arrays``; ValueError naming the mismatch otherwise."""
+    """Common first dimension of ``arrays``; ValueError naming the mismatch otherwise.
+
+    Parameters
+    ----------
+    **arrays : numpy.ndarray
+        Arrays by name (the names appear in the error message); at least one.
+    """
     items = list(arrays.items())
     n = items[0][1].shape[0]
     for name, a in items[1:]:
@@ -158,7 +164,18 @@ class LSQResult:
         return {n: float(v) for n, v in zip(self.names, self.estimates)}
 
     def covers(self, true_values) -> np.ndarray:
-        """Boolean per parameter: does its confidence interval contain the true value?"""
+        """Boolean per parameter: does its confidence interval contain the true value?
+
+        Parameters
+        ----------
+        true_values : array_like, shape like ``estimates``
+            True parameter values, in the order and units of ``names``/``units``.
+
+        Raises
+        ------
+        ValueError
+            If the shape differs from that of ``estimates``.
+        """
         t = np.asarray(true_values, dtype=float)
         if t.shape != self.estimates.shape:
             raise ValueError(f"true_values must have shape {self.estimates.shape}, got {t.shape}")

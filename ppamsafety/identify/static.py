@@ -262,7 +262,14 @@ def gravity_base_parameters(result: LSQResult, template):
 
 
 def true_gravity_parameters(base) -> np.ndarray:
-    """The four static gravity parameters of a BaseParameters, in the order of (3.15)."""
+    """The four static gravity parameters of a BaseParameters, in the order of (3.15).
+
+    Parameters
+    ----------
+    base : BaseParameters
+        Base parameters; the fields ``GRAVITY_FIELDS`` (m1 L_G1 + m2 L1,
+        m2 L_G2, m2 d_G2, m1 d_G1) [kg m] are read.
+    """
     return np.array([getattr(base, f) for f in GRAVITY_FIELDS])
 
 

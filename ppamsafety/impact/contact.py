@@ -29,7 +29,24 @@ from .._validation import check_nonnegative, check_positive, check_range
 
 @leaf
 def hunt_crossley_force(delta, delta_dot, k, n, b):
-    """Contact force [N] for penetration ``delta`` [m] and its rate [m/s]; never negative."""
+    """Contact force [N] for penetration ``delta`` [m] and its rate [m/s]; never negative.
+
+    F = k delta^n + b delta^n d(delta)/dt for delta > 0, clipped at 0
+    (thesis eq. 6.2); 0 for delta <= 0.
+
+    Parameters
+    ----------
+    delta : float
+        Penetration [m] (positive in contact).
+    delta_dot : float
+        Penetration rate [m/s] (positive while compressing).
+    k : float
+        Contact stiffness [N/m^n].
+    n : float
+        Contact exponent [-].
+    b : float
+        Hunt-Crossley damping [N s/m^(n+1)].
+    """
     if delta <= 0.0:
         return 0.0
     dn = delta ** n
@@ -38,13 +55,33 @@ def hunt_crossley_force(delta, delta_dot, k, n, b):
 
 @leaf
 def hunt_crossley_elastic(delta, k, n):
-    """Elastic part k max(delta, 0)^n [N] of the contact force (no damping)."""
+    """Elastic part k max(delta, 0)^n [N] of the contact force (no damping).
+
+    Parameters
+    ----------
+    delta : float
+        Penetration [m]; negative values give 0.
+    k : float
+        Contact stiffness [N/m^n].
+    n : float
+        Contact exponent [-].
+    """
     return k * max(delta, 0.0) ** n
 
 
 @leaf
 def hunt_crossley_potential(delta, k, n):
-    """Contact potential energy k delta^(n+1)/(n+1) [J] for delta > 0, else 0."""
+    """Contact potential energy k delta^(n+1)/(n+1) [J] for delta > 0, else 0.
+
+    Parameters
+    ----------
+    delta : float
+        Penetration [m].
+    k : float
+        Contact stiffness [N/m^n].
+    n : float
+        Contact exponent [-].
+    """
     if delta <= 0.0:
         return 0.0
     return k * delta ** (n + 1.0) / (n + 1.0)
@@ -52,7 +89,23 @@ def hunt_crossley_potential(delta, k, n):
 
 @kernel
 def hunt_crossley_force_batch(delta, delta_dot, k, n, b, out):
-    """:func:`hunt_crossley_force` element-wise over 1-D arrays ``delta``, ``delta_dot``."""
+    """:func:`hunt_crossley_force` element-wise over 1-D arrays ``delta``, ``delta_dot``.
+
+    Parameters
+    ----------
+    delta : ndarray of float64, shape (N,)
+        Penetrations [m].
+    delta_dot : ndarray of float64, shape (N,)
+        Penetration rates [m/s] (at least N entries).
+    k : float
+        Contact stiffness [N/m^n].
+    n : float
+        Contact exponent [-].
+    b : float
+        Hunt-Crossley damping [N s/m^(n+1)].
+    out : ndarray of float64, shape (N,)
+        Output, overwritten: contact forces [N].
+    """
     for i in range(delta.shape[0]):
         out[i] = hunt_crossley_force(delta[i], delta_dot[i], k, n, b)
 
@@ -95,6 +148,20 @@ def exit_velocity(mass, v0, k, n, b=0.0) -> float:
     x - ln(1 + x) = y - ln(1 + y), solved for y in (-1, 0).  Independent of m
     and n; the restitution is e = v_out/v0.  ``mass`` and ``n`` are only
     validated.
+
+    Parameters
+    ----------
+    mass : float
+        Impacting (or reduced) mass [kg], > 0 (only validated).
+    v0 : float
+        Approach speed [m/s], > 0.
+    k : float
+        Contact stiffness [N/m^n], > 0.
+    n : float
+        Contact exponent [-], in [0.5, 5] (only validated).
+    b : float
+        Hunt-Crossley damping [N s/m^(n+1)], >= 0 (default 0: elastic, the
+        rebound speed is v0).
     """
     from scipy.optimize import brentq
 
@@ -116,5 +183,17 @@ def _x_minus_log1p(x: float) -> float:
 
 
 def restitution(v0, k, b) -> float:
-    """Coefficient of restitution e = v_out / v0 of a Hunt-Crossley impact [-]."""
+    """Coefficient of restitution e = v_out / v0 of a Hunt-Crossley impact [-].
+
+    Independent of the mass and the exponent (see :func:`exit_velocity`).
+
+    Parameters
+    ----------
+    v0 : float
+        Approach speed [m/s], > 0.
+    k : float
+        Contact stiffness [N/m^n], > 0.
+    b : float
+        Hunt-Crossley damping [N s/m^(n+1)], >= 0.
+    """
     return exit_velocity(1.0, v0, k, 1.0, b) / check_positive("v0", v0, unit="m/s")

@@ -188,7 +188,18 @@ def pack_cases(n: int, **fields) -> np.ndarray:
 
 
 def pack_head(head) -> np.ndarray:
-    """The :data:`HEAD` row of a :class:`~ppamsafety.params.head.HeadContactModel`."""
+    """The :data:`HEAD` row of a :class:`~ppamsafety.params.head.HeadContactModel`.
+
+    Parameters
+    ----------
+    head : HeadContactModel
+        Head mass [kg], radius [m] and Hunt-Crossley k [N/m^n], n [-],
+        b [N s/m^(n+1)] are copied (not validated again).
+
+    Returns
+    -------
+    numpy.ndarray, shape (HEAD.size,)
+    """
     row = np.empty(HEAD.size)
     row[HP_M], row[HP_R], row[HP_K] = head.mass, head.radius, head.stiffness
     row[HP_N], row[HP_B] = head.exponent, head.damping
@@ -208,7 +219,26 @@ def _arm_terms(y, P):
 
 @leaf
 def impact_rhs(y, case, P, hp, dy):
-    """Derivative of the impact state; returns (F, delta, delta_dot, |tcp velocity|)."""
+    """Derivative of the impact state; returns (F, delta, delta_dot, |tcp velocity|).
+
+    Contact force F [N], penetration delta [m], its rate [m/s] and the tool
+    point speed [m/s] at state ``y``.  For a fixed arm (``arm_mode`` =
+    :attr:`ArmMode.FIXED`) the arm derivatives are zero.
+
+    Parameters
+    ----------
+    y : ndarray of float64, shape (NY,)
+        Integrator state, layout :data:`STATE`; only read.
+    case : ndarray of float64, shape (NCASE,)
+        The impact case, layout :data:`CASE` (q0, K, arm_mode are read).
+    P : ndarray of float64, shape (NP,)
+        Packed plant parameter row (:data:`ppamsafety.plant.layout.PLANT`);
+        reads ``L1``, ``L2`` and ``theta``.
+    hp : ndarray of float64, shape (HEAD.size,)
+        Head contact parameters, layout :data:`HEAD` (:func:`pack_head`).
+    dy : ndarray of float64, shape (NY,)
+        Output, overwritten: dy/dt in the layout :data:`STATE`.
+    """
     c2, s2, h11, h12, h22, x, yy, j11, j12, j21, j22 = _arm_terms(y, P)
     w1, w2 = y[Y_W], y[Y_W + 1]
     fixed = int(case[C_ARM]) == ArmMode.FIXED
@@ -260,7 +290,21 @@ def _energy(y, case, P, hp):
 
 @leaf
 def initial_state(case, P, hp, y):
-    """Arm at q0 with qd0, head centre at r_tcp + R u, head velocity v_h0."""
+    """Arm at q0 with qd0, head centre at r_tcp + R u, head velocity v_h0.
+
+    Parameters
+    ----------
+    case : ndarray of float64, shape (NCASE,)
+        The impact case, layout :data:`CASE`.
+    P : ndarray of float64, shape (NP,)
+        Packed plant parameter row (:data:`ppamsafety.plant.layout.PLANT`);
+        reads ``L1``, ``L2`` and ``theta``.
+    hp : ndarray of float64, shape (HEAD.size,)
+        Head contact parameters, layout :data:`HEAD` (the radius R is read).
+    y : ndarray of float64, shape (NY,)
+        Output, overwritten: the initial state, layout :data:`STATE`
+        (dissipated energy 0).
+    """
     y[Y_Q], y[Y_Q + 1] = case[C_Q], case[C_Q + 1]
     y[Y_W], y[Y_W + 1] = case[C_QD], case[C_QD + 1]
     _, _, _, _, _, x, yy, _, _, _, _ = _arm_terms(y, P)
@@ -319,6 +363,31 @@ def impact_batch(CASES, P, hp, dt, nsteps, w36, w15, SUM, HIST, hist_of):
     FREE_GAP + 2 x closing speed x step), the integrator takes steps of
     FREE_STRIDE x dt (the force and head acceleration are exactly zero
     there); in contact, near contact and for recorded histories it uses dt.
+
+    Parameters
+    ----------
+    CASES : ndarray of float64, shape (N, NCASE), C-contiguous
+        The impact cases, one :data:`CASE` row each.
+    P : ndarray of float64, shape (NP,)
+        Packed plant parameter row (:data:`ppamsafety.plant.layout.PLANT`);
+        reads ``L1``, ``L2`` and ``theta``.
+    hp : ndarray of float64, shape (HEAD.size,)
+        Head contact parameters, layout :data:`HEAD` (:func:`pack_head`).
+    dt : float
+        RK4 step in contact [s]; also the HIC sample spacing.
+    nsteps : int
+        Number of steps of ``dt`` simulated (duration ``nsteps * dt``).
+    w36, w15 : int
+        HIC36 / HIC15 window limits in whole sample intervals
+        (0.036 s / dt and 0.015 s / dt rounded down).
+    SUM : ndarray of float64, shape (N, NSUM)
+        Output, overwritten: one :data:`SUMMARY` row per case.
+    HIST : ndarray of float64, shape (H, nsteps + 1, NHIST)
+        Output: for a recorded case c, ``HIST[hist_of[c], s]`` is filled with
+        the :data:`HIST` row of step s (every step is taken with ``dt``).
+    hist_of : ndarray of int64, shape (N,)
+        Per case, its index into the first axis of ``HIST``, or -1 for no
+        history.
     """
     y = np.empty(NY)
     yt = np.empty(NY)

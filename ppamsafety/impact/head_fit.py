@@ -74,8 +74,12 @@ def default_arm_mass(arm) -> float:
     """Effective mass of the thesis arm at the tool for the step-response impact [kg].
 
     At q = (50, -80) deg with the tool moving as joint 1 turns (the step moves
-    q1), see :func:`ppamsafety.impact.model.effective_mass`.  ``arm`` is an
-    :class:`~ppamsafety.params.ArmParameters`.
+    q1), see :func:`ppamsafety.impact.model.effective_mass`.
+
+    Parameters
+    ----------
+    arm : ArmParameters
+        The arm (links, geometry); TypeError otherwise.
     """
     arm = _arm(arm)
     from ..plant import geometry as geo
@@ -88,9 +92,20 @@ def default_arm_mass(arm) -> float:
 def hybrid3_drop_peak_g(stiffness, exponent, damping, *, dt=1e-6) -> float:
     """Peak head acceleration [g] of the Hybrid III drop test with this contact.
 
-    ``stiffness`` k [N/m^n] > 0, ``exponent`` n in [1, 3], ``damping`` b
-    [N s/m^(n+1)] >= 0 (the ranges of :class:`~ppamsafety.params.head.HeadContactModel`),
-    ``dt`` integration step [s] in [1e-8, 1e-4].
+    A 4.54 kg head falling 376 mm onto a rigid plate (49 CFR 572.32; infinite
+    arm mass in the two-body model), 20 ms simulated; peak F_max / (m g0).
+
+    Parameters
+    ----------
+    stiffness : float
+        Contact stiffness k [N/m^n], > 0.
+    exponent : float
+        Contact exponent n [-], in [1, 3].
+    damping : float
+        Hunt-Crossley damping b [N s/m^(n+1)], >= 0 (the ranges of
+        :class:`~ppamsafety.params.head.HeadContactModel`).
+    dt : float, keyword-only
+        Integration step [s], in [1e-8, 1e-4] (default 1e-6).
     """
     stiffness, exponent, damping = _contact(stiffness, exponent, damping)
     dt = _step(dt)
@@ -104,7 +119,17 @@ def hybrid3_drop_peak_g(stiffness, exponent, damping, *, dt=1e-6) -> float:
 def iso_effective_spring(stiffness, exponent, force) -> float:
     """Energy-equivalent linear spring F^2/(2E) of the elastic part at ``force`` [N/m].
 
-    ``stiffness`` k [N/m^n] > 0, ``exponent`` n in [1, 3], ``force`` [N] in (0, 1e6].
+    E is the elastic contact energy k delta^(n+1)/(n+1) at the penetration
+    where k delta^n = F.
+
+    Parameters
+    ----------
+    stiffness : float
+        Contact stiffness k [N/m^n], > 0.
+    exponent : float
+        Contact exponent n [-], in [1, 3].
+    force : float
+        Contact force F [N], in (0, 1e6].
     """
     stiffness = check_range("stiffness", stiffness, 0.0, 1e20, lo_open=True, unit="N/m^n")
     exponent = check_range("exponent", exponent, 1.0, 3.0)

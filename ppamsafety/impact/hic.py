@@ -66,6 +66,16 @@ def hic_bruteforce_kernel(a, dt, max_window_samples):
 
     ``a`` [g], ``dt`` [s]; returns the first maximising pair in (i, j) order
     and ``(0.0, 0, 0)`` if there is no pair (N < 2 or Wn < 1).
+
+    Parameters
+    ----------
+    a : ndarray of float64, shape (N,)
+        Head acceleration magnitude samples [g], non-negative (not checked
+        here; see :func:`hic`).
+    dt : float
+        Sample spacing [s].
+    max_window_samples : int
+        Window limit Wn in whole sample intervals (W / dt rounded down).
     """
     n = a.shape[0]
     s = _cumulative_area(a, dt)
@@ -162,6 +172,17 @@ def hic_kernel(a, dt, max_window_samples):
     ``a`` [g] non-negative samples, ``dt`` [s], windows 1 <= j - i <= ``max_window_samples``.
     Same maximum as :func:`hic_bruteforce_kernel` (the pair may differ on exact ties);
     ``(0.0, 0, 1)`` for an all-zero record and ``(0.0, 0, 0)`` if there is no pair.
+
+    Parameters
+    ----------
+    a : ndarray of float64, shape (N,)
+        Head acceleration magnitude samples [g], non-negative and finite (not
+        checked here; see :func:`hic`).
+    dt : float
+        Sample spacing [s].
+    max_window_samples : int
+        Window limit Wn in whole sample intervals (W / dt rounded down);
+        values above N - 1 act as N - 1.
     """
     n = a.shape[0]
     wn = min(max_window_samples, n - 1)
@@ -214,7 +235,22 @@ def hic_kernel(a, dt, max_window_samples):
 
 @kernel
 def hic_batch_kernel(A, dt, max_window_samples, out_value, out_i, out_j):
-    """:func:`hic_kernel` for every record (row) of ``A``, written to the ``out_*`` arrays."""
+    """:func:`hic_kernel` for every record (row) of ``A``, written to the ``out_*`` arrays.
+
+    Parameters
+    ----------
+    A : ndarray of float64, shape (R, N), C-contiguous
+        R records of N acceleration magnitude samples [g], non-negative.
+    dt : float
+        Sample spacing [s].
+    max_window_samples : int
+        Window limit Wn in whole sample intervals.
+    out_value : ndarray of float64, shape (R,)
+        Output, overwritten: HIC of each record [-].
+    out_i, out_j : ndarray of int64, shape (R,)
+        Output, overwritten: sample indices of the start and end of each
+        maximising window (times ``i dt``, ``j dt``).
+    """
     for r in range(A.shape[0]):
         out_value[r], out_i[r], out_j[r] = hic_kernel(A[r], dt, max_window_samples)
 
@@ -326,7 +362,23 @@ def hic(a, dt, *, window=0.036) -> HICResult:
 
 
 def hic_bruteforce(a, dt, *, window=0.036) -> HICResult:
-    """:func:`hic` by brute force over all O(N W/dt) windows (reference for tests and timing)."""
+    """:func:`hic` by brute force over all O(N W/dt) windows (reference for tests and timing).
+
+    Parameters
+    ----------
+    a : array_like, shape (N,) or (R, N)
+        Head acceleration magnitude [g], non-negative, finite, N >= 2; records
+        along the last axis.
+    dt : float
+        Sample spacing [s].
+    window : float, keyword-only
+        Window limit W [s]: 0.036 for HIC36 (default), 0.015 for HIC15.
+
+    Returns
+    -------
+    HICResult
+        As :func:`hic` (same validation and errors).
+    """
     return _evaluate(hic_bruteforce_kernel, _bruteforce_batch_kernel, a, dt, window)
 
 
@@ -397,8 +449,21 @@ def hic_rectangular(amplitude, duration, *, window=0.036) -> float:
 
     Derivation: the mean over any window is <= A, so HIC <= A^2.5 L <= A^2.5 W, and a
     window longer than T has I <= A T, so HIC = I^2.5 / L^1.5 < A^2.5 T; a window of
-    width min(T, W) inside the pulse attains A^2.5 min(T, W).  ``amplitude`` [g] >= 0, ``duration`` and
-    ``window`` [s] > 0; returns HIC [-].
+    width min(T, W) inside the pulse attains A^2.5 min(T, W).
+
+    Parameters
+    ----------
+    amplitude : float
+        Pulse acceleration A [g], >= 0.
+    duration : float
+        Pulse duration T [s], > 0.
+    window : float, keyword-only
+        Window limit W [s], > 0 (default 0.036, HIC36).
+
+    Returns
+    -------
+    float
+        HIC [-].
     """
     A = check_nonnegative("amplitude", amplitude, unit="g")
     T = check_positive("duration", duration, unit="s")

@@ -100,7 +100,15 @@ class ArmParameters:
         check_instance("ArmParameters.effects", self.effects, Effects)
 
     def replace(self, **changes) -> "ArmParameters":
-        """Return a copy with some fields changed (validated again)."""
+        """Return a copy with some fields changed (validated again).
+
+        Parameters
+        ----------
+        **changes
+            New values of fields of :class:`ArmParameters`, by field name (as for
+            :func:`dataclasses.replace`); the copy is checked like a newly
+            constructed object.
+        """
         return replace(self, **changes)
 
     @property

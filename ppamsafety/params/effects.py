@@ -163,7 +163,15 @@ class Effects:
         return tuple(f for f in self.__dataclass_fields__ if getattr(self, f) != getattr(off, f))
 
     def replace(self, **changes) -> "Effects":
-        """Return a copy with some fields changed (validated again)."""
+        """Return a copy with some fields changed (validated again).
+
+        Parameters
+        ----------
+        **changes
+            New values of fields of :class:`Effects`, by field name (as for
+            :func:`dataclasses.replace`); the copy is checked like a newly
+            constructed object.
+        """
         return replace(self, **changes)
 
 

@@ -124,7 +124,15 @@ class ArmGeometry:
                     f"q{1 if k < 2 else 2}_min/max")
 
     def replace(self, **changes) -> "ArmGeometry":
-        """Return a copy with some fields changed (validated again)."""
+        """Return a copy with some fields changed (validated again).
+
+        Parameters
+        ----------
+        **changes
+            New values of fields of :class:`ArmGeometry`, by field name (as for
+            :func:`dataclasses.replace`); the copy is checked like a newly
+            constructed object.
+        """
         return replace(self, **changes)
 
 
@@ -134,6 +142,13 @@ def group_lengths(geometry: ArmGeometry, q1, q2) -> np.ndarray:
     Same attachment points (A.13)-(A.20) as the compiled
     :func:`ppamsafety.plant.geometry.group_points` (a test checks they agree); kept
     here in plain numpy so that parameter sets can be checked without the kernels.
+
+    Parameters
+    ----------
+    geometry : ArmGeometry
+        Attachment points and link length L1 [m].
+    q1, q2 : array_like
+        Joint angles [rad]; broadcast against each other.
     """
     g = geometry
     q1, q2 = np.broadcast_arrays(np.asarray(q1, float), np.asarray(q2, float))

@@ -46,6 +46,20 @@ def hunt_crossley_max_penetration(mass: float, v0: float, k: float, n: float, b:
     parameter sets do not import the impact engine): delta_max =
     [(n+1) m/b^2 (b v0 - k ln(1 + b v0/k))]^(1/(n+1)), -> [(n+1) m v0^2/(2k)]^(1/(n+1))
     for b -> 0.  Inputs already validated (positive, finite).
+
+    Parameters
+    ----------
+    mass : float
+        Moving mass [kg].
+    v0 : float
+        Approach speed at first contact [m/s], > 0.
+    k : float
+        Contact stiffness [N/m^n], > 0.
+    n : float
+        Contact exponent [-].
+    b : float
+        Hunt-Crossley damping [N s/m^(n+1)], >= 0 (a series expansion is used
+        for b v0/k < 1e-3, which includes b = 0).
     """
     x = b * v0 / k
     if x < 1e-3:
@@ -131,7 +145,15 @@ class HeadContactModel:
                 f"HeadContactModel.damping too large (or .mass too small) to be integrated ({params})")
 
     def replace(self, **changes) -> "HeadContactModel":
-        """Return a copy with some fields changed (validated again)."""
+        """Return a copy with some fields changed (validated again).
+
+        Parameters
+        ----------
+        **changes
+            New values of fields of :class:`HeadContactModel`, by field name (as for
+            :func:`dataclasses.replace`); the copy is checked like a newly
+            constructed object.
+        """
         return replace(self, **changes)
 
     def force(self, delta, delta_dot=0.0):
@@ -204,7 +226,18 @@ def _models() -> dict:
 
 
 def head_model(name: str = "thesis-frontal") -> HeadContactModel:
-    """A named head contact model: one of :func:`head_model_names`."""
+    """A named head contact model: one of :func:`head_model_names`.
+
+    Parameters
+    ----------
+    name : str
+        Model name (default ``"thesis-frontal"``).
+
+    Raises
+    ------
+    ValueError
+        For an unknown name (the message lists the choices).
+    """
     check_str("name", name)
     models = _models()
     if name not in models:

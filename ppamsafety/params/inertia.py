@@ -129,7 +129,15 @@ class BaseParameters:
                          self.m2LG2, self.m2dG2, self.IS2])
 
     def replace(self, **changes) -> "BaseParameters":
-        """Return a copy with some fields changed (validated again)."""
+        """Return a copy with some fields changed (validated again).
+
+        Parameters
+        ----------
+        **changes
+            New values of fields of :class:`BaseParameters`, by field name (as for
+            :func:`dataclasses.replace`); the copy is checked like a newly
+            constructed object.
+        """
         return replace(self, **changes)
 
 
@@ -184,7 +192,10 @@ class LinkInertia:
     def base_parameters(self, L1: float) -> BaseParameters:
         """Base parameters (B.5) by the parallel-axis (Steiner) relations.
 
-        ``L1`` is the upper-arm length [m], in (0, 5].
+        Parameters
+        ----------
+        L1 : float
+            Upper-arm length [m], in (0, 5].
         """
         L1 = check_range("L1", L1, 0.0, 5.0, lo_open=True, unit="m")
         IO1 = self.IG1 + self.m1 * (self.LG1 ** 2 + self.dG1 ** 2)
@@ -195,7 +206,15 @@ class LinkInertia:
             m2dG2=self.m2 * self.dG2, IS2=IS2, coulomb=self.coulomb, viscous=self.viscous)
 
     def replace(self, **changes) -> "LinkInertia":
-        """Return a copy with some fields changed (validated again)."""
+        """Return a copy with some fields changed (validated again).
+
+        Parameters
+        ----------
+        **changes
+            New values of fields of :class:`LinkInertia`, by field name (as for
+            :func:`dataclasses.replace`); the copy is checked like a newly
+            constructed object.
+        """
         return replace(self, **changes)
 
 
@@ -229,7 +248,16 @@ RADIUS_OF_GYRATION = (0.375 / math.sqrt(12.0), 0.36 / math.sqrt(12.0))
 
 @dataclass(frozen=True)
 class LinkDerivation:
-    """Result of :func:`derive_physical_links` with its evidence."""
+    """Result of :func:`derive_physical_links` with its evidence.
+
+    Attributes
+    ----------
+    links : LinkInertia
+        The reconciled physical links.
+    residuals : dict
+        ``{evidence name: (fitted, target, sigma)}`` for every prior and
+        identified first moment of the fit (SI units of the quantity).
+    """
 
     links: LinkInertia
     residuals: dict   # name -> (fitted, target, sigma)

@@ -74,7 +74,20 @@ class MuscleGroup:
     @classmethod
     def from_newton_per_bar(cls, name: str, n_muscles: int, coefficients_n_per_bar,
                             **kwargs) -> "MuscleGroup":
-        """Build a group from Table B.1-style coefficients in N/bar."""
+        """Build a group from Table B.1-style coefficients in N/bar.
+
+        Parameters
+        ----------
+        name : str
+            Label of the group.
+        n_muscles : int
+            Number of PPAMs in series, n_m.
+        coefficients_n_per_bar : sequence of 5 float
+            (a0, a1, a2, a3, a4) of the force law (3.9) in N/bar; divided by
+            ``BAR`` = 1e5 Pa to give N/Pa.
+        **kwargs
+            Further :class:`MuscleGroup` fields (``l0`` [m], ``slenderness``).
+        """
         c = check_vector("coefficients_n_per_bar", coefficients_n_per_bar, 5, unit="N/bar")
         return cls(name=name, n_muscles=n_muscles, coefficients=tuple(x / BAR for x in c),
                    **kwargs)
@@ -125,7 +138,15 @@ class MuscleSet:
                              f"eps_max = {self.eps_max:g}")
 
     def replace(self, **changes) -> "MuscleSet":
-        """Return a copy with some fields changed (validated again)."""
+        """Return a copy with some fields changed (validated again).
+
+        Parameters
+        ----------
+        **changes
+            New values of fields of :class:`MuscleSet`, by field name (as for
+            :func:`dataclasses.replace`); the copy is checked like a newly
+            constructed object.
+        """
         return replace(self, **changes)
 
 

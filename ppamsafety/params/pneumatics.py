@@ -59,7 +59,15 @@ class PneumaticParams:
                                                              self.polytropic_n, 1.0, 1.67))
 
     def replace(self, **changes) -> "PneumaticParams":
-        """Return a copy with some fields changed (validated again)."""
+        """Return a copy with some fields changed (validated again).
+
+        Parameters
+        ----------
+        **changes
+            New values of fields of :class:`PneumaticParams`, by field name (as for
+            :func:`dataclasses.replace`); the copy is checked like a newly
+            constructed object.
+        """
         return replace(self, **changes)
 
 

@@ -71,7 +71,20 @@ MAX_TIME_CONSTANT = 10.0
 
 
 def check_time_constant(name: str, value) -> float:
-    """A valve time constant in [1 ms, 10 s] or ``math.inf`` (closed valve); returns a float."""
+    """A valve time constant in [1 ms, 10 s] or ``math.inf`` (closed valve); returns a float.
+
+    Parameters
+    ----------
+    name : str
+        Argument name for the error messages.
+    value : float
+        Time constant [s].
+
+    Raises
+    ------
+    TypeError, ValueError
+        If ``value`` is not a real number or is outside the range.
+    """
     t = check_real(name, value, unit="s")
     if t == math.inf:
         return t
@@ -80,7 +93,13 @@ def check_time_constant(name: str, value) -> float:
 
 @dataclass(frozen=True)
 class ValveSet:
-    """The four valves, one per muscle group (index 0 = group 1)."""
+    """The four valves, one per muscle group (index 0 = group 1).
+
+    Attributes
+    ----------
+    valves : tuple of 4 Valve
+        Valve of groups 1..4 (static error (3.12) and time constant (3.2)).
+    """
 
     valves: tuple
 
@@ -95,11 +114,26 @@ class ValveSet:
         object.__setattr__(self, "valves", tuple(self.valves))
 
     def replace(self, **changes) -> "ValveSet":
-        """Return a copy with some fields changed (validated again)."""
+        """Return a copy with some fields changed (validated again).
+
+        Parameters
+        ----------
+        **changes
+            New values of fields of :class:`ValveSet`, by field name (as for
+            :func:`dataclasses.replace`); the copy is checked like a newly
+            constructed object.
+        """
         return replace(self, **changes)
 
     def with_time_constants(self, time_constants) -> "ValveSet":
-        """Return a copy with new time constants [s] (one per valve, see :class:`Valve`)."""
+        """Return a copy with new time constants [s] (one per valve, see :class:`Valve`).
+
+        Parameters
+        ----------
+        time_constants : sequence of 4 float
+            Time constants T_i of (3.2) [s], each in [1 ms, 10 s] or ``math.inf``
+            (closed valve).
+        """
         if isinstance(time_constants, (tuple, list)) and len(time_constants) == 4:
             ts = [check_time_constant(f"valve {i + 1} time_constant", t)
                   for i, t in enumerate(time_constants)]

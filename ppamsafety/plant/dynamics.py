@@ -42,21 +42,59 @@ from .layout import COUL, GRAV, L1, THETA1, THETA2, THETA3, THETA4, THETA5, THET
 
 @leaf
 def mass_matrix_cs(c2, s2, P):
-    """Inertia matrix entries (h11, h12, h22) [kg m^2] from cos q2, sin q2."""
+    """Inertia matrix entries (h11, h12, h22) [kg m^2] from cos q2, sin q2.
+
+    H of (3.1) in the base parameters (B.5); symmetric, so h21 = h12.
+
+    Parameters
+    ----------
+    c2, s2 : float
+        cos q2 and sin q2 of the elbow angle q2 [-].
+    P : ndarray of float64, shape (NP,)
+        Packed plant parameter row (:data:`ppamsafety.plant.layout.PLANT`);
+        reads ``L1`` [m] and ``theta``.
+    """
     a = P[L1] * (P[THETA4] * c2 + P[THETA5] * s2)
     return P[THETA3] + P[THETA6] + 2.0 * a, P[THETA6] + a, P[THETA6]
 
 
 @leaf
 def coriolis_cs(c2, s2, w1, w2, P):
-    """Centrifugal/Coriolis matrix entries (c11, c12, c21, c22) [kg m^2/s]."""
+    """Centrifugal/Coriolis matrix entries (c11, c12, c21, c22) [kg m^2/s].
+
+    C(q, qd) of (3.1) from the Christoffel symbols (B.1); C qd is the
+    centrifugal/Coriolis torque [N m].
+
+    Parameters
+    ----------
+    c2, s2 : float
+        cos q2 and sin q2 of the elbow angle q2 [-].
+    w1, w2 : float
+        Joint velocities qd1, qd2 [rad/s].
+    P : ndarray of float64, shape (NP,)
+        Packed plant parameter row (:data:`ppamsafety.plant.layout.PLANT`);
+        reads ``L1`` [m] and ``theta``.
+    """
     hq = P[L1] * (P[THETA4] * s2 - P[THETA5] * c2)
     return -hq * w2, -hq * (w1 + w2), hq * w1, 0.0
 
 
 @leaf
 def gravity_cs(c1, s1, c12, s12, P):
-    """Gravity torques (g1, g2) [N m] from cos/sin of q1 and q1 + q2."""
+    """Gravity torques (g1, g2) [N m] from cos/sin of q1 and q1 + q2.
+
+    G(q) of (3.1) in the base parameters (B.5).
+
+    Parameters
+    ----------
+    c1, s1 : float
+        cos q1 and sin q1 of the shoulder angle q1 [-].
+    c12, s12 : float
+        cos(q1 + q2) and sin(q1 + q2) [-].
+    P : ndarray of float64, shape (NP,)
+        Packed plant parameter row (:data:`ppamsafety.plant.layout.PLANT`);
+        reads ``gravity`` [m/s^2] and ``theta``.
+    """
     g = P[GRAV]
     g2 = g * (P[THETA4] * c12 + P[THETA5] * s12)
     return g * (P[THETA1] * c1 + P[THETA2] * s1) + g2, g2
@@ -67,13 +105,32 @@ def potential_cs(c1, s1, c12, s12, P):
     """Gravitational potential energy (B.1) up to a constant [J]; its gradient is G.
 
     In base parameters: U = g (theta1 s1 - theta2 c1 + theta4 s12 - theta5 c12).
+
+    Parameters
+    ----------
+    c1, s1 : float
+        cos q1 and sin q1 of the shoulder angle q1 [-].
+    c12, s12 : float
+        cos(q1 + q2) and sin(q1 + q2) [-].
+    P : ndarray of float64, shape (NP,)
+        Packed plant parameter row (:data:`ppamsafety.plant.layout.PLANT`);
+        reads ``gravity`` [m/s^2] and ``theta``.
     """
     return P[GRAV] * (P[THETA1] * s1 - P[THETA2] * c1 + P[THETA4] * s12 - P[THETA5] * c12)
 
 
 @leaf
 def gravity_torque(q1, q2, P):
-    """Gravity torques (g1, g2) [N m]."""
+    """Gravity torques (g1, g2) [N m].
+
+    Parameters
+    ----------
+    q1, q2 : float
+        Joint angles (shoulder, elbow) [rad].
+    P : ndarray of float64, shape (NP,)
+        Packed plant parameter row (:data:`ppamsafety.plant.layout.PLANT`);
+        reads ``gravity`` [m/s^2] and ``theta``.
+    """
     return gravity_cs(math.cos(q1), math.sin(q1), math.cos(q1 + q2), math.sin(q1 + q2), P)
 
 
@@ -88,6 +145,17 @@ def friction_cs(w1, w2, smooth, P):
 
     ``smooth=True``: s = tanh(qd / v_s) (the plant); ``False``: the ideal
     sign function.
+
+    Parameters
+    ----------
+    w1, w2 : float
+        Joint velocities qd1, qd2 [rad/s].
+    smooth : bool
+        Smooth Coulomb term tanh(qd / v_s) if true, sign(qd) if false.
+    P : ndarray of float64, shape (NP,)
+        Packed plant parameter row (:data:`ppamsafety.plant.layout.PLANT`);
+        reads ``coulomb`` [N m], ``viscous`` [N m s/rad] and
+        ``v_friction`` [rad/s].
     """
     if smooth:
         vs = P[VFRIC]
@@ -101,13 +169,44 @@ def friction_cs(w1, w2, smooth, P):
 
 @leaf
 def friction_torque(w1, w2, P):
-    """Joint friction (smooth Coulomb + viscous) [N m]."""
+    """Joint friction (smooth Coulomb + viscous) [N m].
+
+    :func:`friction_cs` with ``smooth=True``.
+
+    Parameters
+    ----------
+    w1, w2 : float
+        Joint velocities qd1, qd2 [rad/s].
+    P : ndarray of float64, shape (NP,)
+        Packed plant parameter row (:data:`ppamsafety.plant.layout.PLANT`);
+        reads ``coulomb``, ``viscous`` and ``v_friction``.
+    """
     return friction_cs(w1, w2, True, P)
 
 
 @leaf
 def forward_dynamics_cs(c1, s1, c2, s2, c12, s12, w1, w2, tau1, tau2, P):
-    """Joint accelerations (qdd1, qdd2) [rad/s^2] for joint torques tau [N m]."""
+    """Joint accelerations (qdd1, qdd2) [rad/s^2] for joint torques tau [N m].
+
+    Solves H qdd = tau - C qd - G - tau_f of (3.1)/(3.29) with the smooth
+    friction of :func:`friction_torque`.
+
+    Parameters
+    ----------
+    c1, s1 : float
+        cos q1 and sin q1 of the shoulder angle q1 [-].
+    c2, s2 : float
+        cos q2 and sin q2 of the elbow angle q2 [-].
+    c12, s12 : float
+        cos(q1 + q2) and sin(q1 + q2) [-].
+    w1, w2 : float
+        Joint velocities qd1, qd2 [rad/s].
+    tau1, tau2 : float
+        Joint torques [N m].
+    P : ndarray of float64, shape (NP,)
+        Packed plant parameter row (:data:`ppamsafety.plant.layout.PLANT`);
+        reads ``L1``, ``theta``, ``gravity`` and the friction fields.
+    """
     h11, h12, h22 = mass_matrix_cs(c2, s2, P)
     c11, c12_, c21, c22 = coriolis_cs(c2, s2, w1, w2, P)
     g1, g2 = gravity_cs(c1, s1, c12, s12, P)
@@ -120,7 +219,22 @@ def forward_dynamics_cs(c1, s1, c2, s2, c12, s12, w1, w2, tau1, tau2, P):
 
 @leaf
 def forward_dynamics(q1, q2, w1, w2, tau1, tau2, P):
-    """Joint accelerations (qdd1, qdd2) [rad/s^2] for joint torques tau [N m]."""
+    """Joint accelerations (qdd1, qdd2) [rad/s^2] for joint torques tau [N m].
+
+    :func:`forward_dynamics_cs` for angles ``q1``, ``q2``.
+
+    Parameters
+    ----------
+    q1, q2 : float
+        Joint angles (shoulder, elbow) [rad].
+    w1, w2 : float
+        Joint velocities qd1, qd2 [rad/s].
+    tau1, tau2 : float
+        Joint torques [N m].
+    P : ndarray of float64, shape (NP,)
+        Packed plant parameter row (:data:`ppamsafety.plant.layout.PLANT`);
+        reads ``L1``, ``theta``, ``gravity`` and the friction fields.
+    """
     return forward_dynamics_cs(math.cos(q1), math.sin(q1), math.cos(q2), math.sin(q2),
                                math.cos(q1 + q2), math.sin(q1 + q2), w1, w2, tau1, tau2, P)
 

@@ -33,6 +33,19 @@ def group_points(k, c1, s1, c12, s12, P):
     groups 1-2, upper arm for 3-4), the distal point B and the pivot P of the
     joint that moves B relative to A (O for groups 1-2, S for 3-4) [m].
     Eqs. (A.13)-(A.20); ``c1 = cos q1``, ``c12 = cos(q1 + q2)`` etc.
+
+    Parameters
+    ----------
+    k : int
+        Muscle group index 0..3 (thesis groups 1..4; 0, 1 act on joint 1,
+        2, 3 on joint 2).  Any other value is treated as 3.
+    c1, s1 : float
+        cos q1 and sin q1 of the shoulder angle q1 [-].
+    c12, s12 : float
+        cos(q1 + q2) and sin(q1 + q2) [-].
+    P : ndarray of float64, shape (NP,)
+        Packed plant parameter row (:data:`ppamsafety.plant.layout.PLANT`);
+        reads the geometry fields (``X11`` .. ``d43``, ``L1``) [m].
     """
     sx = P[L1] * c1
     sy = P[L1] * s1
@@ -55,7 +68,20 @@ def group_length_lever(k, c1, s1, c12, s12, P):
     vector from the pivot to B: the torque about the joint per newton of
     muscle pull, (A.1)-(A.4).  By virtual work ``h = -dd/dq``; with
     ``d'' = (|r|^2 - u.r - d'^2)/d`` (u = B - A) we get ``dh/dq = -d''``.
-    Units: m, m, m/rad.
+    Units: m, m, m/rad.  The derivative is along the joint the group drives
+    (q1 for groups 1-2, q2 for groups 3-4).
+
+    Parameters
+    ----------
+    k : int
+        Muscle group index 0..3 (thesis groups 1..4).
+    c1, s1 : float
+        cos q1 and sin q1 of the shoulder angle q1 [-].
+    c12, s12 : float
+        cos(q1 + q2) and sin(q1 + q2) [-].
+    P : ndarray of float64, shape (NP,)
+        Packed plant parameter row (:data:`ppamsafety.plant.layout.PLANT`);
+        reads the geometry fields [m].
     """
     ax, ay, bx, by, px, py = group_points(k, c1, s1, c12, s12, P)
     ux = bx - ax
@@ -71,28 +97,69 @@ def group_length_lever(k, c1, s1, c12, s12, P):
 
 @leaf
 def tcp_kinematics_cs(c1, s1, c12, s12, P):
-    """TCP position and Jacobian from cos/sin of q1 and q1 + q2: (x, y, j11, j12, j21, j22)."""
+    """TCP position and Jacobian from cos/sin of q1 and q1 + q2.
+
+    Returns ``(x, y, j11, j12, j21, j22)``: the TCP (end of link 2) position
+    [m] and the entries of its Jacobian d(x, y)/d(q1, q2) [m/rad].
+
+    Parameters
+    ----------
+    c1, s1 : float
+        cos q1 and sin q1 of the shoulder angle q1 [-].
+    c12, s12 : float
+        cos(q1 + q2) and sin(q1 + q2) [-].
+    P : ndarray of float64, shape (NP,)
+        Packed plant parameter row (:data:`ppamsafety.plant.layout.PLANT`);
+        reads the link lengths ``L1``, ``L2`` [m].
+    """
     return (P[L1] * c1 + P[L2] * c12, P[L1] * s1 + P[L2] * s12,
             -P[L1] * s1 - P[L2] * s12, -P[L2] * s12, P[L1] * c1 + P[L2] * c12, P[L2] * c12)
 
 
 @leaf
 def tcp_position(q1, q2, P):
-    """TCP (end of link 2) position (x, y) [m]."""
+    """TCP (end of link 2) position (x, y) [m].
+
+    Parameters
+    ----------
+    q1, q2 : float
+        Joint angles (shoulder, elbow) [rad].
+    P : ndarray of float64, shape (NP,)
+        Packed plant parameter row (:data:`ppamsafety.plant.layout.PLANT`);
+        reads the link lengths ``L1``, ``L2`` [m].
+    """
     k = tcp_kinematics_cs(math.cos(q1), math.sin(q1), math.cos(q1 + q2), math.sin(q1 + q2), P)
     return k[0], k[1]
 
 
 @leaf
 def tcp_jacobian(q1, q2, P):
-    """TCP Jacobian entries (j11, j12, j21, j22) [m/rad]."""
+    """TCP Jacobian entries (j11, j12, j21, j22) [m/rad].
+
+    Parameters
+    ----------
+    q1, q2 : float
+        Joint angles (shoulder, elbow) [rad].
+    P : ndarray of float64, shape (NP,)
+        Packed plant parameter row (:data:`ppamsafety.plant.layout.PLANT`);
+        reads the link lengths ``L1``, ``L2`` [m].
+    """
     k = tcp_kinematics_cs(math.cos(q1), math.sin(q1), math.cos(q1 + q2), math.sin(q1 + q2), P)
     return k[2], k[3], k[4], k[5]
 
 
 @leaf
 def load_point(q1, q2, P):
-    """Load point A_L (A.21) [m]."""
+    """Load point A_L (A.21): position (x, y) [m].
+
+    Parameters
+    ----------
+    q1, q2 : float
+        Joint angles (shoulder, elbow) [rad].
+    P : ndarray of float64, shape (NP,)
+        Packed plant parameter row (:data:`ppamsafety.plant.layout.PLANT`);
+        reads ``L1``, ``LL`` and ``dL`` [m].
+    """
     c1, s1 = math.cos(q1), math.sin(q1)
     c12, s12 = math.cos(q1 + q2), math.sin(q1 + q2)
     return (P[L1] * c1 + c12 * P[LL] + s12 * P[DL], P[L1] * s1 + s12 * P[LL] - c12 * P[DL])
@@ -100,7 +167,19 @@ def load_point(q1, q2, P):
 
 @leaf
 def inverse_kinematics_elbow_up(x, y, P):
-    """Elbow-up (q2 < 0) inverse kinematics of the TCP: (q1, q2, reachable)."""
+    """Elbow-up (q2 < 0) inverse kinematics of the TCP: (q1, q2, reachable).
+
+    Returns the joint angles [rad] and ``True``, or ``(0.0, 0.0, False)``
+    when the point lies outside the annulus the two links can reach.
+
+    Parameters
+    ----------
+    x, y : float
+        Target TCP position in the base frame [m].
+    P : ndarray of float64, shape (NP,)
+        Packed plant parameter row (:data:`ppamsafety.plant.layout.PLANT`);
+        reads the link lengths ``L1``, ``L2`` [m].
+    """
     a, b = P[L1], P[L2]
     c2 = (x * x + y * y - a * a - b * b) / (2.0 * a * b)
     if c2 > 1.0 or c2 < -1.0:

@@ -41,19 +41,48 @@ from .layout import COEF, EPS_F0, EPS_FLOOR, L0, V_C
 
 @leaf
 def poly_value(a0, a1, a2, a3, a4, e):
-    """a0/e + a1 + a2 e + a3 e^2 + a4 e^3 [N/Pa] (Horner form), unclipped."""
+    """a0/e + a1 + a2 e + a3 e^2 + a4 e^3 [N/Pa] (Horner form), unclipped.
+
+    The force polynomial of (3.9) without the clipping at zero.
+
+    Parameters
+    ----------
+    a0, a1, a2, a3, a4 : float
+        Force-law coefficients of (3.9), Table B.1 [N/Pa = m^2].
+    e : float
+        Contraction eps [-]; must be nonzero (a0/e).
+    """
     return a0 / e + a1 + e * (a2 + e * (a3 + e * a4))
 
 
 @leaf
 def poly_slope(a0, a1, a2, a3, a4, e):
-    """Derivative of :func:`poly_value` with respect to e [N/Pa]."""
+    """Derivative of :func:`poly_value` with respect to e [N/Pa].
+
+    Parameters
+    ----------
+    a0, a1, a2, a3, a4 : float
+        Force-law coefficients of (3.9), Table B.1 [N/Pa = m^2]
+        (``a1`` does not enter the derivative).
+    e : float
+        Contraction eps [-]; must be nonzero.
+    """
     return -a0 / (e * e) + a2 + e * (2.0 * a3 + 3.0 * e * a4)
 
 
 @leaf
 def poly_integral(a0, a1, a2, a3, a4, e):
-    """Antiderivative of :func:`poly_value` without the constant (log form) [N/Pa]."""
+    """Antiderivative of :func:`poly_value` without the constant (log form) [N/Pa].
+
+    a0 ln e + a1 e + a2 e^2/2 + a3 e^3/3 + a4 e^4/4.
+
+    Parameters
+    ----------
+    a0, a1, a2, a3, a4 : float
+        Force-law coefficients of (3.9), Table B.1 [N/Pa = m^2].
+    e : float
+        Contraction eps [-]; must be positive (ln e).
+    """
     e2 = e * e
     return (a0 * math.log(e) + a1 * e + a2 * e2 / 2.0
             + a3 * e2 * e / 3.0 + a4 * e2 * e2 / 4.0)
@@ -67,7 +96,21 @@ def _poly(k, e, P):
 
 @leaf
 def force_per_pressure(k, eps, P):
-    """f_k(eps) of group ``k`` [N/Pa]: muscle force per unit gauge pressure."""
+    """f_k(eps) of group ``k`` [N/Pa]: muscle force per unit gauge pressure.
+
+    The force law (3.9), clipped at zero at and beyond the zero-force
+    contraction ``eps_f0`` and evaluated at ``EPS_FLOOR`` below that floor.
+
+    Parameters
+    ----------
+    k : int
+        Muscle group index 0..3 (thesis groups 1..4).
+    eps : float
+        Contraction of a muscle of the group [-].
+    P : ndarray of float64, shape (NP,)
+        Packed plant parameter row (:data:`ppamsafety.plant.layout.PLANT`);
+        reads the group's ``coef`` [N/Pa] and ``eps_f0`` [-] fields.
+    """
     e = max(eps, EPS_FLOOR)
     if e >= P[EPS_F0 + k]:
         return 0.0
@@ -76,7 +119,21 @@ def force_per_pressure(k, eps, P):
 
 @leaf
 def dforce_deps(k, eps, P):
-    """d f_k / d eps [N/Pa] (zero where f is clipped)."""
+    """d f_k / d eps [N/Pa] (zero where f is clipped).
+
+    Also zero below the contraction floor ``EPS_FLOOR``, where
+    :func:`force_per_pressure` is held constant.
+
+    Parameters
+    ----------
+    k : int
+        Muscle group index 0..3 (thesis groups 1..4).
+    eps : float
+        Contraction of a muscle of the group [-].
+    P : ndarray of float64, shape (NP,)
+        Packed plant parameter row (:data:`ppamsafety.plant.layout.PLANT`);
+        reads the group's ``coef`` [N/Pa] and ``eps_f0`` [-] fields.
+    """
     e = max(eps, EPS_FLOOR)
     if e >= P[EPS_F0 + k] or eps < EPS_FLOOR or _poly(k, e, P) <= 0.0:
         return 0.0
@@ -86,7 +143,20 @@ def dforce_deps(k, eps, P):
 
 @leaf
 def integral(k, e, P):
-    """Antiderivative of the force polynomial of group ``k`` without the constant."""
+    """Antiderivative of the force polynomial of group ``k`` without the constant [N/Pa].
+
+    :func:`poly_integral` with the group's coefficients (unclipped).
+
+    Parameters
+    ----------
+    k : int
+        Muscle group index 0..3 (thesis groups 1..4).
+    e : float
+        Contraction [-]; must be positive.
+    P : ndarray of float64, shape (NP,)
+        Packed plant parameter row (:data:`ppamsafety.plant.layout.PLANT`);
+        reads the group's ``coef`` field [N/Pa].
+    """
     b = COEF + 5 * k
     return poly_integral(P[b], P[b + 1], P[b + 2], P[b + 3], P[b + 4], e)
 
@@ -97,6 +167,17 @@ def muscle_volume(k, eps, P):
 
     Satisfies dV/deps = l0 f_k(eps) exactly (also in the clipped regions:
     constant beyond the zero-force contraction, linear below the floor).
+
+    Parameters
+    ----------
+    k : int
+        Muscle group index 0..3 (thesis groups 1..4).
+    eps : float
+        Contraction of a muscle of the group [-].
+    P : ndarray of float64, shape (NP,)
+        Packed plant parameter row (:data:`ppamsafety.plant.layout.PLANT`);
+        reads the group's ``coef`` [N/Pa], ``eps_f0`` [-], ``v_c`` [m^3] and
+        ``l0`` [m] fields.
     """
     e = min(max(eps, EPS_FLOOR), P[EPS_F0 + k])
     v = P[V_C + k] + P[L0 + k] * integral(k, e, P)

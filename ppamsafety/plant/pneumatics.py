@@ -32,8 +32,27 @@ from .torque import torque_kernel
 def pressure_rates(p, u, qd1, qd2, mt, vol, P, out):
     """Gauge-pressure derivatives of (3.6) with the static valve model [Pa/s].
 
-    ``p`` pressures [Pa], ``u`` valve set values [Pa], ``mt``/``vol`` from
-    :func:`~ppamsafety.plant.torque.torque_kernel`.
+    dp_i/dt = (v1_i + v2_i u_i - p_i)/T_i - n (P_atm + p_i) m_tau,i qd_j / V_i,
+    with j the joint group i drives.
+
+    Parameters
+    ----------
+    p : ndarray of float64, shape (4,)
+        Gauge pressures of the four groups [Pa].
+    u : ndarray of float64, shape (4,)
+        Valve set values of the four groups [Pa].
+    qd1, qd2 : float
+        Joint velocities (shoulder, elbow) [rad/s].
+    mt : ndarray of float64, shape (4,)
+        Torque functions m_tau,i = dV_i/dq [m^3], from
+        :func:`~ppamsafety.plant.torque.torque_kernel`.
+    vol : ndarray of float64, shape (4,)
+        Group volumes V_i [m^3], from the same kernel.
+    P : ndarray of float64, shape (NP,)
+        Packed plant parameter row (:data:`ppamsafety.plant.layout.PLANT`);
+        reads ``n_poly``, ``p_atm``, ``v1``, ``v2`` and ``tv``.
+    out : ndarray of float64, shape (4,)
+        Output, overwritten: dp_i/dt [Pa/s].
     """
     n = P[NPOLY]
     for i in range(4):
@@ -44,7 +63,26 @@ def pressure_rates(p, u, qd1, qd2, mt, vol, P, out):
 
 @leaf
 def stiffness_from(p, mt, dmt, vol, P):
-    """Joint stiffnesses (K1, K2) of (2.18) [N m/rad] from torque-kernel outputs."""
+    """Joint stiffnesses (K1, K2) of (2.18) [N m/rad] from torque-kernel outputs.
+
+    K_j = sum over the groups of joint j of
+    n (P_atm + p_i) m_tau,i^2 / V_i - p_i d m_tau,i/dq_j.
+
+    Parameters
+    ----------
+    p : ndarray of float64, shape (4,)
+        Gauge pressures of the four groups [Pa].
+    mt : ndarray of float64, shape (4,)
+        Torque functions m_tau,i [m^3], from
+        :func:`~ppamsafety.plant.torque.torque_kernel`.
+    dmt : ndarray of float64, shape (4,)
+        Their derivatives along the driven joint [m^3/rad].
+    vol : ndarray of float64, shape (4,)
+        Group volumes V_i [m^3].
+    P : ndarray of float64, shape (NP,)
+        Packed plant parameter row (:data:`ppamsafety.plant.layout.PLANT`);
+        reads ``n_poly`` and ``p_atm``.
+    """
     n = P[NPOLY]
     k1 = 0.0
     k2 = 0.0
@@ -59,14 +97,42 @@ def stiffness_from(p, mt, dmt, vol, P):
 
 @leaf
 def set_value(i, p_desired, P):
-    """Valve set value giving ``p_desired`` by inverting (3.12), clipped to [0, p_max]."""
+    """Valve set value giving ``p_desired`` by inverting (3.12), clipped to [0, p_max].
+
+    Returns (p_desired - v1_i) / v2_i clipped to [0, p_max] [Pa].
+
+    Parameters
+    ----------
+    i : int
+        Valve (muscle group) index 0..3.
+    p_desired : float
+        Desired steady-state gauge pressure [Pa].
+    P : ndarray of float64, shape (NP,)
+        Packed plant parameter row (:data:`ppamsafety.plant.layout.PLANT`);
+        reads ``v1``, ``v2`` and ``p_max``.
+    """
     ps = (p_desired - P[V1 + i]) / P[V2 + i]
     return min(max(ps, 0.0), P[PMAX])
 
 
 @kernel
 def delta_p_to_set_values(dp1, dp2, P, out):
-    """Delta-p approach (3.7): desired pressures p_m +- dp, clipped, then set values."""
+    """Delta-p approach (3.7): desired pressures p_m +- dp, clipped, then set values.
+
+    Groups 0, 2 (thesis 1, 3) get p_m + dp, groups 1, 3 get p_m - dp; the
+    desired pressures are clipped to [0, p_max] and converted with
+    :func:`set_value`.
+
+    Parameters
+    ----------
+    dp1, dp2 : float
+        Pressure differences Delta p of joints 1 and 2 [Pa].
+    P : ndarray of float64, shape (NP,)
+        Packed plant parameter row (:data:`ppamsafety.plant.layout.PLANT`);
+        reads ``p_mean``, ``p_max``, ``v1`` and ``v2``.
+    out : ndarray of float64, shape (4,)
+        Output, overwritten: valve set values of the four groups [Pa].
+    """
     pmax = P[PMAX]
     for i in range(4):
         pm = P[PM1] if i < 2 else P[PM2]
@@ -81,7 +147,21 @@ def gravity_compensation_dp(q1, q2, Pc, mt, dmt, vol):
 
     ``Pc`` is the controller's packed view (identified gravity terms, see
     :func:`ppamsafety.plant.layout.controller_view`).  Scratch arrays
-    ``mt``, ``dmt``, ``vol`` of length 4 are overwritten.
+    ``mt``, ``dmt``, ``vol`` of length 4 are overwritten.  Returns
+    ``(dp1, dp2)``.
+
+    Parameters
+    ----------
+    q1, q2 : float
+        Joint angles (shoulder, elbow) [rad].
+    Pc : ndarray of float64, shape (NP,)
+        Packed parameter row (layout :data:`ppamsafety.plant.layout.PLANT`)
+        the compensation believes in; reads the torque-function fields,
+        ``theta``, ``gravity`` and ``p_mean``.
+    mt, dmt, vol : ndarray of float64, shape (4,)
+        Scratch, overwritten with the outputs of
+        :func:`~ppamsafety.plant.torque.torque_kernel` at (q1, q2):
+        m_tau [m^3], d m_tau/dq [m^3/rad], group volumes [m^3].
     """
     torque_kernel(q1, q2, Pc, mt, dmt, vol)
     g1, g2 = gravity_torque(q1, q2, Pc)

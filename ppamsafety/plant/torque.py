@@ -28,7 +28,19 @@ from .muscle import dforce_deps, force_per_pressure, muscle_volume
 
 @kernel
 def torque_kernel(q1, q2, P, mt, dmt, vol):
-    """:func:`torque_kernel_cs` for angles ``q1``, ``q2`` [rad]."""
+    """:func:`torque_kernel_cs` for angles ``q1``, ``q2`` [rad].
+
+    Parameters
+    ----------
+    q1, q2 : float
+        Joint angles (shoulder, elbow) [rad].
+    P : ndarray of float64, shape (NP,)
+        Packed plant parameter row (:data:`ppamsafety.plant.layout.PLANT`).
+    mt, dmt, vol : ndarray of float64, shape (4,)
+        Outputs, overwritten, indexed by group 0..3: torque functions
+        m_tau [m^3], their derivatives along the driven joint [m^3/rad] and
+        group volumes [m^3], as in :func:`torque_kernel_cs`.
+    """
     torque_kernel_cs(math.cos(q1), math.sin(q1), math.cos(q1 + q2), math.sin(q1 + q2),
                      P, mt, dmt, vol)
 
@@ -40,6 +52,24 @@ def torque_kernel_cs(c1, s1, c12, s12, P, mt, dmt, vol):
     The derivative is along the driven joint (q1 for groups 1-2, q2 for
     groups 3-4):  d m_tau/dq = f'(eps) h^2/(n_m l0) + f dh/dq, using
     d eps/dq = h/(n_m l0).
+
+    Parameters
+    ----------
+    c1, s1 : float
+        cos q1 and sin q1 of the shoulder angle q1 [-].
+    c12, s12 : float
+        cos(q1 + q2) and sin(q1 + q2) [-].
+    P : ndarray of float64, shape (NP,)
+        Packed plant parameter row (:data:`ppamsafety.plant.layout.PLANT`);
+        reads the geometry, ``lconn``, ``n_muscles``, ``l0``, ``coef``,
+        ``eps_f0`` and ``v_c`` fields.
+    mt : ndarray of float64, shape (4,)
+        Output, overwritten: torque functions m_tau,i = f_i h_i of (2.10) per
+        group 0..3 [N m/Pa = m^3].
+    dmt : ndarray of float64, shape (4,)
+        Output, overwritten: d m_tau,i/dq along the driven joint [m^3/rad].
+    vol : ndarray of float64, shape (4,)
+        Output, overwritten: group volumes n_m V(eps) [m^3].
     """
     for k in range(4):
         d, h, dh = group_length_lever(k, c1, s1, c12, s12, P)
