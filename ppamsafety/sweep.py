@@ -15,7 +15,14 @@ of cases (dicts of JSON-serialisable parameters).  :func:`run_sweep`
 * records a failing case (its parameters, ``status="failed"`` and the error)
   and goes on, or with ``on_error="raise"`` stops with an error that names
   the case, after keeping every finished result,
-* returns one DataFrame with the case parameters as leading columns.
+* returns one DataFrame with the case parameters as leading columns,
+* takes the cases as a list of dicts, a grid (:func:`grid_cases`: every
+  combination of the values of each key) or both,
+* runs locally (``backend="local"``: this process or a process pool) or on a
+  Dask cluster (``backend="dask"``: a ``dask.distributed`` scheduler address
+  or ``Client``, or a ``LocalCluster`` started and closed for the sweep), with
+  the same caching and failure semantics: every case is stored as soon as its
+  future completes.
 
 Each case should itself be a batched computation (many impacts or variants
 per call) so that process overhead is negligible.
@@ -32,8 +39,9 @@ import os
 import pickle
 import secrets
 import sys
+import itertools
 import warnings
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 
@@ -42,6 +50,8 @@ import pandas as pd
 from ._sourcehash import source_hash
 
 _STATUS_COLUMNS = ("status", "error")
+#: Execution back ends of :func:`run_sweep`.
+BACKENDS = ("local", "dask")
 
 
 class SweepError(RuntimeError):
@@ -152,6 +162,47 @@ def _error_text(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {exc}"
 
 
+def grid_cases(grid: Mapping, base: Mapping | None = None) -> list[dict]:
+    """Every combination of the values of a grid, as a list of cases.
+
+    Parameters
+    ----------
+    grid : mapping of str to sequence
+        Parameter name -> the values it takes (a non-empty list or tuple).
+        The first key varies slowest.
+    base : mapping, optional
+        Parameters common to every case (a grid key of the same name wins).
+
+    Returns
+    -------
+    list of dict
+        ``len = prod(len(values))`` cases, ``{**base, **point}``.
+
+    Examples
+    --------
+    >>> grid_cases({"lam": [0.4, 0.8], "ki_bar": [2, 12]})[:2]
+    [{'lam': 0.4, 'ki_bar': 2}, {'lam': 0.4, 'ki_bar': 12}]
+    """
+    if not isinstance(grid, Mapping):
+        raise TypeError(f"grid must be a dict of parameter name -> list of values, got "
+                        f"{type(grid).__name__} {grid!r:.80}")
+    if base is not None and not isinstance(base, Mapping):
+        raise TypeError(f"base must be a dict of parameters or None, got {type(base).__name__}")
+    keys = list(grid)
+    values = []
+    for k in keys:
+        if not isinstance(k, str):
+            raise TypeError(f"grid keys must be str parameter names, got {k!r}")
+        v = grid[k]
+        if isinstance(v, (str, bytes, Mapping)) or not isinstance(v, Sequence):
+            raise TypeError(f"grid[{k!r}] must be a list of values, got {type(v).__name__} "
+                            f"{v!r:.80}")
+        if len(v) == 0:
+            raise ValueError(f"grid[{k!r}] is an empty list: give at least one value")
+        values.append(list(v))
+    return [{**(base or {}), **dict(zip(keys, point))} for point in itertools.product(*values)]
+
+
 def _check_cases(cases) -> list[dict]:
     if isinstance(cases, (str, bytes, Mapping)) or not isinstance(cases, Iterable):
         raise TypeError(f"cases must be a sequence of dicts (keyword arguments of func, one dict "
@@ -170,6 +221,8 @@ def _check_cases(cases) -> list[dict]:
 
 
 def _check_processes(processes) -> int:
+    if processes is None:
+        return _available_cores()
     if isinstance(processes, bool):
         raise TypeError(f"processes must be a positive int, got {processes!r}")
     try:
@@ -188,16 +241,80 @@ def _check_processes(processes) -> int:
     return processes
 
 
-def run_sweep(func, cases, *, name: str | None = None, cache_dir=None, processes: int = 1,
-              progress: bool = True, on_error: str = "record") -> pd.DataFrame:
+def _dask_client(scheduler, processes: int):
+    """(client, cleanup) for :func:`run_sweep`'s dask back end."""
+    try:
+        from dask.distributed import Client, LocalCluster
+    except ImportError:
+        raise ImportError("backend='dask' needs dask.distributed: pip install "
+                          "'ppamsafety[cluster]' (or 'dask[distributed]')") from None
+    if isinstance(scheduler, Client):
+        return scheduler, lambda: None
+    if scheduler is None:
+        cluster = LocalCluster(n_workers=processes, threads_per_worker=1, processes=True,
+                               dashboard_address=None)
+        try:
+            client = Client(cluster)
+        except BaseException:
+            cluster.close()
+            raise
+
+        def close():
+            client.close()
+            cluster.close()
+        return client, close
+    if isinstance(scheduler, str) and scheduler:
+        try:
+            client = Client(scheduler, timeout="30s")
+        except OSError as exc:
+            raise OSError(f"scheduler = {scheduler!r}: cannot connect to the dask scheduler "
+                          f"({_error_text(exc)})") from None
+        return client, client.close
+    raise TypeError(f"scheduler must be None, a scheduler address str (e.g. "
+                    f"'tcp://host:8786') or a dask.distributed.Client, got "
+                    f"{type(scheduler).__name__} {scheduler!r:.80}")
+
+
+def _run_dask(func, cases, todo, keys, name, scheduler, processes, finish, on_error):
+    """Submit the cases ``todo`` to dask and ``finish`` each as its future completes."""
+    from dask.distributed import as_completed as dask_completed
+
+    client, close = _dask_client(scheduler, processes)
+    try:
+        futures = {}
+        for i in todo:
+            fut = client.submit(_call, func, cases[i], key=f"{name}-{keys[i]}-{secrets.token_hex(4)}",
+                                pure=False)
+            futures[fut] = i
+        for fut in dask_completed(list(futures)):
+            if fut.cancelled():
+                continue
+            if fut.status == "error":
+                exc = fut.exception()
+                ok = finish(futures[fut], exc=exc)
+            else:
+                ok = finish(futures[fut], fut.result())
+            if not ok and on_error == "raise":
+                client.cancel([f for f in futures if not f.done()])
+                break
+    finally:
+        close()
+
+
+def run_sweep(func, cases=None, *, name: str | None = None, cache_dir=None,
+              processes: int | None = 1, progress: bool = True, on_error: str = "record",
+              grid: Mapping | None = None, backend: str = "local",
+              scheduler=None) -> pd.DataFrame:
     """Evaluate ``func(**case)`` for every case and concatenate the results.
 
     Parameters
     ----------
     func : callable
         Top-level (picklable) function returning a dict (one row) or a DataFrame.
-    cases : sequence of dict
+    cases : sequence of dict, optional
         Keyword arguments per case (str keys, JSON-serialisable values).
+        With ``grid``, each case is combined with every grid point (default
+        one empty case).  One of ``cases`` and ``grid`` is required.
     name : str, optional
         Sweep name used in the cache key (default ``func.__qualname__``).
     cache_dir : path-like, optional
@@ -207,9 +324,11 @@ def run_sweep(func, cases, *, name: str | None = None, cache_dir=None, processes
         (:func:`case_key`, :func:`function_hash`).  An unreadable cache file is
         named in a warning and recomputed.  Failed cases are not cached.
         None: no cache.
-    processes : int
-        Worker processes (1 = run in this process).  More than the available
-        cores gives a warning and is capped at the number of cores.
+    processes : int or None
+        Worker processes (1 = run in this process; None = every available
+        core).  More than the available cores gives a warning and is capped at
+        the number of cores.  With ``backend="dask"`` and no ``scheduler``: the
+        number of workers of the ``LocalCluster`` (ignored with a scheduler).
     progress : bool
         Show a progress bar.
     on_error : {"record", "raise"}
@@ -219,6 +338,23 @@ def run_sweep(func, cases, *, name: str | None = None, cache_dir=None, processes
         failures.  ``"raise"``: cases not yet started are cancelled, every
         finished result is kept (and cached), then :class:`SweepError` names the
         first failing case (lowest index).
+    grid : mapping of str to list, optional
+        Parameter grid (:func:`grid_cases`); the cases are every combination,
+        each merged into every entry of ``cases``.
+    backend : {"local", "dask"}
+        ``"local"``: this process or a ``ProcessPoolExecutor``.  ``"dask"``:
+        ``dask.distributed`` (optional extra ``ppamsafety[cluster]``); the
+        cases are submitted as futures and stored as they complete
+        (``as_completed``), so a sweep interrupted on a cluster resumes from
+        ``cache_dir`` too.  The cache must be on a file system this process
+        can write (the results come back to this process, which writes them).
+    scheduler : None, str or dask.distributed.Client
+        Dask only.  None: a ``LocalCluster(n_workers=processes,
+        threads_per_worker=1, processes=True)`` is started for the sweep and
+        closed after it.  A scheduler address such as
+        ``"tcp://10.0.0.5:8786"`` (e.g. of a dask-jobqueue ``SLURMCluster``):
+        a client is connected and closed afterwards, the cluster is left
+        running.  A ``Client``: used as it is and left open.
 
     Returns
     -------
@@ -231,7 +367,17 @@ def run_sweep(func, cases, *, name: str | None = None, cache_dir=None, processes
 
     if not callable(func):
         raise TypeError(f"func must be callable, got {type(func).__name__} {func!r:.80}")
-    cases = _check_cases(cases)
+    if cases is None and grid is None:
+        raise TypeError("run_sweep needs cases (a list of dicts) or grid (a dict of lists)")
+    cases = _check_cases([{}] if cases is None else cases)
+    if grid is not None:
+        points = grid_cases(grid)
+        cases = [{**c, **g} for c in cases for g in points]
+    if backend not in BACKENDS:
+        raise ValueError(f"backend = {backend!r} is not one of {', '.join(map(repr, BACKENDS))}")
+    if scheduler is not None and backend != "dask":
+        raise ValueError(f"scheduler = {scheduler!r} is given but backend = {backend!r}; a "
+                         f"scheduler is used only with backend='dask'")
     if on_error not in ("record", "raise"):
         raise ValueError(f"on_error = {on_error!r} is not one of 'record', 'raise'")
     if name is not None and (not isinstance(name, str) or not name):
@@ -249,7 +395,7 @@ def run_sweep(func, cases, *, name: str | None = None, cache_dir=None, processes
         cache.mkdir(parents=True, exist_ok=True)
     code = function_hash(func)
     keys = [case_key(name, c, code) for c in cases]     # also checks JSON-serialisability
-    if processes > 1:
+    if processes > 1 and backend == "local":
         try:
             pickle.dumps(func)
         except Exception as exc:
@@ -297,7 +443,10 @@ def run_sweep(func, cases, *, name: str | None = None, cache_dir=None, processes
 
     try:
         nproc = min(processes, len(todo))
-        if nproc <= 1:
+        if backend == "dask":
+            if todo:
+                _run_dask(func, cases, todo, keys, name, scheduler, processes, finish, on_error)
+        elif nproc <= 1:
             for i in todo:
                 try:
                     out = func(**cases[i])
