@@ -368,6 +368,10 @@ def run_study_file(study, outdir, *, backend: str = "local", scheduler=None,
                               f"(marker kind {KIND!r}); choose the folder of the interrupted "
                               f"sweep, or a new folder without --resume")
         ow, clean = True, False
+    elif not overwrite and out.is_dir() and (read_marker(out) or {}).get("kind") == KIND:
+        raise OutputError(f"output folder '{out}' holds a previous sweep; pass --resume "
+                          f"(resume=True) to continue it without recomputing its finished cases, "
+                          f"or --overwrite (overwrite=True) to recompute everything")
     folder = OutputFolder(out, kind=KIND, overwrite=ow, clean=clean)
     with folder as stage:
         cache = folder.workdir("cache", fresh=not resume)
