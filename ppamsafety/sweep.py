@@ -154,6 +154,41 @@ def _as_frame(case: dict, out) -> pd.DataFrame:
     return df
 
 
+def _as_result(case: dict, out):
+    """A dict result as one row (case parameters first, then the results), else a DataFrame.
+
+    Rows are kept as dicts (cheaper than one-row DataFrames) and assembled
+    into one DataFrame at the end of the sweep.
+    """
+    if isinstance(out, Mapping) and not isinstance(out, pd.DataFrame):
+        row = dict(case)
+        row.update(out)
+        return row
+    return _as_frame(case, out)
+
+
+def _assemble(cases, results, failures, on_error, name) -> pd.DataFrame:
+    """One DataFrame of every result row (fast path: every result is a dict row)."""
+    if on_error == "raise":
+        return pd.DataFrame([results[i] for i in range(len(cases))])
+    rows = []
+    for i, c in enumerate(cases):
+        if i in failures:
+            rows.append({**c, "status": "failed", "error": _error_text(failures[i])})
+            continue
+        r = results[i]
+        clash = [k for k in _STATUS_COLUMNS if k in r]
+        if clash:
+            raise ValueError(f"sweep {name!r}: case {i} returned the column(s) {clash}, which "
+                             f"run_sweep(on_error='record') adds itself; rename them or pass "
+                             f"on_error='raise'")
+        row = {k: r[k] for k in c}
+        row["status"], row["error"] = "ok", ""
+        row.update((k, v) for k, v in r.items() if k not in row)
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
 def _call(func, case):
     return func(**case)
 
@@ -276,26 +311,36 @@ def _dask_client(scheduler, processes: int):
 
 
 def _run_dask(func, cases, todo, keys, name, scheduler, processes, finish, on_error):
-    """Submit the cases ``todo`` to dask and ``finish`` each as its future completes."""
+    """Submit the cases ``todo`` to dask and ``finish`` each as its future completes.
+
+    The cases are submitted in one ``Client.map`` call; finished futures are
+    taken in batches (``as_completed(...).batches()``) and their results
+    fetched with one ``gather`` per batch, so the per-case cost is one task on
+    the scheduler, not one round trip per result.
+    """
     from dask.distributed import as_completed as dask_completed
 
     client, close = _dask_client(scheduler, processes)
     try:
-        futures = {}
-        for i in todo:
-            fut = client.submit(_call, func, cases[i], key=f"{name}-{keys[i]}-{secrets.token_hex(4)}",
-                                pure=False)
-            futures[fut] = i
-        for fut in dask_completed(list(futures)):
-            if fut.cancelled():
-                continue
-            if fut.status == "error":
-                exc = fut.exception()
-                ok = finish(futures[fut], exc=exc)
-            else:
-                ok = finish(futures[fut], fut.result())
-            if not ok and on_error == "raise":
-                client.cancel([f for f in futures if not f.done()])
+        run = secrets.token_hex(4)
+        futs = client.map(functools.partial(_call, func), [cases[i] for i in todo],
+                          key=[f"{name}-{keys[i]}-{run}" for i in todo], pure=False)
+        index = {f.key: i for f, i in zip(futs, todo)}
+        stop = False
+        for batch in dask_completed(futs).batches():
+            done = [f for f in batch if f.status == "finished"]
+            values = client.gather(done) if done else []
+            for f, v in zip(done, values):
+                if not finish(index[f.key], v) and on_error == "raise":
+                    stop = True
+            for f in batch:
+                if f.status == "error":
+                    if not finish(index[f.key], exc=f.exception()) and on_error == "raise":
+                        stop = True
+            for f in batch:
+                f.release()
+            if stop:
+                client.cancel([f for f in futs if not f.done()])
                 break
     finally:
         close()
@@ -411,8 +456,9 @@ def run_sweep(func, cases=None, *, name: str | None = None, cache_dir=None,
             try:
                 with open(f, "rb") as fh:
                     obj = pickle.load(fh)
-                if not isinstance(obj, pd.DataFrame):
-                    raise TypeError(f"it holds a {type(obj).__name__}, not a DataFrame")
+                if not isinstance(obj, (pd.DataFrame, dict)):
+                    raise TypeError(f"it holds a {type(obj).__name__}, not a DataFrame or a "
+                                    f"dict (one result row)")
                 results[i] = obj
                 continue
             except Exception as exc:
@@ -427,7 +473,7 @@ def run_sweep(func, cases=None, *, name: str | None = None, cache_dir=None,
         bar.update(1)
         if exc is None:
             try:
-                df = _as_frame(cases[i], out)
+                df = _as_result(cases[i], out)
             except Exception as e:
                 exc = e
         if exc is not None:
@@ -479,6 +525,11 @@ def run_sweep(func, cases=None, *, name: str | None = None, cache_dir=None,
                          i, cases[i], err) from failures[i]
     if not cases:
         return pd.DataFrame()
+    if all(isinstance(r, dict) for r in results.values()):
+        out = _assemble(cases, results, failures, on_error, name)
+        _warn_failures(cases, failures, name)
+        return out
+    results = {i: pd.DataFrame([r]) if isinstance(r, dict) else r for i, r in results.items()}
     if on_error == "raise":
         return pd.concat([results[i] for i in range(len(cases))], ignore_index=True)
 
@@ -498,10 +549,14 @@ def run_sweep(func, cases=None, *, name: str | None = None, cache_dir=None,
         df.insert(pos, "status", "ok")
         df.insert(pos + 1, "error", "")
         frames.append(df)
+    _warn_failures(cases, failures, name)
+    return pd.concat(frames, ignore_index=True)
+
+
+def _warn_failures(cases, failures, name) -> None:
     if failures:
         shown = "; ".join(f"case {i} {cases[i]!r}: {_error_text(failures[i])}"
                           for i in sorted(failures)[:3])
         more = " ..." if len(failures) > 3 else ""
         warnings.warn(f"sweep {name!r}: {len(failures)} of {len(cases)} cases failed (rows with "
-                      f"status='failed'): {shown}{more}", RuntimeWarning, stacklevel=2)
-    return pd.concat(frames, ignore_index=True)
+                      f"status='failed'): {shown}{more}", RuntimeWarning, stacklevel=3)

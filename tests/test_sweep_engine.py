@@ -61,7 +61,8 @@ def _cached_xs(cache: Path) -> dict:
     out = {}
     for f in cache.glob("*.pkl"):
         with open(f, "rb") as fh:
-            out[int(pickle.load(fh).x.iloc[0])] = (f.name, f.stat().st_mtime_ns)
+            row = pickle.load(fh)                           # a dict result is cached as a row
+            out[int(row["x"])] = (f.name, f.stat().st_mtime_ns)
     return out
 
 
