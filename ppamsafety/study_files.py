@@ -98,6 +98,8 @@ class Study:
         The TOML text.
     path : pathlib.Path or None
         Where it was read from.
+    origins : list of int
+        Per case, the index of the ``[[variants]]`` entry it came from.
     """
 
     name: str

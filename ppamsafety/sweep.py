@@ -57,6 +57,13 @@ BACKENDS = ("local", "dask")
 class SweepError(RuntimeError):
     """A sweep case failed with ``on_error="raise"``.
 
+    Parameters
+    ----------
+    message : str
+        The error message.
+    index, case, error
+        See Attributes.
+
     Attributes
     ----------
     index : int
@@ -89,6 +96,16 @@ def function_hash(func) -> str:
     reloading its module does not match the loaded code.  Helper functions
     outside the ppamsafety package that ``func`` calls are *not* covered: put
     a version in the sweep ``name`` when you change them.
+
+    Parameters
+    ----------
+    func : callable or functools.partial
+        The case function (a partial's bound arguments are hashed too).
+
+    Returns
+    -------
+    str
+        20 hex digits.
     """
     h = hashlib.sha1()
     if isinstance(func, functools.partial):
