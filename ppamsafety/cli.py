@@ -1,4 +1,4 @@
-"""Command-line interface: ``ppamsafety report``, ``ppamsafety impact``, ``ppamsafety info``.
+"""Command-line interface: ``ppamsafety report``, ``sweep``, ``impact``, ``info``.
 
 Exit status
 -----------
@@ -157,6 +157,36 @@ def _cmd_identify(args) -> int:
     return EXIT_OK
 
 
+def _processes(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an int") from None
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"{v} is not allowed (a positive number of processes)")
+    return v
+
+
+def _cmd_sweep(args) -> int:
+    from .study_files import load_study, run_study_file
+
+    if args.scheduler is not None and args.backend != "dask":
+        raise ValueError(f"--scheduler {args.scheduler} needs --backend dask")
+    study = load_study(args.study)            # checked before anything runs
+    n = len(study.cases) if args.max_cases is None else min(args.max_cases, len(study.cases))
+    print(f"study {study.name!r}: {n} cases on {args.backend}"
+          f"{' (' + args.scheduler + ')' if args.scheduler else ''} -> {args.out}", flush=True)
+    df = run_study_file(study, args.out, backend=args.backend, scheduler=args.scheduler,
+                        processes=args.processes, resume=args.resume, overwrite=args.overwrite,
+                        max_cases=args.max_cases, progress=not args.no_progress)
+    failed = int((df["status"] == "failed").sum()) if "status" in df.columns else 0
+    print(f"results written to {args.out}/{study.csv} ({len(df) - failed} ok, {failed} failed)")
+    if failed:
+        print(f"ppamsafety: {failed} case(s) failed; their rows have status='failed' and the "
+              f"error", file=sys.stderr)
+    return EXIT_OK
+
+
 def _cmd_impact(args) -> int:
     import numpy as np
 
@@ -246,6 +276,28 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--overwrite", action="store_true",
                    help="replace a previous ppamsafety identification in DIR (never other files)")
     d.set_defaults(func=_cmd_identify)
+    w = sub.add_parser("sweep", help="run a study file (TOML): a safety sweep into a folder",
+                       epilog=_EPILOG + """
+sweep folder: --resume reuses the finished cases of an interrupted sweep in OUT (allowed
+without --overwrite when OUT holds a previous sweep); --overwrite recomputes everything.
+""")
+    w.add_argument("study", metavar="STUDY.toml", help="study file (see studies/*.toml)")
+    w.add_argument("--out", required=True, metavar="DIR", help="output folder")
+    w.add_argument("--backend", choices=("local", "dask"), default="local",
+                   help="local processes (default) or a dask.distributed cluster")
+    w.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="dask scheduler address, e.g. tcp://10.0.0.5:8786 (default with "
+                        "--backend dask: a LocalCluster on this machine)")
+    w.add_argument("--processes", type=_processes, default=None, metavar="N",
+                   help="worker processes (default: every available core)")
+    w.add_argument("--resume", action="store_true",
+                   help="reuse the finished cases of a previous run in DIR")
+    w.add_argument("--overwrite", action="store_true",
+                   help="replace a previous ppamsafety output in DIR, recomputing every case")
+    w.add_argument("--max-cases", type=_processes, default=None, metavar="N",
+                   help="run only the first N cases (a preview)")
+    w.add_argument("--no-progress", action="store_true", help="no progress bar")
+    w.set_defaults(func=_cmd_sweep)
     m = sub.add_parser("impact", help="simulate one impact of the thesis arm with a head",
                        epilog=_EPILOG)
     m.add_argument("--q", nargs=2, type=_angle_deg, required=True, metavar=("Q1", "Q2"),

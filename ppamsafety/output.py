@@ -21,6 +21,14 @@ Output folders (:class:`OutputFolder`)
       files that the new run did not write are removed -- only files the marker
       lists, and only folders that became empty.
 
+Work folders (:meth:`OutputFolder.workdir`)
+    A sub-folder the toolkit fills *during* a run (a sweep's cache of
+    finished cases), so that an interrupted run can resume.  The marker lists
+    it under ``dirs`` before anything is written into it; every file below a
+    listed folder counts as written by the toolkit.  Work folders are not
+    staged and are not removed when the output is replaced, except by an
+    explicit :meth:`OutputFolder.workdir` call with ``fresh=True``.
+
 Single files (:func:`atomic_write`)
     An existing file is an error unless ``overwrite=True`` (``--overwrite``);
     the content is written to a temporary file in the same folder and moved
@@ -73,7 +81,9 @@ def read_marker(folder) -> dict | None:
     """The marker of ``folder`` as a dict, or None if it is missing or not valid.
 
     Valid means: a JSON object with ``tool == "ppamsafety"``, a string ``kind``
-    and ``files``, a list of relative paths (``/``-separated, no ``..``).
+    and ``files``, a list of relative paths (``/``-separated, no ``..``), and
+    optionally ``dirs``, a list of such paths: work folders whose files are
+    all the toolkit's.
 
     Parameters
     ----------
@@ -87,9 +97,16 @@ def read_marker(folder) -> dict | None:
         return None
     if not (isinstance(data, dict) and data.get("tool") == "ppamsafety"
             and isinstance(data.get("kind"), str) and isinstance(data.get("files"), list)
-            and all(_valid_relpath(x) for x in data["files"])):
+            and all(_valid_relpath(x) for x in data["files"])
+            and isinstance(data.get("dirs", []), list)
+            and all(_valid_relpath(x) for x in data.get("dirs", []))):
         return None
     return data
+
+
+def _under(entry: str, dirs) -> bool:
+    """Whether the relative path ``entry`` lies inside one of the folders ``dirs``."""
+    return any(entry.startswith(d.rstrip("/") + "/") for d in dirs)
 
 
 def _entries(folder: Path, exclude: str | None = None) -> list[str]:
@@ -128,16 +145,17 @@ def inspect_output_folder(folder, *, overwrite: bool = False, _exclude: str | No
     Returns
     -------
     dict
-        ``{"files": set of toolkit files present, "kind": str or None}``.
+        ``{"files": set of toolkit files present (work folders included),
+        "kind": str or None, "dirs": set of work folders}``.
     """
     p = _as_path("outdir", folder)
     if p.exists() and not p.is_dir():
         raise OutputError(f"output folder '{p}' exists and is not a folder")
     if not p.exists():
-        return {"files": set(), "kind": None}
+        return {"files": set(), "kind": None, "dirs": set()}
     entries = _entries(p, exclude=_exclude)
     if not entries:
-        return {"files": set(), "kind": None}
+        return {"files": set(), "kind": None, "dirs": set()}
     marker = read_marker(p)
     if marker is None:
         why = ("its marker file %s is not valid" % MARKER if (p / MARKER).exists()
@@ -147,6 +165,8 @@ def inspect_output_folder(folder, *, overwrite: bool = False, _exclude: str | No
             f"folder (it holds e.g. {_few(entries, 3)}); ppamsafety never deletes or overwrites "
             f"files it did not write: choose a new or empty folder")
     listed = set(marker["files"])
+    dirs = set(marker.get("dirs", []))
+    listed |= {e for e in entries if _under(e, dirs)}
     foreign = [e for e in entries if e not in listed and e != MARKER]
     if foreign:
         raise OutputError(
@@ -154,18 +174,23 @@ def inspect_output_folder(folder, *, overwrite: bool = False, _exclude: str | No
             f"{_few(foreign)}; they are never deleted or overwritten, so the folder is not "
             f"used (not even with --overwrite): move them away or choose another folder")
     present = listed & set(entries)
+    if entries == [MARKER] and not present:
+        return {"files": set(), "kind": marker["kind"], "dirs": dirs}   # nothing but a marker
     if not overwrite:
         raise OutputError(
             f"output folder '{p}' holds a previous ppamsafety {marker['kind']} "
             f"({len(present)} files); pass {_FLAG} to replace it, or choose another folder")
-    return {"files": present, "kind": marker["kind"]}
+    return {"files": present, "kind": marker["kind"], "dirs": dirs}
 
 
-def _write_marker(folder: Path, kind: str, files) -> None:
+def _write_marker(folder: Path, kind: str, files, dirs=()) -> None:
     from . import __version__
 
+    dirs = sorted(set(dirs))
     data = {"tool": "ppamsafety", "version": __version__, "kind": kind,
-            "files": sorted(set(files))}
+            "files": sorted(f for f in set(files) if not _under(f, dirs))}
+    if dirs:
+        data["dirs"] = dirs
     atomic_write(folder / MARKER, lambda t: t.write_text(json.dumps(data, indent=1) + "\n",
                                                          encoding="utf-8"),
                  overwrite=True)
@@ -205,13 +230,56 @@ class OutputFolder:
         self.kind, self.overwrite, self.clean = kind, overwrite, clean
         self.staging: Path | None = None
         self.written: list[str] = []
+        self._dirs: set[str] = set()
 
     def __enter__(self) -> Path:
-        inspect_output_folder(self.path, overwrite=self.overwrite)
+        self._prev = inspect_output_folder(self.path, overwrite=self.overwrite)
         self._created = not self.path.exists()
         self.path.mkdir(parents=True, exist_ok=True)
         self.staging = Path(tempfile.mkdtemp(prefix=_STAGING_PREFIX, dir=self.path))
         return self.staging
+
+    def workdir(self, name: str, *, fresh: bool = False) -> Path:
+        """A work folder ``outdir/name`` that is filled during the run (not staged).
+
+        Call it inside the ``with`` block.  The marker is updated to list the
+        folder (under ``dirs``) *before* it is returned, so files written into
+        it count as the toolkit's even if the process is killed before the
+        block ends; a later run with the same folder finds and may reuse them.
+
+        Parameters
+        ----------
+        name : str
+            Relative folder name (``/``-separated, no ``..``), e.g. ``"cache"``.
+        fresh : bool
+            Remove the files a previous run left in it first (only the
+            toolkit's: the folder must already be a listed work folder, or
+            be empty or missing).
+
+        Returns
+        -------
+        pathlib.Path
+            The work folder (created if missing).
+        """
+        if self.staging is None:
+            raise RuntimeError("OutputFolder.workdir() must be called inside the with block")
+        if not _valid_relpath(name) or name.startswith(_STAGING_PREFIX):
+            raise ValueError(f"work folder name = {name!r} must be a relative path without "
+                             f"'..' (e.g. 'cache')")
+        d = self.path / name
+        if d.exists() and not d.is_dir():
+            raise OutputError(f"work folder '{d}' exists and is not a folder")
+        prev = inspect_output_folder(self.path, overwrite=True, _exclude=self.staging.name)
+        if fresh:
+            for f in sorted(prev["files"]):
+                if _under(f, [name]):
+                    _remove_listed(self.path, f)
+        self._dirs.add(name)
+        kind = self.kind if self.clean or prev["kind"] is None else prev["kind"]
+        _write_marker(self.path, kind, {f for f in prev["files"] if not _under(f, [name])},
+                      prev["dirs"] | self._dirs)
+        d.mkdir(parents=True, exist_ok=True)
+        return d
 
     def __exit__(self, exc_type, exc, tb) -> bool:
         try:
@@ -228,24 +296,27 @@ class OutputFolder:
 
     def _commit(self) -> None:
         # check again: a user may have put files into the folder meanwhile
-        prev = inspect_output_folder(self.path, overwrite=self.overwrite,
+        # (files in this run's work folders are ours: they need no --overwrite)
+        prev = inspect_output_folder(self.path, overwrite=self.overwrite or bool(self._dirs),
                                      _exclude=self.staging.name)
         new = _entries(self.staging)
         kind = self.kind if self.clean or prev["kind"] is None else prev["kind"]
+        dirs = self._dirs | (set() if self.clean else prev["dirs"])
+        work = {f for f in prev["files"] if _under(f, self._dirs)}
         # the marker lists every toolkit file before any is moved, so an interrupted
         # commit never leaves files that a later run would take for the user's
-        _write_marker(self.path, kind, prev["files"] | set(new))
+        _write_marker(self.path, kind, prev["files"] | set(new), prev["dirs"] | self._dirs)
         for f in new:
             dst = self.path / f
             dst.parent.mkdir(parents=True, exist_ok=True)
             os.replace(self.staging / f, dst)
-        final = set(new)
+        final = set(new) | work                 # this run's work folders are kept
         if self.clean:
             for f in sorted(prev["files"] - final):
                 _remove_listed(self.path, f)
         else:
             final |= prev["files"]
-        _write_marker(self.path, kind, final)
+        _write_marker(self.path, kind, final, dirs)
         self.written = sorted(final)
 
 

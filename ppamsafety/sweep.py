@@ -15,7 +15,14 @@ of cases (dicts of JSON-serialisable parameters).  :func:`run_sweep`
 * records a failing case (its parameters, ``status="failed"`` and the error)
   and goes on, or with ``on_error="raise"`` stops with an error that names
   the case, after keeping every finished result,
-* returns one DataFrame with the case parameters as leading columns.
+* returns one DataFrame with the case parameters as leading columns,
+* takes the cases as a list of dicts, a grid (:func:`grid_cases`: every
+  combination of the values of each key) or both,
+* runs locally (``backend="local"``: this process or a process pool) or on a
+  Dask cluster (``backend="dask"``: a ``dask.distributed`` scheduler address
+  or ``Client``, or a ``LocalCluster`` started and closed for the sweep), with
+  the same caching and failure semantics: every case is stored as soon as its
+  future completes.
 
 Each case should itself be a batched computation (many impacts or variants
 per call) so that process overhead is negligible.
@@ -32,8 +39,9 @@ import os
 import pickle
 import secrets
 import sys
+import itertools
 import warnings
-from collections.abc import Iterable, Mapping
+from collections.abc import Iterable, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from pathlib import Path
 
@@ -42,6 +50,8 @@ import pandas as pd
 from ._sourcehash import source_hash
 
 _STATUS_COLUMNS = ("status", "error")
+#: Execution back ends of :func:`run_sweep`.
+BACKENDS = ("local", "dask")
 
 
 class SweepError(RuntimeError):
@@ -50,9 +60,9 @@ class SweepError(RuntimeError):
     Parameters
     ----------
     message : str
-        The exception message.
+        The error message.
     index, case, error
-        Stored as the attributes below.
+        See Attributes.
 
     Attributes
     ----------
@@ -89,9 +99,13 @@ def function_hash(func) -> str:
 
     Parameters
     ----------
-    func : callable
-        The case function of a sweep; a :class:`functools.partial` is hashed
-        with its bound arguments and the function it wraps.
+    func : callable or functools.partial
+        The case function (a partial's bound arguments are hashed too).
+
+    Returns
+    -------
+    str
+        20 hex digits.
     """
     h = hashlib.sha1()
     if isinstance(func, functools.partial):
@@ -157,12 +171,88 @@ def _as_frame(case: dict, out) -> pd.DataFrame:
     return df
 
 
+def _as_result(case: dict, out):
+    """A dict result as one row (case parameters first, then the results), else a DataFrame.
+
+    Rows are kept as dicts (cheaper than one-row DataFrames) and assembled
+    into one DataFrame at the end of the sweep.
+    """
+    if isinstance(out, Mapping) and not isinstance(out, pd.DataFrame):
+        row = dict(case)
+        row.update(out)
+        return row
+    return _as_frame(case, out)
+
+
+def _assemble(cases, results, failures, on_error, name) -> pd.DataFrame:
+    """One DataFrame of every result row (fast path: every result is a dict row)."""
+    if on_error == "raise":
+        return pd.DataFrame([results[i] for i in range(len(cases))])
+    rows = []
+    for i, c in enumerate(cases):
+        if i in failures:
+            rows.append({**c, "status": "failed", "error": _error_text(failures[i])})
+            continue
+        r = results[i]
+        clash = [k for k in _STATUS_COLUMNS if k in r]
+        if clash:
+            raise ValueError(f"sweep {name!r}: case {i} returned the column(s) {clash}, which "
+                             f"run_sweep(on_error='record') adds itself; rename them or pass "
+                             f"on_error='raise'")
+        row = {k: r[k] for k in c}
+        row["status"], row["error"] = "ok", ""
+        row.update((k, v) for k, v in r.items() if k not in row)
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
 def _call(func, case):
     return func(**case)
 
 
 def _error_text(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {exc}"
+
+
+def grid_cases(grid: Mapping, base: Mapping | None = None) -> list[dict]:
+    """Every combination of the values of a grid, as a list of cases.
+
+    Parameters
+    ----------
+    grid : mapping of str to sequence
+        Parameter name -> the values it takes (a non-empty list or tuple).
+        The first key varies slowest.
+    base : mapping, optional
+        Parameters common to every case (a grid key of the same name wins).
+
+    Returns
+    -------
+    list of dict
+        ``len = prod(len(values))`` cases, ``{**base, **point}``.
+
+    Examples
+    --------
+    >>> grid_cases({"lam": [0.4, 0.8], "ki_bar": [2, 12]})[:2]
+    [{'lam': 0.4, 'ki_bar': 2}, {'lam': 0.4, 'ki_bar': 12}]
+    """
+    if not isinstance(grid, Mapping):
+        raise TypeError(f"grid must be a dict of parameter name -> list of values, got "
+                        f"{type(grid).__name__} {grid!r:.80}")
+    if base is not None and not isinstance(base, Mapping):
+        raise TypeError(f"base must be a dict of parameters or None, got {type(base).__name__}")
+    keys = list(grid)
+    values = []
+    for k in keys:
+        if not isinstance(k, str):
+            raise TypeError(f"grid keys must be str parameter names, got {k!r}")
+        v = grid[k]
+        if isinstance(v, (str, bytes, Mapping)) or not isinstance(v, Sequence):
+            raise TypeError(f"grid[{k!r}] must be a list of values, got {type(v).__name__} "
+                            f"{v!r:.80}")
+        if len(v) == 0:
+            raise ValueError(f"grid[{k!r}] is an empty list: give at least one value")
+        values.append(list(v))
+    return [{**(base or {}), **dict(zip(keys, point))} for point in itertools.product(*values)]
 
 
 def _check_cases(cases) -> list[dict]:
@@ -183,6 +273,8 @@ def _check_cases(cases) -> list[dict]:
 
 
 def _check_processes(processes) -> int:
+    if processes is None:
+        return _available_cores()
     if isinstance(processes, bool):
         raise TypeError(f"processes must be a positive int, got {processes!r}")
     try:
@@ -201,16 +293,90 @@ def _check_processes(processes) -> int:
     return processes
 
 
-def run_sweep(func, cases, *, name: str | None = None, cache_dir=None, processes: int = 1,
-              progress: bool = True, on_error: str = "record") -> pd.DataFrame:
+def _dask_client(scheduler, processes: int):
+    """(client, cleanup) for :func:`run_sweep`'s dask back end."""
+    try:
+        from dask.distributed import Client, LocalCluster
+    except ImportError:
+        raise ImportError("backend='dask' needs dask.distributed: pip install "
+                          "'ppamsafety[cluster]' (or 'dask[distributed]')") from None
+    if isinstance(scheduler, Client):
+        return scheduler, lambda: None
+    if scheduler is None:
+        cluster = LocalCluster(n_workers=processes, threads_per_worker=1, processes=True,
+                               dashboard_address=None)
+        try:
+            client = Client(cluster)
+        except BaseException:
+            cluster.close()
+            raise
+
+        def close():
+            client.close()
+            cluster.close()
+        return client, close
+    if isinstance(scheduler, str) and scheduler:
+        try:
+            client = Client(scheduler, timeout="30s")
+        except OSError as exc:
+            raise OSError(f"scheduler = {scheduler!r}: cannot connect to the dask scheduler "
+                          f"({_error_text(exc)})") from None
+        return client, client.close
+    raise TypeError(f"scheduler must be None, a scheduler address str (e.g. "
+                    f"'tcp://host:8786') or a dask.distributed.Client, got "
+                    f"{type(scheduler).__name__} {scheduler!r:.80}")
+
+
+def _run_dask(func, cases, todo, keys, name, scheduler, processes, finish, on_error):
+    """Submit the cases ``todo`` to dask and ``finish`` each as its future completes.
+
+    The cases are submitted in one ``Client.map`` call; finished futures are
+    taken in batches (``as_completed(...).batches()``) and their results
+    fetched with one ``gather`` per batch, so the per-case cost is one task on
+    the scheduler, not one round trip per result.
+    """
+    from dask.distributed import as_completed as dask_completed
+
+    client, close = _dask_client(scheduler, processes)
+    try:
+        run = secrets.token_hex(4)
+        futs = client.map(functools.partial(_call, func), [cases[i] for i in todo],
+                          key=[f"{name}-{keys[i]}-{run}" for i in todo], pure=False)
+        index = {f.key: i for f, i in zip(futs, todo)}
+        stop = False
+        for batch in dask_completed(futs).batches():
+            done = [f for f in batch if f.status == "finished"]
+            values = client.gather(done) if done else []
+            for f, v in zip(done, values):
+                if not finish(index[f.key], v) and on_error == "raise":
+                    stop = True
+            for f in batch:
+                if f.status == "error":
+                    if not finish(index[f.key], exc=f.exception()) and on_error == "raise":
+                        stop = True
+            for f in batch:
+                f.release()
+            if stop:
+                client.cancel([f for f in futs if not f.done()])
+                break
+    finally:
+        close()
+
+
+def run_sweep(func, cases=None, *, name: str | None = None, cache_dir=None,
+              processes: int | None = 1, progress: bool = True, on_error: str = "record",
+              grid: Mapping | None = None, backend: str = "local",
+              scheduler=None) -> pd.DataFrame:
     """Evaluate ``func(**case)`` for every case and concatenate the results.
 
     Parameters
     ----------
     func : callable
         Top-level (picklable) function returning a dict (one row) or a DataFrame.
-    cases : sequence of dict
+    cases : sequence of dict, optional
         Keyword arguments per case (str keys, JSON-serialisable values).
+        With ``grid``, each case is combined with every grid point (default
+        one empty case).  One of ``cases`` and ``grid`` is required.
     name : str, optional
         Sweep name used in the cache key (default ``func.__qualname__``).
     cache_dir : path-like, optional
@@ -220,9 +386,11 @@ def run_sweep(func, cases, *, name: str | None = None, cache_dir=None, processes
         (:func:`case_key`, :func:`function_hash`).  An unreadable cache file is
         named in a warning and recomputed.  Failed cases are not cached.
         None: no cache.
-    processes : int
-        Worker processes (1 = run in this process).  More than the available
-        cores gives a warning and is capped at the number of cores.
+    processes : int or None
+        Worker processes (1 = run in this process; None = every available
+        core).  More than the available cores gives a warning and is capped at
+        the number of cores.  With ``backend="dask"`` and no ``scheduler``: the
+        number of workers of the ``LocalCluster`` (ignored with a scheduler).
     progress : bool
         Show a progress bar.
     on_error : {"record", "raise"}
@@ -232,6 +400,23 @@ def run_sweep(func, cases, *, name: str | None = None, cache_dir=None, processes
         failures.  ``"raise"``: cases not yet started are cancelled, every
         finished result is kept (and cached), then :class:`SweepError` names the
         first failing case (lowest index).
+    grid : mapping of str to list, optional
+        Parameter grid (:func:`grid_cases`); the cases are every combination,
+        each merged into every entry of ``cases``.
+    backend : {"local", "dask"}
+        ``"local"``: this process or a ``ProcessPoolExecutor``.  ``"dask"``:
+        ``dask.distributed`` (optional extra ``ppamsafety[cluster]``); the
+        cases are submitted as futures and stored as they complete
+        (``as_completed``), so a sweep interrupted on a cluster resumes from
+        ``cache_dir`` too.  The cache must be on a file system this process
+        can write (the results come back to this process, which writes them).
+    scheduler : None, str or dask.distributed.Client
+        Dask only.  None: a ``LocalCluster(n_workers=processes,
+        threads_per_worker=1, processes=True)`` is started for the sweep and
+        closed after it.  A scheduler address such as
+        ``"tcp://10.0.0.5:8786"`` (e.g. of a dask-jobqueue ``SLURMCluster``):
+        a client is connected and closed afterwards, the cluster is left
+        running.  A ``Client``: used as it is and left open.
 
     Returns
     -------
@@ -244,7 +429,17 @@ def run_sweep(func, cases, *, name: str | None = None, cache_dir=None, processes
 
     if not callable(func):
         raise TypeError(f"func must be callable, got {type(func).__name__} {func!r:.80}")
-    cases = _check_cases(cases)
+    if cases is None and grid is None:
+        raise TypeError("run_sweep needs cases (a list of dicts) or grid (a dict of lists)")
+    cases = _check_cases([{}] if cases is None else cases)
+    if grid is not None:
+        points = grid_cases(grid)
+        cases = [{**c, **g} for c in cases for g in points]
+    if backend not in BACKENDS:
+        raise ValueError(f"backend = {backend!r} is not one of {', '.join(map(repr, BACKENDS))}")
+    if scheduler is not None and backend != "dask":
+        raise ValueError(f"scheduler = {scheduler!r} is given but backend = {backend!r}; a "
+                         f"scheduler is used only with backend='dask'")
     if on_error not in ("record", "raise"):
         raise ValueError(f"on_error = {on_error!r} is not one of 'record', 'raise'")
     if name is not None and (not isinstance(name, str) or not name):
@@ -262,7 +457,7 @@ def run_sweep(func, cases, *, name: str | None = None, cache_dir=None, processes
         cache.mkdir(parents=True, exist_ok=True)
     code = function_hash(func)
     keys = [case_key(name, c, code) for c in cases]     # also checks JSON-serialisability
-    if processes > 1:
+    if processes > 1 and backend == "local":
         try:
             pickle.dumps(func)
         except Exception as exc:
@@ -278,8 +473,9 @@ def run_sweep(func, cases, *, name: str | None = None, cache_dir=None, processes
             try:
                 with open(f, "rb") as fh:
                     obj = pickle.load(fh)
-                if not isinstance(obj, pd.DataFrame):
-                    raise TypeError(f"it holds a {type(obj).__name__}, not a DataFrame")
+                if not isinstance(obj, (pd.DataFrame, dict)):
+                    raise TypeError(f"it holds a {type(obj).__name__}, not a DataFrame or a "
+                                    f"dict (one result row)")
                 results[i] = obj
                 continue
             except Exception as exc:
@@ -294,7 +490,7 @@ def run_sweep(func, cases, *, name: str | None = None, cache_dir=None, processes
         bar.update(1)
         if exc is None:
             try:
-                df = _as_frame(cases[i], out)
+                df = _as_result(cases[i], out)
             except Exception as e:
                 exc = e
         if exc is not None:
@@ -310,7 +506,10 @@ def run_sweep(func, cases, *, name: str | None = None, cache_dir=None, processes
 
     try:
         nproc = min(processes, len(todo))
-        if nproc <= 1:
+        if backend == "dask":
+            if todo:
+                _run_dask(func, cases, todo, keys, name, scheduler, processes, finish, on_error)
+        elif nproc <= 1:
             for i in todo:
                 try:
                     out = func(**cases[i])
@@ -343,6 +542,11 @@ def run_sweep(func, cases, *, name: str | None = None, cache_dir=None, processes
                          i, cases[i], err) from failures[i]
     if not cases:
         return pd.DataFrame()
+    if all(isinstance(r, dict) for r in results.values()):
+        out = _assemble(cases, results, failures, on_error, name)
+        _warn_failures(cases, failures, name)
+        return out
+    results = {i: pd.DataFrame([r]) if isinstance(r, dict) else r for i, r in results.items()}
     if on_error == "raise":
         return pd.concat([results[i] for i in range(len(cases))], ignore_index=True)
 
@@ -362,10 +566,14 @@ def run_sweep(func, cases, *, name: str | None = None, cache_dir=None, processes
         df.insert(pos, "status", "ok")
         df.insert(pos + 1, "error", "")
         frames.append(df)
+    _warn_failures(cases, failures, name)
+    return pd.concat(frames, ignore_index=True)
+
+
+def _warn_failures(cases, failures, name) -> None:
     if failures:
         shown = "; ".join(f"case {i} {cases[i]!r}: {_error_text(failures[i])}"
                           for i in sorted(failures)[:3])
         more = " ..." if len(failures) > 3 else ""
         warnings.warn(f"sweep {name!r}: {len(failures)} of {len(cases)} cases failed (rows with "
-                      f"status='failed'): {shown}{more}", RuntimeWarning, stacklevel=2)
-    return pd.concat(frames, ignore_index=True)
+                      f"status='failed'): {shown}{more}", RuntimeWarning, stacklevel=3)

@@ -34,6 +34,9 @@ def test_report_regenerates_from_scratch(tmp_path):
     assert not (out / "design_stale.png").exists()
     text = (out / "index.md").read_text()
     assert "Table A.1" in text and (out / "design_max_load.png").exists()
+    page = (out / "index.html").read_text(encoding="utf-8")     # the same report as a page
+    assert "<table>" in page and 'src="design_max_load.png"' in page
+    assert "index.html" in json.loads((out / MARKER).read_text())["files"]
 
 
 def test_help_documents_exit_codes_and_overwrite():

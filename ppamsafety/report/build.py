@@ -18,11 +18,15 @@ from pathlib import Path
 
 from ..output import OutputFolder
 from ..studies import REGISTRY, run_study
+from .html import report_page
 
 
 def build_report(outdir="reports", *, quick: bool = False, only=None, progress: bool = True,
                  overwrite: bool = False) -> Path:
-    """Run the studies and write ``outdir/index.md`` plus their figures and tables.
+    """Run the studies and write ``outdir/index.md``, ``index.html``, figures and tables.
+
+    ``index.html`` is the same report as one page with section navigation
+    (:func:`ppamsafety.report.html.report_page`).
 
     Parameters
     ----------
@@ -69,6 +73,8 @@ def build_report(outdir="reports", *, quick: bool = False, only=None, progress: 
                   f"{' --quick' if quick else ''}. Every number below was computed by the code in "
                   "this repository; thesis values are quoted for comparison with their table or "
                   "equation.\n\n")
-        (stage / "index.md").write_text(header + "\n".join(sections))
+        md = header + "\n".join(sections)
+        (stage / "index.md").write_text(md)
+        (stage / "index.html").write_text(report_page(md), encoding="utf-8")
         (stage / "metrics.json").write_text(json.dumps(metrics, indent=2, default=float))
     return out / "index.md"

@@ -1,0 +1,450 @@
+"""The physics case of a safety sweep: one experiment, one controller, its impacts.
+
+:func:`safety_case` runs one named thesis experiment with one controller
+(family and gains), crashes the arm into a head at chosen instants of the
+record and returns a compact dict of results (worst F_max, HIC36, HIC15,
+tracking statistics ...).  Its parameters are JSON-serialisable, so it is a
+:func:`ppamsafety.sweep.run_sweep` case function; :func:`safety_sweep` runs
+it over a grid or a list of cases on every core (or a Dask cluster), and the
+study files (:mod:`ppamsafety.study_files`) describe such sweeps in TOML.
+
+Each parameter is checked by :func:`check_case` before anything runs, with
+an error that names the parameter, its value and the allowed values.
+
+With the default parameters (``instants="heuristic"``, no stiffness
+override, no sensor noise) the case follows the code path of Table 6.1
+(:mod:`ppamsafety.studies.safety`): :func:`run_thesis_experiment` and
+:func:`~ppamsafety.impact.instants.evaluate_experiment` with the same
+arguments, so it reproduces the table's numbers exactly.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+
+import numpy as np
+import pandas as pd
+
+from .impact.instants import HEURISTICS
+
+#: Experiment names (thesis catalog).
+EXPERIMENTS = ("step", "switch", "circle5", "circle10", "circle20")
+#: Controller families a case can set.
+CONTROLLERS = ("PID", "PSMC joint", "PSMC task")
+#: Impact-instant choices: the four heuristic instants, every instant, or one heuristic.
+INSTANTS = ("heuristic", "all", *HEURISTICS)
+#: TCP speed below which an instant of ``instants="all"`` is skipped [m/s] (as the safety study).
+MIN_SPEED = 1e-3
+#: Result columns of :func:`safety_case` (``histories`` is added when asked for).
+RESULT_COLUMNS = ("label", "F_max", "HIC36", "HIC15", "t0_F_max", "t0_HIC36", "instant_HIC36",
+                  "tcp_speed", "K1", "K2", "n_impacts", "track_mean", "track_max", "track_rms",
+                  "diverged")
+
+_JOINT_GAINS = ("kp_bar", "ki_bar", "kd_bar")
+_TASK_GAINS = ("task_kp", "task_ki", "task_kd")
+
+
+def _is_number(v) -> bool:
+    return isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool)
+
+
+def _number(name, v, lo=0.0, lo_open=False, unit=""):
+    if not _is_number(v) or not math.isfinite(float(v)):
+        raise TypeError(f"{name} = {v!r} must be a finite number{' [' + unit + ']' if unit else ''}")
+    v = float(v)
+    if v < lo or (lo_open and v == lo):
+        raise ValueError(f"{name} = {v:g} is not allowed: it must be {'>' if lo_open else '>='} "
+                         f"{lo:g}{' ' + unit if unit else ''}")
+    return v
+
+
+def _gain(name, v, unit):
+    """A gain: one number or a pair [joint 1, joint 2], each >= 0."""
+    if isinstance(v, (list, tuple)):
+        if len(v) != 2:
+            raise ValueError(f"{name} = {v!r} must be one number or a pair [joint 1, joint 2] "
+                             f"[{unit}]")
+        return [_number(f"{name}[{i}]", x, unit=unit) for i, x in enumerate(v)]
+    return _number(name, v, unit=unit)
+
+
+def _check_stiffness(v):
+    if v is None:
+        return None
+    if isinstance(v, (list, tuple)):
+        if len(v) != 2:
+            raise ValueError(f"stiffness = {v!r} must be None, one number or a pair "
+                             f"[K1, K2] [Nm/rad]")
+        return [_number(f"stiffness[{i}]", x, unit="Nm/rad") for i, x in enumerate(v)]
+    return _number("stiffness", v, unit="Nm/rad")
+
+
+def _check_head(v):
+    from .params.head import head_model_names
+
+    names = head_model_names()
+    if not isinstance(v, str) or v not in names:
+        raise ValueError(f"head = {v!r} is not a head model name; allowed: {names}")
+    return v
+
+
+def _check_effects(v):
+    if v is None or (isinstance(v, Mapping) and not v):
+        return {}
+    raise ValueError(f"effects = {v!r} is not allowed yet: only {{}} (none). The plant effects "
+                     f"(ArmParameters.effects) are being added; once they exist, this key passes "
+                     f"them through to the arm")
+
+
+def _check_choice(name, v, choices):
+    if not isinstance(v, str) or v not in choices:
+        raise ValueError(f"{name} = {v!r} is not allowed; choose from {list(choices)}")
+    return v
+
+
+def _check_optional_int(name, v, lo, hi):
+    if v is None:
+        return None
+    if isinstance(v, bool) or not isinstance(v, (int, np.integer)):
+        raise TypeError(f"{name} = {v!r} must be an int in [{lo}, {hi}] or None")
+    if not lo <= int(v) <= hi:
+        raise ValueError(f"{name} = {v} is outside [{lo}, {hi}]")
+    return int(v)
+
+
+def _check_bool(name, v):
+    if not isinstance(v, bool):
+        raise TypeError(f"{name} = {v!r} must be true or false")
+    return v
+
+
+#: Parameters of :func:`safety_case`: name -> (validator, description).
+PARAMETERS = {
+    "experiment": (lambda v: _check_choice("experiment", v, EXPERIMENTS),
+                   f"thesis experiment, one of {list(EXPERIMENTS)}"),
+    "controller": (lambda v: _check_choice("controller", v, CONTROLLERS),
+                   f"controller family, one of {list(CONTROLLERS)}"),
+    "lam": (lambda v: None if v is None else _gain("lam", v, "s"),
+            "PSMC sliding-surface time constant lambda [s] (Table 5.1: 0.4); PSMC only"),
+    "kp_bar": (lambda v: None if v is None else _gain("kp_bar", v, "bar/rad"),
+               "Kp [bar/rad], PID and joint PSMC (one number or a pair per joint)"),
+    "ki_bar": (lambda v: None if v is None else _gain("ki_bar", v, "bar/(rad s)"),
+               "Ki [bar/(rad s)], PID and joint PSMC"),
+    "kd_bar": (lambda v: None if v is None else _gain("kd_bar", v, "bar s/rad"),
+               "Kd [bar s/rad], PID and joint PSMC"),
+    "task_kp": (lambda v: None if v is None else _number("task_kp", v, unit="N/m"),
+                "task PSMC virtual coupling Kp [N/m] (Table 5.1: 200)"),
+    "task_ki": (lambda v: None if v is None else _number("task_ki", v, unit="N/(m s)"),
+                "task PSMC Ki [N/(m s)] (Table 5.1: 100)"),
+    "task_kd": (lambda v: None if v is None else _number("task_kd", v, unit="N s/m"),
+                "task PSMC Kd [N s/m] (Table 5.1: 10)"),
+    "stiffness": (_check_stiffness,
+                  "joint stiffness of the impacts [Nm/rad]: None = (2.18) from the pressures "
+                  "at the instant, a number for both joints or a pair [K1, K2]"),
+    "head": (_check_head, "head contact model name (ppamsafety.params.head.head_model_names)"),
+    "effects": (_check_effects, "plant effects; only {} for now (ArmParameters.effects will "
+                                "pass through)"),
+    "instants": (lambda v: _check_choice("instants", v, INSTANTS),
+                 "impact instants: 'heuristic' (the thesis' four), 'all' (every `every`-th "
+                 "ms) or one heuristic name"),
+    "every": (lambda v: _check_optional_int("every", v, 1, 10 ** 6),
+              "stride of instants='all' [ms]"),
+    "noise_seed": (lambda v: _check_optional_int("noise_seed", v, 0, 2 ** 63 - 1),
+                   "None: no sensor noise (thesis tables); an int: Table 3.2 sensor noise "
+                   "with this seed"),
+    "duration": (lambda v: None if v is None else _number("duration", v, lo_open=True, unit="s"),
+                 "experiment length [s] (default: the catalog's)"),
+    "histories": (lambda v: _check_bool("histories", v),
+                  "return the full time histories (closed loop and worst impact)"),
+}
+
+
+def check_case(**case) -> dict:
+    """Check the parameters of one :func:`safety_case`; return them completed with defaults.
+
+    Parameters
+    ----------
+    **case
+        Keyword arguments of :func:`safety_case`.
+
+    Returns
+    -------
+    dict
+        Every parameter of :func:`safety_case`, checked.
+
+    Raises
+    ------
+    TypeError, ValueError
+        Naming the parameter, its value and what is allowed (unknown names too).
+    """
+    unknown = [k for k in case if k not in PARAMETERS]
+    if unknown:
+        raise ValueError(f"unknown safety_case parameter(s) {unknown}; allowed: "
+                         f"{list(PARAMETERS)}")
+    full = {**DEFAULTS, **case}
+    for k, v in full.items():
+        PARAMETERS[k][0](v)
+    ctrl = full["controller"]
+    if ctrl == "PID" and full["lam"] is not None:
+        raise ValueError(f"lam = {full['lam']!r} does not apply to controller = 'PID' (PSMC only)")
+    if ctrl == "PSMC task":
+        given = [k for k in _JOINT_GAINS if full[k] is not None]
+        if given:
+            raise ValueError(f"{given} do not apply to controller = 'PSMC task' (use task_kp, "
+                             f"task_ki, task_kd [SI])")
+        if isinstance(full["lam"], list):
+            raise ValueError(f"lam = {full['lam']!r}: the task PSMC has one lambda [s]")
+    else:
+        given = [k for k in _TASK_GAINS if full[k] is not None]
+        if given:
+            raise ValueError(f"{given} apply only to controller = 'PSMC task', not {ctrl!r}")
+    if full["every"] is not None and full["instants"] != "all":
+        raise ValueError(f"every = {full['every']} applies only to instants = 'all', not "
+                         f"{full['instants']!r}")
+    return full
+
+
+DEFAULTS = {"experiment": "step", "controller": "PID", "lam": None, "kp_bar": None,
+            "ki_bar": None, "kd_bar": None, "task_kp": None, "task_ki": None, "task_kd": None,
+            "stiffness": None, "head": "thesis-frontal", "effects": None,
+            "instants": "heuristic", "every": None, "noise_seed": None, "duration": None,
+            "histories": False}
+"""Default parameters of :func:`safety_case`."""
+
+
+def _bar(v):
+    from .units import BAR
+
+    return None if v is None else (np.asarray(v, float) * BAR if isinstance(v, list) else v * BAR)
+
+
+def make_controller(controller: str = "PID", *, lam=None, kp_bar=None, ki_bar=None, kd_bar=None,
+                    task_kp=None, task_ki=None, task_kd=None):
+    """The controller of a case (Table 5.1 gains for every gain left None).
+
+    Parameters
+    ----------
+    controller : {"PID", "PSMC joint", "PSMC task"}
+        Family.
+    lam : float or pair, optional
+        lambda [s] (PSMC).
+    kp_bar, ki_bar, kd_bar : float or pair, optional
+        Joint-space gains [bar/rad, bar/(rad s), bar s/rad] (PID, joint PSMC).
+    task_kp, task_ki, task_kd : float, optional
+        Task-space gains [N/m, N/(m s), N s/m] (task PSMC).
+
+    Returns
+    -------
+    ppamsafety.control.Controller
+        Built exactly as :func:`~ppamsafety.experiments.catalog.thesis_variants`
+        builds the same variant.
+    """
+    from .control import PID, JointPSMC, TaskPSMC
+
+    kw = {}
+    if controller == "PSMC task":
+        for k, v in (("lam", lam), ("kp", task_kp), ("ki", task_ki), ("kd", task_kd)):
+            if v is not None:
+                kw[k] = v
+        return TaskPSMC(**kw)
+    for k, v in (("kp", kp_bar), ("ki", ki_bar), ("kd", kd_bar)):
+        if v is not None:
+            kw[k] = _bar(v)
+    if controller == "PID":
+        return PID(**kw)
+    if lam is not None:
+        kw["lam"] = lam
+    return JointPSMC(**kw)
+
+
+def _impacts(result, arm, instants, every, head, stiffness):
+    """Impacts of a record; the same calls as the safety study without a stiffness override."""
+    from .impact.instants import evaluate_experiment, heuristic_instants, impact_states
+    from .impact.model import simulate_impacts
+
+    if stiffness is None and instants in ("heuristic", "all"):
+        kw = {"every": every, "min_speed": MIN_SPEED} if instants == "all" else {}
+        return evaluate_experiment(result, arm, instants=instants, head=head, **kw)
+    st = impact_states(result, arm)
+    if instants == "all":
+        idx = np.arange(0, len(st), every)
+        idx = idx[st["tcp_speed"].to_numpy()[idx] >= MIN_SPEED]
+        names = None
+    else:
+        h = heuristic_instants(st)
+        names = list(h) if instants == "heuristic" else [instants]
+        idx = np.array([h[n] for n in names])
+    sub = st.iloc[idx]
+    K = sub[["K1", "K2"]].to_numpy()
+    if stiffness is not None:
+        K = np.broadcast_to(np.asarray(stiffness, float), K.shape).copy()
+    res = simulate_impacts(arm, sub[["q1", "q2"]].to_numpy(), sub[["qd1", "qd2"]].to_numpy(), K,
+                           head=head)
+    res.summary.insert(0, "t0", sub["t"].to_numpy())
+    if names is not None:
+        res.summary.insert(0, "instant", names)
+    return res
+
+
+def safety_case(experiment: str = "step", controller: str = "PID", *, lam=None, kp_bar=None,
+                ki_bar=None, kd_bar=None, task_kp=None, task_ki=None, task_kd=None,
+                stiffness=None, head: str = "thesis-frontal", effects=None,
+                instants: str = "heuristic", every: int | None = None, noise_seed=None,
+                duration=None, histories: bool = False) -> dict:
+    """One experiment with one controller, crashed into a head: a compact result row.
+
+    Parameters
+    ----------
+    experiment : {"step", "switch", "circle5", "circle10", "circle20"}
+        Thesis experiment (:mod:`ppamsafety.experiments.catalog`).
+    controller : {"PID", "PSMC joint", "PSMC task"}
+        Controller family; gains default to Table 5.1.
+    lam : float or pair, optional
+        PSMC lambda [s] (a pair per joint for joint PSMC).
+    kp_bar, ki_bar, kd_bar : float or pair, optional
+        Joint-space gains [bar/rad, bar/(rad s), bar s/rad] of PID and joint
+        PSMC (one value for both joints or a pair).
+    task_kp, task_ki, task_kd : float, optional
+        Task-space PSMC gains [N/m, N/(m s), N s/m].
+    stiffness : None, float or pair
+        Joint stiffness used in the impacts [Nm/rad]: None = (2.18) from the
+        pressures at each instant (thesis); a value overrides it (fig. 6.3).
+    head : str
+        Head contact model name (:func:`ppamsafety.params.head.head_model`).
+    effects : dict or None
+        Plant effects.  Only ``{}``/None for now: the effects
+        (``ArmParameters.effects``) are being added to the plant and will be
+        passed through to the arm by this key.
+    instants : str
+        ``"heuristic"``: the thesis' four instants (§6.3.3); ``"all"``: every
+        ``every``-th ms (instants with the TCP slower than :data:`MIN_SPEED`
+        skipped); or one heuristic name such as ``"max TCP speed"``.
+    every : int, optional
+        Stride of ``instants="all"`` [ms] (default 1).
+    noise_seed : int, optional
+        None: no sensor noise (as the thesis tables).  An int: Gaussian
+        sensor noise of Table 3.2 with this seed.
+    duration : float, optional
+        Experiment length [s] (default: the catalog's, e.g. 12 s for the step).
+    histories : bool
+        Also return the full time histories under the key ``"histories"``:
+        ``{"closed_loop": DataFrame (1 kHz record), "impact": DataFrame (worst
+        HIC36 impact)}``.  Off by default: results stay compact.
+
+    Returns
+    -------
+    dict
+        ``label``; ``F_max`` [N], ``HIC36``, ``HIC15`` (worst over the
+        impacts), ``t0_F_max``, ``t0_HIC36`` [s] (their instants),
+        ``instant_HIC36`` (heuristic name or ""), ``tcp_speed`` [m/s] (largest
+        at impact), ``K1``, ``K2`` [Nm/rad] (stiffness of the worst-HIC
+        impact), ``n_impacts``; ``track_mean``, ``track_max``, ``track_rms``
+        [m] (task-space tracking error; circles after the 5 s warm-up, NaN if
+        the run diverged) and ``diverged``.
+    """
+    from .control import SensorConfig
+    from .experiments.catalog import CIRCLE_PERIODS, CIRCLE_WARMUP, run_thesis_experiment
+    from .experiments.catalog import ControllerVariant
+    from .experiments.metrics import tracking_stats
+    from .params import thesis_arm
+    from .params.head import head_model
+
+    p = check_case(experiment=experiment, controller=controller, lam=lam, kp_bar=kp_bar,
+                   ki_bar=ki_bar, kd_bar=kd_bar, task_kp=task_kp, task_ki=task_ki,
+                   task_kd=task_kd, stiffness=stiffness, head=head, effects=effects,
+                   instants=instants, every=every, noise_seed=noise_seed, duration=duration,
+                   histories=histories)
+    arm = thesis_arm()
+    ctrl = make_controller(p["controller"], lam=p["lam"], kp_bar=p["kp_bar"], ki_bar=p["ki_bar"],
+                           kd_bar=p["kd_bar"], task_kp=p["task_kp"], task_ki=p["task_ki"],
+                           task_kd=p["task_kd"])
+    variant = ControllerVariant.of(ctrl)
+    sensors = None if p["noise_seed"] is None else SensorConfig(noise=True, seed=p["noise_seed"])
+    res = run_thesis_experiment(arm, p["experiment"], [variant], sensors=sensors,
+                                duration=p["duration"])[0]
+    ev = _impacts(res, arm, p["instants"], p["every"] or 1, head_model(p["head"]),
+                  p["stiffness"])
+    s = ev.summary
+    if len(s) == 0:
+        raise ValueError(f"no impact instant: the TCP never moves faster than {MIN_SPEED} m/s")
+    w = s.loc[s["HIC36"].idxmax()]
+    wf = s.loc[s["F_max"].idxmax()]
+    t_from = min(CIRCLE_WARMUP, res.t[-1] / 2) if p["experiment"] in CIRCLE_PERIODS else 0.0
+    tr = tracking_stats(res, t_from=t_from)
+    out = {"label": variant.label, "F_max": float(wf.F_max), "HIC36": float(w.HIC36),
+           "HIC15": float(s["HIC15"].max()), "t0_F_max": float(wf.t0), "t0_HIC36": float(w.t0),
+           "instant_HIC36": str(w.instant) if "instant" in s.columns else "",
+           "tcp_speed": float(s["tcp_speed"].max()), "K1": float(w.K1), "K2": float(w.K2),
+           "n_impacts": int(len(s)), "track_mean": tr["mean"], "track_max": tr["max"],
+           "track_rms": tr["rms"], "diverged": bool(res.diverged)}
+    if histories:
+        worst = int(s["HIC36"].idxmax())
+        ev_w = _impacts_one(res, arm, s.iloc[worst], head_model(p["head"]))
+        out["histories"] = {"closed_loop": res.to_pandas(), "impact": ev_w}
+    return out
+
+
+def _impacts_one(result, arm, row, head) -> pd.DataFrame:
+    """Time history of one impact (a summary row of :func:`_impacts`)."""
+    from .impact.instants import impact_states
+    from .impact.model import simulate_impacts
+
+    st = impact_states(result, arm)
+    k = int(np.argmin(np.abs(st["t"].to_numpy() - row.t0)))
+    r = st.iloc[k]
+    res = simulate_impacts(arm, r[["q1", "q2"]].to_numpy(float), r[["qd1", "qd2"]].to_numpy(float),
+                           [float(row.K1), float(row.K2)], head=head, history=True)
+    return res.histories[0]
+
+
+def safety_sweep(cases=None, *, grid=None, name: str = "safety", cache_dir=None,
+                 processes: int | None = None, progress: bool = True, on_error: str = "record",
+                 backend: str = "local", scheduler=None) -> pd.DataFrame:
+    """Run :func:`safety_case` over a grid or a list of cases (all cores by default).
+
+    Parameters
+    ----------
+    cases : sequence of dict, optional
+        :func:`safety_case` keyword arguments per case; each is checked
+        (:func:`check_case`) before anything runs.
+    grid : mapping of str to list, optional
+        Parameter grid combined with every case (:func:`ppamsafety.sweep.grid_cases`).
+    name : str
+        Sweep name (part of the cache key).
+    cache_dir : path-like, optional
+        Resume folder (see :func:`ppamsafety.sweep.run_sweep`).
+    processes : int, optional
+        Worker processes, default every available core.
+    progress : bool
+        Progress bar.
+    on_error : {"record", "raise"}
+        Failing cases: a row with ``status="failed"`` and ``error``, or stop.
+    backend : {"local", "dask"}
+        Where the cases run (see :func:`ppamsafety.sweep.run_sweep`).
+    scheduler : None, str or dask.distributed.Client
+        Dask scheduler (None: a LocalCluster for the sweep).
+
+    Returns
+    -------
+    pandas.DataFrame
+        Case parameters, ``status``, ``error`` and the :func:`safety_case` results.
+    """
+    from .sweep import _check_cases, grid_cases, run_sweep
+
+    all_cases = _check_cases([{}] if cases is None else cases)
+    if grid is not None:
+        all_cases = [{**c, **g} for c in all_cases for g in grid_cases(grid)]
+    elif cases is None:
+        raise TypeError("safety_sweep needs cases (a list of dicts) or grid (a dict of lists)")
+    for i, c in enumerate(all_cases):
+        try:
+            check_case(**c)
+        except (TypeError, ValueError) as exc:
+            raise type(exc)(f"case {i} {c!r}: {exc}") from None
+    return run_sweep(safety_case, all_cases, name=name, cache_dir=cache_dir, processes=processes,
+                     progress=progress, on_error=on_error, backend=backend, scheduler=scheduler)
+
+
+__all__ = ["EXPERIMENTS", "CONTROLLERS", "INSTANTS", "MIN_SPEED", "PARAMETERS", "DEFAULTS",
+           "RESULT_COLUMNS", "check_case", "make_controller", "safety_case", "safety_sweep"]
