@@ -24,12 +24,33 @@ from __future__ import annotations
 import math
 
 from .._jit import kernel, leaf
-from .._validation import check_nonnegative, check_positive, check_range
+from .._validation import check_finite_result, check_positive, check_range
 
 
 @leaf
 def hunt_crossley_force(delta, delta_dot, k, n, b):
-    """Contact force [N] for penetration ``delta`` [m] and its rate [m/s]; never negative."""
+    """Contact force [N] for penetration ``delta`` [m] and its rate [m/s]; never negative.
+
+    Compiled scalar kernel (no input checks: the callers validate).
+
+    Parameters
+    ----------
+    delta : float
+        Penetration [m] (<= 0: no contact).
+    delta_dot : float
+        Penetration rate [m/s].
+    k : float
+        Stiffness [N/m^n].
+    n : float
+        Exponent [-].
+    b : float
+        Damping [N s/m^(n+1)].
+
+    Returns
+    -------
+    float
+        max(k delta^n + b delta^n delta_dot, 0) for delta > 0, else 0.
+    """
     if delta <= 0.0:
         return 0.0
     dn = delta ** n
@@ -38,13 +59,33 @@ def hunt_crossley_force(delta, delta_dot, k, n, b):
 
 @leaf
 def hunt_crossley_elastic(delta, k, n):
-    """Elastic part k max(delta, 0)^n [N] of the contact force (no damping)."""
+    """Elastic part k max(delta, 0)^n [N] of the contact force (no damping).
+
+    Parameters
+    ----------
+    delta : float
+        Penetration [m].
+    k : float
+        Stiffness [N/m^n].
+    n : float
+        Exponent [-].
+    """
     return k * max(delta, 0.0) ** n
 
 
 @leaf
 def hunt_crossley_potential(delta, k, n):
-    """Contact potential energy k delta^(n+1)/(n+1) [J] for delta > 0, else 0."""
+    """Contact potential energy k delta^(n+1)/(n+1) [J] for delta > 0, else 0.
+
+    Parameters
+    ----------
+    delta : float
+        Penetration [m].
+    k : float
+        Stiffness [N/m^n].
+    n : float
+        Exponent [-].
+    """
     if delta <= 0.0:
         return 0.0
     return k * delta ** (n + 1.0) / (n + 1.0)
@@ -52,15 +93,27 @@ def hunt_crossley_potential(delta, k, n):
 
 @kernel
 def hunt_crossley_force_batch(delta, delta_dot, k, n, b, out):
-    """:func:`hunt_crossley_force` element-wise over 1-D arrays ``delta``, ``delta_dot``."""
+    """:func:`hunt_crossley_force` element-wise over 1-D arrays ``delta``, ``delta_dot``.
+
+    Parameters
+    ----------
+    delta, delta_dot : numpy.ndarray, shape (m,)
+        Penetrations [m] and their rates [m/s].
+    k, n, b : float
+        Stiffness [N/m^n], exponent [-], damping [N s/m^(n+1)].
+    out : numpy.ndarray, shape (m,)
+        Filled with the forces [N].
+    """
     for i in range(delta.shape[0]):
         out[i] = hunt_crossley_force(delta[i], delta_dot[i], k, n, b)
 
 
 def _check(mass, v0, k, n, b):
-    return (check_positive("mass", mass, unit="kg"), check_positive("v0", v0, unit="m/s"),
-            check_positive("k", k, unit="N/m^n"), check_range("n", n, 0.5, 5.0),
-            check_nonnegative("b", b, unit="N s/m^(n+1)"))
+    return (check_range("mass", mass, 0.0, 1e6, lo_open=True, unit="kg"),
+            check_range("v0", v0, 0.0, 1e3, lo_open=True, unit="m/s"),
+            check_range("k", k, 0.0, 1e20, lo_open=True, unit="N/m^n"),
+            check_range("n", n, 0.5, 5.0),
+            check_range("b", b, 0.0, 1e20, unit="N s/m^(n+1)"))
 
 
 def max_penetration(mass, v0, k, n, b=0.0) -> float:
@@ -72,11 +125,26 @@ def max_penetration(mass, v0, k, n, b=0.0) -> float:
     Parameters
     ----------
     mass : float
-        Impacting (or reduced) mass [kg].
+        Impacting (or reduced) mass [kg], in (0, 1e6].
     v0 : float
-        Approach speed [m/s], > 0.
-    k, n, b : float
-        Contact parameters: stiffness [N/m^n], exponent [-], damping [N s/m^(n+1)].
+        Approach speed [m/s], in (0, 1000].
+    k : float
+        Contact stiffness [N/m^n], in (0, 1e20].
+    n : float
+        Exponent [-], in [0.5, 5].
+    b : float
+        Damping [N s/m^(n+1)], in [0, 1e20].
+
+    Returns
+    -------
+    float
+        delta_max [m].
+
+    Raises
+    ------
+    ValueError
+        Out-of-range input, or a result that is not a positive finite number
+        (under- or overflow for extreme combinations).
     """
     m, v0, k, n, b = _check(mass, v0, k, n, b)
     x = b * v0 / k
@@ -84,7 +152,13 @@ def max_penetration(mass, v0, k, n, b=0.0) -> float:
         level = m * v0 * v0 / (2.0 * k) * (1.0 - 2.0 * x / 3.0 + x * x / 2.0 - 2.0 * x ** 3 / 5.0)
     else:
         level = m / (b * b) * (b * v0 - k * math.log1p(x))   # = delta_max^(n+1)/(n+1)
-    return ((n + 1.0) * level) ** (1.0 / (n + 1.0))
+    out = ((n + 1.0) * level) ** (1.0 / (n + 1.0)) if level > 0.0 else 0.0
+    check_finite_result("max_penetration", out, f"mass = {m:g}, v0 = {v0:g}, k = {k:g}, "
+                        f"n = {n:g}, b = {b:g}")
+    if not out > 0.0:
+        raise ValueError(f"max_penetration underflows to 0 for mass = {m:g} kg, v0 = {v0:g} m/s, "
+                         f"k = {k:g}, n = {n:g}, b = {b:g}: the contact is too stiff or damped")
+    return out
 
 
 def exit_velocity(mass, v0, k, n, b=0.0) -> float:
@@ -95,6 +169,29 @@ def exit_velocity(mass, v0, k, n, b=0.0) -> float:
     x - ln(1 + x) = y - ln(1 + y), solved for y in (-1, 0).  Independent of m
     and n; the restitution is e = v_out/v0.  ``mass`` and ``n`` are only
     validated.
+
+    Parameters
+    ----------
+    mass : float
+        Impacting (or reduced) mass [kg], in (0, 1e6] (validated only).
+    v0 : float
+        Approach speed [m/s], in (0, 1000].
+    k : float
+        Contact stiffness [N/m^n], in (0, 1e20].
+    n : float
+        Exponent [-], in [0.5, 5] (validated only).
+    b : float
+        Damping [N s/m^(n+1)], in [0, 1e20].
+
+    Returns
+    -------
+    float
+        Rebound speed [m/s], in [0, v0].
+
+    Raises
+    ------
+    ValueError
+        Out-of-range input, or b v0 / k beyond 1e300 (no finite phase-plane level).
     """
     from scipy.optimize import brentq
 
@@ -102,6 +199,9 @@ def exit_velocity(mass, v0, k, n, b=0.0) -> float:
     if b == 0.0:
         return v0
     x = b * v0 / k
+    if not x <= 1e300:
+        raise ValueError(f"b v0 / k = {b:g} x {v0:g} / {k:g} overflows: damping b too large "
+                         f"for stiffness k")
     target = _x_minus_log1p(x)
     y = brentq(lambda y: _x_minus_log1p(y) - target, -1.0 + 1e-15, 0.0, xtol=1e-300,
                rtol=1e-15, maxiter=500)
@@ -116,5 +216,20 @@ def _x_minus_log1p(x: float) -> float:
 
 
 def restitution(v0, k, b) -> float:
-    """Coefficient of restitution e = v_out / v0 of a Hunt-Crossley impact [-]."""
+    """Coefficient of restitution e = v_out / v0 of a Hunt-Crossley impact [-].
+
+    Parameters
+    ----------
+    v0 : float
+        Approach speed [m/s], in (0, 1000].
+    k : float
+        Contact stiffness [N/m^n], in (0, 1e20].
+    b : float
+        Damping [N s/m^(n+1)], in [0, 1e20].
+
+    Returns
+    -------
+    float
+        e in [0, 1] (1 without damping).
+    """
     return exit_velocity(1.0, v0, k, 1.0, b) / check_positive("v0", v0, unit="m/s")
