@@ -31,7 +31,7 @@ from ppamsafety.units import DEG  # noqa: E402
 
 COUNTS: dict = defaultdict(Counter)
 FAST = settings(max_examples=60, deadline=None, suppress_health_check=list(HealthCheck))
-SLOW = settings(max_examples=12, deadline=None, suppress_health_check=list(HealthCheck))
+SLOW = settings(max_examples=30, deadline=None, suppress_health_check=list(HealthCheck))
 ARM = thesis_arm()
 Q = np.array([50 * DEG, -80 * DEG])
 QD = np.array([3.0, -1.0])

@@ -202,10 +202,15 @@ def exit_velocity(mass, v0, k, n, b=0.0) -> float:
     if not x <= 1e300:
         raise ValueError(f"b v0 / k = {b:g} x {v0:g} / {k:g} overflows: damping b too large "
                          f"for stiffness k")
+    if x < 1e-8:   # y = -x + 2 x^2 / 3 + O(x^3): v_out = v0 (1 - 2x/3), error ~ x^2
+        return v0 * (1.0 - 2.0 * x / 3.0)
     target = _x_minus_log1p(x)
+    if target > 30.0:   # y -> -1: 1 + y = exp(y - target) = exp(-1 - target) (< 1e-13)
+        return k / b * (1.0 - math.exp(-1.0 - target))
     y = brentq(lambda y: _x_minus_log1p(y) - target, -1.0 + 1e-15, 0.0, xtol=1e-300,
                rtol=1e-15, maxiter=500)
-    return -k / b * y
+    return check_finite_result("exit_velocity", -k / b * y,
+                               f"v0 = {v0:g}, k = {k:g}, b = {b:g}")
 
 
 def _x_minus_log1p(x: float) -> float:
