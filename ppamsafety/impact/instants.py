@@ -17,7 +17,7 @@ from .._validation import (InvalidTypeError, check_choice, check_instance, check
                            check_nonnegative, describe)
 from ..plant import geometry as geo
 from ..plant.pneumatics import joint_stiffness
-from .model import ImpactResults, check_arm, resolve_head, simulate_impacts
+from .model import ImpactResults, _simulate_impacts, check_arm, resolve_head, simulate_impacts  # noqa: F401
 
 HEURISTICS = ("max TCP speed", "max |qd1|", "max |qd2|", "max ||qd||")
 
@@ -145,9 +145,10 @@ def evaluate_experiment(result, arm, *, instants: str = "heuristic", every: int 
         idx = idx[st["tcp_speed"].to_numpy()[idx] >= min_speed] if min_speed > 0 else idx
         names = None
     sub = st.iloc[idx]
-    res = simulate_impacts(arm, sub[["q1", "q2"]].to_numpy(), sub[["qd1", "qd2"]].to_numpy(),
-                           sub[["K1", "K2"]].to_numpy(), head=head, dt=dt, duration=duration,
-                           history=history)
+    res = _simulate_impacts(arm, sub[["q1", "q2"]].to_numpy(), sub[["qd1", "qd2"]].to_numpy(),
+                            sub[["K1", "K2"]].to_numpy(), head=head, direction=None,
+                            head_velocity=None, fixed_arm=False, dt=dt, duration=duration,
+                            history=history, warn_area=False, stacklevel=4)
     res.summary.insert(0, "t0", sub["t"].to_numpy())
     if names is not None:
         res.summary.insert(0, "instant", names)

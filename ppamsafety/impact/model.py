@@ -32,6 +32,9 @@ from .contact import max_penetration
 #: Joint angles beyond this magnitude [rad] are refused: no revolute joint of a planar
 #: arm needs more than one turn, and such values are almost always degrees.
 MAX_ANGLE = 2.0 * math.pi
+#: Tolerance [rad] of the working-area warning: closed-loop records (e.g. the step
+#: response of fig. 5.17) overshoot the limits (2.6)-(2.7) by a fraction of a degree.
+ANGLE_MARGIN = math.radians(5.0)
 #: Joint speeds beyond this magnitude [rad/s] are refused (about 10^4 rpm: no robot arm;
 #: the arithmetic would only overflow).
 MAX_JOINT_SPEED = 1.0e3
@@ -113,8 +116,9 @@ def check_angles(name: str, q: np.ndarray, arm, *, stacklevel: int = 3) -> np.nd
     -- with the hint "did you mean np.radians(...)?" when the values read as
     degrees lie inside the working area (2.6)-(2.7); angles outside the
     working area ``arm.geometry.q1_min..q1_max``, ``q2_min..q2_max`` but
-    within 2 pi give a ``UserWarning`` (the impact model itself is valid
-    there, e.g. for another arm).
+    within 2 pi give a ``UserWarning`` when they exceed it by more than
+    :data:`ANGLE_MARGIN` (5 deg; the impact model itself is valid there, e.g.
+    for another arm, and closed-loop records overshoot the limits slightly).
 
     Parameters
     ----------
@@ -150,11 +154,12 @@ def check_angles(name: str, q: np.ndarray, arm, *, stacklevel: int = 3) -> np.nd
         where = f"[{i}]" if q.ndim > 1 else ""
         raise ValueError(f"{name}{where} = {val.tolist()} rad is not a joint angle: |{name}| "
                          f"must be <= 2 pi rad{hint or f' (the arm works in the {area})'}")
-    out = np.any((q2d < lo) | (q2d > hi), axis=1)
+    out = np.any((q2d < lo - ANGLE_MARGIN) | (q2d > hi + ANGLE_MARGIN), axis=1)
     if np.any(out):
         i = np.nonzero(out)[0]
         warnings.warn(f"{name}: case(s) {_fmt_cases(i)} (e.g. {np.round(q2d[i[0]], 4).tolist()} "
-                      f"rad) lie outside the {area}; the impact model is still evaluated",
+                      f"rad) lie outside the {area} (by more than 5 deg); the impact model is "
+                      f"still evaluated",
                       UserWarning, stacklevel=stacklevel)
     return q
 
@@ -624,6 +629,15 @@ def simulate_impacts(arm, q, qd, stiffness, *, head: HeadContactModel | str | No
         reached the head centre), or |E_balance_error| > :data:`ENERGY_TOL`
         (1e-3).
     """
+    return _simulate_impacts(arm, q, qd, stiffness, head=head, direction=direction,
+                             head_velocity=head_velocity, fixed_arm=fixed_arm, dt=dt,
+                             duration=duration, history=history, warn_area=True, stacklevel=4)
+
+
+def _simulate_impacts(arm, q, qd, stiffness, *, head, direction, head_velocity, fixed_arm, dt,
+                      duration, history, warn_area, stacklevel):
+    """:func:`simulate_impacts`; ``warn_area=False`` for states of a simulated closed-loop
+    record (their working-area excursions are the controller's, not a user's mistake)."""
     arm = check_arm(arm)
     q = as_float_array("q", q, shape_tail=(2,), ndim=(1, 2))
     qd = as_float_array("qd", qd, shape_tail=(2,), ndim=(1, 2))
@@ -654,7 +668,10 @@ def simulate_impacts(arm, q, qd, stiffness, *, head: HeadContactModel | str | No
     K = _rows("stiffness", K, n, ref)
     vh = np.zeros((n, 2)) if vh is None else _rows("head_velocity", vh, n, ref)
     # ---- ranges and physical plausibility ----
-    check_angles("q", q, arm)
+    if warn_area:
+        check_angles("q", q, arm, stacklevel=stacklevel)
+    elif np.any(np.abs(q) > MAX_ANGLE):
+        check_angles("q", q, arm)
     check_range_array("qd", qd, -MAX_JOINT_SPEED, MAX_JOINT_SPEED, unit="rad/s")
     check_range_array("stiffness", K, 0.0, math.inf, unit="N m/rad")
     check_range_array("head_velocity", vh, -MAX_HEAD_SPEED, MAX_HEAD_SPEED, unit="m/s")
@@ -677,7 +694,7 @@ def simulate_impacts(arm, q, qd, stiffness, *, head: HeadContactModel | str | No
     if fast.size:
         warnings.warn(f"case(s) {_fmt_cases(fast)}: tool speed {speed[fast[0]]:.3g} m/s or head "
                       f"speed above the plausible maximum {PLAUSIBLE_SPEED:g} m/s for this arm "
-                      f"(check the units of qd: rad/s)", UserWarning, stacklevel=2)
+                      f"(check the units of qd: rad/s)", UserWarning, stacklevel=stacklevel - 1)
     v_close = np.einsum("ni,ni->n", (0.0 if fixed_arm else vt) - vh, u)
     check_pass_through(hm, v_close)
     active = (np.linalg.norm(vt - vh, axis=1) > 0) if not fixed_arm else \
@@ -701,6 +718,6 @@ def simulate_impacts(arm, q, qd, stiffness, *, head: HeadContactModel | str | No
                        "K1": K[:, 0], "K2": K[:, 1], "ux": u[:, 0], "uy": u[:, 1],
                        "tcp_speed": speed})
     df = pd.concat([df, eng.SUMMARY.frame(SUM)], axis=1)
-    df = _check_run(df, sel, hm, stacklevel=3)
+    df = _check_run(df, sel, hm, stacklevel=stacklevel)
     hists = {int(i): eng.HIST.frame(HIST[j]) for j, i in enumerate(hist_idx)}
     return ImpactResults(df, hists, hm, float(dt), float(duration))
