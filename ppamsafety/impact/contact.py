@@ -24,28 +24,32 @@ from __future__ import annotations
 import math
 
 from .._jit import kernel, leaf
-from .._validation import check_nonnegative, check_positive, check_range
+from .._validation import check_finite_result, check_positive, check_range
 
 
 @leaf
 def hunt_crossley_force(delta, delta_dot, k, n, b):
     """Contact force [N] for penetration ``delta`` [m] and its rate [m/s]; never negative.
 
-    F = k delta^n + b delta^n d(delta)/dt for delta > 0, clipped at 0
-    (thesis eq. 6.2); 0 for delta <= 0.
+    Compiled scalar kernel (no input checks: the callers validate).
 
     Parameters
     ----------
     delta : float
-        Penetration [m] (positive in contact).
+        Penetration [m] (<= 0: no contact).
     delta_dot : float
-        Penetration rate [m/s] (positive while compressing).
+        Penetration rate [m/s].
     k : float
-        Contact stiffness [N/m^n].
+        Stiffness [N/m^n].
     n : float
-        Contact exponent [-].
+        Exponent [-].
     b : float
-        Hunt-Crossley damping [N s/m^(n+1)].
+        Damping [N s/m^(n+1)].
+
+    Returns
+    -------
+    float
+        max(k delta^n + b delta^n delta_dot, 0) for delta > 0, else 0.
     """
     if delta <= 0.0:
         return 0.0
@@ -60,11 +64,11 @@ def hunt_crossley_elastic(delta, k, n):
     Parameters
     ----------
     delta : float
-        Penetration [m]; negative values give 0.
+        Penetration [m].
     k : float
-        Contact stiffness [N/m^n].
+        Stiffness [N/m^n].
     n : float
-        Contact exponent [-].
+        Exponent [-].
     """
     return k * max(delta, 0.0) ** n
 
@@ -78,9 +82,9 @@ def hunt_crossley_potential(delta, k, n):
     delta : float
         Penetration [m].
     k : float
-        Contact stiffness [N/m^n].
+        Stiffness [N/m^n].
     n : float
-        Contact exponent [-].
+        Exponent [-].
     """
     if delta <= 0.0:
         return 0.0
@@ -93,27 +97,23 @@ def hunt_crossley_force_batch(delta, delta_dot, k, n, b, out):
 
     Parameters
     ----------
-    delta : ndarray of float64, shape (N,)
-        Penetrations [m].
-    delta_dot : ndarray of float64, shape (N,)
-        Penetration rates [m/s] (at least N entries).
-    k : float
-        Contact stiffness [N/m^n].
-    n : float
-        Contact exponent [-].
-    b : float
-        Hunt-Crossley damping [N s/m^(n+1)].
-    out : ndarray of float64, shape (N,)
-        Output, overwritten: contact forces [N].
+    delta, delta_dot : numpy.ndarray, shape (m,)
+        Penetrations [m] and their rates [m/s].
+    k, n, b : float
+        Stiffness [N/m^n], exponent [-], damping [N s/m^(n+1)].
+    out : numpy.ndarray, shape (m,)
+        Filled with the forces [N].
     """
     for i in range(delta.shape[0]):
         out[i] = hunt_crossley_force(delta[i], delta_dot[i], k, n, b)
 
 
 def _check(mass, v0, k, n, b):
-    return (check_positive("mass", mass, unit="kg"), check_positive("v0", v0, unit="m/s"),
-            check_positive("k", k, unit="N/m^n"), check_range("n", n, 0.5, 5.0),
-            check_nonnegative("b", b, unit="N s/m^(n+1)"))
+    return (check_range("mass", mass, 0.0, 1e6, lo_open=True, unit="kg"),
+            check_range("v0", v0, 0.0, 1e3, lo_open=True, unit="m/s"),
+            check_range("k", k, 0.0, 1e20, lo_open=True, unit="N/m^n"),
+            check_range("n", n, 0.5, 5.0),
+            check_range("b", b, 0.0, 1e20, unit="N s/m^(n+1)"))
 
 
 def max_penetration(mass, v0, k, n, b=0.0) -> float:
@@ -125,11 +125,26 @@ def max_penetration(mass, v0, k, n, b=0.0) -> float:
     Parameters
     ----------
     mass : float
-        Impacting (or reduced) mass [kg].
+        Impacting (or reduced) mass [kg], in (0, 1e6].
     v0 : float
-        Approach speed [m/s], > 0.
-    k, n, b : float
-        Contact parameters: stiffness [N/m^n], exponent [-], damping [N s/m^(n+1)].
+        Approach speed [m/s], in (0, 1000].
+    k : float
+        Contact stiffness [N/m^n], in (0, 1e20].
+    n : float
+        Exponent [-], in [0.5, 5].
+    b : float
+        Damping [N s/m^(n+1)], in [0, 1e20].
+
+    Returns
+    -------
+    float
+        delta_max [m].
+
+    Raises
+    ------
+    ValueError
+        Out-of-range input, or a result that is not a positive finite number
+        (under- or overflow for extreme combinations).
     """
     m, v0, k, n, b = _check(mass, v0, k, n, b)
     x = b * v0 / k
@@ -137,7 +152,13 @@ def max_penetration(mass, v0, k, n, b=0.0) -> float:
         level = m * v0 * v0 / (2.0 * k) * (1.0 - 2.0 * x / 3.0 + x * x / 2.0 - 2.0 * x ** 3 / 5.0)
     else:
         level = m / (b * b) * (b * v0 - k * math.log1p(x))   # = delta_max^(n+1)/(n+1)
-    return ((n + 1.0) * level) ** (1.0 / (n + 1.0))
+    out = ((n + 1.0) * level) ** (1.0 / (n + 1.0)) if level > 0.0 else 0.0
+    check_finite_result("max_penetration", out, f"mass = {m:g}, v0 = {v0:g}, k = {k:g}, "
+                        f"n = {n:g}, b = {b:g}")
+    if not out > 0.0:
+        raise ValueError(f"max_penetration underflows to 0 for mass = {m:g} kg, v0 = {v0:g} m/s, "
+                         f"k = {k:g}, n = {n:g}, b = {b:g}: the contact is too stiff or damped")
+    return out
 
 
 def exit_velocity(mass, v0, k, n, b=0.0) -> float:
@@ -152,16 +173,25 @@ def exit_velocity(mass, v0, k, n, b=0.0) -> float:
     Parameters
     ----------
     mass : float
-        Impacting (or reduced) mass [kg], > 0 (only validated).
+        Impacting (or reduced) mass [kg], in (0, 1e6] (validated only).
     v0 : float
-        Approach speed [m/s], > 0.
+        Approach speed [m/s], in (0, 1000].
     k : float
-        Contact stiffness [N/m^n], > 0.
+        Contact stiffness [N/m^n], in (0, 1e20].
     n : float
-        Contact exponent [-], in [0.5, 5] (only validated).
+        Exponent [-], in [0.5, 5] (validated only).
     b : float
-        Hunt-Crossley damping [N s/m^(n+1)], >= 0 (default 0: elastic, the
-        rebound speed is v0).
+        Damping [N s/m^(n+1)], in [0, 1e20].
+
+    Returns
+    -------
+    float
+        Rebound speed [m/s], in [0, v0].
+
+    Raises
+    ------
+    ValueError
+        Out-of-range input, or b v0 / k beyond 1e300 (no finite phase-plane level).
     """
     from scipy.optimize import brentq
 
@@ -169,10 +199,18 @@ def exit_velocity(mass, v0, k, n, b=0.0) -> float:
     if b == 0.0:
         return v0
     x = b * v0 / k
+    if not x <= 1e300:
+        raise ValueError(f"b v0 / k = {b:g} x {v0:g} / {k:g} overflows: damping b too large "
+                         f"for stiffness k")
+    if x < 1e-8:   # y = -x + 2 x^2 / 3 + O(x^3): v_out = v0 (1 - 2x/3), error ~ x^2
+        return v0 * (1.0 - 2.0 * x / 3.0)
     target = _x_minus_log1p(x)
+    if target > 30.0:   # y -> -1: 1 + y = exp(y - target) = exp(-1 - target) (< 1e-13)
+        return k / b * (1.0 - math.exp(-1.0 - target))
     y = brentq(lambda y: _x_minus_log1p(y) - target, -1.0 + 1e-15, 0.0, xtol=1e-300,
                rtol=1e-15, maxiter=500)
-    return -k / b * y
+    return check_finite_result("exit_velocity", -k / b * y,
+                               f"v0 = {v0:g}, k = {k:g}, b = {b:g}")
 
 
 def _x_minus_log1p(x: float) -> float:
@@ -185,15 +223,18 @@ def _x_minus_log1p(x: float) -> float:
 def restitution(v0, k, b) -> float:
     """Coefficient of restitution e = v_out / v0 of a Hunt-Crossley impact [-].
 
-    Independent of the mass and the exponent (see :func:`exit_velocity`).
-
     Parameters
     ----------
     v0 : float
-        Approach speed [m/s], > 0.
+        Approach speed [m/s], in (0, 1000].
     k : float
-        Contact stiffness [N/m^n], > 0.
+        Contact stiffness [N/m^n], in (0, 1e20].
     b : float
-        Hunt-Crossley damping [N s/m^(n+1)], >= 0.
+        Damping [N s/m^(n+1)], in [0, 1e20].
+
+    Returns
+    -------
+    float
+        e in [0, 1] (1 without damping).
     """
     return exit_velocity(1.0, v0, k, 1.0, b) / check_positive("v0", v0, unit="m/s")

@@ -13,23 +13,42 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from .._validation import check_choice, check_int
+from .._validation import (InvalidTypeError, check_choice, check_instance, check_int,
+                           check_nonnegative, describe)
 from ..plant import geometry as geo
 from ..plant.pneumatics import joint_stiffness
-from .model import ImpactResults, simulate_impacts
+from .model import ImpactResults, _simulate_impacts, check_arm, resolve_head, simulate_impacts  # noqa: F401
 
 HEURISTICS = ("max TCP speed", "max |qd1|", "max |qd2|", "max ||qd||")
+
+
+def _check_result(result):
+    from ..experiments.closed_loop import ExperimentResult
+    return check_instance("result", result, ExperimentResult)
 
 
 def impact_states(result, arm) -> pd.DataFrame:
     """Per-sample impact initial conditions of an :class:`ExperimentResult`.
 
-    Columns: t [s], q1, q2 [rad], qd1, qd2 [rad/s], K1, K2 [N m/rad]
-    (2.18 with the simulated pressures), tcp_speed [m/s]; samples after a
-    divergence (NaN state) are left out.  The record is read by signal name
-    (:meth:`ExperimentResult.signal`).
+    Parameters
+    ----------
+    result : ExperimentResult
+        The closed-loop record, read by signal name
+        (:meth:`ExperimentResult.signal`).
+    arm : ArmParameters
+        The arm (kinematics and the joint stiffness model 2.18).
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns: t [s], q1, q2 [rad], qd1, qd2 [rad/s], K1, K2 [N m/rad]
+        (2.18 with the simulated pressures), tcp_speed [m/s]; samples after a
+        divergence (NaN state) are left out.
     """
-    ok = np.isfinite(result.signal("q1"))
+    result = _check_result(result)
+    arm = check_arm(arm)
+    ok = np.all(np.isfinite(result.signals("q1", "q2", "qd1", "qd2", "p1", "p2", "p3", "p4")),
+                axis=1)
     q = result.signals("q1", "q2")[ok]
     qd = result.signals("qd1", "qd2")[ok]
     p = result.signals("p1", "p2", "p3", "p4")[ok]
@@ -41,8 +60,34 @@ def impact_states(result, arm) -> pd.DataFrame:
 
 
 def heuristic_instants(states: pd.DataFrame) -> dict:
-    """Row indices of the four impact instants of §6.3.3 (name -> index)."""
-    qd = states[["qd1", "qd2"]].to_numpy()
+    """Row indices of the four impact instants of §6.3.3 (name -> index).
+
+    Parameters
+    ----------
+    states : pandas.DataFrame
+        Impact states as returned by :func:`impact_states` (columns
+        ``tcp_speed``, ``qd1``, ``qd2`` used; at least one row, finite).
+
+    Returns
+    -------
+    dict
+        :data:`HEURISTICS` name -> row position in ``states``.
+    """
+    if not isinstance(states, pd.DataFrame):
+        raise InvalidTypeError(f"states must be a pandas DataFrame (impact_states), got "
+                               f"{describe(states)}")
+    missing = [c for c in ("tcp_speed", "qd1", "qd2") if c not in states.columns]
+    if missing:
+        raise ValueError(f"states lacks the column(s) {missing} (see impact_states)")
+    if len(states) == 0:
+        raise ValueError("states has no rows: no impact instant to choose")
+    try:
+        vals = states[["tcp_speed", "qd1", "qd2"]].to_numpy(dtype=float)
+    except (TypeError, ValueError):
+        raise InvalidTypeError("states columns tcp_speed, qd1, qd2 must be numeric") from None
+    if not np.all(np.isfinite(vals)):
+        raise ValueError("states contains NaN or inf in tcp_speed, qd1 or qd2")
+    qd = vals[:, 1:]
     return {HEURISTICS[0]: int(np.argmax(states["tcp_speed"].to_numpy())),
             HEURISTICS[1]: int(np.argmax(np.abs(qd[:, 0]))),
             HEURISTICS[2]: int(np.argmax(np.abs(qd[:, 1]))),
@@ -59,16 +104,20 @@ def evaluate_experiment(result, arm, *, instants: str = "heuristic", every: int 
     result : ExperimentResult
         The closed-loop record.
     arm : ArmParameters
+        The arm.
     instants : {"heuristic", "all"}, keyword-only
         The four instants of §6.3.3, or every ``every``-th sample.
     every : int
         Sample stride for ``instants="all"`` (1 = every control period, 1 ms).
     head : HeadContactModel or str, optional
-    dt, duration : float
-        Impact integration step and length [s].
+        Head model or its name (default ``"thesis-frontal"``).
+    dt : float
+        Impact integration step [s] (see :func:`simulate_impacts`).
+    duration : float
+        Simulated time of each impact [s].
     min_speed : float
-        With ``"all"``, instants whose TCP speed is below this [m/s] are
-        skipped (reported with zero force), e.g. 1e-4 to skip the arm at rest.
+        With ``"all"``, instants whose TCP speed is below this [m/s] (>= 0)
+        are left out, e.g. 1e-4 to skip the arm at rest.
     history : bool or sequence of int
         Passed to :func:`simulate_impacts` (indices into the evaluated rows).
 
@@ -78,9 +127,15 @@ def evaluate_experiment(result, arm, *, instants: str = "heuristic", every: int 
         Summary with an extra column ``t0`` (impact instant) and, for the
         heuristic, ``instant`` (its name).
     """
+    result = _check_result(result)
+    arm = check_arm(arm)
     check_choice("instants", instants, ("heuristic", "all"))
     every = check_int("every", every, 1, 10 ** 6)
+    head = resolve_head(head)
+    min_speed = check_nonnegative("min_speed", min_speed, unit="m/s")
     st = impact_states(result, arm)
+    if len(st) == 0:
+        raise ValueError(f"result {result.name!r} has no finite sample to evaluate")
     if instants == "heuristic":
         h = heuristic_instants(st)
         idx = np.array(list(h.values()))
@@ -90,9 +145,10 @@ def evaluate_experiment(result, arm, *, instants: str = "heuristic", every: int 
         idx = idx[st["tcp_speed"].to_numpy()[idx] >= min_speed] if min_speed > 0 else idx
         names = None
     sub = st.iloc[idx]
-    res = simulate_impacts(arm, sub[["q1", "q2"]].to_numpy(), sub[["qd1", "qd2"]].to_numpy(),
-                           sub[["K1", "K2"]].to_numpy(), head=head, dt=dt, duration=duration,
-                           history=history)
+    res = _simulate_impacts(arm, sub[["q1", "q2"]].to_numpy(), sub[["qd1", "qd2"]].to_numpy(),
+                            sub[["K1", "K2"]].to_numpy(), head=head, direction=None,
+                            head_velocity=None, fixed_arm=False, dt=dt, duration=duration,
+                            history=history, warn_area=False, stacklevel=4)
     res.summary.insert(0, "t0", sub["t"].to_numpy())
     if names is not None:
         res.summary.insert(0, "instant", names)

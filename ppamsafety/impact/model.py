@@ -11,23 +11,276 @@ along a direction, the quantity that decides the impact force (§6.3.4).
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
 
-from .._validation import as_float_array, check_range
-from ..params.head import HeadContactModel, head_model
+from .._validation import (InvalidTypeError, as_float_array, check_bool, check_choice,
+                           check_finite_result, check_instance, check_int, check_range,
+                           check_range_array, check_same_rows, check_str, describe)
+from ..params.arm import ArmParameters
+from ..params.head import HeadContactModel, head_model, head_model_names
 from ..plant import dynamics as dyn
 from ..plant import geometry as geo
 from ..plant import layout as lay
 from . import engine as eng
+from .contact import max_penetration
+
+# ---- plausibility thresholds (issue 8) -----------------------------------------------------
+#: Joint angles beyond this magnitude [rad] are refused: no revolute joint of a planar
+#: arm needs more than one turn, and such values are almost always degrees.
+MAX_ANGLE = 2.0 * math.pi
+#: Tolerance [rad] of the working-area warning: closed-loop records (e.g. the step
+#: response of fig. 5.17) overshoot the limits (2.6)-(2.7) by a fraction of a degree.
+ANGLE_MARGIN = math.radians(5.0)
+#: Joint speeds beyond this magnitude [rad/s] are refused (about 10^4 rpm: no robot arm;
+#: the arithmetic would only overflow).
+MAX_JOINT_SPEED = 1.0e3
+#: Tool or head speeds above this [m/s] give a ``UserWarning``: the thesis' impact speeds
+#: are below 2 m/s (Table 6.1) and a PPAM-driven arm of this size cannot reach 10 m/s.
+PLAUSIBLE_SPEED = 10.0
+#: Head speeds beyond this magnitude [m/s] are refused.
+MAX_HEAD_SPEED = 1.0e3
+#: The joint spring's period 2 pi / omega, omega^2 = max(K) / lambda_min(H(q)) (an upper
+#: bound of the arm's highest natural frequency on its joint springs), must span at least
+#: this many of the largest RK4 steps the engine takes (FREE_STRIDE x dt in free flight).
+STEPS_PER_PERIOD = 20
+#: Relative energy-balance error |E_balance_error| above which a case is flagged
+#: (``energy_ok`` False) and a ``UserWarning`` is given.  Valid cases at the default step
+#: stay below 1e-5 (tests); 1e-3 signals an under-resolved contact or spring.
+ENERGY_TOL = 1e-3
+#: Largest number of integration steps duration / dt of one call (memory of the HIC buffer).
+MAX_STEPS = 10 ** 7
+#: Largest memory of the recorded histories of one call [bytes].
+MAX_HISTORY_BYTES = 2 * 10 ** 9
+
+
+def resolve_head(head, name: str = "head") -> HeadContactModel:
+    """``head`` as a :class:`HeadContactModel`: ``None`` (thesis-frontal), a name or a model.
+
+    Parameters
+    ----------
+    head : HeadContactModel, str or None
+        The model, one of :func:`~ppamsafety.params.head.head_model_names`, or
+        ``None`` for ``"thesis-frontal"``.
+    name : str
+        Argument name used in error messages.
+
+    Returns
+    -------
+    HeadContactModel
+    """
+    if head is None:
+        return head_model()
+    if isinstance(head, HeadContactModel):
+        return head
+    names = head_model_names()
+    if isinstance(head, str):
+        if head not in names:
+            raise ValueError(f"{name} = {head!r}: unknown head model; choose from "
+                             f"{', '.join(map(repr, names))} or pass a HeadContactModel")
+        return head_model(head)
+    raise InvalidTypeError(f"{name} must be a HeadContactModel or a head model name "
+                           f"({', '.join(map(repr, names))}), got {describe(head)}")
+
+
+def check_arm(arm, name: str = "arm") -> ArmParameters:
+    """Check that ``arm`` is an :class:`~ppamsafety.params.ArmParameters`; return it.
+
+    Parameters
+    ----------
+    arm : ArmParameters
+        The arm.
+    name : str
+        Argument name used in error messages.
+
+    Returns
+    -------
+    ArmParameters
+    """
+    return check_instance(name, arm, ArmParameters)
+
+
+def _fmt_cases(idx, limit: int = 5) -> str:
+    idx = [int(i) for i in idx]
+    more = f" and {len(idx) - limit} more" if len(idx) > limit else ""
+    return ", ".join(map(str, idx[:limit])) + more
+
+
+def check_angles(name: str, q: np.ndarray, arm, *, stacklevel: int = 3) -> np.ndarray:
+    """Refuse joint angles that cannot be radians; warn outside the working area.
+
+    Rules (issue 8): any |q| > :data:`MAX_ANGLE` (2 pi) raises ``ValueError``
+    -- with the hint "did you mean np.radians(...)?" when the values read as
+    degrees lie inside the working area (2.6)-(2.7); angles outside the
+    working area ``arm.geometry.q1_min..q1_max``, ``q2_min..q2_max`` but
+    within 2 pi give a ``UserWarning`` when they exceed it by more than
+    :data:`ANGLE_MARGIN` (5 deg; the impact model itself is valid there, e.g.
+    for another arm, and closed-loop records overshoot the limits slightly).
+
+    Parameters
+    ----------
+    name : str
+        Argument name used in messages.
+    q : numpy.ndarray, shape (..., 2)
+        Finite joint angles [rad] (already converted).
+    arm : ArmParameters
+        Supplies the working area.
+    stacklevel : int
+        ``stacklevel`` of the warning.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``q`` unchanged.
+    """
+    g = arm.geometry
+    lo = np.array([g.q1_min, g.q2_min])
+    hi = np.array([g.q1_max, g.q2_max])
+    area = (f"working area q1 in [{math.degrees(g.q1_min):.0f}, {math.degrees(g.q1_max):.0f}] "
+            f"deg, q2 in [{math.degrees(g.q2_min):.0f}, {math.degrees(g.q2_max):.0f}] deg")
+    q2d = q.reshape(-1, 2)
+    big = np.abs(q2d) > MAX_ANGLE
+    if np.any(big):
+        i = int(np.nonzero(big.any(axis=1))[0][0])
+        val = q2d[i]
+        rad = np.radians(val)
+        hint = ""
+        if np.all((rad >= lo) & (rad <= hi)):
+            hint = (f"; looks like degrees: did you mean np.radians({val.tolist()}) = "
+                    f"{np.round(rad, 4).tolist()} rad (inside the {area})?")
+        where = f"[{i}]" if q.ndim > 1 else ""
+        raise ValueError(f"{name}{where} = {val.tolist()} rad is not a joint angle: |{name}| "
+                         f"must be <= 2 pi rad{hint or f' (the arm works in the {area})'}")
+    out = np.any((q2d < lo - ANGLE_MARGIN) | (q2d > hi + ANGLE_MARGIN), axis=1)
+    if np.any(out):
+        i = np.nonzero(out)[0]
+        warnings.warn(f"{name}: case(s) {_fmt_cases(i)} (e.g. {np.round(q2d[i[0]], 4).tolist()} "
+                      f"rad) lie outside the {area} (by more than 5 deg); the impact model is "
+                      f"still evaluated",
+                      UserWarning, stacklevel=stacklevel)
+    return q
+
+
+def stiffness_limit(q, arm, step: float) -> np.ndarray:
+    """Largest joint stiffness [N m/rad] an RK4 step of length ``step`` resolves at ``q``.
+
+    k_lim = lambda_min(H(q)) (2 pi / (:data:`STEPS_PER_PERIOD` step))^2: the
+    joint spring's period 2 pi sqrt(lambda_min(H)/k), with the smallest
+    eigenvalue of the link inertia matrix H(q) (the lightest inertia a
+    joint spring can see), then spans at least :data:`STEPS_PER_PERIOD` steps
+    (RK4 itself is unstable beyond omega step = 2.83).
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 2)
+        Joint angles [rad].
+    arm : ArmParameters
+        Link inertias.
+    step : float
+        Largest integration step [s].
+
+    Returns
+    -------
+    numpy.ndarray, shape (...)
+        Stiffness limit per case [N m/rad].
+    """
+    q = as_float_array("q", q, shape_tail=(2,))
+    step = check_range("step", step, 0.0, math.inf, lo_open=True, unit="s")
+    lam = np.linalg.eigvalsh(dyn.inertia_matrix(q, arm))[..., 0]
+    return lam * (2.0 * math.pi / (STEPS_PER_PERIOD * step)) ** 2
+
+
+def check_stiffness(K: np.ndarray, q: np.ndarray, arm, step: float, dt: float,
+                    name: str = "stiffness") -> np.ndarray:
+    """Refuse joint stiffnesses the integration step cannot resolve (:func:`stiffness_limit`).
+
+    Parameters
+    ----------
+    K : numpy.ndarray, shape (N, 2)
+        Joint stiffnesses [N m/rad], finite and non-negative.
+    q : numpy.ndarray, shape (N, 2)
+        Joint angles [rad].
+    arm : ArmParameters
+        Link inertias.
+    step : float
+        Largest RK4 step the integrator takes [s].
+    dt : float
+        The user's step [s] (named in the message).
+    name : str
+        Argument name used in messages.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``K`` unchanged.
+    """
+    lim = stiffness_limit(q, arm, step)
+    bad = np.nonzero(K.max(axis=1) > lim)[0]
+    if bad.size:
+        i = int(bad[0])
+        k = float(K[i].max())
+        dt_ok = dt * math.sqrt(lim[i] / k)
+        remedy = (f"use dt <= {dt_ok:.3g} s, or " if dt_ok >= 1e-8 else
+                  "this is beyond any integration step (dt >= 1e-8 s): use ")
+        raise ValueError(
+            f"{name}[{i}] = {K[i].tolist()} N m/rad is beyond the validity of the flexible-joint "
+            f"impact model at dt = {dt:g} s: the joint spring's period 2 pi sqrt(m/k) must span "
+            f">= {STEPS_PER_PERIOD} integration steps, so k <= {lim[i]:.4g} N m/rad here "
+            f"(case(s) {_fmt_cases(bad)}); {remedy}the rigid-arm limit "
+            f"(fixed_arm=True or a two-body impact with the effective mass)")
+    return K
+
+
+def check_pass_through(hm: HeadContactModel, closing_speed) -> None:
+    """Refuse cases whose closing speed would drive the tool through the head model.
+
+    The engine starts the head centre at distance ``radius`` from the tool
+    point; the free head on a rigid arm (reduced mass m_h, the largest
+    possible) must stop before it: the closed-form maximum penetration
+    :func:`~ppamsafety.impact.contact.max_penetration` at the case's closing
+    speed must stay below the radius.
+
+    Parameters
+    ----------
+    hm : HeadContactModel
+        The head model.
+    closing_speed : array_like, shape (N,)
+        Closing speed of tool and head along the impact direction [m/s]
+        (cases with speed <= 0 are not checked).
+    """
+    v = np.atleast_1d(np.asarray(closing_speed, dtype=float))
+    for i in np.nonzero(v > 0)[0]:
+        if v[i] > 1e3:
+            raise ValueError(f"case {int(i)}: closing speed {v[i]:.4g} m/s of tool and head "
+                             f"(qd, head_velocity) exceeds 1000 m/s")
+        dmax = max_penetration(hm.mass, float(v[i]), hm.stiffness, hm.exponent, hm.damping)
+        if not dmax < hm.radius:
+            raise ValueError(
+                f"case {int(i)}: at the closing speed {v[i]:.4g} m/s the tool would pass "
+                f"through the head model {hm.name!r} (maximum penetration {dmax:.3g} m >= "
+                f"radius {hm.radius:g} m); use a stiffer head model or a lower speed (qd)")
+
+
+def _rows(name, arr, n, ref_name):
+    """Broadcast a (2,) or (m, 2) array to (n, 2); rows must be 1 or n."""
+    a = np.atleast_2d(arr)
+    if a.ndim != 2:
+        raise ValueError(f"{name} must have shape (2,) or (N, 2), got shape {arr.shape}")
+    if a.shape[0] not in (1, n):
+        check_same_rows(ref_name, np.empty((n, 2)), name, a)
+    return np.ascontiguousarray(np.broadcast_to(a, (n, 2)))
 
 
 def _unit(v, name):
     n = np.linalg.norm(v, axis=-1, keepdims=True)
     if np.any(n == 0):
-        raise ValueError(f"{name} contains a zero vector")
+        i = int(np.nonzero(n.reshape(-1) == 0)[0][0])
+        where = f"[{i}]" if v.ndim > 1 else ""
+        raise ValueError(f"{name}{where} = {v.reshape(-1, 2)[i].tolist()} is a zero vector; "
+                         f"it must give a direction (any non-zero length)")
     return v / n
 
 
@@ -41,17 +294,50 @@ def effective_mass(q, direction, arm) -> np.ndarray:
     Parameters
     ----------
     q : array_like, shape (..., 2)
-        Joint angles [rad].
+        Joint angles [rad], |q| <= 2 pi (see :func:`check_angles`; outside
+        the working area a ``UserWarning``).
     direction : array_like, shape (..., 2)
-        Impact direction (normalised internally).
+        Impact direction (normalised internally; non-zero), broadcast against ``q``.
     arm : ArmParameters
+        Link inertias and kinematics.
+
+    Returns
+    -------
+    numpy.ndarray
+        Effective mass [kg], shape of ``q`` and ``direction`` broadcast without the last axis.
+
+    Raises
+    ------
+    ValueError
+        For a singular direction (stretched or folded arm, u along which the
+        tool cannot move: infinite apparent mass).
     """
     q = as_float_array("q", q, shape_tail=(2,))
-    u = _unit(as_float_array("direction", direction, shape_tail=(2,)), "direction")
+    d = as_float_array("direction", direction, shape_tail=(2,))
+    arm = check_arm(arm)
+    check_angles("q", q, arm)
+    u = _unit(d, "direction")
+    try:
+        q, u = np.broadcast_arrays(q, u)
+    except ValueError:
+        raise ValueError(f"direction (shape {d.shape}) does not broadcast against q "
+                         f"(shape {q.shape})") from None
     J = geo.jacobian(q, arm)
     Hinv = np.linalg.inv(dyn.inertia_matrix(q, arm))
     M = J @ Hinv @ np.swapaxes(J, -1, -2)
-    return 1.0 / np.einsum("...i,...ij,...j->...", u, M, u)
+    inv_m = np.einsum("...i,...ij,...j->...", u, M, u)
+    scale = np.linalg.eigvalsh(M)[..., -1]
+    if np.any(inv_m <= 1e-12 * scale):
+        raise ValueError("direction: the tool cannot move along this direction at q (singular "
+                         "arm configuration, q2 = 0 or pi): the effective mass is infinite")
+    return check_finite_result("effective_mass", 1.0 / inv_m, "this q and direction")
+
+
+class MissingHistoryError(KeyError, ValueError):
+    """No history recorded for a case, or an unknown signal (a ``KeyError`` and a ``ValueError``)."""
+
+    def __str__(self):
+        return str(self.args[0]) if self.args else ""
 
 
 @dataclass
@@ -62,13 +348,18 @@ class ImpactResults:
     ----------
     summary : pandas.DataFrame
         One row per case: inputs (q1, q2, qd1, qd2 [rad, rad/s], K1, K2
-        [N m/rad], ux, uy) and :data:`~ppamsafety.impact.engine.SUMMARY_COLUMNS`
-        (F_max [N], t_Fmax [s], HIC36, HIC15 and windows [s], delta_max [m],
-        a_max_g [g], energies [J], contact_time [s], v_tcp0 [m/s],
-        E_balance_error [-]).
+        [N m/rad], ux, uy, tcp_speed [m/s]),
+        :data:`~ppamsafety.impact.engine.SUMMARY_COLUMNS` (F_max [N], t_Fmax
+        [s], HIC36, HIC15 and windows [s], delta_max [m], a_max_g [g],
+        energies [J], contact_time [s], v_tcp0 [m/s], E_balance_error [-]),
+        and the checks of the run: ``energy_ok`` (bool, |E_balance_error| <=
+        :data:`ENERGY_TOL`) and ``status`` (``"ok"``, ``"at rest"`` for cases
+        not simulated, or the reasons a case is flagged: ``"non-finite: ..."``,
+        ``"tool reached the head centre"``, ``"energy balance error ..."``).
     histories : dict
         Case index -> DataFrame with :data:`~ppamsafety.impact.engine.HIST_COLUMNS`.
     head : HeadContactModel
+        The head model used.
     dt, duration : float
         Integration step and simulated time [s].
     """
@@ -80,7 +371,13 @@ class ImpactResults:
     duration: float = 0.05
 
     def to_pandas(self) -> pd.DataFrame:
-        """The data as a pandas DataFrame (SI units)."""
+        """The data as a pandas DataFrame (SI units).
+
+        Returns
+        -------
+        pandas.DataFrame
+            A copy of :attr:`summary`.
+        """
         return self.summary.copy()
 
     def __len__(self) -> int:
@@ -95,16 +392,24 @@ class ImpactResults:
             Case index (row of :attr:`summary`) whose history was recorded
             (``history=`` argument of :func:`simulate_impacts`).
 
+        Returns
+        -------
+        pandas.DataFrame
+            One row per integration step.
+
         Raises
         ------
+        TypeError
+            If ``index`` is not an integer.
         KeyError
-            If no history was recorded for ``index``.
+            If no history was recorded for ``index`` (:class:`MissingHistoryError`,
+            also a ``ValueError``).
         """
-        try:
-            return self.histories[index]
-        except (KeyError, TypeError):
-            raise KeyError(f"index = {index!r}: no history recorded for this case; recorded: "
-                           f"{sorted(self.histories)}") from None
+        i = check_int("index", index)
+        if i not in self.histories:
+            raise MissingHistoryError(f"index = {i}: no history recorded for this case; "
+                                      f"recorded: {sorted(self.histories)}")
+        return self.histories[i]
 
     def signal(self, name: str, index: int) -> np.ndarray:
         """One history signal by name, e.g. ``signal("F", 0)`` (SI units, see
@@ -116,19 +421,64 @@ class ImpactResults:
             A column of :data:`~ppamsafety.impact.engine.HIST_COLUMNS`.
         index : int
             Case index whose history was recorded.
+
+        Returns
+        -------
+        numpy.ndarray
+            The signal at every step.
         """
+        check_str("name", name)
         if name not in eng.HIST_COLUMNS:
-            raise KeyError(f"name = {name!r} is not a history signal; signals: "
-                           f"{', '.join(eng.HIST_COLUMNS)}")
+            raise MissingHistoryError(f"name = {name!r} is not a history signal; signals: "
+                                      f"{', '.join(eng.HIST_COLUMNS)}")
         return self.history(index)[name].to_numpy()
 
     def signals(self, *names: str, index: int) -> np.ndarray:
-        """Several history signals by name as columns of an array, shape (nsteps + 1, k)."""
+        """Several history signals by name as columns of an array, shape (nsteps + 1, k).
+
+        Parameters
+        ----------
+        *names : str
+            Columns of :data:`~ppamsafety.impact.engine.HIST_COLUMNS` (at least one).
+        index : int
+            Case index whose history was recorded.
+
+        Returns
+        -------
+        numpy.ndarray, shape (nsteps + 1, len(names))
+        """
+        if not names:
+            raise ValueError("names: give at least one signal name; signals: "
+                             f"{', '.join(eng.HIST_COLUMNS)}")
         return np.stack([self.signal(n, index) for n in names], axis=1)
 
     def worst(self, metric: str = "HIC36") -> pd.Series:
-        """Row of the case with the largest ``metric``."""
-        return self.summary.loc[self.summary[metric].idxmax()]
+        """Row of the case with the largest ``metric``.
+
+        Parameters
+        ----------
+        metric : str
+            A numeric column of :attr:`summary` (e.g. ``"HIC36"``, ``"F_max"``).
+
+        Returns
+        -------
+        pandas.Series
+            The summary row; cases whose ``metric`` is NaN are ignored.
+
+        Raises
+        ------
+        ValueError
+            For an unknown or non-numeric column, or if no case has a finite value.
+        """
+        cols = [c for c in self.summary.columns
+                if pd.api.types.is_numeric_dtype(self.summary[c])
+                and not pd.api.types.is_bool_dtype(self.summary[c])]
+        check_choice("metric", metric, cols)
+        vals = self.summary[metric]
+        if not np.any(np.isfinite(vals.to_numpy(dtype=float))):
+            raise ValueError(f"metric = {metric!r}: no case has a finite value "
+                             f"({len(vals)} cases)")
+        return self.summary.loc[vals.idxmax()]
 
     def plot(self, index=None, **kwargs):
         """Plot with :mod:`ppamsafety.report`; returns a matplotlib Figure.
@@ -140,10 +490,72 @@ class ImpactResults:
             history).
         **kwargs
             Passed to :func:`ppamsafety.report.impact_figures.plot_impact_history`.
+
+        Returns
+        -------
+        matplotlib.figure.Figure
         """
         from ..report.impact_figures import plot_impact_history
-        i = index if index is not None else next(iter(self.histories))
-        return plot_impact_history(self.histories[i], head=self.head, **kwargs)
+        if index is None:
+            if not self.histories:
+                raise MissingHistoryError("index: no history was recorded (pass history=True "
+                                          "or a list of case indices to simulate_impacts)")
+            index = next(iter(self.histories))
+        return plot_impact_history(self.history(index), head=self.head, **kwargs)
+
+
+def _history_indices(history, n: int) -> np.ndarray:
+    """``history`` (bool, None or a sequence of case indices) as unique int64 indices."""
+    if history is None or isinstance(history, (bool, np.bool_)):
+        return np.arange(n) if history else np.array([], dtype=np.int64)
+    if isinstance(history, (str, bytes, dict, set, frozenset)) or not (
+            isinstance(history, (list, tuple, range, np.ndarray))):
+        raise InvalidTypeError(f"history must be True, False or a sequence of case indices, "
+                               f"got {describe(history)}")
+    items = list(np.asarray(history, dtype=object).ravel()) if isinstance(history, np.ndarray) \
+        else list(history)
+    idx = [check_int(f"history[{j}]", x, 0, max(n - 1, 0)) for j, x in enumerate(items)]
+    if n == 0 and idx:
+        raise ValueError(f"history = {idx}: there are no cases")
+    return np.array(list(dict.fromkeys(idx)), dtype=np.int64)
+
+
+def _check_run(df, sel, hm, stacklevel):
+    """Post-run checks: energy balance, non-finite values, pass-through; columns + warnings."""
+    n = len(df)
+    cols = eng.SUMMARY_COLUMNS
+    vals = df[cols].to_numpy()
+    act = np.zeros(n, dtype=bool)
+    act[sel] = True
+    nonfinite = ~np.isfinite(vals) & act[:, None]
+    through = act & ~(df["delta_max"].to_numpy() < hm.radius)
+    err = df["E_balance_error"].to_numpy()
+    energy_ok = ~act | (np.abs(err) <= ENERGY_TOL)
+    status = np.where(act, "ok", "at rest").astype(object)
+    flagged = np.nonzero(nonfinite.any(axis=1) | through | ~energy_ok)[0]
+    for i in flagged:
+        reasons = []
+        if nonfinite[i].any():
+            reasons.append("non-finite: " + ", ".join(c for c, b in zip(cols, nonfinite[i]) if b))
+        if through[i]:
+            reasons.append("tool reached the head centre")
+        if not energy_ok[i]:
+            reasons.append(f"energy balance error {err[i]:.3g}")
+        status[i] = "; ".join(reasons)
+    df["energy_ok"] = energy_ok
+    df["status"] = status
+    if flagged.size:
+        allbad = nonfinite.any(axis=1)
+        if allbad[sel].all():
+            i = int(flagged[0])
+            raise ValueError(f"every simulated case failed (case {i}: {status[i]}); check the "
+                             f"inputs (stiffness, dt, head model)")
+        i = int(flagged[0])
+        warnings.warn(
+            f"impact results flagged for case(s) {_fmt_cases(flagged)}: {status[i]} (case {i}); "
+            f"see the summary columns 'status' and 'energy_ok' (energy tolerance "
+            f"|E_balance_error| <= {ENERGY_TOL:g})", UserWarning, stacklevel=stacklevel)
+    return df
 
 
 def simulate_impacts(arm, q, qd, stiffness, *, head: HeadContactModel | str | None = None,
@@ -155,70 +567,141 @@ def simulate_impacts(arm, q, qd, stiffness, *, head: HeadContactModel | str | No
     ----------
     arm : ArmParameters
         Link inertias (plant) and kinematics.
-    q, qd : array_like, shape (N, 2) or (2,)
-        Link angles [rad] and angular velocities [rad/s] at the impact instant.
+    q : array_like, shape (N, 2) or (2,)
+        Link angles [rad] at the impact instant.  |q| > 2 pi is refused
+        (with a hint when the values are degrees); angles outside the working
+        area (``arm.geometry.q1_min..q1_max``, ``q2_min..q2_max``) give a
+        ``UserWarning``.
+    qd : array_like, shape (N, 2) or (2,)
+        Link angular velocities [rad/s], |qd| <= 1000 rad/s.
     stiffness : array_like, shape (N, 2) or (2,)
-        Joint stiffnesses K1, K2 [N m/rad] (constant during the impact).
+        Joint stiffnesses K1, K2 [N m/rad] (constant during the impact), >= 0
+        and at most :func:`stiffness_limit` for the integration step.
     head : HeadContactModel or str, keyword-only
-        Head model or its name (default ``"thesis-frontal"``).
+        Head model or its name (default ``"thesis-frontal"``; see
+        :func:`~ppamsafety.params.head.head_model_names`).
     direction : array_like, shape (N, 2) or (2,), optional
-        Unit vector from the tool point to the head centre; default the TCP
-        velocity direction (the worst case of fig. 6.2).
-    head_velocity : array_like, optional
-        Initial head velocity [m/s] (default at rest).
+        Vector from the tool point to the head centre (normalised; non-zero);
+        default the TCP velocity direction relative to the head (the worst
+        case of fig. 6.2).
+    head_velocity : array_like, shape (N, 2) or (2,), optional
+        Initial head velocity [m/s] (default at rest), |v| <= 1000 m/s.
     fixed_arm : bool
         Treat the arm as rigid and fixed (the head moves into the tool; stored
         in the case rows as :class:`~ppamsafety.impact.engine.ArmMode`).
-    dt, duration : float
-        Fixed RK4 step and simulated time [s] (default 20 us, 50 ms; halving
-        the step changes F_max and HIC by less than 2e-4 relative, see tests).
+    dt : float
+        Fixed RK4 step [s] in [1e-8, 1e-3] (default 20 us; halving the step
+        changes F_max and HIC by less than 2e-4 relative, see tests).
+    duration : float
+        Simulated time [s] in [1e-4, 10], at least ``dt``; duration / dt <=
+        :data:`MAX_STEPS`.
     history : bool or sequence of int
-        Record time histories for all cases (True) or for the given indices.
+        Record time histories for all cases (True) or for the given case
+        indices (each in [0, N - 1]; duplicates are recorded once).
 
     Returns
     -------
     ImpactResults
-        Cases whose tool and head are both at rest are skipped (zero force).
+        Cases whose tool and head are both at rest are skipped (zero force,
+        ``status`` ``"at rest"``).
+
+    Raises
+    ------
+    TypeError
+        For arguments of the wrong kind (naming the argument).
+    ValueError
+        For values out of range or inconsistent: arrays of shapes (2,) or
+        (N, 2) broadcast against each other (1 or N rows; otherwise e.g.
+        "qd has 4 rows, q has 3"); angles |q| > 2 pi; stiffness beyond
+        :func:`stiffness_limit` at the largest RK4 step (FREE_STRIDE x dt,
+        :data:`~ppamsafety.impact.engine.FREE_STRIDE`); a head model through
+        which the tool would pass at a case's closing speed (maximum
+        penetration of the free head on a rigid arm,
+        :func:`~ppamsafety.impact.contact.max_penetration`, >= radius); or
+        when every simulated case gives non-finite results.
+
+    Warns
+    -----
+    UserWarning
+        Angles outside the working area; tool or head speed above
+        :data:`PLAUSIBLE_SPEED` (10 m/s); and after the run, cases flagged in
+        ``status``: non-finite summary values, delta_max >= head radius (tool
+        reached the head centre), or |E_balance_error| > :data:`ENERGY_TOL`
+        (1e-3).
     """
-    hm = head_model() if head is None else (head_model(head) if isinstance(head, str) else head)
-    if not isinstance(hm, HeadContactModel):
-        raise ValueError("head must be a HeadContactModel or a model name")
-    if not isinstance(fixed_arm, (bool, np.bool_)):
-        raise TypeError(f"fixed_arm = {fixed_arm!r} must be True or False")
-    check_range("dt", dt, 1e-8, 1e-3, unit="s")
-    check_range("duration", duration, 1e-4, 10.0, unit="s")
-    q = np.atleast_2d(as_float_array("q", q, shape_tail=(2,)))
-    n = q.shape[0]
-    qd = np.broadcast_to(as_float_array("qd", qd, shape_tail=(2,)), (n, 2))
-    K = np.broadcast_to(as_float_array("stiffness", stiffness, shape_tail=(2,)), (n, 2))
-    if np.any(K < 0):
-        raise ValueError("stiffness must be non-negative [N m/rad]")
-    vh = np.zeros((n, 2)) if head_velocity is None else np.broadcast_to(
-        as_float_array("head_velocity", head_velocity, shape_tail=(2,)), (n, 2))
+    return _simulate_impacts(arm, q, qd, stiffness, head=head, direction=direction,
+                             head_velocity=head_velocity, fixed_arm=fixed_arm, dt=dt,
+                             duration=duration, history=history, warn_area=True, stacklevel=4)
+
+
+def _simulate_impacts(arm, q, qd, stiffness, *, head, direction, head_velocity, fixed_arm, dt,
+                      duration, history, warn_area, stacklevel):
+    """:func:`simulate_impacts`; ``warn_area=False`` for states of a simulated closed-loop
+    record (their working-area excursions are the controller's, not a user's mistake)."""
+    arm = check_arm(arm)
+    q = as_float_array("q", q, shape_tail=(2,), ndim=(1, 2))
+    qd = as_float_array("qd", qd, shape_tail=(2,), ndim=(1, 2))
+    K = as_float_array("stiffness", stiffness, shape_tail=(2,), ndim=(1, 2))
+    hm = resolve_head(head)
+    d = None if direction is None else as_float_array("direction", direction, shape_tail=(2,),
+                                                      ndim=(1, 2))
+    vh = None if head_velocity is None else as_float_array(
+        "head_velocity", head_velocity, shape_tail=(2,), ndim=(1, 2))
+    fixed_arm = check_bool("fixed_arm", fixed_arm)
+    dt = check_range("dt", dt, 1e-8, 1e-3, unit="s")
+    duration = check_range("duration", duration, 1e-4, 10.0, unit="s")
+    if duration < dt:
+        raise ValueError(f"duration = {duration:g} s is shorter than dt = {dt:g} s")
+    nsteps = int(math.ceil(duration / dt - 1e-9))
+    if nsteps > MAX_STEPS:
+        raise ValueError(f"duration / dt = {duration:g} s / {dt:g} s = {nsteps} steps exceeds "
+                         f"{MAX_STEPS}; use a larger dt or a shorter duration")
+    # ---- shapes: (2,) or (N, 2), rows 1 or N ----
+    named = [(nm, a) for nm, a in (("q", q), ("qd", qd), ("stiffness", K), ("direction", d),
+                                     ("head_velocity", vh)) if a is not None]
+    n = max(a.shape[0] if a.ndim == 2 else 1 for _, a in named)
+    if q.ndim == 2 and q.shape[0] == 0:
+        n = 0
+    ref = next(nm for nm, a in named if (a.shape[0] if a.ndim == 2 else 1) == n)
+    q = _rows("q", q, n, ref)
+    qd = _rows("qd", qd, n, ref)
+    K = _rows("stiffness", K, n, ref)
+    vh = np.zeros((n, 2)) if vh is None else _rows("head_velocity", vh, n, ref)
+    # ---- ranges and physical plausibility ----
+    if warn_area:
+        check_angles("q", q, arm, stacklevel=stacklevel)
+    elif np.any(np.abs(q) > MAX_ANGLE):
+        check_angles("q", q, arm)
+    check_range_array("qd", qd, -MAX_JOINT_SPEED, MAX_JOINT_SPEED, unit="rad/s")
+    check_range_array("stiffness", K, 0.0, math.inf, unit="N m/rad")
+    check_range_array("head_velocity", vh, -MAX_HEAD_SPEED, MAX_HEAD_SPEED, unit="m/s")
+    if not fixed_arm and n:
+        check_stiffness(K, q, arm, eng.FREE_STRIDE * dt, dt)
+    hist_idx = _history_indices(history, n)
+    if hist_idx.size * (nsteps + 1) * eng.NHIST * 8 > MAX_HISTORY_BYTES:
+        raise ValueError(f"history: {hist_idx.size} histories of {nsteps + 1} steps need "
+                         f"{hist_idx.size * (nsteps + 1) * eng.NHIST * 8 / 1e9:.3g} GB (limit "
+                         f"{MAX_HISTORY_BYTES / 1e9:g} GB); record fewer cases or use a larger dt")
     vt = np.einsum("nij,nj->ni", geo.jacobian(q, arm), qd)
-    if direction is None:
-        speed = np.linalg.norm(vt, axis=1)
+    speed = np.linalg.norm(vt, axis=1)
+    if d is None:
         rel = vt - vh
         nrm = np.linalg.norm(rel, axis=1)
         u = np.where(nrm[:, None] > 0, rel / np.where(nrm > 0, nrm, 1.0)[:, None], [1.0, 0.0])
     else:
-        u = np.broadcast_to(_unit(as_float_array("direction", direction, shape_tail=(2,)),
-                                  "direction"), (n, 2))
-        speed = np.linalg.norm(vt, axis=1)
+        u = _rows("direction", _unit(d, "direction"), n, ref)
+    fast = np.nonzero((speed > PLAUSIBLE_SPEED) | (np.linalg.norm(vh, axis=1) > PLAUSIBLE_SPEED))[0]
+    if fast.size:
+        warnings.warn(f"case(s) {_fmt_cases(fast)}: tool speed {speed[fast[0]]:.3g} m/s or head "
+                      f"speed above the plausible maximum {PLAUSIBLE_SPEED:g} m/s for this arm "
+                      f"(check the units of qd: rad/s)", UserWarning, stacklevel=stacklevel - 1)
+    v_close = np.einsum("ni,ni->n", (0.0 if fixed_arm else vt) - vh, u)
+    check_pass_through(hm, v_close)
     active = (np.linalg.norm(vt - vh, axis=1) > 0) if not fixed_arm else \
         (np.linalg.norm(vh, axis=1) > 0)
     mode = eng.ArmMode.FIXED if fixed_arm else eng.ArmMode.FLEXIBLE
     cases = eng.pack_cases(n, q=q, qd=0.0 if fixed_arm else qd, K=K, u=u, v_head=vh,
                            arm_mode=int(mode))
-    nsteps = int(math.ceil(duration / dt - 1e-9))
-    if history is True:
-        hist_idx = np.arange(n)
-    elif history is False or history is None:
-        hist_idx = np.array([], dtype=np.int64)
-    else:
-        hist_idx = np.asarray(history, dtype=np.int64)
-        if np.any((hist_idx < 0) | (hist_idx >= n)):
-            raise ValueError(f"history indices must be in [0, {n - 1}]")
     hist_of = np.full(n, -1, dtype=np.int64)
     hist_of[hist_idx] = np.arange(hist_idx.size)
     hp = eng.pack_head(hm)
@@ -235,6 +718,6 @@ def simulate_impacts(arm, q, qd, stiffness, *, head: HeadContactModel | str | No
                        "K1": K[:, 0], "K2": K[:, 1], "ux": u[:, 0], "uy": u[:, 1],
                        "tcp_speed": speed})
     df = pd.concat([df, eng.SUMMARY.frame(SUM)], axis=1)
+    df = _check_run(df, sel, hm, stacklevel=stacklevel)
     hists = {int(i): eng.HIST.frame(HIST[j]) for j, i in enumerate(hist_idx)}
     return ImpactResults(df, hists, hm, float(dt), float(duration))
-

@@ -55,8 +55,8 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from .._validation import as_float_array, check_int, check_nonnegative, check_range
-from ..params.head import HeadContactModel, head_model
+from .._validation import as_float_array, check_finite_result, check_int, check_range
+from ..params.head import HeadContactModel
 from ..layouts import Field, Layout
 from ..units import G0
 from .contact import hunt_crossley_elastic, hunt_crossley_force
@@ -170,18 +170,22 @@ def simulate_impact_pymunk(arm, q, qd, stiffness, *, head: HeadContactModel | st
     arm : ArmParameters
         Uses ``arm.links`` (masses, centres of gravity, centroidal inertias)
         and ``arm.geometry.L1``, ``L2``.
-    q, qd : array_like, shape (2,)
-        Link angles [rad] and velocities [rad/s] at the impact instant t0.
+    q : array_like, shape (2,)
+        Link angles [rad] at the impact instant t0 (|q| <= 2 pi; outside the
+        working area a ``UserWarning``).
+    qd : array_like, shape (2,)
+        Link angular velocities [rad/s] at t0, |qd| <= 1000 rad/s.
     stiffness : array_like, shape (2,)
-        Joint stiffnesses K1, K2 [N m/rad], >= 0.
+        Joint stiffnesses K1, K2 [N m/rad], >= 0 and at most
+        :func:`~ppamsafety.impact.model.stiffness_limit` for the step ``dt``.
     head : HeadContactModel or str, keyword-only
         Head model or its name (default ``"thesis-frontal"``).
     direction : array_like, shape (2,), optional
         Unit vector from the TCP to the head centre; default the TCP velocity
         direction (fig. 6.2).  Required if the TCP is at rest.
     gap : float
-        Extra distance between the head surface and the TCP at t0 [m] (0: touching;
-        a large value gives the free motion of the arm).
+        Extra distance between the head surface and the TCP at t0 [m], in
+        [0, 10] (0: touching; a large value gives the free motion of the arm).
     dt : float
         Fixed pymunk step [s], in [1e-8, 1e-4].
     duration : float
@@ -198,20 +202,29 @@ def simulate_impact_pymunk(arm, q, qd, stiffness, *, head: HeadContactModel | st
     except ImportError as exc:  # pragma: no cover - depends on the environment
         raise ImportError("simulate_impact_pymunk needs pymunk (pip install pymunk)") from exc
 
-    hm = head_model() if head is None else (head_model(head) if isinstance(head, str) else head)
-    if not isinstance(hm, HeadContactModel):
-        raise ValueError("head must be a HeadContactModel or a model name")
+    from .model import check_angles, check_arm, check_pass_through, check_stiffness, resolve_head
+
+    arm = check_arm(arm)
     q = as_float_array("q", q, shape_tail=(2,))
     qd = as_float_array("qd", qd, shape_tail=(2,))
     K = as_float_array("stiffness", stiffness, shape_tail=(2,))
     if q.ndim != 1 or qd.ndim != 1 or K.ndim != 1:
-        raise ValueError("q, qd and stiffness must each have shape (2,) (one impact)")
+        raise ValueError(f"q, qd and stiffness must each have shape (2,) (one impact), got "
+                         f"shapes {q.shape}, {qd.shape}, {K.shape}")
+    hm = resolve_head(head)
     if np.any(K < 0):
-        raise ValueError("stiffness must be non-negative [N m/rad]")
-    gap = check_nonnegative("gap", gap, unit="m")
+        raise ValueError(f"stiffness = {K.tolist()} must be non-negative [N m/rad]")
+    if np.any(np.abs(qd) > 1e3):
+        raise ValueError(f"qd = {qd.tolist()} rad/s is outside [-1000, 1000] rad/s")
+    gap = check_range("gap", gap, 0.0, 10.0, unit="m")
     dt = check_range("dt", dt, 1e-8, 1e-4, unit="s")
     duration = check_range("duration", duration, 1e-4, 1.0, unit="s")
     iterations = check_int("iterations", iterations, 1, 10000)
+    if duration / dt > 1e7:
+        raise ValueError(f"duration / dt = {duration:g} s / {dt:g} s exceeds 1e7 pymunk steps; "
+                         f"use a larger dt or a shorter duration")
+    check_angles("q", q, arm)
+    check_stiffness(K[None, :], q[None, :], arm, dt, dt)
 
     lk, L1, L2 = arm.links, arm.geometry.L1, arm.geometry.L2
     q1, q2 = float(q[0]), float(q[1])
@@ -228,10 +241,13 @@ def simulate_impact_pymunk(arm, q, qd, stiffness, *, head: HeadContactModel | st
         u = (v_tcp[0] / sp, v_tcp[1] / sp)
     else:
         d = as_float_array("direction", direction, shape_tail=(2,))
+        if d.ndim != 1:
+            raise ValueError(f"direction must have shape (2,), got {d.shape}")
         nd = float(np.hypot(d[0], d[1]))
-        if d.ndim != 1 or nd == 0.0:
-            raise ValueError("direction must be a non-zero vector of shape (2,)")
+        if nd == 0.0 or not math.isfinite(nd):
+            raise ValueError(f"direction = {d.tolist()} must be a non-zero finite vector")
         u = (float(d[0]) / nd, float(d[1]) / nd)
+    check_pass_through(hm, [max(v_tcp[0] * u[0] + v_tcp[1] * u[1], 0.0)])
 
     # ---- bodies ---------------------------------------------------------------------------
     space = pymunk.Space()
@@ -355,6 +371,7 @@ def simulate_impact_pymunk(arm, q, qd, stiffness, *, head: HeadContactModel | st
                          "v_head_n": vhx * u[0] + vhy * u[1],
                          "v_tcp_n": vtx * u[0] + vty * u[1],
                          "E_total": e_tot, "E_dissipated": Ediss}, columns=HISTORY_COLUMNS)
+    check_finite_result("the pymunk contact force", F, "these inputs")
     i_max = int(np.argmax(F))
     return PymunkImpact(F_max=float(F[i_max]), t_Fmax=float(t[i_max]),
                         HIC36=float(hic(a_g, dt, window=0.036).value),

@@ -91,15 +91,31 @@ def join_table_6_1(results: pd.DataFrame, *, complete: bool | None = None) -> pd
     pandas.DataFrame
         ``results`` (row order kept) with ``HIC_thesis`` and ``Fmax_thesis``.
     """
+    from .._validation import InvalidTypeError, check_bool, describe
     from ..experiments.thesis_data import join_thesis
 
+    if not isinstance(results, pd.DataFrame):
+        raise InvalidTypeError(f"results must be a pandas DataFrame, got {describe(results)}")
+    missing = [c for c in ("controller_family", "ki_bar", "lambda_s", "experiment")
+               if c not in results.columns]
+    if missing:
+        raise ValueError(f"results lacks the key column(s) {missing}; needs controller_family, "
+                         f"ki_bar, lambda_s, experiment")
+    if complete is not None:
+        complete = check_bool("complete", complete)
     return join_thesis(results, table_6_1_long(), on=("experiment",),
                        take=("HIC_thesis", "Fmax_thesis"), complete=complete,
                        what="thesis Table 6.1")
 
 
 def table_6_1_pairs() -> pd.DataFrame:
-    """All 20 (HIC, F_max) pairs of Table 6.1 in long form (experiment column)."""
+    """All 20 (HIC, F_max) pairs of Table 6.1 in long form (experiment column).
+
+    Returns
+    -------
+    pandas.DataFrame
+        Columns ``label``, ``HIC``, ``F_max`` [N], ``experiment``.
+    """
     t = table_6_1()
     a = t[["label", "HIC_step", "Fmax_step"]].rename(columns={"HIC_step": "HIC",
                                                              "Fmax_step": "F_max"})

@@ -18,7 +18,8 @@ import math
 import numpy as np
 
 from .._jit import kernel
-from .._validation import as_float_array, check_positive, check_range
+from .._validation import (as_float_array, check_finite_result, check_positive, check_range,
+                           check_range_array)
 from ..units import G0
 from .contact import hunt_crossley_force
 from .hic import hic_kernel
@@ -54,6 +55,24 @@ def _twobody_batch(V, MU, MH, k, n, b, dt, nsteps, w36, w15, out, acc):
         out[c, 5] = -dd   # final relative velocity (separation speed once apart)
 
 
+#: Largest number of integration steps duration / dt of one call.
+MAX_STEPS = 10 ** 7
+
+
+def _broadcast(name, value, shape, *, allow_inf=False):
+    a = as_float_array(name, value, allow_nonfinite=allow_inf)
+    if np.any(np.isnan(a)) or np.any(a == -np.inf):
+        raise ValueError(f"{name} contains NaN or -inf")
+    check_range_array(name, a, 0.0, np.inf, unit="kg")
+    if np.any(a <= 0):
+        raise ValueError(f"{name} = {a.min():g} kg must be positive")
+    try:
+        return np.broadcast_to(a, shape)
+    except ValueError:
+        raise ValueError(f"{name} (shape {a.shape}) does not broadcast against speed "
+                         f"(shape {shape})") from None
+
+
 def two_body_impact(speed, *, arm_mass, head_mass: float = 5.0, stiffness: float,
                     exponent: float, damping: float = 0.0, dt: float = 1e-5,
                     duration: float = 0.05) -> dict:
@@ -62,38 +81,54 @@ def two_body_impact(speed, *, arm_mass, head_mass: float = 5.0, stiffness: float
     Parameters
     ----------
     speed : array_like
-        Approach speeds [m/s] (> 0).
+        Approach speeds [m/s], each in (0, 1000].
     arm_mass : float or array_like
-        Effective arm mass at the tool along the impact direction [kg];
-        ``np.inf`` for a fixed surface.
+        Effective arm mass at the tool along the impact direction [kg] (> 0);
+        ``np.inf`` for a fixed surface.  Broadcast against ``speed``.
     head_mass : float or array_like
-        Head mass [kg].
-    stiffness, exponent, damping : float, keyword-only
-        Hunt-Crossley k [N/m^n], n [-], b [N s/m^(n+1)].
-    dt, duration : float
-        Integration step and simulated time [s].
+        Head mass [kg] (> 0, finite), broadcast against ``speed``.
+    stiffness : float, keyword-only
+        Hunt-Crossley k [N/m^n] (> 0).
+    exponent : float, keyword-only
+        Hunt-Crossley n [-] in [0.5, 5].
+    damping : float, keyword-only
+        Hunt-Crossley b [N s/m^(n+1)] in [0, 1e22].
+    dt : float
+        Integration step [s] in [1e-9, 1e-3].
+    duration : float
+        Simulated time [s] (> 0, at least dt; duration / dt <= 1e7).
 
     Returns
     -------
     dict of numpy.ndarray
         ``F_max`` [N], ``t_Fmax`` [s], ``HIC36``, ``HIC15``, ``delta_max`` [m],
         ``separation_speed`` [m/s] (relative, at the end).
+
+    Raises
+    ------
+    ValueError
+        Also if the result is not finite (overflow for extreme parameters).
     """
-    v = np.atleast_1d(as_float_array("speed", speed))
+    v = np.atleast_1d(as_float_array("speed", speed, ndim=(0, 1)))
+    check_range_array("speed", v, 0.0, 1e3, unit="m/s")
     if np.any(v <= 0):
-        raise ValueError("speed must be positive [m/s]")
-    ma = np.broadcast_to(np.asarray(arm_mass, dtype=float), v.shape)
-    mh = np.broadcast_to(as_float_array("head_mass", head_mass), v.shape)
-    if np.any(ma <= 0) or np.any(mh <= 0):
-        raise ValueError("arm_mass and head_mass must be positive [kg]")
+        raise ValueError(f"speed = {v.min():g} m/s must be positive")
+    ma = _broadcast("arm_mass", arm_mass, v.shape, allow_inf=True)
+    mh = _broadcast("head_mass", head_mass, v.shape)
     finite = np.isfinite(ma)
     mu = mh.astype(float).copy()
     mu[finite] = ma[finite] * mh[finite] / (ma[finite] + mh[finite])
-    check_positive("stiffness", stiffness, unit="N/m^n")
-    check_range("exponent", exponent, 0.5, 5.0)
-    check_range("damping", damping, 0.0, 1e22, unit="N s/m^(n+1)")
-    check_range("dt", dt, 1e-9, 1e-3, unit="s")
-    nsteps = int(math.ceil(check_positive("duration", duration, unit="s") / dt))
+    stiffness = check_positive("stiffness", stiffness, unit="N/m^n")
+    exponent = check_range("exponent", exponent, 0.5, 5.0)
+    damping = check_range("damping", damping, 0.0, 1e22, unit="N s/m^(n+1)")
+    dt = check_range("dt", dt, 1e-9, 1e-3, unit="s")
+    duration = check_positive("duration", duration, unit="s")
+    if duration < dt:
+        raise ValueError(f"duration = {duration:g} s is shorter than dt = {dt:g} s")
+    if duration / dt > MAX_STEPS:
+        raise ValueError(f"duration / dt = {duration:g} s / {dt:g} s exceeds {MAX_STEPS} steps; "
+                         f"use a larger dt or a shorter duration")
+    nsteps = int(math.ceil(duration / dt))
     out = np.empty((v.size, 6))
     acc = np.empty(nsteps + 1)
     w36 = int(math.floor(0.036 / dt * (1 + 1e-9)))
@@ -101,5 +136,8 @@ def two_body_impact(speed, *, arm_mass, head_mass: float = 5.0, stiffness: float
     _twobody_batch(np.ascontiguousarray(v, dtype=float), np.ascontiguousarray(mu),
                    np.ascontiguousarray(mh, dtype=float), float(stiffness), float(exponent),
                    float(damping), float(dt), nsteps, w36, w15, out, acc)
+    check_finite_result("two_body_impact", out,
+                        f"stiffness = {stiffness:g}, exponent = {exponent:g}, "
+                        f"damping = {damping:g}, dt = {dt:g}")
     keys = ["F_max", "t_Fmax", "HIC36", "HIC15", "delta_max", "separation_speed"]
     return {key: out[:, i] for i, key in enumerate(keys)}
