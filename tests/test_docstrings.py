@@ -202,10 +202,6 @@ ALLOWLIST = {
     "ppamsafety.experiments.trajectories.joint_steps",
     "ppamsafety.experiments.trajectories.step",
     "ppamsafety.experiments.trajectories.trajectory_switch",
-    "ppamsafety.impact.instants.heuristic_instants",
-    "ppamsafety.impact.instants.impact_states",
-    "ppamsafety.impact.model.ImpactResults.worst",
-    "ppamsafety.impact.reference.simulate_impact_scipy",
     "ppamsafety.plant.dynamics.kinetic_energy",
     "ppamsafety.plant.geometry.attachment_points",
     "ppamsafety.plant.geometry.connection_lengths",
@@ -240,7 +236,6 @@ ALLOWLIST = {
     "ppamsafety.control.dispatch.declared_sizes",  # owned by another engineer this session
     "ppamsafety.control.sensors.sensor_reset",  # owned by another engineer this session
     "ppamsafety.experiments.trajectories.Reference.field",  # owned by another engineer this session
-    "ppamsafety.impact.model.ImpactResults.signals",  # owned by another engineer this session
     "ppamsafety.plant.layout.effect_state_lengths",  # owned by another engineer this session
     "ppamsafety.plant.layout.plant_effects",  # owned by another engineer this session
     "ppamsafety.plant.model.effect_state_length",  # owned by another engineer this session
