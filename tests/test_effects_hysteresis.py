@@ -171,33 +171,37 @@ def _sorted(x, y):
 def test_plant_loop_is_rate_independent(arm):
     """The plant's factor-vs-eps loop is (nearly) the same at period 20 s and 40 s.
 
-    The Preisach factor is a function of the contraction path only; what can
-    differ between the two time scales is the path itself (the dynamic lag of
-    the valves, T ~ 0.1 s, and of the arm behind the quasi-static
-    equilibrium, relative size ~ T/period <= 0.5 %) and the registration of
-    the turning points at the end of a 0.5 ms RK4 step.  So the two loops
-    must agree to a small fraction of their width: here 5 % of the
-    falling-minus-rising gap at mid contraction (the gap is ~4 % of the
-    force; 5 % of it is 0.2 % of the force, consistent with the lag bound).
+    The closed loop of a period (from the first maximum down to the minimum
+    and back) is compared at equal contraction.  The Preisach factor is a
+    function of the contraction path only; what can differ between the two
+    time scales is the path itself (the dynamic lag of the valves, T ~ 0.1 s,
+    and of the arm behind the quasi-static equilibrium: relative size
+    ~ T/period <= 0.5 %, halved at 40 s) and the registration of the turning
+    points at the end of a 0.5 ms RK4 step (~ 1e-4 of the stroke).  So the
+    two loops must agree to a small fraction of their width: 5 % of the
+    largest falling-minus-rising gap (a 20x margin on the 0.25 % lag bound
+    relative to the gap of ~1.4 % of the force; measured: 0.9 %).
     """
     a = _hyst(arm)
     loops = []
     for period in (20.0, 40.0):
-        x0, U = _sine_inputs(a, period=period, n_periods=1.0, dt=1e-3)
+        x0, U = _sine_inputs(a, period=period, n_periods=1.25, dt=1e-3)
         X = model.simulate(a, x0, U)
         eps, fac = model.hysteresis_factors(X, a)
-        de = np.diff(eps[:, 2], prepend=eps[0, 2])
-        lo, hi = np.percentile(eps[:, 2], [30, 70])
+        n4 = int(round(period / 4 / 1e-3))           # the first maximum of the set values
+        e, f = eps[n4:, 2], fac[n4:, 2]
+        de = np.diff(e, prepend=e[0])
+        lo, hi = np.percentile(e, [20, 80])
         grid = np.linspace(lo, hi, 9)
-        r = de > 1e-8
-        f = de < -1e-8
-        loops.append((np.interp(grid, *_sorted(eps[r, 2], fac[r, 2])),
-                      np.interp(grid, *_sorted(eps[f, 2], fac[f, 2]))))
+        r, fl = de > 0, de < 0
+        loops.append((np.interp(grid, *_sorted(e[r], f[r])),
+                      np.interp(grid, *_sorted(e[fl], f[fl]))))
     (r20, f20), (r40, f40) = loops
-    gap = np.min(f20 - r20)
-    assert gap > 0.01
-    assert np.max(np.abs(r40 - r20)) < 0.05 * gap
-    assert np.max(np.abs(f40 - f20)) < 0.05 * gap
+    gap = f20 - r20
+    assert np.all(gap > 0)                            # an open loop: falling above rising
+    tol = 0.05 * gap.max()
+    assert np.max(np.abs(r40 - r20)) < tol
+    assert np.max(np.abs(f40 - f20)) < tol
 
 
 def test_factor_is_exactly_rate_independent_on_a_resampled_path(arm):
@@ -252,17 +256,16 @@ def test_dead_time_delays_a_step_by_exactly_d_periods(arm):
     d = (0, 1, 3, 7)
     a = arm.replace(effects=Effects(valve_dead_time=d))
     x0, u0 = model.rest_state(Q0, arm)
-    U = np.tile(u0, (40, 1))
-    U[10:] += 0.2 * BAR                                   # a step at k = 10
-    X = model.simulate(a, x0, U)
     for i, di in enumerate(d):
+        U = np.tile(u0, (40, 1))
+        U[10:, i] += 0.2 * BAR                            # a step of valve i at k = 10
+        X = model.simulate(a, x0, U)
         shifted = U.copy()
-        shifted[di:] = U[:U.shape[0] - di]
-        shifted[:di] = U[0]
-        Xs = model.simulate(arm, x0, shifted)
-        np.testing.assert_array_equal(X[:, 4 + i], Xs[:, 4 + i])
-        # the valve pressure starts to move exactly d periods after the step
-        moved = np.nonzero(np.abs(X[:, 4 + i] - X[10, 4 + i]) > 1.0)[0]
+        shifted[10 + di:, i] = U[10, i]
+        shifted[:10 + di, i] = U[0, i]
+        np.testing.assert_array_equal(X, model.simulate(arm, x0, shifted))
+        # the valve's pressure starts to move exactly d periods after the step
+        moved = np.nonzero(np.abs(X[:, 4 + i] - X[0, 4 + i]) > 1.0)[0]
         assert moved[0] == 10 + di + 1
     # zero delays everywhere: bitwise nominal
     X0 = model.simulate(arm.replace(effects=Effects(valve_dead_time=(0,) * 4)), x0, U)

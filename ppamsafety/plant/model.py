@@ -408,7 +408,9 @@ def initial_effect_state(rows) -> np.ndarray:
         its first ``effect_state_length`` entries; zeros when no effect with
         state is on).
     """
-    rows = np.atleast_2d(as_float_array("rows", rows, shape_tail=(lay.NP,)))
+    rows = np.atleast_2d(np.asarray(rows, dtype=float))   # inf allowed: closed valves
+    if rows.ndim != 2 or rows.shape[1] != lay.NP:
+        raise ValueError(f"rows must have shape ({lay.NP},) or (B, {lay.NP}), got {rows.shape}")
     n = lay.effect_state_lengths(rows)
     Z = np.zeros((rows.shape[0], int(n.max())))
     _init_many(Z, np.ascontiguousarray(rows))
