@@ -249,6 +249,11 @@ class Effects:
         ``(-1, 0.3, -0.2)``) for all groups, or four such histories, one per
         group (a saved memory row becomes a history with
         :func:`history_of_memory`).  Stored as four tuples.
+    hysteresis_exact_stages : bool
+        Evaluate the Preisach output exactly (``preisach_peek``) in every
+        RK4 stage instead of by the secant of the last step (default False:
+        4x fewer Everett evaluations, error O(h^2) in the stage forces; see
+        :mod:`ppamsafety.plant.model`).  For checks of the fast scheme.
     valve_dead_time : tuple of 4 int or None
         Transport delay of the set value of each valve, in whole control
         periods (input samples of ``plant.model.simulate``), in [0, 100];
@@ -264,6 +269,7 @@ class Effects:
     polytropic_n: float | None = None
     hysteresis_delta: tuple | None = None
     hysteresis_initial: object = "negative"
+    hysteresis_exact_stages: bool = False
     valve_dead_time: tuple | None = None
 
     def __post_init__(self):
@@ -297,6 +303,9 @@ class Effects:
             lambda n, v: check_range(n, v, *HYSTERESIS_DELTA_RANGE)))
         object.__setattr__(self, "hysteresis_initial",
                            _hysteresis_initial(self.hysteresis_initial))
+        if not isinstance(self.hysteresis_exact_stages, (bool, np.bool_)):
+            raise TypeError(f"Effects.hysteresis_exact_stages must be a bool, "
+                            f"got {self.hysteresis_exact_stages!r}")
         object.__setattr__(self, "valve_dead_time", _vector(
             "valve_dead_time", self.valve_dead_time, 4,
             lambda n, v: check_int(n, v, 0, VALVE_DEAD_TIME_MAX)))
@@ -314,12 +323,14 @@ class Effects:
     def enabled(self) -> tuple:
         """Names of the effects that are on (fields differing from the default).
 
-        ``hysteresis_initial`` is an option of the hysteresis, not an effect:
-        it is never listed (and is ignored while ``hysteresis_delta`` is None).
+        ``hysteresis_initial`` and ``hysteresis_exact_stages`` are options of
+        the hysteresis, not effects: they are never listed (and are ignored
+        while ``hysteresis_delta`` is None).
         """
         off = Effects()
         return tuple(f for f in self.__dataclass_fields__
-                     if f != "hysteresis_initial" and getattr(self, f) != getattr(off, f))
+                     if f not in ("hysteresis_initial", "hysteresis_exact_stages")
+                     and getattr(self, f) != getattr(off, f))
 
     def replace(self, **changes) -> "Effects":
         """Return a copy with some fields changed (validated again)."""

@@ -64,6 +64,13 @@ GEOMETRY_FIELDS = (
     Field("dL", 1, "m", "offset of the load point A_L from link 2, Table 2.2, (A.21)"),
 )
 
+class HysteresisStages(enum.IntEnum):
+    """How the Preisach output W is evaluated inside the RK4 stages (see plant.model)."""
+
+    SECANT = 0      #: W(u) + secant slope of the last step (no Everett call per stage)
+    EXACT = 1       #: preisach_peek at every stage (4 x 3 Everett calls per step more)
+
+
 class Switch(enum.IntEnum):
     """On/off code of a plant effect, stored in its ``*_mode`` field of :data:`EFFECTS`."""
 
@@ -105,6 +112,8 @@ EFFECT_FIELDS = (
           "of the major loop (fig. 3.12)", default=0.0, columns=("wfit_slope", "wfit_intercept")),
     Field("hysteresis_initial", 4 * HYST_ROW, "-", "Preisach memory rows of the four groups "
           "at t = 0 (layout hysteresis.memory.MEMORY), §3.6.6", default=0.0),
+    Field("hysteresis_stages", 1, "code", "HysteresisStages: W inside the RK4 stages by the "
+          "secant of the last step (fast) or by exact preisach_peek", default=0.0),
     Field("dead_time_mode", 1, "code", "Switch: valve set values delayed by whole control "
           "periods (delay line in z), §4.2.4", default=0.0),
     Field("dead_time", 4, "-", "dead time d_i of valve i [control periods]", default=0.0),
@@ -156,6 +165,10 @@ EFFECT_STATE = Layout("plant effect state", [
           "(layout hysteresis.memory.MEMORY, group-major), §3.6.3"),
     Field("hysteresis_output", 4, "-", "Preisach output W of each group at its committed "
           "input (cache of the last preisach_update)"),
+    Field("hysteresis_slope", 4, "-", "secant dW/deps_s of each group over its last move "
+          "(RK4 stages, HysteresisStages.SECANT)"),
+    Field("hysteresis_direction", 4, "-", "sign of each group's last move of eps_s "
+          "(+1 rising, -1 falling, 0 none yet)"),
     Field("delay_count", 1, "-", "number of set values pushed into the delay line so far"),
 ])
 
@@ -180,22 +193,23 @@ NZ = PLANT.offset("effect_state_length")
                                   "valve_offset_mode", "valve_gain_mode", "valve_lag_mode",
                                   "polytropic_mode")
 #: effects with state: hysteresis (3.35) and valve dead time
-(HYST_MODE, HYST_DELTA, HYST_EPS_MAX, HYST_WFIT, HYST_INIT, DEAD_MODE, DEAD, DEAD_LEN) = \
-    PLANT.offsets("hysteresis_mode", "hysteresis_delta", "hysteresis_eps_max",
-                  "hysteresis_wfit", "hysteresis_initial", "dead_time_mode", "dead_time",
-                  "dead_time_length")
+(HYST_MODE, HYST_DELTA, HYST_EPS_MAX, HYST_WFIT, HYST_INIT, HYST_STAGES, DEAD_MODE, DEAD,
+ DEAD_LEN) = PLANT.offsets("hysteresis_mode", "hysteresis_delta", "hysteresis_eps_max",
+                           "hysteresis_wfit", "hysteresis_initial", "hysteresis_stages",
+                           "dead_time_mode", "dead_time", "dead_time_length")
 HYST_WFIT_SLOPE, HYST_WFIT_INTERCEPT = HYST_WFIT, HYST_WFIT + 1
 #: offsets in the effect state z (:data:`EFFECT_STATE`); the delay line starts at Z_DELAY
-Z_HYST, Z_HYST_W, Z_DELAY_COUNT = EFFECT_STATE.offsets(
-    "hysteresis_memory", "hysteresis_output", "delay_count")
+Z_HYST, Z_HYST_W, Z_HYST_SLOPE, Z_HYST_DIR, Z_DELAY_COUNT = EFFECT_STATE.offsets(
+    "hysteresis_memory", "hysteresis_output", "hysteresis_slope", "hysteresis_direction",
+    "delay_count")
 Z_DELAY = EFFECT_STATE.size
 #: Effect fields applied when the row is packed (from ``ArmParameters.effects``); they
 #: cannot be changed on a packed row by :func:`with_effects`.
 PACK_TIME_EFFECTS = ("payload_mode", "payload_mass", "friction_mode", "valve_offset_mode",
                      "valve_gain_mode", "valve_lag_mode", "polytropic_mode",
                      "hysteresis_mode", "hysteresis_delta", "hysteresis_eps_max",
-                     "hysteresis_wfit", "hysteresis_initial", "dead_time_mode", "dead_time",
-                     "dead_time_length")
+                     "hysteresis_wfit", "hysteresis_initial", "hysteresis_stages",
+                     "dead_time_mode", "dead_time", "dead_time_length")
 NP = PLANT.size                        #: length of the row
 
 #: Contraction floor used by the force/volume kernels (eps <= 0 is undefined).
@@ -356,7 +370,9 @@ def _apply_effects(values: dict, arm) -> None:
         rows = [initial_memory(init if isinstance(init, str) else init[k]) for k in range(4)]
         values.update(hysteresis_mode=Switch.ON, hysteresis_delta=fx.hysteresis_delta,
                       hysteresis_eps_max=EPS_MAX, hysteresis_wfit=w_fit(),
-                      hysteresis_initial=np.concatenate(rows))
+                      hysteresis_initial=np.concatenate(rows),
+                      hysteresis_stages=HysteresisStages.EXACT if fx.hysteresis_exact_stages
+                      else HysteresisStages.SECANT)
         nz = EFFECT_STATE.size
     if fx.valve_dead_time is not None:
         D = max(fx.valve_dead_time) + 1

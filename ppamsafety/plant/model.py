@@ -60,8 +60,9 @@ How to add an effect
    stages (extend ``NWORK`` and :func:`rk4_step`).  Never change the
    signatures above.
 4. *Initial state.*  :func:`simulate` starts from ``effect_state`` (default
-   zeros), the closed loop (:mod:`ppamsafety.experiments.closed_loop`) from
-   zeros; if zero is not the effect's rest state, set it there.
+   :func:`initial_effect_state`), the closed loop
+   (:mod:`ppamsafety.experiments.closed_loop`) from :func:`effects_init`;
+   if zero is not the effect's rest state, set it there (from the row).
 5. *Tests.*  With the effect off, ``tests/test_golden.py`` must still pass
    bitwise; add a test of the effect itself, and a benchmark run
    (``studies/bench_plant.py``) showing the cost of the check when off.
@@ -70,40 +71,58 @@ An effect that is a pure change of plant *parameters* needs none of steps
 2-4: it is folded into the plant-truth row by
 :func:`~ppamsafety.plant.layout.pack` from ``ArmParameters.effects``
 (:class:`~ppamsafety.params.effects.Effects`) and only flagged in the effect
-section.  That is how the implemented effects work -- payload at A_L (folded
+section.  That is how the parameter-only effects work -- payload at A_L (folded
 into theta), plant friction, valve offset/gain/time constant and polytropic
 exponent that differ from the controllers' belief -- so the kernels are
 untouched and a row with every effect off is bitwise the nominal row.
 Different rows of one batch may carry different effects (``simulate`` with
 a list of arms).
 
-Hysteresis hook (design note, not implemented)
-~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~
-The Preisach force hysteresis of (3.33)-(3.35) (``plant/hysteresis.py``,
-branch ``preisach``) is the first effect with state; wiring it:
+Effects with state (implemented)
+~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~
+*Muscle force hysteresis* (thesis §3.6, (3.31)-(3.35);
+``Effects.hysteresis_delta``).  Parameters ``hysteresis_*`` of the row
+(delta per group, eps_max = 0.35, the W_fit line, the initial memories);
+state: one Preisach memory row per group (:mod:`ppamsafety.hysteresis.memory`,
+``STATE_LENGTH`` floats, at ``Z_HYST + k STATE_LENGTH``) plus the output W at
+the committed input, the secant slope and direction of the last move
+(:data:`~ppamsafety.plant.layout.EFFECT_STATE`).  In :func:`plant_rhs` the
+torque of group k is ``p_k * mt[k] * (1 + delta_k (W_k - W_fit(eps_s,k)))``,
+the factor of (3.35) on the force p l0^2 f(eps) (f: the group's identified
+polynomial of Table B.1, the plant's f_t0^fit; see
+:mod:`ppamsafety.params.effects`).  The factor multiplies only the torques
+``tau1``, ``tau2``, NOT the ``mt`` passed to
+:func:`~ppamsafety.plant.pneumatics.pressure_rates`: there m_tau is the
+volume derivative dV/dq (virtual work, (3.5)), geometric, without force
+hysteresis.  The contraction comes from
+:func:`~ppamsafety.plant.torque.group_terms` (same arithmetic as
+:func:`~ppamsafety.plant.torque.torque_kernel_cs`), so delta = 0 is bitwise
+the nominal plant.  Memory: :func:`effects_update` commits the end-of-step
+eps_s of each group once per accepted RK4 step (``preisach_update``); a
+turning point of eps inside a step is registered at the end of the step, an
+O(h) error in the position of one reversal (0.5-1 ms), the order of any
+discrete-time record.  Stages: the memory is frozen over the four stages;
+stage 1 sits on the committed input (cached W, exact); stages 2-4 use, by
+default (``HysteresisStages.SECANT``), W(u) + s (v - u) with s the secant of
+the last step while the stage continues the last move, and W(u) for a stage
+that reverses it (a new reversal branch starts with zero slope: its weight
+grows like (v - u)^2).  Both errors are O(dv^2) per stage, dv <= one step's
+change of eps_s (~1e-3), i.e. ~1e-7 in the force factor, far below the O(h)
+turning-point registration; ``Effects.hysteresis_exact_stages`` evaluates
+``preisach_peek`` at every stage instead (4x the Everett evaluations; the
+test suite checks the two agree to 1e-3 of the hysteresis effect).  Cost
+(measured, closed loop of ``studies/bench_closed_loop.py``): 1.75x the
+nominal run with the secant stages (3.8x with exact peeks).  The
+controllers' model rows carry no hysteresis (they do not know about it).
 
-* *Parameters* (step 1): ``hysteresis_mode`` (a ``Switch`` code),
-  ``hysteresis_delta`` (4, the scale delta of (3.35) per group, thesis
-  0.139-0.299), ``hysteresis_eps_max`` (the eps -> eps_s map of (3.34),
-  thesis 35 %) and the operator's weight-function data (or an index into a
-  table owned by ``hysteresis.py``).
-* *State* (step 2): per group a reversal-point stack (variable length:
-  per group an offset into z and a capacity, declared as effect fields; the
-  row's ``effect_state_length`` covers the four stacks).  z = 0 must mean the
-  state after a descent to eps_s = -1 (the erased memory), or step 4 sets it.
-* *Force* (step 3): in :func:`plant_rhs`, the torque of group k becomes
-  ``p_k * mt[k] * (1 + delta_k (W_k[eps_s,k] - W_fit(eps_s,k)))`` -- the
-  factor of (3.35) multiplying f(eps) -- with W evaluated from the memory in
-  z (frozen over the RK4 stages) and the stage's contraction eps_k.
-  :func:`~ppamsafety.plant.torque.torque_kernel_cs` computes eps_k but does
-  not return it: give it a fifth output buffer (``work[12:16]``, NWORK + 4).
-  The factor must multiply only the torques ``tau1``, ``tau2``, NOT the
-  ``mt`` passed to :func:`~ppamsafety.plant.pneumatics.pressure_rates`: there
-  m_tau is the volume derivative dV/dq (virtual work, (3.5)), which is
-  geometric and has no force hysteresis.
-* *Memory update*: in :func:`effects_update`, once per RK4 step, from the
-  step-end state x: contractions eps_k(q) (``group_length_lever``), then
-  the Preisach wipe-out update of each group's stack.
+*Valve dead time* (``Effects.valve_dead_time``): :func:`valve_delay`
+replaces the set values of control period k by u_i[k - d_i] from a ring
+buffer in z (at ``Z_DELAY``, D = max d_i + 1 samples per valve, primed with
+the first set value); called once per period by :func:`simulate` and the
+closed loop (:mod:`ppamsafety.experiments.closed_loop`) before integrating.
+
+Initial state: :func:`effects_init` (kernels) / :func:`initial_effect_state`
+(Python) set z at t = 0 from the row; both runners call it.
 """
 
 from __future__ import annotations
@@ -121,8 +140,9 @@ from ..hysteresis.memory import MAX_DEPTH, MEMORY, preisach_output, preisach_pee
 from . import layout as lay
 from .dynamics import forward_dynamics_cs
 from .layout import (DEAD, DEAD_LEN, DEAD_MODE, HYST_DELTA, HYST_EPS_MAX, HYST_INIT,
-                     HYST_MODE, HYST_ROW, HYST_WFIT_INTERCEPT, HYST_WFIT_SLOPE, NZ, Z_DELAY,
-                     Z_DELAY_COUNT, Z_HYST, Z_HYST_W, Switch)
+                     HYST_MODE, HYST_ROW, HYST_STAGES, HYST_WFIT_INTERCEPT, HYST_WFIT_SLOPE, NZ,
+                     Z_DELAY, Z_DELAY_COUNT, Z_HYST, Z_HYST_DIR, Z_HYST_SLOPE, Z_HYST_W,
+                     HysteresisStages, Switch)
 from .pneumatics import pressure_rates
 from .torque import group_contraction, group_terms, torque_kernel_cs
 
@@ -132,6 +152,11 @@ NU = 4          #: input dimension
 NRHS = 16
 #: scratch length needed by rk4_step (5 state vectors + the plant_rhs scratch)
 NWORK = 5 * NX + NRHS
+#: Largest stage change of eps_s evaluated by the secant scheme (HysteresisStages.SECANT);
+#: beyond it the stage uses preisach_peek.  0.01 (an eps change of 0.00175, a contraction
+#: rate of 1.75 /s over a 1 ms step) is reached only by jumps (the first step from a
+#: saturated initial memory), not by the motions of the experiments.
+SECANT_MAX_STEP = 0.01
 #: offset of the current input in a Preisach memory row (hysteresis.memory.MEMORY)
 _MEM_INPUT = MEMORY.offset("input")
 _MEM_DEPTH = MEMORY.offset("depth")
@@ -159,7 +184,15 @@ def effects_update(x, z, u, P):
         c12, s12 = c1 * c2 - s1 * s2, s1 * c2 + c1 * s2
         for k in range(4):
             es = scaled_contraction(group_contraction(k, c1, s1, c12, s12, P), P[HYST_EPS_MAX])
-            z[Z_HYST_W + k] = preisach_update(z, es, Z_HYST + k * HYST_ROW)
+            o = Z_HYST + k * HYST_ROW
+            u_old = z[o + _MEM_INPUT]
+            w_old = z[Z_HYST_W + k]
+            w = preisach_update(z, es, o)
+            z[Z_HYST_W + k] = w
+            du = z[o + _MEM_INPUT] - u_old
+            if du != 0.0:                       # secant of this step, for the next stages
+                z[Z_HYST_SLOPE + k] = (w - w_old) / du
+                z[Z_HYST_DIR + k] = 1.0 if du > 0.0 else -1.0
 
 
 @leaf
@@ -176,6 +209,8 @@ def effects_init(z, P):
             z[Z_HYST + i] = P[HYST_INIT + i]
         for k in range(4):
             z[Z_HYST_W + k] = preisach_output(z, Z_HYST + k * HYST_ROW)
+            z[Z_HYST_SLOPE + k] = 0.0
+            z[Z_HYST_DIR + k] = 0.0
     if int(P[DEAD_MODE]) == Switch.ON:
         z[Z_DELAY_COUNT] = 0.0
 
@@ -208,16 +243,30 @@ def valve_delay(z, u, P):
 def _hysteresis_factor(k, eps, z, P):
     """Force factor 1 + delta (W - W_fit) of (3.35) for group ``k`` at contraction ``eps``.
 
-    W from the group's memory in ``z`` without writing it
-    (:func:`preisach_peek`); at the committed input (the first RK4 stage)
-    the cached output of the last update is used instead (the same value).
+    W from the group's memory in ``z`` without writing it.  At the
+    committed input (the first RK4 stage) the cached output of the last
+    update (the same value).  Elsewhere, ``HysteresisStages.EXACT``:
+    :func:`preisach_peek`; ``SECANT`` (default): W(u) + s (v - u) while the
+    stage input v continues the last move (s its secant slope), W(u) for a
+    stage that reverses it (a fresh reversal branch starts with zero slope),
+    and :func:`preisach_peek` when there is no last move yet or the stage is
+    far from the committed input (|v - u| > :data:`SECANT_MAX_STEP`, e.g.
+    the first step from a saturated initial memory).
     """
     es = scaled_contraction(eps, P[HYST_EPS_MAX])
     o = Z_HYST + k * HYST_ROW
-    if es == z[o + _MEM_INPUT]:
+    dv = es - z[o + _MEM_INPUT]
+    d = z[Z_HYST_DIR + k]
+    if dv == 0.0:
         w = z[Z_HYST_W + k]
-    else:
+    elif (int(P[HYST_STAGES]) == HysteresisStages.EXACT or d == 0.0
+          or abs(dv) > SECANT_MAX_STEP):
         w = preisach_peek(z, es, o)
+    elif dv * d > 0.0:
+        w = z[Z_HYST_W + k] + z[Z_HYST_SLOPE + k] * dv
+        w = 1.0 if w > 1.0 else (-1.0 if w < -1.0 else w)
+    else:
+        w = z[Z_HYST_W + k]
     return hysteresis_factor(P[HYST_DELTA + k], w, es, P[HYST_WFIT_SLOPE],
                              P[HYST_WFIT_INTERCEPT])
 
@@ -429,6 +478,8 @@ def _refresh_outputs(Z, rows):
         if int(rows[b, HYST_MODE]) == Switch.ON:
             for k in range(4):
                 Z[b, Z_HYST_W + k] = preisach_output(Z[b], Z_HYST + k * HYST_ROW)
+                if not (Z[b, Z_HYST_DIR + k] == 1.0 or Z[b, Z_HYST_DIR + k] == -1.0):
+                    Z[b, Z_HYST_DIR + k] = 0.0      # no valid secant: frozen W until a move
 
 
 def _check_effect_state(Z, rows) -> None:
@@ -456,22 +507,22 @@ def _hysteresis_along(X, z, P, eps_out, fac_out):
         c1, s1 = math.cos(x[0]), math.sin(x[0])
         c2, s2 = math.cos(x[1]), math.sin(x[1])
         c12, s12 = c1 * c2 - s1 * s2, s1 * c2 + c1 * s2
+        effects_update(x, z, u, P)
         for k in range(4):
             eps = group_contraction(k, c1, s1, c12, s12, P)
             eps_out[n, k] = eps
-            fac_out[n, k] = _hysteresis_factor(k, eps, z, P)
-        effects_update(x, z, u, P)
+            fac_out[n, k] = _hysteresis_factor(k, eps, z, P)   # at the committed input
 
 
 def hysteresis_factors(states, arm=None, *, params=None, effect_state=None):
     """The plant's hysteresis force factors (3.35) along a state trajectory.
 
-    Each state is treated as the end of one accepted integration step, as in
-    :func:`simulate`: the factor at sample n is evaluated with the memory of
-    samples 0..n-1 (:func:`preisach_peek`), then sample n is committed.  For
-    the output of :func:`simulate` (one state per control period, several
-    RK4 steps each) this reproduces the plant's factors at the samples up to
-    the registration of turning points between samples.  Use it to plot the
+    Each state is committed to the memories as the end of one accepted
+    integration step, as in :func:`simulate`, and the factor is the exact
+    one at that state (the value the plant uses at the first stage of the
+    next step).  For the output of :func:`simulate` (one state per control
+    period, several RK4 steps each) this reproduces the plant's factors at
+    the samples up to the registration of turning points between samples.  Use it to plot the
     plant's force-contraction loop: muscle force of group k = p_k f_k(eps_k)
     * factor_k (per unit l0^2, Table B.1 polynomial (3.9)).
 
