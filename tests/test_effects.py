@@ -47,7 +47,8 @@ def test_effects_change_only_the_plant_truth_view(arm):
     fx = TRUTH.replace(payload_mass=M_P)
     a = arm.replace(effects=fx)
     # every parameter-only effect (the effects with state: tests/test_effects_hysteresis.py)
-    stateful = {"hysteresis_delta", "hysteresis_initial", "valve_dead_time"}
+    stateful = {"hysteresis_delta", "hysteresis_initial", "hysteresis_exact_stages",
+                "valve_dead_time"}
     assert set(fx.enabled()) == set(Effects.__dataclass_fields__) - stateful
     np.testing.assert_array_equal(lay.controller_view(a), lay.controller_view(arm))
     np.testing.assert_array_equal(lay.model_view(a), lay.model_view(arm))

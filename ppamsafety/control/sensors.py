@@ -320,6 +320,15 @@ def pressure_read(p, cfg, out):
     """Measured gauge pressures (4) [Pa] of true pressures ``p`` into ``out``.
 
     ``gain_i p_i + offset_i`` with the sensor faults on, else a copy of ``p``.
+
+    Parameters
+    ----------
+    p : float64[:]
+        True gauge pressures (4) [Pa].
+    cfg : float64[:]
+        Sensor configuration row (``SENSOR_CONFIG``).
+    out : float64[:]
+        Measured pressures (4) [Pa], written.
     """
     if int(cfg[C_FAULTS]) == SensorFaults.ON:
         for i in range(4):

@@ -177,6 +177,17 @@ def effects_update(x, z, u, P):
     contraction eps_s (3.34) to its Preisach memory (:func:`preisach_update`)
     and caches the output W.  Every other effect: nothing (with every effect
     off this is one flag test).
+
+    Parameters
+    ----------
+    x : float64[:]
+        State at the end of the step (8,).
+    z : float64[:]
+        Effect state, updated in place.
+    u : float64[:]
+        Set values of the step (4,) [Pa].
+    P : float64[:]
+        Plant row.
     """
     if int(P[HYST_MODE]) == Switch.ON:
         c1, s1 = math.cos(x[0]), math.sin(x[0])
@@ -203,6 +214,13 @@ def effects_init(z, P):
     (``hysteresis_initial``, from ``Effects.hysteresis_initial``) and their
     outputs; dead time: an empty delay line (primed with the first set value
     by :func:`valve_delay`).  Nothing for a row without effects with state.
+
+    Parameters
+    ----------
+    z : float64[:]
+        Effect state of the row (length ``effect_state_length``), written.
+    P : float64[:]
+        Plant row.
     """
     if int(P[HYST_MODE]) == Switch.ON:
         for i in range(4 * HYST_ROW):
@@ -224,6 +242,15 @@ def valve_delay(z, u, P):
     samples per valve in ``z`` at :data:`~ppamsafety.plant.layout.Z_DELAY`)
     is primed with the first set value: before t = 0 the valves received
     u[0].  Does nothing when the dead time is off.
+
+    Parameters
+    ----------
+    z : float64[:]
+        Effect state (holds the delay line), updated in place.
+    u : float64[:]
+        Set values of this period (4,) [Pa]; overwritten by the delayed ones.
+    P : float64[:]
+        Plant row.
     """
     if int(P[DEAD_MODE]) == Switch.ON:
         D = int(P[DEAD_LEN])

@@ -51,6 +51,15 @@ def group_contraction(k, c1, s1, c12, s12, P):
 
     The same arithmetic as :func:`group_terms` (so bitwise the contraction
     the torque kernels use).
+
+    Parameters
+    ----------
+    k : int
+        Muscle group 0..3.
+    c1, s1, c12, s12 : float
+        cos/sin of q1 and of q1 + q2.
+    P : float64[:]
+        Plant row.
     """
     d, _, _ = group_length_lever(k, c1, s1, c12, s12, P)
     nl = P[NM + k] * P[L0 + k]
@@ -63,6 +72,15 @@ def group_terms(k, c1, s1, c12, s12, P):
 
     One group's share of :func:`torque_kernel_cs`; the contraction is what
     the plant's force hysteresis (3.35) needs.
+
+    Parameters
+    ----------
+    k : int
+        Muscle group 0..3.
+    c1, s1, c12, s12 : float
+        cos/sin of q1 and of q1 + q2.
+    P : float64[:]
+        Plant row.
     """
     d, h, dh = group_length_lever(k, c1, s1, c12, s12, P)
     nl = P[NM + k] * P[L0 + k]
