@@ -13,6 +13,21 @@ Thesis §2.4.5:
   held until the next edge arrives.
 * Optional measurement noise with the variances of Table 3.2 (first
   excitation signal), drawn from a seeded generator so runs are repeatable.
+* Optional sensor faults (issue 9), errors of the measurement, not of the
+  plant: an encoder offset per joint (a wrong absolute reference: the
+  incremental encoders only know angles relative to the index pulse passed
+  in the initialisation procedure, §2.4.5.1), so the measured angle is
+  quantised(q) + offset; and an offset and gain per pressure sensor
+  (Sensortechnics HCX005D6V, 0.5-4.5 V over 5 bar, transformed by the glue
+  electronics, §2.4.2, §2.4.6), so the measured pressure is
+  gain p + offset.  The measured pressures go to the controllers (SMC uses
+  them); the log keeps the true pressures.  On the real arm the valves
+  regulate with the same sensors' signal (§2.4.3); that side of a
+  pressure-sensor fault is a plant-truth valve offset/gain
+  (``Effects.valve_offset`` / ``valve_gain``, (3.12)) and is set there if
+  wanted.  With every fault at its default (offset 0, gain 1) the packed
+  flag is ``SensorFaults.OFF`` and the kernels skip the arithmetic (bitwise
+  nominal).
 
 In the closed loop the plant is integrated in sub-steps; the encoder edge
 times inside a sub-step are found by linear interpolation of the angle.
@@ -27,8 +42,9 @@ from enum import IntEnum
 import numpy as np
 
 from .._jit import leaf
-from .._validation import check_int, check_nonnegative, check_positive
+from .._validation import check_int, check_nonnegative, check_positive, check_range
 from ..layouts import Field, Layout, check_flag
+from ..units import BAR
 
 #: Table 3.2, first excitation signal: variances of q1, q2 [rad^2], qd1, qd2 [rad^2/s^2].
 TABLE_3_2_VARIANCES = (3.46e-6, 2.59e-6, 1.63e-4, 2.32e-5)
@@ -41,12 +57,24 @@ class EncoderMode(IntEnum):
     ON = 1
 
 
+class SensorFaults(IntEnum):
+    """Sensor faults: off (ideal calibration) or on (offsets/gains applied)."""
+
+    OFF = 0
+    ON = 1
+
+
 class VelocitySource(IntEnum):
     """Velocity measurement: exact velocity or the inter-pulse-timing board."""
 
     IDEAL = 0
     IPT = 1
 
+
+#: Largest pressure-sensor offset fault [Pa] (as the valve offsets, §3.5.1.2).
+PRESSURE_OFFSET_MAX = 0.5 * BAR
+#: Range of the pressure-sensor gain fault [-] (as the valve gains).
+PRESSURE_GAIN_RANGE = (0.5, 1.5)
 
 #: Time of an edge never seen [s] (far in the past: the counter has overflowed).
 T_NEVER = -1.0e9
@@ -72,9 +100,17 @@ SENSOR_CONFIG = Layout("sensor configuration", [
     Field("dead_band", 1, "rad/s", "velocities below this read zero"),
     Field("encoder", 1, "code", "EncoderMode: quantise the angles"),
     Field("velocity", 1, "code", "VelocitySource: ideal or inter-pulse timing"),
+    Field("faults", 1, "code", "SensorFaults: apply the offsets and gains below"),
+    Field("encoder_offset", 2, "rad", "offset added to the measured angles (index error, "
+          "§2.4.5.1)"),
+    Field("pressure_offset", 4, "Pa", "offset of the measured gauge pressures (§2.4.2)"),
+    Field("pressure_gain", 4, "-", "gain of the measured gauge pressures (§2.4.2)",
+          default=1.0),
 ])
 C_RES, C_TC, C_NMAX, C_DEAD, C_ENC, C_VEL = SENSOR_CONFIG.offsets(
     "resolution", "clock_period", "n_max", "dead_band", "encoder", "velocity")
+C_FAULTS, C_QOFF, C_POFF, C_PGAIN = SENSOR_CONFIG.offsets(
+    "faults", "encoder_offset", "pressure_offset", "pressure_gain")
 NSCFG = SENSOR_CONFIG.size
 
 #: One sample of measurement noise (:meth:`SensorConfig.noise_samples` rows).
@@ -109,6 +145,16 @@ class SensorConfig:
         Velocities below this magnitude read zero [rad/s] (0.025).
     noise_variances : tuple of 4 float
         Variances of q1, q2 [rad^2] and qd1, qd2 [rad^2/s^2] (Table 3.2).
+    encoder_offset : tuple of 2 float
+        Sensor fault: offset added to the measured angles [rad], in
+        [-pi, pi] (a wrong index reference, §2.4.5.1); default (0, 0).
+    pressure_offset : tuple of 4 float
+        Sensor fault: offset of the measured gauge pressures [Pa], in
+        [-0.5, 0.5] bar (§2.4.2; the valves' own offsets reach 0.1 bar,
+        §3.5.1.2); default zeros.
+    pressure_gain : tuple of 4 float
+        Sensor fault: gain of the measured gauge pressures [-], in [0.5, 1.5];
+        default ones.  Measured pressure = gain p + offset.
     """
 
     encoder: bool = True
@@ -120,6 +166,9 @@ class SensorConfig:
     counter_bits: int = 16
     dead_band: float = 0.025
     noise_variances: tuple = TABLE_3_2_VARIANCES
+    encoder_offset: tuple = (0.0, 0.0)
+    pressure_offset: tuple = (0.0, 0.0, 0.0, 0.0)
+    pressure_gain: tuple = (1.0, 1.0, 1.0, 1.0)
 
     def __post_init__(self):
         code = check_flag(VelocitySource, self.velocity, "SensorConfig.velocity")
@@ -133,6 +182,26 @@ class SensorConfig:
             raise ValueError("SensorConfig.noise_variances needs 4 values (q1, q2, qd1, qd2)")
         for i, v in enumerate(self.noise_variances):
             check_nonnegative(f"SensorConfig.noise_variances[{i}]", v)
+        for name, n, lo, hi, unit in (
+                ("encoder_offset", 2, -math.pi, math.pi, "rad"),
+                ("pressure_offset", 4, -PRESSURE_OFFSET_MAX, PRESSURE_OFFSET_MAX, "Pa"),
+                ("pressure_gain", 4, PRESSURE_GAIN_RANGE[0], PRESSURE_GAIN_RANGE[1], "")):
+            value = getattr(self, name)
+            if isinstance(value, (str, bytes)) or not hasattr(value, "__len__"):
+                raise TypeError(f"SensorConfig.{name} must be a sequence of {n} numbers, "
+                                f"got {value!r}")
+            if len(value) != n:
+                raise ValueError(f"SensorConfig.{name} must have {n} entries, got "
+                                 f"{len(value)}: {value!r}")
+            object.__setattr__(self, name, tuple(
+                check_range(f"SensorConfig.{name}[{i}]", v, lo, hi, unit=unit)
+                for i, v in enumerate(value)))
+
+    @property
+    def faults(self) -> bool:
+        """True if a sensor fault is set (an offset != 0 or a gain != 1)."""
+        return (any(v != 0.0 for v in self.encoder_offset + self.pressure_offset)
+                or any(v != 1.0 for v in self.pressure_gain))
 
     @classmethod
     def ideal(cls) -> "SensorConfig":
@@ -150,7 +219,10 @@ class SensorConfig:
             resolution=self.resolution, clock_period=1.0 / self.clock_hz,
             n_max=2.0 ** self.counter_bits - 1, dead_band=self.dead_band,
             encoder=int(EncoderMode.ON if self.encoder else EncoderMode.OFF),
-            velocity=check_flag(VelocitySource, self.velocity, "SensorConfig.velocity"))
+            velocity=check_flag(VelocitySource, self.velocity, "SensorConfig.velocity"),
+            faults=int(SensorFaults.ON if self.faults else SensorFaults.OFF),
+            encoder_offset=self.encoder_offset, pressure_offset=self.pressure_offset,
+            pressure_gain=self.pressure_gain)
 
     def noise_samples(self, n_steps: int) -> np.ndarray:
         """Noise to add to (q1, q2, qd1, qd2) at each of ``n_steps`` samples, shape (n, 4).
@@ -232,6 +304,8 @@ def sensor_track(j, q_old, q_new, t_old, h, cfg, st):
 def sensor_read(j, q_true, qd_true, t, cfg, st):
     """Measured (angle, velocity) of joint ``j`` at sample time ``t``."""
     qm = st[S_COUNT + j] * cfg[C_RES] if int(cfg[C_ENC]) == EncoderMode.ON else q_true
+    if int(cfg[C_FAULTS]) == SensorFaults.ON:
+        qm = qm + cfg[C_QOFF + j]
     if int(cfg[C_VEL]) != VelocitySource.IPT:
         return qm, qd_true
     # counter overflow: no edge for N_max clock periods -> minimum velocity, dead-banded
@@ -239,3 +313,26 @@ def sensor_read(j, q_true, qd_true, t, cfg, st):
         w = cfg[C_RES] / (cfg[C_NMAX] * cfg[C_TC])
         return qm, st[S_DIR + j] * w if w >= cfg[C_DEAD] else 0.0
     return qm, st[S_READ + j]
+
+
+@leaf
+def pressure_read(p, cfg, out):
+    """Measured gauge pressures (4) [Pa] of true pressures ``p`` into ``out``.
+
+    ``gain_i p_i + offset_i`` with the sensor faults on, else a copy of ``p``.
+
+    Parameters
+    ----------
+    p : float64[:]
+        True gauge pressures (4) [Pa].
+    cfg : float64[:]
+        Sensor configuration row (``SENSOR_CONFIG``).
+    out : float64[:]
+        Measured pressures (4) [Pa], written.
+    """
+    if int(cfg[C_FAULTS]) == SensorFaults.ON:
+        for i in range(4):
+            out[i] = cfg[C_PGAIN + i] * p[i] + cfg[C_POFF + i]
+    else:
+        for i in range(4):
+            out[i] = p[i]

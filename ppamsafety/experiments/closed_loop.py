@@ -21,12 +21,12 @@ import pandas as pd
 from .._jit import kernel
 from .._validation import check_int, check_range
 from ..control.dispatch import CONTROLLER_CLASSES, NINT, NSCRATCH, NSTATE, controller_step
-from ..control.sensors import (N_Q, N_QD, NSENSOR, SENSOR_NOISE, SensorConfig, sensor_init,
-                               sensor_read, sensor_reset, sensor_track)
+from ..control.sensors import (N_Q, N_QD, NSENSOR, SENSOR_NOISE, SensorConfig, pressure_read,
+                               sensor_init, sensor_read, sensor_reset, sensor_track)
 from ..layouts import Field, Layout
 from ..plant import layout as lay
 from ..plant.geometry import tcp_jacobian, tcp_position
-from ..plant.model import NWORK, NX, effect_state_length, rk4_step
+from ..plant.model import NWORK, NX, effect_state_length, effects_init, rk4_step, valve_delay
 from ..plant.pneumatics import delta_p_to_set_values
 from .case import ExperimentCase, as_cases
 from .trajectories import REF_COLUMNS, Reference
@@ -82,6 +82,7 @@ def _run_batch(X0, REFS, ref_idx, PP, PM, KIND, CP, CSIZE, SCFG, NOISE, noise_id
     st = np.empty(NSENSOR)
     qm = np.empty(2)
     qdm = np.empty(2)
+    pmeas = np.empty(4)
     dp = np.empty(2)
     u = np.empty(4)
     internals = np.empty(NINT)
@@ -94,6 +95,7 @@ def _run_batch(X0, REFS, ref_idx, PP, PM, KIND, CP, CSIZE, SCFG, NOISE, noise_id
         internals[:] = 0.0
         Pp, Pm, cfg, R = PP[b], PM[b], SCFG[b], REFS[ref_idx[b]]
         z = np.zeros(effect_state_length(Pp))     # plant effect state (empty: effects off)
+        effects_init(z, Pp)
         # every row exactly as wide as the kind declares (as in Controller.step)
         C = CP[b, :CSIZE[b, Z_PARAMS]]
         S = S_buf[:CSIZE[b, Z_STATE]]
@@ -107,7 +109,8 @@ def _run_batch(X0, REFS, ref_idx, PP, PM, KIND, CP, CSIZE, SCFG, NOISE, noise_id
                 a, w = sensor_read(j, x[X_Q + j], x[X_QD + j], t, cfg, st)
                 qm[j] = a + noise[k, N_Q + j]
                 qdm[j] = w + noise[k, N_QD + j]
-            controller_step(KIND[b], C, S, Pm, k, dt, qm, qdm, x[X_P:X_P + 4], R[k], dp, ints,
+            pressure_read(x[X_P:X_P + 4], cfg, pmeas)      # sensor faults (off: a copy)
+            controller_step(KIND[b], C, S, Pm, k, dt, qm, qdm, pmeas, R[k], dp, ints,
                             scratch)
             delta_p_to_set_values(dp[0], dp[1], Pm, u)
             row = LOG[b, k]
@@ -124,6 +127,7 @@ def _run_batch(X0, REFS, ref_idx, PP, PM, KIND, CP, CSIZE, SCFG, NOISE, noise_id
             row[L_XD] = j11 * x[X_QD] + j12 * x[X_QD + 1]
             row[L_YD] = j21 * x[X_QD] + j22 * x[X_QD + 1]
             row[L_INT:L_INT + NINT] = internals
+            valve_delay(z, u, Pp)          # valve dead time: the plant gets u[k - d] (off: none)
             for i in range(substeps):
                 q_old0, q_old1 = x[X_Q], x[X_Q + 1]
                 rk4_step(x, z, u, tau0, h, Pp, work)

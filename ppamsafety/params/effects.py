@@ -32,6 +32,10 @@ valve_offset             v1 (3.12)                              §3.5.1.2, Table
 valve_gain               v2 (3.12)                              Table B.2; [0.5, 1.5]
 valve_time_constant      tv (3.2)                               §3.5.2; [1 ms, 10 s] or inf
 polytropic_n             n_poly (3.3)                           §3.3: [1, 1.4]
+hysteresis_delta         hysteresis_* and the effect state z    §3.6, (3.31)-(3.35);
+                         (Preisach memory per muscle group)     delta in [0, 1]
+hysteresis_initial       hysteresis_initial (memory rows)       §3.6.6: "negative"
+valve_dead_time          dead_time_* and a delay line in z      §4.2.4; [0, 100] periods
 =======================  =====================================  ==========================
 
 Ranges.  Payload: the arm holds about 2 kg everywhere in its working area
@@ -52,8 +56,45 @@ dissipative model, (3.30)); 10 N m / 10 N m s/rad are far above the
 identified c = (0.030, 0.071) N m, b = (0.83, 0.004) N m s/rad (Table 3.5)
 and bound typos, not physics.
 
-Not here (they need the closed-loop runner, or the Preisach operator): valve
-dead time, sensor faults, muscle hysteresis (3.35).
+Muscle hysteresis (thesis §3.6).  The thesis model omits the hysteresis of
+the PPAM force-contraction characteristic (§3.6.1, figs. 3.7-3.9); its
+static validation (§3.5.1.6, figs. 3.1-3.2) shows the consequence: with
+gravity compensation, rising angles settle below and falling angles above
+their set points.  With ``hysteresis_delta`` set, the plant's muscle force of
+group k becomes (3.35)::
+
+    F_k = p_k l0^2 f_fit,k(eps_k) (1 + delta_k (W_k[eps_s,k] - W_fit(eps_s,k)))
+    eps_s = 2 eps / eps_max - 1,   eps_max = 0.35                       (3.34)
+
+with W the Preisach operator of weight (3.33) (c = -0.1, d = -1,
+:mod:`ppamsafety.hysteresis`), one memory per muscle group, and W_fit its
+least-squares line through the major loop (fig. 3.12).  *Identification of
+f_fit*: the thesis writes f_t0^fit, the least-squares fit of the measured
+force function of one muscle at 1.5 bar; in this plant f_fit,k is the
+identified force polynomial of group k (Table B.1, (3.9)), i.e. the
+"average" model the controllers also use, which is exactly the role (3.31)
+gives f_t0^fit (the hysteresis-free least-squares fit the error e[eps] is
+measured against).  delta: 0.139 for the arm's 25-fibre muscles (§3.6.5,
+fitted at 1.5 bar, :data:`~ppamsafety.hysteresis.DELTA_25_FIBRES`), 0.299 for
+the 40-fibre test muscle.  Range [0, 1]: any Preisach output stays inside the
+major loop, where |W - W_fit| <= 0.32 (measured on 2000 samples), so the
+factor stays >= 0.68 > 0.  ``hysteresis_initial`` is the memory at t = 0:
+``"negative"`` (default: negative saturation, the muscle brought to its
+smallest contraction first, as the thesis requires, §3.6.6),
+``"positive"``, or per group a past input history (see :class:`Effects`).  The factor multiplies only the muscle forces in the
+joint torques, not the volume derivative dV/dq = m_tau of the pressure
+dynamics (geometric, (3.5)); see :mod:`ppamsafety.plant.model`.
+
+Valve dead time.  A transport delay of the set value by a whole number of
+control periods per valve (the plant sees u_i[k - d_i]); delays in the
+control switching are the cause of chattering (§4.2.4, fig. 4.5).  Range
+[0, 100] periods (0.1 s at 1 kHz, far above any proportional valve's
+response delay: a typo guard).  Before t = 0 the valves are taken to have
+received the first set value (the arm was at rest with it).
+
+Not here: sensor faults (encoder and pressure-sensor offsets and gains) are
+errors of the measurement, not of the plant; they live in
+:class:`ppamsafety.control.sensors.SensorConfig`.
 """
 
 from __future__ import annotations
@@ -61,7 +102,9 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 
-from .._validation import check_range
+import numpy as np
+
+from .._validation import check_int, check_range
 from ..units import BAR
 
 #: Payload mass range [kg] (§2.3.3.5, see the module docstring).
@@ -78,6 +121,85 @@ VALVE_TIME_CONSTANT_MIN = 1e-3
 VALVE_TIME_CONSTANT_MAX = 10.0
 #: Polytropic exponent range: isothermal .. isentropic (§3.3).
 POLYTROPIC_RANGE = (1.0, 1.4)
+#: Range of the hysteresis scale delta of (3.35) (see the module docstring).
+HYSTERESIS_DELTA_RANGE = (0.0, 1.0)
+#: Largest valve dead time [control periods] (typo guard, see the module docstring).
+VALVE_DEAD_TIME_MAX = 100
+#: Named initial Preisach memories (§3.6.6; :func:`ppamsafety.hysteresis.initial_memory`).
+HYSTERESIS_INITIAL_NAMES = ("negative", "positive")
+
+
+def _history(name, value):
+    """A validated past-input history of the scaled contraction (tuple of floats)."""
+    try:
+        h = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name} must be a sequence of numbers, got {value!r}") from None
+    if h.ndim != 1 or h.size == 0:
+        raise ValueError(f"{name} must be a non-empty 1-D history, got shape {h.shape}")
+    if not np.all(np.isfinite(h)):
+        raise ValueError(f"{name} must be finite, got {value!r}")
+    if h.min() < -1.0 or h.max() > 1.0:
+        raise ValueError(f"{name} must lie in [-1, 1], got values in [{h.min():g}, {h.max():g}]")
+    if h[0] not in (-1.0, 1.0):
+        raise ValueError(f"{name} must start at a saturation value -1 or +1, got {h[0]!r}")
+    return tuple(float(v) for v in h)
+
+
+def history_of_memory(row) -> tuple:
+    """The past-input history that rebuilds a Preisach memory row exactly.
+
+    Parameters
+    ----------
+    row : array_like, shape (STATE_LENGTH,)
+        A memory row (layout :data:`ppamsafety.hysteresis.MEMORY`), e.g. one
+        group's slice of the effect state returned by
+        ``plant.model.simulate(..., return_effect_state=True)``.
+
+    Returns
+    -------
+    tuple of float
+        The stored extrema x_0 .. x_{n-1} followed by the current input: fed
+        through the operator (:func:`ppamsafety.hysteresis.initial_memory`) it
+        reproduces the row (the prefix sums are recomputed by the same
+        operations).  Use it for ``Effects.hysteresis_initial``.
+
+    Raises
+    ------
+    ValueError
+        If ``row`` has the wrong shape or is not a valid memory row.
+    """
+    from .._validation import as_float_array
+    from ..hysteresis.memory import MAX_DEPTH, MEMORY, STATE_LENGTH
+
+    h = as_float_array("row", row)
+    if h.shape != (STATE_LENGTH,):
+        raise ValueError(f"row must have shape ({STATE_LENGTH},), got {h.shape}")
+    n = h[MEMORY.offset("depth")]
+    if not (n == int(n) and 1 <= n <= MAX_DEPTH):
+        raise ValueError(f"row is not a memory row: depth {n!r} outside 1..{MAX_DEPTH}")
+    return _history("row", np.append(MEMORY.read(h, "extrema")[:int(n)],
+                                      MEMORY.read(h, "input")))
+
+
+def _hysteresis_initial(value):
+    """Normalise ``Effects.hysteresis_initial``: a name or 4 histories (tuple of tuples)."""
+    name = "Effects.hysteresis_initial"
+    if isinstance(value, str):
+        if value not in HYSTERESIS_INITIAL_NAMES:
+            raise ValueError(f"{name} = {value!r} is not one of {HYSTERESIS_INITIAL_NAMES} "
+                             f"or past-input histories")
+        return value
+    if not hasattr(value, "__len__"):
+        raise TypeError(f"{name} must be 'negative', 'positive' or a sequence, got {value!r}")
+    items = list(value)
+    if items and all(isinstance(v, (int, float, np.number)) for v in items):
+        h = _history(name, items)               # one history for all four groups
+        return (h,) * 4
+    if len(items) != 4:
+        raise ValueError(f"{name} must give one history for all groups or "
+                         f"one per muscle group (4), got {len(items)} entries")
+    return tuple(_history(f"{name}[{k}]", v) for k, v in enumerate(items))
 
 
 def _vector(name, value, n, check):
@@ -115,6 +237,27 @@ class Effects:
         None = ``arm.valves``.
     polytropic_n : float or None
         Plant polytropic exponent n (3.3) [-]; None = ``arm.pneumatics``.
+    hysteresis_delta : tuple of 4 float or None
+        Scale delta_k of the muscle force hysteresis (3.35) per muscle group,
+        in [0, 1] [-]; None = no hysteresis.  Thesis: 0.139 for the arm's
+        25-fibre muscles (``(DELTA_25_FIBRES,) * 4``), 0.299 for 40 fibres.
+    hysteresis_initial : str or sequence
+        Preisach memory of each group at t = 0 (only used with
+        ``hysteresis_delta``): ``"negative"`` (default, negative saturation,
+        §3.6.6), ``"positive"``, one past-input history of the scaled
+        contraction eps_s (a sequence in [-1, 1] starting at -1 or +1, e.g.
+        ``(-1, 0.3, -0.2)``) for all groups, or four such histories, one per
+        group (a saved memory row becomes a history with
+        :func:`history_of_memory`).  Stored as four tuples.
+    hysteresis_exact_stages : bool
+        Evaluate the Preisach output exactly (``preisach_peek``) in every
+        RK4 stage instead of by the secant of the last step (default False:
+        4x fewer Everett evaluations, error O(h^2) in the stage forces; see
+        :mod:`ppamsafety.plant.model`).  For checks of the fast scheme.
+    valve_dead_time : tuple of 4 int or None
+        Transport delay of the set value of each valve, in whole control
+        periods (input samples of ``plant.model.simulate``), in [0, 100];
+        None = no dead time.
     """
 
     payload_mass: float = 0.0
@@ -124,6 +267,10 @@ class Effects:
     valve_gain: tuple | None = None
     valve_time_constant: tuple | None = None
     polytropic_n: float | None = None
+    hysteresis_delta: tuple | None = None
+    hysteresis_initial: object = "negative"
+    hysteresis_exact_stages: bool = False
+    valve_dead_time: tuple | None = None
 
     def __post_init__(self):
         def fric(unit):
@@ -151,16 +298,39 @@ class Effects:
                                 f"got {self.polytropic_n!r}")
             object.__setattr__(self, "polytropic_n", check_range(
                 "Effects.polytropic_n", self.polytropic_n, *POLYTROPIC_RANGE))
+        object.__setattr__(self, "hysteresis_delta", _vector(
+            "hysteresis_delta", self.hysteresis_delta, 4,
+            lambda n, v: check_range(n, v, *HYSTERESIS_DELTA_RANGE)))
+        object.__setattr__(self, "hysteresis_initial",
+                           _hysteresis_initial(self.hysteresis_initial))
+        if not isinstance(self.hysteresis_exact_stages, (bool, np.bool_)):
+            raise TypeError(f"Effects.hysteresis_exact_stages must be a bool, "
+                            f"got {self.hysteresis_exact_stages!r}")
+        object.__setattr__(self, "valve_dead_time", _vector(
+            "valve_dead_time", self.valve_dead_time, 4,
+            lambda n, v: check_int(n, v, 0, VALVE_DEAD_TIME_MAX)))
+
+    @property
+    def hysteresis(self) -> bool:
+        """True if the muscle force hysteresis (3.35) is on."""
+        return self.hysteresis_delta is not None
 
     @property
     def any(self) -> bool:
         """True if at least one effect is on."""
-        return self != Effects()
+        return bool(self.enabled())
 
     def enabled(self) -> tuple:
-        """Names of the effects that are on (fields differing from the default)."""
+        """Names of the effects that are on (fields differing from the default).
+
+        ``hysteresis_initial`` and ``hysteresis_exact_stages`` are options of
+        the hysteresis, not effects: they are never listed (and are ignored
+        while ``hysteresis_delta`` is None).
+        """
         off = Effects()
-        return tuple(f for f in self.__dataclass_fields__ if getattr(self, f) != getattr(off, f))
+        return tuple(f for f in self.__dataclass_fields__
+                     if f not in ("hysteresis_initial", "hysteresis_exact_stages")
+                     and getattr(self, f) != getattr(off, f))
 
     def replace(self, **changes) -> "Effects":
         """Return a copy with some fields changed (validated again).
@@ -175,6 +345,7 @@ class Effects:
         return replace(self, **changes)
 
 
-__all__ = ["Effects", "PAYLOAD_MASS_MAX", "FRICTION_MAX", "VALVE_OFFSET_MAX",
+__all__ = ["Effects", "history_of_memory", "PAYLOAD_MASS_MAX", "FRICTION_MAX", "VALVE_OFFSET_MAX",
            "VALVE_GAIN_RANGE", "VALVE_TIME_CONSTANT_MIN", "VALVE_TIME_CONSTANT_MAX",
-           "POLYTROPIC_RANGE"]
+           "POLYTROPIC_RANGE", "HYSTERESIS_DELTA_RANGE", "HYSTERESIS_INITIAL_NAMES",
+           "VALVE_DEAD_TIME_MAX"]

@@ -37,6 +37,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from ..hysteresis.memory import STATE_LENGTH as HYST_ROW
 from ..layouts import Field, Layout
 
 #: Geometry fields, named as the :class:`~ppamsafety.params.ArmGeometry` attributes.
@@ -62,6 +63,13 @@ GEOMETRY_FIELDS = (
     Field("LL", 1, "m", "position of the load point A_L along link 2, Table 2.2, (A.21)"),
     Field("dL", 1, "m", "offset of the load point A_L from link 2, Table 2.2, (A.21)"),
 )
+
+class HysteresisStages(enum.IntEnum):
+    """How the Preisach output W is evaluated inside the RK4 stages (see plant.model)."""
+
+    SECANT = 0      #: W(u) + secant slope of the last step (no Everett call per stage)
+    EXACT = 1       #: preisach_peek at every stage (4 x 3 Everett calls per step more)
+
 
 class Switch(enum.IntEnum):
     """On/off code of a plant effect, stored in its ``*_mode`` field of :data:`EFFECTS`."""
@@ -93,6 +101,24 @@ EFFECT_FIELDS = (
           "Effects.valve_time_constant (3.2)", default=0.0),
     Field("polytropic_mode", 1, "code", "Switch: n_poly holds the plant-truth override "
           "Effects.polytropic_n (3.3)", default=0.0),
+    # --- effects with state (kernels read these; z laid out by EFFECT_STATE) ---------------
+    Field("hysteresis_mode", 1, "code", "Switch: muscle force hysteresis (3.35), Preisach "
+          "memory per group in z, §3.6", default=0.0),
+    Field("hysteresis_delta", 4, "-", "scale delta_k of (3.35) per muscle group, §3.6.5 "
+          "(0.139 for 25 fibres)", default=0.0),
+    Field("hysteresis_eps_max", 1, "-", "eps_max of the map eps_s = 2 eps/eps_max - 1 "
+          "(3.34), 0.35 (§3.6.4)", default=0.0),
+    Field("hysteresis_wfit", 2, "-", "slope and intercept of W_fit, the least-squares line "
+          "of the major loop (fig. 3.12)", default=0.0, columns=("wfit_slope", "wfit_intercept")),
+    Field("hysteresis_initial", 4 * HYST_ROW, "-", "Preisach memory rows of the four groups "
+          "at t = 0 (layout hysteresis.memory.MEMORY), §3.6.6", default=0.0),
+    Field("hysteresis_stages", 1, "code", "HysteresisStages: W inside the RK4 stages by the "
+          "secant of the last step (fast) or by exact preisach_peek", default=0.0),
+    Field("dead_time_mode", 1, "code", "Switch: valve set values delayed by whole control "
+          "periods (delay line in z), §4.2.4", default=0.0),
+    Field("dead_time", 4, "-", "dead time d_i of valve i [control periods]", default=0.0),
+    Field("dead_time_length", 1, "-", "ring length D = max(d_i) + 1 of the delay line of "
+          "each valve in z", default=0.0),
 )
 
 PLANT = Layout("plant parameters", GEOMETRY_FIELDS + (
@@ -130,10 +156,21 @@ PLANT = Layout("plant parameters", GEOMETRY_FIELDS + (
 #: The effect section of :data:`PLANT` on its own (same fields, offsets relative to the section).
 EFFECTS = Layout("plant effect parameters", EFFECT_FIELDS)
 
-#: Contents of the effect-state vector z (empty: no effect with state is implemented yet).
-#: The row's ``effect_state_length`` may exceed ``EFFECT_STATE.size`` (variable-length
-#: memories such as Preisach reversal stacks); z is then laid out by the effect itself.
-EFFECT_STATE = Layout("plant effect state", [])
+#: Contents of the effect-state vector z: the fixed part.  A row with an effect with state
+#: on has ``effect_state_length = EFFECT_STATE.size`` (+ the delay line: with valve dead
+#: time the ring buffers of the four valves follow at :data:`Z_DELAY`, ``4 D`` floats,
+#: valve-major, D = ``dead_time_length``); a row with every effect off has length 0.
+EFFECT_STATE = Layout("plant effect state", [
+    Field("hysteresis_memory", 4 * HYST_ROW, "-", "Preisach memory row of each muscle group "
+          "(layout hysteresis.memory.MEMORY, group-major), §3.6.3"),
+    Field("hysteresis_output", 4, "-", "Preisach output W of each group at its committed "
+          "input (cache of the last preisach_update)"),
+    Field("hysteresis_slope", 4, "-", "secant dW/deps_s of each group over its last move "
+          "(RK4 stages, HysteresisStages.SECANT)"),
+    Field("hysteresis_direction", 4, "-", "sign of each group's last move of eps_s "
+          "(+1 rising, -1 falling, 0 none yet)"),
+    Field("delay_count", 1, "-", "number of set values pushed into the delay line so far"),
+])
 
 # --- module constants for the kernels (frozen by numba at compile time) ----------------
 (X11, Y11, X21, Y21, L12, D12, L22, D22, L32, D32, L42, D42, L33, D33, L43, D43,
@@ -155,10 +192,24 @@ NZ = PLANT.offset("effect_state_length")
  POLYTROPIC_MODE) = PLANT.offsets("payload_mode", "payload_mass", "friction_mode",
                                   "valve_offset_mode", "valve_gain_mode", "valve_lag_mode",
                                   "polytropic_mode")
+#: effects with state: hysteresis (3.35) and valve dead time
+(HYST_MODE, HYST_DELTA, HYST_EPS_MAX, HYST_WFIT, HYST_INIT, HYST_STAGES, DEAD_MODE, DEAD,
+ DEAD_LEN) = PLANT.offsets("hysteresis_mode", "hysteresis_delta", "hysteresis_eps_max",
+                           "hysteresis_wfit", "hysteresis_initial", "hysteresis_stages",
+                           "dead_time_mode", "dead_time", "dead_time_length")
+HYST_WFIT_SLOPE, HYST_WFIT_INTERCEPT = HYST_WFIT, HYST_WFIT + 1
+#: offsets in the effect state z (:data:`EFFECT_STATE`); the delay line starts at Z_DELAY
+Z_HYST, Z_HYST_W, Z_HYST_SLOPE, Z_HYST_DIR, Z_DELAY_COUNT = EFFECT_STATE.offsets(
+    "hysteresis_memory", "hysteresis_output", "hysteresis_slope", "hysteresis_direction",
+    "delay_count")
+Z_DELAY = EFFECT_STATE.size
 #: Effect fields applied when the row is packed (from ``ArmParameters.effects``); they
 #: cannot be changed on a packed row by :func:`with_effects`.
 PACK_TIME_EFFECTS = ("payload_mode", "payload_mass", "friction_mode", "valve_offset_mode",
-                     "valve_gain_mode", "valve_lag_mode", "polytropic_mode")
+                     "valve_gain_mode", "valve_lag_mode", "polytropic_mode",
+                     "hysteresis_mode", "hysteresis_delta", "hysteresis_eps_max",
+                     "hysteresis_wfit", "hysteresis_initial", "hysteresis_stages",
+                     "dead_time_mode", "dead_time", "dead_time_length")
 NP = PLANT.size                        #: length of the row
 
 #: Contraction floor used by the force/volume kernels (eps <= 0 is undefined).
@@ -219,9 +270,9 @@ def pack(arm, dynamics=None) -> np.ndarray:
     Returns
     -------
     numpy.ndarray, shape (NP,)
-        Read-only row (cached per argument pair).  The run-time effect
-        fields (``effect_state_length``) are at their defaults; use
-        :func:`with_effects` to set them.
+        Read-only row (cached per argument pair).  ``effect_state_length``
+        covers the effect state z of the effects with state that are on
+        (0 when none is; see :data:`EFFECT_STATE`).
 
     Notes
     -----
@@ -239,7 +290,12 @@ def pack(arm, dynamics=None) -> np.ndarray:
       so H, C and G of (3.1) include it consistently;
     * friction (3.30), valve offsets v1 / gains v2 (3.12), valve time
       constants T (3.2), polytropic exponent n (3.3): the override replaces
-      the nominal value in the plant row.
+      the nominal value in the plant row;
+    * effects with state, read by the kernels (:mod:`ppamsafety.plant.model`):
+      muscle hysteresis (3.35) (delta per group, eps_max = 0.35, the W_fit
+      line of :func:`ppamsafety.hysteresis.w_fit` and the initial Preisach
+      memories) and valve dead time (delays, ring length); they set
+      ``effect_state_length``.
     """
     groups = arm.muscles.groups
     lconn, eps_a, eps_f0, v_c = _muscle_terms(arm.geometry, arm.muscles)
@@ -306,6 +362,24 @@ def _apply_effects(values: dict, arm) -> None:
             values[flag] = Switch.ON
     if fx.polytropic_n is not None:
         values.update(n_poly=fx.polytropic_n, polytropic_mode=Switch.ON)
+    nz = 0
+    if fx.hysteresis_delta is not None:
+        from ..hysteresis import EPS_MAX, initial_memory, w_fit
+
+        init = fx.hysteresis_initial
+        rows = [initial_memory(init if isinstance(init, str) else init[k]) for k in range(4)]
+        values.update(hysteresis_mode=Switch.ON, hysteresis_delta=fx.hysteresis_delta,
+                      hysteresis_eps_max=EPS_MAX, hysteresis_wfit=w_fit(),
+                      hysteresis_initial=np.concatenate(rows),
+                      hysteresis_stages=HysteresisStages.EXACT if fx.hysteresis_exact_stages
+                      else HysteresisStages.SECANT)
+        nz = EFFECT_STATE.size
+    if fx.valve_dead_time is not None:
+        D = max(fx.valve_dead_time) + 1
+        values.update(dead_time_mode=Switch.ON, dead_time=fx.valve_dead_time,
+                      dead_time_length=D)
+        nz = EFFECT_STATE.size + 4 * D
+    values["effect_state_length"] = nz
 
 
 def plant_effects(P) -> dict:

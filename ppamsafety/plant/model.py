@@ -60,8 +60,9 @@ How to add an effect
    stages (extend ``NWORK`` and :func:`rk4_step`).  Never change the
    signatures above.
 4. *Initial state.*  :func:`simulate` starts from ``effect_state`` (default
-   zeros), the closed loop (:mod:`ppamsafety.experiments.closed_loop`) from
-   zeros; if zero is not the effect's rest state, set it there.
+   :func:`initial_effect_state`), the closed loop
+   (:mod:`ppamsafety.experiments.closed_loop`) from :func:`effects_init`;
+   if zero is not the effect's rest state, set it there (from the row).
 5. *Tests.*  With the effect off, ``tests/test_golden.py`` must still pass
    bitwise; add a test of the effect itself, and a benchmark run
    (``studies/bench_plant.py``) showing the cost of the check when off.
@@ -70,40 +71,58 @@ An effect that is a pure change of plant *parameters* needs none of steps
 2-4: it is folded into the plant-truth row by
 :func:`~ppamsafety.plant.layout.pack` from ``ArmParameters.effects``
 (:class:`~ppamsafety.params.effects.Effects`) and only flagged in the effect
-section.  That is how the implemented effects work -- payload at A_L (folded
+section.  That is how the parameter-only effects work -- payload at A_L (folded
 into theta), plant friction, valve offset/gain/time constant and polytropic
 exponent that differ from the controllers' belief -- so the kernels are
 untouched and a row with every effect off is bitwise the nominal row.
 Different rows of one batch may carry different effects (``simulate`` with
 a list of arms).
 
-Hysteresis hook (design note, not implemented)
-~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~
-The Preisach force hysteresis of (3.33)-(3.35) (``plant/hysteresis.py``,
-branch ``preisach``) is the first effect with state; wiring it:
+Effects with state (implemented)
+~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~~
+*Muscle force hysteresis* (thesis §3.6, (3.31)-(3.35);
+``Effects.hysteresis_delta``).  Parameters ``hysteresis_*`` of the row
+(delta per group, eps_max = 0.35, the W_fit line, the initial memories);
+state: one Preisach memory row per group (:mod:`ppamsafety.hysteresis.memory`,
+``STATE_LENGTH`` floats, at ``Z_HYST + k STATE_LENGTH``) plus the output W at
+the committed input, the secant slope and direction of the last move
+(:data:`~ppamsafety.plant.layout.EFFECT_STATE`).  In :func:`plant_rhs` the
+torque of group k is ``p_k * mt[k] * (1 + delta_k (W_k - W_fit(eps_s,k)))``,
+the factor of (3.35) on the force p l0^2 f(eps) (f: the group's identified
+polynomial of Table B.1, the plant's f_t0^fit; see
+:mod:`ppamsafety.params.effects`).  The factor multiplies only the torques
+``tau1``, ``tau2``, NOT the ``mt`` passed to
+:func:`~ppamsafety.plant.pneumatics.pressure_rates`: there m_tau is the
+volume derivative dV/dq (virtual work, (3.5)), geometric, without force
+hysteresis.  The contraction comes from
+:func:`~ppamsafety.plant.torque.group_terms` (same arithmetic as
+:func:`~ppamsafety.plant.torque.torque_kernel_cs`), so delta = 0 is bitwise
+the nominal plant.  Memory: :func:`effects_update` commits the end-of-step
+eps_s of each group once per accepted RK4 step (``preisach_update``); a
+turning point of eps inside a step is registered at the end of the step, an
+O(h) error in the position of one reversal (0.5-1 ms), the order of any
+discrete-time record.  Stages: the memory is frozen over the four stages;
+stage 1 sits on the committed input (cached W, exact); stages 2-4 use, by
+default (``HysteresisStages.SECANT``), W(u) + s (v - u) with s the secant of
+the last step while the stage continues the last move, and W(u) for a stage
+that reverses it (a new reversal branch starts with zero slope: its weight
+grows like (v - u)^2).  Both errors are O(dv^2) per stage, dv <= one step's
+change of eps_s (~1e-3), i.e. ~1e-7 in the force factor, far below the O(h)
+turning-point registration; ``Effects.hysteresis_exact_stages`` evaluates
+``preisach_peek`` at every stage instead (4x the Everett evaluations; the
+test suite checks the two agree to 1e-3 of the hysteresis effect).  Cost
+(measured, closed loop of ``studies/bench_closed_loop.py``): 1.75x the
+nominal run with the secant stages (3.8x with exact peeks).  The
+controllers' model rows carry no hysteresis (they do not know about it).
 
-* *Parameters* (step 1): ``hysteresis_mode`` (a ``Switch`` code),
-  ``hysteresis_delta`` (4, the scale delta of (3.35) per group, thesis
-  0.139-0.299), ``hysteresis_eps_max`` (the eps -> eps_s map of (3.34),
-  thesis 35 %) and the operator's weight-function data (or an index into a
-  table owned by ``hysteresis.py``).
-* *State* (step 2): per group a reversal-point stack (variable length:
-  per group an offset into z and a capacity, declared as effect fields; the
-  row's ``effect_state_length`` covers the four stacks).  z = 0 must mean the
-  state after a descent to eps_s = -1 (the erased memory), or step 4 sets it.
-* *Force* (step 3): in :func:`plant_rhs`, the torque of group k becomes
-  ``p_k * mt[k] * (1 + delta_k (W_k[eps_s,k] - W_fit(eps_s,k)))`` -- the
-  factor of (3.35) multiplying f(eps) -- with W evaluated from the memory in
-  z (frozen over the RK4 stages) and the stage's contraction eps_k.
-  :func:`~ppamsafety.plant.torque.torque_kernel_cs` computes eps_k but does
-  not return it: give it a fifth output buffer (``work[12:16]``, NWORK + 4).
-  The factor must multiply only the torques ``tau1``, ``tau2``, NOT the
-  ``mt`` passed to :func:`~ppamsafety.plant.pneumatics.pressure_rates`: there
-  m_tau is the volume derivative dV/dq (virtual work, (3.5)), which is
-  geometric and has no force hysteresis.
-* *Memory update*: in :func:`effects_update`, once per RK4 step, from the
-  step-end state x: contractions eps_k(q) (``group_length_lever``), then
-  the Preisach wipe-out update of each group's stack.
+*Valve dead time* (``Effects.valve_dead_time``): :func:`valve_delay`
+replaces the set values of control period k by u_i[k - d_i] from a ring
+buffer in z (at ``Z_DELAY``, D = max d_i + 1 samples per valve, primed with
+the first set value); called once per period by :func:`simulate` and the
+closed loop (:mod:`ppamsafety.experiments.closed_loop`) before integrating.
+
+Initial state: :func:`effects_init` (kernels) / :func:`initial_effect_state`
+(Python) set z at t = 0 from the row; both runners call it.
 """
 
 from __future__ import annotations
@@ -115,16 +134,32 @@ import numpy as np
 from .._jit import kernel, leaf
 
 from .._validation import as_float_array, check_int, check_range
+from ..hysteresis.force import hysteresis_factor, scaled_contraction
+from ..hysteresis.memory import MAX_DEPTH, MEMORY, preisach_output, preisach_peek, \
+    preisach_update
 from . import layout as lay
 from .dynamics import forward_dynamics_cs
-from .layout import NZ
+from .layout import (DEAD, DEAD_LEN, DEAD_MODE, HYST_DELTA, HYST_EPS_MAX, HYST_INIT,
+                     HYST_MODE, HYST_ROW, HYST_STAGES, HYST_WFIT_INTERCEPT, HYST_WFIT_SLOPE, NZ,
+                     Z_DELAY, Z_DELAY_COUNT, Z_HYST, Z_HYST_DIR, Z_HYST_SLOPE, Z_HYST_W,
+                     HysteresisStages, Switch)
 from .pneumatics import pressure_rates
-from .torque import torque_kernel_cs
+from .torque import group_contraction, group_terms, torque_kernel_cs
 
 NX = 8          #: state dimension
 NU = 4          #: input dimension
-#: scratch length needed by rk4_step (5 state vectors + 3 x 4 torque buffers)
-NWORK = 5 * NX + 12
+#: scratch length of plant_rhs (3 x 4 torque buffers + 4 hysteresis factors)
+NRHS = 16
+#: scratch length needed by rk4_step (5 state vectors + the plant_rhs scratch)
+NWORK = 5 * NX + NRHS
+#: Largest stage change of eps_s evaluated by the secant scheme (HysteresisStages.SECANT);
+#: beyond it the stage uses preisach_peek.  0.01 (an eps change of 0.00175, a contraction
+#: rate of 1.75 /s over a 1 ms step) is reached only by jumps (the first step from a
+#: saturated initial memory), not by the motions of the experiments.
+SECANT_MAX_STEP = 0.01
+#: offset of the current input in a Preisach memory row (hysteresis.memory.MEMORY)
+_MEM_INPUT = MEMORY.offset("input")
+_MEM_DEPTH = MEMORY.offset("depth")
 
 
 @leaf
@@ -138,17 +173,139 @@ def effects_update(x, z, u, P):
     """Update the effect state ``z`` after an integration step ending in state ``x``.
 
     Called once per RK4 step (by :func:`rk4_step`) with the step's input
-    ``u``.  No effect is implemented yet, so this does nothing (and, being
-    inlined, costs nothing); see the module docstring for how to add one.
+    ``u``.  Muscle hysteresis: commits each group's end-of-step scaled
+    contraction eps_s (3.34) to its Preisach memory (:func:`preisach_update`)
+    and caches the output W.  Every other effect: nothing (with every effect
+    off this is one flag test).
+
+    Parameters
+    ----------
+    x : float64[:]
+        State at the end of the step (8,).
+    z : float64[:]
+        Effect state, updated in place.
+    u : float64[:]
+        Set values of the step (4,) [Pa].
+    P : float64[:]
+        Plant row.
     """
-    return
+    if int(P[HYST_MODE]) == Switch.ON:
+        c1, s1 = math.cos(x[0]), math.sin(x[0])
+        c2, s2 = math.cos(x[1]), math.sin(x[1])
+        c12, s12 = c1 * c2 - s1 * s2, s1 * c2 + c1 * s2
+        for k in range(4):
+            es = scaled_contraction(group_contraction(k, c1, s1, c12, s12, P), P[HYST_EPS_MAX])
+            o = Z_HYST + k * HYST_ROW
+            u_old = z[o + _MEM_INPUT]
+            w_old = z[Z_HYST_W + k]
+            w = preisach_update(z, es, o)
+            z[Z_HYST_W + k] = w
+            du = z[o + _MEM_INPUT] - u_old
+            if du != 0.0:                       # secant of this step, for the next stages
+                z[Z_HYST_SLOPE + k] = (w - w_old) / du
+                z[Z_HYST_DIR + k] = 1.0 if du > 0.0 else -1.0
+
+
+@leaf
+def effects_init(z, P):
+    """Set the effect state ``z`` of plant row ``P`` to its value at t = 0 (in place).
+
+    Hysteresis: the initial Preisach memories stored in the row
+    (``hysteresis_initial``, from ``Effects.hysteresis_initial``) and their
+    outputs; dead time: an empty delay line (primed with the first set value
+    by :func:`valve_delay`).  Nothing for a row without effects with state.
+
+    Parameters
+    ----------
+    z : float64[:]
+        Effect state of the row (length ``effect_state_length``), written.
+    P : float64[:]
+        Plant row.
+    """
+    if int(P[HYST_MODE]) == Switch.ON:
+        for i in range(4 * HYST_ROW):
+            z[Z_HYST + i] = P[HYST_INIT + i]
+        for k in range(4):
+            z[Z_HYST_W + k] = preisach_output(z, Z_HYST + k * HYST_ROW)
+            z[Z_HYST_SLOPE + k] = 0.0
+            z[Z_HYST_DIR + k] = 0.0
+    if int(P[DEAD_MODE]) == Switch.ON:
+        z[Z_DELAY_COUNT] = 0.0
+
+
+@leaf
+def valve_delay(z, u, P):
+    """Valve dead time: replace the set values ``u`` (4) [Pa] in place by u_i[k - d_i].
+
+    Call once per control period (input sample) k, in order, before the
+    plant is integrated over it.  The delay line (a ring of D = max d_i + 1
+    samples per valve in ``z`` at :data:`~ppamsafety.plant.layout.Z_DELAY`)
+    is primed with the first set value: before t = 0 the valves received
+    u[0].  Does nothing when the dead time is off.
+
+    Parameters
+    ----------
+    z : float64[:]
+        Effect state (holds the delay line), updated in place.
+    u : float64[:]
+        Set values of this period (4,) [Pa]; overwritten by the delayed ones.
+    P : float64[:]
+        Plant row.
+    """
+    if int(P[DEAD_MODE]) == Switch.ON:
+        D = int(P[DEAD_LEN])
+        c = int(z[Z_DELAY_COUNT])
+        if c == 0:
+            for i in range(4):
+                for j in range(D):
+                    z[Z_DELAY + i * D + j] = u[i]
+        slot = c % D
+        for i in range(4):
+            z[Z_DELAY + i * D + slot] = u[i]
+            u[i] = z[Z_DELAY + i * D + (slot - int(P[DEAD + i]) + D) % D]
+        z[Z_DELAY_COUNT] = c + 1
+
+
+@leaf
+def _hysteresis_factor(k, eps, z, P):
+    """Force factor 1 + delta (W - W_fit) of (3.35) for group ``k`` at contraction ``eps``.
+
+    W from the group's memory in ``z`` without writing it.  At the
+    committed input (the first RK4 stage) the cached output of the last
+    update (the same value).  Elsewhere, ``HysteresisStages.EXACT``:
+    :func:`preisach_peek`; ``SECANT`` (default): W(u) + s (v - u) while the
+    stage input v continues the last move (s its secant slope), W(u) for a
+    stage that reverses it (a fresh reversal branch starts with zero slope),
+    and :func:`preisach_peek` when there is no last move yet or the stage is
+    far from the committed input (|v - u| > :data:`SECANT_MAX_STEP`, e.g.
+    the first step from a saturated initial memory).
+    """
+    es = scaled_contraction(eps, P[HYST_EPS_MAX])
+    o = Z_HYST + k * HYST_ROW
+    dv = es - z[o + _MEM_INPUT]
+    d = z[Z_HYST_DIR + k]
+    if dv == 0.0:
+        w = z[Z_HYST_W + k]
+    elif (int(P[HYST_STAGES]) == HysteresisStages.EXACT or d == 0.0
+          or abs(dv) > SECANT_MAX_STEP):
+        w = preisach_peek(z, es, o)
+    elif dv * d > 0.0:
+        w = z[Z_HYST_W + k] + z[Z_HYST_SLOPE + k] * dv
+        w = 1.0 if w > 1.0 else (-1.0 if w < -1.0 else w)
+    else:
+        w = z[Z_HYST_W + k]
+    return hysteresis_factor(P[HYST_DELTA + k], w, es, P[HYST_WFIT_SLOPE],
+                             P[HYST_WFIT_INTERCEPT])
 
 
 @kernel
 def plant_rhs(x, z, u, tau_ext, P, dx, work):
-    """State derivative of the plant; writes ``dx`` (8,).  ``work`` >= 12 floats.
+    """State derivative of the plant; writes ``dx`` (8,).  ``work`` >= NRHS (16) floats.
 
     ``z`` is the effect state (read-only here; see the module docstring).
+    With the muscle hysteresis on, the force of group k in the joint
+    torques is multiplied by the factor of (3.35) (not the volume
+    derivative m_tau in the pressure dynamics).
     """
     mt = work[0:4]
     dmt = work[4:8]
@@ -156,9 +313,17 @@ def plant_rhs(x, z, u, tau_ext, P, dx, work):
     c1, s1 = math.cos(x[0]), math.sin(x[0])
     c2, s2 = math.cos(x[1]), math.sin(x[1])
     c12, s12 = c1 * c2 - s1 * s2, s1 * c2 + c1 * s2
-    torque_kernel_cs(c1, s1, c12, s12, P, mt, dmt, vol)
-    tau1 = x[4] * mt[0] + x[5] * mt[1] + tau_ext[0]
-    tau2 = x[6] * mt[2] + x[7] * mt[3] + tau_ext[1]
+    if int(P[HYST_MODE]) == Switch.ON:
+        fac = work[12:16]
+        for k in range(4):
+            mt[k], dmt[k], vol[k], eps = group_terms(k, c1, s1, c12, s12, P)
+            fac[k] = _hysteresis_factor(k, eps, z, P)
+        tau1 = x[4] * (mt[0] * fac[0]) + x[5] * (mt[1] * fac[1]) + tau_ext[0]
+        tau2 = x[6] * (mt[2] * fac[2]) + x[7] * (mt[3] * fac[3]) + tau_ext[1]
+    else:
+        torque_kernel_cs(c1, s1, c12, s12, P, mt, dmt, vol)
+        tau1 = x[4] * mt[0] + x[5] * mt[1] + tau_ext[0]
+        tau2 = x[6] * mt[2] + x[7] * mt[3] + tau_ext[1]
     a1, a2 = forward_dynamics_cs(c1, s1, c2, s2, c12, s12, x[2], x[3], tau1, tau2, P)
     dx[0] = x[2]
     dx[1] = x[3]
@@ -179,7 +344,7 @@ def rk4_step(x, z, u, tau_ext, h, P, work):
     k3 = work[16:24]
     k4 = work[24:32]
     xt = work[32:40]
-    buf = work[40:52]
+    buf = work[40:40 + NRHS]
     plant_rhs(x, z, u, tau_ext, P, k1, buf)
     for i in range(NX):
         xt[i] = x[i] + 0.5 * h * k1[i]
@@ -211,6 +376,7 @@ def _simulate_batch(X0, Z, U, TAU, dt, substeps, P, out):
         out[b, 0] = x
         for k in range(nsteps):
             u[:] = U[b, k]
+            valve_delay(z, u, Pb)                # dead time (off: nothing)
             tau[:] = TAU[b, k]
             for _ in range(substeps):
                 rk4_step(x, z, u, tau, h, Pb, work)
@@ -228,7 +394,9 @@ def simulate(arm, x0, set_values, *, dt: float = 1e-3, substeps: int = 2,
     x0 : array_like, shape (8,) or (B, 8)
         Initial state [q1, q2, qd1, qd2, p1..p4] (rad, rad/s, Pa).
     set_values : array_like, shape (N, 4) or (B, N, 4)
-        Valve set values held over each interval of length ``dt`` [Pa].
+        Valve set values held over each interval of length ``dt`` [Pa].  With
+        a valve dead time d_i (``Effects.valve_dead_time``) the plant receives
+        sample k - d_i in interval k (sample 0 before that).
     dt : float, keyword-only
         Input (control) period [s]; default 1 ms.
     substeps : int, keyword-only
@@ -240,7 +408,12 @@ def simulate(arm, x0, set_values, *, dt: float = 1e-3, substeps: int = 2,
     effect_state : array_like, shape (nz,) or (B, nz), optional
         Initial effect state z (see the module docstring); ``nz`` must be at
         least the largest ``effect_state_length`` of the rows (each row uses
-        its first ``effect_state_length`` entries).  Default zeros.
+        its first ``effect_state_length`` entries).  Default
+        :func:`initial_effect_state` (zeros when no effect with state is on;
+        the Preisach memories of ``Effects.hysteresis_initial``; an empty
+        delay line).  A given state is used as is (e.g. one returned with
+        ``return_effect_state`` to continue a run); its Preisach memories are
+        validated.
     return_effect_state : bool, keyword-only
         Also return the final effect states.
 
@@ -280,7 +453,7 @@ def simulate(arm, x0, set_values, *, dt: float = 1e-3, substeps: int = 2,
     check_valve_step(rows, dt / substeps)
     nz = int(lay.effect_state_lengths(rows).max())
     if effect_state is None:
-        Z = np.zeros((B, nz))
+        Z = initial_effect_state(rows)
     else:
         Z = as_float_array("effect_state", effect_state)
         if Z.ndim not in (1, 2) or Z.shape[-1] < nz or (Z.ndim == 2 and Z.shape[0] not in (1, B)):
@@ -288,11 +461,150 @@ def simulate(arm, x0, set_values, *, dt: float = 1e-3, substeps: int = 2,
                              f"(the rows' effect_state_length), got {Z.shape}")
         batched = batched or Z.ndim == 2
         Z = np.array(np.broadcast_to(Z if Z.ndim == 2 else Z[None], (B, Z.shape[-1])))
+        _check_effect_state(Z, rows)
     out = np.empty((B, U.shape[1] + 1, NX))
     _simulate_batch(X0, Z, U, T, float(dt), substeps, rows, out)
     if not (batched or B > 1):
         out, Z = out[0], Z[0]
     return (out, Z) if return_effect_state else out
+
+
+def initial_effect_state(rows) -> np.ndarray:
+    """Effect states z at t = 0 of plant rows (see :func:`effects_init`).
+
+    Parameters
+    ----------
+    rows : numpy.ndarray, shape (NP,) or (B, NP)
+        Packed plant rows.
+
+    Returns
+    -------
+    numpy.ndarray, shape (B, nz)
+        One z per row, nz the largest ``effect_state_length`` (each row uses
+        its first ``effect_state_length`` entries; zeros when no effect with
+        state is on).
+    """
+    rows = np.atleast_2d(np.asarray(rows, dtype=float))   # inf allowed: closed valves
+    if rows.ndim != 2 or rows.shape[1] != lay.NP:
+        raise ValueError(f"rows must have shape ({lay.NP},) or (B, {lay.NP}), got {rows.shape}")
+    n = lay.effect_state_lengths(rows)
+    Z = np.zeros((rows.shape[0], int(n.max())))
+    _init_many(Z, np.ascontiguousarray(rows))
+    return Z
+
+
+@kernel
+def _init_many(Z, rows):
+    for b in range(Z.shape[0]):
+        effects_init(Z[b, :effect_state_length(rows[b])], rows[b])
+
+
+@kernel
+def _refresh_outputs(Z, rows):
+    for b in range(Z.shape[0]):
+        if int(rows[b, HYST_MODE]) == Switch.ON:
+            for k in range(4):
+                Z[b, Z_HYST_W + k] = preisach_output(Z[b], Z_HYST + k * HYST_ROW)
+                if not (Z[b, Z_HYST_DIR + k] == 1.0 or Z[b, Z_HYST_DIR + k] == -1.0):
+                    Z[b, Z_HYST_DIR + k] = 0.0      # no valid secant: frozen W until a move
+
+
+def _check_effect_state(Z, rows) -> None:
+    """Validate given effect states (Preisach memories) and refresh their output caches."""
+    hyst = rows[:, HYST_MODE] == Switch.ON
+    if not hyst.any():
+        return
+    mem = Z[hyst][:, Z_HYST:Z_HYST + 4 * HYST_ROW].reshape(-1, 4, HYST_ROW)
+    depth = mem[..., _MEM_DEPTH]
+    u = mem[..., _MEM_INPUT]
+    if not (np.all((depth == np.round(depth)) & (depth >= 1) & (depth <= MAX_DEPTH))
+            and np.all(np.abs(u) <= 1.0)):
+        raise ValueError(f"effect_state: the Preisach memories (z[{Z_HYST}:"
+                         f"{Z_HYST + 4 * HYST_ROW}]) of a row with hysteresis are not memory "
+                         f"rows (depth 1..{MAX_DEPTH}, input in [-1, 1]); start from "
+                         f"initial_effect_state(rows) or a returned effect state")
+    _refresh_outputs(Z, np.ascontiguousarray(rows))
+
+
+@kernel
+def _hysteresis_along(X, z, P, eps_out, fac_out):
+    u = np.zeros(NU)
+    for n in range(X.shape[0]):
+        x = X[n]
+        c1, s1 = math.cos(x[0]), math.sin(x[0])
+        c2, s2 = math.cos(x[1]), math.sin(x[1])
+        c12, s12 = c1 * c2 - s1 * s2, s1 * c2 + c1 * s2
+        effects_update(x, z, u, P)
+        for k in range(4):
+            eps = group_contraction(k, c1, s1, c12, s12, P)
+            eps_out[n, k] = eps
+            fac_out[n, k] = _hysteresis_factor(k, eps, z, P)   # at the committed input
+
+
+def hysteresis_factors(states, arm=None, *, params=None, effect_state=None):
+    """The plant's hysteresis force factors (3.35) along a state trajectory.
+
+    Each state is committed to the memories as the end of one accepted
+    integration step, as in :func:`simulate`, and the factor is the exact
+    one at that state (the value the plant uses at the first stage of the
+    next step).  For the output of :func:`simulate` (one state per control
+    period, several RK4 steps each) this reproduces the plant's factors at
+    the samples up to the registration of turning points between samples.  Use it to plot the
+    plant's force-contraction loop: muscle force of group k = p_k f_k(eps_k)
+    * factor_k (per unit l0^2, Table B.1 polynomial (3.9)).
+
+    Parameters
+    ----------
+    states : array_like, shape (N, 8)
+        Plant states [q1, q2, qd1, qd2, p1..p4] (only q is used) [rad, ...].
+    arm : ArmParameters, optional
+        The arm; its ``effects.hysteresis_delta`` must be set.
+    params : numpy.ndarray, shape (NP,), optional
+        A packed plant row instead of ``arm``.
+    effect_state : array_like, shape (>= EFFECT_STATE.size,), optional
+        Initial effect state; default :func:`initial_effect_state`.
+
+    Returns
+    -------
+    eps : numpy.ndarray, shape (N, 4)
+        Contractions of the four muscle groups [-].
+    factor : numpy.ndarray, shape (N, 4)
+        1 + delta_k (W_k - W_fit) [-].
+
+    Raises
+    ------
+    ValueError
+        If the row has no hysteresis, or for bad shapes.
+    """
+    X = np.ascontiguousarray(as_float_array("states", states, shape_tail=(NX,)))
+    if X.ndim != 2:
+        raise ValueError(f"states must have shape (N, {NX}), got {X.shape}")
+    if params is None:
+        if arm is None:
+            raise ValueError("hysteresis_factors needs arm or params")
+        P = lay.pack(arm)
+    else:
+        P = as_float_array("params", params, shape_tail=(lay.NP,))
+        if P.ndim != 1:
+            raise ValueError(f"params must be one row of shape ({lay.NP},), got {P.shape}")
+    if int(P[HYST_MODE]) != Switch.ON:
+        raise ValueError("hysteresis_factors: the plant row has no hysteresis "
+                         "(set ArmParameters.effects.hysteresis_delta)")
+    P = np.ascontiguousarray(P)
+    if effect_state is None:
+        z = initial_effect_state(P)[0]
+    else:
+        z = as_float_array("effect_state", effect_state).copy()
+        if z.shape != (int(P[NZ]),) and not (z.ndim == 1 and z.size >= lay.EFFECT_STATE.size):
+            raise ValueError(f"effect_state must have shape (>= {lay.EFFECT_STATE.size},), "
+                             f"got {z.shape}")
+        z = np.ascontiguousarray(z)
+        _check_effect_state(z[None], P[None])
+        z = z if z.flags.writeable else z.copy()
+    eps = np.empty((X.shape[0], 4))
+    fac = np.empty((X.shape[0], 4))
+    _hysteresis_along(X, z, P, eps, fac)
+    return eps, fac
 
 
 def check_valve_step(rows, h: float) -> None:
@@ -342,8 +654,9 @@ def state_derivative(x, set_values, arm, *, tau_ext=None) -> np.ndarray:
 
 @kernel
 def _rhs_many(X, U, T, P, out):
-    work = np.empty(12)
+    work = np.empty(NRHS)
     z = np.zeros(effect_state_length(P))
+    effects_init(z, P)
     for n in range(X.shape[0]):
         plant_rhs(X[n], z, U[n], T[n], P, out[n], work)
 

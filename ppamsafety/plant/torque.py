@@ -72,13 +72,52 @@ def torque_kernel_cs(c1, s1, c12, s12, P, mt, dmt, vol):
         Output, overwritten: group volumes n_m V(eps) [m^3].
     """
     for k in range(4):
-        d, h, dh = group_length_lever(k, c1, s1, c12, s12, P)
-        nl = P[NM + k] * P[L0 + k]
-        eps = (P[LCONN + k] + nl - d) / nl
-        f = force_per_pressure(k, eps, P)
-        mt[k] = f * h
-        dmt[k] = dforce_deps(k, eps, P) * h * h / nl + f * dh
-        vol[k] = P[NM + k] * muscle_volume(k, eps, P)
+        mt[k], dmt[k], vol[k], _ = group_terms(k, c1, s1, c12, s12, P)
+
+
+@leaf
+def group_contraction(k, c1, s1, c12, s12, P):
+    """Contraction eps of muscle group ``k`` (dimensionless), from cos/sin of q1, q1 + q2.
+
+    The same arithmetic as :func:`group_terms` (so bitwise the contraction
+    the torque kernels use).
+
+    Parameters
+    ----------
+    k : int
+        Muscle group 0..3.
+    c1, s1, c12, s12 : float
+        cos/sin of q1 and of q1 + q2.
+    P : float64[:]
+        Plant row.
+    """
+    d, _, _ = group_length_lever(k, c1, s1, c12, s12, P)
+    nl = P[NM + k] * P[L0 + k]
+    return (P[LCONN + k] + nl - d) / nl
+
+
+@leaf
+def group_terms(k, c1, s1, c12, s12, P):
+    """(m_tau [m^3], d m_tau/dq [m^3/rad], group volume [m^3], contraction eps [-]) of group ``k``.
+
+    One group's share of :func:`torque_kernel_cs`; the contraction is what
+    the plant's force hysteresis (3.35) needs.
+
+    Parameters
+    ----------
+    k : int
+        Muscle group 0..3.
+    c1, s1, c12, s12 : float
+        cos/sin of q1 and of q1 + q2.
+    P : float64[:]
+        Plant row.
+    """
+    d, h, dh = group_length_lever(k, c1, s1, c12, s12, P)
+    nl = P[NM + k] * P[L0 + k]
+    eps = (P[LCONN + k] + nl - d) / nl
+    f = force_per_pressure(k, eps, P)
+    return (f * h, dforce_deps(k, eps, P) * h * h / nl + f * dh,
+            P[NM + k] * muscle_volume(k, eps, P), eps)
 
 
 @kernel
