@@ -33,9 +33,10 @@ def ref(arm):
 
 @pytest.fixture(scope="module")
 def pushed(arm, ref):
-    """A 10 N push in +x from 1 s to 2 s, perfect estimator model."""
+    """A 10 N push in +x from 1 s to 1.4 s (moves the set point < 0.1 m, inside the
+    reachable annulus), perfect estimator model."""
     f = np.zeros((ref.n_steps, 2))
-    f[1000:2000, 0] = 10.0
+    f[1000:1400, 0] = 10.0
     case = ExperimentCase(arm, AdmittancePSMC(), ref, external_force=f,
                           estimator=ForceEstimator(model=arm.plant_base))
     return run_batch([case], dt=DT)[0]
@@ -54,10 +55,10 @@ def test_desired_position_integrates_force_over_b(pushed):
     f = pushed.signals("Fx_dz", "Fy_dz")
     step = np.diff(x, axis=0)
     np.testing.assert_allclose(step, DT * f[1:] / B_THESIS, rtol=0, atol=1e-12)
-    # the push moved the set point in +x: at least 10 N x ~0.8 s / 40 N s/m = 0.2 m
-    # minus the estimator lag; bound 0.1 m
-    assert x[-1, 0] - x[0, 0] > 0.1
-    # ... and the arm followed it (within 3 cm at the end, 1 s after the push)
+    # the push moved the set point in +x: 10 N x 0.4 s / 40 N s/m = 0.1 m at most, less
+    # the estimator lag and the dead zone; bound 0.05 m
+    assert x[-1, 0] - x[0, 0] > 0.05
+    # ... and the arm followed it (within 3 cm at the end, 1.6 s after the push)
     r = pushed.signals("x", "y")
     assert np.linalg.norm(r[-1] - x[-1]) < 0.03
 
