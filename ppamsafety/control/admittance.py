@@ -83,9 +83,30 @@ _NPI, _NGC = JOINT_PSMC_INTERNALS.size, GC_SCRATCH.size
 
 @leaf
 def admittance_step(C, S, Pm, dt, qm, qdm, ref, fest, dp, internals, scratch):
-    """Admittance (5.43) + joint PSMC; C: ``ADMITTANCE_PARAMS``, S: ``ADMITTANCE_STATE``,
-    fest: the estimator's internals row (``ESTIMATOR_INTERNALS``), internals:
-    ``ADMITTANCE_INTERNALS``, scratch: ``ADMITTANCE_SCRATCH``.
+    """Admittance (5.43) + joint PSMC: one control sample.
+
+    Parameters
+    ----------
+    C : numpy.ndarray
+        Parameter row (``ADMITTANCE_PARAMS``).
+    S : numpy.ndarray
+        State (``ADMITTANCE_STATE``), updated in place.
+    Pm : numpy.ndarray
+        The controller's model row (geometry, gravity compensation).
+    dt : float
+        Control period [s].
+    qm, qdm : numpy.ndarray, shape (2,)
+        Measured angles [rad] and velocities [rad/s].
+    ref : numpy.ndarray, shape (12,)
+        Reference row (its TCP position is r_0 of (5.43)).
+    fest : numpy.ndarray
+        The estimator's internals row (``ESTIMATOR_INTERNALS``).
+    dp : numpy.ndarray, shape (2,)
+        Written: Delta p per joint [Pa].
+    internals : numpy.ndarray
+        Written: ``ADMITTANCE_INTERNALS``.
+    scratch : numpy.ndarray
+        Work memory (``ADMITTANCE_SCRATCH``).
     """
     b, fmin = C[PA_B], C[PA_FMIN]
     if int(C[PA_SRC]) == EstimateSource.RLS:

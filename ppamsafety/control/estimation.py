@@ -134,7 +134,15 @@ XE_MT, XE_DMT, XE_VOL = ESTIMATOR_SCRATCH.offsets("mt", "dmt", "vol")
 
 @leaf
 def dead_zone(fx, fy, fmin):
-    """Dead zone of §5.4.3: (0, 0) if ||(fx, fy)|| <= ``fmin`` [N], else (fx, fy) unchanged."""
+    """Dead zone of §5.4.3: (0, 0) if ||(fx, fy)|| <= ``fmin`` [N], else (fx, fy) unchanged.
+
+    Parameters
+    ----------
+    fx, fy : float
+        Estimated force components [N].
+    fmin : float
+        F_min [N].
+    """
     if math.sqrt(fx * fx + fy * fy) <= fmin:
         return 0.0, 0.0
     return fx, fy
@@ -144,12 +152,27 @@ def dead_zone(fx, fy, fmin):
 def estimator_step(E, ES, Pe, k, dt, qm, qdm, pm, out, scratch):
     """One sample of both force estimators.
 
-    ``E``: ``ESTIMATOR_PARAMS``; ``ES``: ``ESTIMATOR_STATE`` (initialised at
-    ``k == 0``, updated in place); ``Pe``: packed plant-layout row of the
-    estimator's model (its theta, friction, geometry, torque functions);
-    ``qm``, ``qdm`` measured angles [rad] and velocities [rad/s]; ``pm``
-    measured gauge pressures (4) [Pa]; ``out``: ``ESTIMATOR_INTERNALS``;
-    ``scratch``: ``ESTIMATOR_SCRATCH``.
+    Parameters
+    ----------
+    E : numpy.ndarray
+        Parameter row (``ESTIMATOR_PARAMS``).
+    ES : numpy.ndarray
+        State (``ESTIMATOR_STATE``), initialised at ``k == 0``, updated in place.
+    Pe : numpy.ndarray
+        Packed plant-layout row of the estimator's model (theta, friction,
+        geometry, torque functions).
+    k : int
+        Sample index.
+    dt : float
+        Control period [s].
+    qm, qdm : numpy.ndarray, shape (2,)
+        Measured angles [rad] and velocities [rad/s].
+    pm : numpy.ndarray, shape (4,)
+        Measured gauge pressures [Pa].
+    out : numpy.ndarray
+        Written: ``ESTIMATOR_INTERNALS``.
+    scratch : numpy.ndarray
+        Work memory (``ESTIMATOR_SCRATCH``).
     """
     mu, ki, om = E[EP_MU], E[EP_KI], E[EP_OMEGA]
     q1, q2, w1, w2 = qm[0], qm[1], qdm[0], qdm[1]
@@ -299,7 +322,13 @@ class ForceEstimator:
         self.model = model
 
     def check_period(self, dt: float) -> None:
-        """Refuse gains the bilinear discretisation cannot represent at period ``dt`` [s]."""
+        """Refuse gains the bilinear discretisation cannot represent at period ``dt``.
+
+        Parameters
+        ----------
+        dt : float
+            Control period [s].
+        """
         for nm, w in (("k_i", self.k_i), ("omega", self.omega)):
             if w * dt >= 2.0:
                 raise ValueError(f"ForceEstimator.{nm} = {w:g} rad/s is too fast for the "
@@ -310,7 +339,13 @@ class ForceEstimator:
         return ESTIMATOR_PARAMS.pack(mu=self.mu, k_i=self.k_i, omega=self.omega, p0=self.p0)
 
     def model_row(self, arm) -> np.ndarray:
-        """Packed plant-layout row of the estimator's model (``model`` or ``arm.model``)."""
+        """Packed plant-layout row of the estimator's model (``model`` or ``arm.model``).
+
+        Parameters
+        ----------
+        arm : ArmParameters
+            Supplies geometry, torque functions and (default) ``arm.model``.
+        """
         from ..plant.layout import pack
         return pack(arm, arm.model if self.model is None else self.model)
 

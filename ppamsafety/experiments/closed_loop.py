@@ -203,6 +203,13 @@ class ExperimentResult:
         :func:`~.catalog.run_thesis_experiment` carry ``variant`` (the
         :class:`~.catalog.ControllerVariant`), ``label``, ``family``,
         ``controller_family``, ``ki_bar``, ``lambda_s`` and ``experiment``.
+    interaction : numpy.ndarray or None, shape (n, NILOG)
+        The interaction log (:data:`INTERACTION_LOG`: applied TCP force,
+        force-estimator internals) of a run with an external input or an
+        estimator; None otherwise.
+    interaction_names : tuple of str
+        The columns of ``interaction`` that were written (readable by
+        :meth:`signal`).
     """
 
     name: str

@@ -39,7 +39,21 @@ XI_F, XI_RH, XI_K, XI_B = EXTERNAL_INPUT.offsets("f", "r_hand", "k_hand", "b_han
 
 @leaf
 def external_joint_torque(row, q1, q2, w1, w2, P, tau):
-    """Write tau = J^T f (2) [N m] for external-input ``row`` at the true state; return f."""
+    """Write tau = J^T f (2) [N m] for external-input ``row`` at the true state; return f.
+
+    Parameters
+    ----------
+    row : numpy.ndarray
+        One ``EXTERNAL_INPUT`` row.
+    q1, q2 : float
+        True joint angles [rad].
+    w1, w2 : float
+        True joint velocities [rad/s].
+    P : numpy.ndarray
+        Plant row (geometry).
+    tau : numpy.ndarray, shape (2,)
+        Written: joint torques [N m].
+    """
     x, y = tcp_position(q1, q2, P)
     j11, j12, j21, j22 = tcp_jacobian(q1, q2, P)
     vx = j11 * w1 + j12 * w2

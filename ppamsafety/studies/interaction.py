@@ -107,6 +107,9 @@ class InteractionStudy:
         A, B, C [m].
     t_release : float
         Release time of experiment 5 [s].
+    step_response : pandas.DataFrame
+        Observer step response of experiment 1: t [s], estimate and
+        closed_form (1 - exp(-K_I t)), both normalised by the step.
     metrics : dict
     """
 
@@ -275,7 +278,13 @@ def compute(*, quick: bool = False, arm=None) -> InteractionStudy:
 
 
 def render(study: InteractionStudy) -> Section:
-    """Markdown section and artifacts of the interaction study."""
+    """Markdown section and artifacts of the interaction study.
+
+    Parameters
+    ----------
+    study : InteractionStudy
+        Output of :func:`compute`.
+    """
     m = study.metrics
     md = [
         "Force estimation (§5.4.2): recursive least squares with forgetting mu = 0.99 on the "
