@@ -19,6 +19,8 @@ from ppamsafety.control import (PID, ControllerKind, GCMode, GravityCompensation
                                 PIDDerivative, SensorConfig, SlidingModeControl, SMCCoupling,
                                 TaskPSMC)
 from ppamsafety.control import base, dispatch
+from ppamsafety.control.admittance import AdmittancePSMC
+from ppamsafety.control.estimation import ESTIMATOR_INTERNALS
 from ppamsafety.control.sensors import (SENSOR_CONFIG, SENSOR_STATE, VelocitySource,
                                         initial_sensor_state)
 from ppamsafety.experiments import closed_loop as cl
@@ -32,6 +34,8 @@ from ppamsafety.units import BAR, DEG
 
 T = 1e-3
 KINDS = list(ControllerKind)
+#: Force-estimator row handed to controller_step (read only by the admittance kind).
+FEST0 = np.zeros(ESTIMATOR_INTERNALS.size)
 
 
 def _random_controller(kind, rng):
@@ -52,6 +56,12 @@ def _random_controller(kind, rng):
         return TaskPSMC(lam=0.4 * f()[0], kp=200 * f()[0], ki=100 * f()[0], kd=10 * f()[0],
                         force_limit=15 * f()[0],
                         gravity_compensation=str(rng.choice(gc + ("proxy",))))
+    if kind == ControllerKind.ADMITTANCE:
+        return AdmittancePSMC(b=40 * f()[0], f_min=3 * f()[0],
+                              source=str(rng.choice(["rls", "observer"])),
+                              psmc=JointPSMC(lam=0.4 * f(), kp=2 * BAR * f(), ki=2 * BAR * f(),
+                                             kd=0.1 * BAR * f(), dp_limit=0.2 * BAR * f(),
+                                             gravity_compensation=str(rng.choice(gc))))
     return SlidingModeControl(poles=40 * f(), gain=3000 * f(), boundary_layer=10 * f(),
                               coupling=str(rng.choice(["siso", "mimo"])))
 
@@ -177,8 +187,10 @@ def test_controller_step_and_batched_runner_are_bitwise_equal(arm):
         dp = res.signals("dp1", "dp2")
         ints = res.log[:, cl.LOG.slice("internals")]
         c.reset()
+        est = res.estimator_log          # the loop's force estimates (admittance reads them)
         for k in range(n):
-            out = c.step(arm, qm[k], qdm[k], p[k], ref.data[k])
+            out = c.step(arm, qm[k], qdm[k], p[k], ref.data[k],
+                         f_est=None if est is None else est[k])
             assert out.tobytes() == dp[k].tobytes(), (c.name, k)
             assert c.internals.tobytes() == ints[k, :c.INTERNALS.size].tobytes(), (c.name, k)
             assert np.all(ints[k, c.INTERNALS.size:] == 0.0)
@@ -211,8 +223,8 @@ def test_batched_dispatch_with_padded_table_rows_equals_controller_step(arm):
         dp = np.empty(2)
         c.reset()
         for k in range(n):
-            dispatch.controller_step(kind, C, S, Pm, k, T, q[k], qd[k], p[k], ref[k], dp, ints,
-                                     scr)
+            dispatch.controller_step(kind, C, S, Pm, k, T, q[k], qd[k], p[k], ref[k], FEST0, dp,
+                                     ints, scr)
             out = c.step(arm, q[k], qd[k], p[k], ref[k])
             assert out.tobytes() == dp.tobytes(), (c.name, k)
             assert c.internals.tobytes() == ints.tobytes(), (c.name, k)
@@ -230,7 +242,7 @@ def test_too_short_rows_raise_under_boundscheck(arm):
     with pytest.raises(IndexError):
         dispatch.controller_step(int(c.kind), C, np.zeros(0), c.model_row(arm), 0, T,
                                  np.radians([50, -80]), z, np.full(4, 2e5), np.zeros(12),
-                                 np.empty(2), np.zeros(c.INTERNALS.size),
+                                 FEST0, np.empty(2), np.zeros(c.INTERNALS.size),
                                  np.zeros(c.SCRATCH - 1))
 
 

@@ -47,11 +47,12 @@ class ControllerKind(IntEnum):
     PSMC_JOINT = 2
     PSMC_TASK = 3
     SMC = 4
+    ADMITTANCE = 5
 
 
-KIND_GC, KIND_PID, KIND_PSMC_JOINT, KIND_PSMC_TASK, KIND_SMC = (
+KIND_GC, KIND_PID, KIND_PSMC_JOINT, KIND_PSMC_TASK, KIND_SMC, KIND_ADMITTANCE = (
     ControllerKind.GC, ControllerKind.PID, ControllerKind.PSMC_JOINT, ControllerKind.PSMC_TASK,
-    ControllerKind.SMC)
+    ControllerKind.SMC, ControllerKind.ADMITTANCE)
 
 # -- reference row -------------------------------------------------------------------------
 # TEMPORARY: a copy of ``experiments.trajectories.REF_COLUMNS`` (tests/test_control_layouts.py
@@ -91,6 +92,8 @@ class Controller:
 
     kind: int = -1
     name: str = "controller"
+    #: True for a controller that reads the loop's force estimate (``f_est`` of :meth:`step`).
+    needs_estimator: bool = False
     PARAMS: Layout = EMPTY
     STATE: Layout = EMPTY
     INTERNALS: Layout = EMPTY
@@ -126,7 +129,8 @@ class Controller:
         self.internals = np.zeros(self.INTERNALS.size)
         self._k = 0
 
-    def step(self, arm, q_meas, qd_meas, p_meas, ref, *, dt: float = 1e-3) -> np.ndarray:
+    def step(self, arm, q_meas, qd_meas, p_meas, ref, *, dt: float = 1e-3,
+             f_est=None) -> np.ndarray:
         """One control update; returns Delta p per joint [Pa] (incl. feedforward).
 
         The compiled step function receives the same rows as in the
@@ -146,16 +150,24 @@ class Controller:
             Reference row (see module docstring).
         dt : float
             Control period [s].
+        f_est : array_like, optional
+            The loop's force-estimator internals row
+            (:data:`~ppamsafety.control.estimation.ESTIMATOR_INTERNALS`, as
+            the runner passes it); read only by controllers with
+            ``needs_estimator`` (admittance).  Default zeros.
         """
         from .dispatch import controller_step
+        from .estimation import ESTIMATOR_INTERNALS
 
         check_range("dt", dt, 1e-6, 1.0, unit="s")
         qm = as_float_array("q_meas", q_meas, shape_tail=(2,)).reshape(2)
         qdm = as_float_array("qd_meas", qd_meas, shape_tail=(2,)).reshape(2)
         pm = as_float_array("p_meas", p_meas, shape_tail=(4,)).reshape(4)
         r = as_float_array("ref", ref, shape_tail=(NREF,)).reshape(NREF)
+        fe = (np.zeros(ESTIMATOR_INTERNALS.size) if f_est is None else as_float_array(
+            "f_est", f_est, shape_tail=(ESTIMATOR_INTERNALS.size,)).reshape(-1))
         out = np.zeros(2)
         controller_step(int(self.kind), self.pack(), self.state, self.model_row(arm), self._k,
-                        dt, qm, qdm, pm, r, out, self.internals, np.zeros(self.SCRATCH))
+                        dt, qm, qdm, pm, r, fe, out, self.internals, np.zeros(self.SCRATCH))
         self._k += 1
         return out

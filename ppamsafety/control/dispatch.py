@@ -9,7 +9,9 @@ written as literals: a buffer cannot be smaller than a declared need.
 from __future__ import annotations
 
 from .._jit import kernel
-from .base import KIND_GC, KIND_PID, KIND_PSMC_JOINT, KIND_PSMC_TASK, KIND_SMC, ControllerKind
+from .admittance import AdmittancePSMC, admittance_step
+from .base import (KIND_ADMITTANCE, KIND_GC, KIND_PID, KIND_PSMC_JOINT, KIND_PSMC_TASK, KIND_SMC,
+                   ControllerKind)
 from .gravity import GravityCompensation, gc_step
 from .pid import PID, pid_step
 from .psmc import JointPSMC, TaskPSMC, psmc_joint_step, psmc_task_step
@@ -18,7 +20,7 @@ from .smc import SlidingModeControl, smc_step
 #: The controller class of every kind.
 CONTROLLER_CLASSES = {KIND_GC: GravityCompensation, KIND_PID: PID,
                       KIND_PSMC_JOINT: JointPSMC, KIND_PSMC_TASK: TaskPSMC,
-                      KIND_SMC: SlidingModeControl}
+                      KIND_SMC: SlidingModeControl, KIND_ADMITTANCE: AdmittancePSMC}
 assert set(CONTROLLER_CLASSES) == set(ControllerKind), "a controller kind has no class"
 
 #: Widest parameter row of any kind (width of the runner's padded parameter table).
@@ -38,14 +40,15 @@ def declared_sizes(kind) -> tuple:
 
 
 @kernel
-def controller_step(kind, C, S, Pm, k, dt, qm, qdm, pm, ref, dp, internals, scratch):
+def controller_step(kind, C, S, Pm, k, dt, qm, qdm, pm, ref, fest, dp, internals, scratch):
     """Compute Delta p (2) [Pa] for controller ``kind`` at sample ``k``.
 
     Parameters are the controller's packed row ``C`` (its ``PARAMS``
     layout), its state ``S`` (``STATE``, updated in place), its model row
     ``Pm``, the measured angles, velocities and pressures, the reference row
-    (12) and the work arrays ``internals`` (``INTERNALS``) and ``scratch``
-    (``SCRATCH`` floats).
+    (12), the loop's force-estimator internals ``fest``
+    (``ESTIMATOR_INTERNALS``, read only by the admittance kind) and the work
+    arrays ``internals`` (``INTERNALS``) and ``scratch`` (``SCRATCH`` floats).
     """
     if kind == KIND_PID:
         pid_step(C, S, Pm, dt, qm, qdm, ref, dp, internals, scratch)
@@ -55,6 +58,8 @@ def controller_step(kind, C, S, Pm, k, dt, qm, qdm, pm, ref, dp, internals, scra
         psmc_task_step(C, S, Pm, dt, qm, qdm, ref, dp, internals, scratch)
     elif kind == KIND_SMC:
         smc_step(C, S, Pm, dt, qm, qdm, pm, ref, dp, internals, scratch)
+    elif kind == KIND_ADMITTANCE:
+        admittance_step(C, S, Pm, dt, qm, qdm, ref, fest, dp, internals, scratch)
     elif kind == KIND_GC:
         gc_step(C, Pm, qm, ref, dp, scratch)
     else:

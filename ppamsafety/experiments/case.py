@@ -23,9 +23,11 @@ from typing import Mapping
 import numpy as np
 
 from ..control.base import Controller
+from ..control.estimation import ForceEstimator
 from ..control.sensors import SensorConfig
 from ..params.arm import ArmParameters
 from ..plant.model import NX
+from .interaction import Hand
 from .trajectories import Reference
 
 
@@ -56,13 +58,26 @@ class ExperimentCase:
         Experiment name (default: the reference's name).
     meta : mapping, optional
         Free-form metadata copied to ``ExperimentResult.meta``.
+    external_force : array_like, shape (n, 2), optional
+        Known external force on the TCP per control sample [N] (world frame,
+        n = reference length), held over each period; the plant receives
+        tau_ext = J^T(q) f (see :mod:`~.interaction`).  Default None: no
+        force, the nominal arithmetic untouched.
+    hand : Hand, optional
+        A spring-damper hand pulling the TCP (added to ``external_force``).
+    estimator : ForceEstimator, optional
+        External-force estimators (RLS and momentum observer, §5.4.2) run in
+        the loop; their estimates are logged (``Fx_rls`` ... ``Fy_mo``).
+        Default None: none, unless the controller needs one (admittance),
+        which then gets ``ForceEstimator()``.
 
     Raises
     ------
     TypeError
         For a field of the wrong type (the message names the field).
     ValueError
-        For an ``x0`` of the wrong shape or with non-finite values.
+        For an ``x0``, ``external_force`` or ``hand`` of the wrong shape or
+        with non-finite values.
     """
 
     arm: ArmParameters
@@ -72,6 +87,9 @@ class ExperimentCase:
     x0: np.ndarray | None = None
     name: str | None = None
     meta: dict = field(default_factory=dict)
+    external_force: np.ndarray | None = None
+    hand: Hand | None = None
+    estimator: ForceEstimator | None = None
 
     def __post_init__(self):
         if not isinstance(self.arm, ArmParameters):
@@ -108,6 +126,38 @@ class ExperimentCase:
             raise _type_error("meta", self.meta, "a mapping (dict)")
         else:
             object.__setattr__(self, "meta", dict(self.meta))
+        n = self.reference.n_steps
+        if self.external_force is not None:
+            try:
+                f = np.array(self.external_force, dtype=float)
+            except (TypeError, ValueError):
+                raise ValueError(f"ExperimentCase.external_force must be ({n}, 2) numbers [N], "
+                                 f"got {self.external_force!r:.80}") from None
+            if f.shape != (n, 2):
+                raise ValueError(f"ExperimentCase.external_force must have shape ({n}, 2) (one "
+                                 f"TCP force per reference sample), got shape {f.shape}")
+            if not np.all(np.isfinite(f)):
+                raise ValueError("ExperimentCase.external_force must be finite")
+            f.setflags(write=False)
+            object.__setattr__(self, "external_force", f)
+        if self.hand is not None:
+            if not isinstance(self.hand, Hand):
+                raise _type_error("hand", self.hand, "a Hand or None")
+            if len(self.hand) != n:
+                raise ValueError(f"ExperimentCase.hand has {len(self.hand)} samples, the "
+                                 f"reference {n}")
+        if self.estimator is None:
+            if getattr(self.controller, "needs_estimator", False):
+                object.__setattr__(self, "estimator", ForceEstimator())
+        elif not isinstance(self.estimator, ForceEstimator):
+            raise _type_error("estimator", self.estimator, "a ForceEstimator or None")
+        if self.estimator is not None:
+            self.estimator.check_period(self.reference.dt)
+
+    @property
+    def has_external_input(self) -> bool:
+        """True when a force profile or a hand acts on the TCP."""
+        return self.external_force is not None or self.hand is not None
 
     @classmethod
     def from_dict(cls, case: Mapping) -> "ExperimentCase":
@@ -117,7 +167,8 @@ class ExperimentCase:
         ----------
         case : mapping
             Keys ``arm``, ``controller``, ``reference`` (required),
-            ``sensors``, ``x0``, ``name``, ``meta`` (optional).
+            ``sensors``, ``x0``, ``name``, ``meta``, ``external_force``,
+            ``hand``, ``estimator`` (optional).
 
         Raises
         ------

@@ -21,6 +21,8 @@ import pandas as pd
 from .._jit import kernel
 from .._validation import check_int, check_range
 from ..control.dispatch import CONTROLLER_CLASSES, NINT, NSCRATCH, NSTATE, controller_step
+from ..control.estimation import (ESTIMATOR_INTERNALS, ESTIMATOR_PARAMS, ESTIMATOR_SCRATCH,
+                                  ESTIMATOR_STATE, estimator_step)
 from ..control.sensors import (N_Q, N_QD, NSENSOR, SENSOR_NOISE, SensorConfig, pressure_read,
                                sensor_init, sensor_read, sensor_reset, sensor_track)
 from ..layouts import Field, Layout
@@ -29,6 +31,7 @@ from ..plant.geometry import tcp_jacobian, tcp_position
 from ..plant.model import NWORK, NX, effect_state_length, effects_init, rk4_step, valve_delay
 from ..plant.pneumatics import delta_p_to_set_values
 from .case import ExperimentCase, as_cases
+from .interaction import EXTERNAL_INPUT, external_joint_torque, external_rows
 from .trajectories import REF_COLUMNS, Reference
 
 # Plant state x = (q (2), qd (2), p (4)) of ppamsafety.plant.model.  TEMPORARY names for its
@@ -64,14 +67,37 @@ _UNNAMED = frozenset(LOG.field("internals").column_names())
 INTERNAL_NAMES = {kind: cls.INTERNALS.columns() for kind, cls in CONTROLLER_CLASSES.items()
                   if cls.INTERNALS.size}
 
+#: The interaction log (issue 12), one row per control period beside :data:`LOG` (which keeps
+#: its nominal width): the applied external TCP force and the force estimators' internals.
+#: Only cases with an external input or an estimator carry it (``ExperimentResult.interaction``).
+INTERACTION_LOG = Layout("closed-loop interaction log", [
+    Field("f_ext", 2, "N", "applied external TCP force at the sample (world x, y)",
+          columns=("Fx_ext", "Fy_ext")),
+    Field("estimator", ESTIMATOR_INTERNALS.size, "-",
+          "force-estimator internals (ESTIMATOR_INTERNALS)",
+          columns=tuple(ESTIMATOR_INTERNALS.columns())),
+])
+IL_F, IL_EST = INTERACTION_LOG.offsets("f_ext", "estimator")
+NEST = ESTIMATOR_INTERNALS.size
+_NES, _NESCR = ESTIMATOR_STATE.size, ESTIMATOR_SCRATCH.size
+NILOG = INTERACTION_LOG.size
+_EXT_NAMES = tuple(INTERACTION_LOG.field("f_ext").column_names())
+_EST_NAMES = tuple(ESTIMATOR_INTERNALS.columns())
+
 #: Columns of the runner's per-case table of declared controller sizes (``_controller_rows``).
 Z_PARAMS, Z_STATE, Z_INTERNALS, Z_SCRATCH = 0, 1, 2, 3
 
 
 @kernel
 def _run_batch(X0, REFS, ref_idx, PP, PM, KIND, CP, CSIZE, SCFG, NOISE, noise_idx, dt, substeps,
-               LOG):
-    """Closed loop of every case b; CSIZE[b] = declared (params, state, internals, scratch)."""
+               LOG, EXT, ext_idx, EP, PE, est_on, ILOG):
+    """Closed loop of every case b; CSIZE[b] = declared (params, state, internals, scratch).
+
+    Interaction (issue 12): EXT[ext_idx[b]] holds case b's external-input rows
+    (``EXTERNAL_INPUT``; ext_idx < 0: none, the plant gets the zero torque as
+    before); est_on[b] runs the force estimator with parameters EP[b] and
+    model row PE[b]; ILOG (``INTERACTION_LOG``) receives both.
+    """
     nb = X0.shape[0]
     n = LOG.shape[1]
     h = dt / substeps
@@ -88,6 +114,10 @@ def _run_batch(X0, REFS, ref_idx, PP, PM, KIND, CP, CSIZE, SCFG, NOISE, noise_id
     internals = np.empty(NINT)
     scratch_buf = np.empty(NSCRATCH)
     diverged = np.zeros(nb, dtype=np.bool_)
+    tau_e = np.zeros(2)
+    fest = np.zeros(NEST)
+    ES = np.empty(_NES)
+    escr = np.empty(_NESCR)
     for b in range(nb):
         x[:] = X0[b]
         S_buf[:] = 0.0
@@ -102,6 +132,10 @@ def _run_batch(X0, REFS, ref_idx, PP, PM, KIND, CP, CSIZE, SCFG, NOISE, noise_id
         ints = internals[:CSIZE[b, Z_INTERNALS]]
         scratch = scratch_buf[:CSIZE[b, Z_SCRATCH]]
         noise = NOISE[noise_idx[b]]
+        has_ext = ext_idx[b] >= 0
+        XR = EXT[max(ext_idx[b], 0)]
+        est = est_on[b] != 0
+        fest[:] = 0.0
         sensor_init(x[X_Q], x[X_Q + 1], cfg, st)
         for k in range(n):
             t = k * dt
@@ -110,8 +144,11 @@ def _run_batch(X0, REFS, ref_idx, PP, PM, KIND, CP, CSIZE, SCFG, NOISE, noise_id
                 qm[j] = a + noise[k, N_Q + j]
                 qdm[j] = w + noise[k, N_QD + j]
             pressure_read(x[X_P:X_P + 4], cfg, pmeas)      # sensor faults (off: a copy)
-            controller_step(KIND[b], C, S, Pm, k, dt, qm, qdm, pmeas, R[k], dp, ints,
-                            scratch)
+            if est:
+                estimator_step(EP[b], ES, PE[b], k, dt, qm, qdm, pmeas, fest, escr)
+                ILOG[b, k, IL_EST:IL_EST + NEST] = fest
+            controller_step(KIND[b], C, S, Pm, k, dt, qm, qdm, pmeas, R[k], fest, dp,
+                            ints, scratch)
             delta_p_to_set_values(dp[0], dp[1], Pm, u)
             row = LOG[b, k]
             row[L_T] = t
@@ -130,13 +167,21 @@ def _run_batch(X0, REFS, ref_idx, PP, PM, KIND, CP, CSIZE, SCFG, NOISE, noise_id
             valve_delay(z, u, Pp)          # valve dead time: the plant gets u[k - d] (off: none)
             for i in range(substeps):
                 q_old0, q_old1 = x[X_Q], x[X_Q + 1]
-                rk4_step(x, z, u, tau0, h, Pp, work)
+                if has_ext:
+                    fx, fy = external_joint_torque(XR[k], x[X_Q], x[X_Q + 1], x[X_QD],
+                                                   x[X_QD + 1], Pp, tau_e)
+                    if i == 0:
+                        ILOG[b, k, IL_F], ILOG[b, k, IL_F + 1] = fx, fy
+                    rk4_step(x, z, u, tau_e, h, Pp, work)
+                else:
+                    rk4_step(x, z, u, tau0, h, Pp, work)
                 sensor_track(0, q_old0, x[X_Q], t + i * h, h, cfg, st)
                 sensor_track(1, q_old1, x[X_Q + 1], t + i * h, h, cfg, st)
             if not (np.isfinite(x[X_Q]) and np.isfinite(x[X_Q + 1]) and abs(x[X_QD]) < 1e3
                     and abs(x[X_QD + 1]) < 1e3):
                 diverged[b] = True
                 LOG[b, k + 1:, :] = np.nan
+                ILOG[b, k + 1:, :] = np.nan
                 break
     return diverged
 
@@ -162,6 +207,13 @@ class ExperimentResult:
         :func:`~.catalog.run_thesis_experiment` carry ``variant`` (the
         :class:`~.catalog.ControllerVariant`), ``label``, ``family``,
         ``controller_family``, ``ki_bar``, ``lambda_s`` and ``experiment``.
+    interaction : numpy.ndarray or None, shape (n, NILOG)
+        The interaction log (:data:`INTERACTION_LOG`: applied TCP force,
+        force-estimator internals) of a run with an external input or an
+        estimator; None otherwise.
+    interaction_names : tuple of str
+        The columns of ``interaction`` that were written (readable by
+        :meth:`signal`).
     """
 
     name: str
@@ -170,6 +222,16 @@ class ExperimentResult:
     log: np.ndarray
     diverged: bool = False
     meta: dict = field(default_factory=dict)
+    interaction: np.ndarray | None = None
+    interaction_names: tuple = ()
+
+    @property
+    def estimator_log(self) -> np.ndarray | None:
+        """The force estimators' internals per sample, shape (n, 8) (columns
+        ``Fx_rls, Fy_rls, Fx_mo, Fy_mo, r1, r2, yf1, yf2``), or None without estimator."""
+        if self.interaction is None or _EST_NAMES[0] not in self.interaction_names:
+            return None
+        return self.interaction[:, INTERACTION_LOG.slice("estimator")]
 
     def _log_names(self) -> list:
         names = list(LOG_COLUMNS)
@@ -181,7 +243,8 @@ class ExperimentResult:
 
     def signal_names(self) -> list:
         """Names accepted by :meth:`signal`: logged signals, controller internals, reference."""
-        return [c for c in self._log_names() if c not in _UNNAMED] + list(REF_COLUMNS)
+        return ([c for c in self._log_names() if c not in _UNNAMED] + list(self.interaction_names)
+                + list(REF_COLUMNS))
 
     def signal(self, name: str) -> np.ndarray:
         """One signal by name, shape (n,), SI units.
@@ -189,11 +252,16 @@ class ExperimentResult:
         Names are those of :meth:`to_pandas`: ``t``, ``q1``, ``q2``, ``qd1``,
         ``qd2``, ``p1``..``p4``, ``q1_meas``, ..., ``u1``..``u4``, ``dp1``,
         ``dp2``, ``x``, ``y``, ``xd``, ``yd``, the controller's internals
-        (e.g. ``s1`` for PSMC) and the reference columns (``q1_d``, ``x_d``, ...).
+        (e.g. ``s1`` for PSMC), the reference columns (``q1_d``, ``x_d``, ...)
+        and, for runs with an external input or a force estimator,
+        ``Fx_ext``, ``Fy_ext`` [N] and the estimates ``Fx_rls``, ``Fy_rls``,
+        ``Fx_mo``, ``Fy_mo`` [N], ``r1``, ``r2``, ``yf1``, ``yf2`` [N m].
         """
         names = self._log_names()
         if isinstance(name, str) and name in names and name not in _UNNAMED:
             return self.log[:, names.index(name)]
+        if isinstance(name, str) and name in self.interaction_names:
+            return self.interaction[:, INTERACTION_LOG.column_index(name)]
         if isinstance(name, str) and name in REF_COLUMNS:
             return self.reference.signal(name)
         raise KeyError(f"unknown signal {name!r}; choose from {self.signal_names()}")
@@ -207,7 +275,10 @@ class ExperimentResult:
         df = pd.DataFrame(self.log, columns=self._log_names())
         df = df[[c for c in df.columns if c not in _UNNAMED]]
         ref = pd.DataFrame(self.reference.data, columns=REF_COLUMNS)
-        return pd.concat([df, ref], axis=1)
+        parts = [df, ref]
+        if self.interaction_names:
+            parts.insert(1, pd.DataFrame({c: self.signal(c) for c in self.interaction_names}))
+        return pd.concat(parts, axis=1)
 
     @property
     def t(self) -> np.ndarray:
@@ -293,6 +364,7 @@ def run_batch(cases, *, dt: float = 1e-3, substeps: int = 1) -> list:
     n = cases[0].reference.n_steps
     refs, ref_ids, noises, noise_ids = [], [], [], []
     X0, PP, PM, KIND, CPs, CSIZE, SC = [], [], [], [], [], [], []
+    exts, ext_ids, EPs, PEs, est_on = [], [], [], [], []
     for c in cases:
         ref = c.reference
         if ref.n_steps != n:
@@ -323,6 +395,22 @@ def run_batch(cases, *, dt: float = 1e-3, substeps: int = 1) -> list:
         CSIZE.append(sizes)
         PM.append(Pm)
         SC.append(sens.pack())
+        if c.has_external_input:
+            exts.append(external_rows(n, c.external_force, c.hand))
+            ext_ids.append(len(exts) - 1)
+        else:
+            ext_ids.append(-1)
+        if c.estimator is not None:
+            c.estimator.check_period(dt)
+            EPs.append(c.estimator.pack())
+            PEs.append(c.estimator.model_row(arm))
+            est_on.append(1)
+        else:
+            EPs.append(np.zeros(ESTIMATOR_PARAMS.size))
+            PEs.append(Pm)
+            est_on.append(0)
+    if not exts:
+        exts.append(np.zeros((1, EXTERNAL_INPUT.size)))
     noises.append(np.zeros((n, SENSOR_NOISE.size)))
     noise_ids = [i if i >= 0 else len(noises) - 1 for i in noise_ids]
     ncp = max(c.size for c in CPs)
@@ -330,16 +418,23 @@ def run_batch(cases, *, dt: float = 1e-3, substeps: int = 1) -> list:
     for i, c in enumerate(CPs):
         CP[i, :c.size] = c
     LOG = np.empty((len(cases), n, NLOG))
+    # only as long as the run when some case writes it (never written otherwise)
+    any_inter = any(c.has_external_input or c.estimator is not None for c in cases)
+    ILOG = np.zeros((len(cases), n if any_inter else 1, NILOG))
     diverged = _run_batch(np.array(X0), np.array([r.data for r in refs]),
                           np.array(ref_ids, dtype=np.int64), np.array(PP), np.array(PM),
                           np.array(KIND, dtype=np.int64), CP, np.array(CSIZE, dtype=np.int64),
                           np.array(SC), np.array(noises),
-                          np.array(noise_ids, dtype=np.int64), float(dt), substeps, LOG)
+                          np.array(noise_ids, dtype=np.int64), float(dt), substeps, LOG,
+                          np.array(exts), np.array(ext_ids, dtype=np.int64), np.array(EPs),
+                          np.array(PEs), np.array(est_on, dtype=np.int64), ILOG)
     out = []
     for i, c in enumerate(cases):
         desc = {**c.controller.describe(), "kind": int(c.controller.kind)}
+        names = (_EXT_NAMES if c.has_external_input else ()) + \
+            (_EST_NAMES if c.estimator is not None else ())
         out.append(ExperimentResult(c.name, desc, c.reference, LOG[i], bool(diverged[i]),
-                                    dict(c.meta)))
+                                    dict(c.meta), ILOG[i] if names else None, names))
     return out
 
 
