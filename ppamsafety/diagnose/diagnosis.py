@@ -420,7 +420,12 @@ def diagnose(data, *, arm=None, candidates=None, block_seconds: float = 0.05,
                              "before": float(nrho[c]), "after": float(rho[c]), "noise": 1.0}
     unexplained = bool(bad)
     for e in effects:
-        named_ok = e["confidence"] >= HIGH_CONFIDENCE and not unexplained
+        # "high" needs a decisive weight, a record explained everywhere (an unexplained
+        # error elsewhere may leak into this subsystem) and a parameter interval that
+        # excludes the nominal value
+        moved = any(not (p["ci_low"] <= p["nominal"] <= p["ci_high"])
+                    for p in e["parameters"].values()) or e["name"] == "valve_dead_time"
+        named_ok = e["confidence"] >= HIGH_CONFIDENCE and not unexplained and moved
         e["confidence_level"] = "high" if named_ok else "low"
     for e in partial:
         e["confidence_level"] = "low"

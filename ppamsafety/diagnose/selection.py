@@ -14,7 +14,7 @@ model the whitened residuals e are approximately independent N(0, 1) and
 its coefficients phi are found by linear least squares on e (the
 extensions are linear in phi), a dead time by profiling chi2 over a grid
 of one-sample steps.  Covariance of phi: s^2 (A^T A)^-1 with
-s^2 = chi2/(m - k), the Jacobian of the least-squares fit scaled by the
+s^2 = chi2/(m - k) of the subsystem the parameter acts in, the Jacobian of the least-squares fit scaled by the
 residual variance; parameter intervals by the delta method (dead time:
 the profile-likelihood interval chi2 - chi2_min <= s^2 chi2_1(95 %)).
 
@@ -244,7 +244,19 @@ def fit_model(prob: Problem, names, mask=None) -> Fit:
     k = D.shape[1] + (1 if grid else 0)
     s2 = chi2 / max(m - k, 1)
     if D.shape[1]:
-        cov = s2 * np.linalg.pinv(A.T @ A)
+        # scale each parameter by the residual variance of *its* subsystem (the subsystems'
+        # columns do not overlap, so A^T A is block diagonal across them): an unexplained
+        # torque residual must not inflate the intervals of a valve parameter, nor hide
+        # behind them
+        e_all = (base - Z @ phi)[mask]
+        sd = np.ones(D.shape[1])
+        for chans in SUBSYSTEM.values():
+            cols = np.nonzero(np.any(Z[:, list(chans), :] != 0, axis=(0, 1)))[0]
+            if cols.size:
+                msub = e_all[:, list(chans)].size
+                sd[cols] = math.sqrt(float(np.sum(e_all[:, list(chans)] ** 2))
+                                     / max(msub - cols.size, 1))
+        cov = sd[:, None] * np.linalg.pinv(A.T @ A) * sd[None, :]
     else:
         cov = np.zeros((0, 0))
     if grid:
