@@ -56,7 +56,20 @@ DEAD_TIME_MAX = 0.06
 
 @dataclass(frozen=True)
 class Parameter:
-    """One parameter of a candidate: name, unit, plausible bounds, meaning."""
+    """One parameter of a candidate.
+
+    Attributes
+    ----------
+    name : str
+        Name in ``diagnosis.json``.
+    unit : str
+        SI unit.
+    lo, hi : float
+        Plausible bounds (used by the naming rule of
+        :mod:`ppamsafety.diagnose.selection`).
+    doc : str
+        Meaning, with the thesis reference.
+    """
 
     name: str
     unit: str

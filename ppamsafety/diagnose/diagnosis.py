@@ -84,6 +84,8 @@ class Diagnosis:
     timings : dict
         Wall times [s] of the stages.
     notes : tuple of str
+    blocks : dict
+        ``t`` and whitened block residuals ``before``/``after`` (nb, 6) for the figures.
     """
 
     source: str

@@ -117,7 +117,15 @@ class ArmRecord:
         return np.concatenate([self.q[0], self.qd[0], self.p[0]])
 
     def perturbed(self, sq, sqd, sp, rng) -> "ArmRecord":
-        """A copy with extra white noise of standard deviations ``sq``, ``sqd``, ``sp`` added."""
+        """A copy with extra white noise added (the set values unchanged).
+
+        Parameters
+        ----------
+        sq, sqd, sp : array_like
+            Standard deviations for q (2,), qd (2,), p (4,).
+        rng : numpy.random.Generator
+            Source of the noise.
+        """
         n = len(self)
         return ArmRecord(self.t, self.q + rng.normal(size=(n, 2)) * sq,
                          self.qd + rng.normal(size=(n, 2)) * sqd,
@@ -234,7 +242,14 @@ def _cumzoh(u, dt):
 
 
 def delayed(u, shift: int) -> np.ndarray:
-    """``u`` delayed by ``shift`` samples (the first value held before the start)."""
+    """``u`` delayed by ``shift`` samples (the first value held before the start).
+
+    Parameters
+    ----------
+    u : numpy.ndarray, shape (N, k)
+    shift : int
+        Delay in samples, >= 0.
+    """
     if shift == 0:
         return u
     return np.concatenate([np.repeat(u[:1], shift, axis=0), u[:-shift]])
@@ -252,8 +267,10 @@ class BlockSystem:
     X : numpy.ndarray, shape (nb, 6, NMU)
     starts, stops : numpy.ndarray of int, shape (nb,)
         First and last sample of every block.
-    iu_cum : numpy.ndarray, shape (N, 4)
-        Running ZOH integral of u (to build the dead-time variants).
+    u : numpy.ndarray, shape (N, 4)
+        The set values (to build the dead-time variants).
+    dt : float
+        Sample time [s].
     features : dict
         Per-block operating-region descriptors (mean q, qd, p, time).
     """
@@ -271,7 +288,13 @@ class BlockSystem:
         return self.y.shape[0]
 
     def with_dead_time(self, shift: int) -> np.ndarray:
-        """X with the valve input delayed by ``shift`` samples (dead time ``shift dt``)."""
+        """X with the valve input delayed by ``shift`` samples (dead time ``shift dt``).
+
+        Parameters
+        ----------
+        shift : int
+            Delay in samples (0: X itself, copied).
+        """
         X = self.X.copy()
         if shift:
             c = _cumzoh(delayed(self.u, shift), self.dt)
@@ -346,8 +369,19 @@ def block_system(rec: ArmRecord, arm, *, block_seconds: float = BLOCK_SECONDS) -
 
 
 def channel_noise(rec: ArmRecord) -> dict:
-    """Measurement-noise standard deviations of q, qd, p estimated from ``rec`` (see
-    :mod:`ppamsafety.diagnose.noise`), floored for noise-free records."""
+    """Measurement-noise standard deviations of q, qd, p estimated from the data.
+
+    See :mod:`ppamsafety.diagnose.noise`; floored for noise-free records.
+
+    Parameters
+    ----------
+    rec : ArmRecord
+
+    Returns
+    -------
+    dict
+        ``{"q": (2,), "qd": (2,), "p": (4,)}``.
+    """
     sq = noise_floor(second_difference_sigma(rec.q), np.ptp(rec.q, axis=0) + 1.0)
     sqd = noise_floor(second_difference_sigma(rec.qd), np.ptp(rec.qd, axis=0) + 1.0)
     sp = noise_floor(second_difference_sigma(rec.p), np.ptp(rec.p, axis=0) + 1e5)

@@ -76,7 +76,25 @@ CV_SEGMENTS = 8
 
 @dataclass(frozen=True, eq=False)
 class Problem:
-    """A block system with its noise levels, nominal model and fold assignment."""
+    """A block system with its noise levels, nominal model and fold assignment.
+
+    Attributes
+    ----------
+    bs : BlockSystem
+    mu0 : numpy.ndarray
+        Nominal model vector.
+    sigma : numpy.ndarray, shape (6,)
+        Noise level of each block channel (at the model it was evaluated at).
+    arm : ArmParameters
+    fold : numpy.ndarray of int
+        Cross-validation fold (0/1) of every block.
+    max_shift : int
+        Largest dead time searched [samples].
+    noise : tuple
+        Noise draws (dY, dX) of :func:`~ppamsafety.diagnose.residuals.noise_draws`.
+    _xcache : dict
+        Designs per dead-time shift (internal cache).
+    """
 
     bs: BlockSystem
     mu0: np.ndarray
@@ -88,6 +106,12 @@ class Problem:
     _xcache: dict = field(default_factory=dict, repr=False)
 
     def X(self, shift: int) -> np.ndarray:
+        """The design for a dead time of ``shift`` samples (cached).
+
+        Parameters
+        ----------
+        shift : int
+        """
         if shift not in self._xcache:
             self._xcache[shift] = self.bs.with_dead_time(shift)
         return self._xcache[shift]
@@ -116,7 +140,13 @@ def make_problem(bs: BlockSystem, mu0, noise, arm) -> Problem:
 
 
 def at_model(prob: Problem, mu) -> Problem:
-    """``prob`` with the noise levels re-evaluated at model vector ``mu`` (same cache)."""
+    """``prob`` with the noise levels re-evaluated at a model vector (same cache).
+
+    Parameters
+    ----------
+    prob : Problem
+    mu : numpy.ndarray, shape (NMU,)
+    """
     from dataclasses import replace
 
     from .residuals import block_noise
@@ -271,7 +301,14 @@ def fit_model(prob: Problem, names, mask=None) -> Fit:
 
 
 def cv_chi2(prob: Problem, names) -> float:
-    """Held-out chi2 of 2-fold cross-validation over alternating time segments."""
+    """Held-out chi2 of 2-fold cross-validation over alternating time segments.
+
+    Parameters
+    ----------
+    prob : Problem
+    names : sequence of str
+        Candidate names of the model.
+    """
     total = 0.0
     for f in (0, 1):
         fit = fit_model(prob, names, mask=prob.fold != f)
@@ -291,6 +328,10 @@ class Step:
         Per candidate: name, k, chi2, bic, aicc, delta_bic, lr_stat, lr_df,
         p_value, cv_chi2, cv_gain, bic_weight, eligible.
     chosen : str or None
+    current_bic, current_cv : float
+        BIC and held-out chi2 of the current model.
+    current_weight : float
+        BIC weight of keeping the current model.
     """
 
     current: tuple
@@ -372,7 +413,15 @@ def forward_selection(prob: Problem, candidates=None, *, alpha: float = ALPHA,
 
 
 def in_bounds(prob: Problem, fit: Fit, name: str) -> bool:
-    """True if every parameter interval of effect ``name`` in ``fit`` meets its bounds."""
+    """True if every parameter interval of effect ``name`` lies in its widened bounds.
+
+    Parameters
+    ----------
+    prob : Problem
+    fit : Fit
+    name : str
+        One of ``fit.names``.
+    """
     from .candidates import REGISTRY
 
     tab = parameter_table(prob, fit)[name]
@@ -383,6 +432,13 @@ def in_bounds(prob: Problem, fit: Fit, name: str) -> bool:
 
 def parameter_table(prob: Problem, fit: Fit, confidence: float = 0.95) -> dict:
     """Reported parameters of every effect of ``fit`` with delta-method intervals.
+
+    Parameters
+    ----------
+    prob : Problem
+    fit : Fit
+    confidence : float
+        Level of the intervals.
 
     Returns
     -------
@@ -428,7 +484,13 @@ def parameter_table(prob: Problem, fit: Fit, confidence: float = 0.95) -> dict:
 
 
 def subsystem_channels(name: str) -> tuple:
-    """Block-residual channel indices of the subsystem of candidate ``name``."""
+    """Block-residual channel indices of the subsystem of a candidate.
+
+    Parameters
+    ----------
+    name : str
+        Candidate name.
+    """
     from .candidates import REGISTRY
 
     return SUBSYSTEM[REGISTRY[name].subsystem]
