@@ -187,6 +187,53 @@ def _cmd_sweep(args) -> int:
     return EXIT_OK
 
 
+def _cmd_diagnose(args) -> int:
+    import warnings
+
+    from .data import MeasuredDataWarning, load_measured
+    from .diagnose import diagnose
+    from .output import inspect_output_folder
+
+    inspect_output_folder(args.out, overwrite=args.overwrite)   # fail before computing
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", MeasuredDataWarning)    # kept in data.notes
+        data = load_measured(args.data, allow_gaps=args.allow_gaps,
+                             strict_units=not args.loose_units)
+    dg = diagnose(data, experiment=args.experiment, alpha=args.alpha, rho_max=args.rho_max,
+                  block_seconds=args.block, seed=args.seed)
+    dg.write(args.out, overwrite=args.overwrite)
+    for e in dg.effects:
+        ps = ", ".join(f"{n} = {p['value']:.4g} [{p['ci_low']:.4g}, {p['ci_high']:.4g}] "
+                       f"{p['unit']}" for n, p in e["parameters"].items())
+        print(f"effect {e['name']} (confidence {e['confidence']:.3f}, "
+              f"{e['confidence_level']}): {ps}")
+    if not dg.effects:
+        print("no effect named")
+    print(f"unexplained: {'yes (' + ', '.join(dg.unexplained_channels) + ')' if dg.unexplained else 'no'}")
+    print(f"diagnosis written to {args.out} ({dg.timings['total']:.1f} s)")
+    return EXIT_OK
+
+
+def _effect_arg(text: str):
+    if "=" not in text:
+        raise argparse.ArgumentTypeError(f"--effect {text!r}: expected NAME=VALUE")
+    name, value = text.split("=", 1)
+    return name.strip(), value.strip()
+
+
+def _cmd_synthesize(args) -> int:
+    from .diagnose import synthesize
+
+    effects = {}
+    for name, value in args.effect or []:
+        effects[name] = value if "," in value else _finite(value)
+    data = synthesize(args.experiment, effects, noise=args.noise, seed=args.seed,
+                      duration=args.duration)
+    path = data.save(args.out, overwrite=args.overwrite)
+    print(f"record written to {path} ({len(data)} rows)")
+    return EXIT_OK
+
+
 def _cmd_impact(args) -> int:
     import numpy as np
 
@@ -298,6 +345,46 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
                    help="run only the first N cases (a preview)")
     w.add_argument("--no-progress", action="store_true", help="no progress bar")
     w.set_defaults(func=_cmd_sweep)
+    g = sub.add_parser("diagnose", help="find and name the effect the model is missing",
+                       description="Compare a measured arm record (q, qd, p and the valve set "
+                                   "values u) with the model, name the missing effects with "
+                                   "fitted parameters, or report 'unexplained' "
+                                   "(docs/diagnose.md). Exit code 0 whenever the analysis ran.",
+                       epilog=_EPILOG)
+    g.add_argument("data", metavar="DATA", help="measured data file (.csv or .parquet)")
+    g.add_argument("--out", required=True, metavar="DIR",
+                   help="output folder for diagnosis.json, diagnosis.md and figures")
+    g.add_argument("--experiment", choices=("open-loop", "closed-loop"), default=None,
+                   help="experiment hint (must agree with the metadata)")
+    g.add_argument("--alpha", type=_positive, default=0.01,
+                   help="level of the likelihood-ratio test (default 0.01, Bonferroni-divided)")
+    g.add_argument("--rho-max", type=_positive, default=1.5,
+                   help="largest residual/noise RMS ratio counted as explained (default 1.5)")
+    g.add_argument("--block", type=_positive, default=0.05, metavar="SECONDS",
+                   help="block length of the subsystem residuals [s] (default 0.05)")
+    g.add_argument("--seed", type=int, default=0, help="seed of the noise propagation")
+    g.add_argument("--allow-gaps", action="store_true",
+                   help="drop rows with missing values; the longest gap-free segment is used")
+    g.add_argument("--loose-units", action="store_true",
+                   help="only warn when values look like bar, degrees or mm")
+    g.add_argument("--overwrite", action="store_true",
+                   help="replace a previous ppamsafety diagnosis in DIR (never other files)")
+    g.set_defaults(func=_cmd_diagnose)
+    y = sub.add_parser("synthesize", help="write a record with hidden effects (rehearsal data)",
+                       description="Simulate an experiment on a plant with hidden effects and "
+                                   "write it in the measured-data format; the file carries no "
+                                   "hint of what is hidden (docs/diagnose.md).",
+                       epilog=_EPILOG)
+    y.add_argument("--experiment", choices=("open-loop",), default="open-loop")
+    y.add_argument("--effect", type=_effect_arg, action="append", metavar="NAME=VALUE",
+                   help="hidden effect, repeatable (e.g. payload_mass=0.4, "
+                        "valve_time_constant_factor=1.5, valve_dead_time=0.02)")
+    y.add_argument("--noise", choices=("table-3.2", "none"), default="table-3.2")
+    y.add_argument("--seed", type=int, default=0, help="seed of the excitation and the noise")
+    y.add_argument("--duration", type=_positive, default=10.0, help="record length [s]")
+    y.add_argument("--out", required=True, metavar="DATA", help="new .csv (or .parquet) file")
+    y.add_argument("--overwrite", action="store_true", help="allow replacing an existing file")
+    y.set_defaults(func=_cmd_synthesize)
     m = sub.add_parser("impact", help="simulate one impact of the thesis arm with a head",
                        epilog=_EPILOG)
     m.add_argument("--q", nargs=2, type=_angle_deg, required=True, metavar=("Q1", "Q2"),

@@ -1,0 +1,17 @@
+"""The discrepancy workflow (issue 10): where measurement and model disagree, which effect
+is missing, its fitted parameters, and the gap shrinking.
+
+* :mod:`.residuals` -- replay and per-subsystem block residuals of an arm record;
+* :mod:`.noise` -- the noise level estimated from the data;
+* :mod:`.candidates` -- the library of candidate effects;
+* :mod:`.selection` -- ranking (BIC), evidence, forward selection with refit;
+* :mod:`.diagnosis` -- :func:`diagnose` and the :class:`Diagnosis` result;
+* :mod:`.synthesize` -- the hidden-effect data generator.
+
+Documentation: ``docs/diagnose.md``.
+"""
+
+from .diagnosis import Diagnosis, diagnose  # noqa: F401
+from .synthesize import synthesize
+
+__all__ = ["Diagnosis", "diagnose", "synthesize"]

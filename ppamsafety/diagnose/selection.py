@@ -1,0 +1,501 @@
+"""Ranking, evidence and forward selection with refit (issue 10 items 3-4).
+
+Statistics (the choices a reviewer will ask about)
+--------------------------------------------------
+*Data.*  The block residuals of :mod:`ppamsafety.diagnose.residuals`
+(channels p1..p4, tau1, tau2), each divided by its **noise level** sigma_c:
+the standard deviation the measurement noise alone gives that channel
+(:func:`~ppamsafety.diagnose.residuals.block_noise`, from the noise
+estimated in the data).  Blocks do not share samples, so under a correct
+model the whitened residuals e are approximately independent N(0, 1) and
+-2 log L = chi2 = sum e^2 (+ const) with the noise level *known*.
+
+*Fit.*  A model = the nominal model plus a set of candidate extensions;
+its coefficients phi are found by linear least squares on e (the
+extensions are linear in phi), a dead time by profiling chi2 over a grid
+of one-sample steps.  Covariance of phi: s^2 (A^T A)^-1 with
+s^2 = chi2/(m - k) of the subsystem the parameter acts in, the Jacobian of the least-squares fit scaled by the
+residual variance; parameter intervals by the delta method (dead time:
+the profile-likelihood interval chi2 - chi2_min <= s^2 chi2_1(95 %)).
+
+*Criterion.*  BIC = chi2 + k ln m (k fitted parameters including a dead
+time, m equations).  BIC rather than AICc because it is consistent (the
+chance of adding a spurious effect vanishes as the record grows) and
+conservative -- naming an effect that is not there is the error to avoid;
+AICc is reported too.  **Confidence** of a choice: its BIC weight
+exp(-BIC/2) / sum over {current model, every candidate}, the approximate
+posterior probability with equal priors; the **evidence ratio** against
+the runner-up is exp((BIC_2 - BIC_1)/2).
+
+*Naming rule* (all must hold for the best candidate by BIC):
+
+1. BIC below the current model's;
+2. significant: likelihood-ratio test against the noise level, Delta chi2
+   ~ chi2(Delta k), p < alpha / K (alpha = 0.01, Bonferroni over the K
+   candidates tried at the step);
+3. its fitted parameters are determined and physically possible: every
+   parameter's confidence interval lies inside the candidate's bounds
+   widened by half their width on each side (an exponent n = 3, or one
+   known only to +-4, or a
+   negative mass is a sign that the candidate is absorbing another effect
+   it is nearly collinear with, e.g. a valve lag and the polytropic volume
+   term on a slow excitation);
+4. it predicts held-out data: 2-fold cross-validation over alternating
+   time segments (fit on half of the segments, chi2 on the other half, and
+   the reverse) lowers the held-out chi2.
+
+Forward selection repeats this with every earlier effect refitted together
+with each new candidate, until no candidate passes.  Finally the residual
+ratio rho_c = RMS(e_c) of every channel is compared with ``rho_max`` (1.5:
+under a correct model rho is 1 within a few per cent for a few hundred
+blocks, so 1.5 leaves room for a noise estimate that is somewhat off but
+not for a model error as large as the noise).  An effect is **named** only
+if every channel of its subsystem then has rho <= rho_max; a significant
+effect that leaves its subsystem far above the noise is reported as
+*partial* (fitted, not named) and the diagnosis as unexplained.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import stats
+
+from .candidates import DEAD_TIME_MAX, library
+from .residuals import SUBSYSTEM, BlockSystem
+
+#: Significance level of the likelihood-ratio test (before the Bonferroni division).
+ALPHA = 0.01
+#: Largest residual-to-noise RMS ratio of a channel that counts as "explained".
+RHO_MAX = 1.5
+#: Number of time segments alternated between the two cross-validation folds.
+CV_SEGMENTS = 8
+
+
+@dataclass(frozen=True, eq=False)
+class Problem:
+    """A block system with its noise levels, nominal model and fold assignment.
+
+    Attributes
+    ----------
+    bs : BlockSystem
+    mu0 : numpy.ndarray
+        Nominal model vector.
+    sigma : numpy.ndarray, shape (6,)
+        Noise level of each block channel (at the model it was evaluated at).
+    arm : ArmParameters
+    fold : numpy.ndarray of int
+        Cross-validation fold (0/1) of every block.
+    max_shift : int
+        Largest dead time searched [samples].
+    noise : tuple
+        Noise draws (dY, dX) of :func:`~ppamsafety.diagnose.residuals.noise_draws`.
+    _xcache : dict
+        Designs per dead-time shift (internal cache).
+    """
+
+    bs: BlockSystem
+    mu0: np.ndarray
+    sigma: np.ndarray
+    arm: object
+    fold: np.ndarray
+    max_shift: int
+    noise: tuple = ()
+    _xcache: dict = field(default_factory=dict, repr=False)
+
+    def X(self, shift: int) -> np.ndarray:
+        """The design for a dead time of ``shift`` samples (cached).
+
+        Parameters
+        ----------
+        shift : int
+        """
+        if shift not in self._xcache:
+            self._xcache[shift] = self.bs.with_dead_time(shift)
+        return self._xcache[shift]
+
+
+def make_problem(bs: BlockSystem, mu0, noise, arm) -> Problem:
+    """Bundle a block system for selection (folds: :data:`CV_SEGMENTS` alternating segments).
+
+    Parameters
+    ----------
+    bs : BlockSystem
+    mu0 : numpy.ndarray, shape (NMU,)
+        Nominal model vector.
+    noise : tuple (dY, dX)
+        Noise draws of :func:`~ppamsafety.diagnose.residuals.noise_draws`; the
+        noise level of each channel is evaluated at the current model.
+    arm : ArmParameters
+    """
+    from .residuals import block_noise
+
+    seg = np.minimum((np.arange(bs.nb) * CV_SEGMENTS) // bs.nb, CV_SEGMENTS - 1)
+    max_shift = max(1, int(round(DEAD_TIME_MAX / bs.dt)))
+    mu0 = np.asarray(mu0, float)
+    return Problem(bs=bs, mu0=mu0, sigma=block_noise(*noise, mu0), arm=arm,
+                   fold=seg % 2, max_shift=max_shift, noise=tuple(noise))
+
+
+def at_model(prob: Problem, mu) -> Problem:
+    """``prob`` with the noise levels re-evaluated at a model vector (same cache).
+
+    Parameters
+    ----------
+    prob : Problem
+    mu : numpy.ndarray, shape (NMU,)
+    """
+    from dataclasses import replace
+
+    from .residuals import block_noise
+
+    return replace(prob, sigma=block_noise(*prob.noise, mu), _xcache=prob._xcache)
+
+
+@dataclass(frozen=True, eq=False)
+class Fit:
+    """A fitted model (nominal + extensions ``names``).
+
+    Attributes
+    ----------
+    names : tuple of str
+    k : int
+        Fitted parameters (linear coefficients + a dead time).
+    m : int
+        Equations used.
+    chi2 : float
+        Sum of squared whitened residuals over the equations used.
+    phi : numpy.ndarray
+        Linear coefficients, candidate blocks in the order of ``names``.
+    cov : numpy.ndarray
+        Covariance of phi (scaled by the residual variance).
+    slices : dict
+        Candidate name -> slice of phi.
+    shift : int
+        Dead time in samples (0: none).
+    shift_ci : tuple of int
+        Profile interval of the shift.
+    mu : numpy.ndarray
+        Fitted model vector.
+    e : numpy.ndarray, shape (nb, 6)
+        Whitened residuals of every block under this fit.
+    """
+
+    names: tuple
+    k: int
+    m: int
+    chi2: float
+    phi: np.ndarray
+    cov: np.ndarray
+    slices: dict
+    shift: int
+    shift_ci: tuple
+    mu: np.ndarray
+    e: np.ndarray
+
+    @property
+    def bic(self) -> float:
+        return self.chi2 + self.k * math.log(self.m)
+
+    @property
+    def aicc(self) -> float:
+        k, m = self.k, self.m
+        return self.chi2 + 2 * k + (2 * k * (k + 1) / (m - k - 1) if m - k - 1 > 0 else math.inf)
+
+    def rho(self) -> np.ndarray:
+        """Residual-to-noise RMS ratio per channel (all blocks)."""
+        return np.sqrt(np.mean(self.e ** 2, axis=0))
+
+
+def _directions(prob: Problem, names):
+    cands = library(names)
+    Ds, slices, j = [], {}, 0
+    for c in cands:
+        if c.directions is None:
+            slices[c.name] = slice(j, j)
+            continue
+        D = c.directions(prob.mu0, prob.arm)
+        Ds.append(D)
+        slices[c.name] = slice(j, j + D.shape[1])
+        j += D.shape[1]
+    D = np.concatenate(Ds, axis=1) if Ds else np.zeros((prob.mu0.size, 0))
+    grid = any(c.grid for c in cands)
+    return D, slices, grid
+
+
+def _solve(prob, D, shift, mask):
+    X = prob.X(shift)
+    base = (prob.bs.y - X @ prob.mu0) / prob.sigma
+    Z = np.einsum("bcm,mk->bck", X, D) / prob.sigma[None, :, None]
+    k = D.shape[1]
+    b = base[mask].ravel()
+    A = Z[mask].reshape(b.size, k)
+    if k:
+        scale = np.sqrt(np.sum(A ** 2, axis=0))
+        scale[scale == 0] = 1.0
+        sol, *_ = np.linalg.lstsq(A / scale, b, rcond=None)
+        phi = sol / scale
+    else:
+        phi = np.zeros(0)
+    r = b - A @ phi
+    return phi, float(r @ r), A, base, Z
+
+
+def fit_model(prob: Problem, names, mask=None) -> Fit:
+    """Fit the nominal model extended by the candidates ``names`` (see the module docstring).
+
+    Parameters
+    ----------
+    prob : Problem
+    names : sequence of str
+        Candidate names (may be empty: the nominal model).
+    mask : numpy.ndarray of bool, shape (nb,), optional
+        Blocks to fit on (default all).
+
+    Returns
+    -------
+    Fit
+    """
+    names = tuple(names)
+    nb = prob.bs.nb
+    mask = np.ones(nb, bool) if mask is None else np.asarray(mask, bool)
+    D, slices, grid = _directions(prob, names)
+    shifts = range(1, prob.max_shift + 1) if grid else (0,)
+    best, prof = None, []
+    for s in shifts:
+        phi, chi2, A, base, Z = _solve(prob, D, s, mask)
+        prof.append(chi2)
+        if best is None or chi2 < best[1]:
+            best = (phi, chi2, A, base, Z, s)
+    phi, chi2, A, base, Z, shift = best
+    m = A.shape[0]
+    k = D.shape[1] + (1 if grid else 0)
+    s2 = chi2 / max(m - k, 1)
+    if D.shape[1]:
+        # scale each parameter by the residual variance of *its* subsystem (the subsystems'
+        # columns do not overlap, so A^T A is block diagonal across them): an unexplained
+        # torque residual must not inflate the intervals of a valve parameter, nor hide
+        # behind them
+        e_all = (base - Z @ phi)[mask]
+        sd = np.ones(D.shape[1])
+        for chans in SUBSYSTEM.values():
+            cols = np.nonzero(np.any(Z[:, list(chans), :] != 0, axis=(0, 1)))[0]
+            if cols.size:
+                msub = e_all[:, list(chans)].size
+                sd[cols] = math.sqrt(float(np.sum(e_all[:, list(chans)] ** 2))
+                                     / max(msub - cols.size, 1))
+        cov = sd[:, None] * np.linalg.pinv(A.T @ A) * sd[None, :]
+    else:
+        cov = np.zeros((0, 0))
+    if grid:
+        prof = np.array(prof)
+        ok = np.nonzero(prof - prof.min() <= s2 * stats.chi2.ppf(0.95, 1))[0] + 1
+        shift_ci = (int(ok.min()), int(ok.max()))
+    else:
+        shift_ci = (0, 0)
+    e = base - Z @ phi
+    return Fit(names=names, k=k, m=m, chi2=chi2, phi=phi, cov=cov, slices=slices, shift=shift,
+               shift_ci=shift_ci, mu=prob.mu0 + D @ phi, e=e)
+
+
+def cv_chi2(prob: Problem, names) -> float:
+    """Held-out chi2 of 2-fold cross-validation over alternating time segments.
+
+    Parameters
+    ----------
+    prob : Problem
+    names : sequence of str
+        Candidate names of the model.
+    """
+    total = 0.0
+    for f in (0, 1):
+        fit = fit_model(prob, names, mask=prob.fold != f)
+        total += float(np.sum(fit.e[prob.fold == f] ** 2))
+    return total
+
+
+@dataclass(frozen=True, eq=False)
+class Step:
+    """One forward-selection step: the ranking of every candidate tried.
+
+    Attributes
+    ----------
+    current : tuple of str
+        Effects already in the model.
+    table : list of dict
+        Per candidate: name, k, chi2, bic, aicc, delta_bic, lr_stat, lr_df,
+        p_value, cv_chi2, cv_gain, bic_weight, eligible.
+    chosen : str or None
+    current_bic, current_cv : float
+        BIC and held-out chi2 of the current model.
+    current_weight : float
+        BIC weight of keeping the current model.
+    """
+
+    current: tuple
+    table: list
+    chosen: str | None
+    current_bic: float
+    current_cv: float
+    current_weight: float
+
+
+def forward_selection(prob: Problem, candidates=None, *, alpha: float = ALPHA,
+                      max_effects: int = 4) -> tuple:
+    """Forward selection with refit (module docstring).
+
+    Returns the final Fit, the list of Step and the Problem with the noise
+    levels of the final model.
+
+    Parameters
+    ----------
+    prob : Problem
+    candidates : sequence of str, optional
+        Names to consider (default the whole library).
+    alpha : float, keyword-only
+        Level of the likelihood-ratio test before the Bonferroni division.
+    max_effects : int, keyword-only
+        Largest number of effects named.
+    """
+    names = [c.name for c in library(candidates)]
+    selected: list = []
+    prob0 = prob
+    current = fit_model(prob, selected)
+    cur_cv = cv_chi2(prob, selected)
+    steps = []
+    while len(selected) < max_effects:
+        rest = [n for n in names if n not in selected]
+        if not rest:
+            break
+        rows, fits = [], {}
+        for n in rest:
+            f = fit_model(prob, selected + [n])
+            fits[n] = f
+            d = current.chi2 - f.chi2
+            df = max(f.k - current.k, 1)
+            cv = cv_chi2(prob, selected + [n])
+            rows.append({"name": n, "k": f.k - current.k, "chi2": f.chi2, "bic": f.bic,
+                         "aicc": f.aicc, "delta_bic": f.bic - current.bic, "lr_stat": d,
+                         "lr_df": df, "p_value": float(stats.chi2.sf(max(d, 0.0), df)),
+                         "cv_chi2": cv, "cv_gain": cur_cv - cv})
+        for r in rows:
+            r["in_bounds"] = in_bounds(prob, fits[r["name"]], r["name"])
+            r["eligible"] = bool(r["delta_bic"] < 0 and r["p_value"] < alpha / len(rest)
+                                 and r["cv_gain"] > 0 and r["in_bounds"])
+        # BIC weights among the admissible models: the current one and every candidate
+        # whose parameters are physically possible
+        adm = [r for r in rows if r["in_bounds"]]
+        bics = np.array([current.bic] + [r["bic"] for r in adm])
+        w = np.exp(-(bics - bics.min()) / 2)
+        w /= w.sum()
+        for r in rows:
+            r["bic_weight"] = 0.0
+        for r, wi in zip(adm, w[1:]):
+            r["bic_weight"] = float(wi)
+        rows.sort(key=lambda r: r["bic"])
+        ok = [r for r in rows if r["eligible"]]
+        chosen = ok[0]["name"] if ok else None
+        if chosen is not None:
+            others = [r["bic"] for r in adm if r["name"] != chosen] + [current.bic]
+            ok[0]["evidence_ratio_log10"] = float((min(others) - ok[0]["bic"]) / 2 / math.log(10))
+        steps.append(Step(tuple(selected), rows, chosen, current.bic, cur_cv, float(w[0])))
+        if chosen is None:
+            break
+        selected.append(chosen)
+        # the noise level depends on the model (velocity noise enters through H qd):
+        # re-evaluate it at the new model, refit, and compare the next step on that footing
+        prob = at_model(prob0, fits[chosen].mu)
+        current = fit_model(prob, selected)
+        cur_cv = cv_chi2(prob, selected)
+    return current, steps, prob
+
+
+def in_bounds(prob: Problem, fit: Fit, name: str) -> bool:
+    """True if every parameter interval of effect ``name`` lies in its widened bounds.
+
+    Parameters
+    ----------
+    prob : Problem
+    fit : Fit
+    name : str
+        One of ``fit.names``.
+    """
+    from .candidates import REGISTRY
+
+    tab = parameter_table(prob, fit)[name]
+    return all(tab[p.name]["ci_low"] >= p.lo - 0.5 * (p.hi - p.lo)
+               and tab[p.name]["ci_high"] <= p.hi + 0.5 * (p.hi - p.lo)
+               for p in REGISTRY[name].parameters)
+
+
+def parameter_table(prob: Problem, fit: Fit, confidence: float = 0.95) -> dict:
+    """Reported parameters of every effect of ``fit`` with delta-method intervals.
+
+    Parameters
+    ----------
+    prob : Problem
+    fit : Fit
+    confidence : float
+        Level of the intervals.
+
+    Returns
+    -------
+    dict
+        name -> {parameter: {value, unit, ci_low, ci_high, std_error, nominal}}.
+    """
+    from .candidates import REGISTRY
+
+    D, slices, _ = _directions(prob, fit.names)
+    z = stats.norm.ppf(0.5 + confidence / 2)
+    dt = prob.bs.dt
+    nominal_fit_phi = np.zeros_like(fit.phi)
+    out = {}
+    for n in fit.names:
+        c = REGISTRY[n]
+        sl = slices[n]
+
+        def val(phi):
+            mu = prob.mu0 + D @ phi
+            return np.asarray(c.physical(mu, phi[sl], fit.shift * dt), float)
+
+        v = val(fit.phi)
+        v_nom = val(nominal_fit_phi)
+        if c.grid:
+            lo = np.array([fit.shift_ci[0] * dt])
+            hi = np.array([fit.shift_ci[1] * dt])
+            se = (hi - lo) / (2 * z)
+        else:
+            J = np.zeros((v.size, fit.phi.size))
+            sd = np.sqrt(np.maximum(np.diag(fit.cov), 0.0))
+            for j in range(fit.phi.size):
+                h = sd[j] * 1e-3 if sd[j] > 0 else 1e-9 * max(abs(fit.phi[j]), 1.0)
+                p1 = fit.phi.copy()
+                p1[j] += h
+                J[:, j] = (val(p1) - v) / h
+            se = np.sqrt(np.maximum(np.diag(J @ fit.cov @ J.T), 0.0))
+            lo, hi = v - z * se, v + z * se
+        out[n] = {p.name: {"value": float(v[i]), "unit": p.unit, "ci_low": float(lo[i]),
+                           "ci_high": float(hi[i]), "std_error": float(se[i]),
+                           "nominal": float(v_nom[i]) if not c.grid else 0.0}
+                  for i, p in enumerate(c.parameters)}
+    return out
+
+
+def subsystem_channels(name: str) -> tuple:
+    """Block-residual channel indices of the subsystem of a candidate.
+
+    Parameters
+    ----------
+    name : str
+        Candidate name.
+    """
+    from .candidates import REGISTRY
+
+    return SUBSYSTEM[REGISTRY[name].subsystem]
+
+
+__all__ = ["Problem", "make_problem", "at_model", "Fit", "fit_model", "cv_chi2", "Step",
+           "forward_selection", "parameter_table", "in_bounds", "subsystem_channels", "ALPHA", "RHO_MAX",
+           "CV_SEGMENTS"]
