@@ -94,8 +94,10 @@ class ExperimentCase:
         elif not isinstance(self.sensors, SensorConfig):
             raise _type_error("sensors", self.sensors, "a SensorConfig")
         if self.x0 is not None:
-            x0 = check_shape("ExperimentCase.x0", as_float_array("ExperimentCase.x0", self.x0),
-                             (NX,))
+            x0 = check_shape("ExperimentCase.x0", as_float_array(
+                "ExperimentCase.x0", self.x0, allow_nonfinite=True), (NX,))
+            if not np.all(np.isfinite(x0)):
+                raise ValueError(f"ExperimentCase.x0 must be finite, got {x0.tolist()}")
             check_range_array("ExperimentCase.x0[0:2] (q1, q2)", x0[0:2], -2 * np.pi, 2 * np.pi,
                               unit="rad")
             check_range_array("ExperimentCase.x0[2:4] (qd1, qd2)", x0[2:4], -X0_SPEED_MAX,
