@@ -28,7 +28,7 @@ import enum
 import math
 from dataclasses import dataclass
 
-from .._validation import check_choice, check_instance, check_range, check_vector
+from .._validation import check_instance, check_range, check_str, check_vector
 from ..control import PID, JointPSMC, SensorConfig, TaskPSMC
 from ..control.base import Controller
 from ..units import BAR
@@ -286,6 +286,15 @@ def variant_lambda(controller: Controller) -> float:
     return ControllerVariant.of(controller).lambda_s
 
 
+def _check_name(name) -> str:
+    """A thesis experiment name (str, one of :data:`EXPERIMENTS`)."""
+    check_str("name", name)
+    if name not in EXPERIMENTS:
+        raise ValueError(f"unknown thesis experiment name = {name!r}; choose from "
+                         f"{list(EXPERIMENTS)}")
+    return name
+
+
 def _check_arm(arm):
     from ..params.arm import ArmParameters
     return check_instance("arm", arm, ArmParameters)
@@ -338,7 +347,7 @@ def thesis_reference(arm, name: str, *, duration: float | None = None, dt: float
     Reference
     """
     _check_arm(arm)
-    name = check_choice("name", name, EXPERIMENTS)
+    name = _check_name(name)
     d = DEFAULT_DURATIONS[name] if duration is None else check_range(
         "duration", duration, 0.0, 1e5, lo_open=True, unit="s")
     if name == "step":
@@ -389,7 +398,7 @@ def run_thesis_experiment(arm, name: str, variants=None, *, sensors: SensorConfi
         a ``UserWarning`` names it).
     """
     _check_arm(arm)
-    name = check_choice("name", name, EXPERIMENTS)
+    name = _check_name(name)
     if variants is not None and (isinstance(variants, (str, bytes, ControllerVariant, Controller))
                                  or not hasattr(variants, "__iter__")):
         raise TypeError(f"variants must be a sequence of ControllerVariant, got "

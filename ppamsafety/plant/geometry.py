@@ -20,6 +20,7 @@ import numpy as np
 from .._jit import kernel, leaf
 
 from .._validation import as_float_array
+from ._checks import accelerations, angles, check_pressures, checks_arm, speeds, torques  # noqa: F401
 from . import layout as lay
 from .layout import (D12, D22, D32, D33, D42, D43, DL, L1, L2, L12, L22, L32, L33, L42, L43,
                      LL, X11, X21, Y11, Y21)
@@ -131,10 +132,11 @@ def _points_many(q, P, out):
 
 
 def _flat_q(q):
-    q = as_float_array("q", q, shape_tail=(2,))
+    q = angles("q", q)
     return q.reshape(-1, 2), q.shape[:-1]
 
 
+@checks_arm
 def attachment_points(q, arm) -> np.ndarray:
     """Muscle attachment points for configurations ``q`` [rad], shape (..., 2).
 
@@ -149,6 +151,7 @@ def attachment_points(q, arm) -> np.ndarray:
     return out.reshape(lead + (8, 2))
 
 
+@checks_arm
 def muscle_lengths(q, arm, *, with_derivatives: bool = False):
     """Muscle group lengths d_i(q) (A.31)-(A.34) [m], shape (..., 4).
 
@@ -166,6 +169,7 @@ def muscle_lengths(q, arm, *, with_derivatives: bool = False):
     return d.reshape(shp)
 
 
+@checks_arm
 def lever_arms(q, arm) -> np.ndarray:
     """Lever arms (e_i x OA_i) . 1_z of the four groups [m], shape (..., 4)."""
     return muscle_lengths(q, arm, with_derivatives=True)[1]
@@ -209,11 +213,13 @@ def design_connection_lengths(P, geometry, eps_min: float, eps_max: float) -> np
     return out
 
 
+@checks_arm
 def connection_lengths(arm) -> np.ndarray:
     """Connection lengths L_conn,i of the arm (Table A.1) [m], shape (4,)."""
     return np.array(lay.pack(arm)[lay.LCONN:lay.LCONN + 4])
 
 
+@checks_arm
 def contractions(q, arm) -> np.ndarray:
     """Contraction of one muscle in each group, eq. (2.12), shape (..., 4) [-]."""
     P = lay.pack(arm)
@@ -229,6 +235,7 @@ def _fk_many(q, P, out, jac):
         jac[n, 0, 0], jac[n, 0, 1], jac[n, 1, 0], jac[n, 1, 1] = tcp_jacobian(q[n, 0], q[n, 1], P)
 
 
+@checks_arm
 def forward_kinematics(q, arm) -> np.ndarray:
     """TCP position for configurations ``q`` [rad], shape (..., 2) [m]."""
     qf, lead = _flat_q(q)
@@ -237,6 +244,7 @@ def forward_kinematics(q, arm) -> np.ndarray:
     return out.reshape(lead + (2,))
 
 
+@checks_arm
 def jacobian(q, arm) -> np.ndarray:
     """TCP Jacobian dr/dq for configurations ``q``, shape (..., 2, 2) [m/rad]."""
     qf, lead = _flat_q(q)
@@ -245,6 +253,7 @@ def jacobian(q, arm) -> np.ndarray:
     return jac.reshape(lead + (2, 2))
 
 
+@checks_arm
 def inverse_kinematics(r, arm) -> np.ndarray:
     """Elbow-up (q2 < 0) inverse kinematics of the TCP.
 
@@ -276,6 +285,7 @@ def inverse_kinematics(r, arm) -> np.ndarray:
     return np.stack([q1, q2], axis=-1)
 
 
+@checks_arm
 def in_working_area(q, arm) -> np.ndarray:
     """True where q lies inside the working area (2.6)-(2.7)."""
     q = as_float_array("q", q, shape_tail=(2,))

@@ -21,6 +21,7 @@ import numpy as np
 from .._jit import kernel, leaf
 
 from .._validation import as_float_array, check_range
+from ._checks import accelerations, angles, check_pressures, checks_arm, speeds, torques  # noqa: F401
 from ..units import DEG
 from . import layout as lay
 from .dynamics import gravity_torque
@@ -105,6 +106,7 @@ def _gc_many(q, Pc, out):
         out[n, 0], out[n, 1] = gravity_compensation_dp(q[n, 0], q[n, 1], Pc, mt, dmt, vol)
 
 
+@checks_arm
 def joint_stiffness(q, pressures, arm) -> np.ndarray:
     """Joint stiffness (2.18) incl. the closed-valve dp/dq terms [N m/rad].
 
@@ -120,8 +122,8 @@ def joint_stiffness(q, pressures, arm) -> np.ndarray:
     -------
     numpy.ndarray, shape (..., 2)
     """
-    q = as_float_array("q", q, shape_tail=(2,))
-    p = as_float_array("pressures", pressures, shape_tail=(4,))
+    q = angles("q", q)
+    p = check_pressures("pressures", pressures)
     shape = np.broadcast_shapes(q.shape[:-1], p.shape[:-1])
     qf = np.ascontiguousarray(np.broadcast_to(q, shape + (2,)).reshape(-1, 2))
     pf = np.ascontiguousarray(np.broadcast_to(p, shape + (4,)).reshape(-1, 4))
@@ -130,6 +132,7 @@ def joint_stiffness(q, pressures, arm) -> np.ndarray:
     return out.reshape(shape + (2,))
 
 
+@checks_arm
 def gravity_compensation(q, arm, *, params=None) -> np.ndarray:
     """Delta-p of the static gravity compensation (3.18)-(3.19) [Pa], shape (..., 2).
 
@@ -139,7 +142,7 @@ def gravity_compensation(q, arm, *, params=None) -> np.ndarray:
     (without the payload of ``arm.effects``; :func:`static_pressures`
     compensates the plant truth including it).
     """
-    q = as_float_array("q", q, shape_tail=(2,))
+    q = angles("q", q)
     return _gravity_compensation_row(q, lay.pack(arm, arm.model_gravity if params is None
                                                  else params))
 
@@ -152,31 +155,35 @@ def _gravity_compensation_row(q, Pc) -> np.ndarray:
     return out.reshape(q.shape[:-1] + (2,))
 
 
+@checks_arm
 def delta_p_pressures(dp, arm, *, clip: bool = True) -> np.ndarray:
     """Desired pressures [p_m1 + dp1, p_m1 - dp1, p_m2 + dp2, p_m2 - dp2] [Pa] (3.7)."""
-    dp = as_float_array("dp", dp, shape_tail=(2,))
+    dp = check_pressures("dp", dp, tail=2)
     pm = arm.pneumatics.p_mean
     p = np.stack([pm[0] + dp[..., 0], pm[0] - dp[..., 0], pm[1] + dp[..., 1],
                   pm[1] - dp[..., 1]], axis=-1)
     return np.clip(p, 0.0, arm.pneumatics.p_max) if clip else p
 
 
+@checks_arm
 def valve_pressure(set_values, arm) -> np.ndarray:
     """Static delivered pressure p = v1 + v2 p_s (3.12) [Pa], shape (..., 4)."""
-    u = as_float_array("set_values", set_values, shape_tail=(4,))
+    u = check_pressures("set_values", set_values)
     v1 = np.array([v.v1 for v in arm.valves.valves])
     v2 = np.array([v.v2 for v in arm.valves.valves])
     return v1 + v2 * u
 
 
+@checks_arm
 def valve_set_values(pressures, arm) -> np.ndarray:
     """Set values that deliver ``pressures`` by inverting (3.12), clipped to [0, p_max] [Pa]."""
-    p = as_float_array("pressures", pressures, shape_tail=(4,))
+    p = check_pressures("pressures", pressures)
     v1 = np.array([v.v1 for v in arm.valves.valves])
     v2 = np.array([v.v2 for v in arm.valves.valves])
     return np.clip((p - v1) / v2, 0.0, arm.pneumatics.p_max)
 
 
+@checks_arm
 def static_pressures(q, arm, *, params=None) -> np.ndarray:
     """Gauge pressures holding ``q`` in static equilibrium with the Delta-p approach [Pa].
 
@@ -186,13 +193,14 @@ def static_pressures(q, arm, *, params=None) -> np.ndarray:
     an infeasible configuration shows up as a pressure outside [0, p_max].
     """
     if params is None:
-        q = as_float_array("q", q, shape_tail=(2,))
+        q = angles("q", q)
         dp = _gravity_compensation_row(q, lay.pack(arm))
     else:
         dp = gravity_compensation(q, arm, params=params)
     return delta_p_pressures(dp, arm, clip=False)
 
 
+@checks_arm
 def calibrate_mean_pressures(arm, *, q=(50.0 * DEG, -80.0 * DEG),
                              target_stiffness=(43.0, 27.0)) -> tuple:
     """Mean pressures p_m (per joint) giving a target joint stiffness.
