@@ -297,7 +297,19 @@ def regressor(q, qd, qdd, arm, *, gravity_acc: float | None = None) -> np.ndarra
 
 @checks_arm
 def kinetic_energy(q, qd, arm, *, params=None) -> np.ndarray:
-    """Kinetic energy 1/2 qd^T H qd [J]."""
+    """Kinetic energy 1/2 qd^T H qd [J].
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 2)
+        Joint angles [rad].
+    qd : array_like, shape (..., 2)
+        Joint velocities [rad/s], |qd| <= 1000.
+    arm : ArmParameters
+        The arm.
+    params : BaseParameters, optional
+        Rigid-body parameters; default the physical plant.
+    """
     qd = speeds("qd", qd)
     H = inertia_matrix(q, arm, params=params)
     return 0.5 * np.einsum("...i,...ij,...j->...", qd, H, qd)

@@ -140,6 +140,13 @@ def _flat_q(q):
 def attachment_points(q, arm) -> np.ndarray:
     """Muscle attachment points for configurations ``q`` [rad], shape (..., 2).
 
+    Parameters
+    ----------
+    q : array_like, shape (..., 2)
+        Joint angles [rad], |q| <= 2 pi.
+    arm : ArmParameters
+        The arm.
+
     Returns
     -------
     numpy.ndarray, shape (..., 8, 2)
@@ -158,6 +165,15 @@ def muscle_lengths(q, arm, *, with_derivatives: bool = False):
     With ``with_derivatives=True`` also returns the lever arms h_i = -dd_i/dq
     [m] and dh_i/dq [m/rad] (derivative with respect to the joint the group
     drives: q1 for groups 1-2, q2 for groups 3-4).
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 2)
+        Joint angles [rad], |q| <= 2 pi.
+    arm : ArmParameters
+        The arm.
+    with_derivatives : bool, keyword-only
+        Also return the lever arms and their derivatives.
     """
     qf, lead = _flat_q(q)
     n = qf.shape[0]
@@ -171,7 +187,15 @@ def muscle_lengths(q, arm, *, with_derivatives: bool = False):
 
 @checks_arm
 def lever_arms(q, arm) -> np.ndarray:
-    """Lever arms (e_i x OA_i) . 1_z of the four groups [m], shape (..., 4)."""
+    """Lever arms (e_i x OA_i) . 1_z of the four groups [m], shape (..., 4).
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 2)
+        Joint angles [rad], |q| <= 2 pi.
+    arm : ArmParameters
+        The arm.
+    """
     return muscle_lengths(q, arm, with_derivatives=True)[1]
 
 
@@ -215,13 +239,27 @@ def design_connection_lengths(P, geometry, eps_min: float, eps_max: float) -> np
 
 @checks_arm
 def connection_lengths(arm) -> np.ndarray:
-    """Connection lengths L_conn,i of the arm (Table A.1) [m], shape (4,)."""
+    """Connection lengths L_conn,i of the arm (Table A.1) [m], shape (4,).
+
+    Parameters
+    ----------
+    arm : ArmParameters
+        The arm.
+    """
     return np.array(lay.pack(arm)[lay.LCONN:lay.LCONN + 4])
 
 
 @checks_arm
 def contractions(q, arm) -> np.ndarray:
-    """Contraction of one muscle in each group, eq. (2.12), shape (..., 4) [-]."""
+    """Contraction of one muscle in each group, eq. (2.12), shape (..., 4) [-].
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 2)
+        Joint angles [rad], |q| <= 2 pi.
+    arm : ArmParameters
+        The arm.
+    """
     P = lay.pack(arm)
     d = muscle_lengths(q, arm)
     nm, l0, lc = P[lay.NM:lay.NM + 4], P[lay.L0:lay.L0 + 4], P[lay.LCONN:lay.LCONN + 4]
@@ -237,7 +275,15 @@ def _fk_many(q, P, out, jac):
 
 @checks_arm
 def forward_kinematics(q, arm) -> np.ndarray:
-    """TCP position for configurations ``q`` [rad], shape (..., 2) [m]."""
+    """TCP position for configurations ``q`` [rad], shape (..., 2) [m].
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 2)
+        Joint angles [rad], |q| <= 2 pi.
+    arm : ArmParameters
+        The arm.
+    """
     qf, lead = _flat_q(q)
     out, jac = np.empty((qf.shape[0], 2)), np.empty((qf.shape[0], 2, 2))
     _fk_many(qf, lay.pack(arm), out, jac)
@@ -246,7 +292,15 @@ def forward_kinematics(q, arm) -> np.ndarray:
 
 @checks_arm
 def jacobian(q, arm) -> np.ndarray:
-    """TCP Jacobian dr/dq for configurations ``q``, shape (..., 2, 2) [m/rad]."""
+    """TCP Jacobian dr/dq for configurations ``q``, shape (..., 2, 2) [m/rad].
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 2)
+        Joint angles [rad], |q| <= 2 pi.
+    arm : ArmParameters
+        The arm.
+    """
     qf, lead = _flat_q(q)
     out, jac = np.empty((qf.shape[0], 2)), np.empty((qf.shape[0], 2, 2))
     _fk_many(qf, lay.pack(arm), out, jac)
@@ -287,7 +341,15 @@ def inverse_kinematics(r, arm) -> np.ndarray:
 
 @checks_arm
 def in_working_area(q, arm) -> np.ndarray:
-    """True where q lies inside the working area (2.6)-(2.7)."""
+    """True where q lies inside the working area (2.6)-(2.7).
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 2)
+        Joint angles [rad], |q| <= 2 pi.
+    arm : ArmParameters
+        The arm.
+    """
     q = as_float_array("q", q, shape_tail=(2,))
     g = arm.geometry
     return ((q[..., 0] >= g.q1_min) & (q[..., 0] <= g.q1_max)

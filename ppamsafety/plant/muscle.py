@@ -199,7 +199,17 @@ def muscle_force(group: int, eps, pressure, arm) -> np.ndarray:
 
 @checks_arm
 def force_function(group: int, eps, arm) -> np.ndarray:
-    """Force per unit gauge pressure f(eps) of one muscle [N/Pa = m^2]."""
+    """Force per unit gauge pressure f(eps) of one muscle [N/Pa = m^2].
+
+    Parameters
+    ----------
+    group : int
+        Muscle group 1..4.
+    eps : array_like
+        Contraction [-].
+    arm : ArmParameters
+        The arm.
+    """
     return _evaluate(0, group, eps, arm)
 
 
@@ -223,12 +233,32 @@ def force_polynomial(group: int, eps, arm) -> np.ndarray:
 
 @checks_arm
 def muscle_volume_of(group: int, eps, arm) -> np.ndarray:
-    """Volume of one muscle of ``group`` at contraction ``eps`` [m^3]."""
+    """Volume of one muscle of ``group`` at contraction ``eps`` [m^3].
+
+    Parameters
+    ----------
+    group : int
+        Muscle group 1..4.
+    eps : array_like
+        Contraction [-].
+    arm : ArmParameters
+        The arm.
+    """
     return _evaluate(2, group, eps, arm)
 
 
 @checks_arm
 def group_volume(group: int, eps, arm) -> np.ndarray:
-    """Volume of the whole group (n_m muscles) [m^3]."""
+    """Volume of the whole group (n_m muscles) [m^3].
+
+    Parameters
+    ----------
+    group : int
+        Muscle group 1..4.
+    eps : array_like
+        Contraction [-].
+    arm : ArmParameters
+        The arm.
+    """
     n = arm.muscles.groups[check_int("group", group, 1, 4) - 1].n_muscles
     return n * muscle_volume_of(group, eps, arm)

@@ -141,6 +141,15 @@ def gravity_compensation(q, arm, *, params=None) -> np.ndarray:
     ``arm.plant_base`` for an exact compensation of the nominal plant links
     (without the payload of ``arm.effects``; :func:`static_pressures`
     compensates the plant truth including it).
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 2)
+        Joint angles [rad], |q| <= 2 pi.
+    arm : ArmParameters
+        The arm.
+    params : BaseParameters, optional
+        Rigid-body parameters the compensation believes in.
     """
     q = angles("q", q)
     return _gravity_compensation_row(q, lay.pack(arm, arm.model_gravity if params is None
@@ -157,7 +166,17 @@ def _gravity_compensation_row(q, Pc) -> np.ndarray:
 
 @checks_arm
 def delta_p_pressures(dp, arm, *, clip: bool = True) -> np.ndarray:
-    """Desired pressures [p_m1 + dp1, p_m1 - dp1, p_m2 + dp2, p_m2 - dp2] [Pa] (3.7)."""
+    """Desired pressures [p_m1 + dp1, p_m1 - dp1, p_m2 + dp2, p_m2 - dp2] [Pa] (3.7).
+
+    Parameters
+    ----------
+    dp : array_like, shape (..., 2)
+        Pressure differences per joint [Pa].
+    arm : ArmParameters
+        The arm (mean pressures, p_max).
+    clip : bool, keyword-only
+        Clip to [0, p_max].
+    """
     dp = check_pressures("dp", dp, tail=2)
     pm = arm.pneumatics.p_mean
     p = np.stack([pm[0] + dp[..., 0], pm[0] - dp[..., 0], pm[1] + dp[..., 1],
@@ -167,7 +186,15 @@ def delta_p_pressures(dp, arm, *, clip: bool = True) -> np.ndarray:
 
 @checks_arm
 def valve_pressure(set_values, arm) -> np.ndarray:
-    """Static delivered pressure p = v1 + v2 p_s (3.12) [Pa], shape (..., 4)."""
+    """Static delivered pressure p = v1 + v2 p_s (3.12) [Pa], shape (..., 4).
+
+    Parameters
+    ----------
+    set_values : array_like, shape (..., 4)
+        Valve set values [Pa].
+    arm : ArmParameters
+        The arm (valve characteristics).
+    """
     u = check_pressures("set_values", set_values)
     v1 = np.array([v.v1 for v in arm.valves.valves])
     v2 = np.array([v.v2 for v in arm.valves.valves])
@@ -176,7 +203,15 @@ def valve_pressure(set_values, arm) -> np.ndarray:
 
 @checks_arm
 def valve_set_values(pressures, arm) -> np.ndarray:
-    """Set values that deliver ``pressures`` by inverting (3.12), clipped to [0, p_max] [Pa]."""
+    """Set values that deliver ``pressures`` by inverting (3.12), clipped to [0, p_max] [Pa].
+
+    Parameters
+    ----------
+    pressures : array_like, shape (..., 4)
+        Desired gauge pressures [Pa].
+    arm : ArmParameters
+        The arm (valve characteristics).
+    """
     p = check_pressures("pressures", pressures)
     v1 = np.array([v.v1 for v in arm.valves.valves])
     v2 = np.array([v.v2 for v in arm.valves.valves])
@@ -191,6 +226,15 @@ def static_pressures(q, arm, *, params=None) -> np.ndarray:
     ``layout.pack(arm)``, including the payload of ``arm.effects``, so the
     result is a true equilibrium of the simulated arm).  Not clipped, so that
     an infeasible configuration shows up as a pressure outside [0, p_max].
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 2)
+        Joint angles [rad], |q| <= 2 pi.
+    arm : ArmParameters
+        The arm.
+    params : BaseParameters, optional
+        Rigid-body parameters (default: the plant truth).
     """
     if params is None:
         q = angles("q", q)
@@ -208,6 +252,15 @@ def calibrate_mean_pressures(arm, *, q=(50.0 * DEG, -80.0 * DEG),
     Solves K_j(q, p(p_m)) = target_j for p_m,j, with p the static
     gravity-compensation pressures of the plant at ``q`` (thesis §6.3.3:
     K1 = 43, K2 = 27 Nm/rad at the step-response impact instant).
+
+    Parameters
+    ----------
+    arm : ArmParameters
+        The arm.
+    q : pair of float, keyword-only
+        Configuration [rad] (default 50 deg, -80 deg).
+    target_stiffness : pair of float, keyword-only
+        Target joint stiffnesses [N m/rad], each in (0, 1e4].
 
     Returns
     -------

@@ -73,6 +73,15 @@ def torque_functions(q, arm, *, with_derivative: bool = False):
 
     Multiply by 1e5 for the thesis' Nm/bar (fig. 2.11).  With
     ``with_derivative=True`` also returns d m_tau,i/dq along the driven joint.
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 2)
+        Joint angles [rad], |q| <= 2 pi.
+    arm : ArmParameters
+        The arm.
+    with_derivative : bool, keyword-only
+        Also return d m_tau,i/dq [N m/(Pa rad)].
     """
     mt, dmt, _ = _eval(q, lay.pack(arm))
     return (mt, dmt) if with_derivative else mt
@@ -80,13 +89,31 @@ def torque_functions(q, arm, *, with_derivative: bool = False):
 
 @checks_arm
 def group_volumes(q, arm) -> np.ndarray:
-    """Volumes of the four muscle groups at configuration ``q`` [m^3], shape (..., 4)."""
+    """Volumes of the four muscle groups at configuration ``q`` [m^3], shape (..., 4).
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 2)
+        Joint angles [rad], |q| <= 2 pi.
+    arm : ArmParameters
+        The arm.
+    """
     return _eval(q, lay.pack(arm))[2]
 
 
 @checks_arm
 def joint_torques(q, pressures, arm) -> np.ndarray:
-    """Actuator torques (2.17) [N m] for gauge pressures ``pressures`` [Pa] (..., 4)."""
+    """Actuator torques (2.17) [N m] for gauge pressures ``pressures`` [Pa] (..., 4).
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 2)
+        Joint angles [rad], |q| <= 2 pi.
+    pressures : array_like, shape (..., 4)
+        Gauge pressures [Pa] in [-1 atm, 100 bar].
+    arm : ArmParameters
+        The arm.
+    """
     p = check_pressures("pressures", pressures)
     mt = torque_functions(q, arm)
     tau = mt * p
