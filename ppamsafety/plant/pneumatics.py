@@ -20,8 +20,9 @@ from __future__ import annotations
 import numpy as np
 from .._jit import kernel, leaf
 
-from .._validation import as_float_array, check_range
-from ._checks import accelerations, angles, check_pressures, checks_arm, speeds, torques  # noqa: F401
+from .._validation import as_float_array, check_range, check_range_array
+from ._checks import (PRESSURE_MAX, accelerations, angles, check_pressures,  # noqa: F401
+                      checks_arm, speeds, torques)
 from ..units import DEG
 from . import layout as lay
 from .dynamics import gravity_torque
@@ -177,7 +178,8 @@ def delta_p_pressures(dp, arm, *, clip: bool = True) -> np.ndarray:
     clip : bool, keyword-only
         Clip to [0, p_max].
     """
-    dp = check_pressures("dp", dp, tail=2)
+    dp = check_range_array("dp", as_float_array("dp", dp, shape_tail=(2,)), -PRESSURE_MAX,
+                           PRESSURE_MAX, unit="Pa")
     pm = arm.pneumatics.p_mean
     p = np.stack([pm[0] + dp[..., 0], pm[0] - dp[..., 0], pm[1] + dp[..., 1],
                   pm[1] - dp[..., 1]], axis=-1)
