@@ -207,7 +207,13 @@ def initial_sensor_state(q0) -> np.ndarray:
 
 @leaf
 def sensor_reset(st):
-    """Reset the sensor state ``st`` in place: no pulses seen (see :func:`initial_sensor_state`)."""
+    """Reset the sensor state ``st`` in place: no pulses seen (see :func:`initial_sensor_state`).
+
+    Parameters
+    ----------
+    st : numpy.ndarray
+        Sensor state (layout ``SENSOR_STATE``), overwritten.
+    """
     st[:] = 0.0
     for j in range(2):
         st[S_TLAST + j] = T_NEVER
