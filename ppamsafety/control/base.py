@@ -35,7 +35,10 @@ from enum import IntEnum
 
 import numpy as np
 
-from .._validation import as_float_array, check_range
+import numbers
+
+from .._validation import (InvalidTypeError, as_float_array, describe, check_finite_result, check_instance, check_range,
+                           check_range_array, check_shape, check_vector)
 from ..layouts import Layout
 
 
@@ -72,14 +75,61 @@ R_Y = _REF_COLUMNS.index("y_d")           #: y_d [m]
 R_XD = _REF_COLUMNS.index("xd_d")         #: xd_d [m/s]
 R_YD = _REF_COLUMNS.index("yd_d")         #: yd_d [m/s]
 
+#: Largest |angle| accepted by :meth:`Controller.step` [rad] (one turn: the joints of the
+#: arm cannot turn further, §2.2).
+ANGLE_MAX = 2 * np.pi
+#: Largest |joint velocity| accepted by :meth:`Controller.step` [rad/s]: the divergence
+#: threshold of the closed loop (:data:`ppamsafety.experiments.closed_loop.DIVERGENCE_VELOCITY`).
+VELOCITY_MAX = 1.0e3
+#: Gauge pressures accepted by :meth:`Controller.step`: [-P_ATM_MAX, PRESSURE_MAX] [Pa]
+#: (no gauge pressure below vacuum; 100 bar is far above any PPAM supply).
+P_ATM_MAX = 1.01325e5
+PRESSURE_MAX = 1.0e7
+#: Largest |entry| of a reference row accepted by :meth:`Controller.step` (SI units).
+REF_MAX = 1.0e9
+
 #: An empty layout, for a controller without state or internals.
 EMPTY = Layout("empty", [], register=False)
 
 
-def pair(name: str, value, *, lo: float = 0.0, hi: float = np.inf, unit: str = "") -> tuple:
-    """A per-joint value pair; a scalar is used for both joints."""
-    v = np.broadcast_to(np.asarray(value, dtype=float), (2,))
-    return tuple(check_range(f"{name}[{j}]", v[j], lo, hi, unit=unit) for j in range(2))
+def pair(name: str, value, *, lo: float = 0.0, hi: float = np.inf, unit: str = "",
+         lo_open: bool = False) -> tuple:
+    """A per-joint value pair; a scalar is used for both joints.
+
+    Parameters
+    ----------
+    name : str
+        Argument name for error messages (entries are named ``name[j]``).
+    value : float or sequence of 2 float
+        One value for both joints, or one per joint.
+    lo, hi : float
+        Allowed interval ``[lo, hi]`` (``(lo, hi]`` with ``lo_open``); inf
+        and NaN are always refused.
+    unit : str
+        Unit for the messages.
+    lo_open : bool
+        Exclude ``lo`` itself.
+
+    Returns
+    -------
+    tuple of 2 float
+        The values per joint.
+
+    Raises
+    ------
+    TypeError
+        For a value that is neither a real number nor a sequence of two.
+    ValueError
+        For a sequence of another length or an entry outside the interval.
+    """
+    if isinstance(value, numbers.Real) or (isinstance(value, np.ndarray) and value.ndim == 0):
+        v = check_range(name, value, lo, hi, lo_open=lo_open, unit=unit)
+        return (v, v)
+    if not isinstance(value, (list, tuple, np.ndarray)):
+        u = f" [{unit}]" if unit else ""
+        raise InvalidTypeError(f"{name} must be a real number or a pair of real numbers (one "
+                               f"per joint){u}, got {describe(value)}")
+    return check_vector(name, value, 2, lo, hi, lo_open=lo_open, unit=unit)
 
 
 class Controller:
@@ -110,7 +160,19 @@ class Controller:
         raise NotImplementedError
 
     def model_row(self, arm) -> np.ndarray:
-        """Packed arm parameters the controller believes in (its model)."""
+        """Packed arm parameters the controller believes in (its model).
+
+        Parameters
+        ----------
+        arm : ArmParameters
+            The arm whose controller view (:func:`~ppamsafety.plant.layout.controller_view`)
+            is packed.
+
+        Returns
+        -------
+        numpy.ndarray
+            The model row (layout ``PLANT``).
+        """
         from ..plant.layout import controller_view
         return controller_view(arm)
 
@@ -149,25 +211,46 @@ class Controller:
         ref : array_like, shape (12,)
             Reference row (see module docstring).
         dt : float
-            Control period [s].
+            Control period [s], in [1e-6, 1] s.
         f_est : array_like, optional
             The loop's force-estimator internals row
             (:data:`~ppamsafety.control.estimation.ESTIMATOR_INTERNALS`, as
             the runner passes it); read only by controllers with
             ``needs_estimator`` (admittance).  Default zeros.
+
+        Returns
+        -------
+        numpy.ndarray, shape (2,)
+            Delta p per joint [Pa].
+
+        Raises
+        ------
+        TypeError, ValueError
+            For an argument of the wrong type, shape, a non-finite value or
+            a ``dt`` out of range (the message names the argument).
         """
+        from ..params.arm import ArmParameters
         from .dispatch import controller_step
         from .estimation import ESTIMATOR_INTERNALS
 
-        check_range("dt", dt, 1e-6, 1.0, unit="s")
-        qm = as_float_array("q_meas", q_meas, shape_tail=(2,)).reshape(2)
-        qdm = as_float_array("qd_meas", qd_meas, shape_tail=(2,)).reshape(2)
-        pm = as_float_array("p_meas", p_meas, shape_tail=(4,)).reshape(4)
-        r = as_float_array("ref", ref, shape_tail=(NREF,)).reshape(NREF)
+        check_instance("arm", arm, ArmParameters)
+        dt = check_range("dt", dt, 1e-6, 1.0, unit="s")
+        qm = check_range_array("q_meas", check_shape(
+            "q_meas", as_float_array("q_meas", q_meas), (2,)), -ANGLE_MAX, ANGLE_MAX, unit="rad")
+        qdm = check_range_array("qd_meas", check_shape(
+            "qd_meas", as_float_array("qd_meas", qd_meas), (2,)), -VELOCITY_MAX, VELOCITY_MAX,
+            unit="rad/s")
+        pm = check_range_array("p_meas", check_shape(
+            "p_meas", as_float_array("p_meas", p_meas), (4,)), -P_ATM_MAX, PRESSURE_MAX, unit="Pa")
+        r = check_shape("ref", as_float_array("ref", ref), (NREF,))
+        check_range_array("ref", r[R_Q:R_Q + 2], -ANGLE_MAX, ANGLE_MAX, unit="rad")
+        check_range_array("ref", r, -REF_MAX, REF_MAX)
         fe = (np.zeros(ESTIMATOR_INTERNALS.size) if f_est is None else as_float_array(
             "f_est", f_est, shape_tail=(ESTIMATOR_INTERNALS.size,)).reshape(-1))
         out = np.zeros(2)
         controller_step(int(self.kind), self.pack(), self.state, self.model_row(arm), self._k,
                         dt, qm, qdm, pm, r, fe, out, self.internals, np.zeros(self.SCRATCH))
         self._k += 1
-        return out
+        return check_finite_result(f"{type(self).__name__}.step output Delta p", out,
+                                   f"q_meas = {qm.tolist()}, qd_meas = {qdm.tolist()}, "
+                                   f"p_meas = {pm.tolist()}")

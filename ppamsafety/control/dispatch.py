@@ -34,7 +34,13 @@ NSCRATCH = max(c.SCRATCH for c in CONTROLLER_CLASSES.values())
 
 
 def declared_sizes(kind) -> tuple:
-    """(parameter, state, internals, scratch) sizes declared by controller ``kind``."""
+    """(parameter, state, internals, scratch) sizes declared by controller ``kind``.
+
+    Parameters
+    ----------
+    kind : ControllerKind or int
+        The controller kind.
+    """
     c = CONTROLLER_CLASSES[ControllerKind(kind)]
     return c.PARAMS.size, c.STATE.size, c.INTERNALS.size, c.SCRATCH
 

@@ -35,6 +35,7 @@ from enum import IntEnum
 import numpy as np
 
 from .._jit import leaf
+from .._validation import check_choice
 from ..layouts import Field, Layout, check_flag
 from ..plant.pneumatics import gravity_compensation_dp
 from .base import KIND_GC, R_Q, Controller
@@ -102,6 +103,16 @@ def gc_mode(value, allowed=("off", "measured", "desired"), name: str = "gravity_
         Names of the modes the caller supports.
     name : str
         Argument name for the error message.
+
+    Returns
+    -------
+    GCMode
+        The mode.
+
+    Raises
+    ------
+    ValueError
+        For a mode that is not one of ``allowed`` (naming ``name``).
     """
     allowed_codes = {int(GCMode[a.upper()]) for a in allowed}
     try:
@@ -138,9 +149,7 @@ class GravityCompensation(Controller):
 
     def __init__(self, *, at: str = "desired"):
         super().__init__()
-        if at not in ("desired", "measured"):
-            raise ValueError(f"GravityCompensation.at = {at!r} is not 'desired' or 'measured'")
-        self.at = at
+        self.at = check_choice("GravityCompensation.at", at, ("desired", "measured"))
 
     @property
     def gc(self) -> GCMode:

@@ -29,6 +29,37 @@ from .gravity import GC_SCRATCH, add_gravity_compensation, gc_mode
 TABLE_5_1_PID = {"kp": (2.0, 1.5), "ki": (2.0, 2.0), "kd": (0.1, 0.1)}
 
 
+#: Largest gain accepted by PID and joint PSMC [Pa/rad, Pa/(rad s), Pa s/rad]: 10^4 bar/rad,
+#: about 5000 times the gains of Table 5.1 (larger gains only amplify sensor noise and
+#: overflow the pressure command).
+GAIN_MAX = 1.0e9
+
+
+def check_position_feedback(owner: str, kp, ki, kd) -> None:
+    """Refuse gains that leave a joint without position feedback.
+
+    Parameters
+    ----------
+    owner : str
+        Controller name for the message (``"PID"``, ``"JointPSMC"``).
+    kp, ki, kd : pair of float
+        Validated non-negative gains per joint.
+
+    Raises
+    ------
+    ValueError
+        If ``kp[j] == ki[j] == 0`` for a joint ``j`` (only the derivative
+        term, or nothing, acts: no restoring action towards q_d).
+    """
+    for j in range(2):
+        if kp[j] == 0.0 and ki[j] == 0.0:
+            what = "no feedback at all" if kd[j] == 0.0 else "only damping (Kd)"
+            raise ValueError(
+                f"{owner}.kp[{j}] = 0 and {owner}.ki[{j}] = 0: joint {j + 1} has no position "
+                f"feedback ({what}; Kd = {kd[j]:g}), so nothing pulls it towards q_d; give "
+                f"Kp > 0 or Ki > 0 (Table 5.1: Kp = 2 bar/rad = 2e5 Pa/rad)")
+
+
 class PIDDerivative(IntEnum):
     """Source of the PID derivative term."""
 
@@ -60,7 +91,29 @@ I_PID, I_INT = PID_INTERNALS.offsets("pid", "integral")
 
 @leaf
 def pid_step(C, S, Pm, dt, qm, qdm, ref, dp, internals, scratch):
-    """One PID update (C: ``PID_PARAMS``, S: ``PID_STATE``, internals: ``PID_INTERNALS``)."""
+    """One PID update (compiled; arguments are not checked).
+
+    Parameters
+    ----------
+    C : numpy.ndarray
+        Parameter row (layout ``PID_PARAMS``).
+    S : numpy.ndarray
+        State (layout ``PID_STATE``), updated in place.
+    Pm : numpy.ndarray
+        Controller's model row (layout ``PLANT``).
+    dt : float
+        Control period [s].
+    qm, qdm : numpy.ndarray, shape (2,)
+        Measured angles [rad] and velocities [rad/s].
+    ref : numpy.ndarray, shape (12,)
+        Reference row.
+    dp : numpy.ndarray, shape (2,)
+        Output Delta p [Pa], written.
+    internals : numpy.ndarray
+        Logged internals (layout ``PID_INTERNALS``), written.
+    scratch : numpy.ndarray
+        Work memory (``GC_SCRATCH``).
+    """
     difference = int(C[P_DERIV]) == PIDDerivative.DIFFERENCE
     for j in range(2):
         e = ref[R_Q + j] - qm[j]
@@ -82,7 +135,10 @@ class PID(Controller):
     Parameters
     ----------
     kp, ki, kd : float or pair of float, keyword-only
-        Gains per joint in Pa/rad, Pa/(rad s), Pa s/rad (default Table 5.1 (a)).
+        Gains per joint in Pa/rad, Pa/(rad s), Pa s/rad (default Table 5.1
+        (a)), each in [0, :data:`GAIN_MAX`].  Kp and Ki must not both be
+        zero on a joint: that joint would have no position feedback (only
+        damping), so gravity and friction would let it drift.
     derivative : {"velocity", "difference"}
         Derivative from the measured velocity or from the error difference
         (:class:`PIDDerivative`).
@@ -104,11 +160,13 @@ class PID(Controller):
                  gravity_compensation="desired"):
         super().__init__()
         g = TABLE_5_1_PID
-        self.kp = pair("PID.kp", np.asarray(g["kp"]) * BAR if kp is None else kp, unit="Pa/rad")
+        self.kp = pair("PID.kp", np.asarray(g["kp"]) * BAR if kp is None else kp,
+                       hi=GAIN_MAX, unit="Pa/rad")
         self.ki = pair("PID.ki", np.asarray(g["ki"]) * BAR if ki is None else ki,
-                       unit="Pa/(rad s)")
+                       hi=GAIN_MAX, unit="Pa/(rad s)")
         self.kd = pair("PID.kd", np.asarray(g["kd"]) * BAR if kd is None else kd,
-                       unit="Pa s/rad")
+                       hi=GAIN_MAX, unit="Pa s/rad")
+        check_position_feedback("PID", self.kp, self.ki, self.kd)
         code = check_flag(PIDDerivative, derivative, "PID.derivative")
         self.derivative = PIDDerivative(code).name.lower()
         self.gravity_compensation = gravity_compensation
@@ -121,5 +179,11 @@ class PID(Controller):
             derivative=check_flag(PIDDerivative, self.derivative, "PID.derivative"))
 
     def describe(self) -> dict:
-        """Parameters as a flat dict for result tables."""
+        """Parameters as a flat dict for result tables.
+
+        Returns
+        -------
+        dict
+            ``controller``, ``Ki_bar_per_rad_s`` (joint 1), ``lambda_s`` (NaN).
+        """
         return {"controller": self.name, "Ki_bar_per_rad_s": self.ki[0] / BAR, "lambda_s": np.nan}

@@ -35,7 +35,50 @@ from ..units import BAR
 from .base import (KIND_PSMC_JOINT, KIND_PSMC_TASK, R_Q, R_QD, R_X, R_XD, R_Y, R_YD, Controller,
                    pair)
 from .gravity import GC_SCRATCH, add_gravity_compensation, gc_mode
-from .pid import TABLE_5_1_PID
+from .pid import GAIN_MAX, TABLE_5_1_PID, check_position_feedback
+
+#: Largest sliding-surface time constant lambda accepted [s] (Table 5.1: 0.4-1.5 s; a
+#: lambda of minutes would make the proxy's recovery slower than any experiment).
+LAMBDA_MAX = 100.0
+#: Largest task-space virtual-coupling gain accepted [N/m, N/(m s), N s/m] (Table 5.1 (b):
+#: 10-200).
+TASK_GAIN_MAX = 1.0e7
+
+
+def check_proxy_gains(owner: str, kp: float, ki: float, kd: float, lam: float,
+                      suffix: str = "") -> None:
+    """Refuse virtual-coupling gains for which the proxy update (5.27)-(5.29) fails.
+
+    With non-negative gains, A = Ki T^2 + Kp T + Kd of (5.27)-(5.29) is zero
+    for every control period T only if Kp = Ki = Kd = 0: (5.29) divides by
+    A (and (5.32) by A), so the proxy state becomes NaN.  With Kp = Kd = 0
+    and lambda = 0 the coupling is a pure integrator of the position error,
+    which with the arm's inertia has no damping and oscillates with growing
+    amplitude; refused too.
+
+    Parameters
+    ----------
+    owner : str
+        Controller name for the message.
+    kp, ki, kd, lam : float
+        Validated non-negative gains and lambda [s] of one proxy.
+    suffix : str
+        Index appended to the names in the message (``"[0]"`` for joint 1).
+
+    Raises
+    ------
+    ValueError
+        For the gain combinations above.
+    """
+    if kp == 0.0 and ki == 0.0 and kd == 0.0:
+        raise ValueError(
+            f"{owner}.kp{suffix} = {owner}.ki{suffix} = {owner}.kd{suffix} = 0: the proxy update "
+            f"(5.27)-(5.29) divides by A = Ki T^2 + Kp T + Kd = 0; give Kp > 0")
+    if kp == 0.0 and kd == 0.0 and lam == 0.0:
+        raise ValueError(
+            f"{owner}.kp{suffix} = {owner}.kd{suffix} = {owner}.lam{suffix} = 0: the coupling is "
+            f"a pure integrator with no damping, the loop oscillates with growing amplitude; "
+            f"give Kp > 0, Kd > 0 or lam > 0")
 
 #: Table 5.1 (c), joint space: lambda [s], Delta p_lm [bar]; gains as PID.
 TABLE_5_1_JOINT = {"lambda": 0.4, "dp_lm": 0.2}
@@ -191,12 +234,18 @@ class JointPSMC(Controller):
     Parameters
     ----------
     lam : float or pair, keyword-only
-        Sliding-surface time constant lambda [s] (Table 5.1: 0.4).  0 is
-        allowed (then PSMC with a huge limit is a discrete PID).
+        Sliding-surface time constant lambda [s] (Table 5.1: 0.4), in
+        [0, :data:`LAMBDA_MAX`].  0 is allowed (then PSMC with a huge limit
+        is a discrete PID).
     kp, ki, kd : float or pair
-        Virtual-coupling gains [Pa/rad, Pa/(rad s), Pa s/rad] (default as PID).
+        Virtual-coupling gains [Pa/rad, Pa/(rad s), Pa s/rad] (default as
+        PID), each in [0, ``GAIN_MAX``] = [0, 1e9].  Refused per joint:
+        Kp = Ki = 0 (no position feedback), Kp = Ki = Kd = 0 (the proxy
+        update divides by zero, see :func:`check_proxy_gains`), Kp = Kd =
+        lambda = 0 (undamped integrator).
     dp_limit : float or pair
-        Delta p_lm [Pa] (Table 5.1: 0.2 bar).
+        Delta p_lm [Pa] (Table 5.1: 0.2 bar), positive (any finite size:
+        a huge limit turns PSMC into a discrete PID).
     gravity_compensation : {"proxy", "desired", "measured", "off"}
         Where (3.18)-(3.19) is evaluated; default the proxy position (see
         :mod:`ppamsafety.control.gravity`).
@@ -213,18 +262,18 @@ class JointPSMC(Controller):
                  dp_limit=TABLE_5_1_JOINT["dp_lm"] * BAR, gravity_compensation="proxy"):
         super().__init__()
         g = TABLE_5_1_PID
-        self.lam = pair("JointPSMC.lam", lam, unit="s")
+        self.lam = pair("JointPSMC.lam", lam, hi=LAMBDA_MAX, unit="s")
         self.kp = pair("JointPSMC.kp", np.asarray(g["kp"]) * BAR if kp is None else kp,
-                       unit="Pa/rad")
+                       hi=GAIN_MAX, unit="Pa/rad")
         self.ki = pair("JointPSMC.ki", np.asarray(g["ki"]) * BAR if ki is None else ki,
-                       unit="Pa/(rad s)")
+                       hi=GAIN_MAX, unit="Pa/(rad s)")
         self.kd = pair("JointPSMC.kd", np.asarray(g["kd"]) * BAR if kd is None else kd,
-                       unit="Pa s/rad")
-        self.dp_limit = pair("JointPSMC.dp_limit", dp_limit, lo=0.0, unit="Pa")
-        if min(self.dp_limit) <= 0:
-            raise ValueError("JointPSMC.dp_limit must be positive [Pa]")
-        if min(self.kd) == 0 and min(self.lam) == 0 and min(self.kp) == 0:
-            raise ValueError("JointPSMC: Kp, Kd and lambda cannot all be zero")
+                       hi=GAIN_MAX, unit="Pa s/rad")
+        self.dp_limit = pair("JointPSMC.dp_limit", dp_limit, lo=0.0, lo_open=True, unit="Pa")
+        for j in range(2):
+            check_proxy_gains("JointPSMC", self.kp[j], self.ki[j], self.kd[j], self.lam[j],
+                              f"[{j}]")
+        check_position_feedback("JointPSMC", self.kp, self.ki, self.kd)
         self.gravity_compensation = gravity_compensation
         self.gc = gc_mode(gravity_compensation, ("off", "measured", "desired", "proxy"),
                           name=f"{type(self).__name__}.gravity_compensation")
@@ -235,7 +284,13 @@ class JointPSMC(Controller):
                                       dp_limit=self.dp_limit, gc=int(self.gc))
 
     def describe(self) -> dict:
-        """Parameters as a flat dict for result tables."""
+        """Parameters as a flat dict for result tables.
+
+        Returns
+        -------
+        dict
+            ``controller``, ``Ki_bar_per_rad_s`` and ``lambda_s`` of joint 1.
+        """
         return {"controller": self.name, "Ki_bar_per_rad_s": self.ki[0] / BAR,
                 "lambda_s": self.lam[0]}
 
@@ -246,11 +301,13 @@ class TaskPSMC(Controller):
     Parameters
     ----------
     lam : float, keyword-only
-        lambda [s] (Table 5.1: 0.4).
+        lambda [s] (Table 5.1: 0.4), in [0, 100].
     kp, ki, kd : float
-        Virtual coupling [N/m, N/(m s), N s/m] (Table 5.1: 200, 100, 10).
+        Virtual coupling [N/m, N/(m s), N s/m] (Table 5.1: 200, 100, 10),
+        each in [0, 1e7]; the same combinations as for :class:`JointPSMC`
+        are refused (Kp = Ki = 0, Kp = Ki = Kd = 0, Kp = Kd = lambda = 0).
     force_limit : float
-        F [N] (Table 5.1: 15).
+        F [N] (Table 5.1: 15), in (0, 1e7].
     gravity_compensation : {"proxy", "desired", "measured", "off"}
         Where (3.18)-(3.19) is evaluated; default the proxy position (see
         :mod:`ppamsafety.control.gravity`).
@@ -267,11 +324,16 @@ class TaskPSMC(Controller):
                  ki=TABLE_5_1_TASK["ki"], kd=TABLE_5_1_TASK["kd"],
                  force_limit=TABLE_5_1_TASK["F"], gravity_compensation="proxy"):
         super().__init__()
-        self.lam = check_range("TaskPSMC.lam", lam, 0.0, 100.0, unit="s")
-        self.kp = check_range("TaskPSMC.kp", kp, 0.0, 1e7, unit="N/m")
-        self.ki = check_range("TaskPSMC.ki", ki, 0.0, 1e7, unit="N/(m s)")
-        self.kd = check_range("TaskPSMC.kd", kd, 0.0, 1e7, unit="N s/m")
-        self.force_limit = check_range("TaskPSMC.force_limit", force_limit, 0.0, 1e7,
+        self.lam = check_range("TaskPSMC.lam", lam, 0.0, LAMBDA_MAX, unit="s")
+        self.kp = check_range("TaskPSMC.kp", kp, 0.0, TASK_GAIN_MAX, unit="N/m")
+        self.ki = check_range("TaskPSMC.ki", ki, 0.0, TASK_GAIN_MAX, unit="N/(m s)")
+        self.kd = check_range("TaskPSMC.kd", kd, 0.0, TASK_GAIN_MAX, unit="N s/m")
+        check_proxy_gains("TaskPSMC", self.kp, self.ki, self.kd, self.lam)
+        if self.kp == 0.0 and self.ki == 0.0:
+            raise ValueError("TaskPSMC.kp = 0 and TaskPSMC.ki = 0: the TCP has no position "
+                             "feedback, nothing pulls it towards r_d; give Kp > 0 or Ki > 0 "
+                             "(Table 5.1 (b): Kp = 200 N/m)")
+        self.force_limit = check_range("TaskPSMC.force_limit", force_limit, 0.0, TASK_GAIN_MAX,
                                        lo_open=True, unit="N")
         self.gravity_compensation = gravity_compensation
         self.gc = gc_mode(gravity_compensation, ("off", "measured", "desired", "proxy"),
@@ -283,5 +345,11 @@ class TaskPSMC(Controller):
                                      force_limit=self.force_limit, gc=int(self.gc))
 
     def describe(self) -> dict:
-        """Parameters as a flat dict for result tables."""
+        """Parameters as a flat dict for result tables.
+
+        Returns
+        -------
+        dict
+            ``controller``, ``Ki_bar_per_rad_s`` (NaN), ``lambda_s``.
+        """
         return {"controller": self.name, "Ki_bar_per_rad_s": np.nan, "lambda_s": self.lam}

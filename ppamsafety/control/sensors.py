@@ -42,7 +42,7 @@ from enum import IntEnum
 import numpy as np
 
 from .._jit import leaf
-from .._validation import check_int, check_nonnegative, check_positive, check_range
+from .._validation import check_bool, check_int, check_range, check_vector
 from ..layouts import Field, Layout, check_flag
 from ..units import BAR
 
@@ -134,15 +134,15 @@ class SensorConfig:
     noise : bool
         Add zero-mean Gaussian noise with ``noise_variances`` to q and qd.
     seed : int
-        Seed of the noise generator.
+        Seed of the noise generator, in [0, 2^63 - 1].
     resolution : float
-        Encoder resolution [rad] (2 pi / 8000).
+        Encoder resolution [rad] (2 pi / 8000), in (0, pi/2].
     clock_hz : float
-        Timing-board clock [Hz] (2 MHz).
+        Timing-board clock [Hz] (2 MHz), in (0, 1e12].
     counter_bits : int
-        Width of the pulse-interval counter (16).
+        Width of the pulse-interval counter (16), in [4, 32].
     dead_band : float
-        Velocities below this magnitude read zero [rad/s] (0.025).
+        Velocities below this magnitude read zero [rad/s] (0.025), in [0, 1000].
     noise_variances : tuple of 4 float
         Variances of q1, q2 [rad^2] and qd1, qd2 [rad^2/s^2] (Table 3.2).
     encoder_offset : tuple of 2 float
@@ -155,6 +155,11 @@ class SensorConfig:
     pressure_gain : tuple of 4 float
         Sensor fault: gain of the measured gauge pressures [-], in [0.5, 1.5];
         default ones.  Measured pressure = gain p + offset.
+
+    Raises
+    ------
+    TypeError, ValueError
+        For a field of the wrong type or out of range (naming the field).
     """
 
     encoder: bool = True
@@ -171,31 +176,30 @@ class SensorConfig:
     pressure_gain: tuple = (1.0, 1.0, 1.0, 1.0)
 
     def __post_init__(self):
+        def put(name, value):
+            object.__setattr__(self, name, value)
+        put("encoder", check_bool("SensorConfig.encoder", self.encoder))
         code = check_flag(VelocitySource, self.velocity, "SensorConfig.velocity")
-        object.__setattr__(self, "velocity", VelocitySource(code).name.lower())
-        check_int("SensorConfig.seed", self.seed, 0, 2 ** 63 - 1)
-        check_positive("SensorConfig.resolution", self.resolution, unit="rad")
-        check_positive("SensorConfig.clock_hz", self.clock_hz, unit="Hz")
-        check_int("SensorConfig.counter_bits", self.counter_bits, 4, 32)
-        check_nonnegative("SensorConfig.dead_band", self.dead_band, unit="rad/s")
-        if len(self.noise_variances) != 4:
-            raise ValueError("SensorConfig.noise_variances needs 4 values (q1, q2, qd1, qd2)")
-        for i, v in enumerate(self.noise_variances):
-            check_nonnegative(f"SensorConfig.noise_variances[{i}]", v)
+        put("velocity", VelocitySource(code).name.lower())
+        put("noise", check_bool("SensorConfig.noise", self.noise))
+        put("seed", check_int("SensorConfig.seed", self.seed, 0, 2 ** 63 - 1))
+        # at most a quarter turn per encoder step, at most 1 THz clock
+        put("resolution", check_range("SensorConfig.resolution", self.resolution, 0.0,
+                                      math.pi / 2, lo_open=True, unit="rad"))
+        put("clock_hz", check_range("SensorConfig.clock_hz", self.clock_hz, 0.0, 1e12,
+                                    lo_open=True, unit="Hz"))
+        put("counter_bits", check_int("SensorConfig.counter_bits", self.counter_bits, 4, 32))
+        put("dead_band", check_range("SensorConfig.dead_band", self.dead_band, 0.0, 1e3,
+                                     unit="rad/s"))
+        # standard deviations of at most 1 rad and 1000 rad/s
+        put("noise_variances", check_vector("SensorConfig.noise_variances",
+                                            self.noise_variances, 4, 0.0, 1e6))
         for name, n, lo, hi, unit in (
                 ("encoder_offset", 2, -math.pi, math.pi, "rad"),
                 ("pressure_offset", 4, -PRESSURE_OFFSET_MAX, PRESSURE_OFFSET_MAX, "Pa"),
                 ("pressure_gain", 4, PRESSURE_GAIN_RANGE[0], PRESSURE_GAIN_RANGE[1], "")):
-            value = getattr(self, name)
-            if isinstance(value, (str, bytes)) or not hasattr(value, "__len__"):
-                raise TypeError(f"SensorConfig.{name} must be a sequence of {n} numbers, "
-                                f"got {value!r}")
-            if len(value) != n:
-                raise ValueError(f"SensorConfig.{name} must have {n} entries, got "
-                                 f"{len(value)}: {value!r}")
-            object.__setattr__(self, name, tuple(
-                check_range(f"SensorConfig.{name}[{i}]", v, lo, hi, unit=unit)
-                for i, v in enumerate(value)))
+            put(name, check_vector(f"SensorConfig.{name}", getattr(self, name), n, lo, hi,
+                                   unit=unit))
 
     @property
     def faults(self) -> bool:
@@ -228,6 +232,16 @@ class SensorConfig:
         """Noise to add to (q1, q2, qd1, qd2) at each of ``n_steps`` samples, shape (n, 4).
 
         Columns: layout ``SENSOR_NOISE``.
+
+        Parameters
+        ----------
+        n_steps : int
+            Number of samples, in [0, 1e9].
+
+        Returns
+        -------
+        numpy.ndarray, shape (n_steps, 4)
+            Zeros if ``noise`` is off.
         """
         n_steps = check_int("n_steps", n_steps, 0, 10 ** 9)
         if not self.noise:
@@ -240,13 +254,29 @@ def initial_sensor_state(q0) -> np.ndarray:
     """Sensor state (``SENSOR_STATE``) for an arm at rest in ``q0``: no pulses seen yet.
 
     The counts are set by :func:`sensor_init`.
+
+    Parameters
+    ----------
+    q0 : array_like, shape (2,)
+        Initial angles [rad] (unused: the counts are set by :func:`sensor_init`).
+
+    Returns
+    -------
+    numpy.ndarray
+        The empty sensor state.
     """
     return SENSOR_STATE.empty()
 
 
 @leaf
 def sensor_reset(st):
-    """Reset the sensor state ``st`` in place: no pulses seen (see :func:`initial_sensor_state`)."""
+    """Reset the sensor state ``st`` in place: no pulses seen (see :func:`initial_sensor_state`).
+
+    Parameters
+    ----------
+    st : numpy.ndarray
+        Sensor state (layout ``SENSOR_STATE``), overwritten.
+    """
     st[:] = 0.0
     for j in range(2):
         st[S_TLAST + j] = T_NEVER

@@ -33,7 +33,8 @@ from enum import IntEnum
 import numpy as np
 
 from .._jit import leaf
-from .._validation import check_range
+from .._validation import check_instance, check_vector
+from ..params.inertia import LinkInertia
 from ..layouts import Field, Layout, check_flag
 from ..plant import layout as lay
 from ..plant.dynamics import forward_dynamics, mass_matrix_cs
@@ -42,6 +43,14 @@ from .base import KIND_SMC, R_Q, R_QD, R_QDD, R_QDDD, Controller, pair
 
 H_Q = 1e-6      # finite-difference steps [rad], [rad/s]
 H_W = 1e-5
+
+#: Largest pole accepted [1/s] (alpha0 = poles^2; 1e4 1/s is ten times the control rate).
+POLE_MAX = 1.0e4
+#: Largest switching gain K [rad/s^3] and boundary layer Gamma [rad/s^2] accepted.
+SMC_GAIN_MAX = 1.0e9
+#: Shortest model valve time constant accepted [s], as for the valves themselves
+#: (:class:`~ppamsafety.params.valves.Valve`): the 1 kHz controller cannot act faster.
+MODEL_T_MIN = 1.0e-3
 
 
 class SMCCoupling(IntEnum):
@@ -172,15 +181,17 @@ class SlidingModeControl(Controller):
     ----------
     poles : float or pair, keyword-only
         The error dynamics on s = 0 get a double pole at -poles [1/s]:
-        alpha1 = 2 poles, alpha0 = poles^2 (Hurwitz, (4.35)).
+        alpha1 = 2 poles, alpha0 = poles^2 (Hurwitz, (4.35)); in (0, 1e4].
     gain : float or pair
-        Switching gain K [rad/s^3].
+        Switching gain K [rad/s^3], in [0, 1e9].
     boundary_layer : float or pair
-        Boundary-layer width Gamma [rad/s^2] (sgn replaced by sat(s/Gamma)).
+        Boundary-layer width Gamma [rad/s^2] (sgn replaced by sat(s/Gamma)),
+        in (0, 1e9].
     coupling : {"siso", "mimo"}
         Per-link linearisation as in the thesis, or full MIMO.
     model_time_constants : sequence of 4 float, optional
-        Valve time constants the controller assumes [s]; default the arm's.
+        Valve time constants the controller assumes [s], each in
+        [1e-3, 10] s like the valves' own; default the arm's.
     model_links : LinkInertia, optional
         Link parameters of the model; default the plant's (exact model).
 
@@ -208,25 +219,23 @@ class SlidingModeControl(Controller):
     def __init__(self, *, poles=40.0, gain=3000.0, boundary_layer=10.0, coupling: str = "siso",
                  model_time_constants=None, model_links=None):
         super().__init__()
-        p = pair("SlidingModeControl.poles", poles, unit="1/s")
-        if min(p) <= 0:
-            raise ValueError("SlidingModeControl.poles must be positive (Hurwitz) [1/s]")
+        p = pair("SlidingModeControl.poles", poles, lo=0.0, lo_open=True, hi=POLE_MAX,
+                 unit="1/s")
         self.alpha0 = tuple(x * x for x in p)
         self.alpha1 = tuple(2 * x for x in p)
-        self.gain = pair("SlidingModeControl.gain", gain, unit="rad/s^3")
+        self.gain = pair("SlidingModeControl.gain", gain, hi=SMC_GAIN_MAX, unit="rad/s^3")
         self.boundary_layer = pair("SlidingModeControl.boundary_layer", boundary_layer,
-                                   unit="rad/s^2")
-        if min(self.boundary_layer) <= 0:
-            raise ValueError("SlidingModeControl.boundary_layer must be positive [rad/s^2]")
+                                   lo=0.0, lo_open=True, hi=SMC_GAIN_MAX, unit="rad/s^2")
         code = check_flag(SMCCoupling, coupling, "SlidingModeControl.coupling")
         self.coupling = SMCCoupling(code).name.lower()
         if model_time_constants is not None:
-            if len(model_time_constants) != 4:
-                raise ValueError("SlidingModeControl.model_time_constants needs 4 values [s]")
-            model_time_constants = tuple(
-                check_range(f"SlidingModeControl.model_time_constants[{i}]", t, 1e-4, 10.0,
-                            unit="s") for i, t in enumerate(model_time_constants))
+            # as the valves themselves (params.valves): at least 1 ms, at most 10 s
+            model_time_constants = check_vector("SlidingModeControl.model_time_constants",
+                                                model_time_constants, 4, MODEL_T_MIN, 10.0,
+                                                unit="s")
         self.model_time_constants = model_time_constants
+        if model_links is not None:
+            check_instance("SlidingModeControl.model_links", model_links, LinkInertia)
         self.model_links = model_links
 
     def pack(self) -> np.ndarray:
@@ -237,7 +246,19 @@ class SlidingModeControl(Controller):
             coupling=check_flag(SMCCoupling, self.coupling, "SlidingModeControl.coupling"))
 
     def model_row(self, arm) -> np.ndarray:
-        """Packed arm parameters the controller believes in (its model)."""
+        """Packed arm parameters the controller believes in (its model).
+
+        Parameters
+        ----------
+        arm : ArmParameters
+            The plant; its valves get ``model_time_constants`` and its links
+            ``model_links`` where those are set.
+
+        Returns
+        -------
+        numpy.ndarray
+            The model row (layout ``PLANT``).
+        """
         a = arm
         if self.model_time_constants is not None:
             a = a.replace(valves=a.valves.with_time_constants(self.model_time_constants))
@@ -245,6 +266,13 @@ class SlidingModeControl(Controller):
         return lay.pack(a, links.base_parameters(arm.geometry.L1))
 
     def describe(self) -> dict:
-        """Parameters as a flat dict for result tables."""
+        """Parameters as a flat dict for result tables.
+
+        Returns
+        -------
+        dict
+            ``controller``, ``Ki_bar_per_rad_s`` and ``lambda_s`` (NaN),
+            ``boundary_layer`` of joint 1 [rad/s^2].
+        """
         return {"controller": self.name, "Ki_bar_per_rad_s": np.nan, "lambda_s": np.nan,
                 "boundary_layer": self.boundary_layer[0]}

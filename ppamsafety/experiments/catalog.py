@@ -28,6 +28,7 @@ import enum
 import math
 from dataclasses import dataclass
 
+from .._validation import check_instance, check_range, check_str, check_vector
 from ..control import PID, JointPSMC, SensorConfig, TaskPSMC
 from ..control.base import Controller
 from ..units import BAR
@@ -253,18 +254,50 @@ def as_variant(v) -> ControllerVariant:
 
 
 def variant_label(controller: Controller) -> str:
-    """Short label of a controller's variant, e.g. ``"PSMC joint Ki=2 λ=0.4"``."""
+    """Short label of a controller's variant, e.g. ``"PSMC joint Ki=2 λ=0.4"``.
+
+    Parameters
+    ----------
+    controller : Controller
+        The controller.
+    """
     return ControllerVariant.of(controller).label
 
 
 def variant_family(controller: Controller) -> str:
-    """Group of a controller's variant: ``"PID"``, ``"PSMC joint Ki=2"``, ``"PSMC task"``, ..."""
+    """Group of a controller's variant: ``"PID"``, ``"PSMC joint Ki=2"``, ``"PSMC task"``, ...
+
+    Parameters
+    ----------
+    controller : Controller
+        The controller.
+    """
     return ControllerVariant.of(controller).group
 
 
 def variant_lambda(controller: Controller) -> float:
-    """lambda [s] of a PSMC variant (joint 1 for joint space), NaN otherwise."""
+    """lambda [s] of a PSMC variant (joint 1 for joint space), NaN otherwise.
+
+    Parameters
+    ----------
+    controller : Controller
+        The controller.
+    """
     return ControllerVariant.of(controller).lambda_s
+
+
+def _check_name(name) -> str:
+    """A thesis experiment name (str, one of :data:`EXPERIMENTS`)."""
+    check_str("name", name)
+    if name not in EXPERIMENTS:
+        raise ValueError(f"unknown thesis experiment name = {name!r}; choose from "
+                         f"{list(EXPERIMENTS)}")
+    return name
+
+
+def _check_arm(arm):
+    from ..params.arm import ArmParameters
+    return check_instance("arm", arm, ArmParameters)
 
 
 def thesis_variants(*, lambdas=THESIS_LAMBDAS) -> list:
@@ -284,9 +317,9 @@ def thesis_variants(*, lambdas=THESIS_LAMBDAS) -> list:
         Gains in SI units (Pa/rad, Pa/(rad s), Pa s/rad; N/m, ...), Table 5.1
         otherwise; gravity compensation at the defaults of the controllers.
     """
-    lams = [float(x) for x in lambdas]
+    lams = list(check_vector("lambdas", lambdas, None, 0.0, 100.0, unit="s"))
     if not lams:
-        raise ValueError("thesis_variants: lambdas must not be empty")
+        raise ValueError("lambdas must not be empty")
     out = [PID()]
     for ki in THESIS_KI_BAR:
         out += [JointPSMC(lam=lam, ki=ki * BAR) for lam in lams]
@@ -300,7 +333,9 @@ def thesis_reference(arm, name: str, *, duration: float | None = None, dt: float
     Parameters
     ----------
     arm : ArmParameters
+        The arm.
     name : {"step", "switch", "circle5", "circle10", "circle20"}
+        The experiment.
     duration : float, optional
         Length [s]; default :data:`DEFAULT_DURATIONS`.  The step needs more
         than 2 s, the switch more than 7.5 s (the discontinuity must occur).
@@ -311,12 +346,14 @@ def thesis_reference(arm, name: str, *, duration: float | None = None, dt: float
     -------
     Reference
     """
-    if name not in EXPERIMENTS:
-        raise ValueError(f"unknown thesis experiment {name!r}; choose from {list(EXPERIMENTS)}")
-    d = DEFAULT_DURATIONS[name] if duration is None else float(duration)
+    _check_arm(arm)
+    name = _check_name(name)
+    d = DEFAULT_DURATIONS[name] if duration is None else check_range(
+        "duration", duration, 0.0, 1e5, lo_open=True, unit="s")
     if name == "step":
         if d <= STEP_TIMES[0]:
-            raise ValueError(f"step experiment: duration = {d:g} s must exceed {STEP_TIMES[0]} s")
+            raise ValueError(f"step experiment: duration = {d:g} s must exceed the up-step at "
+                             f"{STEP_TIMES[0]} s")
         return tr.step(arm, t_up=STEP_TIMES[0], t_down=STEP_TIMES[1], duration=d, dt=dt)
     if name == "switch":
         if d <= SWITCH_TIME:
@@ -335,6 +372,7 @@ def run_thesis_experiment(arm, name: str, variants=None, *, sensors: SensorConfi
     arm : ArmParameters
         The plant (and the controllers' model).
     name : {"step", "switch", "circle5", "circle10", "circle20"}
+        The experiment.
     variants : sequence of ControllerVariant, optional
         Default :func:`thesis_variants`.  ``(label, Controller)`` pairs are
         accepted too (fields read from the controller, see
@@ -356,10 +394,21 @@ def run_thesis_experiment(arm, name: str, variants=None, *, sensors: SensorConfi
         (the variant's :attr:`~ControllerVariant.group`, e.g.
         ``"PSMC joint Ki=2"``), ``controller_family`` (its family, e.g.
         ``"PSMC joint"``), ``ki_bar`` [bar/(rad s)] and ``lambda_s`` [s].
+        A diverged run has ``diverged`` set with ``divergence_reason`` (and
+        a ``UserWarning`` names it).
     """
+    _check_arm(arm)
+    name = _check_name(name)
+    if variants is not None and (isinstance(variants, (str, bytes, ControllerVariant, Controller))
+                                 or not hasattr(variants, "__iter__")):
+        raise TypeError(f"variants must be a sequence of ControllerVariant, got "
+                        f"{type(variants).__name__}")
     variants = thesis_variants() if variants is None else [as_variant(v) for v in variants]
+    if not variants:
+        raise ValueError("variants must not be empty")
+    sens = SensorConfig() if sensors is None else check_instance("sensors", sensors,
+                                                                 SensorConfig)
     ref = thesis_reference(arm, name, duration=duration, dt=dt)
-    sens = SensorConfig() if sensors is None else sensors
     cases = [ExperimentCase(arm, v.controller, ref, sensors=sens, name=f"{name}: {v.label}",
                             meta={"label": v.label, "experiment": name, "family": v.group,
                                   "lambda_s": v.lambda_s, "ki_bar": v.ki_bar,

@@ -13,6 +13,7 @@ per-step Python overhead.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -83,6 +84,12 @@ _NES, _NESCR = ESTIMATOR_STATE.size, ESTIMATOR_SCRATCH.size
 NILOG = INTERACTION_LOG.size
 _EXT_NAMES = tuple(INTERACTION_LOG.field("f_ext").column_names())
 _EST_NAMES = tuple(ESTIMATOR_INTERNALS.columns())
+
+#: Joint speed at which the closed loop counts as diverged [rad/s]: ``_run_batch`` stops a run
+#: when |qd1| or |qd2| reaches it (the literal ``1e3`` in the kernel) or an angle becomes
+#: non-finite.  The real arm's joints never exceed a few rad/s (Table 6.1 peaks < 5 rad/s), so
+#: 1000 rad/s is far beyond anything physical but still well inside float range.
+DIVERGENCE_VELOCITY = 1.0e3
 
 #: Columns of the runner's per-case table of declared controller sizes (``_controller_rows``).
 Z_PARAMS, Z_STATE, Z_INTERNALS, Z_SCRATCH = 0, 1, 2, 3
@@ -201,7 +208,10 @@ class ExperimentResult:
         Logged signals (columns :data:`LOG_COLUMNS`; internals named per
         controller kind in :meth:`to_pandas`).
     diverged : bool
-        True if the state blew up (the log is NaN from then on).
+        True if the closed loop diverged: the runner stopped because an
+        angle became non-finite or a joint speed reached
+        :data:`DIVERGENCE_VELOCITY` (1000 rad/s), or a logged signal is
+        non-finite.  The log is NaN from then on.
     meta : dict
         Free-form metadata of the case; runs of
         :func:`~.catalog.run_thesis_experiment` carry ``variant`` (the
@@ -214,6 +224,12 @@ class ExperimentResult:
     interaction_names : tuple of str
         The columns of ``interaction`` that were written (readable by
         :meth:`signal`).
+    divergence_reason : str
+        Why the run was flagged as diverged ("" if it was not), e.g.
+        ``"joint speed |qd1| exceeded 1000 rad/s ..."``.
+    diverged_at : float
+        Time [s] of the first sample that is no longer valid (NaN if the run
+        did not diverge).
     """
 
     name: str
@@ -224,6 +240,8 @@ class ExperimentResult:
     meta: dict = field(default_factory=dict)
     interaction: np.ndarray | None = None
     interaction_names: tuple = ()
+    divergence_reason: str = ""
+    diverged_at: float = np.nan
 
     @property
     def estimator_log(self) -> np.ndarray | None:
@@ -256,6 +274,21 @@ class ExperimentResult:
         and, for runs with an external input or a force estimator,
         ``Fx_ext``, ``Fy_ext`` [N] and the estimates ``Fx_rls``, ``Fy_rls``,
         ``Fx_mo``, ``Fy_mo`` [N], ``r1``, ``r2``, ``yf1``, ``yf2`` [N m].
+
+
+        Parameters
+        ----------
+        name : str
+            Signal name (see :meth:`signal_names`).
+
+        Returns
+        -------
+        numpy.ndarray, shape (n,)
+
+        Raises
+        ------
+        KeyError
+            For an unknown name (the message lists the allowed ones).
         """
         names = self._log_names()
         if isinstance(name, str) and name in names and name not in _UNNAMED:
@@ -267,7 +300,19 @@ class ExperimentResult:
         raise KeyError(f"unknown signal {name!r}; choose from {self.signal_names()}")
 
     def signals(self, *names: str) -> np.ndarray:
-        """Several signals by name as columns, shape (n, len(names))."""
+        """Several signals by name as columns, shape (n, len(names)).
+
+        Parameters
+        ----------
+        *names : str
+            Signal names (see :meth:`signal`); at least one.
+
+        Returns
+        -------
+        numpy.ndarray, shape (n, len(names))
+        """
+        if not names:
+            raise ValueError("signals: give at least one signal name")
         return np.stack([self.signal(n) for n in names], axis=1)
 
     def to_pandas(self) -> pd.DataFrame:
@@ -324,6 +369,21 @@ def _controller_rows(arm, controller):
     return int(controller.kind), C, sizes, controller.model_row(arm)
 
 
+def _check_valves(row, dt: float, substeps: int, name: str) -> None:
+    """:func:`~ppamsafety.plant.model.check_valve_step` for one case, naming it and the fix."""
+    from ..plant.model import check_valve_step
+
+    h = dt / substeps
+    try:
+        check_valve_step(row, h)
+    except ValueError as exc:
+        t_min = float(np.min(lay.PLANT.read(row, "tv")))
+        need = int(np.ceil(dt / t_min - 1e-12))
+        raise ValueError(f"run_batch: case {name!r}: substeps = {substeps} gives an integration "
+                         f"step h = dt/substeps = {h:g} s longer than the fastest valve time "
+                         f"constant {t_min:g} s; use substeps >= {need} ({exc})") from None
+
+
 def run_batch(cases, *, dt: float = 1e-3, substeps: int = 1) -> list:
     """Run many closed-loop experiments of equal length in one compiled call.
 
@@ -336,14 +396,21 @@ def run_batch(cases, *, dt: float = 1e-3, substeps: int = 1) -> list:
         :meth:`ExperimentCase.from_dict`, which rejects unknown keys) and
         raise a ``DeprecationWarning``.
     dt : float
-        Control period [s].
+        Control period [s], in [1e-5, 0.1].
     substeps : int
-        RK4 steps per control period.
+        RK4 steps per control period, in [1, 1000].  The integration step
+        h = dt/substeps must not exceed any valve time constant of the
+        plants (:func:`~ppamsafety.plant.model.check_valve_step`, as in
+        :func:`~ppamsafety.plant.model.simulate`); a faster valve is refused
+        with the number of substeps it needs, never chosen silently, so the
+        same call always integrates the same way.
 
     Returns
     -------
     list of ExperimentResult
-        In the order of ``cases``.
+        In the order of ``cases``.  A run that diverged has ``diverged``
+        set, with ``divergence_reason`` and ``diverged_at``, and raises a
+        ``UserWarning`` naming the case.
 
     Raises
     ------
@@ -351,13 +418,16 @@ def run_batch(cases, *, dt: float = 1e-3, substeps: int = 1) -> list:
         For a case that is neither an ExperimentCase nor a dict, or a
         field of the wrong type.
     ValueError
-        For references of different lengths or sample periods, or a bad
-        dict key.
+        For references of different lengths or sample periods, a bad dict
+        key, or a valve time constant shorter than dt/substeps.
     """
     from ..plant.model import rest_state
 
-    check_range("dt", dt, 1e-5, 0.1, unit="s")
+    dt = check_range("dt", dt, 1e-5, 0.1, unit="s")
     substeps = check_int("substeps", substeps, 1, 1000)
+    if isinstance(cases, (ExperimentCase, str, bytes)) or not hasattr(cases, "__iter__"):
+        raise TypeError(f"cases must be a sequence of ExperimentCase, got "
+                        f"{type(cases).__name__}")
     cases = as_cases(cases)
     if not cases:
         return []
@@ -368,9 +438,11 @@ def run_batch(cases, *, dt: float = 1e-3, substeps: int = 1) -> list:
     for c in cases:
         ref = c.reference
         if ref.n_steps != n:
-            raise ValueError("run_batch: all references must have the same number of samples")
+            raise ValueError(f"run_batch: all references must have the same number of samples; "
+                             f"case {c.name!r} has {ref.n_steps}, the first case {n}")
         if abs(ref.dt - dt) > 1e-12:
-            raise ValueError(f"run_batch: reference sampled at {ref.dt} s, controller at {dt} s")
+            raise ValueError(f"run_batch: case {c.name!r}: reference sampled at {ref.dt} s but "
+                             f"dt = {dt} s")
         key = id(ref)
         ids = [id(r) for r in refs]
         if key not in ids:
@@ -389,6 +461,7 @@ def run_batch(cases, *, dt: float = 1e-3, substeps: int = 1) -> list:
             x0 = rest_state(ref.field("q_d")[0], arm)[0]
         X0.append(np.asarray(x0, dtype=float))
         PP.append(lay.pack(arm))
+        _check_valves(PP[-1], dt, substeps, c.name)
         kind, C, sizes, Pm = _controller_rows(arm, c.controller)
         KIND.append(kind)
         CPs.append(C)
@@ -433,9 +506,59 @@ def run_batch(cases, *, dt: float = 1e-3, substeps: int = 1) -> list:
         desc = {**c.controller.describe(), "kind": int(c.controller.kind)}
         names = (_EXT_NAMES if c.has_external_input else ()) + \
             (_EST_NAMES if c.estimator is not None else ())
-        out.append(ExperimentResult(c.name, desc, c.reference, LOG[i], bool(diverged[i]),
-                                    dict(c.meta), ILOG[i] if names else None, names))
+        div, reason, t_div = divergence(LOG[i], bool(diverged[i]), dt)
+        if div:
+            warnings.warn(f"run_batch: case {i} {c.name!r} diverged: {reason}", UserWarning,
+                          stacklevel=2)
+        out.append(ExperimentResult(c.name, desc, c.reference, LOG[i], div, dict(c.meta),
+                                    ILOG[i] if names else None, names,
+                                    divergence_reason=reason, diverged_at=t_div))
     return out
+
+
+def divergence(log: np.ndarray, stopped: bool, dt: float) -> tuple:
+    """Whether a logged run diverged, why, and from when (computed from the log).
+
+    Parameters
+    ----------
+    log : numpy.ndarray, shape (n, NLOG)
+        The run's log as written by the kernel (rows after a stop are NaN).
+    stopped : bool
+        The kernel's flag: it stopped the run because, after the control
+        period starting at some sample k, an angle was non-finite or
+        |qd| >= :data:`DIVERGENCE_VELOCITY`.
+    dt : float
+        Control period [s].
+
+    Returns
+    -------
+    diverged : bool
+        ``stopped``, or any logged value non-finite.
+    reason : str
+        Human-readable cause with the time ("" if not diverged).
+    diverged_at : float
+        Time of the first invalid sample [s] (NaN if not diverged).
+    """
+    finite = np.isfinite(log)
+    bad_rows = np.nonzero(~finite.all(axis=1))[0]
+    n = log.shape[0]
+    if not stopped and bad_rows.size == 0:
+        return False, "", np.nan
+    k = int(bad_rows[0]) if bad_rows.size else n
+    if k < n and finite[k].any():
+        # a partly non-finite row: the kernel did not stop here, a signal went bad first
+        names = [c for c, ok in zip(LOG_COLUMNS, finite[k]) if not ok]
+        return True, (f"non-finite {', '.join(names[:4])}{' ...' if len(names) > 4 else ''} "
+                      f"at t = {k * dt:.6g} s"), k * dt
+    last = log[k - 1] if k >= 1 else None
+    span = f"between t = {(k - 1) * dt:.6g} s and t = {k * dt:.6g} s"
+    if last is None:
+        return True, "non-finite state at t = 0 s", 0.0
+    qd = last[L_QD:L_QD + 2]
+    j = int(np.argmax(np.abs(qd)))
+    return True, (f"joint speed reached {DIVERGENCE_VELOCITY:g} rad/s or an angle became "
+                  f"non-finite {span} (last logged |qd{j + 1}| = {abs(qd[j]):.4g} rad/s, "
+                  f"q = ({last[L_Q]:.4g}, {last[L_Q + 1]:.4g}) rad)"), k * dt
 
 
 def run(arm, controller, reference: Reference, *, sensors: SensorConfig | None = None,
@@ -447,21 +570,32 @@ def run(arm, controller, reference: Reference, *, sensors: SensorConfig | None =
     arm : ArmParameters
         The plant.
     controller : Controller
+        The controller (PID, JointPSMC, TaskPSMC, SlidingModeControl,
+        GravityCompensation).
     reference : Reference
+        The reference; its length sets the run's length.
     sensors : SensorConfig, optional
         Sensor models (default realistic encoders and timing board).
     x0 : array_like, shape (8,), optional
         Initial state (default: at rest at the reference's first angles).
     dt : float
-        Control period [s].
+        Control period [s], in [1e-5, 0.1].
     substeps : int
-        RK4 steps per control period.
+        RK4 steps per control period (see :func:`run_batch`).
     name : str, optional
         Experiment name (default the reference's name).
 
     Returns
     -------
     ExperimentResult
+        With ``diverged``, ``divergence_reason`` and ``diverged_at`` (a
+        ``UserWarning`` is raised for a diverged run).
+
+    Raises
+    ------
+    TypeError, ValueError
+        For a bad argument (see :class:`~.case.ExperimentCase` and
+        :func:`run_batch`).
     """
     case = ExperimentCase(arm, controller, reference, sensors=sensors, x0=x0, name=name)
     return run_batch([case], dt=dt, substeps=substeps)[0]

@@ -12,13 +12,38 @@ from __future__ import annotations
 import numpy as np
 import pandas as pd
 
-from .._validation import check_int, check_positive
+from .._validation import (as_float_array, check_finite, check_instance, check_int,
+                           check_positive, check_vector)
 from .catalog import STEP_TIMES, SWITCH_TIME
+from .closed_loop import ExperimentResult
 
 
 def _window(t, t_from, t_to):
     t_to = np.inf if t_to is None else t_to
     return (t >= t_from - 1e-12) & (t < t_to - 1e-12)
+
+
+def _result(result, name: str = "result") -> ExperimentResult:
+    return check_instance(name, result, ExperimentResult)
+
+
+def _times(t_from, t_to):
+    """Validated window bounds (``t_to`` None: to the end)."""
+    t_from = check_finite("t_from", t_from, unit="s")
+    if t_to is not None:
+        t_to = check_finite("t_to", t_to, unit="s")
+        if t_to <= t_from:
+            raise ValueError(f"t_to = {t_to:g} s must be after t_from = {t_from:g} s")
+    return t_from, t_to
+
+
+def _series(t, err):
+    """Validated time and error series of equal length (NaN allowed in ``err``)."""
+    t = as_float_array("t", t, ndim=1, allow_nonfinite=True)   # NaN after a divergence
+    err = as_float_array("err", err, ndim=1, allow_nonfinite=True)
+    if t.size != err.size:
+        raise ValueError(f"err has {err.size} samples, t has {t.size}")
+    return t, err
 
 
 def tracking_stats(result, *, t_from: float = 0.0, t_to: float | None = None) -> dict:
@@ -27,21 +52,27 @@ def tracking_stats(result, *, t_from: float = 0.0, t_to: float | None = None) ->
     Parameters
     ----------
     result : ExperimentResult
+        The run.
     t_from, t_to : float
         Evaluation window [s] (``t_to`` None: to the end).
 
     Returns
     -------
     dict
-        ``mean``, ``max``, ``rms`` [m] (NaN if the run diverged).
+        ``mean``, ``max``, ``rms`` [m] (NaN if the run diverged, never
+        otherwise), ``diverged`` (bool) and ``divergence_reason`` (str).
     """
+    result = _result(result)
+    t_from, t_to = _times(t_from, t_to)
     m = _window(result.t, t_from, t_to)
     if not m.any():
-        raise ValueError(f"tracking_stats: empty window [{t_from}, {t_to}) s")
+        raise ValueError(f"tracking_stats: empty window [t_from, t_to) = [{t_from}, {t_to}) s")
     e = result.tracking_error()[m]
     if result.diverged or not np.all(np.isfinite(e)):
-        return {"mean": np.nan, "max": np.nan, "rms": np.nan}
-    return {"mean": float(e.mean()), "max": float(e.max()), "rms": float(np.sqrt(np.mean(e ** 2)))}
+        return {"mean": np.nan, "max": np.nan, "rms": np.nan, "diverged": True,
+                "divergence_reason": result.divergence_reason or "non-finite tracking error"}
+    return {"mean": float(e.mean()), "max": float(e.max()), "rms": float(np.sqrt(np.mean(e ** 2))),
+            "diverged": False, "divergence_reason": ""}
 
 
 def time_to_within(t, err, t_event: float, tol: float, *, t_end: float | None = None) -> float:
@@ -49,10 +80,30 @@ def time_to_within(t, err, t_event: float, tol: float, *, t_end: float | None = 
 
     NaN if it does not happen before ``t_end`` (read: "longer than
     t_end - t_event").
+
+    Parameters
+    ----------
+    t : array_like, shape (n,)
+        Sample times [s].
+    err : array_like, shape (n,)
+        Error magnitude per sample (any unit; NaN counts as outside).
+    t_event : float
+        Time of the event [s].
+    tol : float
+        Tolerance, positive (same unit as ``err``).
+    t_end : float, optional
+        End of the window [s] (default: the end of the record).
+
+    Returns
+    -------
+    float
+        Time [s] or NaN.
     """
+    t, err = _series(t, err)
+    t_event, t_end = _times(t_event, t_end)
     check_positive("tol", tol)
-    m = _window(np.asarray(t), t_event, t_end)
-    tt, ee = np.asarray(t)[m], np.asarray(err)[m]
+    m = _window(t, t_event, t_end)
+    tt, ee = t[m], err[m]
     ok = np.nonzero(ee <= tol)[0]
     return float(tt[ok[0]] - t_event) if ok.size else np.nan
 
@@ -62,10 +113,30 @@ def settling_time(t, err, t_event: float, tol: float, *, t_end: float | None = N
 
     NaN if the error is outside the band at the end of the window (not
     settled).
+
+    Parameters
+    ----------
+    t : array_like, shape (n,)
+        Sample times [s].
+    err : array_like, shape (n,)
+        Error magnitude per sample (NaN counts as outside).
+    t_event : float
+        Time of the event [s].
+    tol : float
+        Tolerance, positive (same unit as ``err``).
+    t_end : float, optional
+        End of the window [s] (default: the end of the record).
+
+    Returns
+    -------
+    float
+        Time [s] or NaN.
     """
+    t, err = _series(t, err)
+    t_event, t_end = _times(t_event, t_end)
     check_positive("tol", tol)
-    m = _window(np.asarray(t), t_event, t_end)
-    tt, ee = np.asarray(t)[m], np.asarray(err)[m]
+    m = _window(t, t_event, t_end)
+    tt, ee = t[m], err[m]
     if ee.size == 0 or not ee[-1] <= tol:
         return np.nan
     out = np.nonzero(~(ee <= tol))[0]
@@ -73,10 +144,30 @@ def settling_time(t, err, t_event: float, tol: float, *, t_end: float | None = N
 
 
 def peak_speeds(result, *, t_from: float = 0.0, t_to: float | None = None) -> dict:
-    """Peak TCP speed [m/s] and peak |qd1|, |qd2| [rad/s] (true values) in a window."""
+    """Peak TCP speed [m/s] and peak |qd1|, |qd2| [rad/s] (true values) in a window.
+
+    Parameters
+    ----------
+    result : ExperimentResult
+        The run.
+    t_from, t_to : float
+        Window [s] (``t_to`` None: to the end).
+
+    Returns
+    -------
+    dict
+        ``peak_tcp_speed``, ``peak_qd1``, ``peak_qd2``; NaN (never a
+        silent one) only if the run diverged before the window.
+    """
+    result = _result(result)
+    t_from, t_to = _times(t_from, t_to)
     m = _window(result.t, t_from, t_to)
+    if not m.any():
+        raise ValueError(f"peak_speeds: empty window [t_from, t_to) = [{t_from}, {t_to}) s")
     v = result.tcp_speed()[m]
     qd = np.abs(result.signals("qd1", "qd2")[m])
+    if not np.isfinite(v).any():
+        return {"peak_tcp_speed": np.nan, "peak_qd1": np.nan, "peak_qd2": np.nan}
     return {"peak_tcp_speed": float(np.nanmax(v)), "peak_qd1": float(np.nanmax(qd[:, 0])),
             "peak_qd2": float(np.nanmax(qd[:, 1]))}
 
@@ -104,7 +195,13 @@ def step_metrics(result, *, t_event: float, t_end: float, joint: int = 0,
         ``t_reach`` (first time within ``tol`` [s]), ``t_settle`` (stays
         within ``tol`` until ``t_end`` [s]); NaN where not reached.
     """
+    result = _result(result)
+    t_event = check_finite("t_event", t_event, unit="s")
+    t_end = check_finite("t_end", t_end, unit="s")
+    if t_end <= t_event:
+        raise ValueError(f"t_end = {t_end:g} s must be after t_event = {t_event:g} s")
     joint = check_int("joint", joint, 0, 1)
+    tol = check_positive("tol", tol, unit="rad")
     t = result.t
     q = result.signal(f"q{joint + 1}")
     qd_ref = result.reference.signal(f"q{joint + 1}_d")
@@ -118,6 +215,9 @@ def step_metrics(result, *, t_event: float, t_end: float, joint: int = 0,
     m = _window(t, t_event, t_end)
     direction = np.sign(size)
     progress = (q[m] - q_from) * direction
+    if not np.isfinite(progress).any():     # diverged before the window
+        return {"step": float(size), "overshoot": np.nan, "overshoot_pct": np.nan,
+                "t_90": np.nan, "t_reach": np.nan, "t_settle": np.nan}
     over = max(0.0, float(np.nanmax(progress) - abs(size)))
     reached90 = np.nonzero(progress >= 0.9 * abs(size))[0]
     err = np.abs(q - q_to)
@@ -147,11 +247,11 @@ def chattering_index(dp, dt: float, *, f_cut: float = 5.0) -> float:
     f_cut : float
         Cut-off frequency [Hz].
     """
-    x = np.asarray(dp, dtype=float)
-    if x.ndim != 2 or x.shape[0] < 4:
-        raise ValueError("chattering_index: dp must have shape (n >= 4, joints)")
-    check_positive("dt", dt, unit="s")
-    check_positive("f_cut", f_cut, unit="Hz")
+    x = as_float_array("dp", dp, ndim=2, allow_nonfinite=True)
+    if x.shape[0] < 4:
+        raise ValueError(f"dp must have shape (n >= 4, joints), got {x.shape}")
+    dt = check_positive("dt", dt, unit="s")
+    f_cut = check_positive("f_cut", f_cut, unit="Hz")
     if not np.all(np.isfinite(x)):
         return np.nan
     n = x.shape[0]
@@ -162,10 +262,21 @@ def chattering_index(dp, dt: float, *, f_cut: float = 5.0) -> float:
 
 
 def command_increment_rms(dp) -> float:
-    """RMS of the sample-to-sample change of the commanded Delta p [Pa], joints combined."""
-    x = np.asarray(dp, dtype=float)
-    if x.ndim != 2 or x.shape[0] < 2:
-        raise ValueError("command_increment_rms: dp must have shape (n >= 2, joints)")
+    """RMS of the sample-to-sample change of the commanded Delta p [Pa], joints combined.
+
+    Parameters
+    ----------
+    dp : array_like, shape (n, joints)
+        Commanded Delta p per joint [Pa], n >= 2, finite (check ``diverged``
+        first: a diverged run's command is NaN after the divergence).
+
+    Returns
+    -------
+    float
+    """
+    x = as_float_array("dp", dp, ndim=2)
+    if x.shape[0] < 2:
+        raise ValueError(f"dp must have shape (n >= 2, joints), got {x.shape}")
     return float(np.sqrt(np.sum(np.mean(np.diff(x, axis=0) ** 2, axis=0))))
 
 
@@ -180,16 +291,41 @@ def response_table(results, *, experiment: str, tol_angle: float = np.radians(1.
     Switch: peaks over t >= switch; reach and settling times of the TCP error
     into ``tol_tcp`` after the switch.
 
+    Parameters
+    ----------
+    results : sequence of ExperimentResult
+        Runs of the experiment.
+    experiment : {"step", "switch"}
+        Which experiment the runs are.
+    tol_angle : float
+        Band around the new q1 set angle [rad] (step), positive.
+    tol_tcp : float
+        Band of the TCP error [m] (switch), positive.
+    step_times : pair of float
+        Up- and down-step times [s] (default :data:`~.catalog.STEP_TIMES`).
+    switch_time : float
+        Switch time [s].
+
     Returns
     -------
     pandas.DataFrame
         Columns ``variant``, ``peak_tcp_speed_m_s``, ``peak_qd1_rad_s``,
         ``peak_qd2_rad_s``, and for the step ``overshoot_deg``,
         ``overshoot_pct``, ``t90_s``; for both ``t_reach_s``,
-        ``t_settle_s`` (NaN: not within the band in the window).
+        ``t_settle_s`` (NaN: not within the band in the window), and
+        ``diverged``, ``divergence_reason`` (a diverged run's NaN measures
+        come with ``diverged=True`` and the reason).
     """
     if experiment not in ("step", "switch"):
         raise ValueError(f"response_table: experiment = {experiment!r} is not 'step' or 'switch'")
+    tol_angle = check_positive("tol_angle", tol_angle, unit="rad")
+    tol_tcp = check_positive("tol_tcp", tol_tcp, unit="m")
+    step_times = check_vector("step_times", step_times, 2, 0.0, unit="s")
+    switch_time = check_finite("switch_time", switch_time, unit="s")
+    if isinstance(results, ExperimentResult) or not hasattr(results, "__iter__"):
+        raise TypeError(f"results must be a sequence of ExperimentResult, got "
+                        f"{type(results).__name__}")
+    results = [_result(r, f"results[{i}]") for i, r in enumerate(results)]
     rows = []
     for r in results:
         label = r.meta.get("label", r.name)
@@ -207,6 +343,7 @@ def response_table(results, *, experiment: str, tol_angle: float = np.radians(1.
             e = r.tracking_error()
             row.update({"t_reach_s": time_to_within(r.t, e, switch_time, tol_tcp),
                         "t_settle_s": settling_time(r.t, e, switch_time, tol_tcp)})
+        row.update({"diverged": bool(r.diverged), "divergence_reason": r.divergence_reason})
         rows.append(row)
     return pd.DataFrame(rows)
 

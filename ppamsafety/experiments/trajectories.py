@@ -30,7 +30,8 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from .._validation import as_float_array, check_int, check_range
+from .._validation import (as_float_array, check_finite, check_increasing, check_instance,
+                           check_int, check_range, check_shape, check_str, check_vector)
 from ..layouts import Field, Layout
 from ..plant import geometry as geo
 from ..units import DEG
@@ -64,6 +65,22 @@ class Reference:
 
     Each row of ``data`` is a :data:`REFERENCE_ROW` (columns
     :data:`REF_COLUMNS`); read a column with :meth:`signal`.
+
+    Parameters
+    ----------
+    name : str
+        Name of the reference (default experiment name).
+    t : array_like, shape (n,)
+        Sample times [s] (n >= 1, finite).
+    data : array_like, shape (n, NREF)
+        Reference rows (finite, SI units).
+    dt : float
+        Sample period [s], in [1e-5, 0.1].
+
+    Raises
+    ------
+    TypeError, ValueError
+        For a field of the wrong type or shape, or non-finite values.
     """
 
     name: str
@@ -72,9 +89,18 @@ class Reference:
     dt: float
 
     def __post_init__(self):
-        if self.data.shape != (self.t.size, NREF):
-            raise ValueError(f"Reference.data must have shape (len(t), {NREF}), got "
-                             f"{self.data.shape}")
+        check_str("Reference.name", self.name)
+        t = as_float_array("Reference.t", self.t, ndim=1)
+        data = as_float_array("Reference.data", self.data, ndim=2)
+        if data.shape != (t.size, NREF):
+            raise ValueError(f"Reference.data must have shape (len(t), {NREF}) = "
+                             f"({t.size}, {NREF}), got {data.shape}")
+        if t.size == 0:
+            raise ValueError("Reference.t must have at least one sample")
+        object.__setattr__(self, "t", t)
+        object.__setattr__(self, "data", data)
+        object.__setattr__(self, "dt", check_range("Reference.dt", self.dt, 1e-5, 0.1,
+                                                   unit="s"))
 
     def signal(self, name: str) -> np.ndarray:
         """One reference column by name, shape (n,), SI units.
@@ -97,7 +123,18 @@ class Reference:
         return self.data[:, REFERENCE_ROW.column_index(name)]
 
     def field(self, name: str) -> np.ndarray:
-        """One field of :data:`REFERENCE_ROW` for every sample, e.g. ``"r_d"`` -> (n, 2)."""
+        """One field of :data:`REFERENCE_ROW` for every sample, e.g. ``"r_d"`` -> (n, 2).
+
+        Parameters
+        ----------
+        name : str
+            A field of :data:`REFERENCE_ROW`: ``q_d``, ``qd_d``, ``qdd_d``,
+            ``qddd_d``, ``r_d``, ``rd_d``.
+
+        Returns
+        -------
+        numpy.ndarray, shape (n, 2)
+        """
         return self.data[:, REFERENCE_ROW.slice(name)]
 
     @property
@@ -148,12 +185,93 @@ def _segment(arm, path, t0, t1, dt, oversample=8):
     return rows
 
 
+def _arm(arm):
+    from ..params.arm import ArmParameters
+    return check_instance("arm", arm, ArmParameters)
+
+
+def _dt(dt) -> float:
+    return check_range("dt", dt, 1e-5, 0.1, unit="s")
+
+
+def check_in_working_area(name: str, q, arm, *, index: bool = True) -> np.ndarray:
+    """Refuse joint angles outside the working area (2.6)-(2.7) of ``arm``.
+
+    The simulated arm has no mechanical stops, so a reference beyond them
+    would drive an arm that cannot exist; every reference built here is
+    therefore kept inside the working area.  A value that is outside as
+    radians but inside once converted from degrees gets a hint
+    (``did you mean np.radians(30)?``).
+
+    Parameters
+    ----------
+    name : str
+        Argument name for the message.
+    q : numpy.ndarray, shape (..., 2)
+        Joint angles [rad] (finite).
+    arm : ArmParameters
+        Its ``geometry`` gives the limits q1_min..q1_max, q2_min..q2_max.
+    index : bool, keyword-only
+        Name the offending entry as ``name[i, j]`` (else just ``name``).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``q`` unchanged.
+
+    Raises
+    ------
+    ValueError
+        Naming the first offending entry, its value, the allowed interval
+        (rad and deg) and, where it fits, the degrees hint.
+    """
+    g = arm.geometry
+    lims = ((g.q1_min, g.q1_max), (g.q2_min, g.q2_max))
+    tol = 1e-9
+    for j, (lo, hi) in enumerate(lims):
+        col = q[..., j]
+        bad = np.argwhere((col < lo - tol) | (col > hi + tol))
+        if bad.size:
+            idx = tuple(int(i) for i in bad[0])
+            v = float(col[idx])
+            where = f"{name}[{', '.join(map(str, idx + (j,)))}]" if index else name
+            hint = ""
+            if lo <= np.radians(v) <= hi:
+                hint = (f"; did you mean np.radians({v:g}) = {np.radians(v):.4g} rad? Angles are "
+                        f"in radians")
+            raise ValueError(
+                f"{where} = {v:g} rad ({np.degrees(v):.4g} deg) is outside the working area of "
+                f"joint {j + 1}: [{lo:.4g}, {hi:.4g}] rad = [{np.degrees(lo):.4g}, "
+                f"{np.degrees(hi):.4g}] deg (2.6)-(2.7){hint}")
+    return q
+
+
 def circle_path(*, period: float, center=CIRCLE_CENTER, radius: float = CIRCLE_RADIUS,
                 phase: float = 0.0):
-    """Callable t -> (r, rdot) of a circle traversed counter-clockwise."""
-    check_range("period", period, 0.0, 1e4, lo_open=True, unit="s")
-    check_range("radius", radius, 0.0, 1.0, lo_open=True, unit="m")
-    c = np.asarray(center, dtype=float)
+    """Callable t -> (r, rdot) of a circle traversed counter-clockwise.
+
+    Parameters
+    ----------
+    period : float, keyword-only
+        Time of one turn [s], in (0, 1e4].
+    center : sequence of 2 float
+        Centre (x, y) [m], each in [-1, 1] (the arm reaches 0.61 m).
+    radius : float
+        Radius [m], in (0, 1].
+    phase : float
+        Angle of the start point on the circle [rad] (0: rightmost point),
+        in [-1e3, 1e3].
+
+    Returns
+    -------
+    callable
+        ``path(t)`` -> ``(r, rd)``, positions [m] and velocities [m/s] of
+        shape ``t.shape + (2,)``.
+    """
+    period = check_range("period", period, 0.0, 1e4, lo_open=True, unit="s")
+    c = np.asarray(check_vector("center", center, 2, -1.0, 1.0, unit="m"))
+    radius = check_range("radius", radius, 0.0, 1.0, lo_open=True, unit="m")
+    phase = check_range("phase", phase, -1e3, 1e3, unit="rad")
     w = 2 * np.pi / period
 
     def path(t):
@@ -164,31 +282,146 @@ def circle_path(*, period: float, center=CIRCLE_CENTER, radius: float = CIRCLE_R
     return path
 
 
+def _circle_segment(arm, t0, t1, dt, what, **circle):
+    """``_segment`` of a circle; unreachable or out-of-area circles refused naming ``what``."""
+    path = circle_path(**circle)
+    c = {"center": CIRCLE_CENTER, "radius": CIRCLE_RADIUS, **circle}
+    desc = f"center={tuple(c['center'])!r}, radius={c['radius']!r}"
+    try:
+        rows = _segment(arm, path, t0, t1, dt)
+    except ValueError as exc:
+        raise ValueError(f"{what}: the circle ({desc}) leaves the reach of the arm: "
+                         f"{exc}") from None
+    try:
+        check_in_working_area("q_d", rows[:, REFERENCE_ROW.slice("q_d")], arm)
+    except ValueError as exc:
+        raise ValueError(f"{what}: the circle ({desc}) leaves the working area; choose another "
+                         f"center or radius (default center {CIRCLE_CENTER}, radius "
+                         f"{CIRCLE_RADIUS} m): {exc}") from None
+    return rows
+
+
 def circle(arm, *, period: float, duration: float, dt: float = 1e-3, **kwargs) -> Reference:
-    """Circle tracking (§5.3.4): diameter 20 cm, period ``period`` [s]."""
-    check_range("duration", duration, 0.0, 1e5, lo_open=True, unit="s")
-    data = _segment(arm, circle_path(period=period, **kwargs), 0.0, duration, dt)
+    """Circle tracking (§5.3.4): diameter 20 cm, period ``period`` [s].
+
+    Parameters
+    ----------
+    arm : ArmParameters
+        The arm (inverse kinematics, working area).
+    period : float, keyword-only
+        Time of one turn [s], in (0, 1e4].
+    duration : float, keyword-only
+        Length of the reference [s], in (0, 1e5]; at least one sample.
+    dt : float, keyword-only
+        Sample period [s], in [1e-5, 0.1].
+    **kwargs
+        ``center``, ``radius``, ``phase`` of :func:`circle_path`.
+
+    Returns
+    -------
+    Reference
+
+    Raises
+    ------
+    ValueError
+        For an argument out of range, or a circle that leaves the reach or
+        the working area of the arm (naming ``center`` / ``radius``).
+    """
+    _arm(arm)
+    period = check_range("period", period, 0.0, 1e4, lo_open=True, unit="s")
+    duration = check_range("duration", duration, 0.0, 1e5, lo_open=True, unit="s")
+    dt = _dt(dt)
+    unknown = sorted(set(kwargs) - {"center", "radius", "phase"})
+    if unknown:
+        raise TypeError(f"circle: unexpected keyword argument(s) {unknown}; allowed: center, "
+                        f"radius, phase")
+    data = _circle_segment(arm, 0.0, duration, dt, "circle", period=period, **kwargs)
+    if data.shape[0] == 0:
+        raise ValueError(f"duration = {duration:g} s is shorter than one sample dt = {dt:g} s")
     return Reference(f"circle P={period:g} s", np.arange(data.shape[0]) * dt, data, dt)
 
 
 def trajectory_switch(arm, *, period_before: float = 10.0 / 3.0, period_after: float = 10.0,
                       t_switch: float = 7.5, duration: float = 15.0, dt: float = 1e-3) -> Reference:
-    """Discontinuous switch between two circles (fig. 5.15)."""
-    check_range("t_switch", t_switch, 0.0, duration, lo_open=True, hi_open=True, unit="s")
-    a = _segment(arm, circle_path(period=period_before), 0.0, t_switch, dt)
-    b = _segment(arm, circle_path(period=period_after), t_switch, duration, dt)
+    """Discontinuous switch between two circles (fig. 5.15).
+
+    Parameters
+    ----------
+    arm : ArmParameters
+        The arm.
+    period_before, period_after : float, keyword-only
+        Circle periods before and after the switch [s], in (0, 1e4].
+    t_switch : float, keyword-only
+        Switch time [s], strictly inside (0, duration).
+    duration : float, keyword-only
+        Length [s], in (0, 1e5].
+    dt : float, keyword-only
+        Sample period [s], in [1e-5, 0.1].
+
+    Returns
+    -------
+    Reference
+    """
+    _arm(arm)
+    period_before = check_range("period_before", period_before, 0.0, 1e4, lo_open=True,
+                                unit="s")
+    period_after = check_range("period_after", period_after, 0.0, 1e4, lo_open=True, unit="s")
+    duration = check_range("duration", duration, 0.0, 1e5, lo_open=True, unit="s")
+    dt = _dt(dt)
+    t_switch = check_range("t_switch", t_switch, 0.0, duration, lo_open=True, hi_open=True,
+                           unit="s")
+    a = _circle_segment(arm, 0.0, t_switch, dt, "trajectory_switch (before)",
+                        period=period_before)
+    b = _circle_segment(arm, t_switch, duration, dt, "trajectory_switch (after)",
+                        period=period_after)
     data = np.concatenate([a, b])
     return Reference("trajectory switch", np.arange(data.shape[0]) * dt, data, dt)
 
 
 def joint_steps(arm, *, q_levels, t_changes, duration: float, dt: float = 1e-3,
                 name: str = "joint steps") -> Reference:
-    """Piecewise-constant joint reference: ``q_levels`` (m+1, 2) switched at ``t_changes`` (m,)."""
-    lv = as_float_array("q_levels", q_levels, shape_tail=(2,))
-    tc = np.atleast_1d(as_float_array("t_changes", t_changes))
+    """Piecewise-constant joint reference: ``q_levels`` (m+1, 2) switched at ``t_changes`` (m,).
+
+    Parameters
+    ----------
+    arm : ArmParameters
+        The arm (forward kinematics, working area).
+    q_levels : array_like, shape (m + 1, 2), keyword-only
+        Joint angles [rad] of each level; every level must lie inside the
+        working area (a value in degrees gets a ``np.radians`` hint).
+    t_changes : array_like, shape (m,), keyword-only
+        Times of the changes [s], strictly increasing and strictly inside
+        (0, duration): a change at or after the end would never happen, a
+        change at 0 would skip a level.
+    duration : float, keyword-only
+        Length [s], in (0, 1e5]; at least one sample.
+    dt : float, keyword-only
+        Sample period [s], in [1e-5, 0.1].
+    name : str, keyword-only
+        Name of the reference.
+
+    Returns
+    -------
+    Reference
+        Velocities, accelerations and jerks are zero (steps).
+    """
+    _arm(arm)
+    lv = as_float_array("q_levels", q_levels, ndim=2)
+    check_shape("q_levels", lv, (None, 2))
+    tc = as_float_array("t_changes", t_changes, ndim=(0, 1)).reshape(-1)
+    duration = check_range("duration", duration, 0.0, 1e5, lo_open=True, unit="s")
+    dt = _dt(dt)
+    name = check_str("name", name)
     if lv.shape[0] != tc.size + 1:
-        raise ValueError("joint_steps: need one more level than change times")
-    n = check_int("number of samples", int(round(duration / dt)), 1, 10 ** 9)
+        raise ValueError(f"joint_steps: q_levels has {lv.shape[0]} levels and t_changes "
+                         f"{tc.size} change times; need one more level than change times")
+    check_increasing("t_changes", tc)
+    if tc.size and (tc[0] <= 0.0 or tc[-1] >= duration):
+        i = 0 if tc[0] <= 0.0 else tc.size - 1
+        raise ValueError(f"t_changes[{i}] = {tc[i]:g} s is outside (0, duration) = "
+                         f"(0, {duration:g}) s: the change would never take effect")
+    check_in_working_area("q_levels", lv, arm)
+    n = check_int("number of samples round(duration/dt)", int(round(duration / dt)), 1, 10 ** 9)
     t = np.arange(n) * dt
     seg = np.searchsorted(tc, t, side="right")
     q = lv[seg]
@@ -200,6 +433,56 @@ def joint_steps(arm, *, q_levels, t_changes, duration: float, dt: float = 1e-3,
 
 def step(arm, *, low=30 * DEG, high=70 * DEG, q2=-80 * DEG, t_up: float = 2.0,
          t_down: float = 7.0, duration: float = 12.0, dt: float = 1e-3) -> Reference:
-    """Step response experiment of fig. 5.17: q1_d 30 -> 70 -> 30 deg, q2_d = -80 deg."""
-    return joint_steps(arm, q_levels=[[low, q2], [high, q2], [low, q2]],
-                       t_changes=[t_up, t_down], duration=duration, dt=dt, name="step")
+    """Step response experiment of fig. 5.17: q1_d 30 -> 70 -> 30 deg, q2_d = -80 deg.
+
+    Parameters
+    ----------
+    arm : ArmParameters
+        The arm.
+    low, high : float, keyword-only
+        q1_d before/after the up-step [rad] (30 deg, 70 deg), different,
+        inside the working area (degrees are refused with a hint).
+    q2 : float, keyword-only
+        q2_d [rad] (-80 deg), inside the working area.
+    t_up : float, keyword-only
+        Time of the up-step [s], strictly inside (0, duration).
+    t_down : float, keyword-only
+        Time of the down-step [s], after ``t_up``.  At or after
+        ``duration`` the down-step lies beyond the record and is left out
+        (a shortened run of the 12 s experiment).
+    duration : float, keyword-only
+        Length [s], in (0, 1e5].
+    dt : float, keyword-only
+        Sample period [s], in [1e-5, 0.1].
+
+    Returns
+    -------
+    Reference
+
+    Raises
+    ------
+    ValueError
+        For ``t_down <= t_up`` (no step would be seen), ``low == high``, a
+        ``t_up`` outside (0, duration) or angles outside the working area.
+    """
+    _arm(arm)
+    low = check_finite("low", low, unit="rad")
+    high = check_finite("high", high, unit="rad")
+    q2 = check_finite("q2", q2, unit="rad")
+    t_up = check_finite("t_up", t_up, unit="s")
+    t_down = check_finite("t_down", t_down, unit="s")
+    duration = check_range("duration", duration, 0.0, 1e5, lo_open=True, unit="s")
+    if t_down <= t_up:
+        raise ValueError(f"t_down = {t_down:g} s must come after t_up = {t_up:g} s (steps in "
+                         f"the wrong order give no step at all)")
+    t_up = check_range("t_up", t_up, 0.0, duration, lo_open=True, hi_open=True, unit="s")
+    if low == high:
+        raise ValueError(f"low = high = {low:g} rad: the reference would not step")
+    for nm, v in (("low", low), ("high", high), ("q2", q2)):
+        q = np.array([[v, -80 * DEG]]) if nm != "q2" else np.array([[50 * DEG, v]])
+        check_in_working_area(nm, q, arm, index=False)
+    levels, changes = [[low, q2], [high, q2], [low, q2]], [t_up, t_down]
+    if t_down >= duration:
+        levels, changes = levels[:2], changes[:1]
+    return joint_steps(arm, q_levels=levels, t_changes=changes, duration=duration, dt=dt,
+                       name="step")

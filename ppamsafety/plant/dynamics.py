@@ -35,7 +35,8 @@ import math
 import numpy as np
 from .._jit import kernel, leaf
 
-from .._validation import as_float_array
+from .._validation import as_float_array, check_bool, check_range  # noqa: F401
+from ._checks import accelerations, angles, check_pressures, checks_arm, speeds, torques  # noqa: F401
 from . import layout as lay
 from .layout import COUL, GRAV, L1, THETA1, THETA2, THETA3, THETA4, THETA5, THETA6, VFRIC, VISC
 
@@ -280,6 +281,7 @@ def _evaluate(kind, q, qd, arm, params):
 _NO_Q = np.zeros(2)
 
 
+@checks_arm
 def inertia_matrix(q, arm, *, params=None) -> np.ndarray:
     """H(q) [kg m^2], shape (..., 2, 2).
 
@@ -291,11 +293,12 @@ def inertia_matrix(q, arm, *, params=None) -> np.ndarray:
     params : BaseParameters, optional
         Rigid-body parameters; default the physical plant.
     """
-    q = as_float_array("q", q, shape_tail=(2,))
+    q = angles("q", q)
     out, lead = _evaluate(0, q, _NO_Q, arm, params)
     return out.reshape(lead + (2, 2))
 
 
+@checks_arm
 def coriolis(q, qd, arm, *, params=None) -> np.ndarray:
     """C(q, qd) [kg m^2/s], shape (..., 2, 2) (Christoffel form, so Hdot - 2C is skew).
 
@@ -309,12 +312,13 @@ def coriolis(q, qd, arm, *, params=None) -> np.ndarray:
     params : BaseParameters, optional
         Rigid-body parameters; default the physical plant.
     """
-    q = as_float_array("q", q, shape_tail=(2,))
-    qd = as_float_array("qd", qd, shape_tail=(2,))
+    q = angles("q", q)
+    qd = speeds("qd", qd)
     out, lead = _evaluate(1, q, qd, arm, params)
     return out.reshape(lead + (2, 2))
 
 
+@checks_arm
 def gravity(q, arm, *, params=None) -> np.ndarray:
     """G(q) [N m], shape (..., 2).
 
@@ -326,11 +330,12 @@ def gravity(q, arm, *, params=None) -> np.ndarray:
     params : BaseParameters, optional
         Rigid-body parameters; default the physical plant.
     """
-    q = as_float_array("q", q, shape_tail=(2,))
+    q = angles("q", q)
     out, lead = _evaluate(2, q, _NO_Q, arm, params)
     return out.reshape(lead + (2,))
 
 
+@checks_arm
 def friction(qd, arm, *, params=None, smooth: bool = True) -> np.ndarray:
     """Joint friction (3.30) [N m], shape (..., 2).
 
@@ -345,13 +350,13 @@ def friction(qd, arm, *, params=None, smooth: bool = True) -> np.ndarray:
         True (default): smooth Coulomb term c tanh(qd / v_s) as in the plant;
         False: the ideal sign function of (3.30).
     """
-    qd = as_float_array("qd", qd, shape_tail=(2,))
-    if not isinstance(smooth, (bool, np.bool_)):
-        raise TypeError(f"smooth must be a bool, got {smooth!r}")
+    qd = speeds("qd", qd)
+    smooth = check_bool("smooth", smooth)
     out, lead = _evaluate(3 if smooth else 4, _NO_Q, qd, arm, params)
     return out.reshape(lead + (2,))
 
 
+@checks_arm
 def regressor(q, qd, qdd, arm, *, gravity_acc: float | None = None) -> np.ndarray:
     """Observation matrix K(q, qd, qdd) of (B.5) extended with friction (B.6).
 
@@ -375,10 +380,11 @@ def regressor(q, qd, qdd, arm, *, gravity_acc: float | None = None) -> np.ndarra
     -------
     numpy.ndarray, shape (..., 2, 10)
     """
-    q = as_float_array("q", q, shape_tail=(2,))
-    qd = as_float_array("qd", qd, shape_tail=(2,))
-    qdd = as_float_array("qdd", qdd, shape_tail=(2,))
-    g = arm.gravity if gravity_acc is None else gravity_acc
+    q = angles("q", q)
+    qd = speeds("qd", qd)
+    qdd = accelerations("qdd", qdd)
+    g = arm.gravity if gravity_acc is None else check_range("gravity_acc", gravity_acc, 0.0, 100.0,
+                                                            unit="m/s^2")
     l1 = arm.geometry.L1
     q1, q2 = q[..., 0], q[..., 1]
     w1, w2 = qd[..., 0], qd[..., 1]
@@ -403,13 +409,27 @@ def regressor(q, qd, qdd, arm, *, gravity_acc: float | None = None) -> np.ndarra
     return K
 
 
+@checks_arm
 def kinetic_energy(q, qd, arm, *, params=None) -> np.ndarray:
-    """Kinetic energy 1/2 qd^T H qd [J]."""
-    qd = as_float_array("qd", qd, shape_tail=(2,))
+    """Kinetic energy 1/2 qd^T H qd [J].
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 2)
+        Joint angles [rad].
+    qd : array_like, shape (..., 2)
+        Joint velocities [rad/s], |qd| <= 1000.
+    arm : ArmParameters
+        The arm.
+    params : BaseParameters, optional
+        Rigid-body parameters; default the physical plant.
+    """
+    qd = speeds("qd", qd)
     H = inertia_matrix(q, arm, params=params)
     return 0.5 * np.einsum("...i,...ij,...j->...", qd, H, qd)
 
 
+@checks_arm
 def potential_energy(q, arm, *, params=None) -> np.ndarray:
     """Gravitational potential energy (B.1) up to a constant [J], shape (...).
 
@@ -424,6 +444,6 @@ def potential_energy(q, arm, *, params=None) -> np.ndarray:
     params : BaseParameters, optional
         Rigid-body parameters; default the physical plant.
     """
-    q = as_float_array("q", q, shape_tail=(2,))
+    q = angles("q", q)
     out, lead = _evaluate(5, q, _NO_Q, arm, params)
     return out.reshape(lead)

@@ -20,6 +20,7 @@ import numpy as np
 from .._jit import kernel, leaf
 
 from .._validation import as_float_array
+from ._checks import accelerations, angles, check_pressures, checks_arm, speeds, torques  # noqa: F401
 from . import layout as lay
 from .layout import (D12, D22, D32, D33, D42, D43, DL, L1, L2, L12, L22, L32, L33, L42, L43,
                      LL, X11, X21, Y11, Y21)
@@ -210,12 +211,20 @@ def _points_many(q, P, out):
 
 
 def _flat_q(q):
-    q = as_float_array("q", q, shape_tail=(2,))
+    q = angles("q", q)
     return q.reshape(-1, 2), q.shape[:-1]
 
 
+@checks_arm
 def attachment_points(q, arm) -> np.ndarray:
     """Muscle attachment points for configurations ``q`` [rad], shape (..., 2).
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 2)
+        Joint angles [rad], |q| <= 2 pi.
+    arm : ArmParameters
+        The arm.
 
     Returns
     -------
@@ -228,12 +237,22 @@ def attachment_points(q, arm) -> np.ndarray:
     return out.reshape(lead + (8, 2))
 
 
+@checks_arm
 def muscle_lengths(q, arm, *, with_derivatives: bool = False):
     """Muscle group lengths d_i(q) (A.31)-(A.34) [m], shape (..., 4).
 
     With ``with_derivatives=True`` also returns the lever arms h_i = -dd_i/dq
     [m] and dh_i/dq [m/rad] (derivative with respect to the joint the group
     drives: q1 for groups 1-2, q2 for groups 3-4).
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 2)
+        Joint angles [rad], |q| <= 2 pi.
+    arm : ArmParameters
+        The arm.
+    with_derivatives : bool, keyword-only
+        Also return the lever arms and their derivatives.
     """
     qf, lead = _flat_q(q)
     n = qf.shape[0]
@@ -245,8 +264,17 @@ def muscle_lengths(q, arm, *, with_derivatives: bool = False):
     return d.reshape(shp)
 
 
+@checks_arm
 def lever_arms(q, arm) -> np.ndarray:
-    """Lever arms (e_i x OA_i) . 1_z of the four groups [m], shape (..., 4)."""
+    """Lever arms (e_i x OA_i) . 1_z of the four groups [m], shape (..., 4).
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 2)
+        Joint angles [rad], |q| <= 2 pi.
+    arm : ArmParameters
+        The arm.
+    """
     return muscle_lengths(q, arm, with_derivatives=True)[1]
 
 
@@ -288,13 +316,29 @@ def design_connection_lengths(P, geometry, eps_min: float, eps_max: float) -> np
     return out
 
 
+@checks_arm
 def connection_lengths(arm) -> np.ndarray:
-    """Connection lengths L_conn,i of the arm (Table A.1) [m], shape (4,)."""
+    """Connection lengths L_conn,i of the arm (Table A.1) [m], shape (4,).
+
+    Parameters
+    ----------
+    arm : ArmParameters
+        The arm.
+    """
     return np.array(lay.pack(arm)[lay.LCONN:lay.LCONN + 4])
 
 
+@checks_arm
 def contractions(q, arm) -> np.ndarray:
-    """Contraction of one muscle in each group, eq. (2.12), shape (..., 4) [-]."""
+    """Contraction of one muscle in each group, eq. (2.12), shape (..., 4) [-].
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 2)
+        Joint angles [rad], |q| <= 2 pi.
+    arm : ArmParameters
+        The arm.
+    """
     P = lay.pack(arm)
     d = muscle_lengths(q, arm)
     nm, l0, lc = P[lay.NM:lay.NM + 4], P[lay.L0:lay.L0 + 4], P[lay.LCONN:lay.LCONN + 4]
@@ -308,22 +352,41 @@ def _fk_many(q, P, out, jac):
         jac[n, 0, 0], jac[n, 0, 1], jac[n, 1, 0], jac[n, 1, 1] = tcp_jacobian(q[n, 0], q[n, 1], P)
 
 
+@checks_arm
 def forward_kinematics(q, arm) -> np.ndarray:
-    """TCP position for configurations ``q`` [rad], shape (..., 2) [m]."""
+    """TCP position for configurations ``q`` [rad], shape (..., 2) [m].
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 2)
+        Joint angles [rad], |q| <= 2 pi.
+    arm : ArmParameters
+        The arm.
+    """
     qf, lead = _flat_q(q)
     out, jac = np.empty((qf.shape[0], 2)), np.empty((qf.shape[0], 2, 2))
     _fk_many(qf, lay.pack(arm), out, jac)
     return out.reshape(lead + (2,))
 
 
+@checks_arm
 def jacobian(q, arm) -> np.ndarray:
-    """TCP Jacobian dr/dq for configurations ``q``, shape (..., 2, 2) [m/rad]."""
+    """TCP Jacobian dr/dq for configurations ``q``, shape (..., 2, 2) [m/rad].
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 2)
+        Joint angles [rad], |q| <= 2 pi.
+    arm : ArmParameters
+        The arm.
+    """
     qf, lead = _flat_q(q)
     out, jac = np.empty((qf.shape[0], 2)), np.empty((qf.shape[0], 2, 2))
     _fk_many(qf, lay.pack(arm), out, jac)
     return jac.reshape(lead + (2, 2))
 
 
+@checks_arm
 def inverse_kinematics(r, arm) -> np.ndarray:
     """Elbow-up (q2 < 0) inverse kinematics of the TCP.
 
@@ -355,8 +418,17 @@ def inverse_kinematics(r, arm) -> np.ndarray:
     return np.stack([q1, q2], axis=-1)
 
 
+@checks_arm
 def in_working_area(q, arm) -> np.ndarray:
-    """True where q lies inside the working area (2.6)-(2.7)."""
+    """True where q lies inside the working area (2.6)-(2.7).
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 2)
+        Joint angles [rad], |q| <= 2 pi.
+    arm : ArmParameters
+        The arm.
+    """
     q = as_float_array("q", q, shape_tail=(2,))
     g = arm.geometry
     return ((q[..., 0] >= g.q1_min) & (q[..., 0] <= g.q1_max)

@@ -133,7 +133,10 @@ import numpy as np
 
 from .._jit import kernel, leaf
 
-from .._validation import as_float_array, check_int, check_range
+from .._validation import (as_float_array, check_bool, check_finite_result, check_int,
+                           check_range)
+from ._checks import (accelerations, angles, check_arm, check_pressures, checks_arm,  # noqa: F401
+                      speeds, torques)
 from ..hysteresis.force import hysteresis_factor, scaled_contraction
 from ..hysteresis.memory import MAX_DEPTH, MEMORY, preisach_output, preisach_peek, \
     preisach_update
@@ -425,12 +428,15 @@ def simulate(arm, x0, set_values, *, dt: float = 1e-3, substeps: int = 2,
         Only with ``return_effect_state``: the effect states after the last
         step (entries beyond a row's ``effect_state_length`` unchanged).
     """
-    check_range("dt", dt, 1e-6, 1.0, unit="s")
-    if not isinstance(return_effect_state, (bool, np.bool_)):
-        raise TypeError(f"return_effect_state must be a bool, got {return_effect_state!r}")
+    dt = check_range("dt", dt, 1e-6, 1.0, unit="s")
+    return_effect_state = check_bool("return_effect_state", return_effect_state)
     substeps = check_int("substeps", substeps, 1, 10000)
-    x0 = as_float_array("x0", x0, shape_tail=(NX,))
-    U = as_float_array("set_values", set_values, shape_tail=(NU,))
+    x0 = _state("x0", x0)
+    U = check_pressures("set_values", set_values, tail=NU)
+    if U.ndim not in (2, 3):
+        raise ValueError(f"set_values must have shape (N, 4) or (B, N, 4), got {U.shape}")
+    if x0.ndim not in (1, 2):
+        raise ValueError(f"x0 must have shape (8,) or (B, 8), got {x0.shape}")
     batched = x0.ndim == 2 or U.ndim == 3
     X0 = np.atleast_2d(x0)
     if U.ndim == 2:
@@ -438,17 +444,27 @@ def simulate(arm, x0, set_values, *, dt: float = 1e-3, substeps: int = 2,
     B = max(X0.shape[0], U.shape[0])
     if params is None:
         arms = list(arm) if isinstance(arm, (list, tuple)) else [arm]
+        if not arms:
+            raise ValueError("arm must be an ArmParameters or a non-empty sequence of them")
+        for i, a in enumerate(arms):
+            check_arm(a, "arm" if len(arms) == 1 and not isinstance(arm, (list, tuple))
+                      else f"arm[{i}]")
         rows = np.array([lay.pack(a) for a in arms])
     else:
         rows = np.atleast_2d(as_float_array("params", params, shape_tail=(lay.NP,)))
     B = max(B, rows.shape[0])
+    for name, n_rows in (("x0", X0.shape[0]), ("set_values", U.shape[0]),
+                         ("params" if params is not None else "arm", rows.shape[0])):
+        if n_rows not in (1, B):
+            raise ValueError(f"{name} has {n_rows} batch rows; every batched argument must have "
+                             f"1 or B = {B}")
     X0 = np.array(np.broadcast_to(X0, (B, NX)))          # writable C copies: one
     U = np.array(np.broadcast_to(U, (B,) + U.shape[1:]))  # numba signature for all
     rows = np.array(np.broadcast_to(rows, (B, lay.NP)))
     if tau_ext is None:
         T = np.zeros((B, U.shape[1], 2))
     else:
-        T = as_float_array("tau_ext", tau_ext, shape_tail=(2,))
+        T = torques("tau_ext", tau_ext)
         T = np.array(np.broadcast_to(T if T.ndim == 3 else T[None], (B, U.shape[1], 2)))
     check_valve_step(rows, dt / substeps)
     nz = int(lay.effect_state_lengths(rows).max())
@@ -464,6 +480,12 @@ def simulate(arm, x0, set_values, *, dt: float = 1e-3, substeps: int = 2,
         _check_effect_state(Z, rows)
     out = np.empty((B, U.shape[1] + 1, NX))
     _simulate_batch(X0, Z, U, T, float(dt), substeps, rows, out)
+    bad = np.argwhere(~np.isfinite(out))
+    if bad.size:
+        b, k = int(bad[0][0]), int(bad[0][1])
+        raise ValueError(f"simulate: the state of batch row {b} became non-finite at step {k} "
+                         f"(t = {k * dt:g} s): x0 and set_values drive the plant out of the range "
+                         f"where the model is valid")
     if not (batched or B > 1):
         out, Z = out[0], Z[0]
     return (out, Z) if return_effect_state else out
@@ -638,18 +660,47 @@ def check_valve_step(rows, h: float) -> None:
                          f"(h <= T) or a slower valve")
 
 
+@checks_arm
 def state_derivative(x, set_values, arm, *, tau_ext=None) -> np.ndarray:
-    """Plant state derivative for states ``x`` (..., 8) and inputs (..., 4)."""
-    x = as_float_array("x", x, shape_tail=(NX,))
-    u = as_float_array("set_values", set_values, shape_tail=(NU,))
+    """Plant state derivative for states ``x`` (..., 8) and inputs (..., 4).
+
+    Parameters
+    ----------
+    x : array_like, shape (..., 8)
+        States [q1, q2, qd1, qd2, p1..p4] (rad, rad/s, Pa): |q| <= 2 pi,
+        |qd| <= 1000 rad/s, p in [-1 atm, 100 bar].
+    set_values : array_like, shape (..., 4)
+        Valve set values [Pa] (broadcast against ``x``).
+    arm : ArmParameters
+        The plant.
+    tau_ext : array_like, shape (..., 2), optional
+        External joint torques [N m], |tau| <= 1e4.
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., 8)
+        dx/dt (finite; otherwise ``ValueError``).
+    """
+    x = _state("x", x)
+    u = check_pressures("set_values", set_values, tail=NU)
     shape = np.broadcast_shapes(x.shape[:-1], u.shape[:-1])
     xf = np.ascontiguousarray(np.broadcast_to(x, shape + (NX,)).reshape(-1, NX))
     uf = np.ascontiguousarray(np.broadcast_to(u, shape + (NU,)).reshape(-1, NU))
     tf = np.zeros((xf.shape[0], 2)) if tau_ext is None else np.ascontiguousarray(
-        np.broadcast_to(as_float_array("tau_ext", tau_ext, shape_tail=(2,)), shape + (2,)).reshape(-1, 2))
+        np.broadcast_to(torques("tau_ext", tau_ext), shape + (2,)).reshape(-1, 2))
     out = np.empty_like(xf)
     _rhs_many(xf, uf, tf, lay.pack(arm), out)
-    return out.reshape(shape + (NX,))
+    return check_finite_result("state_derivative", out.reshape(shape + (NX,)), "these x, "
+                               "set_values (the state is outside the model's valid range)")
+
+
+def _state(name: str, x) -> np.ndarray:
+    """Plant states (..., 8): angles, speeds and pressures in their ranges (``_checks``)."""
+    x = as_float_array(name, x, shape_tail=(NX,))
+    angles(f"{name}[..., 0:2] (q)", x[..., 0:2])
+    speeds(f"{name}[..., 2:4] (qd)", x[..., 2:4])
+    check_pressures(f"{name}[..., 4:8] (p)", x[..., 4:8])
+    return x
 
 
 @kernel
@@ -661,6 +712,7 @@ def _rhs_many(X, U, T, P, out):
         plant_rhs(X[n], z, U[n], T[n], P, out[n], work)
 
 
+@checks_arm
 def rest_state(q, arm) -> tuple[np.ndarray, np.ndarray]:
     """A state at rest in ``q`` and the constant set values that hold it there.
 
@@ -670,6 +722,13 @@ def rest_state(q, arm) -> tuple[np.ndarray, np.ndarray]:
     ``arm.effects``, and the set values invert the plant's true valve
     characteristic (3.12) (``Effects.valve_offset`` / ``valve_gain`` if set).
 
+    Parameters
+    ----------
+    q : array_like, shape (2,)
+        Joint angles [rad].
+    arm : ArmParameters
+        The plant.
+
     Returns
     -------
     x0 : numpy.ndarray, shape (8,)
@@ -677,9 +736,9 @@ def rest_state(q, arm) -> tuple[np.ndarray, np.ndarray]:
     """
     from .pneumatics import static_pressures
 
-    q = as_float_array("q", q, shape_tail=(2,))
+    q = angles("q", q)
     if q.shape != (2,):
-        raise ValueError("rest_state expects a single configuration q of shape (2,)")
+        raise ValueError(f"q must be a single configuration of shape (2,), got {q.shape}")
     p = static_pressures(q, arm)
     if np.any(p < 0) or np.any(p > arm.pneumatics.p_max):
         raise ValueError(f"rest_state: configuration q = {q} needs pressures {p} Pa outside "

@@ -29,6 +29,7 @@ import numpy as np
 from .._jit import kernel, leaf
 
 from .._validation import as_float_array, check_int
+from ._checks import accelerations, angles, check_pressures, checks_arm, speeds, torques  # noqa: F401
 from . import layout as lay
 from .layout import COEF, EPS_F0, EPS_FLOOR, L0, V_C
 
@@ -259,6 +260,7 @@ def antiderivative(coefficients, eps) -> np.ndarray:
     return _coef_eval(1, coefficients, eps)
 
 
+@checks_arm
 def muscle_force(group: int, eps, pressure, arm) -> np.ndarray:
     """Force of one muscle (= the group force) by (3.9) [N].
 
@@ -276,11 +278,23 @@ def muscle_force(group: int, eps, pressure, arm) -> np.ndarray:
     return p * _evaluate(0, group, eps, arm)
 
 
+@checks_arm
 def force_function(group: int, eps, arm) -> np.ndarray:
-    """Force per unit gauge pressure f(eps) of one muscle [N/Pa = m^2]."""
+    """Force per unit gauge pressure f(eps) of one muscle [N/Pa = m^2].
+
+    Parameters
+    ----------
+    group : int
+        Muscle group 1..4.
+    eps : array_like
+        Contraction [-].
+    arm : ArmParameters
+        The arm.
+    """
     return _evaluate(0, group, eps, arm)
 
 
+@checks_arm
 def force_polynomial(group: int, eps, arm) -> np.ndarray:
     """The raw force polynomial of ``group`` at ``eps``, without the clipping [N/Pa].
 
@@ -298,12 +312,34 @@ def force_polynomial(group: int, eps, arm) -> np.ndarray:
     return _evaluate(3, group, eps, arm)
 
 
+@checks_arm
 def muscle_volume_of(group: int, eps, arm) -> np.ndarray:
-    """Volume of one muscle of ``group`` at contraction ``eps`` [m^3]."""
+    """Volume of one muscle of ``group`` at contraction ``eps`` [m^3].
+
+    Parameters
+    ----------
+    group : int
+        Muscle group 1..4.
+    eps : array_like
+        Contraction [-].
+    arm : ArmParameters
+        The arm.
+    """
     return _evaluate(2, group, eps, arm)
 
 
+@checks_arm
 def group_volume(group: int, eps, arm) -> np.ndarray:
-    """Volume of the whole group (n_m muscles) [m^3]."""
+    """Volume of the whole group (n_m muscles) [m^3].
+
+    Parameters
+    ----------
+    group : int
+        Muscle group 1..4.
+    eps : array_like
+        Contraction [-].
+    arm : ArmParameters
+        The arm.
+    """
     n = arm.muscles.groups[check_int("group", group, 1, 4) - 1].n_muscles
     return n * muscle_volume_of(group, eps, arm)

@@ -20,7 +20,9 @@ from __future__ import annotations
 import numpy as np
 from .._jit import kernel, leaf
 
-from .._validation import as_float_array, check_range
+from .._validation import as_float_array, check_range, check_range_array
+from ._checks import (PRESSURE_MAX, accelerations, angles, check_pressures,  # noqa: F401
+                      checks_arm, speeds, torques)
 from ..units import DEG
 from . import layout as lay
 from .dynamics import gravity_torque
@@ -185,6 +187,7 @@ def _gc_many(q, Pc, out):
         out[n, 0], out[n, 1] = gravity_compensation_dp(q[n, 0], q[n, 1], Pc, mt, dmt, vol)
 
 
+@checks_arm
 def joint_stiffness(q, pressures, arm) -> np.ndarray:
     """Joint stiffness (2.18) incl. the closed-valve dp/dq terms [N m/rad].
 
@@ -200,8 +203,8 @@ def joint_stiffness(q, pressures, arm) -> np.ndarray:
     -------
     numpy.ndarray, shape (..., 2)
     """
-    q = as_float_array("q", q, shape_tail=(2,))
-    p = as_float_array("pressures", pressures, shape_tail=(4,))
+    q = angles("q", q)
+    p = check_pressures("pressures", pressures)
     shape = np.broadcast_shapes(q.shape[:-1], p.shape[:-1])
     qf = np.ascontiguousarray(np.broadcast_to(q, shape + (2,)).reshape(-1, 2))
     pf = np.ascontiguousarray(np.broadcast_to(p, shape + (4,)).reshape(-1, 4))
@@ -210,6 +213,7 @@ def joint_stiffness(q, pressures, arm) -> np.ndarray:
     return out.reshape(shape + (2,))
 
 
+@checks_arm
 def gravity_compensation(q, arm, *, params=None) -> np.ndarray:
     """Delta-p of the static gravity compensation (3.18)-(3.19) [Pa], shape (..., 2).
 
@@ -218,8 +222,17 @@ def gravity_compensation(q, arm, *, params=None) -> np.ndarray:
     ``arm.plant_base`` for an exact compensation of the nominal plant links
     (without the payload of ``arm.effects``; :func:`static_pressures`
     compensates the plant truth including it).
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 2)
+        Joint angles [rad], |q| <= 2 pi.
+    arm : ArmParameters
+        The arm.
+    params : BaseParameters, optional
+        Rigid-body parameters the compensation believes in.
     """
-    q = as_float_array("q", q, shape_tail=(2,))
+    q = angles("q", q)
     return _gravity_compensation_row(q, lay.pack(arm, arm.model_gravity if params is None
                                                  else params))
 
@@ -232,31 +245,62 @@ def _gravity_compensation_row(q, Pc) -> np.ndarray:
     return out.reshape(q.shape[:-1] + (2,))
 
 
+@checks_arm
 def delta_p_pressures(dp, arm, *, clip: bool = True) -> np.ndarray:
-    """Desired pressures [p_m1 + dp1, p_m1 - dp1, p_m2 + dp2, p_m2 - dp2] [Pa] (3.7)."""
-    dp = as_float_array("dp", dp, shape_tail=(2,))
+    """Desired pressures [p_m1 + dp1, p_m1 - dp1, p_m2 + dp2, p_m2 - dp2] [Pa] (3.7).
+
+    Parameters
+    ----------
+    dp : array_like, shape (..., 2)
+        Pressure differences per joint [Pa].
+    arm : ArmParameters
+        The arm (mean pressures, p_max).
+    clip : bool, keyword-only
+        Clip to [0, p_max].
+    """
+    dp = check_range_array("dp", as_float_array("dp", dp, shape_tail=(2,)), -PRESSURE_MAX,
+                           PRESSURE_MAX, unit="Pa")
     pm = arm.pneumatics.p_mean
     p = np.stack([pm[0] + dp[..., 0], pm[0] - dp[..., 0], pm[1] + dp[..., 1],
                   pm[1] - dp[..., 1]], axis=-1)
     return np.clip(p, 0.0, arm.pneumatics.p_max) if clip else p
 
 
+@checks_arm
 def valve_pressure(set_values, arm) -> np.ndarray:
-    """Static delivered pressure p = v1 + v2 p_s (3.12) [Pa], shape (..., 4)."""
-    u = as_float_array("set_values", set_values, shape_tail=(4,))
+    """Static delivered pressure p = v1 + v2 p_s (3.12) [Pa], shape (..., 4).
+
+    Parameters
+    ----------
+    set_values : array_like, shape (..., 4)
+        Valve set values [Pa].
+    arm : ArmParameters
+        The arm (valve characteristics).
+    """
+    u = check_pressures("set_values", set_values)
     v1 = np.array([v.v1 for v in arm.valves.valves])
     v2 = np.array([v.v2 for v in arm.valves.valves])
     return v1 + v2 * u
 
 
+@checks_arm
 def valve_set_values(pressures, arm) -> np.ndarray:
-    """Set values that deliver ``pressures`` by inverting (3.12), clipped to [0, p_max] [Pa]."""
-    p = as_float_array("pressures", pressures, shape_tail=(4,))
+    """Set values that deliver ``pressures`` by inverting (3.12), clipped to [0, p_max] [Pa].
+
+    Parameters
+    ----------
+    pressures : array_like, shape (..., 4)
+        Desired gauge pressures [Pa].
+    arm : ArmParameters
+        The arm (valve characteristics).
+    """
+    p = check_pressures("pressures", pressures)
     v1 = np.array([v.v1 for v in arm.valves.valves])
     v2 = np.array([v.v2 for v in arm.valves.valves])
     return np.clip((p - v1) / v2, 0.0, arm.pneumatics.p_max)
 
 
+@checks_arm
 def static_pressures(q, arm, *, params=None) -> np.ndarray:
     """Gauge pressures holding ``q`` in static equilibrium with the Delta-p approach [Pa].
 
@@ -264,15 +308,25 @@ def static_pressures(q, arm, *, params=None) -> np.ndarray:
     ``layout.pack(arm)``, including the payload of ``arm.effects``, so the
     result is a true equilibrium of the simulated arm).  Not clipped, so that
     an infeasible configuration shows up as a pressure outside [0, p_max].
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 2)
+        Joint angles [rad], |q| <= 2 pi.
+    arm : ArmParameters
+        The arm.
+    params : BaseParameters, optional
+        Rigid-body parameters (default: the plant truth).
     """
     if params is None:
-        q = as_float_array("q", q, shape_tail=(2,))
+        q = angles("q", q)
         dp = _gravity_compensation_row(q, lay.pack(arm))
     else:
         dp = gravity_compensation(q, arm, params=params)
     return delta_p_pressures(dp, arm, clip=False)
 
 
+@checks_arm
 def calibrate_mean_pressures(arm, *, q=(50.0 * DEG, -80.0 * DEG),
                              target_stiffness=(43.0, 27.0)) -> tuple:
     """Mean pressures p_m (per joint) giving a target joint stiffness.
@@ -280,6 +334,15 @@ def calibrate_mean_pressures(arm, *, q=(50.0 * DEG, -80.0 * DEG),
     Solves K_j(q, p(p_m)) = target_j for p_m,j, with p the static
     gravity-compensation pressures of the plant at ``q`` (thesis §6.3.3:
     K1 = 43, K2 = 27 Nm/rad at the step-response impact instant).
+
+    Parameters
+    ----------
+    arm : ArmParameters
+        The arm.
+    q : pair of float, keyword-only
+        Configuration [rad] (default 50 deg, -80 deg).
+    target_stiffness : pair of float, keyword-only
+        Target joint stiffnesses [N m/rad], each in (0, 1e4].
 
     Returns
     -------

@@ -22,6 +22,7 @@ from .._jit import kernel, leaf
 
 from .geometry import _flat_q, group_length_lever
 from . import layout as lay
+from ._checks import accelerations, angles, check_pressures, checks_arm, speeds, torques  # noqa: F401
 from .layout import L0, LCONN, NM
 from .muscle import dforce_deps, force_per_pressure, muscle_volume
 
@@ -135,26 +136,54 @@ def _eval(q, P):
     return mt.reshape(shp), dmt.reshape(shp), vol.reshape(shp)
 
 
+@checks_arm
 def torque_functions(q, arm, *, with_derivative: bool = False):
     """Torque functions m_tau,i(q) [N m/Pa], shape (..., 4).
 
     Multiply by 1e5 for the thesis' Nm/bar (fig. 2.11).  With
     ``with_derivative=True`` also returns d m_tau,i/dq along the driven joint.
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 2)
+        Joint angles [rad], |q| <= 2 pi.
+    arm : ArmParameters
+        The arm.
+    with_derivative : bool, keyword-only
+        Also return d m_tau,i/dq [N m/(Pa rad)].
     """
     mt, dmt, _ = _eval(q, lay.pack(arm))
     return (mt, dmt) if with_derivative else mt
 
 
+@checks_arm
 def group_volumes(q, arm) -> np.ndarray:
-    """Volumes of the four muscle groups at configuration ``q`` [m^3], shape (..., 4)."""
+    """Volumes of the four muscle groups at configuration ``q`` [m^3], shape (..., 4).
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 2)
+        Joint angles [rad], |q| <= 2 pi.
+    arm : ArmParameters
+        The arm.
+    """
     return _eval(q, lay.pack(arm))[2]
 
 
+@checks_arm
 def joint_torques(q, pressures, arm) -> np.ndarray:
-    """Actuator torques (2.17) [N m] for gauge pressures ``pressures`` [Pa] (..., 4)."""
-    from .._validation import as_float_array
+    """Actuator torques (2.17) [N m] for gauge pressures ``pressures`` [Pa] (..., 4).
 
-    p = as_float_array("pressures", pressures, shape_tail=(4,))
+    Parameters
+    ----------
+    q : array_like, shape (..., 2)
+        Joint angles [rad], |q| <= 2 pi.
+    pressures : array_like, shape (..., 4)
+        Gauge pressures [Pa] in [-1 atm, 100 bar].
+    arm : ArmParameters
+        The arm.
+    """
+    p = check_pressures("pressures", pressures)
     mt = torque_functions(q, arm)
     tau = mt * p
     return np.stack([tau[..., 0] + tau[..., 1], tau[..., 2] + tau[..., 3]], axis=-1)
