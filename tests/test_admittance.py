@@ -28,7 +28,7 @@ def arm():
 
 @pytest.fixture(scope="module")
 def ref(arm):
-    return tr.joint_steps(arm, q_levels=[Q0, Q0], t_changes=[1e9], duration=3.0)
+    return tr.joint_steps(arm, q_levels=[Q0], t_changes=[], duration=3.0)
 
 
 @pytest.fixture(scope="module")

@@ -353,9 +353,14 @@ _CACHE_PROBE = r"""
 import json, numpy as np
 from ppamsafety.params import thesis_arm
 from ppamsafety.control import dispatch, ControllerKind
+from ppamsafety.experiments.trajectories import REFERENCE_ROW as REF
+from ppamsafety.plant.geometry import forward_kinematics
 arm = thesis_arm()
+q = np.radians([50, -80])
+ref = REF.pack(q_d=q, qd_d=0.0, qdd_d=0.0, qddd_d=0.0, r_d=forward_kinematics(q, arm),
+               rd_d=0.0)                          # a consistent hold reference
 for cls in dispatch.CONTROLLER_CLASSES.values():
-    cls().step(arm, np.radians([50, -80]), np.zeros(2), np.full(4, 2e5), np.zeros(12))
+    cls().step(arm, q, np.zeros(2), np.full(4, 2e5), ref)
 st = dispatch.controller_step.stats
 print(json.dumps({"hits": sum(st.cache_hits.values()), "misses": sum(st.cache_misses.values())}))
 """

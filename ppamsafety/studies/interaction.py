@@ -53,7 +53,7 @@ PAYLOAD = 0.5                          #: payload of experiment 3 [kg]
 
 
 def _hold(arm, duration, q=Q_A, name="hold"):
-    return tr.joint_steps(arm, q_levels=[q, q], t_changes=[1e9], duration=duration, name=name)
+    return tr.joint_steps(arm, q_levels=[q], t_changes=[], duration=duration, name=name)
 
 
 def identify_model(plant_arm, *, quick: bool = False):
