@@ -262,6 +262,12 @@ class ConsistentResult(DynamicResult):
 
     Attributes
     ----------
+    lsq : LSQResult
+        The constrained estimate with its (unconstrained, see module doc)
+        statistics; ``lsq.predicted`` is K_f theta_constrained.
+    friction, sign_velocity, datasets, omega, joint_sigma
+        As in :class:`DynamicResult` (``joint_sigma`` from the unconstrained
+        LS residuals).
     unconstrained : DynamicResult
         The ordinary (W)LS estimate of the same data.
     phi : numpy.ndarray, shape (8,)
