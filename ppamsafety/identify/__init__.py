@@ -8,10 +8,14 @@
 * :mod:`.dynamic` -- §3.5.2: regressors (B.3)-(B.6), acceleration-free
   filtering (3.21)-(3.28) with the bilinear F(z), LS / two-step WLS,
   validation laid out like Table 3.4.
+* :mod:`.consistent` -- physically consistent estimate: LS under the planar
+  pseudo-inertia LMIs (Wensing, Kim & Slotine 2017), needs cvxpy
+  (extra ``[identify]``).
 * :mod:`.excitation` -- §3.5.2.4: 5-harmonic 10 s Fourier Delta-p excitation,
   its simulation and its design for the condition number.
 """
 
+from .consistent import ConsistentResult, identify_dynamic_consistent
 from .dynamic import (DynamicData, DynamicResult, filtered_regressor, filtered_system,
                       identify_dynamic, mean_squared_torque_error, validation_table)
 from .excitation import (ExcitationDesign, FourierExcitation, design_excitation,
@@ -25,5 +29,6 @@ __all__ = ["LSQResult", "identify_muscle", "identify_valve", "identify_valves", 
            "gravity_base_parameters", "torques_from_forces", "equilibrium_configurations",
            "StaticExperiment", "static_experiment", "DynamicData", "DynamicResult",
            "filtered_regressor", "filtered_system", "identify_dynamic",
+           "identify_dynamic_consistent", "ConsistentResult",
            "mean_squared_torque_error", "validation_table", "FourierExcitation",
            "ExcitationDesign", "design_excitation", "simulate_excitation"]
