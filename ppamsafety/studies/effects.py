@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
+from types import SimpleNamespace
 
 import numpy as np
 import pandas as pd
@@ -475,6 +476,9 @@ def compute(*, quick: bool = False, arm=None, delta: float = HYSTERESIS_DELTA) -
         lc.append({"plant": lab, "variant": LIMIT_CYCLE_VARIANT, "period_s": 20.0,
                    "mean_m": float(g.mean_m), "max_m": float(g.max_m)})
     lc = pd.DataFrame(lc)
+    c20 = cmps["nominal"]
+    thesis_max = float(c20[(c20.variant == LIMIT_CYCLE_VARIANT)
+                           & (c20.period_s == 20.0)].thesis_max_m.iloc[0])
     sm = summ.set_index("plant")
     metrics = {
         "delta": float(delta),
@@ -486,6 +490,10 @@ def compute(*, quick: bool = False, arm=None, delta: float = HYSTERESIS_DELTA) -
         "median_abs_log_ratio": {f"{r.plant} {r.table}": float(r["median |ln ratio|"])
                                  for _, r in ratios.iterrows()},
         "limit_cycle_max_mm": {r.plant: 1e3 * r.max_m for r in lc.itertuples()},
+        "limit_cycle_thesis_max_mm": 1e3 * thesis_max,
+        # "gone": the hysteresis plant's max error within twice the thesis' max
+        "limit_cycle_gone": bool(lc.set_index("plant").loc["hysteresis", "max_m"]
+                                 <= 2 * thesis_max),
         "conclusions": {lab: {c.key: bool(c.holds) for c in concl[lab]} for lab in arms},
         "wall_times_s": {k: round(v, 2) for k, v in walls.items()},
     }
@@ -494,3 +502,152 @@ def compute(*, quick: bool = False, arm=None, delta: float = HYSTERESIS_DELTA) -
                         warmup=warmup, evaluate=evaluate, circle_errors=errs, comparison=cmps,
                         conclusions=concl, table_6_1=t61, ratios=ratios, limit_cycle=lc,
                         wall_times=walls, metrics=metrics)
+
+
+def _yes(b) -> str:
+    return "holds" if b else "does not hold"
+
+
+def render(study: EffectsStudy) -> Section:
+    """The report section of the effects study (formatting only).
+
+    Parameters
+    ----------
+    study : EffectsStudy
+        Output of :func:`compute`.
+
+    Returns
+    -------
+    Section
+        Markdown and artifacts (figures and CSV tables).
+    """
+    sm = study.sawtooth_summary.set_index("plant")
+    # .at keeps each column's dtype (counts stay int)
+    n, h = (SimpleNamespace(**{c: sm.at[lab, c] for c in sm.columns})
+            for lab in ("nominal", "hysteresis"))
+    levels = study.sawtooth["nominal"]
+    q1s = ", ".join(f"{v:g}" for v in levels.q1_d_deg)
+    q2s = ", ".join(f"{v:g}" for v in levels.q2_d_deg)
+    saw_tab = pd.DataFrame({
+        "plant": list(sm.index),
+        "RMS q1 [deg] (thesis 2.47)": [f"{v:.2f}" for v in sm.rms_q1_deg],
+        "RMS q2 [deg] (thesis 2.06)": [f"{v:.2f}" for v in sm.rms_q2_deg],
+        "q1: rising below / falling above": [f"{a} of {b}" for a, b in
+                                             zip(sm.pattern_q1, sm.steps_q1)],
+        "q2: rising below / falling above": [f"{a} of {b}" for a, b in
+                                             zip(sm.pattern_q2, sm.steps_q2)],
+        "same, bias removed (q1; q2)": [f"{a}; {b}" for a, b in
+                                        zip(sm.pattern_unbiased_q1, sm.pattern_unbiased_q2)],
+        "gap falling − rising [deg] (q1; q2)": [f"{a:.2f}; {b:.2f}" for a, b in
+                                                zip(sm.gap_q1_deg, sm.gap_q2_deg)]})
+    rt = study.ratios.copy()
+    rat = rt.pivot(index="table", columns="plant", values="median |ln ratio|")
+    med = rt.pivot(index="table", columns="plant", values="median ratio")
+    rat_tab = pd.DataFrame({"table": rat.index,
+                            "median |ln ratio| nominal": [f"{v:.3f}" for v in rat.nominal],
+                            "median |ln ratio| hysteresis": [f"{v:.3f}" for v in rat.hysteresis],
+                            "median ratio nominal": [f"{v:.3g}" for v in med.nominal],
+                            "median ratio hysteresis": [f"{v:.3g}" for v in med.hysteresis],
+                            "toward 1": ["yes" if b < a else "no"
+                                         for a, b in zip(rat.nominal, rat.hysteresis)]})
+    lc = study.limit_cycle.set_index("plant")
+    thesis_max = study.metrics["limit_cycle_thesis_max_mm"]
+    lc_n, lc_h = 1e3 * lc.loc["nominal", "max_m"], 1e3 * lc.loc["hysteresis", "max_m"]
+    gone = study.metrics["limit_cycle_gone"]
+    cn = {c.key: c for c in study.conclusions["nominal"]}
+    ch = {c.key: c for c in study.conclusions["hysteresis"]}
+    ct = pd.DataFrame({"": [f"({k})" for k in cn], "thesis claim": [c.claim for c in cn.values()],
+                       "nominal plant": [_yes(c.holds) for c in cn.values()],
+                       "with hysteresis": [_yes(ch[k].holds) for k in cn]})
+    changed = [f"({k})" for k in cn if cn[k].holds != ch[k].holds]
+    now_hold = [f"({k})" for k in "abc" if ch[k].holds and not cn[k].holds]
+    still_fail = [f"({k})" for k in "abc" if not ch[k].holds]
+    cmp_h = study.comparison["hysteresis"]
+    walls = study.wall_times
+    md = f"""The plant truth gets the muscle-force hysteresis of §3.6 ((3.35), Preisach weight (3.33),
+δ = {study.delta:g} in every muscle group, the value fitted for the arm's 25-fibre muscles, §3.6.5);
+the controllers keep the nominal model. Every experiment runs on both plants.
+{'**Quick mode: one short tooth and short circle windows; numbers are not comparable to the thesis.**' if study.quick else ''}
+
+### Gravity-compensation sawtooth (§3.5.1.6, figs. 3.1-3.2)
+
+Static gravity compensation alone ((3.18)-(3.19) at the set angles, identified gravity model of
+Table 3.1). The thesis gives neither the set angles nor the step size of its sawtooth, so we chose
+them: q1_d = {q1s} deg and q2_d = {q2s} deg, each change a {RAMP_S:g} s raised-cosine ramp ("gradual"),
+then {SETTLE_S:g} s pause and {WINDOW_S:g} s of data (the window mean is one point of the figures).
+The RMS errors are over all samples of all data windows.
+
+{markdown_table(saw_tab)}
+
+* **RMS errors.** Without hysteresis {n.rms_q1_deg:.2f}° / {n.rms_q2_deg:.2f}° (q1 / q2), with
+  hysteresis {h.rms_q1_deg:.2f}° / {h.rms_q2_deg:.2f}°, against the thesis' 2.47° / 2.06°. The nominal
+  errors are the static error of the identified gravity model alone and depend only on the set
+  angle; hysteresis adds a direction-dependent part.
+* **Direction pattern.** Rising set angles settle below and falling ones above in
+  {h.pattern_q1} of {h.steps_q1} (q1) and {h.pattern_q2} of {h.steps_q2} (q2) steps with hysteresis, against
+  {n.pattern_q1} of {n.steps_q1} and {n.pattern_q2} of {n.steps_q2} without. The q1 count is limited by the static
+  bias of the gravity model on q1 (all nominal q1 errors are below the set point); relative to each
+  joint's mean error the pattern holds in {h.pattern_unbiased_q1} of {h.steps_q1} (q1) and
+  {h.pattern_unbiased_q2} of {h.steps_q2} (q2) steps. At the same set angle, the error after a falling
+  approach exceeds that after a rising one by {h.gap_q1_deg:.2f}° (q1) and {h.gap_q2_deg:.2f}° (q2) on
+  average; without hysteresis the gap is {n.gap_q1_deg:.2f}° / {n.gap_q2_deg:.2f}° (no memory).
+* **Muscle forces** (plant force vs the nominal law (3.9) at the same logged pressure and
+  contraction, window means). While q2 rises, F3 is below the model in {h.F3_below_q2_rising} of
+  {h.q2_rising} windows and F4 above it in {h.F4_above_q2_rising} of {h.q2_rising}, as in fig. 3.2; while q2
+  falls, F3 is above in {h.F3_above_q2_falling} and F4 below in {h.F4_below_q2_falling} of {h.q2_falling}. Over all
+  four groups of the moving joints, a muscle whose contraction grew over the step is below the
+  model in {h.contracting_below} cases and one whose contraction shrank is above it in
+  {h.extending_above} ({h.moving_groups} group-steps in all) -- the thesis' "if contraction increases,
+  the output force is lower than predicted by the model". Exceptions follow the Preisach memory:
+  after a reversal the new branch starts from the old one's value.
+
+![sawtooth angles](effects_sawtooth_angles.png)
+
+![sawtooth errors](effects_sawtooth_errors.png)
+
+![sawtooth forces](effects_sawtooth_forces.png)
+
+### Table 5.2 and Table 6.1 with hysteresis
+
+Table 5.2 (ten variants, three circles, timing board, {study.warmup:g} s warm-up + {study.evaluate:g} s) and
+Table 6.1 (worst of the four heuristic impact instants of the step and switch runs) recomputed on
+both plants with the functions of the tracking and safety sections. Median over the cells of
+|ln(toolkit / thesis)| (0 = the thesis exactly):
+
+{markdown_table(rat_tab)}
+
+**The Ki = 12 limit cycle.** {LIMIT_CYCLE_VARIANT} at P = 20 s: max error {lc_n:.2f} mm on the nominal
+plant, {lc_h:.2f} mm with hysteresis (mean {1e3 * lc.loc['nominal', 'mean_m']:.2f} / {1e3 * lc.loc['hysteresis', 'mean_m']:.2f} mm;
+thesis max {thesis_max:.2f} mm). Criterion "gone": max error at most twice the thesis' max --
+{'met: the hysteresis damps the slow oscillation, as hypothesised in the tracking section' if gone else 'not met: hysteresis of this size does not remove the velocity-sensor limit cycle (tracking section)'}.
+
+**The thesis' conclusions** (criteria of `ppamsafety/experiments/conclusions.py`):
+
+{markdown_table(ct)}
+
+{('Conclusions that change with hysteresis: ' + ', '.join(changed) + '.') if changed else 'No verdict changes with hysteresis.'}
+Of the tracking conclusions that fail on the nominal plant, {', '.join(now_hold) if now_hold else 'none'} now
+hold{'; ' + ', '.join(still_fail) + ' still fail' if still_fail else ''}. Evidence with hysteresis:
+
+{markdown_table(conclusions_table(study.conclusions['hysteresis'])[['', 'verdict', 'evidence']])}
+
+Table 5.2 with hysteresis (toolkit / thesis (ratio), mm):
+
+{markdown_table(tracking.comparison_markdown(cmp_h))}
+
+![ratio shift](effects_ratio_shift.png)
+
+Wall time of this section: {sum(walls.values()):.1f} s ({', '.join(f'{k} {v:.1f} s' for k, v in walls.items())}).
+"""
+    arts = [("effects_sawtooth.csv", pd.concat([w.assign(plant=lab) for lab, w in
+                                                study.sawtooth.items()], ignore_index=True)),
+            ("effects_summary.csv", study.sawtooth_summary),
+            ("effects_ratios.csv", study.ratios),
+            ("effects_table_5_2.csv", pd.concat([c.assign(plant=lab) for lab, c in
+                                                 study.comparison.items()], ignore_index=True)),
+            ("effects_table_6_1.csv", pd.concat([t.assign(plant=lab) for lab, t in
+                                                 study.table_6_1.items()], ignore_index=True)),
+            ("effects_conclusions.csv", ct),
+            *study.plot().items()]
+    return Section("Effects: the thesis revisited with muscle hysteresis (§3.5.1.6, §3.6)", md,
+                   arts, dict(study.metrics))
