@@ -544,8 +544,8 @@ def render(study: EffectsStudy) -> Section:
     rat = rt.pivot(index="table", columns="plant", values="median |ln ratio|")
     med = rt.pivot(index="table", columns="plant", values="median ratio")
     rat_tab = pd.DataFrame({"table": rat.index,
-                            "median |ln ratio| nominal": [f"{v:.3f}" for v in rat.nominal],
-                            "median |ln ratio| hysteresis": [f"{v:.3f}" for v in rat.hysteresis],
+                            "median abs(ln ratio) nominal": [f"{v:.3f}" for v in rat.nominal],
+                            "median abs(ln ratio) hysteresis": [f"{v:.3f}" for v in rat.hysteresis],
                             "median ratio nominal": [f"{v:.3g}" for v in med.nominal],
                             "median ratio hysteresis": [f"{v:.3g}" for v in med.hysteresis],
                             "toward 1": ["yes" if b < a else "no"
