@@ -627,7 +627,7 @@ thesis max {thesis_max:.2f} mm). Criterion "gone": max error at most twice the t
 
 {('Conclusions that change with hysteresis: ' + ', '.join(changed) + '.') if changed else 'No verdict changes with hysteresis.'}
 Of the tracking conclusions that fail on the nominal plant, {', '.join(now_hold) if now_hold else 'none'} now
-hold{'; ' + ', '.join(still_fail) + ' still fail' if still_fail else ''}. Evidence with hysteresis:
+hold{'; ' + ', '.join(still_fail) + (' still fails' if len(still_fail) == 1 else ' still fail') if still_fail else ''}. Evidence with hysteresis:
 
 {markdown_table(conclusions_table(study.conclusions['hysteresis'])[['', 'verdict', 'evidence']])}
 
