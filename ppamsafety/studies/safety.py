@@ -49,10 +49,15 @@ def every_instant_case(experiment: str, index: int, every: int) -> pd.DataFrame:
     return s[["t0", "tcp_speed", "F_max", "HIC36", "HIC15"]].assign(label=label)
 
 
-def _heuristic_table(arm, head):
+def _heuristic_table(arm, head, runs=None):
+    """Table 6.1: worst impacts of the thesis variants at the four heuristic instants.
+
+    ``runs`` may hold already computed ``{experiment: list of ExperimentResult}``
+    (the ten thesis variants of :func:`run_thesis_experiment` on ``arm``) to reuse.
+    """
     rows, states, worst = [], {}, {}
     for exp in EXPERIMENTS:
-        res = run_thesis_experiment(arm, exp)
+        res = run_thesis_experiment(arm, exp) if runs is None else runs[exp]
         for r in res:
             label = r.meta["label"]
             res_ev = evaluate_experiment(r, arm, head=head, history=True)

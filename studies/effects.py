@@ -1,0 +1,9 @@
+"""The thesis revisited with muscle hysteresis in the plant (sawtooth, Tables 5.2 and 6.1).
+
+Run alone:  python studies/effects.py [outdir] [--quick] [--overwrite]
+"""
+
+from ppamsafety.studies import main
+
+if __name__ == "__main__":
+    raise SystemExit(main("effects"))
