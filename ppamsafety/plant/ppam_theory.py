@@ -157,7 +157,7 @@ def shape_state(a, slenderness) -> dict:
         ``r_max_over_l0`` (largest radius / l0 [-]).
     """
     a = as_float_array("a", a)
-    check_range_array("a", a, 0.0, 1e12)
+    check_range_array("a", np.atleast_1d(a), 0.0, 1e12)
     s = _check_s(slenderness)
     psi = _end_angle(a, s)
     i1, j, i3 = _integrals(a, psi)
@@ -211,7 +211,7 @@ def _state_of_eps(eps, slenderness):
     s = _check_s(slenderness)
     e = as_float_array("eps", eps)
     emax = _max_contraction(s)
-    check_range_array("eps", e, EPS_LOWEST, emax)
+    check_range_array("eps", np.atleast_1d(e), EPS_LOWEST, emax)
     flat = e.ravel()
     a = _solve_a(flat, s)
     st = shape_state(a, s)
