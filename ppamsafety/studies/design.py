@@ -9,6 +9,7 @@ import pandas as pd
 
 from .. import design
 from ..plant import geometry as geo
+from ..params import theoretical_muscles
 from ..plant import pneumatics as pn
 from ..report.tables import markdown_table
 from ..units import BAR, DEG, MM
@@ -43,6 +44,9 @@ class DesignStudy:
         Joint stiffness (2.18) over the working area.
     max_load, max_load_cad : ppamsafety.design.MaxLoadMap
         Maximum load with the plant links and with the CAD links (fig. 2.15).
+    max_load_theory : ppamsafety.design.MaxLoadMap
+        Maximum load with the CAD links and the theoretical force function
+        f_t0 (:func:`ppamsafety.params.theoretical_muscles`), as at design time.
     table_a1 : pandas.DataFrame
         Table A.1 (muscle lengths) computed vs thesis [mm].
     K_step : numpy.ndarray
@@ -66,6 +70,7 @@ class DesignStudy:
     K_step: np.ndarray
     p_mean: np.ndarray
     edge: dict
+    max_load_theory: object = None
     metrics: dict = field(default_factory=dict)
 
     def to_pandas(self) -> pd.DataFrame:
@@ -102,6 +107,9 @@ def compute(*, quick: bool = False, arm=None) -> DesignStudy:
     K_step = pn.joint_stiffness(q_step, pn.static_pressures(q_step, arm), arm)
     ml = design.max_load_map(arm, n1=2 * n, n2=2 * n)
     ml_cad = design.max_load_map(arm, links=design.cad_links(), n1=2 * n, n2=2 * n)
+    g0 = arm.muscles.groups[0]
+    arm_theory = arm.replace(muscles=theoretical_muscles(slenderness=g0.slenderness, l0=g0.l0))
+    ml_theory = design.max_load_map(arm_theory, links=design.cad_links(), n1=2 * n, n2=2 * n)
     d = ml.data
     g = arm.geometry
     inner = d[(d.q1_rad > g.q1_min + 5 * DEG) & (d.q1_rad < g.q1_max - 5 * DEG)
@@ -116,13 +124,14 @@ def compute(*, quick: bool = False, arm=None) -> DesignStudy:
     metrics = {"table_A1_max_abs_diff_mm": float(ta1["difference [mm]"].abs().max()),
                "K_step": K_step.tolist(), "max_load_min_kg": ml.minimum,
                "max_load_min_cad_kg": ml_cad.minimum,
-               "max_load_interior_min_kg": float(inner.M_max_kg.min())}
+               "max_load_interior_min_kg": float(inner.M_max_kg.min()),
+               "max_load_min_theory_cad_kg": ml_theory.minimum}
     return DesignStudy(quick=quick, torque_functions=tf, stiffness=sm, max_load=ml,
                        max_load_cad=ml_cad, table_a1=ta1, K_step=K_step,
                        p_mean=np.array(arm.pneumatics.p_mean),
                        edge={"e1max": e1max, "e4max": e4max, "f1_edge": f1_edge,
                              "f4_raw": f4_raw},
-                       metrics=metrics)
+                       max_load_theory=ml_theory, metrics=metrics)
 
 
 def render(study: DesignStudy) -> Section:
@@ -149,6 +158,8 @@ def render(study: DesignStudy) -> Section:
     qmin = np.array(ml.argmin) / DEG
     pm = study.p_mean / BAR
     inner_min = study.metrics["max_load_interior_min_kg"]
+    ml_th = study.max_load_theory
+    qth = np.array(ml_th.argmin) / DEG
     md = f"""Geometry of Table 2.1 with the identified muscle model of Table B.1 (all SI inside).
 
 **Table A.1 reproduced** (acceptance: +-0.5 mm):
@@ -175,6 +186,7 @@ area (hatched: a pressure would leave [0, 3] bar).
 | thesis fig. 2.15 | "just over 2 kg" | |
 | this toolkit, plant links | {ml.minimum:.2f} kg | ({qmin[0]:.0f}, {qmin[1]:.0f}) |
 | this toolkit, CAD links (m1 = 1.5, m2 = 1.05 kg) | {ml_cad.minimum:.2f} kg | |
+| this toolkit, CAD links, theoretical f_t0 (2.3) instead of Table B.1 | {ml_th.minimum:.2f} kg | ({qth[0]:.0f}, {qth[1]:.0f}) |
 | joint-1 limit (A.43) alone | {m1_min:.2f} kg | |
 | joint-2 limit, muscle 3 carrying (A.44) | {m2a:.2f} kg | |
 | joint-2 limit, muscle 4 carrying (A.45) | {m2b:.2f} kg | |
@@ -188,6 +200,8 @@ The identified fits fall to about zero force near 30 % contraction: f1({100 * e1
 (clipped to 0) for group 4 at q2 = -130 deg, where the design puts those muscles. At those edges the arm cannot carry a load (at
 q2 = -130 deg muscle 4 cannot even hold the forearm: negative maximum load). In the interior the
 map agrees in magnitude with the thesis (median {d.M_max_kg.median():.1f} kg).
+Recomputed with the theoretical f_t0 (Daerden's N -> inf model, `ppamsafety.plant.ppam_theory`,
+fitted as (2.3)) and the CAD links, the minimum is {ml_th.minimum:.2f} kg, the thesis' "just over 2 kg".
 {'' if not quick else '(quick mode: coarse grids)'}
 
 ![max load](design_max_load.png)
