@@ -83,8 +83,7 @@ def _random_reference(arm, n, rng):
 
 # -- declarations ---------------------------------------------------------------------------
 def test_reference_constants_match_the_reference_columns():
-    """Temporary copy in control/base.py (circular import) == trajectories.REF_COLUMNS."""
-    assert list(base._REF_COLUMNS) == list(tr.REF_COLUMNS)
+    """The controllers' reference offsets are those of the declared reference row."""
     assert base.NREF == len(tr.REF_COLUMNS)
     for const, col in [("R_Q", "q1_d"), ("R_QD", "qd1_d"), ("R_QDD", "qdd1_d"),
                        ("R_QDDD", "qddd1_d"), ("R_X", "x_d"), ("R_Y", "y_d"), ("R_XD", "xd_d"),

@@ -58,22 +58,15 @@ KIND_GC, KIND_PID, KIND_PSMC_JOINT, KIND_PSMC_TASK, KIND_SMC, KIND_ADMITTANCE = 
     ControllerKind.SMC, ControllerKind.ADMITTANCE)
 
 # -- reference row -------------------------------------------------------------------------
-# TEMPORARY: a copy of ``experiments.trajectories.REF_COLUMNS`` (tests/test_control_layouts.py
-# asserts they are equal).  It cannot be imported from there: importing
-# ``ppamsafety.experiments.trajectories`` runs ``ppamsafety/experiments/__init__.py``, which
-# imports the catalogue, which imports this package (circular import).  To be repointed to the
-# declared REF layout once it exists in a module importable from here.
-_REF_COLUMNS = ("q1_d", "q2_d", "qd1_d", "qd2_d", "qdd1_d", "qdd2_d", "qddd1_d", "qddd2_d",
-                "x_d", "y_d", "xd_d", "yd_d")
-NREF = len(_REF_COLUMNS)                  #: reference row length
-R_Q = _REF_COLUMNS.index("q1_d")          #: q_d (2) [rad]
-R_QD = _REF_COLUMNS.index("qd1_d")        #: qd_d (2) [rad/s]
-R_QDD = _REF_COLUMNS.index("qdd1_d")      #: qdd_d (2) [rad/s^2]
-R_QDDD = _REF_COLUMNS.index("qddd1_d")    #: qddd_d (2) [rad/s^3]
-R_X = _REF_COLUMNS.index("x_d")           #: x_d [m]
-R_Y = _REF_COLUMNS.index("y_d")           #: y_d [m]
-R_XD = _REF_COLUMNS.index("xd_d")         #: xd_d [m/s]
-R_YD = _REF_COLUMNS.index("yd_d")         #: yd_d [m/s]
+# The reference row is declared in ``experiments/trajectories.py`` (``REFERENCE_ROW``); the
+# controller kernels read it through these offsets.  (``ppamsafety.experiments`` loads its
+# submodules lazily, so importing the trajectories module from here is not circular.)
+from ..experiments.trajectories import (NREF, R_Q_D, R_QD_D, R_QDD_D,  # noqa: E402
+                                        R_QDDD_D, R_R_D, R_RD_D)
+
+R_Q, R_QD, R_QDD, R_QDDD = R_Q_D, R_QD_D, R_QDD_D, R_QDDD_D   #: q_d, its 1st..3rd derivatives
+R_X, R_Y = R_R_D, R_R_D + 1          #: x_d, y_d [m] (the two slots of the r_d field)
+R_XD, R_YD = R_RD_D, R_RD_D + 1      #: xd_d, yd_d [m/s] (the two slots of rd_d)
 
 #: Largest |angle| accepted by :meth:`Controller.step` [rad] (one turn: the joints of the
 #: arm cannot turn further, §2.2).

@@ -29,15 +29,13 @@ from ..control.sensors import (N_Q, N_QD, NSENSOR, SENSOR_NOISE, SensorConfig, p
 from ..layouts import Field, Layout
 from ..plant import layout as lay
 from ..plant.geometry import tcp_jacobian, tcp_position
-from ..plant.model import NWORK, NX, effect_state_length, effects_init, rk4_step, valve_delay
+from ..plant.model import (NWORK, NX, X_P, X_Q, X_QD, effect_state_length, effects_init,
+                           rk4_step, valve_delay)
 from ..plant.pneumatics import delta_p_to_set_values
 from .case import ExperimentCase, as_cases
 from .interaction import EXTERNAL_INPUT, external_joint_torque, external_rows
 from .trajectories import REF_COLUMNS, Reference
 
-# Plant state x = (q (2), qd (2), p (4)) of ppamsafety.plant.model.  TEMPORARY names for its
-# offsets, until the plant declares its state as a Layout.
-X_Q, X_QD, X_P = 0, 2, 4
 
 #: One row of the closed-loop log, written by ``_run_batch`` once per control period.
 LOG = Layout("closed-loop log", [

@@ -140,6 +140,7 @@ from ._checks import (accelerations, angles, check_arm, check_pressures, checks_
 from ..hysteresis.force import hysteresis_factor, scaled_contraction
 from ..hysteresis.memory import MAX_DEPTH, MEMORY, preisach_output, preisach_peek, \
     preisach_update
+from ..layouts import Field, Layout
 from . import layout as lay
 from .dynamics import forward_dynamics_cs
 from .layout import (DEAD, DEAD_LEN, DEAD_MODE, HYST_DELTA, HYST_EPS_MAX, HYST_INIT,
@@ -149,12 +150,36 @@ from .layout import (DEAD, DEAD_LEN, DEAD_MODE, HYST_DELTA, HYST_EPS_MAX, HYST_I
 from .pneumatics import pressure_rates
 from .torque import group_contraction, group_terms, torque_kernel_cs
 
-NX = 8          #: state dimension
-NU = 4          #: input dimension
-#: scratch length of plant_rhs (3 x 4 torque buffers + 4 hysteresis factors)
-NRHS = 16
-#: scratch length needed by rk4_step (5 state vectors + the plant_rhs scratch)
-NWORK = 5 * NX + NRHS
+#: The plant state x, one row per batch case (thesis (3.1), (3.6)).
+STATE = Layout("plant state", [
+    Field("q", 2, "rad", "joint angles q1, q2 (2.6)-(2.7)"),
+    Field("qd", 2, "rad/s", "joint velocities"),
+    Field("p", 4, "Pa", "gauge pressures of muscle groups 1..4 (3.6)"),
+])
+X_Q, X_QD, X_P = STATE.offsets("q", "qd", "p")
+NX = STATE.size  #: state dimension
+NU = 4           #: input dimension (valve set values u1..u4 [Pa])
+#: Scratch of :func:`plant_rhs`: torque-kernel outputs and the hysteresis factors.
+RHS_SCRATCH = Layout("plant_rhs scratch", [
+    Field("m_tau", 4, "m^3", "torque functions m_tau,i of groups 1..4 (2.10)"),
+    Field("dm_tau", 4, "m^3/rad", "their derivatives along the driven joint"),
+    Field("volume", 4, "m^3", "group volumes (2.4)"),
+    Field("hyst_factor", 4, "-", "hysteresis force factors (3.35) (used only when on)"),
+])
+W_MT, W_DMT, W_VOL, W_FAC = RHS_SCRATCH.offsets("m_tau", "dm_tau", "volume", "hyst_factor")
+NRHS = RHS_SCRATCH.size
+#: Scratch of :func:`rk4_step`: the four stage derivatives, the stage state, plant_rhs scratch.
+RK4_SCRATCH = Layout("rk4_step scratch", [
+    Field("k1", NX, "state/s", "stage 1 derivative"),
+    Field("k2", NX, "state/s", "stage 2 derivative"),
+    Field("k3", NX, "state/s", "stage 3 derivative"),
+    Field("k4", NX, "state/s", "stage 4 derivative"),
+    Field("x_stage", NX, "state", "the state at which a stage is evaluated"),
+    Field("rhs", NRHS, "-", "scratch of plant_rhs (RHS_SCRATCH)"),
+])
+W_K1, W_K2, W_K3, W_K4, W_XT, W_RHS = RK4_SCRATCH.offsets("k1", "k2", "k3", "k4", "x_stage",
+                                                           "rhs")
+NWORK = RK4_SCRATCH.size
 #: Largest stage change of eps_s evaluated by the secant scheme (HysteresisStages.SECANT);
 #: beyond it the stage uses preisach_peek.  0.01 (an eps change of 0.00175, a contraction
 #: rate of 1.75 /s over a 1 ms step) is reached only by jumps (the first step from a
@@ -193,8 +218,8 @@ def effects_update(x, z, u, P):
         Plant row.
     """
     if int(P[HYST_MODE]) == Switch.ON:
-        c1, s1 = math.cos(x[0]), math.sin(x[0])
-        c2, s2 = math.cos(x[1]), math.sin(x[1])
+        c1, s1 = math.cos(x[X_Q]), math.sin(x[X_Q])
+        c2, s2 = math.cos(x[X_Q + 1]), math.sin(x[X_Q + 1])
         c12, s12 = c1 * c2 - s1 * s2, s1 * c2 + c1 * s2
         for k in range(4):
             es = scaled_contraction(group_contraction(k, c1, s1, c12, s12, P), P[HYST_EPS_MAX])
@@ -310,29 +335,29 @@ def plant_rhs(x, z, u, tau_ext, P, dx, work):
     torques is multiplied by the factor of (3.35) (not the volume
     derivative m_tau in the pressure dynamics).
     """
-    mt = work[0:4]
-    dmt = work[4:8]
-    vol = work[8:12]
-    c1, s1 = math.cos(x[0]), math.sin(x[0])
-    c2, s2 = math.cos(x[1]), math.sin(x[1])
+    mt = work[W_MT:W_MT + 4]
+    dmt = work[W_DMT:W_DMT + 4]
+    vol = work[W_VOL:W_VOL + 4]
+    c1, s1 = math.cos(x[X_Q]), math.sin(x[X_Q])
+    c2, s2 = math.cos(x[X_Q + 1]), math.sin(x[X_Q + 1])
     c12, s12 = c1 * c2 - s1 * s2, s1 * c2 + c1 * s2
     if int(P[HYST_MODE]) == Switch.ON:
-        fac = work[12:16]
+        fac = work[W_FAC:W_FAC + 4]
         for k in range(4):
             mt[k], dmt[k], vol[k], eps = group_terms(k, c1, s1, c12, s12, P)
             fac[k] = _hysteresis_factor(k, eps, z, P)
-        tau1 = x[4] * (mt[0] * fac[0]) + x[5] * (mt[1] * fac[1]) + tau_ext[0]
-        tau2 = x[6] * (mt[2] * fac[2]) + x[7] * (mt[3] * fac[3]) + tau_ext[1]
+        tau1 = x[X_P] * (mt[0] * fac[0]) + x[X_P + 1] * (mt[1] * fac[1]) + tau_ext[0]
+        tau2 = x[X_P + 2] * (mt[2] * fac[2]) + x[X_P + 3] * (mt[3] * fac[3]) + tau_ext[1]
     else:
         torque_kernel_cs(c1, s1, c12, s12, P, mt, dmt, vol)
-        tau1 = x[4] * mt[0] + x[5] * mt[1] + tau_ext[0]
-        tau2 = x[6] * mt[2] + x[7] * mt[3] + tau_ext[1]
-    a1, a2 = forward_dynamics_cs(c1, s1, c2, s2, c12, s12, x[2], x[3], tau1, tau2, P)
-    dx[0] = x[2]
-    dx[1] = x[3]
-    dx[2] = a1
-    dx[3] = a2
-    pressure_rates(x[4:8], u, x[2], x[3], mt, vol, P, dx[4:8])
+        tau1 = x[X_P] * mt[0] + x[X_P + 1] * mt[1] + tau_ext[0]
+        tau2 = x[X_P + 2] * mt[2] + x[X_P + 3] * mt[3] + tau_ext[1]
+    a1, a2 = forward_dynamics_cs(c1, s1, c2, s2, c12, s12, x[X_QD], x[X_QD + 1], tau1, tau2, P)
+    dx[X_Q] = x[X_QD]
+    dx[X_Q + 1] = x[X_QD + 1]
+    dx[X_QD] = a1
+    dx[X_QD + 1] = a2
+    pressure_rates(x[X_P:X_P + 4], u, x[X_QD], x[X_QD + 1], mt, vol, P, dx[X_P:X_P + 4])
 
 
 @kernel
@@ -342,12 +367,12 @@ def rk4_step(x, z, u, tau_ext, h, P, work):
     The effect state ``z`` is held over the stages and updated once at the
     end by :func:`effects_update`.
     """
-    k1 = work[0:8]
-    k2 = work[8:16]
-    k3 = work[16:24]
-    k4 = work[24:32]
-    xt = work[32:40]
-    buf = work[40:40 + NRHS]
+    k1 = work[W_K1:W_K1 + NX]
+    k2 = work[W_K2:W_K2 + NX]
+    k3 = work[W_K3:W_K3 + NX]
+    k4 = work[W_K4:W_K4 + NX]
+    xt = work[W_XT:W_XT + NX]
+    buf = work[W_RHS:W_RHS + NRHS]
     plant_rhs(x, z, u, tau_ext, P, k1, buf)
     for i in range(NX):
         xt[i] = x[i] + 0.5 * h * k1[i]
@@ -553,8 +578,8 @@ def _hysteresis_along(X, z, P, eps_out, fac_out):
     u = np.zeros(NU)
     for n in range(X.shape[0]):
         x = X[n]
-        c1, s1 = math.cos(x[0]), math.sin(x[0])
-        c2, s2 = math.cos(x[1]), math.sin(x[1])
+        c1, s1 = math.cos(x[X_Q]), math.sin(x[X_Q])
+        c2, s2 = math.cos(x[X_Q + 1]), math.sin(x[X_Q + 1])
         c12, s12 = c1 * c2 - s1 * s2, s1 * c2 + c1 * s2
         effects_update(x, z, u, P)
         for k in range(4):

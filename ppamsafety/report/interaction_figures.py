@@ -105,7 +105,7 @@ def plot_interaction_path(result, *, waypoints=None, labels=("A", "B", "C"), f_m
     title : str
         Figure title.
     """
-    fig, ax = new_figure(1, 1, figsize=(6.5, 6.0))
+    fig, ax = new_figure(1, 1, figsize=(7.5, 6.0))
     x, y = result.signal("x"), result.signal("y")
     xa, ya = result.signal("x_adm"), result.signal("y_adm")
     ax.plot(xa, ya, color="tab:blue", lw=1.0, ls="--", label="desired (admittance)")
@@ -128,7 +128,8 @@ def plot_interaction_path(result, *, waypoints=None, labels=("A", "B", "C"), f_m
     ax.set_xlabel("x [m]")
     ax.set_ylabel("y [m]")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8, loc="best")
+    # the path is tall and narrow: keep the legend beside it, not over the axis labels
+    ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.02, 1.0))
     ax.set_title(title)
     fig.tight_layout()
     return fig

@@ -1,7 +1,7 @@
 """Physical interaction: force estimation, admittance control and the release hazard.
 
 Thesis §5.4 (figs. 5.21, 5.22) and the hazard of §6.3 (pushed away, released).
-Not in the report REGISTRY (the lead decides); run alone with
+Part of ``ppamsafety report`` (section "interaction"); run alone with
 ``python studies/interaction.py [outdir] [--quick] [--overwrite]``.
 
 Experiments (all at 1 kHz, the arm held at A = FK(50 deg, -80 deg)):
