@@ -417,6 +417,22 @@ def run_guarded(parser: argparse.ArgumentParser, func, argv=None) -> int:
     :class:`ppamsafety.output.OutputError`) prints ``ppamsafety: error: ...``
     and gives 2; any other exception prints one line asking to report it and
     gives 1.  No traceback unless the environment sets ``PPAMSAFETY_DEBUG=1``.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        Parser of the command line.
+    func : callable
+        ``func(args) -> int``: runs the command on the parsed namespace and
+        returns its exit status.
+    argv : sequence of str, optional
+        Arguments without the program name (default ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        Exit status (``func``'s, or 0, 1, 2 or the interrupt status as
+        above).
     """
     argv = list(sys.argv[1:] if argv is None else argv)
     debug = os.environ.get("PPAMSAFETY_DEBUG", "") not in ("", "0")

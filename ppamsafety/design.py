@@ -44,8 +44,15 @@ def _grid(arm, n1: int, n2: int):
 class TorqueFunctions:
     """Torque functions along the driven joint (fig. 2.11).
 
-    ``data`` columns: ``group`` (1..4), ``angle_rad`` (q1 for groups 1-2, q2
-    for 3-4), ``m_tau_Nm_per_Pa``, ``eps`` (contraction).
+    Made by :func:`torque_function_curves`.
+
+    Attributes
+    ----------
+    data : pandas.DataFrame
+        One row per sample and muscle group; columns ``group`` (1..4),
+        ``angle_rad`` (q1 for groups 1-2, q2 for 3-4) [rad],
+        ``m_tau_Nm_per_Pa`` (torque function m_tau,i (B.2)) [N m/Pa = m^3],
+        ``eps`` (contraction) [-].
     """
 
     data: pd.DataFrame
@@ -96,11 +103,17 @@ def torque_function_curves(arm, *, n: int = 201) -> TorqueFunctions:
 class StiffnessMap:
     """Joint stiffness (2.18) over the working area.
 
-    ``data`` columns: ``q1_rad``, ``q2_rad``, ``K1_Nm_per_rad``,
-    ``K2_Nm_per_rad``, ``p1_Pa`` .. ``p4_Pa`` (static Delta-p pressures,
-    clipped to [0, p_max]) and ``holdable`` (True where the static pressures
-    are within [0, p_max] without clipping, i.e. the Delta-p approach with the
-    chosen p_m can hold the arm there).
+    Made by :func:`stiffness_map`.
+
+    Attributes
+    ----------
+    data : pandas.DataFrame
+        One row per grid point; columns ``q1_rad``, ``q2_rad`` [rad],
+        ``K1_Nm_per_rad``, ``K2_Nm_per_rad`` [N m/rad], ``p1_Pa`` ..
+        ``p4_Pa`` (static Delta-p gauge pressures [Pa], clipped to [0,
+        p_max]) and ``holdable`` (True where the static pressures are within
+        [0, p_max] without clipping, i.e. the Delta-p approach with the
+        chosen p_m can hold the arm there).
     """
 
     data: pd.DataFrame
@@ -161,9 +174,18 @@ def cad_links() -> LinkInertia:
 class MaxLoadMap:
     """Maximum load (A.43)-(A.45) over the working area.
 
-    ``data`` columns: ``q1_rad``, ``q2_rad``, ``xL_m``, ``yL_m`` (load point
-    A_L), ``M1_kg`` (limit of joint 1), ``M2_kg`` (limit of joint 2 with the
-    carrying muscle), ``carrying_2`` (3 or 4), ``M_max_kg`` = min(M1, M2).
+    Made by :func:`max_load_map`.
+
+    Attributes
+    ----------
+    data : pandas.DataFrame
+        One row per grid point; columns ``q1_rad``, ``q2_rad`` [rad],
+        ``xL_m``, ``yL_m`` (load point A_L) [m], ``M1_kg`` (limit of joint
+        1) [kg], ``M2_kg`` (limit of joint 2 with the carrying muscle) [kg],
+        ``carrying_2`` (carrying group of joint 2, 3 or 4), ``M_max_kg`` =
+        min(M1, M2) [kg].
+    p_max : float
+        Gauge pressure of the carrying muscle the map was computed with [Pa].
     """
 
     data: pd.DataFrame

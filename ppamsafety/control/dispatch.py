@@ -49,12 +49,51 @@ def declared_sizes(kind) -> tuple:
 def controller_step(kind, C, S, Pm, k, dt, qm, qdm, pm, ref, fest, dp, internals, scratch):
     """Compute Delta p (2) [Pa] for controller ``kind`` at sample ``k``.
 
-    Parameters are the controller's packed row ``C`` (its ``PARAMS``
-    layout), its state ``S`` (``STATE``, updated in place), its model row
-    ``Pm``, the measured angles, velocities and pressures, the reference row
-    (12), the loop's force-estimator internals ``fest``
-    (``ESTIMATOR_INTERNALS``, read only by the admittance kind) and the work
-    arrays ``internals`` (``INTERNALS``) and ``scratch`` (``SCRATCH`` floats).
+    Compiled; the arguments are not checked (:meth:`Controller.step` checks
+    them).  Every array is a flat float64 row; the layouts named below are
+    those the controller class of ``kind`` declares (``PARAMS``, ``STATE``,
+    ``INTERNALS``, ``SCRATCH``, see :data:`CONTROLLER_CLASSES`).  The runner
+    passes rows padded to :data:`CONTROLLER_ROW_WIDTH`, :data:`NSTATE`,
+    :data:`NINT` and :data:`NSCRATCH`; a kind reads only its own prefix.
+
+    Parameters
+    ----------
+    kind : int
+        :class:`~ppamsafety.control.base.ControllerKind` code selecting the
+        step function; an unknown code gives Delta p = 0.
+    C : numpy.ndarray, shape (>= PARAMS.size,)
+        The controller's packed parameter row (layout ``PARAMS`` of the
+        kind, SI units), read only.
+    S : numpy.ndarray, shape (>= STATE.size,)
+        The controller's state (layout ``STATE``), updated in place.
+    Pm : numpy.ndarray
+        The controller's model row (layout ``PLANT`` of
+        :mod:`ppamsafety.plant.layout`, its controller view), read only.
+    k : int
+        Sample index (0 at the start of the experiment); not read by the
+        current kinds.
+    dt : float
+        Control period T [s].
+    qm, qdm : numpy.ndarray, shape (2,)
+        Measured joint angles [rad] and velocities [rad/s], read only.
+    pm : numpy.ndarray, shape (4,)
+        Measured gauge pressures of the four muscle groups [Pa], read only
+        (used by the sliding mode control).
+    ref : numpy.ndarray, shape (12,)
+        Reference row (columns ``R_*`` of :mod:`ppamsafety.control.base`:
+        q_d [rad], qd_d [rad/s], qdd_d [rad/s^2], qddd_d [rad/s^3], r_d [m],
+        rd_d [m/s]), read only.
+    fest : numpy.ndarray
+        The loop's force-estimator internals (layout
+        ``ESTIMATOR_INTERNALS`` of :mod:`ppamsafety.control.estimation`),
+        read only, and only by the admittance kind.
+    dp : numpy.ndarray, shape (2,)
+        Output Delta p per joint [Pa] (feedback plus gravity
+        compensation), written.
+    internals : numpy.ndarray, shape (>= INTERNALS.size,)
+        Logged internals of the kind (layout ``INTERNALS``), written.
+    scratch : numpy.ndarray, shape (>= SCRATCH,)
+        Work memory of the kind, overwritten.
     """
     if kind == KIND_PID:
         pid_step(C, S, Pm, dt, qm, qdm, ref, dp, internals, scratch)

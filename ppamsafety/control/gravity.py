@@ -72,11 +72,31 @@ P_GC_MODE = GC_PARAMS.offset("gc")
 
 @leaf
 def add_gravity_compensation(mode, Pm, qm, ref, qp1, qp2, dp, scratch):
-    """Add Delta p_gc to ``dp`` in place (``scratch``: layout ``GC_SCRATCH``).
+    """Add Delta p_gc of (3.18)-(3.19) to ``dp`` in place (compiled, unchecked).
 
-    ``mode``: a :class:`GCMode` code -- off, at the measured angles ``qm``,
-    at the desired angles of the reference row ``ref``, or at the proxy
-    angles (qp1, qp2) [rad].
+    Parameters
+    ----------
+    mode : int
+        :class:`GCMode` code: off (``dp`` unchanged), at the measured angles
+        ``qm``, at the desired angles of the reference row ``ref``, or at
+        the proxy angles (``qp1``, ``qp2``).
+    Pm : numpy.ndarray
+        The controller's model row (layout ``PLANT`` of
+        :mod:`ppamsafety.plant.layout`): identified gravity and torque
+        functions (Table 3.1, (B.2)), mean pressures p_m.
+    qm : numpy.ndarray, shape (2,)
+        Measured joint angles [rad] (read for ``GCMode.MEASURED``).
+    ref : numpy.ndarray, shape (12,)
+        Reference row; its q_d columns (``R_Q``) [rad] are read for
+        ``GCMode.DESIRED``.
+    qp1, qp2 : float
+        Proxy joint angles [rad] (read for ``GCMode.PROXY``; pass 0.0
+        otherwise).
+    dp : numpy.ndarray, shape (2,)
+        Delta p per joint [Pa]; Delta p_gc is added to it.
+    scratch : numpy.ndarray, shape (GC_SCRATCH.size,)
+        Work memory (layout ``GC_SCRATCH``: m_tau, d m_tau/dq and volumes of
+        the four muscle groups), overwritten.
     """
     if mode != GCMode.OFF:
         if mode == GCMode.MEASURED:
@@ -126,7 +146,23 @@ def gc_mode(value, allowed=("off", "measured", "desired"), name: str = "gravity_
 
 @leaf
 def gc_step(C, Pm, qm, ref, dp_out, scratch):
-    """Delta p_gc only (no feedback); C: layout ``GC_PARAMS``."""
+    """Delta p_gc only, no feedback (compiled step of :class:`GravityCompensation`).
+
+    Parameters
+    ----------
+    C : numpy.ndarray
+        Parameter row (layout ``GC_PARAMS``: the :class:`GCMode` code).
+    Pm : numpy.ndarray
+        The controller's model row (layout ``PLANT``).
+    qm : numpy.ndarray, shape (2,)
+        Measured joint angles [rad].
+    ref : numpy.ndarray, shape (12,)
+        Reference row (q_d [rad] in the ``R_Q`` columns).
+    dp_out : numpy.ndarray, shape (2,)
+        Output Delta p_gc per joint [Pa], written.
+    scratch : numpy.ndarray, shape (GC_SCRATCH.size,)
+        Work memory (layout ``GC_SCRATCH``), overwritten.
+    """
     dp_out[0] = 0.0
     dp_out[1] = 0.0
     add_gravity_compensation(int(C[P_GC_MODE]), Pm, qm, ref, 0.0, 0.0, dp_out, scratch)

@@ -151,21 +151,93 @@ _NGC = GC_SCRATCH.size
 
 @leaf
 def proxy_update(sigma, a, da, kp, ki, kd, lam, T):
-    """Unsaturated proxy force f* of (5.27) for scalar inputs."""
+    """Unsaturated proxy force f* of (5.27) for scalar inputs (compiled, unchecked).
+
+    Units below are for a joint-space proxy; for a task-space proxy read
+    m for rad and N for Pa.
+
+    Parameters
+    ----------
+    sigma : float
+        Sliding variable (x_d - x) + lambda (xd_d - xd) [rad].
+    a : float
+        Proxy integral state a[k-1] [rad s].
+    da : float
+        Nabla a[k-1] = a[k-1] - a[k-2] [rad s].
+    kp, ki, kd : float
+        Virtual-coupling gains [Pa/rad, Pa/(rad s), Pa s/rad].
+    lam : float
+        Sliding-surface time constant lambda [s].
+    T : float
+        Control period [s], > 0.
+
+    Returns
+    -------
+    float
+        f* [Pa].
+    """
     A = ki * T * T + kp * T + kd
     return A / (T + lam) * sigma + ki * a + (lam * (ki * T + kp) - kd) / (T * (T + lam)) * da
 
 
 @leaf
 def proxy_state(f, a, da, kp, ki, kd, T):
-    """New integral state a[k] of (5.29)."""
+    """New integral state a[k] of (5.29) (compiled, unchecked).
+
+    Units below are for a joint-space proxy; for a task-space proxy read
+    m for rad and N for Pa.
+
+    Parameters
+    ----------
+    f : float
+        Saturated proxy output f[k] [Pa].
+    a : float
+        Proxy integral state a[k-1] [rad s].
+    da : float
+        Nabla a[k-1] = a[k-1] - a[k-2] [rad s].
+    kp, ki, kd : float
+        Virtual-coupling gains [Pa/rad, Pa/(rad s), Pa s/rad]; A = Ki T^2 +
+        Kp T + Kd must not be zero (:func:`check_proxy_gains`).
+    T : float
+        Control period [s], > 0.
+
+    Returns
+    -------
+    float
+        a[k] [rad s].
+    """
     return (a * (kp * T + kd) + kd * da + T * T * f) / (ki * T * T + kp * T + kd)
 
 
 @leaf
 def psmc_joint_step(C, S, Pm, dt, qm, qdm, ref, dp, internals, scratch):
-    """Joint-space PSMC; C: ``JOINT_PSMC_PARAMS``, S: ``JOINT_PSMC_STATE``,
-    internals: ``JOINT_PSMC_INTERNALS``, scratch: ``GC_SCRATCH``.
+    """One joint-space PSMC update (5.37)-(5.41) (compiled, unchecked).
+
+    Parameters
+    ----------
+    C : numpy.ndarray
+        Parameter row (layout ``JOINT_PSMC_PARAMS``: Kp [Pa/rad], Ki
+        [Pa/(rad s)], Kd [Pa s/rad], lambda [s], Delta p_lm [Pa] per joint,
+        :class:`~ppamsafety.control.gravity.GCMode` code).
+    S : numpy.ndarray
+        State (layout ``JOINT_PSMC_STATE``: a[k-1], Nabla a[k-1] [rad s] per
+        joint), updated in place.
+    Pm : numpy.ndarray
+        The controller's model row (layout ``PLANT``), for the gravity
+        compensation.
+    dt : float
+        Control period T [s].
+    qm, qdm : numpy.ndarray, shape (2,)
+        Measured joint angles [rad] and velocities [rad/s].
+    ref : numpy.ndarray, shape (12,)
+        Reference row (q_d [rad], qd_d [rad/s] in the ``R_Q``, ``R_QD``
+        columns).
+    dp : numpy.ndarray, shape (2,)
+        Output Delta p = Delta p_psmc + Delta p_gc per joint [Pa], written.
+    internals : numpy.ndarray
+        Logged internals (layout ``JOINT_PSMC_INTERNALS``), written.
+    scratch : numpy.ndarray, shape (GC_SCRATCH.size,)
+        Work memory of the gravity compensation (layout ``GC_SCRATCH``).
     """
     for j in range(2):
         kp, ki, kd = C[PJ_KP + j], C[PJ_KI + j], C[PJ_KD + j]
@@ -188,9 +260,34 @@ def psmc_joint_step(C, S, Pm, dt, qm, qdm, ref, dp, internals, scratch):
 
 @leaf
 def psmc_task_step(C, S, Pm, dt, qm, qdm, ref, dp, internals, scratch):
-    """Task-space PSMC; C: ``TASK_PSMC_PARAMS`` (SI: N/m, N/(m s), N s/m, s, N),
-    S: ``TASK_PSMC_STATE``, internals: ``TASK_PSMC_INTERNALS``, scratch:
-    ``TASK_PSMC_SCRATCH``.
+    """One task-space PSMC update of the TCP (§5.3.2) (compiled, unchecked).
+
+    Parameters
+    ----------
+    C : numpy.ndarray
+        Parameter row (layout ``TASK_PSMC_PARAMS``: Kp [N/m], Ki [N/(m s)],
+        Kd [N s/m], lambda [s], F [N],
+        :class:`~ppamsafety.control.gravity.GCMode` code).
+    S : numpy.ndarray
+        State (layout ``TASK_PSMC_STATE``: a[k-1], Nabla a[k-1] (x, y)
+        [m s]), updated in place.
+    Pm : numpy.ndarray
+        The controller's model row (layout ``PLANT``): kinematics, torque
+        functions and gravity compensation.
+    dt : float
+        Control period T [s].
+    qm, qdm : numpy.ndarray, shape (2,)
+        Measured joint angles [rad] and velocities [rad/s].
+    ref : numpy.ndarray, shape (12,)
+        Reference row (r_d [m] and rd_d [m/s] in the ``R_X``, ``R_Y``,
+        ``R_XD``, ``R_YD`` columns; q_d for ``GCMode.DESIRED``).
+    dp : numpy.ndarray, shape (2,)
+        Output Delta p per joint [Pa] ((5.33)-(5.34) plus Delta p_gc),
+        written.
+    internals : numpy.ndarray
+        Logged internals (layout ``TASK_PSMC_INTERNALS``), written.
+    scratch : numpy.ndarray, shape (TASK_PSMC_SCRATCH.size,)
+        Work memory (layout ``TASK_PSMC_SCRATCH``), overwritten.
     """
     kp, ki, kd, lam, F = C[PT_KP], C[PT_KI], C[PT_KD], C[PT_LAM], C[PT_F]
     x, y = tcp_position(qm[0], qm[1], Pm)

@@ -285,13 +285,38 @@ def sensor_reset(st):
 
 @leaf
 def encoder_count(q, res):
-    """Encoder count of angle ``q`` [rad] (floor of q/resolution)."""
+    """Encoder count of angle ``q`` [rad] (floor of q/resolution).
+
+    Parameters
+    ----------
+    q : float
+        Joint angle [rad].
+    res : float
+        Encoder resolution [rad] (2 pi/8000), > 0.
+
+    Returns
+    -------
+    float
+        floor(q/res), an integer count stored as a float.
+    """
     return math.floor(q / res)
 
 
 @leaf
 def sensor_init(q1, q2, cfg, st):
-    """Set the counts of the sensor state ``st`` to the angles (q1, q2)."""
+    """Set the counts of the sensor state ``st`` to the angles (q1, q2).
+
+    Parameters
+    ----------
+    q1, q2 : float
+        Joint angles [rad].
+    cfg : numpy.ndarray
+        Sensor configuration row (layout ``SENSOR_CONFIG``; the resolution
+        [rad] is read).
+    st : numpy.ndarray
+        Sensor state of both joints (layout ``SENSOR_STATE``); its ``count``
+        field is written, the rest is left as it is.
+    """
     st[S_COUNT] = encoder_count(q1, cfg[C_RES])
     st[S_COUNT + 1] = encoder_count(q2, cfg[C_RES])
 
@@ -303,6 +328,23 @@ def sensor_track(j, q_old, q_new, t_old, h, cfg, st):
     Edge times are linearly interpolated inside the interval.  Updates the
     count, the last two edge times, the direction and the held velocity
     reading of the timing board.
+
+    Parameters
+    ----------
+    j : int
+        Joint index, 0 or 1.
+    q_old, q_new : float
+        Angle of joint ``j`` at the start and end of the sub-step [rad].
+    t_old : float
+        Time at the start of the sub-step [s].
+    h : float
+        Sub-step length [s], > 0.
+    cfg : numpy.ndarray
+        Sensor configuration row (layout ``SENSOR_CONFIG``: resolution
+        [rad], clock period T_c [s], N_c,max, dead band [rad/s]).
+    st : numpy.ndarray
+        Sensor state of both joints (layout ``SENSOR_STATE``, per joint
+        ``offset + j``), updated in place when an edge is crossed.
     """
     res = cfg[C_RES]
     c_new = encoder_count(q_new, res)
@@ -332,7 +374,30 @@ def sensor_track(j, q_old, q_new, t_old, h, cfg, st):
 
 @leaf
 def sensor_read(j, q_true, qd_true, t, cfg, st):
-    """Measured (angle, velocity) of joint ``j`` at sample time ``t``."""
+    """Measured (angle, velocity) of joint ``j`` at sample time ``t``.
+
+    Noise (:meth:`SensorConfig.noise_samples`) is not added here.
+
+    Parameters
+    ----------
+    j : int
+        Joint index, 0 or 1.
+    q_true, qd_true : float
+        True angle [rad] and velocity [rad/s] of joint ``j``, returned when
+        the encoder / velocity board is off.
+    t : float
+        Sample time [s] (for the counter-overflow test of the timing board).
+    cfg : numpy.ndarray
+        Sensor configuration row (layout ``SENSOR_CONFIG``), read only.
+    st : numpy.ndarray
+        Sensor state of both joints (layout ``SENSOR_STATE``), read only.
+
+    Returns
+    -------
+    tuple of float
+        Measured angle [rad] (with the encoder-offset fault, if on) and
+        velocity [rad/s].
+    """
     qm = st[S_COUNT + j] * cfg[C_RES] if int(cfg[C_ENC]) == EncoderMode.ON else q_true
     if int(cfg[C_FAULTS]) == SensorFaults.ON:
         qm = qm + cfg[C_QOFF + j]

@@ -92,7 +92,30 @@ X_BUF, X_MT, X_VOL, X_DMT, X_FP, X_GP = SMC_SCRATCH.offsets(
 
 @leaf
 def model_qdd(q1, q2, w1, w2, p, Pm, buf):
-    """Model joint accelerations for state (q, qd, p); ``buf`` >= 12 floats."""
+    """Model joint accelerations for state (q, qd, p) (compiled, unchecked).
+
+    The joint torques are the muscle torques sum p_i m_tau,i of the four
+    groups (B.2), fed to the model's forward dynamics (no external torque).
+
+    Parameters
+    ----------
+    q1, q2 : float
+        Joint angles [rad].
+    w1, w2 : float
+        Joint velocities [rad/s].
+    p : numpy.ndarray, shape (4,)
+        Gauge pressures of the four muscle groups [Pa].
+    Pm : numpy.ndarray
+        The controller's model row (layout ``PLANT``).
+    buf : numpy.ndarray, shape (>= 12,)
+        Work memory: m_tau [m^3], d m_tau/dq [m^3/rad] and volumes [m^3] of
+        the four groups (``qdd_buf`` of ``SMC_SCRATCH``), overwritten.
+
+    Returns
+    -------
+    tuple of float
+        Joint accelerations (qdd1, qdd2) [rad/s^2].
+    """
     mt = buf[0:4]
     torque_kernel(q1, q2, Pm, mt, buf[4:8], buf[8:12])
     return forward_dynamics(q1, q2, w1, w2, p[0] * mt[0] + p[1] * mt[1],
@@ -106,8 +129,33 @@ def _sat(x):
 
 @leaf
 def smc_step(C, S, Pm, dt, qm, qdm, pm, ref, dp, internals, scratch):
-    """SMC update; C: ``SMC_PARAMS``, internals: ``SMC_INTERNALS``, scratch:
-    ``SMC_SCRATCH`` (no state: S is empty).
+    """One sliding-mode-control update (4.33)-(4.41) (compiled, unchecked).
+
+    Parameters
+    ----------
+    C : numpy.ndarray
+        Parameter row (layout ``SMC_PARAMS``: alpha0 [1/s^2], alpha1 [1/s],
+        K [rad/s^3], Gamma [rad/s^2] per joint, :class:`SMCCoupling` code).
+    S : numpy.ndarray
+        State; SMC has none (empty layout), not read.
+    Pm : numpy.ndarray
+        The controller's model row (layout ``PLANT``, see
+        :meth:`SlidingModeControl.model_row`).
+    dt : float
+        Control period [s]; not read (the control law is static).
+    qm, qdm : numpy.ndarray, shape (2,)
+        Measured joint angles [rad] and velocities [rad/s].
+    pm : numpy.ndarray, shape (4,)
+        Measured gauge pressures of the four muscle groups [Pa].
+    ref : numpy.ndarray, shape (12,)
+        Reference row (q_d [rad], qd_d [rad/s], qdd_d [rad/s^2], qddd_d
+        [rad/s^3] in the ``R_Q`` .. ``R_QDDD`` columns).
+    dp : numpy.ndarray, shape (2,)
+        Output Delta p = u per joint [Pa] (4.41), written.
+    internals : numpy.ndarray
+        Logged internals (layout ``SMC_INTERNALS``), written.
+    scratch : numpy.ndarray, shape (SMC_SCRATCH.size,)
+        Work memory (layout ``SMC_SCRATCH``), overwritten.
     """
     buf = scratch[X_BUF:X_BUF + 12]
     q1, q2, w1, w2 = qm[0], qm[1], qdm[0], qdm[1]

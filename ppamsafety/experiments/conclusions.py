@@ -95,7 +95,24 @@ def _mm(x) -> str:
 
 
 def task_space_worst(errors: pd.DataFrame) -> Conclusion:
-    """(a) Task-space PSMC has the largest mean error in every period."""
+    """(a) Task-space PSMC has the largest mean error in every period.
+
+    Parameters
+    ----------
+    errors : pandas.DataFrame
+        Tracking errors, one row per (variant, period) (module docstring);
+        columns used: ``family``, ``period_s`` [s], ``mean_m`` [m], ``variant``.
+
+    Returns
+    -------
+    Conclusion
+        Verdict (a) with its criterion and evidence.
+
+    Raises
+    ------
+    ValueError
+        If a table lacks a column it needs.
+    """
     _need(errors, ["family", "period_s", "mean_m", "variant"], "errors")
     parts, ok, nums = [], True, {}
     for P, g in errors.groupby("period_s"):
@@ -117,7 +134,27 @@ def task_space_worst(errors: pd.DataFrame) -> Conclusion:
 
 
 def joint_psmc_equals_pid(errors: pd.DataFrame, *, tol: float = EQUAL_GAINS_TOL) -> Conclusion:
-    """(b) Joint PSMC with the PID gains (Ki = 2) tracks like PID."""
+    """(b) Joint PSMC with the PID gains (Ki = 2) tracks like PID.
+
+    Parameters
+    ----------
+    errors : pandas.DataFrame
+        Tracking errors, one row per (variant, period) (module docstring);
+        columns used: ``family``, ``period_s`` [s], ``mean_m`` [m], ``lambda_s`` [s].
+    tol : float, keyword-only
+        Largest relative deviation of the mean-error ratio PSMC/PID from 1
+        [-] (default :data:`EQUAL_GAINS_TOL` = 0.25).
+
+    Returns
+    -------
+    Conclusion
+        Verdict (b) with its criterion and evidence.
+
+    Raises
+    ------
+    ValueError
+        If a table lacks a column it needs.
+    """
     _need(errors, ["family", "period_s", "mean_m", "lambda_s"], "errors")
     parts, ok, nums = [], True, {}
     pid_better = 0
@@ -143,7 +180,27 @@ def joint_psmc_equals_pid(errors: pd.DataFrame, *, tol: float = EQUAL_GAINS_TOL)
 
 
 def high_integral_gain_helps(errors: pd.DataFrame, *, factor: float = SEVERAL_FOLD) -> Conclusion:
-    """(c) Ki = 12 cuts the joint PSMC tracking error several-fold."""
+    """(c) Ki = 12 cuts the joint PSMC tracking error several-fold.
+
+    Parameters
+    ----------
+    errors : pandas.DataFrame
+        Tracking errors, one row per (variant, period) (module docstring);
+        columns used: ``family``, ``period_s`` [s], ``mean_m`` [m], ``lambda_s`` [s].
+    factor : float, keyword-only
+        Smallest ratio mean error (Ki = 2) / mean error (Ki = 12) at equal
+        lambda for the claim to hold [-] (default :data:`SEVERAL_FOLD` = 2).
+
+    Returns
+    -------
+    Conclusion
+        Verdict (c) with its criterion and evidence.
+
+    Raises
+    ------
+    ValueError
+        If a table lacks a column it needs.
+    """
     _need(errors, ["family", "period_s", "mean_m", "lambda_s"], "errors")
     parts, ok, nums = [], True, {}
     for P, g in errors.groupby("period_s"):
@@ -161,7 +218,27 @@ def high_integral_gain_helps(errors: pd.DataFrame, *, factor: float = SEVERAL_FO
 
 
 def lambda_hardly_matters(errors: pd.DataFrame, *, spread: float = LAMBDA_SPREAD) -> Conclusion:
-    """(d) lambda hardly changes the tracking error."""
+    """(d) lambda hardly changes the tracking error.
+
+    Parameters
+    ----------
+    errors : pandas.DataFrame
+        Tracking errors, one row per (variant, period) (module docstring);
+        columns used: ``family``, ``period_s`` [s], ``mean_m`` [m].
+    spread : float, keyword-only
+        Largest ratio max/min of the mean error over lambda within a PSMC
+        family and period [-] (default :data:`LAMBDA_SPREAD` = 1.5).
+
+    Returns
+    -------
+    Conclusion
+        Verdict (d) with its criterion and evidence.
+
+    Raises
+    ------
+    ValueError
+        If a table lacks a column it needs.
+    """
     _need(errors, ["family", "period_s", "mean_m"], "errors")
     parts, ok, nums = [], True, {}
     for fam in PSMC_FAMILIES:
@@ -188,7 +265,35 @@ def _fmt_t(x) -> str:
 
 def lambda_slows_recovery(step: pd.DataFrame, switch: pd.DataFrame, *,
                           tol_angle_deg: float = 1.0, tol_tcp_mm: float = 5.0) -> Conclusion:
-    """(e) Larger lambda: slower recovery after the step and the switch."""
+    """(e) Larger lambda: slower recovery after the step and the switch.
+
+    Parameters
+    ----------
+    step, switch : pandas.DataFrame
+        Step and switch response tables
+        (:func:`~ppamsafety.experiments.metrics.response_table` outputs with
+        ``family`` and ``lambda_s`` [s] columns added); column ``t_reach_s``
+        is the time to come back within the tolerance band [s] (NaN: not
+        reached within the window).
+    tol_angle_deg : float, keyword-only
+        Tolerance band of the step on the q1 set angle [deg] with which
+        ``step.t_reach_s`` was measured; only quoted in the criterion text
+        (the times are not recomputed here).
+    tol_tcp_mm : float, keyword-only
+        Tolerance band of the switch on the distance to the new circle [mm]
+        with which ``switch.t_reach_s`` was measured; only quoted in the
+        criterion text.
+
+    Returns
+    -------
+    Conclusion
+        Verdict (e) with its criterion and evidence.
+
+    Raises
+    ------
+    ValueError
+        If a table lacks a column it needs.
+    """
     for name, df in (("step", step), ("switch", switch)):
         _need(df, ["family", "lambda_s", "t_reach_s"], name)
     parts, ok, nums = [], True, {}
@@ -212,7 +317,35 @@ def lambda_slows_recovery(step: pd.DataFrame, switch: pd.DataFrame, *,
 def pid_violent_psmc_smooth(step: pd.DataFrame, *, speed_ratio: float = VIOLENT_SPEED_RATIO,
                             pid_overshoot_pct: float = PID_OVERSHOOT_MIN_PCT,
                             psmc_overshoot_pct: float = PSMC_OVERSHOOT_MAX_PCT) -> Conclusion:
-    """(f) PID's step response is violent, PSMC's smooth."""
+    """(f) PID's step response is violent, PSMC's smooth.
+
+    Parameters
+    ----------
+    step : pandas.DataFrame
+        Step response table (one row per variant, one with family ``"PID"``);
+        columns used: ``family``, ``variant``, ``peak_tcp_speed_m_s`` [m/s],
+        ``overshoot_pct`` [% of the step], ``peak_qd1_rad_s``,
+        ``peak_qd2_rad_s`` [rad/s].
+    speed_ratio : float, keyword-only
+        Smallest ratio of PID's peak TCP speed to every PSMC variant's [-]
+        (default :data:`VIOLENT_SPEED_RATIO` = 2).
+    pid_overshoot_pct : float, keyword-only
+        PID's overshoot must exceed this [% of the step] (default
+        :data:`PID_OVERSHOOT_MIN_PCT` = 10).
+    psmc_overshoot_pct : float, keyword-only
+        Every PSMC variant's overshoot must stay below this [% of the step]
+        (default :data:`PSMC_OVERSHOOT_MAX_PCT` = 5).
+
+    Returns
+    -------
+    Conclusion
+        Verdict (f) with its criterion and evidence.
+
+    Raises
+    ------
+    ValueError
+        If a table lacks a column it needs.
+    """
     _need(step, ["family", "peak_tcp_speed_m_s", "overshoot_pct", "peak_qd1_rad_s",
                  "peak_qd2_rad_s"], "step")
     pid = step[step.family == "PID"].iloc[0]
@@ -240,14 +373,38 @@ def pid_violent_psmc_smooth(step: pd.DataFrame, *, speed_ratio: float = VIOLENT_
 
 def evaluate_conclusions(errors: pd.DataFrame, step: pd.DataFrame,
                          switch: pd.DataFrame) -> list:
-    """All six conclusions (a)-(f), in order."""
+    """All six conclusions (a)-(f), in order, with the default criteria.
+
+    Parameters
+    ----------
+    errors : pandas.DataFrame
+        Tracking errors, one row per (variant, period) (module docstring).
+    step, switch : pandas.DataFrame
+        Step and switch response tables (module docstring).
+
+    Returns
+    -------
+    list of Conclusion
+        The verdicts (a) to (f).
+    """
     return [task_space_worst(errors), joint_psmc_equals_pid(errors),
             high_integral_gain_helps(errors), lambda_hardly_matters(errors),
             lambda_slows_recovery(step, switch), pid_violent_psmc_smooth(step)]
 
 
 def conclusions_table(conclusions) -> pd.DataFrame:
-    """Conclusions as a DataFrame (one row each) for the report."""
+    """Conclusions as a DataFrame (one row each) for the report.
+
+    Parameters
+    ----------
+    conclusions : iterable of Conclusion
+        The tested conclusions (e.g. from :func:`evaluate_conclusions`).
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per conclusion (columns of :meth:`Conclusion.as_row`).
+    """
     return pd.DataFrame([c.as_row() for c in conclusions])
 
 

@@ -285,6 +285,24 @@ def design_connection_lengths(P, geometry, eps_min: float, eps_max: float) -> np
     area, groups 2 and 4 reach ``eps_max`` at their shortest.  The extremes
     (A.39)-(A.42) are found on a dense grid refined by a bounded scalar
     search.  Lengths of groups 1-2 depend on q1 only, of 3-4 on q2 only.
+
+    Parameters
+    ----------
+    P : numpy.ndarray, shape (NP,)
+        Plant row (layout ``PLANT`` of :mod:`ppamsafety.plant.layout`) with
+        at least the geometry fields, ``n_muscles`` and ``l0`` set (the
+        connection lengths themselves are not read).
+    geometry : ArmGeometry
+        The geometry packed in ``P``; its joint ranges q1_min .. q2_max
+        [rad] bound the working area searched.
+    eps_min, eps_max : float
+        Smallest and largest contraction allowed in the working area [-]
+        (``MuscleSet.eps_min``, ``eps_max``).
+
+    Returns
+    -------
+    numpy.ndarray, shape (4,)
+        L_conn of the four muscle groups [m].
     """
     from scipy.optimize import minimize_scalar
 

@@ -383,7 +383,20 @@ def _apply_effects(values: dict, arm) -> None:
 
 
 def plant_effects(P) -> dict:
-    """Which effects are on in plant row(s) ``P``: ``{mode field: bool or bool array}``."""
+    """Which effects are on in plant row(s) ``P``: ``{mode field: bool or bool array}``.
+
+    Parameters
+    ----------
+    P : array_like, shape (NP,) or (..., NP)
+        Packed plant row(s) (layout :data:`PLANT`).
+
+    Returns
+    -------
+    dict
+        For each ``*_mode`` field of :data:`PACK_TIME_EFFECTS`: True where
+        its :class:`Switch` code is ``ON`` (a bool, or a bool array of the
+        leading shape of ``P``).
+    """
     P = np.asarray(P, dtype=float)
     return {name: P[..., PLANT.offset(name)] == Switch.ON
             for name in PACK_TIME_EFFECTS if name.endswith("_mode")}
@@ -438,7 +451,24 @@ def with_effects(P, **effects) -> np.ndarray:
 
 
 def effect_state_lengths(rows) -> np.ndarray:
-    """Effect-state length of each plant row, validated; int array of shape (B,)."""
+    """Effect-state length of each plant row, validated; int array of shape (B,).
+
+    Parameters
+    ----------
+    rows : array_like, shape (NP,) or (B, NP)
+        Packed plant row(s) (layout :data:`PLANT`); the
+        ``effect_state_length`` slot (:data:`NZ`) is read.
+
+    Returns
+    -------
+    numpy.ndarray of int64, shape (B,)
+        Length of the effect state z each row needs (B = 1 for one row).
+
+    Raises
+    ------
+    ValueError
+        If a length is not an integer in [0, :data:`MAX_EFFECT_STATE`].
+    """
     n = np.atleast_2d(rows)[:, NZ]
     if not np.all((n == np.round(n)) & (n >= 0) & (n <= MAX_EFFECT_STATE)):
         raise ValueError(f"params: effect_state_length must be an integer in "
@@ -477,6 +507,14 @@ def anchor_volume(group, eps_a: float) -> float:
     dV/deps ~ c/sqrt(eps); matching c to the fitted dV/deps = l0 F/p at eps_a
     gives V(eps_a) = pi R^2 l0 + 2 eps_a l0 f(eps_a), with the cylinder of
     radius R = l0/slenderness as the eps = 0 value (thesis fig. 2.4 scale).
+
+    Parameters
+    ----------
+    group : MuscleGroup
+        The muscle group (force-law coefficients (3.9), membrane length l0
+        [m], radius [m]).
+    eps_a : float
+        Anchor contraction [-] (``MuscleSet.eps_min``), > 0.
     """
     from .muscle import polynomial
 
@@ -486,10 +524,34 @@ def anchor_volume(group, eps_a: float) -> float:
 
 
 def controller_view(arm) -> np.ndarray:
-    """Packed row with the controllers' identified gravity model (Table 3.1)."""
+    """Packed row with the controllers' identified gravity model (Table 3.1).
+
+    Parameters
+    ----------
+    arm : ArmParameters
+        The arm; ``arm.model_gravity`` fills the dynamics slots, with the
+        nominal valves, pneumatics and friction (no plant effects).
+
+    Returns
+    -------
+    numpy.ndarray, shape (NP,)
+        Read-only row (layout :data:`PLANT`), see :func:`pack`.
+    """
     return pack(arm, arm.model_gravity)
 
 
 def model_view(arm) -> np.ndarray:
-    """Packed row with the identified dynamic model (Table 3.5)."""
+    """Packed row with the identified dynamic model (Table 3.5).
+
+    Parameters
+    ----------
+    arm : ArmParameters
+        The arm; ``arm.model`` fills the dynamics slots, with the nominal
+        valves, pneumatics and friction (no plant effects).
+
+    Returns
+    -------
+    numpy.ndarray, shape (NP,)
+        Read-only row (layout :data:`PLANT`), see :func:`pack`.
+    """
     return pack(arm, arm.model)

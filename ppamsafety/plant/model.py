@@ -192,7 +192,20 @@ _MEM_DEPTH = MEMORY.offset("depth")
 
 @leaf
 def effect_state_length(P):
-    """Length of the effect-state vector z that plant row ``P`` needs."""
+    """Length of the effect-state vector z that plant row ``P`` needs.
+
+    Parameters
+    ----------
+    P : float64[:]
+        Plant row (layout :data:`~ppamsafety.plant.layout.PLANT`); its
+        ``effect_state_length`` slot is read (not validated; see
+        :func:`~ppamsafety.plant.layout.effect_state_lengths`).
+
+    Returns
+    -------
+    int
+        Number of floats of z (0 when no effect with state is on).
+    """
     return int(P[NZ])
 
 
@@ -334,6 +347,26 @@ def plant_rhs(x, z, u, tau_ext, P, dx, work):
     With the muscle hysteresis on, the force of group k in the joint
     torques is multiplied by the factor of (3.35) (not the volume
     derivative m_tau in the pressure dynamics).
+
+    Parameters
+    ----------
+    x : float64[:]
+        State (8,) [q1, q2, qd1, qd2, p1..p4] (rad, rad/s, Pa gauge).
+    z : float64[:]
+        Effect state (length ``effect_state_length`` of ``P``, may be
+        empty), read only.
+    u : float64[:]
+        Valve set values (4,) [Pa].
+    tau_ext : float64[:]
+        External joint torques (2,) [N m].
+    P : float64[:]
+        Plant row (layout :data:`~ppamsafety.plant.layout.PLANT`).
+    dx : float64[:]
+        State derivative (8,) (rad/s, rad/s^2, Pa/s), written.
+    work : float64[:]
+        Work memory, at least :data:`NRHS` (16) floats: m_tau, d m_tau/dq,
+        volumes and (hysteresis on) force factors of the four groups;
+        overwritten.
     """
     mt = work[W_MT:W_MT + 4]
     dmt = work[W_DMT:W_DMT + 4]
@@ -366,6 +399,27 @@ def rk4_step(x, z, u, tau_ext, h, P, work):
 
     The effect state ``z`` is held over the stages and updated once at the
     end by :func:`effects_update`.
+
+    Parameters
+    ----------
+    x : float64[:]
+        State (8,) [q1, q2, qd1, qd2, p1..p4] (rad, rad/s, Pa gauge),
+        updated in place.
+    z : float64[:]
+        Effect state (length ``effect_state_length`` of ``P``, may be
+        empty), updated in place at the end of the step.
+    u : float64[:]
+        Valve set values (4,) [Pa], held over the step.
+    tau_ext : float64[:]
+        External joint torques (2,) [N m], held over the step.
+    h : float
+        Step length [s].
+    P : float64[:]
+        Plant row (layout :data:`~ppamsafety.plant.layout.PLANT`).
+    work : float64[:]
+        Work memory, at least :data:`NWORK` (5 * 8 + 16) floats: the four
+        stage derivatives, the stage state and the :func:`plant_rhs` work;
+        overwritten.
     """
     k1 = work[W_K1:W_K1 + NX]
     k2 = work[W_K2:W_K2 + NX]

@@ -99,6 +99,20 @@ def compare_with_thesis(errors: pd.DataFrame) -> pd.DataFrame:
     in ``errors`` every thesis cell must find its result
     (:func:`~ppamsafety.experiments.thesis_data.join_thesis`).  Variants that
     are not in the thesis get NaN thesis values.
+
+    Parameters
+    ----------
+    errors : pandas.DataFrame
+        Toolkit tracking errors in the long format of :func:`circle_errors`
+        (one row per variant and period; columns used:
+        ``controller_family``, ``ki_bar``, ``lambda_s`` [s], ``period_s``
+        [s], ``mean_m``, ``max_m`` [m]).
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``errors`` with ``thesis_mean_m``, ``thesis_max_m`` [m] and the
+        ratios ``ratio_mean``, ``ratio_max`` [-] added.
     """
     d = join_thesis(errors, thesis_table(), on=("period_s",),
                     take=("thesis_mean_m", "thesis_max_m"), what="thesis Table 5.2")
