@@ -154,7 +154,7 @@ def impact_bounds(arm, q, qd, *, head, head_velocity=None, duration: float = 0.0
     fb = dm ** n * cell.max(axis=1) * MARGIN
     am = fb / (mh * G0)
     hic = window * am ** 2.5
-    s = V * duration / np.maximum(R - dm, 1e-300)
+    s = np.minimum(V * duration / np.maximum(R - dm, 1e-300), 2.0)   # >= 1: no cone bound
     ok = (s < 1.0) & (R > dm)
     c = np.sqrt(np.clip(1.0 - s * s, 1e-300, None))
     imp = (np.sqrt(2.0 * mh * e0) + mh * np.linalg.norm(vh, axis=1)) / c / (mh * G0)
