@@ -148,7 +148,8 @@ class ImpactResults:
 
 def simulate_impacts(arm, q, qd, stiffness, *, head: HeadContactModel | str | None = None,
                      direction=None, head_velocity=None, fixed_arm: bool = False,
-                     dt: float = 2e-5, duration: float = 0.05, history=False) -> ImpactResults:
+                     dt: float = 2e-5, duration: float = 0.05, history=False,
+                     integrator: str = "fixed") -> ImpactResults:
     """Simulate impacts of the flexible-joint arm with a free head (thesis §6.3.2).
 
     Parameters
@@ -174,6 +175,14 @@ def simulate_impacts(arm, q, qd, stiffness, *, head: HeadContactModel | str | No
         the step changes F_max and HIC by less than 2e-4 relative, see tests).
     history : bool or sequence of int
         Record time histories for all cases (True) or for the given indices.
+    integrator : {"fixed", "dense"}
+        ``"fixed"``: RK4 with step ``dt`` in contact (the reference engine).
+        ``"dense"``: RK4 with step 5 ``dt`` in contact and the force on the
+        ``dt`` grid from cubic Hermite interpolation
+        (:func:`~ppamsafety.impact.engine.impact_batch_dense`), about 4x
+        faster; F_max, HIC36 and HIC15 within 2e-4 relative of the fixed
+        engine (tests/test_impact_dense.py).  Cases with a recorded history
+        always use ``"fixed"``.
 
     Returns
     -------
@@ -187,6 +196,8 @@ def simulate_impacts(arm, q, qd, stiffness, *, head: HeadContactModel | str | No
         raise TypeError(f"fixed_arm = {fixed_arm!r} must be True or False")
     check_range("dt", dt, 1e-8, 1e-3, unit="s")
     check_range("duration", duration, 1e-4, 10.0, unit="s")
+    if integrator not in ("fixed", "dense"):
+        raise ValueError(f"integrator = {integrator!r} must be 'fixed' or 'dense'")
     q = np.atleast_2d(as_float_array("q", q, shape_tail=(2,)))
     n = q.shape[0]
     qd = np.broadcast_to(as_float_array("qd", qd, shape_tail=(2,)), (n, 2))
@@ -228,8 +239,21 @@ def simulate_impacts(arm, q, qd, stiffness, *, head: HeadContactModel | str | No
     w36 = int(math.floor(0.036 / dt * (1 + 1e-9)))
     w15 = int(math.floor(0.015 / dt * (1 + 1e-9)))
     out = np.zeros((sel.size, eng.NSUM))
-    eng.impact_batch(np.ascontiguousarray(cases[sel]), np.array(lay.pack(arm)), hp, float(dt),
-                     nsteps, w36, w15, out, HIST, np.ascontiguousarray(hist_of[sel]))
+    P = np.array(lay.pack(arm))
+    if integrator == "dense":
+        dense = hist_of[sel] < 0
+        od = np.zeros((int(dense.sum()), eng.NSUM))
+        eng.impact_batch_dense(np.ascontiguousarray(cases[sel][dense]), P, hp, float(dt), nsteps,
+                               w36, w15, od)
+        out[dense] = od
+        sel_f = sel[~dense]
+        of = np.zeros((sel_f.size, eng.NSUM))
+        eng.impact_batch(np.ascontiguousarray(cases[sel_f]), P, hp, float(dt), nsteps, w36, w15,
+                         of, HIST, np.ascontiguousarray(hist_of[sel_f]))
+        out[~dense] = of
+    else:
+        eng.impact_batch(np.ascontiguousarray(cases[sel]), P, hp, float(dt), nsteps, w36, w15,
+                         out, HIST, np.ascontiguousarray(hist_of[sel]))
     SUM[sel] = out
     df = pd.DataFrame({"q1": q[:, 0], "q2": q[:, 1], "qd1": qd[:, 0], "qd2": qd[:, 1],
                        "K1": K[:, 0], "K2": K[:, 1], "ux": u[:, 0], "uy": u[:, 1],
