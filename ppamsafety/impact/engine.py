@@ -372,7 +372,7 @@ def impact_batch(CASES, P, hp, dt, nsteps, w36, w15, SUM, HIST, hist_of):
 
 
 #: Step of the dense-output integrator, in grid intervals dt (see :func:`impact_batch_dense`).
-DENSE_STRIDE = 5
+DENSE_STRIDE = 8
 #: Its free-flight step while the gap exceeds FREE_GAP plus twice the closing distance [dt].
 DENSE_FREE_STRIDE = 100
 

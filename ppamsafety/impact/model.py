@@ -177,11 +177,12 @@ def simulate_impacts(arm, q, qd, stiffness, *, head: HeadContactModel | str | No
         Record time histories for all cases (True) or for the given indices.
     integrator : {"fixed", "dense"}
         ``"fixed"``: RK4 with step ``dt`` in contact (the reference engine).
-        ``"dense"``: RK4 with step 5 ``dt`` in contact and the force on the
+        ``"dense"``: RK4 with step 8 ``dt`` in contact and the force on the
         ``dt`` grid from cubic Hermite interpolation
-        (:func:`~ppamsafety.impact.engine.impact_batch_dense`), about 4x
+        (:func:`~ppamsafety.impact.engine.impact_batch_dense`), about 3.5x
         faster; F_max, HIC36 and HIC15 within 2e-4 relative of the fixed
-        engine (tests/test_impact_dense.py).  Cases with a recorded history
+        engine and of solve_ivp at rtol 1e-10 (tests/test_impact_dense.py;
+        measured 6e-5 on 1000 random impacts).  Cases with a recorded history
         always use ``"fixed"``.
 
     Returns
