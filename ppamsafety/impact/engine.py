@@ -435,7 +435,25 @@ def impact_batch_dense(CASES, P, hp, dt, nsteps, w36, w15, SUM):
     (while they separate, a contact cannot start inside a long step, and if the
     force becomes positive at its end the step is repeated finely); free flight
     as in :func:`impact_batch`, with steps of DENSE_FREE_STRIDE x dt while the
-    gap exceeds FREE_GAP plus twice the closing distance of such a step.  Accuracy against solve_ivp: tests/test_impact_dense.py.
+    gap exceeds FREE_GAP plus twice the closing distance of such a step.
+    Accuracy against solve_ivp: tests/test_impact_dense.py.
+
+    Parameters
+    ----------
+    CASES : numpy.ndarray, shape (N, NCASE)
+        Impact cases, rows of :data:`CASE`.
+    P : numpy.ndarray
+        Arm parameter vector (:func:`ppamsafety.plant.layout.pack`).
+    hp : numpy.ndarray
+        Head row (:data:`HEAD`).
+    dt : float
+        Grid step of the force samples and of the fine RK4 steps [s].
+    nsteps : int
+        Grid intervals simulated (duration / dt).
+    w36, w15 : int
+        HIC window limits in grid intervals.
+    SUM : numpy.ndarray, shape (N, NSUM)
+        Output, rows of :data:`SUMMARY`.
     """
     y = np.empty(NY)
     ys = np.empty(NY)
