@@ -5,7 +5,9 @@ Modules (one concept each):
 * :mod:`.contact` -- Hunt-Crossley contact law and its closed-form solution;
 * :mod:`.engine` -- the compiled batch kernel: flexible-joint arm against a free head;
 * :mod:`.model` -- :func:`simulate_impacts`, :class:`ImpactResults`, :func:`effective_mass`;
-* :mod:`.instants` -- impact cases from a closed-loop experiment (four instants or all);
+* :mod:`.instants` -- impact cases from a closed-loop experiment (four instants or all;
+  :func:`worst_instant`: the exact worst of every instant, pruned by rigorous bounds);
+* :mod:`.bounds` -- a-priori upper bounds on F_max and HIC of an impact (energy, momentum);
 * :mod:`.hic` -- Head Injury Criterion: exact fast evaluation and closed forms;
 * :mod:`.twobody` -- the one-dimensional effective-mass impact;
 * :mod:`.head_fit` -- reconstruction of the thesis' head contact parameters;
@@ -16,7 +18,7 @@ Modules (one concept each):
 """
 
 from .hic import hic
-from .instants import evaluate_experiment
+from .instants import evaluate_experiment, worst_instant
 from .model import ImpactResults, effective_mass, simulate_impacts
 
-__all__ = ["hic", "evaluate_experiment", "ImpactResults", "effective_mass", "simulate_impacts"]
+__all__ = ["hic", "evaluate_experiment", "worst_instant", "ImpactResults", "effective_mass", "simulate_impacts"]

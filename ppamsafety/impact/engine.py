@@ -438,3 +438,187 @@ def impact_batch(CASES, P, hp, dt, nsteps, w36, w15, SUM, HIST, hist_of):
         r[R_EDISS] = y[Y_ED]
         r[R_TCONT], r[R_VTCP0], r[R_E0] = tcont, v0, e0
         r[R_EBAL] = (_energy(y, case, P, hp) + y[Y_ED] - e0) / max(e0, 1e-300)
+
+
+#: Step of the dense-output integrator, in grid intervals dt (see :func:`impact_batch_dense`).
+DENSE_STRIDE = 8
+#: Its free-flight step while the gap exceeds FREE_GAP plus twice the closing distance [dt].
+DENSE_FREE_STRIDE = 100
+
+
+@leaf
+def _delta_rates(y, case, P, hp, dy):
+    """(d2 delta/dt2, dF/dt) at state ``y`` whose derivative ``dy`` is given.
+
+    delta = R - |x|, x = x_head - r_tcp: delta'' = -(|x'|^2 - (n.x')^2)/|x| - n.x''
+    with x'' = a_head - (J qdd + Jdot qd); for the planar 2R chain
+    Jdot qd = -w1^2 p1 - (w1 + w2)^2 p2 (p1: base to elbow = (j21 - j22, j12 - j11),
+    p2: elbow to tool = (j22, -j12)).  dF/dt = n delta^(n-1) delta' (k + b delta')
+    + b delta^n delta'' where F > 0, else 0.
+    """
+    _, _, _, _, _, x, yy, j11, j12, j21, j22 = _arm_terms(y, P)
+    w1, w2, a1, a2 = y[Y_W], y[Y_W + 1], dy[Y_W], dy[Y_W + 1]
+    if int(case[C_ARM]) == ArmMode.FIXED:
+        w1, w2, a1, a2 = 0.0, 0.0, 0.0, 0.0
+    vx, vy = j11 * w1 + j12 * w2, j21 * w1 + j22 * w2
+    w12 = w1 + w2
+    atx = j11 * a1 + j12 * a2 - w1 * w1 * (j21 - j22) - w12 * w12 * j22
+    aty = j21 * a1 + j22 * a2 - w1 * w1 * (j12 - j11) + w12 * w12 * j12
+    dx, dyy = y[Y_XH] - x, y[Y_XH + 1] - yy
+    dist = math.sqrt(dx * dx + dyy * dyy)
+    nx, ny = dx / dist, dyy / dist
+    ex, ey = y[Y_VH] - vx, y[Y_VH + 1] - vy
+    en = nx * ex + ny * ey
+    ddd = -((ex * ex + ey * ey - en * en) / dist + nx * (dy[Y_VH] - atx) + ny * (dy[Y_VH + 1] - aty))
+    delta, dd = hp[HP_R] - dist, -en
+    if delta <= 0.0:
+        return ddd, 0.0
+    g = hp[HP_K] + hp[HP_B] * dd
+    if g <= 0.0:
+        return ddd, 0.0
+    dn = delta ** hp[HP_N]
+    return ddd, hp[HP_N] * dn / delta * dd * g + hp[HP_B] * dn * ddd
+
+
+@leaf
+def _hermite(v0, d0, v1, d1, h, s):
+    """Cubic Hermite interpolant at fraction s of [0, h] from values and derivatives at both ends."""
+    s2 = s * s
+    s3 = s2 * s
+    return ((2.0 * s3 - 3.0 * s2 + 1.0) * v0 + (s3 - 2.0 * s2 + s) * h * d0
+            + (3.0 * s2 - 2.0 * s3) * v1 + (s3 - s2) * h * d1)
+
+
+@kernel
+def impact_batch_dense(CASES, P, hp, dt, nsteps, w36, w15, SUM):
+    """:func:`impact_batch` without histories, RK4 steps of DENSE_STRIDE x dt in contact.
+
+    The head acceleration is still sampled on the grid k dt (for the HIC and
+    F_max): between the ends of a long step, where the force is positive at
+    both ends, F(t) and delta(t) are cubic Hermite interpolants of their values
+    and rates at the ends (dF/dt and delta'' from :func:`_delta_rates`;
+    F clipped at 0).  A long step across which the force switches between zero
+    and positive (contact onset, where F ~ t^(3/2) is not smooth, and
+    separation) is repeated with DENSE_STRIDE steps of dt, as is any step while
+    head and tool approach each other with a gap too small for a long step
+    (while they separate, a contact cannot start inside a long step, and if the
+    force becomes positive at its end the step is repeated finely); free flight
+    as in :func:`impact_batch`, with steps of DENSE_FREE_STRIDE x dt while the
+    gap exceeds FREE_GAP plus twice the closing distance of such a step.
+    Accuracy against solve_ivp: tests/test_impact_dense.py.
+
+    Parameters
+    ----------
+    CASES : numpy.ndarray, shape (N, NCASE)
+        Impact cases, rows of :data:`CASE`.
+    P : numpy.ndarray
+        Arm parameter vector (:func:`ppamsafety.plant.layout.pack`).
+    hp : numpy.ndarray
+        Head row (:data:`HEAD`).
+    dt : float
+        Grid step of the force samples and of the fine RK4 steps [s].
+    nsteps : int
+        Grid intervals simulated (duration / dt).
+    w36, w15 : int
+        HIC window limits in grid intervals.
+    SUM : numpy.ndarray, shape (N, NSUM)
+        Output, rows of :data:`SUMMARY`.
+    """
+    y = np.empty(NY)
+    ys = np.empty(NY)
+    yt = np.empty(NY)
+    k1, k2, k3, k4 = np.empty(NY), np.empty(NY), np.empty(NY), np.empty(NY)
+    acc = np.empty(nsteps + 1)
+    mg = hp[HP_M] * G0
+    for c in range(CASES.shape[0]):
+        case = CASES[c]
+        initial_state(case, P, hp, y)
+        e0 = _energy(y, case, P, hp)
+        f0, delta0, dd0, v0 = impact_rhs(y, case, P, hp, k1)
+        ddd0, fd0 = _delta_rates(y, case, P, hp, k1)
+        acc[0] = f0 / mg
+        fmax, tmax, dmax = f0, 0.0, max(delta0, 0.0)
+        tcont = dt if f0 > 0.0 else 0.0
+        s = 0
+        while s < nsteps:
+            m = DENSE_FREE_STRIDE
+            if not (s + m <= nsteps and -delta0 > FREE_GAP + 2.0 * max(dd0, 0.0) * m * dt):
+                m = FREE_STRIDE
+            if (f0 == 0.0 and s + m <= nsteps
+                    and -delta0 > FREE_GAP + 2.0 * max(dd0, 0.0) * m * dt):
+                _rk4(y, m * dt, case, P, hp, k1, k2, k3, k4, yt)
+                for i in range(1, m):
+                    acc[s + i] = 0.0
+                s += m
+                f0, delta0, dd0, _ = impact_rhs(y, case, P, hp, k1)
+                ddd0, fd0 = _delta_rates(y, case, P, hp, k1)
+                acc[s] = f0 / mg
+                if f0 > fmax:
+                    fmax, tmax = f0, s * dt
+                dmax = max(dmax, delta0)
+                if f0 > 0.0:
+                    tcont += dt
+                continue
+            m = min(DENSE_STRIDE, nsteps - s)
+            fine = m == 1 or (f0 == 0.0 and dd0 > 0.0 and -delta0 <= FREE_GAP * DENSE_STRIDE
+                              / FREE_STRIDE + 2.0 * dd0 * m * dt)
+            if not fine:
+                for i in range(NY):
+                    ys[i] = y[i]
+                _rk4(y, m * dt, case, P, hp, k1, k2, k3, k4, yt)
+                f1, delta1, dd1, _ = impact_rhs(y, case, P, hp, k1)
+                if (f1 > 0.0) != (f0 > 0.0):         # contact switches inside: redo finely
+                    for i in range(NY):
+                        y[i] = ys[i]
+                    impact_rhs(y, case, P, hp, k1)
+                    fine = True
+                else:
+                    ddd1, fd1 = _delta_rates(y, case, P, hp, k1)
+                    h = m * dt
+                    for i in range(1, m):
+                        fr = i / m
+                        fi = 0.0
+                        if f0 > 0.0:
+                            fi = max(_hermite(f0, fd0, f1, fd1, h, fr), 0.0)
+                        di = _hermite(delta0, dd0, delta1, dd1, h, fr)
+                        acc[s + i] = fi / mg
+                        if fi > fmax:
+                            fmax, tmax = fi, (s + i) * dt
+                        dmax = max(dmax, di)
+                        if fi > 0.0:
+                            tcont += dt
+                    s += m
+                    f0, delta0, dd0, ddd0, fd0 = f1, delta1, dd1, ddd1, fd1
+            if fine:
+                for i in range(m):
+                    _rk4(y, dt, case, P, hp, k1, k2, k3, k4, yt)
+                    s += 1
+                    f0, delta0, dd0, _ = impact_rhs(y, case, P, hp, k1)
+                    acc[s] = f0 / mg
+                    if f0 > fmax:
+                        fmax, tmax = f0, s * dt
+                    dmax = max(dmax, delta0)
+                    if f0 > 0.0:
+                        tcont += dt
+                ddd0, fd0 = _delta_rates(y, case, P, hp, k1)
+            else:
+                acc[s] = f0 / mg
+                if f0 > fmax:
+                    fmax, tmax = f0, s * dt
+                dmax = max(dmax, delta0)
+                if f0 > 0.0:
+                    tcont += dt
+        r = SUM[c]
+        r[R_FMAX], r[R_TFMAX] = fmax, tmax
+        r[R_HIC36], i1, i2 = hic_kernel(acc, dt, w36)
+        r[R_W36], r[R_W36 + 1] = i1 * dt, i2 * dt
+        if i2 - i1 > w15:
+            r[R_HIC15], i1, i2 = hic_kernel(acc, dt, w15)
+        else:
+            r[R_HIC15] = r[R_HIC36]
+        r[R_W15], r[R_W15 + 1] = i1 * dt, i2 * dt
+        r[R_DMAX], r[R_AMAX] = dmax, fmax / mg
+        r[R_EHEAD] = 0.5 * hp[HP_M] * (y[Y_VH] * y[Y_VH] + y[Y_VH + 1] * y[Y_VH + 1])
+        r[R_EDISS] = y[Y_ED]
+        r[R_TCONT], r[R_VTCP0], r[R_E0] = tcont, v0, e0
+        r[R_EBAL] = (_energy(y, case, P, hp) + y[Y_ED] - e0) / max(e0, 1e-300)

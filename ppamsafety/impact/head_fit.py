@@ -134,9 +134,16 @@ def iso_effective_spring(stiffness, exponent, force) -> float:
     stiffness = check_range("stiffness", stiffness, 0.0, 1e20, lo_open=True, unit="N/m^n")
     exponent = check_range("exponent", exponent, 1.0, 3.0)
     force = check_range("force", force, 0.0, 1e6, lo_open=True, unit="N")
-    delta = (force / stiffness) ** (1.0 / exponent)
-    energy = stiffness * delta ** (exponent + 1.0) / (exponent + 1.0)
-    return float(check_finite_result("iso_effective_spring", force ** 2 / (2.0 * energy),
+    # With k delta^n = F the elastic energy is E = F delta/(n + 1), so F^2/(2E) =
+    # (n + 1) F/(2 delta); evaluated in logarithms so that extreme but valid k and F
+    # cannot overflow or underflow in an intermediate power.
+    log_delta = (math.log(force) - math.log(stiffness)) / exponent
+    log_spring = math.log((exponent + 1.0) / 2.0) + math.log(force) - log_delta
+    if not -700.0 < log_spring < 700.0:
+        raise ValueError(f"iso_effective_spring: stiffness = {stiffness:g} N/m^n, exponent = "
+                         f"{exponent:g}, force = {force:g} N give an effective spring of "
+                         f"e^{log_spring:.0f} N/m, outside the floating-point range")
+    return float(check_finite_result("iso_effective_spring", math.exp(log_spring),
                                      f"stiffness = {stiffness:g}, exponent = {exponent:g}"))
 
 

@@ -10,6 +10,8 @@ evaluate those or every sample of the record.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import pandas as pd
 
@@ -148,8 +150,127 @@ def evaluate_experiment(result, arm, *, instants: str = "heuristic", every: int 
     res = _simulate_impacts(arm, sub[["q1", "q2"]].to_numpy(), sub[["qd1", "qd2"]].to_numpy(),
                             sub[["K1", "K2"]].to_numpy(), head=head, direction=None,
                             head_velocity=None, fixed_arm=False, dt=dt, duration=duration,
-                            history=history, warn_area=False, stacklevel=4)
+                            history=history, integrator="fixed", warn_area=False,
+                            stacklevel=4)
     res.summary.insert(0, "t0", sub["t"].to_numpy())
     if names is not None:
         res.summary.insert(0, "instant", names)
     return res
+
+
+@dataclass
+class WorstInstants:
+    """Result of :func:`worst_instant`: the worst impacts of an experiment, found exactly.
+
+    Attributes
+    ----------
+    table : pandas.DataFrame
+        One row per candidate instant (the rows :func:`evaluate_experiment`
+        with ``instants="all"`` would simulate): ``t0`` [s], ``tcp_speed``
+        [m/s], ``F_bound`` [N] and ``HIC36_bound`` (rigorous upper bounds,
+        :func:`~ppamsafety.impact.bounds.impact_bounds`), ``simulated``
+        (bool) and, for simulated rows only, ``F_max`` [N], ``HIC36``,
+        ``HIC15`` (NaN where the instant was pruned: its bounds are below the
+        worst simulated values, so it cannot be the worst).
+    worst_F, worst_HIC : pandas.Series
+        Summary row (as :func:`simulate_impacts`, plus ``t0``) of the instant
+        with the largest F_max / HIC36 (the earliest on ties), identical to
+        that instant's row in the full scan.
+    n_simulated, n_pruned : int
+        Instants simulated and pruned.
+    """
+
+    table: pd.DataFrame
+    worst_F: pd.Series
+    worst_HIC: pd.Series
+    n_simulated: int
+    n_pruned: int
+
+
+def worst_instant(result, arm, *, every: int = 1, head=None, dt: float = 2e-5,
+                  duration: float = 0.05, min_speed: float = 0.0,
+                  chunk: int = 32) -> WorstInstants:
+    """Worst F_max and HIC36 over every instant of an experiment, with pruning.
+
+    Same answer as ``evaluate_experiment(result, arm, instants="all", ...)``
+    followed by ``idxmax`` (same instants, same values to the last digit: the
+    worst instants are simulated by the same engine with the same inputs),
+    but only the instants that could be the worst are simulated.  Method:
+    a rigorous upper bound on F_max and on HIC36 of every instant
+    (:func:`~ppamsafety.impact.bounds.impact_bounds`); instants are simulated
+    in batches in descending order of the F bound until the next bound is
+    below the largest simulated F_max, then likewise for HIC36.  An instant
+    is skipped only if its bound is strictly below a simulated value, so the
+    maximum (and, on exact ties, the earliest maximising instant) is kept.
+
+    Parameters
+    ----------
+    result : ExperimentResult
+        The closed-loop record.
+    arm : ArmParameters
+    every : int, keyword-only
+        Sample stride (1 = every control period).
+    head : HeadContactModel or str, optional
+        Head model (default ``"thesis-frontal"``).
+    dt, duration : float
+        Impact integration step and length [s].
+    min_speed : float
+        Instants whose TCP speed is below this [m/s] are not candidates.
+    chunk : int
+        Impacts simulated per compiled batch call (>= 1).
+
+    Returns
+    -------
+    WorstInstants
+    """
+    from ..params.head import HeadContactModel, head_model
+    from .bounds import impact_bounds
+
+    every = check_int("every", every, 1, 10 ** 6)
+    chunk = check_int("chunk", chunk, 1, 10 ** 6)
+    hm = head_model() if head is None else (head_model(head) if isinstance(head, str) else head)
+    if not isinstance(hm, HeadContactModel):
+        raise TypeError(f"head = {head!r} must be a HeadContactModel or a model name")
+    st = impact_states(result, arm)
+    idx = np.arange(0, len(st), every)
+    idx = idx[st["tcp_speed"].to_numpy()[idx] >= min_speed] if min_speed > 0 else idx
+    sub = st.iloc[idx].reset_index(drop=True)
+    q, qd, K = (sub[["q1", "q2"]].to_numpy(), sub[["qd1", "qd2"]].to_numpy(),
+                sub[["K1", "K2"]].to_numpy())
+    n = len(sub)
+    fb, hb = impact_bounds(arm, q, qd, head=hm, duration=duration)
+    frames = []
+    simulated = np.zeros(n, bool)
+    best = {"F_max": -np.inf, "HIC36": -np.inf}
+    for metric, bound in (("F_max", fb), ("HIC36", hb)):
+        order = np.argsort(-bound, kind="stable")
+        pos = 0
+        while pos < n:
+            take = []
+            while pos < n and len(take) < chunk and not bound[order[pos]] < best[metric]:
+                if not simulated[order[pos]]:
+                    take.append(order[pos])
+                pos += 1
+            if not take:
+                break
+            take = np.array(take)
+            res = _simulate_impacts(arm, q[take], qd[take], K[take], head=hm, direction=None,
+                                    head_velocity=None, fixed_arm=False, dt=dt,
+                                    duration=duration, history=False, integrator="fixed",
+                                    warn_area=False, stacklevel=4)
+            s = res.summary
+            frames.append(s.set_axis(take, axis=0))     # keep each column's dtype
+            simulated[take] = True
+            for m in best:
+                best[m] = max(best[m], float(s[m].max()))
+    full = pd.concat(frames).sort_index()
+    done = full.index.to_numpy()
+    full.insert(0, "t0", sub["t"].to_numpy()[done])
+    table = pd.DataFrame({"t0": sub["t"].to_numpy(), "tcp_speed": sub["tcp_speed"].to_numpy(),
+                          "F_bound": fb, "HIC36_bound": hb, "simulated": simulated})
+    for c in ("F_max", "HIC36", "HIC15"):
+        table[c] = np.nan
+        table.loc[done, c] = full[c].to_numpy()
+    return WorstInstants(table=table, worst_F=full.loc[full["F_max"].idxmax()],
+                         worst_HIC=full.loc[full["HIC36"].idxmax()],
+                         n_simulated=int(simulated.sum()), n_pruned=int(n - simulated.sum()))

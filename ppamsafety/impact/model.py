@@ -560,7 +560,8 @@ def _check_run(df, sel, hm, stacklevel):
 
 def simulate_impacts(arm, q, qd, stiffness, *, head: HeadContactModel | str | None = None,
                      direction=None, head_velocity=None, fixed_arm: bool = False,
-                     dt: float = 2e-5, duration: float = 0.05, history=False) -> ImpactResults:
+                     dt: float = 2e-5, duration: float = 0.05, history=False,
+                     integrator: str = "fixed") -> ImpactResults:
     """Simulate impacts of the flexible-joint arm with a free head (thesis §6.3.2).
 
     Parameters
@@ -598,6 +599,15 @@ def simulate_impacts(arm, q, qd, stiffness, *, head: HeadContactModel | str | No
     history : bool or sequence of int
         Record time histories for all cases (True) or for the given case
         indices (each in [0, N - 1]; duplicates are recorded once).
+    integrator : {"fixed", "dense"}
+        ``"fixed"``: RK4 with step ``dt`` in contact (the reference engine).
+        ``"dense"``: RK4 with step 8 ``dt`` in contact and the force on the
+        ``dt`` grid from cubic Hermite interpolation
+        (:func:`~ppamsafety.impact.engine.impact_batch_dense`), about 3.5x
+        faster; F_max, HIC36 and HIC15 within 2e-4 relative of the fixed
+        engine and of solve_ivp at rtol 1e-10 (tests/test_impact_dense.py;
+        measured 6e-5 on 1000 random impacts).  Cases with a recorded history
+        always use ``"fixed"``.
 
     Returns
     -------
@@ -631,11 +641,12 @@ def simulate_impacts(arm, q, qd, stiffness, *, head: HeadContactModel | str | No
     """
     return _simulate_impacts(arm, q, qd, stiffness, head=head, direction=direction,
                              head_velocity=head_velocity, fixed_arm=fixed_arm, dt=dt,
-                             duration=duration, history=history, warn_area=True, stacklevel=4)
+                             duration=duration, history=history, integrator=integrator,
+                             warn_area=True, stacklevel=4)
 
 
 def _simulate_impacts(arm, q, qd, stiffness, *, head, direction, head_velocity, fixed_arm, dt,
-                      duration, history, warn_area, stacklevel):
+                      duration, history, integrator, warn_area, stacklevel):
     """:func:`simulate_impacts`; ``warn_area=False`` for states of a simulated closed-loop
     record (their working-area excursions are the controller's, not a user's mistake)."""
     arm = check_arm(arm)
@@ -648,6 +659,7 @@ def _simulate_impacts(arm, q, qd, stiffness, *, head, direction, head_velocity, 
     vh = None if head_velocity is None else as_float_array(
         "head_velocity", head_velocity, shape_tail=(2,), ndim=(1, 2))
     fixed_arm = check_bool("fixed_arm", fixed_arm)
+    integrator = check_choice("integrator", integrator, ("fixed", "dense"))
     dt = check_range("dt", dt, 1e-8, 1e-3, unit="s")
     duration = check_range("duration", duration, 1e-4, 10.0, unit="s")
     if duration < dt:
@@ -711,8 +723,21 @@ def _simulate_impacts(arm, q, qd, stiffness, *, head, direction, head_velocity, 
     w36 = int(math.floor(0.036 / dt * (1 + 1e-9)))
     w15 = int(math.floor(0.015 / dt * (1 + 1e-9)))
     out = np.zeros((sel.size, eng.NSUM))
-    eng.impact_batch(np.ascontiguousarray(cases[sel]), np.array(lay.pack(arm)), hp, float(dt),
-                     nsteps, w36, w15, out, HIST, np.ascontiguousarray(hist_of[sel]))
+    P = np.array(lay.pack(arm))
+    if integrator == "dense":
+        dense = hist_of[sel] < 0
+        od = np.zeros((int(dense.sum()), eng.NSUM))
+        eng.impact_batch_dense(np.ascontiguousarray(cases[sel][dense]), P, hp, float(dt), nsteps,
+                               w36, w15, od)
+        out[dense] = od
+        sel_f = sel[~dense]
+        of = np.zeros((sel_f.size, eng.NSUM))
+        eng.impact_batch(np.ascontiguousarray(cases[sel_f]), P, hp, float(dt), nsteps, w36, w15,
+                         of, HIST, np.ascontiguousarray(hist_of[sel_f]))
+        out[~dense] = of
+    else:
+        eng.impact_batch(np.ascontiguousarray(cases[sel]), P, hp, float(dt), nsteps, w36, w15,
+                         out, HIST, np.ascontiguousarray(hist_of[sel]))
     SUM[sel] = out
     df = pd.DataFrame({"q1": q[:, 0], "q2": q[:, 1], "qd1": qd[:, 0], "qd2": qd[:, 1],
                        "K1": K[:, 0], "K2": K[:, 1], "ux": u[:, 0], "uy": u[:, 1],

@@ -136,7 +136,10 @@ def plot_fmax_over_time(items, *, title: str = ""):
     ----------
     items : sequence of (str, pandas.DataFrame, dict)
         (panel label, table with columns ``t0`` [s] and ``F_max`` [N],
-        {heuristic name: instant t0 [s]} drawn as vertical lines).
+        {heuristic name: instant t0 [s]} drawn as vertical lines).  A table
+        from :func:`~ppamsafety.impact.instants.worst_instant` (columns
+        ``F_bound`` and ``simulated``; F_max NaN where pruned) is drawn as the
+        bound (grey) and the simulated F_max (dots).
     title : str
         Figure title (default "peak force of an impact at every instant").
 
@@ -148,7 +151,14 @@ def plot_fmax_over_time(items, *, title: str = ""):
     fig, axes = new_figure(len(items), 1, figsize=(10, 2.4 * len(items) + 0.5), sharex=True,
                              squeeze=False)
     for a, (label, s, marks) in zip(axes[:, 0], items):
-        a.plot(s["t0"], s["F_max"], color="k", lw=1)
+        if "F_bound" in s:
+            sim = s["simulated"].to_numpy(bool)
+            a.plot(s["t0"], s["F_bound"], color="0.6", lw=0.8, label="upper bound")
+            a.plot(s["t0"][sim], s["F_max"][sim], "k.", ms=2, label="simulated F_max")
+            a.set_ylim(0.0, 1.3 * max(float(s["F_max"].max()), MAXILLA_FRACTURE_N))
+            a.legend(loc="upper right", fontsize=7)
+        else:
+            a.plot(s["t0"], s["F_max"], color="k", lw=1)
         for name, t0 in marks.items():
             a.axvline(t0, color="tab:orange", lw=0.8, alpha=0.8)
         a.axhline(MAXILLA_FRACTURE_N, color="r", ls="--", lw=1)
