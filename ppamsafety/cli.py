@@ -442,6 +442,13 @@ def run_guarded(parser: argparse.ArgumentParser, func, argv=None) -> int:
         return exc.code if isinstance(exc.code, int) else EXIT_USAGE
     try:
         return func(args)
+    except BrokenPipeError:            # e.g. `ppamsafety impact ... | head`: the reader left
+        try:                           # early; nothing is wrong with the command or its input
+            devnull = os.open(os.devnull, os.O_WRONLY)
+            os.dup2(devnull, sys.stdout.fileno())   # no second error when Python flushes
+        except (OSError, ValueError):
+            pass
+        return EXIT_OK
     except KeyboardInterrupt:
         print("ppamsafety: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED

@@ -121,3 +121,13 @@ def test_build_report_checks_only(tmp_path):
     with pytest.raises(TypeError, match="list of study names"):
         build_report(tmp_path / "r", only="design")
     assert not (tmp_path / "r").exists()
+
+
+def test_a_reader_that_leaves_early_is_not_an_error():
+    """`ppamsafety impact ... | head -1`: the closed pipe gives exit 0 and no message."""
+    p = subprocess.Popen([sys.executable, "-m", "ppamsafety.cli", "impact", "--q", "50", "-80",
+                          "--qd", "3", "-1"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    p.stdout.close()                                   # the reader is gone before any output
+    err = p.stderr.read().decode()
+    assert p.wait(timeout=300) == 0
+    assert "Traceback" not in err and "error" not in err
