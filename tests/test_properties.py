@@ -7,20 +7,18 @@ argument, or return a finite, sane result.  Anything else (AttributeError,
 OverflowError, a numba typing error, a silent NaN) fails the test.
 
 Counts per entry point (examples, clear errors, sane results) are printed at
-the end of the module and written to ``/work/property_counts_valid.txt`` when
-the environment variable ``PPAMSAFETY_PROPERTY_COUNTS`` is set.
+the end of the module and written to
+``$PPAMSAFETY_PROPERTY_COUNTS/property_counts_params.txt`` when that variable names a folder.
 """
 
 import math
-import os
-import re
-from collections import Counter, defaultdict
 
 import numpy as np
 import pytest
 hypothesis = pytest.importorskip("hypothesis")
 from hypothesis import HealthCheck, given, settings  # noqa: E402
 from hypothesis import strategies as st
+from property_support import Recorder, anything, bad_types, numbers, special  # noqa: E402
 
 from ppamsafety import design
 from ppamsafety.impact import head_fit as hf
@@ -31,52 +29,21 @@ from ppamsafety.params import (BaseParameters, LinkInertia, MuscleGroup, Pneumat
 from ppamsafety.params.geometry import group_length_range
 from ppamsafety.params.head import HeadContactModel, head_model, hunt_crossley_max_penetration
 
-COUNTS: dict = defaultdict(Counter)
 FAST = settings(max_examples=60, deadline=None, suppress_health_check=list(HealthCheck))
 SLOW = settings(max_examples=15, deadline=None, suppress_health_check=list(HealthCheck))
 
 # --- strategies ----------------------------------------------------------------------
 
-bad_types = st.one_of(st.text(max_size=4), st.none(), st.dictionaries(st.text(max_size=2),
-                                                                      st.integers(), max_size=2),
-                      st.complex_numbers(allow_nan=False, max_magnitude=1e3).filter(
-                          lambda z: z.imag != 0), st.booleans(),
-                      st.lists(st.lists(st.floats(), max_size=2), min_size=1, max_size=2))
-special = st.sampled_from([math.nan, math.inf, -math.inf, 0.0, -0.0, -1.0, 1e-300, 1e300,
-                           -1e300, 10 ** 400])
-numbers = st.one_of(st.floats(allow_nan=True, allow_infinity=True),
-                    st.floats(-10.0, 10.0), st.integers(-10 ** 6, 10 ** 6))
-anything = st.one_of(bad_types, special, numbers)
 
 
-def outcome(entry, call, *names):
-    """Run ``call``; a clear error must name one of ``names``.  Returns the result or None."""
-    try:
-        result = call()
-    except (TypeError, ValueError) as exc:
-        msg = str(exc)
-        assert any(re.search(rf"(?<![A-Za-z0-9_]){re.escape(n)}(?![A-Za-z0-9_])", msg)
-                   for n in names), f"{entry}: message does not name {names}: {msg!r}"
-        COUNTS[entry]["error"] += 1
-        return None
-    COUNTS[entry]["sane"] += 1
-    return result
+_REC = Recorder("params")
+outcome = _REC.outcome
 
 
 @pytest.fixture(scope="module", autouse=True)
 def _report_counts():
     yield
-    lines = [f"{'entry point':45s} {'examples':>8s} {'clear error':>11s} {'sane result':>11s}"]
-    for entry in sorted(COUNTS):
-        c = COUNTS[entry]
-        lines.append(f"{entry:45s} {c['error'] + c['sane']:8d} {c['error']:11d} {c['sane']:11d}")
-    tot = sum(c["error"] for c in COUNTS.values()), sum(c["sane"] for c in COUNTS.values())
-    lines.append(f"{'total':45s} {tot[0] + tot[1]:8d} {tot[0]:11d} {tot[1]:11d}")
-    text = "\n".join(lines)
-    print("\n" + text)
-    if os.environ.get("PPAMSAFETY_PROPERTY_COUNTS"):
-        with open("/work/property_counts_valid.txt", "w") as fh:
-            fh.write(text + "\n")
+    _REC.report()
 
 
 def _is_float(x):
@@ -354,6 +321,6 @@ def test_counts_cover_every_entry_point():
                 "hic_rectangular", "head_fit.iso_effective_spring",
                 "head_fit.hybrid3_drop_peak_g", "head_fit.hic_curve",
                 "design.torque_function_curves", "design.stiffness_map", "design.max_load_map"}
-    if len(COUNTS) < 5:     # run alone (-k): nothing to check
+    if len(_REC.counts) < 5:     # run alone (-k): nothing to check
         pytest.skip("run the whole module to collect the counts")
-    assert expected <= set(COUNTS)
+    assert expected <= set(_REC.counts)

@@ -6,19 +6,17 @@ message names the argument, or return a finite, sane result.  Anything else (Att
 OverflowError, a numba typing error, a silent NaN) fails the test.
 
 Counts per entry point are printed at the end of the module and written to
-``/work/property_counts_control.txt`` when ``PPAMSAFETY_PROPERTY_COUNTS`` is set.
+``$PPAMSAFETY_PROPERTY_COUNTS/property_counts_control.txt`` when that variable names a folder.
 """
 
 import math
-import os
-import re
-from collections import Counter, defaultdict
 
 import numpy as np
 import pytest
 hypothesis = pytest.importorskip("hypothesis")
 from hypothesis import HealthCheck, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
+from property_support import SPECIAL_VALUES, Recorder, bad_types, numbers  # noqa: E402
 
 from ppamsafety.control import (PID, GravityCompensation, JointPSMC, SensorConfig,  # noqa: E402
                                 SlidingModeControl, TaskPSMC)
@@ -29,20 +27,11 @@ from ppamsafety.experiments.closed_loop import run_batch  # noqa: E402
 from ppamsafety.params import thesis_arm  # noqa: E402
 from ppamsafety.plant import dynamics, geometry, model, pneumatics, torque  # noqa: E402
 
-COUNTS: dict = defaultdict(Counter)
 FAST = settings(max_examples=40, deadline=None, suppress_health_check=list(HealthCheck))
 SLOW = settings(max_examples=12, deadline=None, suppress_health_check=list(HealthCheck))
 ARM = thesis_arm()
 
-bad_types = st.one_of(st.text(max_size=4), st.none(), st.dictionaries(st.text(max_size=2),
-                                                                      st.integers(), max_size=2),
-                      st.complex_numbers(allow_nan=False, max_magnitude=1e3).filter(
-                          lambda z: z.imag != 0), st.booleans(),
-                      st.lists(st.lists(st.floats(), max_size=2), min_size=1, max_size=2))
-special = st.sampled_from([math.nan, math.inf, -math.inf, 0.0, -0.0, -1.0, 1e-300, 1e300,
-                           -1e300, 10 ** 400, 30.0, 70.0, -80.0])
-numbers = st.one_of(st.floats(allow_nan=True, allow_infinity=True),
-                    st.floats(-10.0, 10.0), st.integers(-10 ** 6, 10 ** 6))
+special = st.sampled_from(SPECIAL_VALUES + [30.0, 70.0, -80.0])   # + degrees as radians
 anything = st.one_of(bad_types, special, numbers)
 pairs = st.one_of(anything, st.lists(numbers, min_size=1, max_size=3),
                   st.tuples(st.floats(0, 1e6), st.floats(0, 1e6)))
@@ -51,18 +40,8 @@ arrays2 = st.one_of(anything, st.lists(numbers, min_size=2, max_size=2),
                     st.lists(numbers, max_size=5), st.tuples(st.floats(-3, 3), st.floats(-3, 3)))
 
 
-def outcome(entry, call, *names):
-    """Run ``call``; a clear error must name one of ``names``.  Returns the result or None."""
-    try:
-        result = call()
-    except (TypeError, ValueError) as exc:
-        msg = str(exc)
-        assert any(re.search(rf"(?<![A-Za-z0-9_]){re.escape(n)}(?![A-Za-z0-9_])", msg)
-                   for n in names), f"{entry}: message does not name {names}: {msg!r}"
-        COUNTS[entry]["error"] += 1
-        return None
-    COUNTS[entry]["sane"] += 1
-    return result
+_REC = Recorder("control")
+outcome = _REC.outcome
 
 
 def finite(x):
@@ -72,17 +51,7 @@ def finite(x):
 @pytest.fixture(scope="module", autouse=True)
 def _report_counts():
     yield
-    lines = [f"{'entry point':45s} {'examples':>8s} {'clear error':>11s} {'sane result':>11s}"]
-    for entry in sorted(COUNTS):
-        c = COUNTS[entry]
-        lines.append(f"{entry:45s} {c['error'] + c['sane']:8d} {c['error']:11d} {c['sane']:11d}")
-    tot = sum(c["error"] for c in COUNTS.values()), sum(c["sane"] for c in COUNTS.values())
-    lines.append(f"{'total':45s} {tot[0] + tot[1]:8d} {tot[0]:11d} {tot[1]:11d}")
-    text = "\n".join(lines)
-    print("\n" + text)
-    if os.environ.get("PPAMSAFETY_PROPERTY_COUNTS"):
-        with open("/work/property_counts_control.txt", "w") as fh:
-            fh.write(text + "\n")
+    _REC.report()
 
 
 # --- controllers ------------------------------------------------------------------------

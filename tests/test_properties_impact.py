@@ -3,14 +3,10 @@
 For arbitrary (mostly invalid) input each call must raise ``TypeError``/``ValueError``
 naming the argument, or return a finite result (summary values finite, or the case
 flagged in ``status`` with a warning).  Counts per entry point are printed and written to
-``/work/property_counts_impact.txt`` when ``PPAMSAFETY_PROPERTY_COUNTS`` is set.
+``$PPAMSAFETY_PROPERTY_COUNTS/property_counts_impact.txt`` when that variable names a folder.
 """
 
 import math
-import os
-import re
-import warnings
-from collections import Counter, defaultdict
 
 import numpy as np
 import pandas as pd
@@ -18,6 +14,7 @@ import pytest
 hypothesis = pytest.importorskip("hypothesis")
 from hypothesis import HealthCheck, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
+from property_support import Recorder, anything, numbers, special  # noqa: E402
 
 from ppamsafety.impact import contact  # noqa: E402
 from ppamsafety.impact import engine as eng  # noqa: E402
@@ -29,7 +26,6 @@ from ppamsafety.impact.twobody import two_body_impact  # noqa: E402
 from ppamsafety.params import thesis_arm  # noqa: E402
 from ppamsafety.units import DEG  # noqa: E402
 
-COUNTS: dict = defaultdict(Counter)
 FAST = settings(max_examples=60, deadline=None, suppress_health_check=list(HealthCheck))
 SLOW = settings(max_examples=30, deadline=None, suppress_health_check=list(HealthCheck))
 ARM = thesis_arm()
@@ -37,16 +33,6 @@ Q = np.array([50 * DEG, -80 * DEG])
 QD = np.array([3.0, -1.0])
 K = np.array([43.0, 27.0])
 
-bad_types = st.one_of(st.text(max_size=4), st.none(), st.dictionaries(st.text(max_size=2),
-                                                                      st.integers(), max_size=2),
-                      st.complex_numbers(allow_nan=False, max_magnitude=1e3).filter(
-                          lambda z: z.imag != 0), st.booleans(),
-                      st.lists(st.lists(st.floats(), max_size=2), min_size=1, max_size=2))
-special = st.sampled_from([math.nan, math.inf, -math.inf, 0.0, -0.0, -1.0, 1e-300, 1e300,
-                           -1e300, 10 ** 400])
-numbers = st.one_of(st.floats(allow_nan=True, allow_infinity=True),
-                    st.floats(-10.0, 10.0), st.integers(-10 ** 6, 10 ** 6))
-anything = st.one_of(bad_types, special, numbers)
 pairs = st.one_of(st.lists(st.one_of(numbers, special), min_size=0, max_size=3),
                   st.tuples(st.floats(-8.0, 8.0), st.floats(-8.0, 8.0)),
                   st.lists(st.tuples(st.floats(-3.0, 3.0), st.floats(-3.0, 3.0)), min_size=1,
@@ -54,36 +40,14 @@ pairs = st.one_of(st.lists(st.one_of(numbers, special), min_size=0, max_size=3),
                   anything)
 
 
-def outcome(entry, call, *names):
-    """Run ``call``; a clear error must name one of ``names``.  Returns the result or None."""
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", UserWarning)
-            result = call()
-    except (TypeError, ValueError) as exc:
-        msg = str(exc)
-        assert any(re.search(rf"(?<![A-Za-z0-9_]){re.escape(n)}(?![A-Za-z0-9_])", msg)
-                   for n in names), f"{entry}: message does not name {names}: {msg!r}"
-        COUNTS[entry]["error"] += 1
-        return None
-    COUNTS[entry]["sane"] += 1
-    return result
+_REC = Recorder("impact", ignore=(UserWarning,))
+outcome = _REC.outcome
 
 
 @pytest.fixture(scope="module", autouse=True)
 def _report_counts():
     yield
-    lines = [f"{'entry point':45s} {'examples':>8s} {'clear error':>11s} {'sane result':>11s}"]
-    for entry in sorted(COUNTS):
-        c = COUNTS[entry]
-        lines.append(f"{entry:45s} {c['error'] + c['sane']:8d} {c['error']:11d} {c['sane']:11d}")
-    tot = sum(c["error"] for c in COUNTS.values()), sum(c["sane"] for c in COUNTS.values())
-    lines.append(f"{'total':45s} {tot[0] + tot[1]:8d} {tot[0]:11d} {tot[1]:11d}")
-    text = "\n".join(lines)
-    print("\n" + text)
-    if os.environ.get("PPAMSAFETY_PROPERTY_COUNTS"):
-        with open("/work/property_counts_impact.txt", "w") as fh:
-            fh.write(text + "\n")
+    _REC.report()
 
 
 def _summary_sane(r):
