@@ -9,6 +9,8 @@ the error.  A run that never meets a tolerance inside its window gets NaN
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pandas as pd
 
@@ -258,7 +260,7 @@ def chattering_index(dp, dt: float, *, f_cut: float = 5.0) -> float:
     F = np.fft.rfft(x - x.mean(axis=0), axis=0)
     F[np.fft.rfftfreq(n, dt) < f_cut] = 0.0
     hp = np.fft.irfft(F, n=n, axis=0)
-    return float(np.sqrt(np.sum(np.mean(hp ** 2, axis=0))))
+    return _combined_rms(hp)
 
 
 def command_increment_rms(dp) -> float:
@@ -277,7 +279,22 @@ def command_increment_rms(dp) -> float:
     x = as_float_array("dp", dp, ndim=2)
     if x.shape[0] < 2:
         raise ValueError(f"dp must have shape (n >= 2, joints), got {x.shape}")
-    return float(np.sqrt(np.sum(np.mean(np.diff(x, axis=0) ** 2, axis=0))))
+    return _combined_rms(np.diff(x, axis=0))
+
+
+def _combined_rms(y) -> float:
+    """sqrt(sum over columns of mean(y^2)) of finite ``y``, without overflow in the squares.
+
+    Computed directly (so ordinary values are unchanged to the last bit); only if the
+    squares overflow is it recomputed on ``y`` scaled by its largest magnitude.
+    """
+    with np.errstate(over="ignore"):
+        v = float(np.sqrt(np.sum(np.mean(y ** 2, axis=0))))
+    if math.isfinite(v):
+        return v
+    scale = float(np.max(np.abs(y)))
+    z = y / scale
+    return scale * float(np.sqrt(np.sum(np.mean(z ** 2, axis=0))))
 
 
 def response_table(results, *, experiment: str, tol_angle: float = np.radians(1.0),
