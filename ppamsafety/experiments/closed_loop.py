@@ -84,7 +84,7 @@ _EXT_NAMES = tuple(INTERACTION_LOG.field("f_ext").column_names())
 _EST_NAMES = tuple(ESTIMATOR_INTERNALS.columns())
 
 #: Joint speed at which the closed loop counts as diverged [rad/s]: ``_run_batch`` stops a run
-#: when |qd1| or |qd2| reaches it (the literal ``1e3`` in the kernel) or an angle becomes
+#: when |qd1| or |qd2| reaches it or an angle becomes
 #: non-finite.  The real arm's joints never exceed a few rad/s (Table 6.1 peaks < 5 rad/s), so
 #: 1000 rad/s is far beyond anything physical but still well inside float range.
 DIVERGENCE_VELOCITY = 1.0e3
@@ -182,8 +182,9 @@ def _run_batch(X0, REFS, ref_idx, PP, PM, KIND, CP, CSIZE, SCFG, NOISE, noise_id
                     rk4_step(x, z, u, tau0, h, Pp, work)
                 sensor_track(0, q_old0, x[X_Q], t + i * h, h, cfg, st)
                 sensor_track(1, q_old1, x[X_Q + 1], t + i * h, h, cfg, st)
-            if not (np.isfinite(x[X_Q]) and np.isfinite(x[X_Q + 1]) and abs(x[X_QD]) < 1e3
-                    and abs(x[X_QD + 1]) < 1e3):
+            if not (np.isfinite(x[X_Q]) and np.isfinite(x[X_Q + 1])
+                    and abs(x[X_QD]) < DIVERGENCE_VELOCITY
+                    and abs(x[X_QD + 1]) < DIVERGENCE_VELOCITY):
                 diverged[b] = True
                 LOG[b, k + 1:, :] = np.nan
                 ILOG[b, k + 1:, :] = np.nan

@@ -146,13 +146,10 @@ def max_penetration(mass, v0, k, n, b=0.0) -> float:
         Out-of-range input, or a result that is not a positive finite number
         (under- or overflow for extreme combinations).
     """
+    from ..params.head import hunt_crossley_max_penetration
+
     m, v0, k, n, b = _check(mass, v0, k, n, b)
-    x = b * v0 / k
-    if x < 1e-3:   # x - ln(1 + x) = x^2/2 - x^3/3 + x^4/4 - ..., avoids cancellation
-        level = m * v0 * v0 / (2.0 * k) * (1.0 - 2.0 * x / 3.0 + x * x / 2.0 - 2.0 * x ** 3 / 5.0)
-    else:
-        level = m / (b * b) * (b * v0 - k * math.log1p(x))   # = delta_max^(n+1)/(n+1)
-    out = ((n + 1.0) * level) ** (1.0 / (n + 1.0)) if level > 0.0 else 0.0
+    out = hunt_crossley_max_penetration(m, v0, k, n, b)
     check_finite_result("max_penetration", out, f"mass = {m:g}, v0 = {v0:g}, k = {k:g}, "
                         f"n = {n:g}, b = {b:g}")
     if not out > 0.0:

@@ -223,14 +223,11 @@ def worst_instant(result, arm, *, every: int = 1, head=None, dt: float = 2e-5,
     -------
     WorstInstants
     """
-    from ..params.head import HeadContactModel, head_model
     from .bounds import impact_bounds
 
     every = check_int("every", every, 1, 10 ** 6)
     chunk = check_int("chunk", chunk, 1, 10 ** 6)
-    hm = head_model() if head is None else (head_model(head) if isinstance(head, str) else head)
-    if not isinstance(hm, HeadContactModel):
-        raise TypeError(f"head = {head!r} must be a HeadContactModel or a model name")
+    hm = resolve_head(head)
     st = impact_states(result, arm)
     idx = np.arange(0, len(st), every)
     idx = idx[st["tcp_speed"].to_numpy()[idx] >= min_speed] if min_speed > 0 else idx

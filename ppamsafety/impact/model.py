@@ -18,13 +18,13 @@ import numpy as np
 import pandas as pd
 
 from .._validation import (InvalidTypeError, as_float_array, check_bool, check_choice,
-                           check_finite_result, check_instance, check_int, check_range,
+                           check_finite_result, check_int, check_range,
                            check_range_array, check_same_rows, check_str, describe)
-from ..params.arm import ArmParameters
 from ..params.head import HeadContactModel, head_model, head_model_names
 from ..plant import dynamics as dyn
 from ..plant import geometry as geo
 from ..plant import layout as lay
+from ..plant._checks import check_arm  # noqa: F401  (also used by reference, pymunk, instants)
 from . import engine as eng
 from .contact import max_penetration
 
@@ -85,22 +85,6 @@ def resolve_head(head, name: str = "head") -> HeadContactModel:
     raise InvalidTypeError(f"{name} must be a HeadContactModel or a head model name "
                            f"({', '.join(map(repr, names))}), got {describe(head)}")
 
-
-def check_arm(arm, name: str = "arm") -> ArmParameters:
-    """Check that ``arm`` is an :class:`~ppamsafety.params.ArmParameters`; return it.
-
-    Parameters
-    ----------
-    arm : ArmParameters
-        The arm.
-    name : str
-        Argument name used in error messages.
-
-    Returns
-    -------
-    ArmParameters
-    """
-    return check_instance(name, arm, ArmParameters)
 
 
 def _fmt_cases(idx, limit: int = 5) -> str:

@@ -41,9 +41,10 @@ MIN_CONTACT_TIME = 1.0e-4
 def hunt_crossley_max_penetration(mass: float, v0: float, k: float, n: float, b: float) -> float:
     """Maximum penetration [m] of a mass hitting a rigid wall, Hunt-Crossley contact.
 
-    Closed form of Marhefka & Orin (1999) (same as
-    :func:`ppamsafety.impact.contact.max_penetration`, repeated here so that the
-    parameter sets do not import the impact engine): delta_max =
+    Closed form of Marhefka & Orin (1999), the one implementation of it
+    (:func:`ppamsafety.impact.contact.max_penetration` validates its inputs and
+    calls this; it lives here so that the parameter sets need not import the
+    impact engine): delta_max =
     [(n+1) m/b^2 (b v0 - k ln(1 + b v0/k))]^(1/(n+1)), -> [(n+1) m v0^2/(2k)]^(1/(n+1))
     for b -> 0.  Inputs already validated (positive, finite).
 
@@ -62,11 +63,12 @@ def hunt_crossley_max_penetration(mass: float, v0: float, k: float, n: float, b:
         for b v0/k < 1e-3, which includes b = 0).
     """
     x = b * v0 / k
-    if x < 1e-3:
-        level = mass * v0 * v0 / (2.0 * k) * (1.0 - 2.0 * x / 3.0 + x * x / 2.0 - 0.4 * x ** 3)
+    if x < 1e-3:   # x - ln(1 + x) = x^2/2 - x^3/3 + x^4/4 - ..., avoids cancellation
+        level = (mass * v0 * v0 / (2.0 * k)
+                 * (1.0 - 2.0 * x / 3.0 + x * x / 2.0 - 2.0 * x ** 3 / 5.0))
     else:
-        level = mass / (b * b) * (b * v0 - k * math.log1p(x))
-    return ((n + 1.0) * level) ** (1.0 / (n + 1.0))
+        level = mass / (b * b) * (b * v0 - k * math.log1p(x))   # = delta_max^(n+1)/(n+1)
+    return ((n + 1.0) * level) ** (1.0 / (n + 1.0)) if level > 0.0 else 0.0
 
 
 @dataclass(frozen=True)
