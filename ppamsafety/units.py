@@ -21,7 +21,10 @@ MM = 1.0e-3
 CM = 1.0e-2
 #: One degree in radian.
 DEG = math.pi / 180.0
-#: Standard gravity in m/s^2, used for g and for HIC acceleration units.
-G0 = 9.81
+#: Standard gravity in m/s^2 (3rd CGPM, 1901; exact by definition), the unit
+#: "g" of head accelerations and of the HIC.  The arm's own gravitational
+#: acceleration is a plant parameter (:attr:`ArmParameters.gravity`, the
+#: thesis's 9.81 m/s^2) and is not this constant.
+G0 = 9.80665
 #: Standard atmospheric pressure in Pa (the thesis uses 1.013 bar).
 P_ATM = 1.013 * BAR

@@ -220,3 +220,20 @@ def test_fast_is_20x_faster_than_bruteforce():
 def test_fast_is_100x_faster_than_bruteforce(name):
     """Realistic 50 ms records at dt = 10 us, HIC36: >= 100x (see studies/bench_hic.py)."""
     assert speedup(SIGNALS[name][0]) >= 100.0
+
+
+def test_head_acceleration_unit_is_standard_gravity():
+    """Issue 12 item 8: "g" is standard gravity, 9.80665 m/s^2 exactly (3rd CGPM, 1901).
+
+    A constant contact force F on a free head of mass m gives a = F / (m g0) in g; with
+    a rectangular pulse of duration T <= 36 ms, HIC = a^2.5 T (closed form).  With the old
+    9.81 the HIC would be (9.81/9.80665)^2.5 - 1 = 8.5e-4 higher, far outside 1e-12.
+    """
+    from ppamsafety.units import G0
+
+    assert G0 == 9.80665
+    F, m, T, dt = 1000.0, 4.5, 0.010, 1e-5
+    a_g = F / (m * G0)
+    a = np.full(int(round(T / dt)) + 1, a_g)
+    assert hic(a, dt).value == pytest.approx(a_g ** 2.5 * T, rel=1e-9)
+    assert hic(a, dt).value == pytest.approx(hic_rectangular(a_g, T), rel=1e-9)
