@@ -86,6 +86,11 @@ class Diagnosis:
     notes : tuple of str
     blocks : dict
         ``t`` and whitened block residuals ``before``/``after`` (nb, 6) for the figures.
+    kind : str
+        ``"arm"`` or ``"actuator"`` (a test-bench record,
+        :mod:`ppamsafety.diagnose.actuator`: ``replay`` then holds ``t``,
+        ``eps``, ``pressure``, ``direction`` and the forces ``measured``,
+        ``before`` (nominal law), ``after`` (diagnosed), each (N,)).
     """
 
     source: str
@@ -101,6 +106,7 @@ class Diagnosis:
     timings: dict = field(default_factory=dict)
     notes: tuple = ()
     blocks: dict = field(default_factory=dict, repr=False)
+    kind: str = "arm"
 
     @property
     def names(self) -> tuple:
@@ -138,7 +144,7 @@ class Diagnosis:
 
         return _clean({
             "schema_version": SCHEMA_VERSION, "tool": "ppamsafety", "version": __version__,
-            "source": self.source,
+            "source": self.source, "kind": self.kind,
             "effects": [eff(e) for e in self.effects],
             "partial": [eff(e) for e in self.partial],
             "unexplained": self.unexplained,
@@ -149,7 +155,15 @@ class Diagnosis:
             "settings": self.settings, "timings_s": self.timings, "notes": list(self.notes)})
 
     def plot(self):
-        """Measured vs before vs after (full simulation) for q, qd, p; a matplotlib Figure."""
+        """Measured vs before vs after (full simulation) for q, qd, p; a matplotlib Figure.
+
+        For an actuator record: measured, nominal and diagnosed force against
+        the contraction (the loops) and against time.
+        """
+        if self.kind == "actuator":
+            from ..report.diagnose_figures import actuator_force_figure
+
+            return actuator_force_figure(self)
         from matplotlib.figure import Figure
 
         r = self.replay
@@ -180,6 +194,10 @@ class Diagnosis:
 
     def plot_blocks(self):
         """Whitened block residuals per subsystem channel, before and after; a Figure."""
+        if self.kind == "actuator":
+            from ..report.diagnose_figures import actuator_residual_figure
+
+            return actuator_residual_figure(self)
         from matplotlib.figure import Figure
 
         from .residuals import CHANNELS
@@ -353,7 +371,22 @@ def diagnose(data, *, arm=None, candidates=None, block_seconds: float = 0.05,
     Returns
     -------
     Diagnosis
+
+    Notes
+    -----
+    An actuator record (``data.kind == "actuator"``, a test bench) is
+    diagnosed against its nominal force law by
+    :func:`ppamsafety.diagnose.actuator.diagnose_actuator` (``arm``,
+    ``block_seconds`` and ``seed`` do not apply; ``candidates`` from the
+    tester vocabulary).
     """
+    from ..data.measured import MeasuredData
+
+    if isinstance(data, MeasuredData) and data.kind == "actuator":
+        from .actuator import diagnose_actuator
+
+        return diagnose_actuator(data, candidates=candidates, alpha=alpha, rho_max=rho_max,
+                                 experiment=experiment)
     from ..params import thesis_arm
     from ..params.arm import ArmParameters
     from ..plant import layout as lay

@@ -1,0 +1,533 @@
+"""The discrepancy workflow on a test bench: one actuator's force against its nominal law.
+
+Thesis §3.5.1.6 localised the muscle hysteresis by comparing the measured
+muscle force with the force the law (3.9) predicts from the measured
+pressure and contraction.  :func:`diagnose_actuator` does that for an
+actuator record (``kind = "actuator"``, ``docs/measured_data.md``):
+
+1. **residual** ``r = F_measured - p (a0/eps + a1 + a2 eps + a3 eps^2 + a4 eps^3)``
+   with the record's own coefficients (a cylinder: ``a = [0, A, 0, 0, 0]``),
+   eps from the ``contraction`` column or ``(l0 - position)/l0``;
+2. **noise level** of r from its high-frequency content
+   (:func:`~.noise.interpolation_sigma`: each sample against the line
+   through its neighbours, valid for non-uniform sampling).  Filtered
+   (correlated) sensor noise is detected by comparing the estimate on every
+   sample with the estimate on every 2nd, 4th, ... sample: white noise gives
+   the same value, correlated noise a larger one at larger strides.  The
+   statistics then use the smallest stride at which the estimate stops
+   growing (:data:`NOISE_PLATEAU`), i.e. samples that are approximately
+   independent;
+3. **direction of motion** by a reversal detector with a dead band of
+   :data:`REVERSAL_SIGMAS` x the contraction noise (a noisy contraction
+   rate would flip sign at every sample): +1 contracting, -1 extending,
+   held through rests (a stopped actuator keeps the friction of its last
+   motion), 0 before any motion; speed by a centred difference over a
+   window long enough for the noise;
+4. **candidates** (:mod:`.actuator_candidates`), **ranking and forward
+   selection** with refit under the arm workflow's naming rule
+   (:mod:`.linear_selection`), **unexplained** when the final residual RMS
+   exceeds ``rho_max`` x the noise, and **where**: the final residual per
+   direction of motion, pressure level, contraction level and time segment.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from .._validation import check_range
+
+#: Minimum samples of the diagnosed segment.
+MIN_SAMPLES = 30
+#: Dead band of the reversal detector, in contraction noise standard deviations.
+REVERSAL_SIGMAS = 12.0
+#: The noise estimate "stops growing" when the next stride raises it by less than this factor.
+NOISE_PLATEAU = 1.25
+#: Samples this many contraction noise levels around a reversal point have an ambiguous
+#: direction of motion and are left out of the statistics.
+AMBIGUOUS_SIGMAS = 6.0
+#: A sample after a turning point within this many contraction noise levels of it still
+#: rests there (keeps the old direction of motion).
+REST_SIGMAS = 6.0
+#: Largest stride tried for correlated noise.
+MAX_STRIDE = 32
+
+
+@dataclass(frozen=True, eq=False)
+class ActuatorRecord:
+    """The arrays of one gap-free actuator record (SI units).
+
+    Attributes
+    ----------
+    t : numpy.ndarray, shape (N,)
+        Time from the first sample [s].
+    force : numpy.ndarray, shape (N,)
+        Measured force [N].
+    pressure : numpy.ndarray, shape (N,)
+        Measured gauge pressure [Pa].
+    eps : numpy.ndarray, shape (N,)
+        Contraction [-].
+    a : numpy.ndarray, shape (5,)
+        Nominal force-law coefficients a0..a4 of (3.9) [N/Pa].
+    l0 : float
+        Uncontracted length [m] (NaN when the record does not give it).
+    source : str
+        File or label.
+    rows : tuple of (int, int)
+        Row range used.
+    """
+
+    t: np.ndarray
+    force: np.ndarray
+    pressure: np.ndarray
+    eps: np.ndarray
+    a: np.ndarray
+    l0: float
+    source: str = "<data>"
+    rows: tuple = (0, 0)
+
+    def __len__(self) -> int:
+        return self.t.size
+
+    def nominal_force(self) -> np.ndarray:
+        """Force of the nominal law (3.9) at the measured p, eps [N]."""
+        a, e = self.a, self.eps
+        inv = a[0] / e if a[0] != 0.0 else 0.0
+        return self.pressure * (inv + a[1] + e * (a[2] + e * (a[3] + e * a[4])))
+
+
+def actuator_record(data) -> tuple:
+    """The longest gap-free segment of an actuator record as an :class:`ActuatorRecord`.
+
+    Parameters
+    ----------
+    data : MeasuredData
+        ``kind = "actuator"`` with force, pressure and contraction or position.
+
+    Returns
+    -------
+    ActuatorRecord
+    list of str
+        Notes.
+    """
+    from ..data.measured import MeasuredData
+
+    if not isinstance(data, MeasuredData):
+        raise TypeError(f"data must be a MeasuredData, got {type(data).__name__}")
+    if data.kind != "actuator":
+        raise ValueError(f"{data.source}: data.kind = {data.kind!r}; the test-bench diagnosis "
+                         f"needs kind = 'actuator'")
+    notes = []
+    a0, b0 = max(data.segments, key=lambda s: s[1] - s[0])
+    if len(data.segments) > 1:
+        notes.append(f"the record has {len(data.segments)} gap-free segments; the longest "
+                     f"(rows {a0}..{b0 - 1}) is diagnosed")
+    n = b0 - a0
+    if n < MIN_SAMPLES:
+        raise ValueError(f"{data.source}: the diagnosed segment has {n} samples; at least "
+                         f"{MIN_SAMPLES} are needed")
+    law = data.meta["force_law"]
+    a = np.asarray(law["a"], float)
+    l0 = float(law["l0"]) if "l0" in law else math.nan
+    eps = data.contraction()[a0:b0]
+    if data.has("contraction") and data.has("position"):
+        notes.append("both contraction and position are given; contraction is used")
+    if a[0] != 0.0 and np.any(eps <= 0):
+        k = int(np.argmin(eps))
+        raise ValueError(f"{data.source}: the force law has an a0/eps term (a0 = {a[0]:g} N/Pa) "
+                         f"but the contraction reaches {eps[k]:g} <= 0 (row {a0 + k}); check "
+                         f"the contraction/position column and l0")
+    t = data.column("t")[a0:b0]
+    rec = ActuatorRecord(t=t - t[0], force=data.column("force")[a0:b0],
+                         pressure=data.column("pressure")[a0:b0], eps=eps, a=a, l0=l0,
+                         source=data.source, rows=(a0, b0))
+    return rec, notes
+
+
+def motion_direction(eps, threshold: float, rest: float = 0.0) -> np.ndarray:
+    """Direction of motion with a dead band: +1 contracting, -1 extending, 0 before any motion.
+
+    A reversal is registered when the contraction has come back by more than
+    ``threshold`` from its running extremum; the samples up to that extremum,
+    and after it the samples still within ``rest`` of it (a rest at the
+    turning point, blurred by noise), keep the old direction.  Rests keep the
+    direction of the last motion.
+
+    Parameters
+    ----------
+    eps : array_like, shape (N,)
+        Contraction [-].
+    threshold : float
+        Dead band [-], > 0.
+    rest : float
+        Contraction within which a sample after the extremum still counts as
+        resting at it [-], in [0, threshold).
+
+    Returns
+    -------
+    numpy.ndarray of int, shape (N,)
+    """
+    from .._validation import as_float_array
+
+    e = as_float_array("eps", eps)
+    if e.ndim != 1:
+        raise ValueError(f"eps must be 1-D, got shape {e.shape}")
+    threshold = check_range("threshold", threshold, 0.0, math.inf, lo_open=True)
+    rest = check_range("rest", rest, 0.0, threshold, hi_open=True)
+    n = e.size
+    d = np.zeros(n, dtype=int)
+    cur, start, imax, imin = 0, 0, 0, 0
+    for k in range(1, n):
+        x = e[k]
+        if cur == 0:
+            if x > e[imax]:
+                imax = k
+            if x < e[imin]:
+                imin = k
+            if x - e[imin] > threshold:
+                j = _last_within(e, imin, k, rest)
+                cur, start, imax = 1, j + 1, k
+            elif e[imax] - x > threshold:
+                j = _last_within(e, imax, k, rest)
+                cur, start, imin = -1, j + 1, k
+        elif cur > 0:
+            if x > e[imax]:
+                imax = k
+            elif e[imax] - x > threshold:
+                j = _last_within(e, imax, k, rest)
+                d[start:j + 1] = 1
+                cur, start, imin = -1, j + 1, k
+        else:
+            if x < e[imin]:
+                imin = k
+            elif x - e[imin] > threshold:
+                j = _last_within(e, imin, k, rest)
+                d[start:j + 1] = -1
+                cur, start, imax = 1, j + 1, k
+    d[start:] = cur
+    return d
+
+
+def _last_within(e, i, k, rest):
+    """Last index in [i, k) whose value is within ``rest`` of e[i]."""
+    seg = np.abs(e[i:k] - e[i]) <= rest
+    return i + int(np.flatnonzero(seg)[-1])
+
+
+def reversal_band(eps, direction, band: float) -> np.ndarray:
+    """Samples next to a reversal of ``direction`` whose contraction is within ``band`` of it.
+
+    Parameters
+    ----------
+    eps : numpy.ndarray, shape (N,)
+        Contraction [-].
+    direction : numpy.ndarray of int, shape (N,)
+        From :func:`motion_direction`.
+    band : float
+        Half-width in contraction [-], >= 0.
+
+    Returns
+    -------
+    numpy.ndarray of bool, shape (N,)
+    """
+    n = eps.size
+    out = np.zeros(n, bool)
+    turns = np.flatnonzero((direction[1:] != direction[:-1]) & (direction[1:] != 0)
+                           & (direction[:-1] != 0))
+    for k in turns:                       # k: last sample of the old direction (the extremum)
+        ref = eps[k]
+        j = k
+        while j >= 0 and abs(eps[j] - ref) <= band:
+            out[j] = True
+            j -= 1
+        j = k + 1
+        while j < n and abs(eps[j] - ref) <= band:
+            out[j] = True
+            j += 1
+    return out
+
+
+def contraction_rate(t, eps, sigma_eps: float) -> np.ndarray:
+    """d eps/dt [1/s] by a centred difference over a window long enough for the noise.
+
+    The half-window h (samples) makes the typical change over 2h samples
+    about 20 noise standard deviations.
+
+    Parameters
+    ----------
+    t : numpy.ndarray, shape (N,)
+        Time [s].
+    eps : numpy.ndarray, shape (N,)
+        Contraction [-].
+    sigma_eps : float
+        Noise of the contraction [-].
+    """
+    n = eps.size
+    inc = float(np.sum(np.abs(np.diff(eps)))) / max(n - 1, 1)
+    steady = float(np.abs(eps[-1] - eps[0])) / max(n - 1, 1)
+    inc = max(inc - 2 * sigma_eps * 0.8, steady, 1e-300)   # remove the noise's share
+    h = int(np.clip(math.ceil(10.0 * sigma_eps / inc), 1, max(1, n // 10)))
+    k = np.arange(n)
+    lo, hi = np.clip(k - h, 0, n - 1), np.clip(k + h, 0, n - 1)
+    return (eps[hi] - eps[lo]) / (t[hi] - t[lo])
+
+
+def residual_noise(t, r) -> tuple:
+    """Noise level of the force residual and the stride of approximately independent samples.
+
+    Parameters
+    ----------
+    t : numpy.ndarray, shape (N,)
+        Time [s].
+    r : numpy.ndarray, shape (N,)
+        Force residual [N].
+
+    Returns
+    -------
+    sigma : float
+        [N].
+    stride : int
+        Use every ``stride``-th sample for the statistics.
+    estimates : dict
+        stride -> sigma estimate [N].
+    """
+    from .noise import interpolation_sigma
+
+    est = {}
+    s = 1
+    while s <= MAX_STRIDE and r[::s].size >= 5 * 4:
+        est[s] = interpolation_sigma(t[::s], r[::s])
+        s *= 2
+    strides = sorted(est)
+    chosen = strides[-1]
+    for s in strides[:-1]:
+        if est[2 * s] < NOISE_PLATEAU * est[s]:
+            chosen = s
+            break
+    sigma = est[chosen]
+    scale = float(np.max(np.abs(r))) if r.size else 1.0
+    sigma = max(sigma, 1e-9 * max(scale, 1e-300), 1e-300)
+    return sigma, chosen, est
+
+
+def _where(e, feats, rho_max):
+    """Operating regions of significant residual (same columns as the arm's table)."""
+    from scipy import stats
+
+    zcrit = stats.norm.isf(0.0005)
+    rows = []
+    d = feats["direction"]
+    groups = {
+        "direction of motion": {"contracting (d eps/dt > 0)": d > 0,
+                                "extending (d eps/dt < 0)": d < 0, "before any motion": d == 0},
+        "pressure level": _terciles(feats["pressure"], "p", 1e-5, "bar"),
+        "contraction level": _terciles(feats["eps"], "eps", 100.0, "%"),
+        "time segment": {f"t {a:.4g}-{b:.4g} s": m for a, b, m in _segments(feats["t"])},
+    }
+    for region, gs in groups.items():
+        for g, m in gs.items():
+            n = int(m.sum())
+            if n == 0:
+                continue
+            mean = float(e[m].mean())
+            rms = float(np.sqrt(np.mean(e[m] ** 2)))
+            z = mean * math.sqrt(n)
+            rows.append({"channel": "force", "region": region, "group": g, "blocks": n,
+                         "mean": mean, "rms": rms, "z": z,
+                         "significant": bool(abs(z) > zcrit or rms > rho_max)})
+    return pd.DataFrame(rows)
+
+
+def _terciles(x, name, scale, unit):
+    a, b = np.quantile(x, [1 / 3, 2 / 3])
+    if a == b:
+        return {f"{name} = {a * scale:.3g} {unit}": np.ones(x.size, bool)}
+    return {f"{name} low (< {a * scale:.3g} {unit})": x < a, f"{name} mid": (x >= a) & (x < b),
+            f"{name} high (>= {b * scale:.3g} {unit})": x >= b}
+
+
+def _segments(t, n=8):
+    edges = np.linspace(t.min(), t.max() + 1e-12, n + 1)
+    return [(edges[i], edges[i + 1], (t >= edges[i]) & (t < edges[i + 1])) for i in range(n)]
+
+
+def diagnose_actuator(data, *, candidates=None, alpha: float = 0.01, rho_max: float = 1.5,
+                      experiment: str | None = None):
+    """Diagnose an actuator (test-bench) record against its nominal force law.
+
+    See the module docstring; the result has the arm's schema
+    (``docs/diagnose.md``, tester keys documented there).
+
+    Parameters
+    ----------
+    data : MeasuredData
+        ``kind = "actuator"`` record (:func:`ppamsafety.data.load_measured`).
+    candidates : sequence of str, optional, keyword-only
+        Subset of :data:`~.candidates.ACTUATOR_VOCABULARY` (default all).
+    alpha : float, keyword-only
+        Level of the likelihood-ratio test (Bonferroni-divided per step), in (0, 0.5].
+    rho_max : float, keyword-only
+        Largest residual/noise RMS ratio of an explained record, in [1, 100].
+    experiment : str, optional, keyword-only
+        Hint that must agree with the metadata when given.
+
+    Returns
+    -------
+    Diagnosis
+    """
+    from .actuator_candidates import build_extensions
+    from .candidates import ACTUATOR_VOCABULARY
+    from .diagnosis import HIGH_CONFIDENCE, Diagnosis
+    from .linear_selection import fit_linear, forward_selection_linear
+    from .noise import interpolation_sigma
+
+    t0 = time.perf_counter()
+    check_range("alpha", alpha, 0.0, 0.5, lo_open=True)
+    check_range("rho_max", rho_max, 1.0, 100.0)
+    if candidates is not None:
+        if isinstance(candidates, str) or not all(isinstance(c, str) for c in candidates):
+            raise TypeError(f"candidates must be a sequence of names, got {candidates!r}")
+        bad = [c for c in candidates if c not in ACTUATOR_VOCABULARY]
+        if bad:
+            raise ValueError(f"candidates = {list(candidates)}: {bad} not in the tester "
+                             f"vocabulary {list(ACTUATOR_VOCABULARY)}")
+    rec, notes = actuator_record(data)
+    if experiment is not None and experiment != data.experiment:
+        raise ValueError(f"experiment = {experiment!r} does not match the record's metadata "
+                         f"experiment = {data.experiment!r}")
+    notes = list(data.notes) + notes
+    f_nom = rec.nominal_force()
+    r = rec.force - f_nom
+    sigma, stride, est = residual_noise(rec.t, r)
+    if stride > 1:
+        listed = ", ".join(f"{v:.3g} N at stride {k}" for k, v in est.items())
+        notes.append(f"the residual noise is correlated (estimates {listed}): the statistics "
+                     f"use every {stride}th sample")
+    sigma_eps = max(interpolation_sigma(rec.t, rec.eps), 1e-12)
+    span = float(np.ptp(rec.eps))
+    thr = max(REVERSAL_SIGMAS * sigma_eps, 1e-9)
+    direction = motion_direction(rec.eps, thr, REST_SIGMAS * sigma_eps)
+    rate = contraction_rate(rec.t, rec.eps, sigma_eps)
+    if math.isfinite(rec.l0):
+        speed, speed_unit = rate * rec.l0, "m/s"
+    else:
+        speed, speed_unit = rate, "1/s"
+        notes.append("no l0 in the force law: speeds are contraction rates [1/s] and a viscous "
+                     "friction coefficient is in N s")
+    turns = int(np.count_nonzero(np.diff(direction[direction != 0]))) if np.any(direction) else 0
+    if turns < 2:
+        notes.append(f"only {turns} reversal(s) of the motion: history effects (hysteresis) and "
+                     f"friction are hard to separate on this record")
+    ctx = {"eps": rec.eps, "pressure": rec.pressure, "f_nom": f_nom, "direction": direction,
+           "speed": speed, "speed_unit": speed_unit, "a": rec.a}
+    exts, enotes = build_extensions(ctx, candidates)
+    notes += enotes
+    ambiguous = reversal_band(rec.eps, direction, AMBIGUOUS_SIGMAS * sigma_eps)
+    idx = np.arange(0, len(rec), stride)
+    if direction.any():
+        # before the first motion the friction force is unknown (anything within +-c)
+        ambiguous = ambiguous | (direction == 0)
+    idx = idx[~ambiguous[idx]]
+    if ambiguous.any():
+        notes.append(f"{int(ambiguous.sum())} sample(s) before the first motion or within "
+                     f"{AMBIGUOUS_SIGMAS:g} contraction noise levels of a reversal point "
+                     f"(direction of motion ambiguous) are left out of the statistics")
+    if idx.size < MIN_SAMPLES:
+        raise ValueError(f"{data.source}: only {idx.size} samples remain for the statistics; "
+                         f"at least {MIN_SAMPLES} are needed")
+    e0 = r[idx] / sigma
+    cols = {n: x.columns[idx] / sigma for n, x in exts.items()}
+    t1 = time.perf_counter()
+
+    def admissible(fit, name):
+        sl = fit.slices[name]
+        return exts[name].admissible(fit.phi[sl], fit.cov[sl, sl])
+
+    nominal = fit_linear(e0, cols, [])
+    fit, steps = forward_selection_linear(e0, cols, admissible, alpha=alpha,
+                                          max_effects=len(exts))
+    t2 = time.perf_counter()
+    rho = fit.rho()
+    effects, partial = [], []
+    for s in steps:
+        if s.chosen is None:
+            continue
+        row = next(x for x in s.table if x["name"] == s.chosen)
+        sl = fit.slices[s.chosen]
+        params = exts[s.chosen].values(fit.phi[sl], fit.cov[sl, sl])
+        ev = {k: row[k] for k in ("delta_bic", "lr_stat", "lr_df", "p_value", "cv_gain")}
+        ev["evidence_ratio_log10"] = row.get("evidence_ratio_log10")
+        ev["subsystem_rho"] = {"force": rho}
+        entry = {"name": s.chosen, "subsystem": "force", "parameters": params, "evidence": ev,
+                 "confidence": row["bic_weight"]}
+        (effects if rho <= rho_max else partial).append(entry)
+    unexplained = bool(rho > rho_max)
+    for e in effects:
+        moved = any(not (p["ci_low"] <= p["nominal"] <= p["ci_high"])
+                    for p in e["parameters"].values())
+        ok = e["confidence"] >= HIGH_CONFIDENCE and not unexplained and moved
+        e["confidence_level"] = "high" if ok else "low"
+    for e in partial:
+        e["confidence_level"] = "low"
+    # the diagnosed force on every sample (the fit's coefficients, all samples)
+    f_after = f_nom.copy()
+    for n in fit.names:
+        f_after += exts[n].columns @ fit.phi[fit.slices[n]]
+    e_all_before = r / sigma
+    e_all_after = (rec.force - f_after) / sigma
+    rr = {"force": {"unit": "N", "before": float(np.sqrt(np.mean(r ** 2))),
+                    "after": float(np.sqrt(np.mean((rec.force - f_after) ** 2))),
+                    "noise": float(sigma)},
+          "block_force": {"unit": "N / noise (residual ratio, samples used by the statistics)",
+                          "before": nominal.rho(), "after": rho, "noise": 1.0}}
+    feats = {"t": rec.t[idx], "direction": direction[idx], "pressure": rec.pressure[idx],
+             "eps": rec.eps[idx]}
+    where = _where(fit.e, feats, rho_max)
+    bad = ["force"] if unexplained else []
+    if unexplained:
+        sig = where[where["significant"]]
+        worst = sig.reindex(sig["z"].abs().sort_values(ascending=False).index).head(3)
+        where_txt = "; ".join(f"{r_.region}: {r_.group} (mean {r_.mean:+.2f} noise)"
+                              for r_ in worst.itertuples()) or "everywhere"
+        notes.append(f"force residual {rho:.2f} x the noise (> {rho_max}): no effect of the "
+                     f"tester library explains it; largest where {where_txt}")
+    settings = {"kind": "actuator", "alpha": alpha, "rho_max": rho_max,
+                "criterion": "BIC (known noise level), LR test p < alpha/K, 2-fold CV gain, "
+                             "parameters inside widened bounds",
+                "high_confidence": HIGH_CONFIDENCE,
+                "candidates": list(ACTUATOR_VOCABULARY if candidates is None else candidates),
+                "candidates_applicable": list(exts), "samples": int(len(rec)),
+                "samples_used": int(idx.size), "stride": int(stride),
+                "dt_s_median": float(np.median(np.diff(rec.t))), "rows": list(rec.rows),
+                "noise_estimate": {"force_residual_N": float(sigma),
+                                   "by_stride_N": {str(k): float(v) for k, v in est.items()},
+                                   "contraction": float(sigma_eps)},
+                "noise_method": "robust interpolation residual: 1.4826 MAD(x[k] - (w x[k-1] + "
+                                "(1-w) x[k+1]))/sqrt(1 + w^2 + (1-w)^2)",
+                "reversal_threshold": float(thr), "reversals": turns,
+                "contraction_span": span, "speed_unit": speed_unit,
+                "force_law": {"a": [float(x) for x in rec.a],
+                              "l0": float(rec.l0) if math.isfinite(rec.l0) else None,
+                              "name": data.meta["force_law"].get("name", "")},
+                "data": {"kind": data.kind, "experiment": data.experiment,
+                         "description": data.meta.get("description", "")}}
+    timings = {"residuals_and_noise": t1 - t0, "selection": t2 - t1,
+               "total": time.perf_counter() - t0}
+    return Diagnosis(source=data.source, effects=effects, partial=partial,
+                     unexplained=unexplained, unexplained_channels=bad, residual_rms=rr,
+                     where=where, steps=steps,
+                     replay={"t": rec.t, "eps": rec.eps, "pressure": rec.pressure,
+                             "direction": direction, "measured": rec.force, "before": f_nom,
+                             "after": f_after},
+                     settings=settings, timings=timings, notes=tuple(notes),
+                     blocks={"t": rec.t, "before": e_all_before[:, None],
+                             "after": e_all_after[:, None], "eps": rec.eps},
+                     kind="actuator")
+
+
+__all__ = ["ActuatorRecord", "actuator_record", "motion_direction", "contraction_rate",
+           "residual_noise", "diagnose_actuator", "REVERSAL_SIGMAS", "NOISE_PLATEAU"]
