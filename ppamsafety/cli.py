@@ -214,6 +214,14 @@ def _cmd_diagnose(args) -> int:
     return EXIT_OK
 
 
+def _float_list(text: str):
+    try:
+        vals = [float(v) for v in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r}: expected comma-separated numbers") from None
+    return vals
+
+
 def _effect_arg(text: str):
     if "=" not in text:
         raise argparse.ArgumentTypeError(f"--effect {text!r}: expected NAME=VALUE")
@@ -227,8 +235,25 @@ def _cmd_synthesize(args) -> int:
     effects = {}
     for name, value in args.effect or []:
         effects[name] = value if "," in value else _finite(value)
-    data = synthesize(args.experiment, effects, noise=args.noise, seed=args.seed,
-                      duration=args.duration)
+    if args.kind == "actuator":
+        if args.duration is not None:
+            raise ValueError("--duration is an arm option; for --kind actuator use --cycles, "
+                             "--period and --sample-rate")
+        opts = {k: getattr(args, k) for k in ("protocol", "pressures", "cycles", "period",
+                                              "sample_rate", "force_law", "jitter")
+                if getattr(args, k) is not None}
+        data = synthesize(args.experiment, effects, noise=args.noise, seed=args.seed,
+                          kind="actuator", position=args.position, **opts)
+    else:
+        extra = [f"--{k.replace('_', '-')}" for k in ("protocol", "pressures", "cycles",
+                                                       "period", "sample_rate", "force_law",
+                                                       "jitter") if getattr(args, k) is not None]
+        if args.position:
+            extra.append("--position")
+        if extra:
+            raise ValueError(f"{', '.join(extra)}: option(s) of --kind actuator only")
+        data = synthesize(args.experiment, effects, noise=args.noise, seed=args.seed,
+                          duration=10.0 if args.duration is None else args.duration)
     path = data.save(args.out, overwrite=args.overwrite)
     print(f"record written to {path} ({len(data)} rows)")
     return EXIT_OK
@@ -347,14 +372,16 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
     w.set_defaults(func=_cmd_sweep)
     g = sub.add_parser("diagnose", help="find and name the effect the model is missing",
                        description="Compare a measured arm record (q, qd, p and the valve set "
-                                   "values u) with the model, name the missing effects with "
-                                   "fitted parameters, or report 'unexplained' "
-                                   "(docs/diagnose.md). Exit code 0 whenever the analysis ran.",
+                                   "values u), or an actuator record from a test bench (force, "
+                                   "pressure, contraction, nominal force law), with the model, "
+                                   "name the missing effects with fitted parameters, or report "
+                                   "'unexplained' (docs/diagnose.md). Exit code 0 whenever the "
+                                   "analysis ran.",
                        epilog=_EPILOG)
     g.add_argument("data", metavar="DATA", help="measured data file (.csv or .parquet)")
     g.add_argument("--out", required=True, metavar="DIR",
                    help="output folder for diagnosis.json, diagnosis.md and figures")
-    g.add_argument("--experiment", choices=("open-loop", "closed-loop"), default=None,
+    g.add_argument("--experiment", choices=("open-loop", "closed-loop", "tensile"), default=None,
                    help="experiment hint (must agree with the metadata)")
     g.add_argument("--alpha", type=_positive, default=0.01,
                    help="level of the likelihood-ratio test (default 0.01, Bonferroni-divided)")
@@ -375,13 +402,33 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
                                    "write it in the measured-data format; the file carries no "
                                    "hint of what is hidden (docs/diagnose.md).",
                        epilog=_EPILOG)
-    y.add_argument("--experiment", choices=("open-loop",), default="open-loop")
+    y.add_argument("--kind", choices=("arm", "actuator"), default="arm",
+                   help="the arm (default) or one actuator on a tensile tester")
+    y.add_argument("--experiment", choices=("open-loop", "tensile"), default=None,
+                   help="open-loop (arm, default) or tensile (actuator, default)")
     y.add_argument("--effect", type=_effect_arg, action="append", metavar="NAME=VALUE",
                    help="hidden effect, repeatable (e.g. payload_mass=0.4, "
                         "valve_time_constant_factor=1.5, valve_dead_time=0.02)")
-    y.add_argument("--noise", choices=("table-3.2", "none"), default="table-3.2")
+    y.add_argument("--noise", choices=("table-3.2", "tester", "none"), default=None,
+                   help="table-3.2 (arm default), tester (actuator default) or none")
     y.add_argument("--seed", type=int, default=0, help="seed of the excitation and the noise")
-    y.add_argument("--duration", type=_positive, default=10.0, help="record length [s]")
+    y.add_argument("--duration", type=_positive, default=None,
+                   help="record length [s] (arm; default 10)")
+    y.add_argument("--protocol", choices=("sawtooth", "pressure-sweep"), default=None,
+                   help="actuator: contraction sawtooth (default) or pressure sweep")
+    y.add_argument("--pressures", type=_float_list, default=None, metavar="PA,PA,...",
+                   help="actuator: gauge pressures [Pa] (default 1e5,1.5e5,2.5e5)")
+    y.add_argument("--cycles", type=int, default=None, help="actuator: cycles per pressure")
+    y.add_argument("--period", type=_positive, default=None, help="actuator: cycle period [s]")
+    y.add_argument("--sample-rate", type=_positive, default=None, metavar="HZ",
+                   help="actuator: sampling rate [Hz] (default 50)")
+    y.add_argument("--force-law", type=_float_list, default=None, metavar="A0,A1,A2,A3,A4",
+                   help="actuator: nominal law (3.9) [N/Pa] (default Table B.1 group 1; a "
+                        "cylinder: 0,AREA,0,0,0)")
+    y.add_argument("--position", action="store_true",
+                   help="actuator: write the length 'position' [m] instead of 'contraction'")
+    y.add_argument("--jitter", type=_nonnegative, default=None,
+                   help="actuator: relative jitter of the sampling intervals (non-uniform t)")
     y.add_argument("--out", required=True, metavar="DATA", help="new .csv (or .parquet) file")
     y.add_argument("--overwrite", action="store_true", help="allow replacing an existing file")
     y.set_defaults(func=_cmd_synthesize)

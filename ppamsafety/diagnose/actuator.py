@@ -53,6 +53,11 @@ AMBIGUOUS_SIGMAS = 6.0
 #: A sample after a turning point within this many contraction noise levels of it still
 #: rests there (keeps the old direction of motion).
 REST_SIGMAS = 6.0
+#: Pressures whose 95th/5th percentile ratio is below this are "one level": a force or
+#: pressure sensor offset is then exactly in the span of a refitted force law.
+PRESSURE_LEVELS_RATIO = 1.3
+#: Window of the rolling noise level [samples used by the statistics].
+LOCAL_WINDOW = 301
 #: Largest stride tried for correlated noise.
 MAX_STRIDE = 32
 
@@ -218,6 +223,65 @@ def _last_within(e, i, k, rest):
     return i + int(np.flatnonzero(seg)[-1])
 
 
+def monotone_contraction(eps, direction) -> np.ndarray:
+    """The contraction made monotone between detected reversals (the Preisach input).
+
+    Within every run of constant direction of motion the least-squares
+    monotone fit (isotonic regression: non-decreasing while contracting,
+    non-increasing while extending) replaces the noisy samples; before the
+    first motion the median of those samples.  The Preisach operator
+    registers a reversal at every sign change of its input: fed the raw
+    contraction, measurement noise would start a new (flat) branch at almost
+    every sample and make W lag its true path.
+
+    Parameters
+    ----------
+    eps : numpy.ndarray, shape (N,)
+        Contraction [-].
+    direction : numpy.ndarray of int, shape (N,)
+        From :func:`motion_direction`.
+
+    Returns
+    -------
+    numpy.ndarray, shape (N,)
+    """
+    from scipy.optimize import isotonic_regression
+
+    out = np.asarray(eps, float).copy()
+    edges = np.flatnonzero(np.diff(direction)) + 1
+    bounds = np.concatenate([[0], edges, [out.size]])
+    for a, b in zip(bounds[:-1], bounds[1:]):
+        d = direction[a]
+        if d == 0:
+            out[a:b] = np.median(out[a:b])
+        elif b - a > 1:
+            out[a:b] = isotonic_regression(out[a:b], increasing=bool(d > 0)).x
+    return out
+
+
+def segment_speed_ratio(speed, direction) -> float:
+    """Ratio of the fastest to the slowest monotone run (75th percentile of |speed| in each).
+
+    1 means every run had the same speed: viscous friction is then not
+    separable from Coulomb friction.
+
+    Parameters
+    ----------
+    speed : numpy.ndarray, shape (N,)
+        Speed (any unit).
+    direction : numpy.ndarray of int, shape (N,)
+        From :func:`motion_direction`.
+    """
+    edges = np.flatnonzero(np.diff(direction)) + 1
+    bounds = np.concatenate([[0], edges, [speed.size]])
+    v = [float(np.quantile(np.abs(speed[a:b]), 0.75)) for a, b in zip(bounds[:-1], bounds[1:])
+         if direction[a] != 0 and b - a >= 5]
+    v = [x for x in v if x > 0]
+    if len(v) < 2:
+        return 1.0
+    return max(v) / min(v)
+
+
 def reversal_band(eps, direction, band: float) -> np.ndarray:
     """Samples next to a reversal of ``direction`` whose contraction is within ``band`` of it.
 
@@ -312,6 +376,49 @@ def residual_noise(t, r) -> tuple:
     scale = float(np.max(np.abs(r))) if r.size else 1.0
     sigma = max(sigma, 1e-9 * max(scale, 1e-300), 1e-300)
     return sigma, chosen, est
+
+
+def local_sigma(t, r, stride: int = 1) -> np.ndarray:
+    """Noise level of every sample of the residual: a rolling robust scale (heteroscedastic noise).
+
+    The pressure noise reaches the residual multiplied by the force function
+    (``sigma_p f(eps)``, ten times larger at 5 % than at 25 % contraction for
+    the thesis law) and the load-cell noise may depend on the range: one
+    number for the whole record would under-weight the quiet parts and
+    over-weight the noisy ones, and bias chi2.  The interpolation residuals
+    ``d`` of :func:`~.noise.interpolation_sigma` (on every ``stride``-th
+    sample) are turned into ``1.4826 median |d|`` over a centred window of
+    :data:`LOCAL_WINDOW` samples (at least a quarter of it at the ends),
+    interpolated back to every sample and floored at 0.2 x the global level.
+
+    Parameters
+    ----------
+    t : numpy.ndarray, shape (N,)
+        Time [s].
+    r : numpy.ndarray, shape (N,)
+        Force residual [N].
+    stride : int
+        Stride of approximately independent samples (:func:`residual_noise`).
+
+    Returns
+    -------
+    numpy.ndarray, shape (N,)
+        [N].
+    """
+    from .noise import MAD_GAUSS
+
+    ts, xs = t[::stride], r[::stride]
+    w = (ts[2:] - ts[1:-1]) / (ts[2:] - ts[:-2])
+    d = np.abs(xs[1:-1] - (w * xs[:-2] + (1.0 - w) * xs[2:])) / np.sqrt(1.0 + w ** 2
+                                                                        + (1.0 - w) ** 2)
+    glob = MAD_GAUSS * float(np.median(d))
+    win = int(min(LOCAL_WINDOW, max(5, d.size // 4)))
+    loc = MAD_GAUSS * pd.Series(d).rolling(win, center=True, min_periods=max(3, win // 4)) \
+        .median().to_numpy()
+    loc = np.where(np.isfinite(loc), loc, glob)
+    out = np.interp(t, ts[1:-1], loc)
+    floor = max(0.2 * glob, 1e-300)
+    return np.maximum(out, floor)
 
 
 def _where(e, feats, rho_max):
@@ -422,8 +529,12 @@ def diagnose_actuator(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
     if turns < 2:
         notes.append(f"only {turns} reversal(s) of the motion: history effects (hysteresis) and "
                      f"friction are hard to separate on this record")
+    p_lo, p_hi = np.quantile(rec.pressure, [0.05, 0.95])
+    one_level = not (p_lo > 0 and p_hi / p_lo >= PRESSURE_LEVELS_RATIO)
     ctx = {"eps": rec.eps, "pressure": rec.pressure, "f_nom": f_nom, "direction": direction,
-           "speed": speed, "speed_unit": speed_unit, "a": rec.a}
+           "speed": speed, "speed_unit": speed_unit, "a": rec.a,
+           "eps_monotone": monotone_contraction(rec.eps, direction),
+           "speed_ratio": segment_speed_ratio(speed, direction)}
     exts, enotes = build_extensions(ctx, candidates)
     notes += enotes
     ambiguous = reversal_band(rec.eps, direction, AMBIGUOUS_SIGMAS * sigma_eps)
@@ -439,8 +550,9 @@ def diagnose_actuator(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
     if idx.size < MIN_SAMPLES:
         raise ValueError(f"{data.source}: only {idx.size} samples remain for the statistics; "
                          f"at least {MIN_SAMPLES} are needed")
-    e0 = r[idx] / sigma
-    cols = {n: x.columns[idx] / sigma for n, x in exts.items()}
+    sig = local_sigma(rec.t, r, stride)
+    e0 = r[idx] / sig[idx]
+    cols = {n: x.columns[idx] / sig[idx, None] for n, x in exts.items()}
     t1 = time.perf_counter()
 
     def admissible(fit, name):
@@ -466,10 +578,17 @@ def diagnose_actuator(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
                  "confidence": row["bic_weight"]}
         (effects if rho <= rho_max else partial).append(entry)
     unexplained = bool(rho > rho_max)
+    if one_level and "force_law_refit" in fit.names:
+        notes.append("the pressure takes essentially one level (95th/5th percentile ratio < "
+                     f"{PRESSURE_LEVELS_RATIO}): a refitted force law cannot be told from a "
+                     "force- or pressure-sensor offset, so force_law_refit is reported with low "
+                     "confidence; record several pressures to separate them")
     for e in effects:
-        moved = any(not (p["ci_low"] <= p["nominal"] <= p["ci_high"])
-                    for p in e["parameters"].values())
+        sl = fit.slices[e["name"]]
+        moved = exts[e["name"]].moved(fit.phi[sl], fit.cov[sl, sl])
         ok = e["confidence"] >= HIGH_CONFIDENCE and not unexplained and moved
+        if e["name"] == "force_law_refit" and one_level:
+            ok = False
         e["confidence_level"] = "high" if ok else "low"
     for e in partial:
         e["confidence_level"] = "low"
@@ -477,11 +596,11 @@ def diagnose_actuator(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
     f_after = f_nom.copy()
     for n in fit.names:
         f_after += exts[n].columns @ fit.phi[fit.slices[n]]
-    e_all_before = r / sigma
-    e_all_after = (rec.force - f_after) / sigma
+    e_all_before = r / sig
+    e_all_after = (rec.force - f_after) / sig
     rr = {"force": {"unit": "N", "before": float(np.sqrt(np.mean(r ** 2))),
                     "after": float(np.sqrt(np.mean((rec.force - f_after) ** 2))),
-                    "noise": float(sigma)},
+                    "noise": float(np.sqrt(np.mean(sig ** 2)))},
           "block_force": {"unit": "N / noise (residual ratio, samples used by the statistics)",
                           "before": nominal.rho(), "after": rho, "noise": 1.0}}
     feats = {"t": rec.t[idx], "direction": direction[idx], "pressure": rec.pressure[idx],
@@ -504,11 +623,18 @@ def diagnose_actuator(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
                 "samples_used": int(idx.size), "stride": int(stride),
                 "dt_s_median": float(np.median(np.diff(rec.t))), "rows": list(rec.rows),
                 "noise_estimate": {"force_residual_N": float(sigma),
+                                   "force_residual_local_N": [float(sig.min()),
+                                                              float(np.median(sig)),
+                                                              float(sig.max())],
                                    "by_stride_N": {str(k): float(v) for k, v in est.items()},
                                    "contraction": float(sigma_eps)},
                 "noise_method": "robust interpolation residual: 1.4826 MAD(x[k] - (w x[k-1] + "
-                                "(1-w) x[k+1]))/sqrt(1 + w^2 + (1-w)^2)",
+                                "(1-w) x[k+1]))/sqrt(1 + w^2 + (1-w)^2); per sample: rolling "
+                                f"median over {LOCAL_WINDOW} samples (local_N: min, median, "
+                                "max)",
                 "reversal_threshold": float(thr), "reversals": turns,
+                "pressure_one_level": bool(one_level),
+                "speed_ratio": float(ctx["speed_ratio"]),
                 "contraction_span": span, "speed_unit": speed_unit,
                 "force_law": {"a": [float(x) for x in rec.a],
                               "l0": float(rec.l0) if math.isfinite(rec.l0) else None,

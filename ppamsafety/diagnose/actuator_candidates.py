@@ -56,8 +56,8 @@ FRICTION_MAX_FRACTION = 0.2
 DELTA_BOUNDS = (0.0, 0.5)
 #: Largest relative change of the force function accepted from a refit.
 REFIT_MAX_RELATIVE = 0.5
-#: |correlation| of direction and speed above which viscous friction is not separable.
-VISCOUS_COLLINEAR = 0.95
+#: Fastest/slowest run speed below which viscous friction is not separable from Coulomb.
+VISCOUS_SPEED_RATIO = 1.25
 
 
 @dataclass(frozen=True, eq=False)
@@ -85,6 +85,9 @@ class Extension:
         bounds.
     note : str
         A remark on how the extension was built (e.g. viscous part left out).
+    shift : callable or None
+        ``shift(phi, cov) -> bool``: the fit moved away from the nominal model
+        (replacing "some parameter's interval excludes its nominal value").
     """
 
     name: str
@@ -95,6 +98,7 @@ class Extension:
     signature: str
     check: object = field(default=None, repr=False)
     note: str = ""
+    shift: object = field(default=None, repr=False)
 
     @property
     def k(self) -> int:
@@ -126,6 +130,21 @@ class Extension:
                          "nominal": float(self.nominal[i])}
                 for i, p in enumerate(self.parameters)}
 
+    def moved(self, phi, cov) -> bool:
+        """True if the fit differs significantly (95 %) from the nominal model.
+
+        Parameters
+        ----------
+        phi : numpy.ndarray, shape (k,)
+            This extension's coefficients.
+        cov : numpy.ndarray, shape (k, k)
+            Their covariance.
+        """
+        if self.shift is not None:
+            return bool(self.shift(phi, cov))
+        return any(not (p["ci_low"] <= p["nominal"] <= p["ci_high"])
+                   for p in self.values(phi, cov).values())
+
     def admissible(self, phi, cov) -> bool:
         """Rule 3: the fitted parameters are determined and physically possible.
 
@@ -155,14 +174,11 @@ def _friction(ctx):
     moving = s != 0
     vmax = float(np.max(np.abs(v[moving]))) if moving.any() else 0.0
     note = ""
-    use_visc = vmax > 0 and np.std(v[moving]) > 0
-    if use_visc:
-        corr = abs(float(np.corrcoef(s[moving], v[moving])[0, 1]))
-        if not corr < VISCOUS_COLLINEAR:
-            use_visc = False
-            note = (f"friction: the speed is nearly constant (|corr(direction, speed)| = "
-                    f"{corr:.3f} >= {VISCOUS_COLLINEAR}), so the viscous part is not separable "
-                    f"from the Coulomb part; fitted Coulomb only (c includes b |v|)")
+    use_visc = vmax > 0 and ctx["speed_ratio"] >= VISCOUS_SPEED_RATIO
+    if vmax > 0 and not use_visc:
+        note = (f"friction: every run of the motion had about the same speed (fastest/slowest "
+                f"{ctx['speed_ratio']:.2f} < {VISCOUS_SPEED_RATIO}), so a viscous part is not "
+                f"separable from the Coulomb part; fitted Coulomb only (c includes b |v|)")
     params = [Parameter("c", "N", 0.0, fmax, "Coulomb friction opposing the motion")]
     cols = [-s]
     if use_visc:
@@ -183,7 +199,7 @@ def _hysteresis(ctx):
     moving = np.flatnonzero(s != 0)
     if moving.size == 0:
         return None, "no motion detected: hysteresis is not identifiable from this record"
-    eps_s = scaled_input(ctx["eps"], EPS_MAX)
+    eps_s = scaled_input(ctx["eps_monotone"], EPS_MAX)
     # unknown history before the record: the memory starts at the saturation the first
     # motion leaves (contracting first: from the stretched muscle, eps_s = -1; §3.6.6)
     initial = "negative" if s[moving[0]] > 0 else "positive"
@@ -199,7 +215,7 @@ def _hysteresis(ctx):
         "memory: after a reversal the force moves gradually from one branch to the other, "
         "minor loops are nested; proportional to the force (and so to the pressure)",
         note=f"hysteresis: Preisach memory started from {initial} saturation (eps_max = "
-             f"{EPS_MAX}, (3.34))"), ""
+             f"{EPS_MAX}, (3.34)), input: the contraction made monotone between reversals"), ""
 
 
 def _refit(ctx):
@@ -227,12 +243,17 @@ def _refit(ctx):
         se = np.sqrt(np.maximum(np.diag(G @ cov @ G.T), 0.0))
         return bool(np.all(np.abs(d) + z * se <= lim * np.abs(f_q)))
 
+    def shift(phi, cov):
+        d = G @ phi
+        se = np.sqrt(np.maximum(np.diag(G @ cov @ G.T), 0.0))
+        return bool(np.any(np.abs(d) > z * se))
+
     params = tuple(Parameter(f"a{j}", "N/Pa", -1.0, 1.0, f"coefficient a{j} of (3.9)")
                    for j in range(5))
     return Extension(
         "force_law_refit", cols, params, np.asarray(a, float), T,
         "a smooth function of the contraction, proportional to the pressure, the same in both "
-        "directions of motion", check=check,
+        "directions of motion", check=check, shift=shift,
         note=f"force_law_refit: coefficients a{', a'.join(map(str, free))} refitted"), ""
 
 
@@ -281,5 +302,5 @@ def build_extensions(ctx: dict, names=None) -> tuple:
 
 
 __all__ = ["Extension", "build_extensions", "BUILDERS", "FRICTION_MAX_FRACTION",
-           "DELTA_BOUNDS", "REFIT_MAX_RELATIVE", "VISCOUS_COLLINEAR"]
+           "DELTA_BOUNDS", "REFIT_MAX_RELATIVE", "VISCOUS_SPEED_RATIO"]
 _ = math

@@ -127,31 +127,64 @@ def plant_with(arm, effects: dict):
     return plant, dead, offset
 
 
-def synthesize(experiment: str = "open-loop", effects=None, *, noise: str = "table-3.2",
-               seed: int = 0, duration: float = 10.0, dt: float = 1e-3, arm=None):
+def synthesize(experiment: str | None = None, effects=None, *, noise: str | None = None,
+               seed: int = 0, duration: float = 10.0, dt: float = 1e-3, arm=None,
+               kind: str = "arm", **tester):
     """A record of ``experiment`` on a plant with hidden ``effects`` (module docstring).
 
     Parameters
     ----------
-    experiment : {"open-loop"}
-        Open-loop Fourier excitation of the valves (§3.5.2.4), 10 s period,
-        coefficients drawn with ``seed``.
+    experiment : {"open-loop", "tensile"}, optional
+        Arm (default ``"open-loop"``): open-loop Fourier excitation of the
+        valves (§3.5.2.4), 10 s period, coefficients drawn with ``seed``.
+        Actuator (``kind="actuator"``, default ``"tensile"``): a tensile-tester
+        record (:func:`ppamsafety.diagnose.actuator_synthesize.synthesize_actuator`).
     effects : dict, optional
-        ``{name: value}``; default none (the nominal plant).
-    noise : {"table-3.2", "none"}, keyword-only
+        ``{name: value}``; default none (the nominal plant).  Actuator effects:
+        :data:`ppamsafety.diagnose.actuator_synthesize.EFFECTS`.
+    noise : {"table-3.2", "none"} or {"tester", "none"}, optional, keyword-only
+        Arm default ``"table-3.2"``; actuator default ``"tester"``.
     seed : int, keyword-only
         Seed of the excitation and of the noise.
     duration : float, keyword-only
-        Record length [s].
+        Record length [s] (arm only).
     dt : float, keyword-only
-        Sample time [s].
+        Sample time [s] (arm only).
     arm : ArmParameters, optional, keyword-only
-        The nominal arm (default the thesis arm).
+        The nominal arm (default the thesis arm; arm only).
+    kind : {"arm", "actuator"}, keyword-only
+        What is measured: the arm, or one actuator on a test bench.
+    **tester
+        Keyword options of
+        :func:`~ppamsafety.diagnose.actuator_synthesize.synthesize_actuator`
+        (``protocol``, ``pressures``, ``cycles``, ``period``, ``eps_range``,
+        ``sample_rate``, ``force_law``, ``l0``, ``position``, ``jitter``);
+        only with ``kind="actuator"``.
 
     Returns
     -------
     MeasuredData
     """
+    kind = check_choice("kind", kind, ("arm", "actuator"))
+    if kind == "actuator":
+        from .actuator_synthesize import synthesize_actuator
+
+        if experiment is not None and experiment != "tensile":
+            raise ValueError(f"experiment = {experiment!r} is not available for kind = "
+                             f"'actuator'; allowed: 'tensile'")
+        if arm is not None:
+            raise ValueError("arm is not used with kind = 'actuator' (the force law is given "
+                             "with force_law=...)")
+        if duration != 10.0 or dt != 1e-3:
+            raise ValueError("duration and dt are arm options; for kind = 'actuator' use "
+                             "cycles, period and sample_rate")
+        return synthesize_actuator(effects, noise="tester" if noise is None else noise,
+                                   seed=seed, **tester)
+    if tester:
+        raise TypeError(f"synthesize() got option(s) {sorted(tester)} that exist only for "
+                        f"kind = 'actuator'")
+    experiment = "open-loop" if experiment is None else experiment
+    noise = "table-3.2" if noise is None else noise
     from ..data.measured import MeasuredData
     from ..data.synthetic import VELOCITY_NOISE_VARIANCES, _arm, default_excitation
     from ..identify.excitation import equilibrium_for
