@@ -58,6 +58,16 @@ REST_SIGMAS = 6.0
 PRESSURE_LEVELS_RATIO = 1.3
 #: Window of the rolling noise level [samples used by the statistics].
 LOCAL_WINDOW = 301
+#: Fewest reversals of the motion for a history effect (friction, hysteresis) to be named
+#: with high confidence: two full loops.
+MIN_REVERSALS_HIGH = 4
+HISTORY_EFFECTS = ("actuator_friction", "hysteresis")
+#: Rule 5 of the naming rule: an effect is named only if its fitted contribution has an
+#: RMS of at least this many noise levels (chi2 falls by >= its square per sample).
+MIN_EFFECT_RMS = 0.2
+#: "high" confidence needs the final residual this close to the noise (RMS ratio): the
+#: estimated noise level is good to a few per cent, a model error of half the noise is not.
+RHO_HIGH = 1.15
 #: Largest stride tried for correlated noise.
 MAX_STRIDE = 32
 
@@ -259,24 +269,38 @@ def monotone_contraction(eps, direction) -> np.ndarray:
     return out
 
 
-def segment_speed_ratio(speed, direction) -> float:
-    """Ratio of the fastest to the slowest monotone run (75th percentile of |speed| in each).
+def segment_speed_ratio(t, eps_monotone, direction) -> float:
+    """Ratio of the fastest to the slowest monotone run of the motion.
 
-    1 means every run had the same speed: viscous friction is then not
+    A run's speed is its contraction change between 10 % and 90 % of its
+    span divided by the time it took (rests at the ends do not count).  1
+    means every run had the same speed: viscous friction is then not
     separable from Coulomb friction.
 
     Parameters
     ----------
-    speed : numpy.ndarray, shape (N,)
-        Speed (any unit).
+    t : numpy.ndarray, shape (N,)
+        Time [s].
+    eps_monotone : numpy.ndarray, shape (N,)
+        Contraction made monotone between reversals (:func:`monotone_contraction`).
     direction : numpy.ndarray of int, shape (N,)
         From :func:`motion_direction`.
     """
     edges = np.flatnonzero(np.diff(direction)) + 1
-    bounds = np.concatenate([[0], edges, [speed.size]])
-    v = [float(np.quantile(np.abs(speed[a:b]), 0.75)) for a, b in zip(bounds[:-1], bounds[1:])
-         if direction[a] != 0 and b - a >= 5]
-    v = [x for x in v if x > 0]
+    bounds = np.concatenate([[0], edges, [t.size]])
+    v = []
+    for a, b in zip(bounds[:-1], bounds[1:]):
+        if direction[a] == 0 or b - a < 5:
+            continue
+        x = eps_monotone[a:b] * direction[a]          # rising in both directions
+        lo, hi = x[0], x[-1]
+        if not hi > lo:
+            continue
+        i1 = int(np.searchsorted(x, lo + 0.1 * (hi - lo)))
+        i2 = int(np.searchsorted(x, lo + 0.9 * (hi - lo)))
+        i2 = min(i2, x.size - 1)
+        if i2 > i1:
+            v.append((x[i2] - x[i1]) / (t[a + i2] - t[a + i1]))
     if len(v) < 2:
         return 1.0
     return max(v) / min(v)
@@ -526,15 +550,16 @@ def diagnose_actuator(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
         notes.append("no l0 in the force law: speeds are contraction rates [1/s] and a viscous "
                      "friction coefficient is in N s")
     turns = int(np.count_nonzero(np.diff(direction[direction != 0]))) if np.any(direction) else 0
-    if turns < 2:
-        notes.append(f"only {turns} reversal(s) of the motion: history effects (hysteresis) and "
-                     f"friction are hard to separate on this record")
+    if turns < MIN_REVERSALS_HIGH:
+        notes.append(f"only {turns} reversal(s) of the motion (< {MIN_REVERSALS_HIGH}): "
+                     f"hysteresis and friction, which show at reversals, are hard to tell from "
+                     f"a slow drift on this record and are reported with low confidence at most")
     p_lo, p_hi = np.quantile(rec.pressure, [0.05, 0.95])
     one_level = not (p_lo > 0 and p_hi / p_lo >= PRESSURE_LEVELS_RATIO)
+    eps_mono = monotone_contraction(rec.eps, direction)
     ctx = {"eps": rec.eps, "pressure": rec.pressure, "f_nom": f_nom, "direction": direction,
-           "speed": speed, "speed_unit": speed_unit, "a": rec.a,
-           "eps_monotone": monotone_contraction(rec.eps, direction),
-           "speed_ratio": segment_speed_ratio(speed, direction)}
+           "speed": speed, "speed_unit": speed_unit, "a": rec.a, "eps_monotone": eps_mono,
+           "speed_ratio": segment_speed_ratio(rec.t, eps_mono, direction)}
     exts, enotes = build_extensions(ctx, candidates)
     notes += enotes
     ambiguous = reversal_band(rec.eps, direction, AMBIGUOUS_SIGMAS * sigma_eps)
@@ -561,7 +586,8 @@ def diagnose_actuator(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
 
     nominal = fit_linear(e0, cols, [])
     fit, steps = forward_selection_linear(e0, cols, admissible, alpha=alpha,
-                                          max_effects=len(exts))
+                                          max_effects=len(exts),
+                                          min_gain_per_equation=MIN_EFFECT_RMS ** 2)
     t2 = time.perf_counter()
     rho = fit.rho()
     effects, partial = [], []
@@ -586,8 +612,11 @@ def diagnose_actuator(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
     for e in effects:
         sl = fit.slices[e["name"]]
         moved = exts[e["name"]].moved(fit.phi[sl], fit.cov[sl, sl])
-        ok = e["confidence"] >= HIGH_CONFIDENCE and not unexplained and moved
+        ok = (e["confidence"] >= HIGH_CONFIDENCE and not unexplained and moved
+              and rho <= RHO_HIGH)
         if e["name"] == "force_law_refit" and one_level:
+            ok = False
+        if e["name"] in HISTORY_EFFECTS and turns < MIN_REVERSALS_HIGH:
             ok = False
         e["confidence_level"] = "high" if ok else "low"
     for e in partial:
@@ -608,15 +637,17 @@ def diagnose_actuator(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
     where = _where(fit.e, feats, rho_max)
     bad = ["force"] if unexplained else []
     if unexplained:
-        sig = where[where["significant"]]
-        worst = sig.reindex(sig["z"].abs().sort_values(ascending=False).index).head(3)
+        sigw = where[where["significant"]]
+        worst = sigw.reindex(sigw["z"].abs().sort_values(ascending=False).index).head(3)
         where_txt = "; ".join(f"{r_.region}: {r_.group} (mean {r_.mean:+.2f} noise)"
                               for r_ in worst.itertuples()) or "everywhere"
         notes.append(f"force residual {rho:.2f} x the noise (> {rho_max}): no effect of the "
                      f"tester library explains it; largest where {where_txt}")
     settings = {"kind": "actuator", "alpha": alpha, "rho_max": rho_max,
                 "criterion": "BIC (known noise level), LR test p < alpha/K, 2-fold CV gain, "
-                             "parameters inside widened bounds",
+                             "parameters inside widened bounds (dissipative ones not < 0), "
+                             f"effect RMS >= {MIN_EFFECT_RMS} x noise",
+                "min_effect_rms": MIN_EFFECT_RMS, "rho_high": RHO_HIGH,
                 "high_confidence": HIGH_CONFIDENCE,
                 "candidates": list(ACTUATOR_VOCABULARY if candidates is None else candidates),
                 "candidates_applicable": list(exts), "samples": int(len(rec)),

@@ -31,7 +31,8 @@ law is a smooth function of the contraction, proportional to the pressure,
 the same in both directions of motion.
 
 Plausible bounds (rule 3 of the naming rule; the 95 % interval must lie in
-the bounds widened by half their width on each side): c in [0, 0.2 max
+the bounds widened by half their width on each side, and the dissipative
+parameters c, b, delta must not be significantly negative): c in [0, 0.2 max
 |F_nom|] ("a few %" of the force is typical of a tester, 20 % is not a
 working actuator); b in [0, 0.2 max |F_nom| / max |v|]; delta in [0, 0.5]
 (the thesis found 0.139 and 0.299, §3.6.5; the range of
@@ -88,6 +89,10 @@ class Extension:
     shift : callable or None
         ``shift(phi, cov) -> bool``: the fit moved away from the nominal model
         (replacing "some parameter's interval excludes its nominal value").
+    nonnegative : tuple of str
+        Parameters that must not be significantly negative (95 % interval
+        reaching 0): dissipation, a friction or a hysteresis loop that gives
+        energy back is not physical.
     """
 
     name: str
@@ -99,6 +104,7 @@ class Extension:
     check: object = field(default=None, repr=False)
     note: str = ""
     shift: object = field(default=None, repr=False)
+    nonnegative: tuple = ()
 
     @property
     def k(self) -> int:
@@ -158,6 +164,8 @@ class Extension:
         if self.check is not None:
             return bool(self.check(phi, cov))
         tab = self.values(phi, cov)
+        if any(tab[n]["ci_high"] < 0 for n in self.nonnegative):
+            return False
         return all(tab[p.name]["ci_low"] >= p.lo - 0.5 * (p.hi - p.lo)
                    and tab[p.name]["ci_high"] <= p.hi + 0.5 * (p.hi - p.lo)
                    for p in self.parameters)
@@ -189,7 +197,8 @@ def _friction(ctx):
     return Extension(
         "actuator_friction", np.column_stack(cols), tuple(params), np.zeros(k), np.eye(k),
         "a force opposing the motion: jumps by 2c at every reversal, the same at every pressure "
-        "and contraction, independent of the history", note=note), ""
+        "and contraction, independent of the history", note=note,
+        nonnegative=tuple(p.name for p in params)), ""
 
 
 def _hysteresis(ctx):
@@ -215,7 +224,8 @@ def _hysteresis(ctx):
         "memory: after a reversal the force moves gradually from one branch to the other, "
         "minor loops are nested; proportional to the force (and so to the pressure)",
         note=f"hysteresis: Preisach memory started from {initial} saturation (eps_max = "
-             f"{EPS_MAX}, (3.34)), input: the contraction made monotone between reversals"), ""
+             f"{EPS_MAX}, (3.34)), input: the contraction made monotone between reversals",
+        nonnegative=("delta",)), ""
 
 
 def _refit(ctx):
