@@ -14,9 +14,12 @@ actuator record (``kind = "actuator"``, ``docs/measured_data.md``):
    (correlated) sensor noise is detected by comparing the estimate on every
    sample with the estimate on every 2nd, 4th, ... sample: white noise gives
    the same value, correlated noise a larger one at larger strides.  The
-   statistics then use the smallest stride at which the estimate stops
-   growing (:data:`NOISE_PLATEAU`), i.e. samples that are approximately
-   independent;
+   statistics then use the smallest stride whose estimate reaches
+   :data:`NOISE_PLATEAU` of the largest, i.e. samples that are approximately
+   independent.  These estimates are taken on the residual of the whole
+   library fitted at once, so that the smooth part of a missing effect does
+   not leak into them, and the level is made local (heteroscedastic noise,
+   :func:`local_sigma`);
 3. **direction of motion** by a reversal detector with a dead band of
    :data:`REVERSAL_SIGMAS` x the contraction noise (a noisy contraction
    rate would flip sign at every sample): +1 contracting, -1 extending,
@@ -45,8 +48,12 @@ from .._validation import check_range
 MIN_SAMPLES = 30
 #: Dead band of the reversal detector, in contraction noise standard deviations.
 REVERSAL_SIGMAS = 12.0
-#: The noise estimate "stops growing" when the next stride raises it by less than this factor.
-NOISE_PLATEAU = 1.25
+#: Stride of approximately independent samples: the smallest whose noise estimate reaches
+#: this fraction of the largest estimate over the strides 1, 2, 4, ... (white noise gives
+#: the same value at every stride, filtered noise a growing one up to its correlation time).
+NOISE_PLATEAU = 0.85
+#: A stride is tried only if it leaves at least this many samples.
+MIN_STRIDE_SAMPLES = 200
 #: Samples this many contraction noise levels around a reversal point have an ambiguous
 #: direction of motion and are left out of the statistics.
 AMBIGUOUS_SIGMAS = 6.0
@@ -387,15 +394,13 @@ def residual_noise(t, r) -> tuple:
 
     est = {}
     s = 1
-    while s <= MAX_STRIDE and r[::s].size >= 5 * 4:
+    while s <= MAX_STRIDE and r[::s].size >= MIN_STRIDE_SAMPLES:
         est[s] = interpolation_sigma(t[::s], r[::s])
         s *= 2
-    strides = sorted(est)
-    chosen = strides[-1]
-    for s in strides[:-1]:
-        if est[2 * s] < NOISE_PLATEAU * est[s]:
-            chosen = s
-            break
+    if not est:
+        est[1] = interpolation_sigma(t, r)
+    top = max(est.values())
+    chosen = min(k for k, v in est.items() if v >= NOISE_PLATEAU * top)
     sigma = est[chosen]
     scale = float(np.max(np.abs(r))) if r.size else 1.0
     sigma = max(sigma, 1e-9 * max(scale, 1e-300), 1e-300)
@@ -533,11 +538,6 @@ def diagnose_actuator(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
     notes = list(data.notes) + notes
     f_nom = rec.nominal_force()
     r = rec.force - f_nom
-    sigma, stride, est = residual_noise(rec.t, r)
-    if stride > 1:
-        listed = ", ".join(f"{v:.3g} N at stride {k}" for k, v in est.items())
-        notes.append(f"the residual noise is correlated (estimates {listed}): the statistics "
-                     f"use every {stride}th sample")
     sigma_eps = max(interpolation_sigma(rec.t, rec.eps), 1e-12)
     span = float(np.ptp(rec.eps))
     thr = max(REVERSAL_SIGMAS * sigma_eps, 1e-9)
@@ -559,9 +559,26 @@ def diagnose_actuator(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
     eps_mono = monotone_contraction(rec.eps, direction)
     ctx = {"eps": rec.eps, "pressure": rec.pressure, "f_nom": f_nom, "direction": direction,
            "speed": speed, "speed_unit": speed_unit, "a": rec.a, "eps_monotone": eps_mono,
-           "speed_ratio": segment_speed_ratio(rec.t, eps_mono, direction)}
+           "speed_ratio": segment_speed_ratio(rec.t, eps_mono, direction),
+           "eps_span_sigmas": float(np.subtract(*np.quantile(rec.eps, [0.95, 0.05])))
+           / sigma_eps}
     exts, enotes = build_extensions(ctx, candidates)
     notes += enotes
+    # the noise level is estimated on the residual of the full library (every applicable
+    # candidate fitted at once, unweighted): smooth structure of a missing effect must not
+    # leak into the estimate at the larger strides
+    r_full = r
+    if exts:
+        A = np.concatenate([x.columns for x in exts.values()], axis=1)
+        sc = np.sqrt(np.sum(A ** 2, axis=0))
+        sc[sc == 0] = 1.0
+        coef, *_ = np.linalg.lstsq(A / sc, r, rcond=None)
+        r_full = r - (A / sc) @ coef
+    sigma, stride, est = residual_noise(rec.t, r_full)
+    if stride > 1:
+        listed = ", ".join(f"{v:.3g} N at stride {k}" for k, v in est.items())
+        notes.append(f"the residual noise is correlated (estimates {listed}): the statistics "
+                     f"use every {stride}th sample")
     ambiguous = reversal_band(rec.eps, direction, AMBIGUOUS_SIGMAS * sigma_eps)
     idx = np.arange(0, len(rec), stride)
     if direction.any():
@@ -575,7 +592,7 @@ def diagnose_actuator(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
     if idx.size < MIN_SAMPLES:
         raise ValueError(f"{data.source}: only {idx.size} samples remain for the statistics; "
                          f"at least {MIN_SAMPLES} are needed")
-    sig = local_sigma(rec.t, r, stride)
+    sig = local_sigma(rec.t, r_full, stride)
     e0 = r[idx] / sig[idx]
     cols = {n: x.columns[idx] / sig[idx, None] for n, x in exts.items()}
     t1 = time.perf_counter()

@@ -57,6 +57,8 @@ FRICTION_MAX_FRACTION = 0.2
 DELTA_BOUNDS = (0.0, 0.5)
 #: Largest relative change of the force function accepted from a refit.
 REFIT_MAX_RELATIVE = 0.5
+#: Contraction span (5-95 %) in contraction noise levels below which only a1 is refitted.
+REFIT_MIN_SPAN_SIGMAS = 50.0
 #: Fastest/slowest run speed below which viscous friction is not separable from Coulomb.
 VISCOUS_SPEED_RATIO = 1.25
 
@@ -234,6 +236,12 @@ def _refit(ctx):
     free = [j for j in range(5) if a[j] != 0.0 or j == 1]
     if 0 in free and np.any(eps <= 0):
         free.remove(0)
+    narrow = ctx["eps_span_sigmas"] < REFIT_MIN_SPAN_SIGMAS
+    if narrow:
+        # (nearly) fixed contraction: only the force function's value there is
+        # identifiable; freeing its slope would fit the contraction noise that the
+        # columns share with the residual (errors in variables)
+        free = [1]
     basis = {0: lambda e: 1.0 / e, 1: lambda e: np.ones_like(e), 2: lambda e: e,
              3: lambda e: e ** 2, 4: lambda e: e ** 3}
     cols = np.column_stack([p * basis[j](eps) for j in free])
@@ -264,7 +272,9 @@ def _refit(ctx):
         "force_law_refit", cols, params, np.asarray(a, float), T,
         "a smooth function of the contraction, proportional to the pressure, the same in both "
         "directions of motion", check=check, shift=shift,
-        note=f"force_law_refit: coefficients a{', a'.join(map(str, free))} refitted"), ""
+        note=f"force_law_refit: coefficients a{', a'.join(map(str, free))} refitted"
+             + (f" (the contraction spans fewer than {REFIT_MIN_SPAN_SIGMAS:g} noise levels: "
+                f"only the force function's level is identifiable)" if narrow else "")), ""
 
 
 BUILDERS = {"actuator_friction": _friction, "hysteresis": _hysteresis,
@@ -279,7 +289,9 @@ def build_extensions(ctx: dict, names=None) -> tuple:
     ctx : dict
         The record's arrays: ``eps`` [-], ``pressure`` [Pa], ``f_nom`` [N],
         ``direction`` (+1/-1/0), ``speed`` and ``speed_unit``, ``a`` (the
-        nominal coefficients, N/Pa).
+        nominal coefficients, N/Pa), ``eps_monotone`` (the Preisach input),
+        ``speed_ratio`` (fastest/slowest run), ``eps_span_sigmas``
+        (contraction span in noise levels).
     names : sequence of str, optional
         Subset of :data:`~.candidates.ACTUATOR_VOCABULARY` (default all).
 
@@ -312,5 +324,5 @@ def build_extensions(ctx: dict, names=None) -> tuple:
 
 
 __all__ = ["Extension", "build_extensions", "BUILDERS", "FRICTION_MAX_FRACTION",
-           "DELTA_BOUNDS", "REFIT_MAX_RELATIVE", "VISCOUS_SPEED_RATIO"]
+           "DELTA_BOUNDS", "REFIT_MAX_RELATIVE", "REFIT_MIN_SPAN_SIGMAS", "VISCOUS_SPEED_RATIO"]
 _ = math
