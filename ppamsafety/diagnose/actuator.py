@@ -53,7 +53,7 @@ REVERSAL_SIGMAS = 12.0
 #: the same value at every stride, filtered noise a growing one up to its correlation time).
 NOISE_PLATEAU = 0.85
 #: A stride is tried only if it leaves at least this many samples.
-MIN_STRIDE_SAMPLES = 200
+MIN_STRIDE_SAMPLES = 400
 #: Samples this many contraction noise levels around a reversal point have an ambiguous
 #: direction of motion and are left out of the statistics.
 AMBIGUOUS_SIGMAS = 6.0

@@ -32,7 +32,8 @@ the same in both directions of motion.
 
 Plausible bounds (rule 3 of the naming rule; the 95 % interval must lie in
 the bounds widened by half their width on each side, and the dissipative
-parameters c, b, delta must not be significantly negative): c in [0, 0.2 max
+parameters c and delta must not be significantly negative -- b may, within
+its bounds: it is a small correction estimated from the speed changes): c in [0, 0.2 max
 |F_nom|] ("a few %" of the force is typical of a tester, 20 % is not a
 working actuator); b in [0, 0.2 max |F_nom| / max |v|]; delta in [0, 0.5]
 (the thesis found 0.139 and 0.299, §3.6.5; the range of
@@ -200,7 +201,7 @@ def _friction(ctx):
         "actuator_friction", np.column_stack(cols), tuple(params), np.zeros(k), np.eye(k),
         "a force opposing the motion: jumps by 2c at every reversal, the same at every pressure "
         "and contraction, independent of the history", note=note,
-        nonnegative=tuple(p.name for p in params)), ""
+        nonnegative=("c",)), ""
 
 
 def _hysteresis(ctx):
