@@ -6,7 +6,11 @@ is missing, its fitted parameters, and the gap shrinking.
 * :mod:`.candidates` -- the library of candidate effects;
 * :mod:`.selection` -- ranking (BIC), evidence, forward selection with refit;
 * :mod:`.diagnosis` -- :func:`diagnose` and the :class:`Diagnosis` result;
-* :mod:`.synthesize` -- the hidden-effect data generator.
+* :mod:`.synthesize` -- the hidden-effect data generator;
+* test bench (actuator records): :mod:`.actuator` (pipeline),
+  :mod:`.actuator_candidates`, :mod:`.linear_selection` (the naming rule for
+  linear residual models), :mod:`.actuator_synthesize`,
+  :mod:`.actuator_battery` (blind battery, confusion matrix).
 
 Documentation: ``docs/diagnose.md``.
 """

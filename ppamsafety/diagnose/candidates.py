@@ -31,9 +31,9 @@ payload                torque      M [kg] at the load point A_L (2.19), (A.21)
 hysteresis             torque      delta_1..delta_4 [-] (3.35)  (when available)
 =====================  ==========  =================================================
 
-Names on a tester (actuator records; not implemented in this version):
-``actuator_friction``, ``hysteresis``, ``force_law_refit``
-(:data:`ACTUATOR_VOCABULARY`).
+Names on a tester (actuator records): ``actuator_friction``, ``hysteresis``,
+``force_law_refit`` (:data:`ACTUATOR_VOCABULARY`); their library is
+:mod:`ppamsafety.diagnose.actuator_candidates`.
 """
 
 from __future__ import annotations
