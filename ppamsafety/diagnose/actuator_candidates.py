@@ -44,7 +44,6 @@ measured contraction within +-50 % of the nominal force function there.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -326,4 +325,3 @@ def build_extensions(ctx: dict, names=None) -> tuple:
 
 __all__ = ["Extension", "build_extensions", "BUILDERS", "FRICTION_MAX_FRACTION",
            "DELTA_BOUNDS", "REFIT_MAX_RELATIVE", "REFIT_MIN_SPAN_SIGMAS", "VISCOUS_SPEED_RATIO"]
-_ = math
