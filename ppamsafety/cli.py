@@ -228,7 +228,8 @@ def _cmd_synthesize(args) -> int:
     for name, value in args.effect or []:
         effects[name] = value if "," in value else _finite(value)
     data = synthesize(args.experiment, effects, noise=args.noise, seed=args.seed,
-                      duration=args.duration)
+                      duration=args.duration, controller=args.controller,
+                      reference=args.reference)
     path = data.save(args.out, overwrite=args.overwrite)
     print(f"record written to {path} ({len(data)} rows)")
     return EXIT_OK
@@ -375,7 +376,15 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
                                    "write it in the measured-data format; the file carries no "
                                    "hint of what is hidden (docs/diagnose.md).",
                        epilog=_EPILOG)
-    y.add_argument("--experiment", choices=("open-loop",), default="open-loop")
+    y.add_argument("--experiment", choices=("open-loop", "closed-loop"), default="open-loop",
+                   help="open-loop Fourier excitation (default) or a closed-loop thesis "
+                        "experiment (--controller, --reference)")
+    y.add_argument("--controller", default="PSMC joint Ki=2 λ=0.4", metavar="VARIANT",
+                   help="closed loop: thesis controller variant label (default "
+                        "'PSMC joint Ki=2 λ=0.4'; e.g. 'PID', 'PSMC task λ=0.8')")
+    y.add_argument("--reference", default="circle10",
+                   choices=("step", "switch", "circle5", "circle10", "circle20"),
+                   help="closed loop: thesis experiment (default circle10)")
     y.add_argument("--effect", type=_effect_arg, action="append", metavar="NAME=VALUE",
                    help="hidden effect, repeatable (e.g. payload_mass=0.4, "
                         "valve_time_constant_factor=1.5, valve_dead_time=0.02)")
