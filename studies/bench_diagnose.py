@@ -70,7 +70,7 @@ def straightforward_step(rec, arm):
 
     t0 = time.perf_counter()
     base = err(row0)
-    table = [("nominal", float(base @ base), 0)]
+    table = [("nominal", float(base @ base), 1)]
     for c in library():
         n0 = count[0]
         if c.grid:

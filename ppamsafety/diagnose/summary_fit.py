@@ -331,6 +331,39 @@ class SummaryFit:
         """The per-effect fit table."""
         return self.table
 
+    def cells(self, effect: str | None = None) -> pd.DataFrame:
+        """Thesis vs simulated statistics per cell: nominal plant and ``effect`` at its best fit.
+
+        Parameters
+        ----------
+        effect : str, optional
+            Effect axis name (default the best-fitting effect).
+
+        Returns
+        -------
+        pandas.DataFrame
+            variant, period_s, statistic, thesis_m, nominal_m, ratio_nominal,
+            best_m, ratio_best (simulated / thesis) [m, -].
+        """
+        effect = self.table.effect.iloc[0] if effect is None else axis(effect).name
+        if effect not in self.stats:
+            raise ValueError(f"effect = {effect!r} was not fitted; fitted: {list(self.stats)}")
+        th = float(self.table.set_index("effect").loc[effect, "best_theta"])
+        st = self.stats[effect]
+        ok = np.all(np.isfinite(st.reshape(st.shape[0], -1)), axis=1)
+        rows, c = [], 0
+        for v in self.design.variants:
+            for P in self.design.periods:
+                for k, name in enumerate(("mean", "max")):
+                    best = float(np.exp(np.interp(th, self.thetas[ok], np.log(st[ok, c, k]))))
+                    t = float(self.thesis[c, k])
+                    nom = float(st[0, c, k])
+                    rows.append({"variant": v, "period_s": P, "statistic": name,
+                                 "thesis_m": t, "nominal_m": nom, "ratio_nominal": nom / t,
+                                 "best_m": best, "ratio_best": best / t})
+                c += 1
+        return pd.DataFrame(rows)
+
     def plot(self):
         """Profiles of chi2 along every effect axis; a matplotlib Figure."""
         from ..report.diagnose_figures import plot_summary_profiles

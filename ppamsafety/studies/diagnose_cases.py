@@ -368,6 +368,19 @@ def render(study: DiagnoseCasesStudy) -> Section:
                 "**No single effect closes the gap**: the best fit still leaves the statistics "
                 f"{np.sqrt(best.chi2_per_stat):.1f} standard uncertainties off on average (RMS)."))
     L.append("")
+    cells = fit.cells()
+    cd = pd.DataFrame({
+        "variant": cells.variant, "P [s]": cells.period_s, "statistic": cells.statistic,
+        "thesis [mm]": 1e3 * cells.thesis_m,
+        "nominal [mm] (ratio)": [f"{1e3 * a:.2f} ({r:.2f})" for a, r in
+                                 zip(cells.nominal_m, cells.ratio_nominal)],
+        f"{best.effect} = {best.best_value:.3g} [mm] (ratio)": [
+            f"{1e3 * a:.2f} ({r:.2f})" for a, r in zip(cells.best_m, cells.ratio_best)]})
+    L.append(f"Per cell (Table 5.2 value beside ours, ratio ours/thesis; "
+             f"{d.window:g} s window):")
+    L.append("")
+    L.append(markdown_table(cd, digits=2))
+    L.append("")
     conf = ", ".join(f"{a} ~ {b} ({c:.2f})" for a, b, c in fit.confounded) or "none"
     cos = fit.cosines.to_numpy()
     iu = np.triu_indices_from(cos, 1)
@@ -415,6 +428,7 @@ def render(study: DiagnoseCasesStudy) -> Section:
         ("diagnose_case_c_parameters.csv", study.case_c_table),
         ("diagnose_case_c_gap.csv", study.case_c_gap),
         ("diagnose_table_5_2_fit.csv", fit.table),
+        ("diagnose_table_5_2_cells.csv", cells),
         ("diagnose_table_5_2_cosines.csv", fit.cosines.reset_index().rename(
             columns={"index": "effect"})),
         ("diagnose_battery.csv", study.battery)]
