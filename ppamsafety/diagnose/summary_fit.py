@@ -170,6 +170,31 @@ def plant_at(arm, name: str, theta: float, *, dt: float = 1e-3):
     return plant_with(arm, {name: v})[0]
 
 
+def plant_with_axes(arm, thetas: dict, *, dt: float = 1e-3):
+    """The plant truth with several effects at once: ``{axis name: theta}``.
+
+    Parameters
+    ----------
+    arm : ArmParameters
+        Nominal arm.
+    thetas : dict
+        Axis name -> theta in [0, 1].
+    dt : float, keyword-only
+        Control period [s].
+
+    Returns
+    -------
+    ArmParameters
+    """
+    if not isinstance(thetas, dict):
+        raise TypeError(f"thetas must be a dict {{axis name: theta}}, got {type(thetas).__name__}")
+    eff = arm.effects
+    for name, th in thetas.items():
+        e = plant_at(arm, name, th, dt=dt).effects
+        eff = eff.replace(**{f: getattr(e, f) for f in e.enabled()})
+    return arm if eff == arm.effects else arm.replace(effects=eff)
+
+
 @dataclass(frozen=True)
 class TableDesign:
     """Which cells of Table 5.2 are simulated and how.
@@ -468,6 +493,99 @@ def fit_summary(arm=None, *, effects=None, thetas=(0.0, 0.5, 1.0), design=None,
                       wall_time_s=time.perf_counter() - t0, metrics=metrics)
 
 
-__all__ = ["Axis", "AXES", "axis", "plant_at", "TableDesign", "simulate_table", "thesis_cells",
+@dataclass(eq=False)
+class PairFit:
+    """Result of :func:`fit_pair`: two effects fitted together.
+
+    Attributes
+    ----------
+    names : tuple of str
+        The two axis names.
+    best_theta : tuple of float
+    best_value : tuple of float
+        Physical magnitudes at the best point.
+    chi2_min : float
+    chi2_per_stat : float
+    chi2_single : float
+        Best chi2 of either effect alone.
+    grid : pandas.DataFrame
+        theta_a, theta_b, chi2 on the fine grid.
+    """
+
+    names: tuple
+    best_theta: tuple
+    best_value: tuple
+    chi2_min: float
+    chi2_per_stat: float
+    chi2_single: float
+    grid: pd.DataFrame
+
+
+def fit_pair(fit: SummaryFit, arm=None, names=None, *, fine: int = 41) -> PairFit:
+    """Fit the two best single effects of ``fit`` together (does a pair close the gap?).
+
+    The statistics on the theta grid of both axes are known on the edges from
+    ``fit``; the interior points are simulated with both effects on (one
+    batched run), interpolated bilinearly in the log statistics and chi2 is
+    minimised on a fine grid.
+
+    Parameters
+    ----------
+    fit : SummaryFit
+        One-at-a-time fit (same design).
+    arm : ArmParameters, optional
+        Nominal arm (default the thesis arm).
+    names : sequence of 2 str, optional
+        Axis names (default the two best of ``fit.table``).
+    fine : int, keyword-only
+        Points per axis of the fine grid.
+
+    Returns
+    -------
+    PairFit
+    """
+    from scipy.interpolate import RegularGridInterpolator
+
+    from ..params import thesis_arm
+
+    if not isinstance(fit, SummaryFit):
+        raise TypeError(f"fit must be a SummaryFit, got {type(fit).__name__}")
+    arm = thesis_arm() if arm is None else arm
+    names = tuple(fit.table.effect.iloc[:2]) if names is None else tuple(names)
+    if len(names) != 2 or names[0] == names[1] or any(n not in fit.stats for n in names):
+        raise ValueError(f"names must be two different fitted effects of {list(fit.stats)}, "
+                         f"got {names!r}")
+    th = fit.thetas
+    n = th.size
+    inner = [(i, j) for i in range(1, n) for j in range(1, n)]
+    sim = simulate_table(arm, [plant_with_axes(arm, {names[0]: th[i], names[1]: th[j]})
+                               for i, j in inner], fit.design)
+    S = np.empty((n, n) + fit.stats[names[0]].shape[1:])
+    S[:, 0] = fit.stats[names[0]]
+    S[0, :] = fit.stats[names[1]]
+    for (i, j), v in zip(inner, sim):
+        S[i, j] = v
+    with np.errstate(invalid="ignore", divide="ignore"):
+        logS = np.log(S)
+    interp = RegularGridInterpolator((th, th), logS.reshape(n, n, -1))
+    f = np.linspace(0.0, th[-1], fine)
+    A, B = np.meshgrid(f, f, indexing="ij")
+    L = interp(np.stack([A.ravel(), B.ravel()], axis=1))
+    R = whitened(np.exp(L).reshape(L.shape[0], -1, 2), fit.thesis)
+    chi2 = np.sum(R ** 2, axis=1)
+    chi2 = np.where(np.isfinite(chi2), chi2, np.inf)
+    k = int(np.argmin(chi2))
+    bt = (float(A.ravel()[k]), float(B.ravel()[k]))
+    single = float(fit.table.set_index("effect").loc[list(names), "chi2_min"].min())
+    return PairFit(names=names, best_theta=bt,
+                   best_value=(axis(names[0]).value(bt[0]), axis(names[1]).value(bt[1])),
+                   chi2_min=float(chi2[k]), chi2_per_stat=float(chi2[k] / fit.m),
+                   chi2_single=single,
+                   grid=pd.DataFrame({"theta_a": A.ravel(), "theta_b": B.ravel(),
+                                      "chi2": chi2}))
+
+
+__all__ = ["Axis", "AXES", "axis", "plant_at", "plant_with_axes", "PairFit", "fit_pair",
+           "TableDesign", "simulate_table", "thesis_cells",
            "whitened", "SummaryFit", "fit_summary", "REPRODUCIBILITY", "PRINT_STD", "RANK_TOL",
            "CONFOUNDED_COS"]
