@@ -61,10 +61,11 @@ from .._jit import kernel, leaf
 from .._validation import (InvalidTypeError, as_float_array, check_int, check_range,
                            check_shape, describe)
 from ..control.dispatch import NINT, NSCRATCH, NSTATE, controller_step
-from ..control.estimation import (EI_R, ESTIMATOR_INTERNALS, ESTIMATOR_SCRATCH, ESTIMATOR_STATE,
-                                  ForceEstimator, estimator_step)
+from ..control.estimation import (EI_R, ESTIMATOR_SCRATCH, ESTIMATOR_STATE, ForceEstimator,
+                                  estimator_step)
 from ..experiments.closed_loop import (DIVERGENCE_VELOCITY, IL_EST, IL_F, L_DP, L_INT, L_P, L_Q,
-                                       L_QD, L_QDM, L_QM, L_T, L_U, L_X, L_XD, L_Y, L_YD, NEST)
+                                       L_QD, L_QDM, L_QM, L_T, L_U, L_X, L_XD, L_Y, L_YD, NEST,
+                                       Z_INTERNALS, Z_PARAMS, Z_SCRATCH, Z_STATE)
 from ..experiments.trajectories import NREF, R_Q_D, R_R_D
 from ..control.sensors import (N_Q, N_QD, NSENSOR, SENSOR_NOISE, pressure_read, sensor_init,
                                sensor_read, sensor_reset, sensor_track)
@@ -76,7 +77,7 @@ from ..plant.model import (NWORK, NX, X_P, X_Q, X_QD, effect_state_length, effec
 from ..plant.pneumatics import delta_p_to_set_values
 from ..units import G0
 from .contact import hunt_crossley_elastic, hunt_crossley_force
-from .engine import HEAD, HP_B, HP_K, HP_M, HP_N, HP_R, pack_head
+from .engine import HP_B, HP_K, HP_M, HP_N, HP_R, pack_head
 from .hic import hic_kernel
 
 
@@ -293,10 +294,10 @@ def _run_collision(x0, R, Pp, Pm, kind, C, sizes, cfg, noise, dt, substeps, EP, 
     sensor_reset(st)
     z = np.zeros(effect_state_length(Pp))
     effects_init(z, Pp)
-    Cr = C[:sizes[0]]
-    S = S_buf[:sizes[1]]
-    ints = internals[:sizes[2]]
-    scratch = scratch_buf[:sizes[3]]
+    Cr = C[:sizes[Z_PARAMS]]
+    S = S_buf[:sizes[Z_STATE]]
+    ints = internals[:sizes[Z_INTERNALS]]
+    scratch = scratch_buf[:sizes[Z_SCRATCH]]
     sensor_init(x[X_Q], x[X_Q + 1], cfg, st)
     detected = False
     kdet = -1
