@@ -13,8 +13,8 @@ pressures and the controller act and a second impact can happen.
 Integration.  Each 1 ms control period is integrated as in the closed loop
 (``substeps`` RK4 steps of :func:`~ppamsafety.plant.model.rk4_step`, the head
 advanced separately) while head and tool are far apart; once the gap at the
-start of a period falls below ``fine_gap`` + 2 dt (|v_tcp| + |v_head|) the
-run switches (for good) to ``contact_substeps`` coupled RK4 steps per period
+start of a period is below ``fine_gap`` + 2 dt (|v_tcp| + |v_head|) (or they are in
+contact) the period is integrated with ``contact_substeps`` coupled RK4 steps
 (default 50: 20 us, the engine's default step) in which plant and head form
 one ODE and the contact force is evaluated at every RK4 stage.  The works of
 the contact force on the head and on the arm and the contact dissipation are
@@ -360,10 +360,8 @@ def _run_collision(x0, R, Pp, Pm, kind, C, sizes, cfg, noise, dt, substeps, EP, 
         c[CL_VH], c[CL_VH + 1] = hs[H_V], hs[H_V + 1]
         c[CL_DET] = 1.0 if detected else 0.0
         valve_delay(z, u, Pp)
-        if not fine:
-            speed = math.sqrt(vx * vx + vy * vy) + math.sqrt(hs[H_V] ** 2 + hs[H_V + 1] ** 2)
-            if -delta < CP[CC_GAP] + 2.0 * dt * speed:
-                fine = True
+        speed = math.sqrt(vx * vx + vy * vy) + math.sqrt(hs[H_V] ** 2 + hs[H_V + 1] ** 2)
+        fine = f > 0.0 or -delta < CP[CC_GAP] + 2.0 * dt * speed
         c[CL_FINE] = 1.0 if fine else 0.0
         if fine:
             for i in range(nf):
