@@ -214,3 +214,16 @@ def test_neck_pulls_the_head_back(setup):
     d_free = np.hypot(*(free.log[-1, COLLISION_LOG.slice("x_head")] - s["xh"]))
     d_neck = np.hypot(*(neck.log[-1, COLLISION_LOG.slice("x_head")] - s["xh"]))
     assert d_neck < d_free
+
+
+def test_head_appearing_late_and_overlap(setup):
+    s = setup["PSMC"]
+    t0 = s["k0"] * 1e-3
+    late = _run(s, head_appears=t0 - 0.05)
+    early = _run(s)
+    # the head was nowhere near the path before: appearing 50 ms early changes nothing
+    assert np.array_equal(late.fine, early.fine)
+    with pytest.raises(ValueError, match="overlaps"):
+        _run(s, head_appears=t0 + 0.005)       # appears inside the tool (mid-impact place)
+    with pytest.raises(ValueError, match="head_appears"):
+        _run(s, head_appears=-1.0)

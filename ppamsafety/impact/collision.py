@@ -104,6 +104,8 @@ class RunStatus(IntEnum):
     DIVERGED = 1
     #: A coarse period ended with head and tool interpenetrating (fine_gap too small).
     MISSED_CONTACT = 2
+    #: The head overlapped the tool when it appeared (``head_appears``).
+    OVERLAP = 3
 
 
 #: Default detection margin: the threshold on each joint's observer residual is this
@@ -130,10 +132,12 @@ COLLISION = Layout("collision parameters", [
     Field("retract_lookback", 1, "s", "RETRACT: back to the measured position this long ago"),
     Field("fine_gap", 1, "m", "gap below which fine coupled steps start"),
     Field("contact_substeps", 1, "-", "coupled RK4 steps per control period in fine mode"),
+    Field("head_appears", 1, "s", "time from which the head is present (no contact before)"),
 ])
-(CC_XH0, CC_VH0, CC_KN, CC_BN, CC_TH, CC_REACT, CC_LOOK, CC_GAP, CC_NSUB) = COLLISION.offsets(
-    "x_head0", "v_head0", "neck_stiffness", "neck_damping", "threshold", "reaction",
-    "retract_lookback", "fine_gap", "contact_substeps")
+(CC_XH0, CC_VH0, CC_KN, CC_BN, CC_TH, CC_REACT, CC_LOOK, CC_GAP, CC_NSUB,
+ CC_ON) = COLLISION.offsets("x_head0", "v_head0", "neck_stiffness", "neck_damping", "threshold",
+                            "reaction", "retract_lookback", "fine_gap", "contact_substeps",
+                            "head_appears")
 
 HEAD_STATE = Layout("collision head state", [
     Field("x_head", 2, "m", "head centre", columns=("xh", "yh")),
@@ -271,6 +275,7 @@ def _run_collision(x0, R, Pp, Pm, kind, C, sizes, cfg, noise, dt, substeps, EP, 
     react = int(CP[CC_REACT])
     h = dt / substeps
     hf = dt / nf
+    kon = int(math.ceil(CP[CC_ON] / dt - 1e-9))
     x = np.empty(NX)
     x[:] = x0
     hs = np.zeros(NH)
@@ -353,6 +358,12 @@ def _run_collision(x0, R, Pp, Pm, kind, C, sizes, cfg, noise, dt, substeps, EP, 
         row[L_YD] = j21 * x[X_QD] + j22 * x[X_QD + 1]
         row[L_INT:L_INT + NINT] = internals
         f, nx, ny, delta, dd, vx, vy, _, _, _, _ = _contact(x, hs, Pp, hp)
+        present = k >= kon
+        if not present:
+            f = 0.0
+        elif k == kon and delta > 0.0:
+            status = RunStatus.OVERLAP
+            break
         ILOG[k, IL_F], ILOG[k, IL_F + 1] = -f * nx, -f * ny
         c = CLOG[k]
         c[CL_F], c[CL_GAP] = f, -delta
@@ -361,7 +372,7 @@ def _run_collision(x0, R, Pp, Pm, kind, C, sizes, cfg, noise, dt, substeps, EP, 
         c[CL_DET] = 1.0 if detected else 0.0
         valve_delay(z, u, Pp)
         speed = math.sqrt(vx * vx + vy * vy) + math.sqrt(hs[H_V] ** 2 + hs[H_V + 1] ** 2)
-        fine = f > 0.0 or -delta < CP[CC_GAP] + 2.0 * dt * speed
+        fine = present and (f > 0.0 or -delta < CP[CC_GAP] + 2.0 * dt * speed)
         c[CL_FINE] = 1.0 if fine else 0.0
         if fine:
             for i in range(nf):
@@ -380,7 +391,7 @@ def _run_collision(x0, R, Pp, Pm, kind, C, sizes, cfg, noise, dt, substeps, EP, 
                 sensor_track(0, q_old0, x[X_Q], t + i * h, h, cfg, st)
                 sensor_track(1, q_old1, x[X_Q + 1], t + i * h, h, cfg, st)
             fe = _contact(x, hs, Pp, hp)
-            if fe[3] > 0.0:
+            if present and fe[3] > 0.0:
                 status = RunStatus.MISSED_CONTACT
         if not (np.isfinite(x[X_Q]) and np.isfinite(x[X_Q + 1])
                 and abs(x[X_QD]) < DIVERGENCE_VELOCITY
@@ -676,7 +687,7 @@ def simulate_collision(case, *, head_position, head=None, head_velocity=(0.0, 0.
                        threshold=math.inf, reaction=Reaction.NONE,
                        retract_lookback: float = RETRACT_LOOKBACK,
                        contact_substeps: int = CONTACT_SUBSTEPS, fine_gap: float = FINE_GAP,
-                       substeps: int = 1) -> CollisionResult:
+                       substeps: int = 1, head_appears: float = 0.0) -> CollisionResult:
     """Run one closed-loop experiment with a head in the workspace; detect and react.
 
     Parameters
@@ -714,6 +725,11 @@ def simulate_collision(case, *, head_position, head=None, head_velocity=(0.0, 0.
     substeps : int
         RK4 steps per control period far from the head (as in
         :func:`~ppamsafety.experiments.closed_loop.run_batch`), in [1, 1000].
+    head_appears : float
+        Time [s] from which the head is present, in [0, run length) (default
+        0).  Before it there is no contact (the head steps into the path,
+        e.g. shortly before the impact instant of a path that passed its
+        place earlier); the head must not overlap the tool then.
 
     Returns
     -------
@@ -759,6 +775,7 @@ def simulate_collision(case, *, head_position, head=None, head_velocity=(0.0, 0.
     nf = check_int("contact_substeps", contact_substeps, 10, 1000)
     gap = check_range("fine_gap", fine_gap, 1e-4, 1.0, unit="m")
     substeps = check_int("substeps", substeps, 1, 1000)
+    t_on = check_range("head_appears", head_appears, 0.0, (ref.n_steps - 1) * dt, unit="s")
     arm = case.arm
     est = case.estimator if case.estimator is not None else ForceEstimator()
     est.check_period(dt)
@@ -767,7 +784,7 @@ def simulate_collision(case, *, head_position, head=None, head_velocity=(0.0, 0.
     Pp = lay.pack(arm)
     _check_valves(Pp, dt, substeps, case.name)
     r0 = forward_kinematics(x0[:2], arm)
-    if np.hypot(*(xh0 - r0)) <= hm.radius:
+    if t_on == 0.0 and np.hypot(*(xh0 - r0)) <= hm.radius:
         raise ValueError(f"head_position = {xh0.tolist()} m lies within the head radius "
                          f"{hm.radius:g} m of the initial tool point {r0.tolist()} m")
     kind, C, sizes, Pm = _controller_rows(arm, case.controller)
@@ -776,7 +793,8 @@ def simulate_collision(case, *, head_position, head=None, head_velocity=(0.0, 0.
              else np.zeros((n, SENSOR_NOISE.size)))
     CP = COLLISION.pack(x_head0=xh0, v_head0=vh0, neck_stiffness=kn, neck_damping=bn,
                         threshold=np.minimum(th, 1e300), reaction=float(reaction),
-                        retract_lookback=look, fine_gap=gap, contact_substeps=float(nf))
+                        retract_lookback=look, fine_gap=gap, contact_substeps=float(nf),
+                        head_appears=t_on)
     LOG = np.empty((n, NLOG))
     ILOG = np.zeros((n, NILOG))
     CLOG = np.zeros((n, NCLOG))
@@ -791,6 +809,10 @@ def simulate_collision(case, *, head_position, head=None, head_velocity=(0.0, 0.
     if status == RunStatus.MISSED_CONTACT:
         raise RuntimeError(f"simulate_collision: case {case.name!r}: a coarse control period "
                            f"ended in contact; increase fine_gap = {gap:g} m")
+    if status == RunStatus.OVERLAP:
+        raise ValueError(f"simulate_collision: case {case.name!r}: the head at head_position = "
+                         f"{xh0.tolist()} m overlaps the tool when it appears at head_appears = "
+                         f"{t_on:g} s")
     if status == RunStatus.DIVERGED:
         warnings.warn(f"simulate_collision: case {case.name!r} diverged", UserWarning,
                       stacklevel=2)
