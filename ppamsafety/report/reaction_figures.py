@@ -13,7 +13,10 @@ from .figures import new_figure
 
 
 def plot_collision(result, *, title: str | None = None, t_range=None):
-    """Contact force, TCP / head position and observer residuals vs time, detection marked.
+    """Contact force, TCP and head trajectories and observer residuals vs time, detection marked.
+
+    The trajectories are projected on the direction u from the TCP to the head centre at
+    the closest approach, measured from the head's initial surface point [mm].
 
     Parameters
     ----------
@@ -34,11 +37,18 @@ def plot_collision(result, *, title: str | None = None, t_range=None):
     axes[0].plot(ft, result.fine[:, 0], color="tab:red", lw=1.0, label="contact force")
     axes[0].set_ylabel("F [N]")
     df = result.to_pandas()
-    axes[1].plot(t, df["x"], color="tab:blue", lw=1.0, label="TCP x")
-    axes[1].plot(t, df["y"], color="tab:blue", lw=1.0, ls="--", label="TCP y")
-    axes[1].plot(t, df["x_head"], color="tab:orange", lw=1.0, label="head centre x")
-    axes[1].plot(t, df["y_head"], color="tab:orange", lw=1.0, ls="--", label="head centre y")
-    axes[1].set_ylabel("position [m]")
+    # trajectories along the initial impact direction u (TCP -> head centre at the start),
+    # from the head's initial surface point: the gap between the curves is the clearance
+    xh0 = df[["x_head", "y_head"]].to_numpy()[0]
+    k = int(np.argmin(df["gap"].to_numpy()))
+    r_k = df[["x", "y"]].to_numpy()[k]
+    u = (xh0 - r_k) / max(float(np.hypot(*(xh0 - r_k))), 1e-12)
+    surf0 = xh0 - result.head.radius * u
+    tcp_u = (df[["x", "y"]].to_numpy() - surf0) @ u
+    head_u = (df[["x_head", "y_head"]].to_numpy() - xh0) @ u
+    axes[1].plot(t, tcp_u * 1e3, color="tab:blue", lw=1.0, label="TCP along u")
+    axes[1].plot(t, head_u * 1e3, color="tab:orange", lw=1.0, label="head surface along u")
+    axes[1].set_ylabel("position along u [mm]")
     for i, c in enumerate(("tab:green", "tab:purple")):
         axes[2].plot(t, np.abs(df[f"r{i + 1}"]), color=c, lw=1.0,
                      label=f"|r{i + 1}| (5.54)")
