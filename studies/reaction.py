@@ -1,0 +1,9 @@
+"""Collision detection and reaction in the closed loop (issue 12 item 7, beyond thesis §6.3.5).
+
+Run alone:  python studies/reaction.py [outdir] [--quick] [--overwrite]
+"""
+
+from ppamsafety.studies import main
+
+if __name__ == "__main__":
+    raise SystemExit(main("reaction"))
