@@ -326,6 +326,46 @@ def _segments(t, n=8):
     return [(edges[i], edges[i + 1], (t >= edges[i]) & (t < edges[i + 1])) for i in range(n)]
 
 
+def after_row(arm, fit, params) -> np.ndarray:
+    """The plant row of the model with every fitted effect (for the "after" rollout).
+
+    Effects that are directions of the model vector are written back with
+    :func:`~ppamsafety.diagnose.residuals.row_from_mu`; effects with their
+    own regression columns (hysteresis) through their ``plant_effect``
+    (:class:`~ppamsafety.params.effects.Effects` overrides, e.g. the fitted
+    delta, clipped to the plant's range [0, 1]).
+
+    Parameters
+    ----------
+    arm : ArmParameters
+        The nominal model.
+    fit : ppamsafety.diagnose.selection.Fit
+        The final fit.
+    params : dict
+        :func:`~ppamsafety.diagnose.selection.parameter_table` of ``fit``.
+
+    Returns
+    -------
+    numpy.ndarray, shape (NP,)
+    """
+    from dataclasses import replace
+
+    from ..plant import layout as lay
+    from .candidates import REGISTRY
+    from .residuals import row_from_mu
+
+    over = {}
+    for n in fit.names:
+        c = REGISTRY[n]
+        if c.columns is not None and c.plant_effect is not None:
+            vals = np.array([p["value"] for p in params[n].values()])
+            over.update(c.plant_effect(vals, arm))
+    if "hysteresis_delta" in over and over["hysteresis_delta"][0] <= 0.0:
+        over.pop("hysteresis_delta")
+    base = arm.replace(effects=replace(arm.effects, **over)) if over else arm
+    return row_from_mu(lay.pack(base), fit.mu)
+
+
 def diagnose(data, *, arm=None, candidates=None, block_seconds: float = 0.05,
              alpha: float = 0.01, rho_max: float = 1.5, experiment: str | None = None,
              seed: int = 0) -> Diagnosis:
@@ -404,7 +444,7 @@ def diagnose(data, *, arm=None, candidates=None, block_seconds: float = 0.05,
     stepfits = []
     for e in effects + partial:
         names_so_far.append(e["name"])
-    final_rows = [row0, row_from_mu(row0, fit.mu)]
+    final_rows = [row0, after_row(arm, fit, params)]
     U_shifts = [0, fit.shift]
     X = replay(rec, np.array(final_rows), shifts=U_shifts)
     t3 = time.perf_counter()

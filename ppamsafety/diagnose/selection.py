@@ -210,25 +210,40 @@ class Fit:
 
 
 def _directions(prob: Problem, names):
+    """Directions D (NMU, K) in mu, extra prediction columns E (nb, 6, K) or None, the
+    candidate slices of phi and whether a dead time is profiled."""
     cands = library(names)
-    Ds, slices, j = [], {}, 0
+    Ds, Es, slices, j = [], [], {}, 0
+    nb = prob.bs.nb
     for c in cands:
-        if c.directions is None:
+        if c.columns is not None:
+            E = prob.bs.extra[c.columns]
+            D = np.zeros((prob.mu0.size, E.shape[2]))
+        elif c.directions is None:
             slices[c.name] = slice(j, j)
             continue
-        D = c.directions(prob.mu0, prob.arm)
+        else:
+            D = c.directions(prob.mu0, prob.arm)
+            E = None
         Ds.append(D)
+        Es.append(np.zeros((nb, prob.bs.y.shape[1], D.shape[1])) if E is None else E)
         slices[c.name] = slice(j, j + D.shape[1])
         j += D.shape[1]
     D = np.concatenate(Ds, axis=1) if Ds else np.zeros((prob.mu0.size, 0))
+    E = None
+    if any(c.columns is not None for c in cands):
+        E = np.concatenate(Es, axis=2)
     grid = any(c.grid for c in cands)
-    return D, slices, grid
+    return D, slices, grid, E
 
 
-def _solve(prob, D, shift, mask):
+def _solve(prob, D, shift, mask, E=None):
     X = prob.X(shift)
     base = (prob.bs.y - X @ prob.mu0) / prob.sigma
-    Z = np.einsum("bcm,mk->bck", X, D) / prob.sigma[None, :, None]
+    P = np.einsum("bcm,mk->bck", X, D)
+    if E is not None:
+        P = P + E
+    Z = P / prob.sigma[None, :, None]
     k = D.shape[1]
     b = base[mask].ravel()
     A = Z[mask].reshape(b.size, k)
@@ -261,11 +276,11 @@ def fit_model(prob: Problem, names, mask=None) -> Fit:
     names = tuple(names)
     nb = prob.bs.nb
     mask = np.ones(nb, bool) if mask is None else np.asarray(mask, bool)
-    D, slices, grid = _directions(prob, names)
+    D, slices, grid, E = _directions(prob, names)
     shifts = range(1, prob.max_shift + 1) if grid else (0,)
     best, prof = None, []
     for s in shifts:
-        phi, chi2, A, base, Z = _solve(prob, D, s, mask)
+        phi, chi2, A, base, Z = _solve(prob, D, s, mask, E)
         prof.append(chi2)
         if best is None or chi2 < best[1]:
             best = (phi, chi2, A, base, Z, s)
@@ -447,7 +462,7 @@ def parameter_table(prob: Problem, fit: Fit, confidence: float = 0.95) -> dict:
     """
     from .candidates import REGISTRY
 
-    D, slices, _ = _directions(prob, fit.names)
+    D, slices, _, _ = _directions(prob, fit.names)
     z = stats.norm.ppf(0.5 + confidence / 2)
     dt = prob.bs.dt
     nominal_fit_phi = np.zeros_like(fit.phi)

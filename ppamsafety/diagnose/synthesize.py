@@ -48,7 +48,7 @@ RELATIVE = {"friction_coulomb_factor": ("friction_coulomb", 2), "friction_viscou
             ("friction_viscous", 2), "valve_gain_factor": ("valve_gain", 4),
             "valve_time_constant_factor": ("valve_time_constant", 4)}
 _VECTOR_LEN = {"friction_coulomb": 2, "friction_viscous": 2, "valve_offset": 4, "valve_gain": 4,
-               "valve_time_constant": 4}
+               "valve_time_constant": 4, "hysteresis_delta": 4}
 
 
 def _as_list(name, value, n):
