@@ -95,6 +95,9 @@ class Problem:
     floor : numpy.ndarray or None
         Lower bound of the noise level per channel (rest-point records:
         :data:`ppamsafety.diagnose.static.RESOLUTION`), None for none.
+    shift_grid : tuple of int or None
+        Dead-time shifts profiled (None: 1 .. ``max_shift``; the bootstrap
+        fixes the full record's best shift).
     _xcache : dict
         Designs per dead-time shift (internal cache).
     """
@@ -107,6 +110,7 @@ class Problem:
     max_shift: int
     noise: tuple = ()
     floor: np.ndarray | None = None
+    shift_grid: tuple | None = None
     _xcache: dict = field(default_factory=dict, repr=False)
 
     def X(self, shift: int) -> np.ndarray:
@@ -264,7 +268,11 @@ def _solve(prob, D, shift, mask, E=None):
     if k:
         scale = np.sqrt(np.sum(A ** 2, axis=0))
         scale[scale == 0] = 1.0
-        sol, *_ = np.linalg.lstsq(A / scale, b, rcond=None)
+        As = A / scale
+        try:                                    # normal equations of the scaled columns
+            sol = np.linalg.solve(As.T @ As, As.T @ b)
+        except np.linalg.LinAlgError:
+            sol, *_ = np.linalg.lstsq(As, b, rcond=None)
         phi = sol / scale
     else:
         phi = np.zeros(0)
@@ -291,7 +299,8 @@ def fit_model(prob: Problem, names, mask=None) -> Fit:
     nb = prob.bs.nb
     mask = np.ones(nb, bool) if mask is None else np.asarray(mask, bool)
     D, slices, grid, E = _directions(prob, names)
-    shifts = range(1, prob.max_shift + 1) if grid else (0,)
+    shifts = ((range(1, prob.max_shift + 1) if prob.shift_grid is None else prob.shift_grid)
+              if grid else (0,))
     best, prof = None, []
     for s in shifts:
         phi, chi2, A, base, Z = _solve(prob, D, s, mask, E)
@@ -441,7 +450,7 @@ def forward_selection(prob: Problem, candidates=None, *, alpha: float = ALPHA,
     return current, steps, prob
 
 
-def resample(prob: Problem, idx) -> Problem:
+def resample(prob: Problem, idx, *, shift_grid=None) -> Problem:
     """``prob`` restricted to the blocks ``idx`` (in that order, repeats allowed).
 
     The noise levels stay those of ``prob``; the cross-validation folds are
@@ -452,6 +461,8 @@ def resample(prob: Problem, idx) -> Problem:
     prob : Problem
     idx : numpy.ndarray of int
         Block indices.
+    shift_grid : tuple of int, optional, keyword-only
+        Dead-time shifts to profile in the resampled problem.
     """
     from dataclasses import replace
 
@@ -465,9 +476,11 @@ def resample(prob: Problem, idx) -> Problem:
     noise = tuple(a[:, idx] for a in prob.noise) if prob.noise else ()
     # the dead-time designs of the blocks are rows of the parent's: take them from its cache
     # (rebuilding one integrates the whole delayed input again)
-    cache = {s: X[idx] for s, X in prob._xcache.items()}
+    keep = prob._xcache.keys() if shift_grid is None else set(shift_grid) | {0}
+    cache = {s: X[idx] for s, X in prob._xcache.items() if s in keep}
     return Problem(bs=nbs, mu0=prob.mu0, sigma=prob.sigma, arm=prob.arm, fold=seg % 2,
-                   max_shift=prob.max_shift, noise=noise, floor=prob.floor, _xcache=cache)
+                   max_shift=prob.max_shift, noise=noise, floor=prob.floor,
+                   shift_grid=shift_grid, _xcache=cache)
 
 
 #: Default number of bootstrap replicates of :func:`bootstrap_frequency` (a frequency to
@@ -488,6 +501,8 @@ def bootstrap_frequency(prob: Problem, candidates=None, *, replicates: int = BOO
     :func:`forward_selection` on its regressions (no re-simulation; the
     noise levels are those of the full record).  A selection frequency near
     1 says the choice does not hinge on a few stretches of the record.
+    The valve dead time is profiled once on the whole record and held at
+    that shift in the replicates (its linear parameters are refitted).
 
     Parameters
     ----------
@@ -523,14 +538,18 @@ def bootstrap_frequency(prob: Problem, candidates=None, *, replicates: int = BOO
     names = [c.name for c in library(candidates)]
     counts = dict.fromkeys(names, 0)
     runs = int(math.ceil(nb / L))
+    grid = None
     if any(c.grid for c in library(candidates)):
-        for sh in range(1, prob.max_shift + 1):      # fill the parent's cache once
-            prob.X(sh)
+        # the dead time is profiled once on the whole record; the replicates refit the
+        # linear parameters at that shift (profiling 60 shifts per fit would cost 60x)
+        grid = (fit_model(prob, [c.name for c in library(candidates) if c.grid]).shift,)
+        prob.X(grid[0])
     prob.X(0)
     for _ in range(replicates):
         st = rng.integers(0, nb - L + 1, size=runs)
         idx = (st[:, None] + np.arange(L)[None, :]).ravel()[:nb]
-        _, steps, _ = forward_selection(resample(prob, idx), candidates, alpha=alpha,
+        _, steps, _ = forward_selection(resample(prob, idx, shift_grid=grid), candidates,
+                                        alpha=alpha,
                                         max_effects=max_effects)
         for s in steps:
             if s.chosen is not None:
