@@ -200,7 +200,7 @@ def _cmd_diagnose(args) -> int:
         data = load_measured(args.data, allow_gaps=args.allow_gaps,
                              strict_units=not args.loose_units)
     dg = diagnose(data, experiment=args.experiment, alpha=args.alpha, rho_max=args.rho_max,
-                  block_seconds=args.block, seed=args.seed)
+                  block_seconds=args.block, seed=args.seed, bootstrap=args.bootstrap)
     dg.write(args.out, overwrite=args.overwrite)
     for e in dg.effects:
         ps = ", ".join(f"{n} = {p['value']:.4g} [{p['ci_low']:.4g}, {p['ci_high']:.4g}] "
@@ -354,7 +354,8 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
     g.add_argument("data", metavar="DATA", help="measured data file (.csv or .parquet)")
     g.add_argument("--out", required=True, metavar="DIR",
                    help="output folder for diagnosis.json, diagnosis.md and figures")
-    g.add_argument("--experiment", choices=("open-loop", "closed-loop"), default=None,
+    g.add_argument("--experiment", choices=("open-loop", "closed-loop", "static-sawtooth"),
+                   default=None,
                    help="experiment hint (must agree with the metadata)")
     g.add_argument("--alpha", type=_positive, default=0.01,
                    help="level of the likelihood-ratio test (default 0.01, Bonferroni-divided)")
@@ -362,7 +363,10 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
                    help="largest residual/noise RMS ratio counted as explained (default 1.5)")
     g.add_argument("--block", type=_positive, default=0.05, metavar="SECONDS",
                    help="block length of the subsystem residuals [s] (default 0.05)")
-    g.add_argument("--seed", type=int, default=0, help="seed of the noise propagation")
+    g.add_argument("--seed", type=int, default=0,
+                   help="seed of the noise propagation and of the bootstrap")
+    g.add_argument("--bootstrap", type=int, default=None, metavar="B",
+                   help="moving-block bootstrap replicates of the selection (default 40, 0: off)")
     g.add_argument("--allow-gaps", action="store_true",
                    help="drop rows with missing values; the longest gap-free segment is used")
     g.add_argument("--loose-units", action="store_true",
@@ -375,13 +379,16 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
                                    "write it in the measured-data format; the file carries no "
                                    "hint of what is hidden (docs/diagnose.md).",
                        epilog=_EPILOG)
-    y.add_argument("--experiment", choices=("open-loop",), default="open-loop")
+    y.add_argument("--experiment", choices=("open-loop", "static-sawtooth"), default="open-loop",
+                   help="open-loop Fourier excitation, or the static gravity-compensation "
+                        "sawtooth of thesis 3.5.1.6 (rest points only)")
     y.add_argument("--effect", type=_effect_arg, action="append", metavar="NAME=VALUE",
                    help="hidden effect, repeatable (e.g. payload_mass=0.4, "
                         "valve_time_constant_factor=1.5, valve_dead_time=0.02)")
     y.add_argument("--noise", choices=("table-3.2", "none"), default="table-3.2")
     y.add_argument("--seed", type=int, default=0, help="seed of the excitation and the noise")
-    y.add_argument("--duration", type=_positive, default=10.0, help="record length [s]")
+    y.add_argument("--duration", type=_positive, default=None,
+                   help="record length [s] (default 10 s open loop, the whole sawtooth)")
     y.add_argument("--out", required=True, metavar="DATA", help="new .csv (or .parquet) file")
     y.add_argument("--overwrite", action="store_true", help="allow replacing an existing file")
     y.set_defaults(func=_cmd_synthesize)

@@ -175,15 +175,17 @@ class Diagnosis:
         for k, ax in enumerate(axs.T.ravel()):
             scale = 1e-5 if REPLAY_UNITS[k] == "Pa" else 1.0
             unit = "bar" if REPLAY_UNITS[k] == "Pa" else REPLAY_UNITS[k]
+            mk = dict(marker="o", ms=3, ls="none") if r.get("static") else {}
             ax.plot(t[::step], r["measured"][::step, k] * scale, color="0.6", lw=0.8,
-                    label="measured")
+                    label="measured", **mk)
             ax.plot(t[::step], r["before"][::step, k] * scale, "C3", lw=0.9,
-                    label="model before")
+                    label="model before", **(dict(mk, marker="s", mfc="none") if mk else {}))
             ax.plot(t[::step], r["after"][::step, k] * scale, "C0--", lw=0.9,
-                    label="model after")
-            rr = self.residual_rms[REPLAY_CHANNELS[k]]
-            ax.set_title(f"{REPLAY_CHANNELS[k]}: RMS error {rr['before']:.3g} -> "
-                         f"{rr['after']:.3g} {REPLAY_UNITS[k]}", fontsize=8)
+                    label="model after", **(dict(mk, marker="x") if mk else {}))
+            rr = self.residual_rms.get(REPLAY_CHANNELS[k])
+            if rr is not None:
+                ax.set_title(f"{REPLAY_CHANNELS[k]}: RMS error {rr['before']:.3g} -> "
+                             f"{rr['after']:.3g} {REPLAY_UNITS[k]}", fontsize=8)
             ax.set_ylabel(f"{REPLAY_CHANNELS[k]} [{unit}]", fontsize=8)
         axs[0, 0].legend(fontsize=7)
         axs[-1, 0].set_xlabel("t [s]")
