@@ -511,9 +511,18 @@ def diagnose(data, *, arm=None, candidates=None, block_seconds: float = 0.05,
                     forces["residual_before"][:, k] ** 2))), "after": float(np.sqrt(np.mean(
                         forces["residual_after"][:, k] ** 2))), "noise": float(forces["sigma"][k])}
     else:
-        X = replay(rec, np.array([row0, row_after]), shifts=[0, fit.shift])
+        try:
+            X = replay(rec, np.array([row0, row_after]), shifts=[0, fit.shift])
+            before, after = X[0], X[1]
+        except ValueError as exc:
+            # a model with every fitted effect (partial ones too: e.g. a negative payload
+            # absorbing an error outside the library) may leave the model's valid range
+            X = replay(rec, np.array([row0]), shifts=[0])
+            before, after = X[0], X[0]
+            notes.append(f"the model with every fitted effect could not be simulated ({exc}); "
+                         f"'after' repeats 'before'")
         meas = np.concatenate([rec.q, rec.qd, rec.p], axis=1)
-        before, after, t_rep = X[0], X[1], rec.t
+        t_rep = rec.t
         sig_replay = np.concatenate([noise["q"], noise["qd"], noise["p"]])
     t3 = time.perf_counter()
     for k, ch in enumerate(REPLAY_CHANNELS):
