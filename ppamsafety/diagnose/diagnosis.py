@@ -180,8 +180,8 @@ class Diagnosis:
                     label="measured", **mk)
             ax.plot(t[::step], r["before"][::step, k] * scale, "C3", lw=0.9,
                     label="model before", **(dict(mk, marker="s", mfc="none") if mk else {}))
-            ax.plot(t[::step], r["after"][::step, k] * scale, "C0--", lw=0.9,
-                    label="model after", **(dict(mk, marker="x") if mk else {}))
+            ax.plot(t[::step], r["after"][::step, k] * scale, color="C0", lw=0.9,
+                    label="model after", **(dict(mk, marker="x") if mk else {"ls": "--"}))
             rr = self.residual_rms.get(REPLAY_CHANNELS[k])
             if rr is not None:
                 ax.set_title(f"{REPLAY_CHANNELS[k]}: RMS error {rr['before']:.3g} -> "
