@@ -200,7 +200,7 @@ def _cmd_diagnose(args) -> int:
         data = load_measured(args.data, allow_gaps=args.allow_gaps,
                              strict_units=not args.loose_units)
     dg = diagnose(data, experiment=args.experiment, alpha=args.alpha, rho_max=args.rho_max,
-                  block_seconds=args.block, seed=args.seed)
+                  block_seconds=args.block, seed=args.seed, bootstrap=args.bootstrap)
     dg.write(args.out, overwrite=args.overwrite)
     for e in dg.effects:
         ps = ", ".join(f"{n} = {p['value']:.4g} [{p['ci_low']:.4g}, {p['ci_high']:.4g}] "
@@ -253,8 +253,8 @@ def _cmd_synthesize(args) -> int:
         if extra:
             raise ValueError(f"{', '.join(extra)}: option(s) of --kind actuator only")
         data = synthesize(args.experiment, effects, noise=args.noise, seed=args.seed,
-                          duration=10.0 if args.duration is None else args.duration,
-                          controller=args.controller, reference=args.reference)
+                          duration=args.duration, controller=args.controller,
+                          reference=args.reference)
     path = data.save(args.out, overwrite=args.overwrite)
     print(f"record written to {path} ({len(data)} rows)")
     return EXIT_OK
@@ -382,7 +382,8 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
     g.add_argument("data", metavar="DATA", help="measured data file (.csv or .parquet)")
     g.add_argument("--out", required=True, metavar="DIR",
                    help="output folder for diagnosis.json, diagnosis.md and figures")
-    g.add_argument("--experiment", choices=("open-loop", "closed-loop", "tensile"), default=None,
+    g.add_argument("--experiment", choices=("open-loop", "closed-loop", "static-sawtooth",
+                                            "tensile"), default=None,
                    help="experiment hint (must agree with the metadata)")
     g.add_argument("--alpha", type=_positive, default=0.01,
                    help="level of the likelihood-ratio test (default 0.01, Bonferroni-divided)")
@@ -390,7 +391,10 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
                    help="largest residual/noise RMS ratio counted as explained (default 1.5)")
     g.add_argument("--block", type=_positive, default=0.05, metavar="SECONDS",
                    help="block length of the subsystem residuals [s] (default 0.05)")
-    g.add_argument("--seed", type=int, default=0, help="seed of the noise propagation")
+    g.add_argument("--seed", type=int, default=0,
+                   help="seed of the noise propagation and of the bootstrap")
+    g.add_argument("--bootstrap", type=int, default=None, metavar="B",
+                   help="moving-block bootstrap replicates of the selection (default 40, 0: off)")
     g.add_argument("--allow-gaps", action="store_true",
                    help="drop rows with missing values; the longest gap-free segment is used")
     g.add_argument("--loose-units", action="store_true",
@@ -405,10 +409,12 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
                        epilog=_EPILOG)
     y.add_argument("--kind", choices=("arm", "actuator"), default="arm",
                    help="the arm (default) or one actuator on a tensile tester")
-    y.add_argument("--experiment", choices=("open-loop", "closed-loop", "tensile"),
-                   default=None,
-                   help="arm: open-loop Fourier excitation (default) or a closed-loop thesis "
-                        "experiment (--controller, --reference); actuator: tensile (default)")
+    y.add_argument("--experiment", choices=("open-loop", "closed-loop", "static-sawtooth",
+                                            "tensile"), default=None,
+                   help="arm: open-loop Fourier excitation (default), a closed-loop thesis "
+                        "experiment (--controller, --reference) or the static "
+                        "gravity-compensation sawtooth of thesis 3.5.1.6 (rest points only); "
+                        "actuator: tensile (default)")
     y.add_argument("--controller", default="PSMC joint Ki=2 λ=0.4", metavar="VARIANT",
                    help="closed loop: thesis controller variant label (default "
                         "'PSMC joint Ki=2 λ=0.4'; e.g. 'PID', 'PSMC task λ=0.8')")
@@ -422,7 +428,7 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
                    help="table-3.2 (arm default), tester (actuator default) or none")
     y.add_argument("--seed", type=int, default=0, help="seed of the excitation and the noise")
     y.add_argument("--duration", type=_positive, default=None,
-                   help="record length [s] (arm; default 10)")
+                   help="record length [s] (arm; default 10 s, the whole sawtooth)")
     y.add_argument("--protocol", choices=("sawtooth", "pressure-sweep"), default=None,
                    help="actuator: contraction sawtooth (default) or pressure sweep")
     y.add_argument("--pressures", type=_float_list, default=None, metavar="PA,PA,...",

@@ -50,9 +50,15 @@ def test_synthesize_rejects_unknown_effect():
         synthesize(effects={"warp": 1.0}, duration=1.0)
 
 
-def test_diagnose_refuses_a_static_record():
+def test_diagnose_refuses_a_static_record_without_pressures():
+    from ppamsafety.data import MeasuredData
+
+    s = synthetic_static(n=5)
+    f = s.frame.drop(columns=["p1", "p2", "p3", "p4"])
+    with pytest.raises(ValueError, match="missing column"):
+        diagnose(MeasuredData(s.meta, f))
     with pytest.raises(ValueError, match="open-loop or closed-loop"):
-        diagnose(synthetic_static(n=5))
+        arm_record(s)
 
 
 def test_register_checks_the_vocabulary():

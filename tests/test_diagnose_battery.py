@@ -15,6 +15,17 @@ never telling it what was hidden.  Magnitudes (why):
 * polytropic n = 1.0 vs 1.4 -- isothermal against the model's isentropic;
 * valve dead time 20 ms -- a slow fieldbus (two 10 ms frames).
 
+Hysteresis hidden alone (3.35) at the thesis's delta = 0.139 (§3.6.5), in
+the open-loop record and in the static sawtooth (§3.5.1.6, 21 rest points);
+delta within +-0.007 (5 %: the record registers the Preisach turning points
+at the 1 kHz samples, the plant at its 0.5 ms steps, and the sawtooth's
+unrecorded overshoots leave minor loops).  Nothing hidden in the sawtooth:
+nothing named (the false-positive check of the new candidate on the record
+type it is made for).
+
+In the sawtooth also a payload (0.4 kg, +-0.02 kg) and a valve offset
+(+5000 Pa, each offset within 100 Pa): the new candidate must not take them.
+
 Out of the library: link 1 2 % short in the plant (``geometry.L1`` 0.294 m).
 Tolerances on the fitted parameters: payload +-0.02 kg (5 %), T +-10 %,
 c +-35 % (errors in variables: the smooth Coulomb law of noisy velocities,
@@ -47,7 +58,14 @@ CASES = {
     "payload+lag": ({"payload_mass": 0.4, "valve_time_constant_factor": 1.5},
                     {"payload", "valve_lag"}),
     "outside:L1": ({"geometry.L1": 0.294}, None),
+    "hysteresis": ({"hysteresis_delta": 0.139}, {"hysteresis"}),
+    "sawtooth:nothing": ({}, set()),
+    "sawtooth:hysteresis": ({"hysteresis_delta": 0.139}, {"hysteresis"}),
+    "sawtooth:payload": ({"payload_mass": 0.4}, {"payload"}),
+    "sawtooth:valve_offset": ({"valve_offset_delta": 5000.0}, {"valve_offset_gain"}),
 }
+#: Tolerance on the fitted hysteresis delta (module docstring).
+DELTA_TOL = 0.007
 
 
 def check_parameters(case, dg):
@@ -65,10 +83,20 @@ def check_parameters(case, dg):
         assert abs(p["polytropic_exponent"]["n"]["value"] - 1.0) < 0.15
     if "valve_dead_time" in p:
         assert abs(p["valve_dead_time"]["d"]["value"] - 0.02) <= 0.002
+    if "hysteresis" in p and "hysteresis" in case:
+        assert abs(p["hysteresis"]["delta"]["value"] - 0.139) <= DELTA_TOL
     if "valve_offset_gain" in p and case == "valve_offset":
         for i in range(4):
             v = p["valve_offset_gain"][f"v1_{i + 1}"]
             assert v["ci_low"] <= NOM_V1[i] + 5000 <= v["ci_high"]
+    if "valve_offset_gain" in p and case == "sawtooth:valve_offset":
+        # 21 rest points, 8 intervals per record: the all-cover rule would fail one record in
+        # three by chance; the offsets must be within 100 Pa (1 mbar, 2 % of the offset)
+        for i in range(4):
+            v = p["valve_offset_gain"][f"v1_{i + 1}"]["value"]
+            assert abs(v - NOM_V1[i] - 5000) <= 100.0, (i, v)
+    if "payload" in p and case == "sawtooth:payload":
+        assert abs(p["payload"]["M"]["value"] - 0.4) < 0.02
 
 
 def outcome(case, dg):
@@ -83,16 +111,19 @@ def outcome(case, dg):
 
 def run_case(case, seed):
     effects, _ = CASES[case]
-    dg = diagnose(synthesize(effects=effects, seed=seed, duration=10.0))
+    if case.startswith("sawtooth:"):
+        return diagnose(synthesize("static-sawtooth", effects=effects, seed=seed), bootstrap=0)
+    dg = diagnose(synthesize(effects=effects, seed=seed, duration=10.0), bootstrap=0)
     return dg
 
 
-@pytest.mark.parametrize("case", ["nothing", "payload", "valve_lag"])
+@pytest.mark.parametrize("case", ["nothing", "payload", "valve_lag", "hysteresis",
+                                  "sawtooth:nothing", "sawtooth:hysteresis"])
 def test_battery_fast_subset(case):
     dg = run_case(case, seed=11)
     assert outcome(case, dg) == "correct", (case, dg.names, dg.ranking().head())
     check_parameters(case, dg)
-    if case != "nothing":
+    if CASES[case][1]:
         assert all(e["confidence_level"] == "high" for e in dg.effects)
         # the gap shrinks in the full simulation
         assert dg.residual_rms["q2"]["after"] < dg.residual_rms["q2"]["before"] or \
@@ -101,7 +132,7 @@ def test_battery_fast_subset(case):
 
 @pytest.mark.slow
 def test_battery_full():
-    seeds = (1, 2, 3, 4, 5)
+    seeds = tuple(int(x) for x in os.environ.get("PPAMSAFETY_BATTERY_SEEDS", "1,2,3,4,5").split(","))
     rows, failures = {}, []
     for case in CASES:
         counts = {}

@@ -2,9 +2,12 @@
 is missing, its fitted parameters, and the gap shrinking.
 
 * :mod:`.residuals` -- replay and per-subsystem block residuals of an arm record;
+* :mod:`.static` -- rest points of a static-sawtooth record (§3.5.1.6): torque balance,
+  static valves, muscle forces, quasi-static equilibria;
 * :mod:`.noise` -- the noise level estimated from the data;
 * :mod:`.candidates` -- the library of candidate effects;
-* :mod:`.selection` -- ranking (BIC), evidence, forward selection with refit;
+* :mod:`.selection` -- ranking (BIC), evidence, forward selection with refit, its
+  moving-block bootstrap frequency;
 * :mod:`.diagnosis` -- :func:`diagnose` and the :class:`Diagnosis` result;
 * :mod:`.synthesize` -- the hidden-effect data generator;
 * test bench (actuator records): :mod:`.actuator` (pipeline),

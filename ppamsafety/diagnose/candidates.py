@@ -13,9 +13,9 @@ changes X itself.  Every extension maps back to a plant row
 the full simulation can be shown by a batched rollout.
 
 Adding a candidate = one :func:`register` call (see the entries at the end
-of this module; the hysteresis entry is written against the plant effect
-another branch adds and is registered only when
-``Effects`` has ``hysteresis_delta``).
+of this module).  An effect that is not a direction of mu (hysteresis)
+brings its own regression columns, built with the block system
+(``Candidate.columns``).
 
 Arm library (open/closed-loop arm records)
 ------------------------------------------
@@ -28,7 +28,7 @@ valve_dead_time        pressure    d [s], common to the four valves
 polytropic_exponent    pressure    n [-]  (3.3)
 joint_friction         torque      c1, c2 [N m], b1, b2 [N m s/rad]  (3.30)
 payload                torque      M [kg] at the load point A_L (2.19), (A.21)
-hysteresis             torque      delta_1..delta_4 [-] (3.35)  (when available)
+hysteresis             torque      delta [-] (3.35), shared by the 4 groups     
 =====================  ==========  =================================================
 
 Names on a tester (actuator records): ``actuator_friction``, ``hysteresis``,
@@ -103,6 +103,13 @@ class Candidate:
     plant_effect : callable or None
         ``plant_effect(values, arm) -> dict`` of :class:`~ppamsafety.params.effects.Effects`
         overrides reproducing the effect (for rehearsal), None if not a plant effect.
+    columns : str or None
+        Key of :attr:`ppamsafety.diagnose.residuals.BlockSystem.extra`: regression
+        columns (nb, 6, k) added to the *prediction* of the block residual
+        (prediction = X mu + columns phi), for an effect that is not a
+        direction of mu (hysteresis: a torque proportional to the Preisach
+        output of the measured contraction history).  ``directions`` must
+        then be None; the k coefficients are this candidate's phi.
     """
 
     name: str
@@ -113,6 +120,7 @@ class Candidate:
     directions: object = None
     grid: bool = False
     plant_effect: object = field(default=None, repr=False)
+    columns: str | None = None
 
     @property
     def n_params(self) -> int:
@@ -280,20 +288,52 @@ def _payload_candidate():
 register(_payload_candidate())
 
 
+#: Name of the hysteresis regression columns in ``BlockSystem.extra``.
+HYSTERESIS_COLUMNS = "hysteresis"
+
+
 def _maybe_register_hysteresis():
-    """Hysteresis (3.35) plugs in once the plant effect exists (another branch): the
-    torque of group k gains ``delta_k p_k m_tau,k (W_k - W_fit)``, linear in delta_k
-    given the Preisach output W_k of the measured contraction history."""
+    """Hysteresis (3.35): one delta shared by the four muscle groups.
+
+    The plant multiplies the force of group k in the joint torques by
+    ``1 + delta_k (W_k - W_fit(eps_s,k))`` (:mod:`ppamsafety.plant.model`),
+    so the torque of joint j gains ``sum_k delta_k p_k m_tau,k (W_k - W_fit)``:
+    linear in delta given the Preisach output W_k of the *measured*
+    contraction history (contractions from the measured q through the
+    geometry).  The columns are built by
+    :func:`ppamsafety.diagnose.residuals.hysteresis_signature` with the
+    plant's own operator (:func:`ppamsafety.plant.model.hysteresis_factors`
+    with delta = 1).
+
+    Parameterisation: one delta for all four groups.  The arm's four muscle
+    groups are the same 25-fibre muscles (thesis §3.6.5 fits one delta =
+    0.139 for them), so one parameter is the physical hypothesis and the
+    criterion charges k = 1.  Four deltas would cost 3 more parameters in BIC
+    for a difference the thesis gives no reason to expect, and the two
+    antagonists of a joint move in opposite directions, so their columns are
+    strongly (negatively) correlated in a torque residual: per-muscle deltas
+    are poorly determined from torques alone.  A muscle whose delta differs
+    shows as a residual left over (``partial`` / unexplained).
+    """
     from ..params.effects import Effects
 
     if "hysteresis_delta" not in Effects.__dataclass_fields__:
         return
-    # The regression columns need the Preisach operator over the measured
-    # contractions (ppamsafety.hysteresis); they are added with the plant effect.
+    register(Candidate(
+        "hysteresis", "torque",
+        (Parameter("delta", "-", 0.0, 1.0, "hysteresis scale delta of (3.35), one value for "
+                   "the four muscle groups (thesis §3.6.5: 0.139 for the arm's 25-fibre "
+                   "muscles)"),),
+        "torque (and muscle-force) residual that depends on the direction of the last "
+        "contraction change: force below the model while a muscle contracts, above while it "
+        "extends (§3.5.1.6, fig. 3.2); rising angles settle low, falling ones high",
+        lambda mu, phi, shift: np.array([phi[0]]), None, columns=HYSTERESIS_COLUMNS,
+        plant_effect=lambda v, arm: {"hysteresis_delta": (float(min(max(v[0], 0.0), 1.0)),)
+                                     * 4}))
 
 
 _maybe_register_hysteresis()
 
 __all__ = ["Candidate", "Parameter", "REGISTRY", "register", "library", "VOCABULARY",
-           "ACTUATOR_VOCABULARY", "DEAD_TIME_MAX"]
+           "ACTUATOR_VOCABULARY", "DEAD_TIME_MAX", "HYSTERESIS_COLUMNS"]
 _ = math

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from .._validation import check_bool, check_range
+from .._validation import check_bool, check_int, check_range
 
 #: Schema version of ``diagnosis.json``.
 SCHEMA_VERSION = 1
@@ -91,6 +91,9 @@ class Diagnosis:
         :mod:`ppamsafety.diagnose.actuator`: ``replay`` then holds ``t``,
         ``eps``, ``pressure``, ``direction`` and the forces ``measured``,
         ``before`` (nominal law), ``after`` (diagnosed), each (N,)).
+    subsystems : dict
+        Extra subsystem checks: ``"forces"`` (static records with F1..F4,
+        :func:`ppamsafety.diagnose.static.force_residuals`).
     """
 
     source: str
@@ -107,6 +110,7 @@ class Diagnosis:
     notes: tuple = ()
     blocks: dict = field(default_factory=dict, repr=False)
     kind: str = "arm"
+    subsystems: dict = field(default_factory=dict, repr=False)
 
     @property
     def names(self) -> tuple:
@@ -152,7 +156,18 @@ class Diagnosis:
             "residual_rms": self.residual_rms,
             "where": self.where.to_dict(orient="records"),
             "ranking": self.ranking().to_dict(orient="records"),
+            "forces": self._forces_dict(),
             "settings": self.settings, "timings_s": self.timings, "notes": list(self.notes)})
+
+    def _forces_dict(self):
+        f = self.subsystems.get("forces")
+        if f is None:
+            return None
+        return {"unit": "N", "muscles": ["F1", "F2", "F3", "F4"],
+                "noise_of_rest_point_mean": list(f["sigma"]),
+                "rho_before": list(f["rho_before"]), "rho_after": list(f["rho_after"]),
+                "delta_forces": f["delta_forces"], "delta_forces_std_error": f["delta_forces_se"],
+                "delta_per_muscle": list(f["delta_per_muscle"])}
 
     def plot(self):
         """Measured vs before vs after (full simulation) for q, qd, p; a matplotlib Figure.
@@ -174,15 +189,17 @@ class Diagnosis:
         for k, ax in enumerate(axs.T.ravel()):
             scale = 1e-5 if REPLAY_UNITS[k] == "Pa" else 1.0
             unit = "bar" if REPLAY_UNITS[k] == "Pa" else REPLAY_UNITS[k]
+            mk = dict(marker="o", ms=3, ls="none") if r.get("static") else {}
             ax.plot(t[::step], r["measured"][::step, k] * scale, color="0.6", lw=0.8,
-                    label="measured")
+                    label="measured", **mk)
             ax.plot(t[::step], r["before"][::step, k] * scale, "C3", lw=0.9,
-                    label="model before")
-            ax.plot(t[::step], r["after"][::step, k] * scale, "C0--", lw=0.9,
-                    label="model after")
-            rr = self.residual_rms[REPLAY_CHANNELS[k]]
-            ax.set_title(f"{REPLAY_CHANNELS[k]}: RMS error {rr['before']:.3g} -> "
-                         f"{rr['after']:.3g} {REPLAY_UNITS[k]}", fontsize=8)
+                    label="model before", **(dict(mk, marker="s", mfc="none") if mk else {}))
+            ax.plot(t[::step], r["after"][::step, k] * scale, color="C0", lw=0.9,
+                    label="model after", **(dict(mk, marker="x") if mk else {"ls": "--"}))
+            rr = self.residual_rms.get(REPLAY_CHANNELS[k])
+            if rr is not None:
+                ax.set_title(f"{REPLAY_CHANNELS[k]}: RMS error {rr['before']:.3g} -> "
+                             f"{rr['after']:.3g} {REPLAY_UNITS[k]}", fontsize=8)
             ax.set_ylabel(f"{REPLAY_CHANNELS[k]} [{unit}]", fontsize=8)
         axs[0, 0].legend(fontsize=7)
         axs[-1, 0].set_xlabel("t [s]")
@@ -344,15 +361,57 @@ def _segments(t, n=8):
     return [(edges[i], edges[i + 1], (t >= edges[i]) & (t < edges[i + 1])) for i in range(n)]
 
 
+def after_row(arm, fit, params) -> np.ndarray:
+    """The plant row of the model with every fitted effect (for the "after" rollout).
+
+    Effects that are directions of the model vector are written back with
+    :func:`~ppamsafety.diagnose.residuals.row_from_mu`; effects with their
+    own regression columns (hysteresis) through their ``plant_effect``
+    (:class:`~ppamsafety.params.effects.Effects` overrides, e.g. the fitted
+    delta, clipped to the plant's range [0, 1]).
+
+    Parameters
+    ----------
+    arm : ArmParameters
+        The nominal model.
+    fit : ppamsafety.diagnose.selection.Fit
+        The final fit.
+    params : dict
+        :func:`~ppamsafety.diagnose.selection.parameter_table` of ``fit``.
+
+    Returns
+    -------
+    numpy.ndarray, shape (NP,)
+    """
+    from dataclasses import replace
+
+    from ..plant import layout as lay
+    from .candidates import REGISTRY
+    from .residuals import row_from_mu
+
+    over = {}
+    for n in fit.names:
+        c = REGISTRY[n]
+        if c.columns is not None and c.plant_effect is not None:
+            vals = np.array([p["value"] for p in params[n].values()])
+            over.update(c.plant_effect(vals, arm))
+    if "hysteresis_delta" in over and over["hysteresis_delta"][0] <= 0.0:
+        over.pop("hysteresis_delta")
+    base = arm.replace(effects=replace(arm.effects, **over)) if over else arm
+    return row_from_mu(lay.pack(base), fit.mu)
+
+
 def diagnose(data, *, arm=None, candidates=None, block_seconds: float = 0.05,
              alpha: float = 0.01, rho_max: float = 1.5, experiment: str | None = None,
-             seed: int = 0) -> Diagnosis:
+             seed: int = 0, bootstrap: int | None = None) -> Diagnosis:
     """Diagnose a measured arm record against the model (module docstring).
 
     Parameters
     ----------
     data : MeasuredData
-        Arm record with q, qd, p, u (:func:`ppamsafety.data.load_measured`).
+        Arm record (:func:`ppamsafety.data.load_measured`): open or closed
+        loop with q, qd, p, u; or a static sawtooth (§3.5.1.6) with q, p
+        (u and F1..F4 optional), see :mod:`ppamsafety.diagnose.static`.
     arm : ArmParameters, optional, keyword-only
         The current model (default the thesis arm).
     candidates : sequence of str, optional, keyword-only
@@ -366,7 +425,12 @@ def diagnose(data, *, arm=None, candidates=None, block_seconds: float = 0.05,
     experiment : str, optional, keyword-only
         Hint for records whose metadata lacks it (must agree when both given).
     seed : int, keyword-only
-        Seed of the Monte Carlo noise propagation.
+        Seed of the Monte Carlo noise propagation and of the bootstrap.
+    bootstrap : int, optional, keyword-only
+        Replicates of the moving-block bootstrap of the selection
+        (:func:`~ppamsafety.diagnose.selection.bootstrap_frequency`); default
+        :data:`~ppamsafety.diagnose.selection.BOOTSTRAP_REPLICATES`, 0: none.
+        Each named effect's evidence then carries ``bootstrap_frequency``.
 
     Returns
     -------
@@ -377,8 +441,8 @@ def diagnose(data, *, arm=None, candidates=None, block_seconds: float = 0.05,
     An actuator record (``data.kind == "actuator"``, a test bench) is
     diagnosed against its nominal force law by
     :func:`ppamsafety.diagnose.actuator.diagnose_actuator` (``arm``,
-    ``block_seconds`` and ``seed`` do not apply; ``candidates`` from the
-    tester vocabulary).
+    ``block_seconds``, ``seed`` and ``bootstrap`` do not apply; its confidence
+    is the BIC weight; ``candidates`` from the tester vocabulary).
     """
     from ..data.measured import MeasuredData
 
@@ -392,8 +456,9 @@ def diagnose(data, *, arm=None, candidates=None, block_seconds: float = 0.05,
     from ..plant import layout as lay
     from .candidates import REGISTRY
     from .residuals import (CHANNEL_UNITS, CHANNELS, SUBSYSTEM, arm_record, block_system,
-                            channel_noise, model_vector, noise_draws, replay, row_from_mu)
-    from .selection import fit_model, forward_selection, make_problem, parameter_table
+                            channel_noise, model_vector, noise_draws, replay)
+    from .selection import (bootstrap_frequency, fit_model, forward_selection, make_problem,
+                            parameter_table)
 
     t0 = time.perf_counter()
     arm = thesis_arm() if arm is None else arm
@@ -404,18 +469,42 @@ def diagnose(data, *, arm=None, candidates=None, block_seconds: float = 0.05,
     if experiment is not None and experiment != data.experiment:
         raise ValueError(f"experiment = {experiment!r} does not match the record's metadata "
                          f"experiment = {data.experiment!r}")
-    rec, notes = arm_record(data)
-    notes = list(data.notes) + notes
+    from .selection import BOOTSTRAP_REPLICATES
+
+    bootstrap = BOOTSTRAP_REPLICATES if bootstrap is None else check_int("bootstrap", bootstrap,
+                                                                         0, 10000)
+    static = data.experiment == "static-sawtooth"
     row0 = lay.pack(arm)
     mu0 = model_vector(row0)
-    noise = channel_noise(rec)
-    bs = block_system(rec, arm, block_seconds=block_seconds)
-    prob = make_problem(bs, mu0, noise_draws(rec, arm, noise, block_seconds=block_seconds,
-                                             seed=seed), arm)
+    if static:
+        from .static import (STATIC_CANDIDATES, force_residuals, static_equilibria,
+                             static_floor, static_noise, static_noise_draws, static_record,
+                             static_system)
+
+        rec, notes = static_record(data)
+        noise = static_noise(rec)
+        bs = static_system(rec, arm)
+        prob = make_problem(bs, mu0, static_noise_draws(rec, arm, noise, seed=seed), arm,
+                            floor=static_floor(rec, arm))
+        if candidates is None:
+            candidates = [c for c in STATIC_CANDIDATES if c in REGISTRY
+                          and (c != "valve_offset_gain" or rec.u is not None)]
+    else:
+        rec, notes = arm_record(data)
+        noise = channel_noise(rec)
+        bs = block_system(rec, arm, block_seconds=block_seconds)
+        prob = make_problem(bs, mu0, noise_draws(rec, arm, noise, block_seconds=block_seconds,
+                                                 seed=seed), arm)
+    notes = list(data.notes) + notes
     t1 = time.perf_counter()
     nominal = fit_model(prob, [])
     fit, steps, fprob = forward_selection(prob, candidates, alpha=alpha)
     t2 = time.perf_counter()
+    freq, boot_info = ({}, {})
+    if bootstrap:
+        freq, boot_info = bootstrap_frequency(prob, candidates, replicates=bootstrap, seed=seed,
+                                              alpha=alpha)
+    tb = time.perf_counter()
     rho = fit.rho()
     params = parameter_table(fprob, fit) if fit.names else {}
     effects, partial = [], []
@@ -428,30 +517,60 @@ def diagnose(data, *, arm=None, candidates=None, block_seconds: float = 0.05,
         ev = {k: r[k] for k in ("delta_bic", "lr_stat", "lr_df", "p_value", "cv_gain")}
         ev["evidence_ratio_log10"] = r.get("evidence_ratio_log10")
         ev["subsystem_rho"] = sub_rho
+        if bootstrap:
+            ev["bootstrap_frequency"] = freq.get(s.chosen, 0.0)
         entry = {"name": s.chosen, "subsystem": sub, "parameters": params[s.chosen],
                  "evidence": ev, "confidence": r["bic_weight"]}
         (effects if max(sub_rho.values()) <= rho_max else partial).append(entry)
+    if static and rec.u is None:
+        rho[:4] = 0.0                       # no valve equations without set values
     bad = [CHANNELS[c] for c in range(6) if rho[c] > rho_max]
-    # full simulation: nominal and after each named step, one batched rollout
-    mus, shifts, names_so_far = [mu0], [0], []
-    stepfits = []
-    for e in effects + partial:
-        names_so_far.append(e["name"])
-    final_rows = [row0, row_from_mu(row0, fit.mu)]
-    U_shifts = [0, fit.shift]
-    X = replay(rec, np.array(final_rows), shifts=U_shifts)
-    t3 = time.perf_counter()
-    meas = np.concatenate([rec.q, rec.qd, rec.p], axis=1)
-    sig_replay = np.concatenate([noise["q"], noise["qd"], noise["p"]])
+    row_after = after_row(arm, fit, params)
     rr = {}
+    forces = None
+    if static:
+        Q, Pm = static_equilibria(rec, np.array([row0, row_after]))
+        qm, pm = rec.means(rec.q), rec.means(rec.p)
+        meas = np.concatenate([qm, np.zeros_like(qm), pm], axis=1)
+        before = np.concatenate([Q[0], np.zeros_like(qm), Pm[0]], axis=1)
+        after = np.concatenate([Q[1], np.zeros_like(qm), Pm[1]], axis=1)
+        t_rep = bs.features["t"]
+        sig_replay = np.concatenate([noise["q"], np.zeros(2), noise["p"]])
+        delta = params.get("hysteresis", {}).get("delta", {}).get("value", 0.0)
+        forces = force_residuals(rec, arm, noise, delta=max(delta, 0.0))
+        if forces is not None:
+            for k in range(4):
+                rr[f"F{k + 1}"] = {"unit": "N", "before": float(np.sqrt(np.mean(
+                    forces["residual_before"][:, k] ** 2))), "after": float(np.sqrt(np.mean(
+                        forces["residual_after"][:, k] ** 2))), "noise": float(forces["sigma"][k])}
+    else:
+        try:
+            X = replay(rec, np.array([row0, row_after]), shifts=[0, fit.shift])
+            before, after = X[0], X[1]
+        except ValueError as exc:
+            # a model with every fitted effect (partial ones too: e.g. a negative payload
+            # absorbing an error outside the library) may leave the model's valid range
+            X = replay(rec, np.array([row0]), shifts=[0])
+            before, after = X[0], X[0]
+            notes.append(f"the model with every fitted effect could not be simulated ({exc}); "
+                         f"'after' repeats 'before'")
+        meas = np.concatenate([rec.q, rec.qd, rec.p], axis=1)
+        t_rep = rec.t
+        sig_replay = np.concatenate([noise["q"], noise["qd"], noise["p"]])
+    t3 = time.perf_counter()
     for k, ch in enumerate(REPLAY_CHANNELS):
+        if static and ch in ("qd1", "qd2"):
+            continue
         rr[ch] = {"unit": REPLAY_UNITS[k],
-                  "before": float(np.sqrt(np.mean((X[0, :, k] - meas[:, k]) ** 2))),
-                  "after": float(np.sqrt(np.mean((X[1, :, k] - meas[:, k]) ** 2))),
+                  "before": float(np.sqrt(np.mean((before[:, k] - meas[:, k]) ** 2))),
+                  "after": float(np.sqrt(np.mean((after[:, k] - meas[:, k]) ** 2))),
                   "noise": float(sig_replay[k])}
     nrho = nominal.rho()
+    units = ("Pa/s",) * 4 + ("N m",) * 2 if static else CHANNEL_UNITS
     for c, ch in enumerate(CHANNELS):
-        rr[f"block_{ch}"] = {"unit": f"{CHANNEL_UNITS[c]} / noise (block residual ratio)",
+        if static and c < 4 and rec.u is None:
+            continue
+        rr[f"block_{ch}"] = {"unit": f"{units[c]} / noise (block residual ratio)",
                              "before": float(nrho[c]), "after": float(rho[c]), "noise": 1.0}
     unexplained = bool(bad)
     for e in effects:
@@ -465,30 +584,47 @@ def diagnose(data, *, arm=None, candidates=None, block_seconds: float = 0.05,
     for e in partial:
         e["confidence_level"] = "low"
     where = _where(fprob, fit.e, bs.features, rho_max)
+    if static:
+        where["region"] = where["region"].replace({"velocity sign": "direction of approach"})
+        where["group"] = where["group"].str.replace("qd > 0", "angle rose").str.replace(
+            "qd < 0", "angle fell or held")
     if unexplained:
         notes.append(f"residual above {rho_max} x the noise on {', '.join(bad)}: no effect of "
                      f"the library explains it (see 'where')")
-    settings = {"block_seconds": block_seconds, "alpha": alpha, "rho_max": rho_max,
+    settings = {"block_seconds": None if static else block_seconds, "alpha": alpha,
+                "rho_max": rho_max,
                 "criterion": "BIC (known noise level), LR test p < alpha/K, 2-fold CV gain, "
                              "parameters inside widened bounds",
                 "high_confidence": HIGH_CONFIDENCE, "candidates": list(
                     REGISTRY if candidates is None else candidates),
-                "blocks": int(bs.nb), "samples": int(len(rec)), "dt_s": rec.dt,
-                "rows": list(rec.rows), "seed": seed,
-                "noise_estimate": {k: [float(x) for x in v] for k, v in noise.items()},
+                "blocks": int(bs.nb), "samples": int(len(rec.t)),
+                "dt_s": None if static else rec.dt,
+                "rows": None if static else list(rec.rows), "seed": seed,
+                "noise_estimate": {k: [float(x) for x in v] for k, v in noise.items()
+                                   if v is not None},
                 "noise_method": "robust second difference: 1.4826 MAD(x[k+1]-2x[k]+x[k-1])/sqrt(6)",
                 "block_noise": {ch: float(s) for ch, s in zip(CHANNELS, fprob.sigma)},
+                "bootstrap": boot_info,
                 "data": {"kind": data.kind, "experiment": data.experiment,
                          "description": data.meta.get("description", "")}}
-    timings = {"residuals_and_noise": t1 - t0, "selection": t2 - t1, "rollout": t3 - t2,
-               "total": time.perf_counter() - t0}
-    _ = (mus, shifts, stepfits)
+    if static:
+        settings["rest_points"] = int(rec.m)
+        settings["residuals"] = ("rest points (window means): torque balance tau(p, q) = G(q) "
+                                 "[N m], static valve 0 = a + b u - kappa p [Pa/s]; angles: "
+                                 "quasi-static equilibria of the model")
+    timings = {"residuals_and_noise": t1 - t0, "selection": t2 - t1, "bootstrap": tb - t2,
+               "rollout": t3 - tb, "total": time.perf_counter() - t0}
+    extra = {}
+    if forces is not None:
+        extra["forces"] = forces
     return Diagnosis(source=data.source, effects=effects, partial=partial,
                      unexplained=unexplained, unexplained_channels=bad, residual_rms=rr,
                      where=where, steps=steps,
-                     replay={"t": rec.t, "measured": meas, "before": X[0], "after": X[1]},
+                     replay={"t": t_rep, "measured": meas, "before": before, "after": after,
+                             "static": static},
                      settings=settings, timings=timings, notes=tuple(notes),
-                     blocks={"t": bs.features["t"], "before": nominal.e, "after": fit.e})
+                     blocks={"t": bs.features["t"], "before": nominal.e, "after": fit.e},
+                     subsystems=extra)
 
 
 __all__ = ["Diagnosis", "diagnose", "SCHEMA_VERSION", "HIGH_CONFIDENCE", "JSON_NAME"]

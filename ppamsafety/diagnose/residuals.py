@@ -273,6 +273,10 @@ class BlockSystem:
         Sample time [s].
     features : dict
         Per-block operating-region descriptors (mean q, qd, p, time).
+    extra : dict
+        Regression columns of candidates that are not directions of mu,
+        name -> (nb, 6, k), added to the prediction (``Candidate.columns``;
+        ``"hysteresis"``: see :func:`hysteresis_signature`).
     """
 
     y: np.ndarray
@@ -282,6 +286,7 @@ class BlockSystem:
     u: np.ndarray = field(repr=False)
     dt: float = 0.0
     features: dict = field(default_factory=dict, repr=False)
+    extra: dict = field(default_factory=dict, repr=False)
 
     @property
     def nb(self) -> int:
@@ -304,7 +309,58 @@ class BlockSystem:
         return X
 
 
-def block_system(rec: ArmRecord, arm, *, block_seconds: float = BLOCK_SECONDS) -> BlockSystem:
+def hysteresis_signature(q, p, arm, *, initial="negative") -> tuple:
+    """Muscle forces and joint torques of the hysteresis (3.35) per unit delta along measured data.
+
+    The plant's force of group k is ``p_k f_k(eps_k) (1 + delta_k (W_k -
+    W_fit(eps_s,k)))`` and its torque contribution ``p_k m_tau,k (1 + ...)``
+    (:mod:`ppamsafety.plant.model`).  Here the Preisach output W_k is that of
+    the *measured* contraction history (eps_k from the measured q through the
+    geometry, each sample committed as the end of one step, exactly as the
+    plant commits its steps: :func:`ppamsafety.plant.model.hysteresis_factors`
+    with delta = 1), so the torque change is ``delta * h_tau`` with
+    ``h_tau,j = sum_{k of joint j} p_k m_tau,k (W_k - W_fit)``.
+
+    Parameters
+    ----------
+    q : numpy.ndarray, shape (N, 2)
+        Measured joint angles [rad], in time order.
+    p : numpy.ndarray, shape (N, 4)
+        Measured gauge pressures [Pa].
+    arm : ArmParameters
+        Geometry and muscles of the model.
+    initial : str or sequence, keyword-only
+        Preisach memory before the first sample (``Effects.hysteresis_initial``;
+        default ``"negative"``: every muscle brought to its smallest
+        contraction first, thesis §3.6.6).
+
+    Returns
+    -------
+    h : numpy.ndarray, shape (N, 4)
+        W_k - W_fit(eps_s,k) per group [-].
+    h_tau : numpy.ndarray, shape (N, 2)
+        Joint torque per unit delta [N m].
+    eps : numpy.ndarray, shape (N, 4)
+        Contractions [-].
+    """
+    from ..params.effects import Effects
+    from ..plant.model import hysteresis_factors
+    from ..plant.torque import torque_functions
+
+    q = np.asarray(q, dtype=float)
+    p = np.asarray(p, dtype=float)
+    unit = arm.replace(effects=Effects(hysteresis_delta=(1.0,) * 4, hysteresis_initial=initial))
+    states = np.zeros((q.shape[0], 8))
+    states[:, :2] = q
+    eps, fac = hysteresis_factors(states, unit)
+    h = fac - 1.0
+    mt = torque_functions(q, arm)
+    ph = p * mt * h
+    return h, np.stack([ph[:, 0] + ph[:, 1], ph[:, 2] + ph[:, 3]], axis=1), eps
+
+
+def block_system(rec: ArmRecord, arm, *, block_seconds: float = BLOCK_SECONDS,
+                 extra: bool = True) -> BlockSystem:
     """Build the block-integral equations of ``rec`` for the geometry/muscles of ``arm``.
 
     Parameters
@@ -314,6 +370,10 @@ def block_system(rec: ArmRecord, arm, *, block_seconds: float = BLOCK_SECONDS) -
         Known geometry, muscle force law and friction smoothing (the model).
     block_seconds : float, keyword-only
         Block length [s]; blocks have distinct end samples and do not overlap.
+    extra : bool, keyword-only
+        Also build the regression columns of the non-mu candidates
+        (:attr:`BlockSystem.extra`; the hysteresis torque, one column shared
+        by the four groups).
 
     Returns
     -------
@@ -365,7 +425,19 @@ def block_system(rec: ArmRecord, arm, *, block_seconds: float = BLOCK_SECONDS) -
 
     feats = {"t": 0.5 * (rec.t[starts] + rec.t[stops]), "q": bmean(rec.q), "qd": bmean(rec.qd),
              "p": bmean(rec.p)}
-    return BlockSystem(y=y, X=X, starts=starts, stops=stops, u=rec.u, dt=dt, features=feats)
+    ext = {}
+    if extra:
+        from .candidates import HYSTERESIS_COLUMNS
+
+        _, h_tau, _ = hysteresis_signature(rec.q, rec.p, arm)
+        c_h = _cumtrapz(h_tau, dt)
+        E = np.zeros((nb, 6, 1))
+        # the measured torque is tau(p) + delta h_tau = X theta, so the block residual
+        # y - X mu = -delta Int h_tau: the prediction gains -Int h_tau per unit delta
+        E[:, 4:6, 0] = -(c_h[stops] - c_h[starts])
+        ext[HYSTERESIS_COLUMNS] = E
+    return BlockSystem(y=y, X=X, starts=starts, stops=stops, u=rec.u, dt=dt, features=feats,
+                       extra=ext)
 
 
 def channel_noise(rec: ArmRecord) -> dict:
@@ -413,12 +485,12 @@ def noise_draws(rec: ArmRecord, arm, noise: dict, *, block_seconds: float = BLOC
     dX : numpy.ndarray, shape (draws, nb, 6, NMU)
     """
     draws = check_int("draws", draws, 1, 1000)
-    base = block_system(rec, arm, block_seconds=block_seconds)
+    base = block_system(rec, arm, block_seconds=block_seconds, extra=False)
     rng = np.random.default_rng(seed)
     dY, dX = [], []
     for _ in range(draws):
         s = block_system(rec.perturbed(noise["q"], noise["qd"], noise["p"], rng), arm,
-                         block_seconds=block_seconds)
+                         block_seconds=block_seconds, extra=False)
         dY.append(s.y - base.y)
         dX.append(s.X - base.X)
     return np.array(dY), np.array(dX)
@@ -483,5 +555,5 @@ def replay(rec: ArmRecord, rows, *, shifts=None, substeps: int = 1) -> np.ndarra
 
 
 __all__ = ["ArmRecord", "arm_record", "BlockSystem", "block_system", "block_noise",
-           "channel_noise", "noise_draws", "replay", "model_vector", "row_from_mu", "delayed", "MU_NAMES",
+           "channel_noise", "noise_draws", "replay", "hysteresis_signature", "model_vector", "row_from_mu", "delayed", "MU_NAMES",
            "MU_UNITS", "NMU", "CHANNELS", "CHANNEL_UNITS", "SUBSYSTEM", "BLOCK_SECONDS"]

@@ -66,16 +66,29 @@ import pandas as pd
 
 from .._validation import check_choice, check_int, check_range
 
-EXPERIMENTS = ("open-loop", "closed-loop")
+EXPERIMENTS = ("open-loop", "closed-loop", "static-sawtooth")
 #: Defaults of the closed-loop record: controller variant label and catalogue reference.
 DEFAULT_CONTROLLER = "PSMC joint Ki=2 λ=0.4"
 DEFAULT_REFERENCE = "circle10"
+#: One tooth of the sawtooth set angles [deg] (the text does not give the sequence of fig. 3.1;
+#: the same choice as :mod:`ppamsafety.studies.effects`: both joints up and down together in
+#: 10 deg steps over the part of the working area the arm can hold).
+SAWTOOTH_Q1_DEG = (30.0, 40.0, 50.0, 60.0, 70.0, 80.0, 70.0, 60.0, 50.0, 40.0)
+SAWTOOTH_Q2_DEG = (-95.0, -85.0, -75.0, -65.0, -55.0, -45.0, -55.0, -65.0, -75.0, -85.0)
+#: Teeth of the default sawtooth.
+SAWTOOTH_TEETH = 2
+#: Gradual change, pause and data window per level [s] (§3.5.1.6: "a 3 second pause ...
+#: then data was taken during 1 second"; the 1 s ramp is our choice).
+SAWTOOTH_RAMP_S, SAWTOOTH_SETTLE_S, SAWTOOTH_WINDOW_S = 1.0, 3.0, 1.0
+#: Standard deviation of the synthetic muscle-force noise [N] (our choice; the thesis gives
+#: no force-sensor noise).
+FORCE_NOISE_STD = 2.0
 NOISES = ("table-3.2", "none")
 RELATIVE = {"friction_coulomb_factor": ("friction_coulomb", 2), "friction_viscous_factor":
             ("friction_viscous", 2), "valve_gain_factor": ("valve_gain", 4),
             "valve_time_constant_factor": ("valve_time_constant", 4)}
 _VECTOR_LEN = {"friction_coulomb": 2, "friction_viscous": 2, "valve_offset": 4, "valve_gain": 4,
-               "valve_time_constant": 4}
+               "valve_time_constant": 4, "hysteresis_delta": 4}
 
 
 def _as_list(name, value, n):
@@ -154,29 +167,170 @@ def plant_with(arm, effects: dict):
     return plant, dead, offset
 
 
+def sawtooth_set_angles(levels=None, *, dt: float = 1e-3, ramp: float = SAWTOOTH_RAMP_S,
+                        settle: float = SAWTOOTH_SETTLE_S, window: float = SAWTOOTH_WINDOW_S):
+    """Set angles of the static sawtooth (thesis §3.5.1.6) and its data windows.
+
+    The first level is held for ``settle + window``; every further level is
+    reached by a raised-cosine ramp of ``ramp`` seconds and held for
+    ``settle + window``; data are taken in the last ``window`` seconds.
+
+    Parameters
+    ----------
+    levels : array_like, shape (m, 2), optional
+        Set angles per level [rad], m >= 3; default :data:`SAWTOOTH_TEETH`
+        teeth of :data:`SAWTOOTH_Q1_DEG` / :data:`SAWTOOTH_Q2_DEG`, closed at
+        the start level.
+    dt : float, keyword-only
+        Sample time [s].
+    ramp, settle, window : float, keyword-only
+        Durations [s] (> 0).
+
+    Returns
+    -------
+    t : numpy.ndarray, shape (N,)
+        Time [s].
+    q_d : numpy.ndarray, shape (N, 2)
+        Set angles [rad].
+    windows : numpy.ndarray of int, shape (m, 2)
+        First and one-past-last sample of each data window.
+    """
+    if levels is None:
+        q1 = SAWTOOTH_Q1_DEG * SAWTOOTH_TEETH + SAWTOOTH_Q1_DEG[:1]
+        q2 = SAWTOOTH_Q2_DEG * SAWTOOTH_TEETH + SAWTOOTH_Q2_DEG[:1]
+        levels = np.radians(np.stack([q1, q2], 1))
+    lv = np.asarray(levels, dtype=float)
+    if lv.ndim != 2 or lv.shape[1] != 2 or lv.shape[0] < 3 or not np.all(np.isfinite(lv)):
+        raise ValueError(f"levels must be finite with shape (m >= 3, 2) [rad], got shape "
+                         f"{lv.shape}")
+    dt = check_range("dt", dt, 1e-4, 0.01, unit="s")
+    for name, v in (("ramp", ramp), ("settle", settle), ("window", window)):
+        check_range(name, v, 0.0, 600.0, lo_open=True, unit="s")
+    hold = settle + window
+    m = lv.shape[0]
+    starts = np.array([0.0] + [hold + i * (ramp + hold) for i in range(m - 1)])
+    n = int(round((hold + (m - 1) * (ramp + hold)) / dt))
+    t = np.arange(n) * dt
+    q = np.tile(lv[0], (n, 1))
+    for i in range(1, m):
+        s = np.clip((t - starts[i]) / ramp, 0.0, 1.0)
+        on = t >= starts[i]
+        q[on] = lv[i - 1] + (0.5 * (1 - np.cos(np.pi * s[on])))[:, None] * (lv[i] - lv[i - 1])
+    ends = starts + np.where(np.arange(m) > 0, ramp, 0.0) + hold
+    k1 = np.minimum(np.round(ends / dt).astype(int), n)
+    k0 = k1 - int(round(window / dt))
+    return t, q, np.stack([k0, k1], 1)
+
+
+def gravity_compensation_set_values(q_d, arm) -> np.ndarray:
+    """Valve set values of the static gravity compensation at the set angles (§3.5.1.5) [Pa].
+
+    Delta p_gc of (3.18)-(3.19) with the identified gravity terms (Table 3.1),
+    the pressures p_m +- Delta p (clipped to [0, p_max]) and the inverse of
+    the static valve model (3.12): what the experimenter computes with the
+    nominal model, whatever the plant hides.
+
+    Parameters
+    ----------
+    q_d : array_like, shape (N, 2)
+        Set angles [rad].
+    arm : ArmParameters
+        The nominal model.
+
+    Returns
+    -------
+    numpy.ndarray, shape (N, 4)
+    """
+    from ..plant.pneumatics import delta_p_pressures, gravity_compensation, valve_set_values
+
+    dp = gravity_compensation(q_d, arm)
+    return valve_set_values(delta_p_pressures(dp, arm), arm)
+
+
+def _sawtooth(plant, arm, noise, seed, duration, dt, dead, offset):
+    """Samples of the data windows of the static sawtooth (see :func:`synthesize`)."""
+    from ..data.synthetic import VELOCITY_NOISE_VARIANCES
+    from ..identify.static import ANGLE_NOISE_VARIANCES, PRESSURE_NOISE_STD
+    from ..plant.geometry import contractions
+    from ..plant.model import hysteresis_factors, rest_state, simulate
+    from ..plant.muscle import muscle_force
+    from .residuals import delayed
+
+    t, qd_set, windows = sawtooth_set_angles(dt=dt)
+    if duration is not None:
+        keep = int(np.sum(t[windows[:, 1] - 1] < duration))
+        if keep < 3:
+            raise ValueError(f"duration = {duration} s holds {keep} sawtooth levels; at least 3 "
+                             f"are needed (one level takes "
+                             f"{SAWTOOTH_RAMP_S + SAWTOOTH_SETTLE_S + SAWTOOTH_WINDOW_S} s)")
+        windows = windows[:keep]
+        t, qd_set = t[:windows[-1, 1]], qd_set[:windows[-1, 1]]
+    u = gravity_compensation_set_values(qd_set, arm)
+    x0, _ = rest_state(qd_set[0], plant)
+    shift = int(round(dead / dt))
+    substeps = max(2, int(math.ceil(dt / min(1e-3, 0.5 * min(
+        v.time_constant for v in arm.valves.valves)))))
+    X = simulate(plant, x0, delayed(u, shift), dt=dt, substeps=substeps)[:t.size]
+    if plant.effects.hysteresis_delta is not None:
+        eps, fac = hysteresis_factors(X, plant)
+    else:
+        eps, fac = contractions(X[:, :2], arm), np.ones((t.size, 4))
+    F = np.stack([muscle_force(k + 1, eps[:, k], X[:, 4 + k], arm) for k in range(4)], 1) * fac
+    idx = np.concatenate([np.arange(a, b) for a, b in windows])
+    q, qd, p, F = X[idx, :2].copy(), X[idx, 2:4].copy(), X[idx, 4:8] + offset, F[idx]
+    if noise == "table-3.2":
+        rng = np.random.default_rng(seed)
+        q += rng.normal(size=q.shape) * np.sqrt(ANGLE_NOISE_VARIANCES)
+        qd += rng.normal(size=qd.shape) * np.sqrt(VELOCITY_NOISE_VARIANCES)
+        p += rng.normal(size=p.shape) * PRESSURE_NOISE_STD
+        F += rng.normal(size=F.shape) * FORCE_NOISE_STD
+    cols = {"t": t[idx], "q1": q[:, 0], "q2": q[:, 1], "qd1": qd[:, 0], "qd2": qd[:, 1]}
+    for name, arr in (("p", p), ("u", u[idx]), ("F", F)):
+        for i in range(4):
+            cols[f"{name}{i + 1}"] = arr[:, i]
+    cols["q1_d"], cols["q2_d"] = qd_set[idx, 0], qd_set[idx, 1]
+    meta = {"kind": "arm", "experiment": "static-sawtooth",
+            "description": "synthetic static gravity-compensation sawtooth (thesis 3.5.1.6): "
+                           f"{len(windows)} rest points, {SAWTOOTH_WINDOW_S:g} s of data each",
+            "source": f"ppamsafety synthesize (seed {seed}, noise {noise})"}
+    return meta, pd.DataFrame(cols)
+
+
 def synthesize(experiment: str | None = None, effects=None, *, noise: str | None = None,
-               seed: int = 0, duration: float = 10.0, dt: float = 1e-3, arm=None,
+               seed: int = 0, duration: float | None = None, dt: float = 1e-3, arm=None,
                controller: str = DEFAULT_CONTROLLER, reference: str = DEFAULT_REFERENCE,
                kind: str = "arm", **tester):
     """A record of ``experiment`` on a plant with hidden ``effects`` (module docstring).
 
     Parameters
     ----------
-    experiment : {"open-loop", "closed-loop", "tensile"}, optional
+    experiment : {"open-loop", "closed-loop", "static-sawtooth", "tensile"}, optional
         Arm (default ``"open-loop"``): open-loop Fourier excitation of the
-        valves (§3.5.2.4), 10 s period, coefficients drawn with ``seed``; or a
-        closed-loop thesis experiment (``controller``, ``reference``).
+        valves (§3.5.2.4), 10 s period, coefficients drawn with ``seed``; a
+        closed-loop thesis experiment (``controller``, ``reference``); or
+        ``"static-sawtooth"``, the static gravity-compensation validation of
+        §3.5.1.6 -- set angles stepped in a sawtooth
+        (:func:`sawtooth_set_angles`), the set values of the static gravity
+        compensation at the set angles computed with the *nominal* model
+        (:func:`gravity_compensation_set_values`, a feed-forward: no
+        feedback), the plant simulated through every ramp and pause, and only
+        the samples of the 1 s data windows recorded (columns t, q, qd, p, u,
+        the muscle forces F1..F4 of the plant and the set angles q1_d, q2_d;
+        ``t`` jumps between windows).
         Actuator (``kind="actuator"``, default ``"tensile"``): a tensile-tester
         record (:func:`ppamsafety.diagnose.actuator_synthesize.synthesize_actuator`).
     effects : dict, optional
         ``{name: value}``; default none (the nominal plant).  Actuator effects:
         :data:`ppamsafety.diagnose.actuator_synthesize.EFFECTS`.
     noise : {"table-3.2", "none"} or {"tester", "none"}, optional, keyword-only
-        Arm default ``"table-3.2"``; actuator default ``"tester"``.
+        Arm default ``"table-3.2"`` (the sawtooth's forces then get
+        :data:`FORCE_NOISE_STD`); actuator default ``"tester"``.
     seed : int, keyword-only
         Seed of the excitation and of the noise.
-    duration : float, keyword-only
-        Record length [s] (arm only).
+    duration : float, optional, keyword-only
+        Record length [s] (arm only): default 10 s (open and closed loop) or
+        the whole sawtooth (about 105 s; a shorter duration keeps the levels
+        whose data window ends before it, at least 3).
     dt : float, keyword-only
         Sample time [s] (the control period in closed loop; arm only).
     arm : ArmParameters, optional, keyword-only
@@ -211,7 +365,7 @@ def synthesize(experiment: str | None = None, effects=None, *, noise: str | None
         if arm is not None:
             raise ValueError("arm is not used with kind = 'actuator' (the force law is given "
                              "with force_law=...)")
-        if duration != 10.0 or dt != 1e-3:
+        if duration is not None or dt != 1e-3:
             raise ValueError("duration and dt are arm options; for kind = 'actuator' use "
                              "cycles, period and sample_rate")
         if controller != DEFAULT_CONTROLLER or reference != DEFAULT_REFERENCE:
@@ -230,10 +384,17 @@ def synthesize(experiment: str | None = None, effects=None, *, noise: str | None
     experiment = check_choice("experiment", experiment, EXPERIMENTS)
     noise = check_choice("noise", noise, NOISES)
     seed = check_int("seed", seed, 0)
-    duration = check_range("duration", duration, 0.5, 3600.0, unit="s")
+    if duration is not None:
+        duration = check_range("duration", duration, 0.5, 3600.0, unit="s")
     dt = check_range("dt", dt, 1e-4, 0.01, unit="s")
     arm = _arm(arm)
     plant, dead, offset = plant_with(arm, {} if effects is None else effects)
+    if experiment == "static-sawtooth":
+        from ..data.measured import MeasuredData
+
+        meta, frame = _sawtooth(plant, arm, noise, seed, duration, dt, dead, offset)
+        return MeasuredData(meta, frame, source="synthesize")
+    duration = 10.0 if duration is None else duration
     if experiment == "closed-loop":
         return _closed_loop(arm, plant, dead, offset, noise=noise, seed=seed,
                             duration=duration, dt=dt, controller=controller,
@@ -361,5 +522,6 @@ def _closed_loop(arm, plant, dead, offset, *, noise, seed, duration, dt, control
     return _record(meta, t, q, qd, p, u)
 
 
-__all__ = ["synthesize", "plant_with", "closed_loop_case", "EXPERIMENTS", "NOISES",
+__all__ = ["synthesize", "plant_with", "closed_loop_case", "sawtooth_set_angles",
+           "gravity_compensation_set_values", "EXPERIMENTS", "NOISES", "FORCE_NOISE_STD",
            "DEFAULT_CONTROLLER", "DEFAULT_REFERENCE"]

@@ -72,7 +72,8 @@ class StudyResult:
 
 #: Study modules in report order (module names inside ppamsafety.studies).
 REGISTRY = ["design", "tracking", "responses", "smc", "head_model", "safety", "stiffness",
-            "lambda_sweep", "effects", "interaction", "reaction", "diagnose_cases"]
+            "lambda_sweep", "effects", "interaction", "reaction", "diagnose_sawtooth",
+            "diagnose_cases"]
 
 
 def resolve_arm(arm):

@@ -1,0 +1,9 @@
+"""Discrepancy workflow, case (a): hidden hysteresis in the static sawtooth (§3.5.1.6).
+
+Run alone:  python studies/diagnose_sawtooth.py [outdir] [--quick] [--overwrite]
+"""
+
+from ppamsafety.studies import main
+
+if __name__ == "__main__":
+    raise SystemExit(main("diagnose_sawtooth"))
