@@ -43,7 +43,12 @@ on a bracket around it, widened until the engine value at both ends is below
 the middle.  Every evaluated placement is a valid impact, so the reported
 maximum is the best engine value seen (never a model value).
 
-**Every instant, and what is rigorous.**  Instants are pruned in two tiers:
+**Every instant, and what is rigorous.**  First, instants whose predictor
+*envelope* (the prediction at the largest effective mass of the state and the
+full tool speed, an upper bound of the prediction over every psi because both
+scales grow with mass and speed; g and h by their running maxima) is below a
+simulated thesis-placement value by more than ``margin`` are dropped (same
+footing as tier 2 below).  The rest are pruned in two tiers:
 
 1. Rigorous: :func:`~ppamsafety.impact.bounds.impact_bounds` bounds F_max and
    HIC of an instant *for every head placement*: its derivation uses only
@@ -96,11 +101,12 @@ BRACKET = math.radians(4.0)
 #: by about 1e-4 relative per deg^2, so by < 1e-6 within it).
 XTOL = 1e-3
 #: Default predictor margin (see the module docstring, tier 2).
-MARGIN = 0.02
+MARGIN = 0.01
 #: Default refinement tolerance: instants whose engine value at the predicted direction is
-#: more than this fraction below the best are not refined (the refinement gains < 1e-4,
-#: reported as ``refine_gain``).
-SEARCH_TOL = 2e-3
+#: more than this fraction below the best are not refined.  Safe if no refinement gains more
+#: than this over the predicted direction; the largest gain seen (``refine_gain``, about 1e-3
+#: on the thesis experiments) must stay below half of it, else a warning is given.
+SEARCH_TOL = 3e-3
 #: Speeds of the predictor table: log-spaced, TABLE_POINTS points from TABLE_VMIN [m/s].
 TABLE_POINTS = 160
 TABLE_VMIN = 1e-3
@@ -603,8 +609,11 @@ class WorstDirection:
         Engine and predictor over psi at the instant of the worst F_max
         (None with ``sweep=False``).
     counts : dict
-        ``instants``, ``bound_pruned`` (skipped by the rigorous bound for
-        both metrics), ``searched`` (Brent-refined instants), ``engine_runs``.
+        ``instants`` (candidates), ``bound_pruned`` (instants whose rigorous
+        bounds lie below the worst values found for both metrics: provably
+        not the worst in any placement), ``envelope_pruned`` (dropped by the
+        predictor envelope before the psi grid), ``simulated_instants``,
+        ``searched`` (Brent-refined instants), ``engine_runs``.
     margin : float
         Predictor margin finally used.
     rho : float
@@ -686,7 +695,7 @@ def _tiered(en, predictor, hm, sel, q, qd, K, e, ep, M, speed, bound_all, margin
         return en.run(q[idx], qd[idx], K[idx], u)
 
     rho = 0.0
-    thesis, worst, cand_rows, searched, gain = {}, {}, {}, set(), 0.0
+    thesis, worst, cand_rows, searched, gain, refined = {}, {}, {}, set(), 0.0, {}
     for m, col in _COL.items():
         # thesis placement (psi = 0)
         p0 = pred[m][:, i0]
@@ -721,6 +730,7 @@ def _tiered(en, predictor, hm, sel, q, qd, K, e, ep, M, speed, bound_all, margin
                             ep[ci:ci + 1], float(PSI_GRID[gi[ci]]), col, xtol, seen)
             gain = max(gain, v / vals[k] - 1.0)
             searched.add(ci)
+            refined.setdefault(m, {})[ci] = (ps, v)
             res[ci] = (ps, v)
             best = max(best, v)
         kbest = max(res, key=lambda i: (res[i][1], -i))
@@ -728,7 +738,8 @@ def _tiered(en, predictor, hm, sel, q, qd, K, e, ep, M, speed, bound_all, margin
         for ci, (ps, v) in res.items():
             cand_rows.setdefault(ci, {})[f"{m}@worst"] = (ps, v)
     return {"pred": pred, "bound": bound, "thesis": thesis, "worst": worst,
-            "cand_rows": cand_rows, "searched": searched, "gain": gain, "rho": rho}
+            "cand_rows": cand_rows, "searched": searched, "gain": gain, "rho": rho,
+            "refined": refined}
 
 
 def worst_direction(result, arm, *, every: int = 1, head=None, dt: float = 2e-5,
@@ -822,9 +833,9 @@ def worst_direction(result, arm, *, every: int = 1, head=None, dt: float = 2e-5,
                       f"miss the worst instant", UserWarning, stacklevel=2)
     st = st.iloc[sel].reset_index(drop=True)
     q, qd, K, e, ep, M, speed = (a[sel] for a in (q, qd, K, e, ep, M, speed))
-    pred, bound, thesis, worst, cand_rows, searched, gain, rho = (
+    pred, bound, thesis, worst, cand_rows, searched, gain, rho, refined = (
         res_[k] for k in ("pred", "bound", "thesis", "worst", "cand_rows", "searched", "gain",
-                          "rho"))
+                          "rho", "refined"))
     i0 = int(np.argmin(np.abs(PSI_GRID)))
 
     # same instant: worst placement at the thesis' worst instants
@@ -832,9 +843,12 @@ def worst_direction(result, arm, *, every: int = 1, head=None, dt: float = 2e-5,
     for m, col in _COL.items():
         ti, tv = thesis[m]
         wi, wpsi, wv = worst[m]
-        seen = {}
-        ps, sv = _search(en, q[ti:ti + 1], qd[ti:ti + 1], K[ti:ti + 1], e[ti:ti + 1],
-                         ep[ti:ti + 1], float(PSI_GRID[np.argmax(pred[m][ti])]), col, xtol, seen)
+        if ti in refined.get(m, {}):      # already refined in the tiered search
+            ps, sv = refined[m][ti]
+        else:
+            ps, sv = _search(en, q[ti:ti + 1], qd[ti:ti + 1], K[ti:ti + 1], e[ti:ti + 1],
+                             ep[ti:ti + 1], float(PSI_GRID[np.argmax(pred[m][ti])]), col, xtol,
+                             {})
         if sv > wv:          # the thesis' instant refined beats the tiered search: keep it
             wi, wpsi, wv = ti, ps, sv
         u = _placement(e[wi:wi + 1], ep[wi:wi + 1], np.array([wpsi]))[0]
