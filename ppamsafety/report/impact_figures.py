@@ -329,7 +329,7 @@ def plot_direction_polar(sweeps, *, metric: str = "F_max", title: str = ""):
         raise ValueError("sweeps must hold at least one DirectionSweep")
     pred = {"F_max": "F_pred", "HIC36": "HIC_pred"}[metric]
     unit = " [N]" if metric == "F_max" else ""
-    fig, axes = new_figure(1, len(sweeps), figsize=(4.2 * len(sweeps), 4.4), squeeze=False,
+    fig, axes = new_figure(1, len(sweeps), figsize=(4.6 * len(sweeps), 5.8), squeeze=False,
                            subplot_kw={"projection": "polar"})
     for ax, sw in zip(axes[0], sweeps):
         t = sw.table
@@ -344,10 +344,11 @@ def plot_direction_polar(sweeps, *, metric: str = "F_max", title: str = ""):
         i = int(np.argmax(t[metric].to_numpy()))
         ax.plot([th[i]], [t[metric].iloc[i]], "o", color="tab:red",
                 label=f"worst: {t[metric].iloc[i]:.4g}{unit} at psi = {t['psi_deg'].iloc[i]:+.1f} deg")
-        ax.set_title(sw.label or f"|v_tcp| = {sw.tcp_speed:.2f} m/s", fontsize=9)
-        ax.legend(fontsize=7, loc="lower left", bbox_to_anchor=(-0.1, -0.28))
+        ax.set_title(sw.label or f"|v_tcp| = {sw.tcp_speed:.2f} m/s", fontsize=9, pad=14)
+        ax.tick_params(labelsize=7)
+        ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.06))
     fig.suptitle(title or f"{metric}{unit} over the head placement around the TCP")
-    fig.tight_layout()
+    fig.subplots_adjust(left=0.04, right=0.96, top=0.82, bottom=0.27, wspace=0.35)
     return fig
 
 
