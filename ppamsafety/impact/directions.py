@@ -701,7 +701,7 @@ def _tiered(en, predictor, hm, sel, q, qd, K, e, ep, M, speed, bound_all, margin
         p0 = pred[m][:, i0]
         top = int(np.argmax(p0))
         best0 = engine(top, 0.0)[0, col]
-        c = np.nonzero(((1 + margin) * p0 >= best0) & (bound[m] >= best0))[0]
+        c = np.union1d(np.nonzero(((1 + margin) * p0 >= best0) & (bound[m] >= best0))[0], [top])
         out0 = engine(c, 0.0)
         rho = max(rho, float(np.max(out0[:, col] / np.maximum(p0[c], 1e-300))))
         j = int(np.argmax(out0[:, col]))     # first maximum = earliest instant on ties
@@ -713,7 +713,7 @@ def _tiered(en, predictor, hm, sel, q, qd, K, e, ep, M, speed, bound_all, margin
         gi = pred[m].argmax(axis=1)
         top = int(np.argmax(pm))
         best = engine(top, PSI_GRID[gi[top]])[0, col]
-        c = np.nonzero(((1 + margin) * pm >= best) & (bound[m] >= best))[0]
+        c = np.union1d(np.nonzero(((1 + margin) * pm >= best) & (bound[m] >= best))[0], [top])
         outp = engine(c, PSI_GRID[gi[c]])
         rho = max(rho, float(np.max(outp[:, col] / np.maximum(pm[c], 1e-300))))
         vals = outp[:, col]
