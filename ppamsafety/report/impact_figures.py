@@ -307,7 +307,8 @@ def plot_direction_polar(sweeps, *, metric: str = "F_max", title: str = ""):
     One panel per sweep; the angle is the absolute placement direction phi
     (base frame), the radius the engine value; the two-body prediction is
     dashed, the TCP velocity direction (the thesis' placement, fig. 6.2) a
-    black ray, and the worst placement a red marker.
+    black ray, and the largest value of the sweep's grid a red marker (the optimiser's
+    maximum is in :class:`~ppamsafety.impact.directions.WorstDirection`).
 
     Parameters
     ----------
@@ -343,7 +344,7 @@ def plot_direction_polar(sweeps, *, metric: str = "F_max", title: str = ""):
         ax.plot([v, v], [0, rmax], "k-", lw=1.2, label="TCP velocity (thesis)")
         i = int(np.argmax(t[metric].to_numpy()))
         ax.plot([th[i]], [t[metric].iloc[i]], "o", color="tab:red",
-                label=f"worst: {t[metric].iloc[i]:.4g}{unit} at psi = {t['psi_deg'].iloc[i]:+.1f} deg")
+                label=f"grid max: {t[metric].iloc[i]:.4g}{unit} at psi = {t['psi_deg'].iloc[i]:+.1f} deg")
         ax.set_title(sw.label or f"|v_tcp| = {sw.tcp_speed:.2f} m/s", fontsize=9, pad=14)
         ax.tick_params(labelsize=7)
         ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.06))
