@@ -41,3 +41,28 @@ def test_impact_study_quick(tmp_path, module, files):
     for f in files:
         assert (tmp_path / f).exists(), f
     assert res.markdown.strip()
+
+
+def test_worst_direction_study_quick():
+    """Issue 12 item 6 in quick mode: the worst head placement is never better than the
+    thesis' (along the TCP velocity), lies a few degrees aside, and is measurably worse (the
+    effective mass grows faster aside than the normal speed falls); PSMC stays below the
+    660 N maxilla tolerance, PID's step does not."""
+    from ppamsafety.params.head import MAXILLA_FRACTURE_N
+    from ppamsafety.studies import worst_direction as wd
+
+    study = wd.compute(quick=True)
+    t = study.to_pandas()
+    assert len(t) == 4
+    assert (t["ratio_F_max"] >= 1.0).all() and (t["ratio_HIC36"] >= 1.0).all()
+    assert (t["ratio_F_max"] > 1.005).all() and (t["ratio_F_max"] < 1.1).all()
+    assert (t["psi_F_max_deg"].abs().between(2.0, 30.0)).all()
+    assert (t["F_max_worst"] >= t["F_max_same_instant"] - 1e-9).all()
+    pid = t[(t.experiment == "step") & (t.label == "PID")].iloc[0]
+    assert pid.F_max_worst > MAXILLA_FRACTURE_N
+    assert study.metrics["psmc_below_maxilla"]
+    assert study.metrics["rho_max"] <= 1.005
+    sec = wd.render(study)
+    names = [n for n, _ in sec.artifacts]
+    assert "worst_direction_polar.png" in names and "worst_direction.csv" in names
+    assert "how much worse" in sec.markdown.lower()

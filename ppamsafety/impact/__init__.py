@@ -8,6 +8,8 @@ Modules (one concept each):
 * :mod:`.instants` -- impact cases from a closed-loop experiment (four instants or all;
   :func:`worst_instant`: the exact worst of every instant, pruned by rigorous bounds);
 * :mod:`.bounds` -- a-priori upper bounds on F_max and HIC of an impact (energy, momentum);
+* :mod:`.directions` -- the worst head placement around the tool point, over every instant
+  (two-body predictor, rigorous instant bounds, Brent refinement with the engine);
 * :mod:`.hic` -- Head Injury Criterion: exact fast evaluation and closed forms;
 * :mod:`.twobody` -- the one-dimensional effective-mass impact;
 * :mod:`.head_fit` -- reconstruction of the thesis' head contact parameters;

@@ -299,3 +299,88 @@ def plot_safety_study(study) -> dict:
             "safety_worst_histories.png": plot_worst_histories(
                 items, title="worst step-response impacts"),
             "safety_fmax_over_time.png": plot_fmax_over_time(plot_items)}
+
+
+def plot_direction_polar(sweeps, *, metric: str = "F_max", title: str = ""):
+    """Polar plot of F_max (or HIC36) over the head placement around the tool point.
+
+    One panel per sweep; the angle is the absolute placement direction phi
+    (base frame), the radius the engine value; the two-body prediction is
+    dashed, the TCP velocity direction (the thesis' placement, fig. 6.2) a
+    black ray, and the largest value of the sweep's grid a red marker (the optimiser's
+    maximum is in :class:`~ppamsafety.impact.directions.WorstDirection`).
+
+    Parameters
+    ----------
+    sweeps : sequence of DirectionSweep
+        Outputs of :func:`ppamsafety.impact.directions.direction_sweep`.
+    metric : {"F_max", "HIC36"}
+        Plotted quantity.
+    title : str
+        Figure title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    if metric not in ("F_max", "HIC36"):
+        raise ValueError(f"metric = {metric!r} must be 'F_max' or 'HIC36'")
+    sweeps = list(sweeps)
+    if not sweeps:
+        raise ValueError("sweeps must hold at least one DirectionSweep")
+    pred = {"F_max": "F_pred", "HIC36": "HIC_pred"}[metric]
+    unit = " [N]" if metric == "F_max" else ""
+    fig, axes = new_figure(1, len(sweeps), figsize=(4.6 * len(sweeps), 5.8), squeeze=False,
+                           subplot_kw={"projection": "polar"})
+    for ax, sw in zip(axes[0], sweeps):
+        t = sw.table
+        th = np.radians(t["phi_deg"].to_numpy())
+        order = np.argsort(np.unwrap(th - np.radians(sw.velocity_deg)))
+        ax.plot(th[order], t[metric].to_numpy()[order], "-", color="tab:blue", label="engine")
+        ax.plot(th[order], t[pred].to_numpy()[order], "--", color="tab:gray", lw=1,
+                label="two-body prediction")
+        rmax = float(max(t[metric].max(), t[pred].max()))
+        v = np.radians(sw.velocity_deg)
+        ax.plot([v, v], [0, rmax], "k-", lw=1.2, label="TCP velocity (thesis)")
+        i = int(np.argmax(t[metric].to_numpy()))
+        ax.plot([th[i]], [t[metric].iloc[i]], "o", color="tab:red",
+                label=f"grid max: {t[metric].iloc[i]:.4g}{unit} at psi = {t['psi_deg'].iloc[i]:+.1f} deg")
+        ax.set_title(sw.label or f"|v_tcp| = {sw.tcp_speed:.2f} m/s", fontsize=9, pad=14)
+        ax.tick_params(labelsize=7)
+        ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.06))
+    fig.suptitle(title or f"{metric}{unit} over the head placement around the TCP")
+    fig.subplots_adjust(left=0.04, right=0.96, top=0.82, bottom=0.27, wspace=0.35)
+    return fig
+
+
+def plot_worst_direction(study) -> dict:
+    """Figures of the worst-direction study: polar sweeps and the worst/thesis ratios.
+
+    Parameters
+    ----------
+    study : ppamsafety.studies.worst_direction.WorstDirectionStudy
+        Output of :func:`ppamsafety.studies.worst_direction.compute`.
+
+    Returns
+    -------
+    dict
+        File name -> Figure.
+    """
+    sweeps = [r.sweep for r in study.results if r.sweep is not None]
+    figs = {}
+    if sweeps:
+        figs["worst_direction_polar.png"] = plot_direction_polar(sweeps)
+    t = study.table
+    fig, ax = new_figure(1, 1, figsize=(8, 4))
+    x = np.arange(len(t))
+    ax.bar(x - 0.2, 100 * (t["ratio_F_max"] - 1), 0.4, label="F_max", color="tab:blue")
+    ax.bar(x + 0.2, 100 * (t["ratio_HIC36"] - 1), 0.4, label="HIC36", color="tab:orange")
+    ax.set_xticks(x)
+    ax.set_xticklabels([f"{e}: {lab}" for e, lab in zip(t["experiment"], t["label"])],
+                       rotation=75, fontsize=6)
+    ax.set_ylabel("worst placement vs thesis placement [%]")
+    ax.set_title("how much worse the worst head placement is (every instant)")
+    ax.legend()
+    fig.tight_layout()
+    figs["worst_direction_ratios.png"] = fig
+    return figs

@@ -71,7 +71,8 @@ class StudyResult:
 
 
 #: Study modules in report order (module names inside ppamsafety.studies).
-REGISTRY = ["design", "tracking", "responses", "smc", "head_model", "safety", "stiffness",
+REGISTRY = ["design", "tracking", "responses", "smc", "head_model", "safety", "worst_direction",
+            "stiffness",
             "lambda_sweep", "effects", "interaction", "reaction", "diagnose_sawtooth",
             "diagnose_cases"]
 

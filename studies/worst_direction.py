@@ -1,0 +1,9 @@
+"""Worst head placement around the tool point, over every instant (issue 12 item 6).
+
+Run alone:  python studies/worst_direction.py [outdir] [--quick] [--overwrite]
+"""
+
+from ppamsafety.studies import main
+
+if __name__ == "__main__":
+    raise SystemExit(main("worst_direction"))
