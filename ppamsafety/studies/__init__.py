@@ -72,7 +72,7 @@ class StudyResult:
 
 #: Study modules in report order (module names inside ppamsafety.studies).
 REGISTRY = ["design", "tracking", "responses", "smc", "head_model", "safety", "stiffness",
-            "lambda_sweep", "effects", "interaction"]
+            "lambda_sweep", "effects", "interaction", "iso_15066"]
 
 
 def resolve_arm(arm):
