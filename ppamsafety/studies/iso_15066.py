@@ -19,7 +19,7 @@ What a safety assessor preparing an ISO/TS 15066 argument for this arm needs:
    (hardware pressures 0..p_max, and the Delta-p approach); (b) the closed loop:
    the step experiment with the head pinned where the tool passes at its
    largest speed -- a stiff spring-damper (:class:`~ppamsafety.experiments.interaction.Hand`)
-   holds the tool there from that instant for 9.8 s while the controller keeps
+   holds the tool there from that instant to the end of the run (about 9.8 s) while the controller keeps
    pushing toward its set point; the steady force (PID integral wind-up, PSMC
    bounded coupling).
 5. **Linear spring vs Hunt-Crossley**: the standard's F = v sqrt(mu K) against the
@@ -62,13 +62,15 @@ FAMILIES = (("PSMC joint Ki=2", lambda lam: JointPSMC(lam=lam, ki=2.0 * BAR)),
             ("PSMC joint Ki=12", lambda lam: JointPSMC(lam=lam, ki=12.0 * BAR)),
             ("PSMC task", lambda lam: TaskPSMC(lam=lam)))
 LAMBDAS_FULL = (0.1, 0.2, 0.3, 0.4, 0.6, 0.8, 1.5, 2.5)
-LAMBDAS_QUICK = (0.2, 0.4, 0.8, 1.5)
+LAMBDAS_QUICK = (0.4, 0.8, 1.5)
 #: Quasi-static closed loop: stiffness of the tool-head and head-wall springs in series
 #: (skull/forehead 150 N/mm each, ISO/TS 15066 Table A.3) [N/m] and a damping [N s/m].
 CLAMP_SPRING = 1.0 / (2.0 / SKULL_FOREHEAD.spring_constant)
 CLAMP_DAMPING = 300.0
 #: Quasi-static run: up-step at 2 s, no down-step, 12 s; RK4 substeps per 1 ms period.
 QS_DURATION, QS_T_UP, QS_SUBSTEPS = 12.0, 2.0, 5
+#: Quick mode: 7 s (about 4.8 s of clamping).
+QS_DURATION_QUICK = 7.0
 
 ASSUMPTIONS = (
     "Limits are ISO/TS 15066:2016 Annex A values for skull/forehead (130 N, 150 N/mm) and face "
@@ -87,7 +89,7 @@ ASSUMPTIONS = (
     "thesis Hunt-Crossley fit (checked on the Hybrid III drop onto a rigid plate).",
     "Quasi-static clamping, closed loop: the tool is held where it passes at its largest speed in "
     "the 30->70 deg step by an isotropic spring-damper (75 N/mm = two 150 N/mm skull springs in "
-    "series, 300 N s/m; head mass neglected) for 9.8 s; the contact force is its magnitude "
+    "series, 300 N s/m; head mass neglected) until the end of the 12 s run; the contact force is its magnitude "
     "(normal and tangential parts listed). Transient peaks of this run are not used (massless "
     "head, 1 ms zero-order hold of the force).",
     "Quasi-static bound: exact maximum of the static tool force over muscle pressures in "
@@ -212,23 +214,24 @@ def _static_bounds(arm, n_grid, n_dir):
     return pd.DataFrame(rows), (q1, q2, field_map)
 
 
-def _quasi_static(arm, step_runs):
+def _quasi_static(arm, step_runs, duration):
     """Closed-loop clamping during the up-step: steady force per thesis variant.
 
     The clamping instant is taken from the free step runs (same reference as the
     clamped run until the down-step at 7 s, which the clamped run leaves out).
     """
-    ref = tr.step(arm, t_up=QS_T_UP, t_down=QS_DURATION, duration=QS_DURATION)
+    ref = tr.step(arm, t_up=QS_T_UP, t_down=duration, duration=duration)
     variants = thesis_variants()
     free = [step_runs[v.label] for v in variants]
     cases, info = [], []
     for v, r in zip(variants, free):
         t, sp = r.t, r.tcp_speed()
-        k0 = int(np.argmax(np.where((t > QS_T_UP) & (t < QS_T_UP + 5.0), sp, -1.0)))
+        window = (t > QS_T_UP) & (t < min(QS_T_UP + 5.0, ref.t[-1]))
+        k0 = int(np.argmax(np.where(window, sp, -1.0)))
         tgt = np.array([r.signal("x")[k0], r.signal("y")[k0]])
         u = np.array([r.signal("xd")[k0], r.signal("yd")[k0]])
         u = u / np.linalg.norm(u)
-        hand = Hand(np.tile(tgt, (len(t), 1)), t >= t[k0], stiffness=CLAMP_SPRING,
+        hand = Hand(np.tile(tgt, (len(ref.t), 1)), ref.t >= t[k0], stiffness=CLAMP_SPRING,
                     damping=CLAMP_DAMPING)
         cases.append(ExperimentCase(arm, v.controller, ref, hand=hand, name=f"clamped {v.label}"))
         info.append((v, k0, u, np.array([r.signal("q1")[k0], r.signal("q2")[k0]])))
@@ -243,11 +246,11 @@ def _quasi_static(arm, step_runs):
         fdir = np.array([fx[-n_end:].mean(), fy[-n_end:].mean()])
         bound_dir = static_force_bound(np.array([r.signal("q1")[-1], r.signal("q2")[-1]]), fdir,
                                        arm)["F_u"].iloc[0]
-        k5 = len(r.t) - 1 - 5000
+        k2 = max(k0, len(r.t) - 1 - 2000)
         rows.append({"label": v.label, "family": v.group, "t_clamp": float(r.t[k0]),
                      "F_steady": float(fmag[-n_end:].mean()), "F_normal": float(fn[-n_end:].mean()),
                      "F_tangential": float(np.abs(ft[-n_end:]).mean()),
-                     "F_5s_earlier": float(fmag[k5]), "bound_same_dir": float(bound_dir),
+                     "F_2s_earlier": float(fmag[k2]), "t_hold": float(r.t[-1] - r.t[k0]), "bound_same_dir": float(bound_dir),
                      "dp1_end_bar": float(r.signal("dp1")[-1] / BAR),
                      "dp2_end_bar": float(r.signal("dp2")[-1] / BAR),
                      "tensile_fraction": float(np.mean(fn[k0:] < 0)), "diverged": bool(r.diverged)})
@@ -357,7 +360,8 @@ def compute(*, quick: bool = False, arm=None) -> IsoStudy:
     Parameters
     ----------
     quick : bool
-        4 lambdas per family and a 9 x 9 x 24 static grid instead of 9 and 25 x 25 x 72.
+        The thesis lambdas (0.4, 0.8, 1.5 s), a 9 x 9 x 24 static grid and a 7 s
+        clamped run instead of 8 lambdas, 25 x 25 x 72 and 12 s.
     arm : ArmParameters, optional
         Default the thesis arm.
 
@@ -396,7 +400,7 @@ def compute(*, quick: bool = False, arm=None) -> IsoStudy:
     lambda_table = pd.DataFrame(lrows)
     clamp_tr, clamp_hist = _clamping_transient(arm, worst)
     static_tab, static_map = _static_bounds(arm, 9 if quick else 25, 24 if quick else 72)
-    qs, qs_hist = _quasi_static(arm, step_runs)
+    qs, qs_hist = _quasi_static(arm, step_runs, QS_DURATION_QUICK if quick else QS_DURATION)
     hc_curve, hc_states = _hc_vs_linear(arm, worst, m_r)
     # verdict per thesis variant
     vrows = []
@@ -425,6 +429,9 @@ def compute(*, quick: bool = False, arm=None) -> IsoStudy:
         "static_bound_max_N": float(hw["F_max_N"]),
         "quasi_static_max_N": float(qs.F_steady.max()),
         "quasi_static_PID_N": float(qs.set_index("label").loc["PID", "F_steady"]),
+        "t_hold_s": float(qs.set_index("label").loc["PID", "t_hold"]),
+        "quasi_static_PID_rising": bool(qs.set_index("label").loc["PID", "F_steady"]
+                                        > 1.01 * qs.set_index("label").loc["PID", "F_2s_earlier"]),
         "quasi_static_PID_bound_N": float(qs.set_index("label").loc["PID", "bound_same_dir"]),
         "quasi_static_psmc_max_N": float(qs[qs.label != "PID"].F_steady.max()),
         "static_bound_median_N": float(hw["F_median_N"]),
@@ -482,7 +489,8 @@ def render(study: IsoStudy) -> Section:
         "directions:", "",
         markdown_table(study.static_bounds, digits=4), "",
         "Closed loop, head held from the instant of largest tool speed in the up-step (F in N, "
-        "steady = mean of the last 0.5 s, 9.8 s after clamping):", "",
+        f"steady = mean of the last 0.5 s, {m['t_hold_s']:.1f} s after clamping; `F_2s_earlier`: "
+        "2 s before the end):", "",
         markdown_table(study.quasi_static.drop(columns=["family", "diverged"]), digits=4), "",
         "**Smallest admissible lambda per PSMC family** (worst free impact over step and "
         "switch, four instants; F_max falls with lambda, so the limit bounds lambda from below: "
@@ -505,7 +513,7 @@ def render(study: IsoStudy) -> Section:
         f"{FACE.force_quasi_static:g} N / {SKULL_FOREHEAD.force_quasi_static:g} N. What keeps the "
         "clamping force low is the controller: in the closed loop the PSMC variants settle at "
         f"{m['quasi_static_psmc_max_N']:.0f} N at most (bounded coupling), while PID's integral "
-        f"winds up to {m['quasi_static_PID_N']:.0f} N after 9.8 s (and still rising; its static "
+        f"winds up to {m['quasi_static_PID_N']:.0f} N after {m['t_hold_s']:.1f} s ({'still rising' if m['quasi_static_PID_rising'] else 'levelled off'}; its static "
         f"bound in that direction is {m['quasi_static_PID_bound_N']:.0f} N): "
         f"{'above' if m['quasi_static_PID_N'] > FACE.force_quasi_static else 'below'} the face "
         f"limit {FACE.force_quasi_static:g} N.",
