@@ -115,14 +115,24 @@ def test_clamped_at_least_free_and_energy_balance(arm, head, wall):
     assert c.energy_ok.all()
 
 
-def test_clamping_rigid_wall_limit_exceeds_free(arm):
-    # A much stiffer and longer squeeze: a slow arm pushing a light (1 kg) head against the
-    # wall, so the wall acts before the peak: the clamped peak is clearly higher.
-    head = head_model("iso15066-forehead").replace(name="light", mass=1.0)
+def test_clamping_light_head_limit(arm):
+    # Massless-head limit: a very light head (10 g) pinned against the wall is two linear
+    # springs in series (K/2 = 75 N/mm) between the wall and the arm's effective mass, so
+    # F_clamped -> v sqrt(m_eff K/2) (closed form of the undamped one-mass impact), while the
+    # free light head barely resists (F_free ~ v sqrt(m_head K)).  10 % covers the ringing of
+    # the 10 g head between the springs.
+    from ppamsafety.impact import effective_mass
+
+    head = head_model("iso15066-forehead").replace(name="light", mass=0.01)
     q, qd, K = STATES[1]
-    c = simulate_clamping(arm, q, qd, K, head=head, wall="iso15066-forehead").summary
+    c = simulate_clamping(arm, q, qd, K, head=head, wall="iso15066-forehead").summary.iloc[0]
     f = simulate_impacts(arm, np.array([q]), np.array([qd]), np.array([K]), head=head).summary
-    assert c.F_max.iloc[0] > 1.05 * f.F_max.iloc[0]
+    v = geo.jacobian(np.array(q), arm) @ np.array(qd)
+    m_eff = float(effective_mass(np.array(q), v, arm))
+    expect = np.linalg.norm(v) * math.sqrt(m_eff * 150e3 / 2)
+    assert c.F_max == pytest.approx(expect, rel=0.10)
+    assert c.F_max > 3 * f.F_max.iloc[0]
+    assert c.E_balance_error < 1e-5
 
 
 def test_clamping_matches_solve_ivp(arm):
@@ -180,7 +190,7 @@ def test_static_bound_invalid_inputs(arm):
         static_force_bound((0.8, -1.4), (1.0, 0.0), arm, mode="max")
     with pytest.raises(TypeError, match="with_gravity"):
         static_force_bound((0.8, -1.4), (1.0, 0.0), arm, with_gravity=1)
-    with pytest.raises(ValueError, match="singular"):
+    with pytest.raises(ValueError, match="singular"), pytest.warns(UserWarning, match="working"):
         static_force_bound((0.8, 0.0), (1.0, 0.0), arm)
 
 

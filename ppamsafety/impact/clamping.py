@@ -353,6 +353,8 @@ class ClampingResults:
         Tool-head contact model name.
     wall : str
         Head-wall contact model name.
+    meta : dict
+        Free-form annotations (empty by default).
     """
 
     summary: pd.DataFrame

@@ -321,6 +321,8 @@ class IsoStudy:
         Engine and formula forces at the thesis variants' worst states.
     verdict : pandas.DataFrame
         The thesis's "safe side" claim checked per controller.
+    lambdas : tuple of float
+        The lambda grid of the PSMC families [s].
     metrics : dict
         Headline numbers.
     """
