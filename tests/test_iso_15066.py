@@ -225,6 +225,15 @@ def test_iso_study_quick():
     # within 1 % (joint springs and 2-D geometry are second order in the first ms).
     hs = st.hc_states
     np.testing.assert_allclose(hs.F_formula_own_mass, hs.F_engine_linear, rtol=0.01)
+    # Hunt-Crossley (n = 1.5) is softer than the 150 N/mm spring at low speed and stiffer at
+    # high speed: one crossing inside the plotted range.
+    c = st.hc_curve
+    assert c.F_hunt_crossley.iloc[0] < c.F_linear_forehead.iloc[0]
+    assert c.F_hunt_crossley.iloc[-1] > c.F_linear_forehead.iloc[-1]
+    assert 0.05 < m["hc_linear_crossover_speed"] < 2.0
+    # Thesis Table 6.1 beside the clamped Hunt-Crossley force, in thesis_variants() order.
+    assert list(st.verdict.label)[0] == "PID" and "Fmax_thesis_free" in st.verdict
+    assert st.verdict.Fmax_thesis_free.iloc[0] == 1524.0
     sec = s.render(st)
     assert "ISO/TS 15066" in sec.markdown and len(sec.artifacts) >= 4
     assert "iso_quasi_static.png" in sec.markdown
