@@ -237,3 +237,17 @@ def test_iso_study_quick():
     sec = s.render(st)
     assert "ISO/TS 15066" in sec.markdown and len(sec.artifacts) >= 4
     assert "iso_quasi_static.png" in sec.markdown
+
+
+def test_lambda_bound_interpolation():
+    from ppamsafety.studies.iso_15066 import _lambda_min
+
+    # Log-linear crossing: F = 200 N at 0.1 s, 50 N at 1 s, limit 100 N ->
+    # lambda = 0.1 x 10^((200 - 100) / (200 - 50)) = 0.1 x 10^(2/3) = 0.46416 s.
+    lam, at_min, adm = _lambda_min([0.1, 1.0], [200.0, 50.0], 100.0)
+    assert lam == pytest.approx(0.1 * 10 ** (2 / 3), rel=1e-12) and not at_min and adm == "1"
+    # Non-monotonic curve: the first crossing counts, the list shows the gap.
+    lam, _, adm = _lambda_min([0.1, 0.4, 1.5, 2.5], [300.0, 90.0, 80.0, 120.0], 100.0)
+    assert 0.1 < lam < 0.4 and adm == "0.4 1.5"
+    assert math.isnan(_lambda_min([0.1, 1.0], [300.0, 200.0], 100.0)[0])
+    assert _lambda_min([0.1, 1.0], [30.0, 20.0], 100.0)[:2] == (0.1, True)

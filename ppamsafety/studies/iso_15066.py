@@ -149,21 +149,25 @@ def _worst_per_variant(free):
 
 
 def _lambda_min(lams, F, limit):
-    """Smallest lambda [s] of the grid curve F(lambda) (decreasing) with F <= limit.
+    """Smallest lambda [s] at which the grid curve F(lambda) first meets F <= limit.
 
-    Log-linear interpolation between the last grid point above and the first
-    below; NaN if even the largest lambda exceeds the limit, the smallest grid
-    lambda (with ``below_grid``) if all are below.
+    Scans the grid from the smallest lambda; the crossing is interpolated
+    log-linearly between the last grid point above the limit and the first one
+    below.  Returns ``(lambda_min, at_grid_min, admissible)``: NaN if no grid
+    lambda meets the limit; ``at_grid_min`` True if the smallest grid lambda
+    already does; ``admissible`` the grid lambdas that meet it (F(lambda) need
+    not be monotonic: with Ki = 12 the force rises again at large lambda).
     """
     lams, F = np.asarray(lams, float), np.asarray(F, float)
     ok = F <= limit
-    if ok.all():
-        return float(lams[0]), True
-    if not ok[-1]:
-        return math.nan, False
-    i = int(np.nonzero(~ok)[0][-1])       # last lambda above the limit
-    l0, l1, f0, f1 = math.log(lams[i]), math.log(lams[i + 1]), F[i], F[i + 1]
-    return float(math.exp(l0 + (f0 - limit) / (f0 - f1) * (l1 - l0))), False
+    adm = " ".join(f"{x:g}" for x in lams[ok])
+    if not ok.any():
+        return math.nan, False, adm
+    i = int(np.argmax(ok))
+    if i == 0:
+        return float(lams[0]), True, adm
+    l0, l1, f0, f1 = math.log(lams[i - 1]), math.log(lams[i]), F[i - 1], F[i]
+    return float(math.exp(l0 + (f0 - limit) / (f0 - f1) * (l1 - l0))), False, adm
 
 
 def _clamping_transient(arm, worst):
@@ -393,11 +397,11 @@ def compute(*, quick: bool = False, arm=None) -> IsoStudy:
             w = worst[(worst.family == fam) & (worst["head_model"] == hn)].sort_values("lambda")
             for fac in (region.transient_factor, 1.0):
                 lim = fac * region.force_quasi_static
-                lam_f, below = _lambda_min(w["lambda"], w["F_max"], lim)
+                lam_f, below, adm = _lambda_min(w["lambda"], w["F_max"], lim)
                 vmax = region_limits(region, m_r, transient_factor=fac)["v_max"]
-                lam_v, below_v = _lambda_min(w["lambda"], w["tcp_speed"], vmax)
+                lam_v, _, _ = _lambda_min(w["lambda"], w["tcp_speed"], vmax)
                 lrows.append({"family": fam, "region": hn, "factor": fac, "F_limit": lim,
-                              "lambda_min_force": lam_f, "at_grid_min": below,
+                              "lambda_min_force": lam_f, "at_grid_min": below, "admissible_grid": adm,
                               "v_max_annex": vmax, "lambda_min_speed": lam_v,
                               "F_at_lambda_0.4": float(np.interp(0.4, w["lambda"], w["F_max"]))})
     lambda_table = pd.DataFrame(lrows)
@@ -519,7 +523,9 @@ def render(study: IsoStudy) -> Section:
         "the \"maximum lambda\" of the issue is read as this bound on the aggressiveness "
         "1/lambda). `lambda_min_force` from the simulated forces, `lambda_min_speed` from the "
         "Annex A speed criterion with m_R = M/2; NaN: not reached on the grid "
-        f"{list(study.lambdas)} s; `at_grid_min`: already met at the smallest lambda:", "",
+        f"{list(study.lambdas)} s; `at_grid_min`: already met at the smallest lambda; "
+        "`admissible_grid`: the grid lambdas that meet the force limit (F(lambda) need not be "
+        "monotonic: check the list, not only the bound):", "",
         markdown_table(study.lambda_table, digits=4), "",
         "**Linear spring (ISO) vs Hunt-Crossley (thesis head).** At equal speeds (two-body, "
         "m_R = M/2, m_H = 4.4 kg, figure below) the Hunt-Crossley head gives less force than "
