@@ -72,9 +72,8 @@ class StudyResult:
 
 #: Study modules in report order (module names inside ppamsafety.studies).
 REGISTRY = ["design", "tracking", "responses", "smc", "head_model", "safety", "worst_direction",
-            "stiffness",
-            "lambda_sweep", "effects", "interaction", "reaction", "diagnose_sawtooth",
-            "diagnose_cases"]
+            "stiffness", "lambda_sweep", "iso_15066", "reaction", "interaction", "effects",
+            "diagnose_sawtooth", "diagnose_cases"]
 
 
 def resolve_arm(arm):

@@ -1,0 +1,9 @@
+"""Clamping and ISO/TS 15066 power and force limiting for the head (issue 12 items 4, 5).
+
+Run alone:  python studies/iso_15066.py [outdir] [--quick] [--overwrite]
+"""
+
+from ppamsafety.studies import main
+
+if __name__ == "__main__":
+    raise SystemExit(main("iso_15066"))
