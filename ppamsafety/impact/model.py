@@ -695,7 +695,7 @@ def simulate_impacts(arm, q, qd, stiffness, *, head: HeadContactModel | str | No
         Joint stiffnesses K1, K2 [N m/rad] (constant during the impact), >= 0
         and at most :func:`stiffness_limit` (frozen equilibrium) or
         :func:`flexible_stiffness_limit` (flexible joint) for the integration
-        step; not used by the rigid model.
+        step; not used by the rigid model (which also accepts ``np.inf``).
     head : HeadContactModel or str, keyword-only
         Head model or its name (default ``"thesis-frontal"``; see
         :func:`~ppamsafety.params.head.head_model_names`).
@@ -789,14 +789,19 @@ def _simulate_impacts(arm, q, qd, stiffness, *, head, direction, head_velocity, 
     arm = check_arm(arm)
     q = as_float_array("q", q, shape_tail=(2,), ndim=(1, 2))
     qd = as_float_array("qd", qd, shape_tail=(2,), ndim=(1, 2))
-    K = as_float_array("stiffness", stiffness, shape_tail=(2,), ndim=(1, 2))
+    jm = resolve_joint_model(joint_model)
+    rigid = jm == eng.JointModel.RIGID
+    K = as_float_array("stiffness", stiffness, shape_tail=(2,), ndim=(1, 2),
+                       allow_nonfinite=rigid)
+    if rigid and np.any(np.isnan(K) | (K == -np.inf)):
+        raise ValueError(f"stiffness = {K.tolist()} N m/rad contains NaN or -inf; the rigid "
+                         f"model accepts any stiffness >= 0 including inf (it is not used)")
     hm = resolve_head(head)
     d = None if direction is None else as_float_array("direction", direction, shape_tail=(2,),
                                                       ndim=(1, 2))
     vh = None if head_velocity is None else as_float_array(
         "head_velocity", head_velocity, shape_tail=(2,), ndim=(1, 2))
     fixed_arm = check_bool("fixed_arm", fixed_arm)
-    jm = resolve_joint_model(joint_model)
     frozen = jm == eng.JointModel.FROZEN_EQUILIBRIUM
     Bm = None if motor_inertia is None else as_float_array(
         "motor_inertia", motor_inertia, shape_tail=(2,), ndim=(1, 2))
@@ -836,7 +841,7 @@ def _simulate_impacts(arm, q, qd, stiffness, *, head, direction, head_velocity, 
     elif np.any(np.abs(q) > MAX_ANGLE):
         check_angles("q", q, arm)
     check_range_array("qd", qd, -MAX_JOINT_SPEED, MAX_JOINT_SPEED, unit="rad/s")
-    check_range_array("stiffness", K, 0.0, math.inf, unit="N m/rad")
+    check_range_array("stiffness", K, 0.0, math.inf, unit="N m/rad")   # inf: rigid only
     check_range_array("head_velocity", vh, -MAX_HEAD_SPEED, MAX_HEAD_SPEED, unit="m/s")
     check_range_array("motor_inertia", B, 0.0, MAX_MOTOR_INERTIA, unit="kg m^2")
     if not fixed_arm and n and frozen:
