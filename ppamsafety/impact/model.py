@@ -757,7 +757,8 @@ def simulate_impacts(arm, q, qd, stiffness, *, head: HeadContactModel | str | No
         "qd has 4 rows, q has 3"); angles |q| > 2 pi; stiffness beyond
         :func:`stiffness_limit` (or :func:`flexible_stiffness_limit`) at the
         largest RK4 step (FREE_STRIDE x dt,
-        :data:`~ppamsafety.impact.engine.FREE_STRIDE`); ``motor_inertia``
+        :data:`~ppamsafety.impact.engine.FREE_STRIDE`, for ``"fixed"``;
+        DENSE_FREE_STRIDE x dt for ``"dense"``); ``motor_inertia``
         given for the frozen equilibrium, or a joint model other than
         the frozen equilibrium with ``fixed_arm``; a head model through
         which the tool would pass at a case's closing speed (maximum
@@ -844,10 +845,14 @@ def _simulate_impacts(arm, q, qd, stiffness, *, head, direction, head_velocity, 
     check_range_array("stiffness", K, 0.0, math.inf, unit="N m/rad")   # inf: rigid only
     check_range_array("head_velocity", vh, -MAX_HEAD_SPEED, MAX_HEAD_SPEED, unit="m/s")
     check_range_array("motor_inertia", B, 0.0, MAX_MOTOR_INERTIA, unit="kg m^2")
+    # the largest RK4 step the chosen integrator takes (free flight); cases with a history
+    # always run the fixed engine
+    stride = eng.FREE_STRIDE if integrator == "fixed" else max(eng.FREE_STRIDE,
+                                                                 eng.DENSE_FREE_STRIDE)
     if not fixed_arm and n and frozen:
-        check_stiffness(K, q, arm, eng.FREE_STRIDE * dt, dt)
+        check_stiffness(K, q, arm, stride * dt, dt)
     elif jm == eng.JointModel.FLEXIBLE_JOINT and n:
-        check_flexible_stiffness(K, q, B, arm, eng.FREE_STRIDE * dt, dt)
+        check_flexible_stiffness(K, q, B, arm, stride * dt, dt)
     hist_idx = _history_indices(history, n)
     if hist_idx.size * (nsteps + 1) * eng.NHIST * 8 > MAX_HISTORY_BYTES:
         raise ValueError(f"history: {hist_idx.size} histories of {nsteps + 1} steps need "

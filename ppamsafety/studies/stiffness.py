@@ -44,13 +44,15 @@ from . import Section, resolve_arm
 PPAM_MASS = 0.150
 #: Base integration step of the sweep [s] (the impact engine's default).
 DT0 = 2e-5
+#: Integrator of the sweep (:func:`~ppamsafety.impact.model.simulate_impacts`).
+INTEGRATOR = "fixed"
 #: Motor-side inertias of the flexible-joint sweep [kg m^2] besides the PPAM drive's (0)
 #: and the PPAM muscles' upper bound (:func:`ppam_motor_inertia_bound`).
 B_SWEEP = (0.01, 0.1, 1.0)
 #: Motor-side inertias of the fit of fig. 6.3 [kg m^2] (full mode; quick: every third).
 B_FIT = tuple(np.geomspace(1e-4, 1e2, 13))
 #: Stiffnesses [Nm/rad] beyond the sweep's 1e6 that show the rigid limit (full mode).
-K_RIGID_CHECK = (1e7, 1e8)
+K_RIGID_CHECK = (1e7,)
 
 
 def ppam_motor_inertia_bound(q, arm) -> np.ndarray:
@@ -92,7 +94,7 @@ def _step_for(limit_at_dt0: float, k: float) -> float:
     return DT0 / 2.0 ** m
 
 
-def _sweep(arm, q, qd, head, ks, joint_model, B=None) -> pd.DataFrame:
+def _sweep(arm, q, qd, head, ks, joint_model, B=None, integrator=None) -> pd.DataFrame:
     """F_max etc. at every stiffness of ``ks`` for one convention, each at a resolving step."""
     ks = np.asarray(ks, dtype=float)
     if joint_model == "frozen-equilibrium":
@@ -102,18 +104,20 @@ def _sweep(arm, q, qd, head, ks, joint_model, B=None) -> pd.DataFrame:
     else:
         lim = math.inf
     dts = np.array([_step_for(lim, k) for k in ks])
-    out = pd.DataFrame({"k": ks, "dt": dts})
     cols = ["F_max", "HIC36", "E_balance_error", "contact_time"]
-    for c in cols:
-        out[c] = np.nan
+    vals = np.full((ks.size, len(cols)), np.nan)
     kw = {} if B is None else {"motor_inertia": B}
     for dt in np.unique(dts):
         sel = np.nonzero(dts == dt)[0]
         kk = ks[sel]
         r = simulate_impacts(arm, np.tile(q, (kk.size, 1)), np.tile(qd, (kk.size, 1)),
                              np.stack([kk, kk], 1), head=head, dt=float(dt),
-                             joint_model=joint_model, **kw).summary
-        out.loc[sel, cols] = r[cols].to_numpy()
+                             joint_model=joint_model, integrator=integrator or INTEGRATOR,
+                             **kw).summary
+        vals[sel] = r[cols].to_numpy()
+    out = pd.DataFrame(vals, columns=cols)
+    out.insert(0, "dt", dts)
+    out.insert(0, "k", ks)
     return out
 
 
@@ -201,7 +205,7 @@ def compute(*, quick: bool = False, arm=None) -> StiffnessStudy:
     quick : bool
         7 stiffnesses from 1 to 1e6 Nm/rad, 2 motor-side inertias besides the
         PPAM's, 5 in the fit, no points beyond 1e6 (full mode: 23
-        stiffnesses, 1e7 and 1e8 as well, 13 inertias in the fit).
+        stiffnesses and 1e7, 13 inertias in the fit).
     arm : ppamsafety.params.ArmParameters, optional
         Arm (default: the thesis arm).
 
