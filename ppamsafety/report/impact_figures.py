@@ -261,8 +261,8 @@ def plot_stiffness_conventions(sweep, *, thesis=None, reference=None):
         ax.set_title("zoom on fig. 6.3's range" if zoom
                      else "F_max (markers at the right: rigid limit H + diag(B))")
         ax.grid(alpha=0.3, which="both")
-    axes[0].legend(fontsize=7)
-    axes[1].legend(fontsize=7)
+    axes[0].legend(fontsize=7, loc="upper left")
+    axes[1].legend(fontsize=7, loc="lower left")
     fig.tight_layout()
     return fig
 

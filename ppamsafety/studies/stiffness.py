@@ -136,9 +136,9 @@ class StiffnessStudy:
         Tool speed at that instant [m/s].
     sweep : pandas.DataFrame
         Long table: ``convention`` (``"frozen-equilibrium"``,
-        ``"flexible-joint"``, ``"rigid"``), ``B`` [kg m^2] (both joints; NaN for
-        the frozen equilibrium; the PPAM bound as its joint-1 value with
-        ``B_label``), ``B_label``, ``k`` [Nm/rad] (inf for rigid), ``dt`` [s],
+        ``"flexible-joint"``, ``"rigid"``), ``B`` [kg m^2] (both joints; inf for
+        the frozen equilibrium, whose anchor is an infinite motor-side inertia at
+        rest; the PPAM bound as its joint-1 value), ``B_label``, ``k`` [Nm/rad] (inf for rigid), ``dt`` [s],
         ``F_max`` [N], ``HIC36``, ``E_balance_error`` [-], ``contact_time``
         [s], ``dF vs k=1 [N]``, ``F/F_thesis`` (ratio to the level of fig. 6.3,
         Table 6.1's 1524 N).
@@ -234,7 +234,8 @@ def compute(*, quick: bool = False, arm=None) -> StiffnessStudy:
 
     parts = []
     fr = _sweep(arm, q, qd, head, ks_all, "frozen-equilibrium")
-    parts.append(fr.assign(convention="frozen-equilibrium", B=np.nan, B_label="frozen"))
+    # the frozen anchor is a motor side of infinite inertia at rest: B = inf
+    parts.append(fr.assign(convention="frozen-equilibrium", B=np.inf, B_label="frozen"))
     b_list = [(np.zeros(2), "B = 0 (PPAM)"), (B_ppam, "B = PPAM bound")] + \
         [(np.full(2, b), f"B = {b:g}") for b in b_sweep]
     rig_rows = []
