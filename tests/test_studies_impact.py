@@ -28,7 +28,8 @@ def test_safety_study_reproduces_the_thesis_ordering(safety_run):
 
 
 @pytest.mark.parametrize("module, files", [
-    (stiffness, ["stiffness_sweep.csv", "stiffness_sweep.png"]),
+    (stiffness, ["stiffness_sweep.csv", "stiffness_sweep.png", "stiffness_table.csv",
+                 "stiffness_fit.csv", "stiffness_rigid.csv"]),
     (head_model, ["head_model_fit.png", "head_model_fits.csv", "head_model_sensitivity.csv"]),
     (lambda_sweep, ["lambda_sweep.csv", "lambda_sweep.png"]),
 ])
@@ -66,3 +67,17 @@ def test_worst_direction_study_quick():
     names = [n for n, _ in sec.artifacts]
     assert "worst_direction_polar.png" in names and "worst_direction.csv" in names
     assert "how much worse" in sec.markdown.lower()
+
+
+def test_stiffness_study_conventions_quick():
+    """Fig. 6.3 (§6.3.4): the flexible joint rises by < 5 N from 1 to 6000 Nm/rad, the frozen
+    equilibrium falls; the rigid limit is the rigid arm; energy balanced everywhere."""
+    m = stiffness.compute(quick=True).metrics
+    assert m["dF_frozen_6000_N"] < -5.0                        # wrong sign, beyond the bound
+    assert m["F_frozen_1e6_N"] < 0.5 * m["F_k1_N"]             # clamped link
+    assert m["dF_flexible_B0_6000_N"] == 0.0                   # PPAM drive: free joint
+    assert 0.0 < m["dF_flexible_Bppam_6000_N"] < m["rise_saturation_N"] < 5.0
+    assert m["B_ppam_1_kgm2"] < 0.01 and m["B_ppam_2_kgm2"] < 0.01
+    assert m["max_abs_energy_error"] < 1e-4
+    assert m["max_flex_kmax_rigid_rel"] < 0.01                 # k = 1e6 against rigid
+    assert m["max_rigid_two_body_rel"] < 3e-3

@@ -19,8 +19,9 @@ Modules (one concept each):
 * :mod:`.thesis_data` -- Table 6.1 and fig. 6.3 reference values.
 """
 
+from .engine import JointModel
 from .hic import hic
 from .instants import evaluate_experiment, worst_instant
 from .model import ImpactResults, effective_mass, simulate_impacts
 
-__all__ = ["hic", "evaluate_experiment", "worst_instant", "ImpactResults", "effective_mass", "simulate_impacts"]
+__all__ = ["JointModel", "hic", "evaluate_experiment", "worst_instant", "ImpactResults", "effective_mass", "simulate_impacts"]

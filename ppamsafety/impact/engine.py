@@ -2,10 +2,21 @@
 
 Model (SPEC §4): the arm is unactuated, in the horizontal plane (no gravity),
 with rigid links and torsional joint springs of constant stiffness K
-(2.18) whose motor side is frozen at the impact instant t0::
+(2.18), unloaded at the impact instant t0.  What holds the springs' far
+(motor) side is the case's :class:`JointModel`; by default (frozen
+equilibrium) it is frozen at t0::
 
     H(q) qdd + C(q, qd) qd = -K (q - q0) + J(q)^T f_tool
     m_h x_h'' = f_head,        f_head = -f_tool = F n
+
+The flexible-joint model (Spong 1987; De Luca and Book 2008, reduced model)
+gives the motor side an inertia B moving with the link at t0::
+
+    H(q) qdd + C(q, qd) qd = -K (q - theta) + J(q)^T f_tool
+    B thetadd = -K (theta - q),    theta(t0) = q0, thetad(t0) = qd0
+
+and its limit K -> infinity, the rigid arm, is the free arm of inertia
+H(q) + diag(B).
 
 The head is a free rigid sphere (mass m_h, radius R) whose surface touches the
 tool point (TCP) at t0 with its centre along the unit vector u (by default the
@@ -45,6 +56,33 @@ from .contact import hunt_crossley_elastic, hunt_crossley_force, hunt_crossley_p
 from .hic import hic_kernel
 
 
+class JointModel(IntEnum):
+    """What holds the far (motor) side of the joint springs during an impact (field
+    ``joint_model`` of :data:`CASE`); thesis §6.3.2 and §6.3.4, De Luca and Book (2008).
+
+    Every convention starts with the springs unloaded at t0 (the arm is unactuated
+    during the impact: the motor torque is held at its t0 value, zero at an unloaded
+    spring), and differs in what the spring's far end does afterwards.
+    """
+
+    #: Frozen equilibrium (default): the motor side is held at q(t0), at rest, for the whole
+    #: impact -- H qdd + C qd = -K (q - q0) + J^T f.  This is the PPAM's own physics: with
+    #: the valves' pressures held, the antagonistic pair is a gas spring (2.18) anchored to
+    #: the link's equilibrium; there is no moving mass behind the gas.  As K -> infinity it
+    #: clamps the link to q0 (F_max -> 0): it is not a model of a stiffer actuator.
+    FROZEN_EQUILIBRIUM = 0
+    #: Flexible joint of Spong (1987) / De Luca and Book (2008), reduced model: a motor-side
+    #: inertia B_i [kg m^2] (reflected to the joint) with angle theta_i moves with the link
+    #: at t0 (theta = q, thetad = qd) and is coupled to it only by the spring:
+    #: H qdd + C qd + K (q - theta) = J^T f,  B thetadd + K (theta - q) = tau_m(t0) = 0.
+    #: B_i = 0: no spring load can build up (theta_i follows q_i), the joint is free.
+    #: As K -> infinity it tends to the rigid arm with inertia H + diag(B).
+    FLEXIBLE_JOINT = 1
+    #: The exact limit K -> infinity of FLEXIBLE_JOINT: a free rigid arm of inertia
+    #: H(q) + diag(B) (links and motor sides locked together); K is not used.
+    RIGID = 2
+
+
 class ArmMode(IntEnum):
     """How the arm moves during the impact (field ``arm_mode`` of :data:`CASE`)."""
 
@@ -65,8 +103,14 @@ CASE = Layout("impact case", [
     Field("v_head", 2, "m/s", "head velocity at t0", columns=("vhx0", "vhy0")),
     Field("arm_mode", 1, "code", "ArmMode: flexible-joint (0) or rigid fixed arm (1)",
           default=float(ArmMode.FLEXIBLE)),
+    Field("joint_model", 1, "code",
+          "JointModel: frozen equilibrium (0), flexible joint (1) or rigid (2)",
+          default=float(JointModel.FROZEN_EQUILIBRIUM)),
+    Field("B", 2, "kg m^2", "motor-side inertias reflected to the joints (flexible joint, "
+          "rigid); unused for the frozen equilibrium", default=0.0),
 ])
-C_Q, C_QD, C_K, C_U, C_VH, C_ARM = CASE.offsets("q", "qd", "K", "u", "v_head", "arm_mode")
+C_Q, C_QD, C_K, C_U, C_VH, C_ARM, C_JM, C_B = CASE.offsets(
+    "q", "qd", "K", "u", "v_head", "arm_mode", "joint_model", "B")
 NCASE = CASE.size
 
 #: Head and Hunt-Crossley contact parameters (a HeadContactModel as a kernel row).
@@ -86,8 +130,12 @@ STATE = Layout("impact integrator state", [
     Field("x_head", 2, "m", "head centre position", columns=("xh", "yh")),
     Field("v_head", 2, "m/s", "head centre velocity", columns=("vxh", "vyh")),
     Field("E_dissipated", 1, "J", "integral of (F - k delta^n) d(delta)/dt dt"),
+    Field("theta", 2, "rad", "motor-side angles (frozen equilibrium: q(t0); a joint with "
+          "B = 0 and the rigid model: equal to q)"),
+    Field("theta_d", 2, "rad/s", "motor-side angular velocities (frozen equilibrium: 0)"),
 ])
-Y_Q, Y_W, Y_XH, Y_VH, Y_ED = STATE.offsets("q", "w", "x_head", "v_head", "E_dissipated")
+Y_Q, Y_W, Y_XH, Y_VH, Y_ED, Y_TH, Y_THD = STATE.offsets(
+    "q", "w", "x_head", "v_head", "E_dissipated", "theta", "theta_d")
 NY = STATE.size
 
 #: One row of the summary of an impact (columns of ImpactResults.summary).
@@ -223,14 +271,16 @@ def impact_rhs(y, case, P, hp, dy):
 
     Contact force F [N], penetration delta [m], its rate [m/s] and the tool
     point speed [m/s] at state ``y``.  For a fixed arm (``arm_mode`` =
-    :attr:`ArmMode.FIXED`) the arm derivatives are zero.
+    :attr:`ArmMode.FIXED`) the arm derivatives are zero.  The joint torques
+    and the motor-side states follow the case's :class:`JointModel`.
 
     Parameters
     ----------
     y : ndarray of float64, shape (NY,)
         Integrator state, layout :data:`STATE`; only read.
     case : ndarray of float64, shape (NCASE,)
-        The impact case, layout :data:`CASE` (q0, K, arm_mode are read).
+        The impact case, layout :data:`CASE` (q0, K, arm_mode, joint_model, B
+        are read).
     P : ndarray of float64, shape (NP,)
         Packed plant parameter row (:data:`ppamsafety.plant.layout.PLANT`);
         reads ``L1``, ``L2`` and ``theta``.
@@ -253,15 +303,36 @@ def impact_rhs(y, case, P, hp, dy):
     f = hunt_crossley_force(delta, ddelta, hp[HP_K], hp[HP_N], hp[HP_B])
     if fixed:            # rigid, fixed arm: the tool point does not move
         dy[Y_Q], dy[Y_Q + 1], dy[Y_W], dy[Y_W + 1] = 0.0, 0.0, 0.0, 0.0
+        dy[Y_TH], dy[Y_TH + 1], dy[Y_THD], dy[Y_THD + 1] = 0.0, 0.0, 0.0, 0.0
     else:
         dy[Y_Q], dy[Y_Q + 1] = w1, w2
         c11, c12, c21, c22 = coriolis_cs(c2, s2, w1, w2, P)
-        t1 = -case[C_K] * (y[Y_Q] - case[C_Q]) - (j11 * nx + j21 * ny) * f - c11 * w1 - c12 * w2
-        t2 = -case[C_K + 1] * (y[Y_Q + 1] - case[C_Q + 1]) - (j12 * nx + j22 * ny) * f \
-            - c21 * w1 - c22 * w2
+        jm = int(case[C_JM])
+        if jm == JointModel.FROZEN_EQUILIBRIUM:
+            sp1 = -case[C_K] * (y[Y_Q] - case[C_Q])
+            sp2 = -case[C_K + 1] * (y[Y_Q + 1] - case[C_Q + 1])
+        elif jm == JointModel.FLEXIBLE_JOINT:
+            sp1 = -case[C_K] * (y[Y_Q] - y[Y_TH]) if case[C_B] > 0.0 else 0.0
+            sp2 = -case[C_K + 1] * (y[Y_Q + 1] - y[Y_TH + 1]) if case[C_B + 1] > 0.0 else 0.0
+        else:            # rigid: the motor sides are locked to the links
+            sp1, sp2 = 0.0, 0.0
+            h11 += case[C_B]
+            h22 += case[C_B + 1]
+        t1 = sp1 - (j11 * nx + j21 * ny) * f - c11 * w1 - c12 * w2
+        t2 = sp2 - (j12 * nx + j22 * ny) * f - c21 * w1 - c22 * w2
         det = h11 * h22 - h12 * h12
         dy[Y_W] = (h22 * t1 - h12 * t2) / det
         dy[Y_W + 1] = (h11 * t2 - h12 * t1) / det
+        if jm == JointModel.FROZEN_EQUILIBRIUM:
+            dy[Y_TH], dy[Y_TH + 1], dy[Y_THD], dy[Y_THD + 1] = 0.0, 0.0, 0.0, 0.0
+        else:
+            for i in range(2):
+                if jm == JointModel.FLEXIBLE_JOINT and case[C_B + i] > 0.0:
+                    dy[Y_TH + i] = y[Y_THD + i]
+                    dy[Y_THD + i] = case[C_K + i] * (y[Y_Q + i] - y[Y_TH + i]) / case[C_B + i]
+                else:    # motor side moves with the link (no spring load can build up)
+                    dy[Y_TH + i] = dy[Y_Q + i]
+                    dy[Y_THD + i] = dy[Y_W + i]
     dy[Y_XH], dy[Y_XH + 1] = y[Y_VH], y[Y_VH + 1]
     dy[Y_VH] = f * nx / hp[HP_M]
     dy[Y_VH + 1] = f * ny / hp[HP_M]
@@ -272,14 +343,29 @@ def impact_rhs(y, case, P, hp, dy):
 
 @leaf
 def _energy(y, case, P, hp):
-    """Kinetic + spring + contact potential energy [J] (dissipation not included)."""
+    """Kinetic (links, motor sides) + spring + contact potential energy [J].
+
+    Dissipation is not included.  The spring energy follows the case's
+    :class:`JointModel`: 1/2 K (q - q0)^2 (frozen equilibrium), 1/2 K (q -
+    theta)^2 plus the motor-side kinetic energy 1/2 B thetad^2 (flexible
+    joint), or none and 1/2 B qd^2 added to the links' (rigid).
+    """
     _, _, h11, h12, h22, x, yy, _, _, _, _ = _arm_terms(y, P)
     w1, w2 = y[Y_W], y[Y_W + 1]
     e = 0.5 * (h11 * w1 * w1 + 2.0 * h12 * w1 * w2 + h22 * w2 * w2)
     if int(case[C_ARM]) == ArmMode.FIXED:
         e = 0.0
-    e += 0.5 * case[C_K] * (y[Y_Q] - case[C_Q]) ** 2 \
-        + 0.5 * case[C_K + 1] * (y[Y_Q + 1] - case[C_Q + 1]) ** 2
+    jm = int(case[C_JM])
+    if jm == JointModel.FROZEN_EQUILIBRIUM:
+        e += 0.5 * case[C_K] * (y[Y_Q] - case[C_Q]) ** 2 \
+            + 0.5 * case[C_K + 1] * (y[Y_Q + 1] - case[C_Q + 1]) ** 2
+    elif jm == JointModel.FLEXIBLE_JOINT:
+        for i in range(2):
+            if case[C_B + i] > 0.0:
+                e += 0.5 * case[C_B + i] * y[Y_THD + i] * y[Y_THD + i] \
+                    + 0.5 * case[C_K + i] * (y[Y_Q + i] - y[Y_TH + i]) ** 2
+    elif int(case[C_ARM]) != ArmMode.FIXED:    # rigid: motor sides move with the links
+        e += 0.5 * (case[C_B] * w1 * w1 + case[C_B + 1] * w2 * w2)
     e += 0.5 * hp[HP_M] * (y[Y_VH] * y[Y_VH] + y[Y_VH + 1] * y[Y_VH + 1])
     dx, dyy = y[Y_XH] - x, y[Y_XH + 1] - yy
     delta = hp[HP_R] - math.sqrt(dx * dx + dyy * dyy)
@@ -303,7 +389,8 @@ def initial_state(case, P, hp, y):
         Head contact parameters, layout :data:`HEAD` (the radius R is read).
     y : ndarray of float64, shape (NY,)
         Output, overwritten: the initial state, layout :data:`STATE`
-        (dissipated energy 0).
+        (dissipated energy 0; motor side at theta = q0 with thetad = qd0, or at
+        rest for the frozen equilibrium).
     """
     y[Y_Q], y[Y_Q + 1] = case[C_Q], case[C_Q + 1]
     y[Y_W], y[Y_W + 1] = case[C_QD], case[C_QD + 1]
@@ -312,6 +399,11 @@ def initial_state(case, P, hp, y):
     y[Y_XH + 1] = yy + hp[HP_R] * case[C_U + 1]
     y[Y_VH], y[Y_VH + 1] = case[C_VH], case[C_VH + 1]
     y[Y_ED] = 0.0
+    y[Y_TH], y[Y_TH + 1] = case[C_Q], case[C_Q + 1]
+    if int(case[C_JM]) == JointModel.FROZEN_EQUILIBRIUM:
+        y[Y_THD], y[Y_THD + 1] = 0.0, 0.0
+    else:
+        y[Y_THD], y[Y_THD + 1] = case[C_QD], case[C_QD + 1]
 
 
 @leaf

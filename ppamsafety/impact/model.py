@@ -218,6 +218,122 @@ def check_stiffness(K: np.ndarray, q: np.ndarray, arm, step: float, dt: float,
     return K
 
 
+#: Names of the motor-side conventions (:class:`~ppamsafety.impact.engine.JointModel`).
+JOINT_MODELS = {"frozen-equilibrium": eng.JointModel.FROZEN_EQUILIBRIUM,
+                "flexible-joint": eng.JointModel.FLEXIBLE_JOINT,
+                "rigid": eng.JointModel.RIGID}
+#: Largest motor-side inertia accepted [kg m^2] (a 10 kg flywheel of 1 m radius: far
+#: beyond any arm drive; larger values only approach the constant-speed motor side).
+MAX_MOTOR_INERTIA = 1.0e2
+
+
+def resolve_joint_model(joint_model, name: str = "joint_model") -> "eng.JointModel":
+    """``joint_model`` as a :class:`~ppamsafety.impact.engine.JointModel`.
+
+    Parameters
+    ----------
+    joint_model : JointModel or str
+        A member, or one of the names of :data:`JOINT_MODELS`
+        (``"frozen-equilibrium"``, ``"flexible-joint"``, ``"rigid"``).
+    name : str
+        Argument name used in error messages.
+
+    Returns
+    -------
+    JointModel
+    """
+    if isinstance(joint_model, eng.JointModel):
+        return joint_model
+    if isinstance(joint_model, str):
+        check_choice(name, joint_model, tuple(JOINT_MODELS))
+        return JOINT_MODELS[joint_model]
+    raise InvalidTypeError(f"{name} must be a JointModel or one of "
+                           f"{', '.join(map(repr, JOINT_MODELS))}, got {describe(joint_model)}")
+
+
+def flexible_stiffness_limit(q, motor_inertia, arm, step: float) -> np.ndarray:
+    """Largest joint stiffness [N m/rad] an RK4 step resolves for the flexible-joint model.
+
+    The highest natural frequency of links (H(q)) and motor sides (B) coupled
+    by springs K_i obeys omega^2 <= sum_i K_i (1/B_i + 1/lambda_min(H))
+    (Rayleigh quotient and Cauchy-Schwarz on each spring's stretch); with
+    equal stiffnesses k on the joints with B_i > 0 the step then spans at
+    least :data:`STEPS_PER_PERIOD` steps of the period when
+    k <= (2 pi / (STEPS_PER_PERIOD step))^2 / sum_i (1/B_i + 1/lambda_min(H)).
+    Joints with B_i = 0 load no spring and set no limit (infinite if both are 0).
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 2)
+        Joint angles [rad].
+    motor_inertia : array_like, shape (..., 2)
+        Motor-side inertias B [kg m^2], >= 0, broadcast against ``q``.
+    arm : ArmParameters
+        Link inertias.
+    step : float
+        Largest integration step [s].
+
+    Returns
+    -------
+    numpy.ndarray, shape (...)
+        Stiffness limit per case [N m/rad] (``inf`` where both B_i are 0).
+    """
+    q = as_float_array("q", q, shape_tail=(2,))
+    B = as_float_array("motor_inertia", motor_inertia, shape_tail=(2,))
+    check_range_array("motor_inertia", B, 0.0, MAX_MOTOR_INERTIA, unit="kg m^2")
+    step = check_range("step", step, 0.0, math.inf, lo_open=True, unit="s")
+    lam = np.linalg.eigvalsh(dyn.inertia_matrix(q, arm))[..., 0]
+    q, B = np.broadcast_arrays(q, B)
+    lam = np.broadcast_to(lam, q.shape[:-1])
+    with np.errstate(divide="ignore"):
+        s = np.where(B > 0, 1.0 / np.where(B > 0, B, 1.0) + 1.0 / lam[..., None], 0.0).sum(-1)
+        return np.where(s > 0, (2.0 * math.pi / (STEPS_PER_PERIOD * step)) ** 2
+                        / np.where(s > 0, s, 1.0), np.inf)
+
+
+def check_flexible_stiffness(K: np.ndarray, q: np.ndarray, B: np.ndarray, arm, step: float,
+                             dt: float, name: str = "stiffness") -> np.ndarray:
+    """Refuse flexible-joint stiffnesses the step cannot resolve (:func:`flexible_stiffness_limit`).
+
+    Parameters
+    ----------
+    K : numpy.ndarray, shape (N, 2)
+        Joint stiffnesses [N m/rad], finite and non-negative.
+    q : numpy.ndarray, shape (N, 2)
+        Joint angles [rad].
+    B : numpy.ndarray, shape (N, 2)
+        Motor-side inertias [kg m^2], >= 0.
+    arm : ArmParameters
+        Link inertias.
+    step : float
+        Largest RK4 step the integrator takes [s].
+    dt : float
+        The user's step [s] (named in the message).
+    name : str
+        Argument name used in messages.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``K`` unchanged.
+    """
+    lim = flexible_stiffness_limit(q, B, arm, step)
+    kk = np.where(B > 0, K, 0.0).max(axis=1)
+    bad = np.nonzero(kk > lim)[0]
+    if bad.size:
+        i = int(bad[0])
+        dt_ok = dt * math.sqrt(lim[i] / kk[i])
+        remedy = (f"use dt <= {dt_ok:.3g} s, or " if dt_ok >= 1e-8 else
+                  "this is beyond any integration step (dt >= 1e-8 s): use ")
+        raise ValueError(
+            f"{name}[{i}] = {K[i].tolist()} N m/rad with motor_inertia = {B[i].tolist()} kg m^2 "
+            f"is beyond the resolution of the flexible-joint impact model at dt = {dt:g} s: the "
+            f"spring's period must span >= {STEPS_PER_PERIOD} integration steps, so k <= "
+            f"{lim[i]:.4g} N m/rad here (case(s) {_fmt_cases(bad)}); {remedy}joint_model "
+            f"'rigid', the exact limit k -> infinity")
+    return K
+
+
 def check_pass_through(hm: HeadContactModel, closing_speed) -> None:
     """Refuse cases whose closing speed would drive the tool through the head model.
 
@@ -268,12 +384,14 @@ def _unit(v, name):
     return v / n
 
 
-def effective_mass(q, direction, arm) -> np.ndarray:
+def effective_mass(q, direction, arm, *, motor_inertia=None) -> np.ndarray:
     """Apparent mass of the arm's links at the tool along ``direction`` [kg].
 
     m_eff = 1 / (u^T J H^-1 J^T u): the mass a point force along the unit
     vector u at the TCP feels when the joint springs have no time to act
-    (impacts shorter than the arm's vibration periods).
+    (impacts shorter than the arm's vibration periods).  With
+    ``motor_inertia`` B, H is replaced by H + diag(B): the rigid arm whose
+    motor sides are locked to the links (:attr:`JointModel.RIGID`).
 
     Parameters
     ----------
@@ -284,6 +402,9 @@ def effective_mass(q, direction, arm) -> np.ndarray:
         Impact direction (normalised internally; non-zero), broadcast against ``q``.
     arm : ArmParameters
         Link inertias and kinematics.
+    motor_inertia : array_like, shape (..., 2), optional
+        Motor-side inertias B [kg m^2] added to the joints, each in
+        [0, :data:`MAX_MOTOR_INERTIA`] (default 0: the links alone).
 
     Returns
     -------
@@ -306,8 +427,18 @@ def effective_mass(q, direction, arm) -> np.ndarray:
     except ValueError:
         raise ValueError(f"direction (shape {d.shape}) does not broadcast against q "
                          f"(shape {q.shape})") from None
+    H = dyn.inertia_matrix(q, arm)
+    if motor_inertia is not None:
+        B = as_float_array("motor_inertia", motor_inertia, shape_tail=(2,))
+        check_range_array("motor_inertia", B, 0.0, MAX_MOTOR_INERTIA, unit="kg m^2")
+        try:
+            H = H + np.eye(2) * B[..., None, :]
+        except ValueError:
+            raise ValueError(f"motor_inertia (shape {B.shape}) does not broadcast against q "
+                             f"(shape {q.shape})") from None
+        q, u = np.broadcast_arrays(q, np.broadcast_to(u, H.shape[:-1]))
     J = geo.jacobian(q, arm)
-    Hinv = np.linalg.inv(dyn.inertia_matrix(q, arm))
+    Hinv = np.linalg.inv(H)
     M = J @ Hinv @ np.swapaxes(J, -1, -2)
     inv_m = np.einsum("...i,...ij,...j->...", u, M, u)
     scale = np.linalg.eigvalsh(M)[..., -1]
@@ -545,7 +676,8 @@ def _check_run(df, sel, hm, stacklevel):
 def simulate_impacts(arm, q, qd, stiffness, *, head: HeadContactModel | str | None = None,
                      direction=None, head_velocity=None, fixed_arm: bool = False,
                      dt: float = 2e-5, duration: float = 0.05, history=False,
-                     integrator: str = "fixed") -> ImpactResults:
+                     integrator: str = "fixed", joint_model="frozen-equilibrium",
+                     motor_inertia=None) -> ImpactResults:
     """Simulate impacts of the flexible-joint arm with a free head (thesis §6.3.2).
 
     Parameters
@@ -561,7 +693,9 @@ def simulate_impacts(arm, q, qd, stiffness, *, head: HeadContactModel | str | No
         Link angular velocities [rad/s], |qd| <= 1000 rad/s.
     stiffness : array_like, shape (N, 2) or (2,)
         Joint stiffnesses K1, K2 [N m/rad] (constant during the impact), >= 0
-        and at most :func:`stiffness_limit` for the integration step.
+        and at most :func:`stiffness_limit` (frozen equilibrium) or
+        :func:`flexible_stiffness_limit` (flexible joint) for the integration
+        step; not used by the rigid model (which also accepts ``np.inf``).
     head : HeadContactModel or str, keyword-only
         Head model or its name (default ``"thesis-frontal"``; see
         :func:`~ppamsafety.params.head.head_model_names`).
@@ -592,6 +726,20 @@ def simulate_impacts(arm, q, qd, stiffness, *, head: HeadContactModel | str | No
         engine and of solve_ivp at rtol 1e-10 (tests/test_impact_dense.py;
         measured 6e-5 on 1000 random impacts).  Cases with a recorded history
         always use ``"fixed"``.
+    joint_model : {"frozen-equilibrium", "flexible-joint", "rigid"} or JointModel
+        What holds the motor side of the joint springs
+        (:class:`~ppamsafety.impact.engine.JointModel`): ``"frozen-equilibrium"``
+        (default; pressures held, the PPAM's own physics: the spring pulls
+        towards q(t0); as K -> infinity it clamps the link), ``"flexible-joint"``
+        (Spong / De Luca and Book: a motor-side inertia ``motor_inertia``
+        moving with the link at t0; as K -> infinity the rigid arm) or
+        ``"rigid"`` (that limit exactly: the free arm of inertia H + diag(B),
+        K unused).  Not combinable with ``fixed_arm``.
+    motor_inertia : array_like, shape (N, 2) or (2,), optional
+        Motor-side inertias B1, B2 [kg m^2] reflected to the joints, each in
+        [0, :data:`MAX_MOTOR_INERTIA`] (default 0: no inertia behind the
+        spring, the joint is then free).  Only for ``"flexible-joint"`` and
+        ``"rigid"``.
 
     Returns
     -------
@@ -607,8 +755,12 @@ def simulate_impacts(arm, q, qd, stiffness, *, head: HeadContactModel | str | No
         For values out of range or inconsistent: arrays of shapes (2,) or
         (N, 2) broadcast against each other (1 or N rows; otherwise e.g.
         "qd has 4 rows, q has 3"); angles |q| > 2 pi; stiffness beyond
-        :func:`stiffness_limit` at the largest RK4 step (FREE_STRIDE x dt,
-        :data:`~ppamsafety.impact.engine.FREE_STRIDE`); a head model through
+        :func:`stiffness_limit` (or :func:`flexible_stiffness_limit`) at the
+        largest RK4 step (FREE_STRIDE x dt,
+        :data:`~ppamsafety.impact.engine.FREE_STRIDE`, for ``"fixed"``;
+        DENSE_FREE_STRIDE x dt for ``"dense"``); ``motor_inertia``
+        given for the frozen equilibrium, or a joint model other than
+        the frozen equilibrium with ``fixed_arm``; a head model through
         which the tool would pass at a case's closing speed (maximum
         penetration of the free head on a rigid arm,
         :func:`~ppamsafety.impact.contact.max_penetration`, >= radius); or
@@ -626,23 +778,42 @@ def simulate_impacts(arm, q, qd, stiffness, *, head: HeadContactModel | str | No
     return _simulate_impacts(arm, q, qd, stiffness, head=head, direction=direction,
                              head_velocity=head_velocity, fixed_arm=fixed_arm, dt=dt,
                              duration=duration, history=history, integrator=integrator,
+                             joint_model=joint_model, motor_inertia=motor_inertia,
                              warn_area=True, stacklevel=4)
 
 
 def _simulate_impacts(arm, q, qd, stiffness, *, head, direction, head_velocity, fixed_arm, dt,
-                      duration, history, integrator, warn_area, stacklevel):
+                      duration, history, integrator, warn_area, stacklevel,
+                      joint_model="frozen-equilibrium", motor_inertia=None):
     """:func:`simulate_impacts`; ``warn_area=False`` for states of a simulated closed-loop
     record (their working-area excursions are the controller's, not a user's mistake)."""
     arm = check_arm(arm)
     q = as_float_array("q", q, shape_tail=(2,), ndim=(1, 2))
     qd = as_float_array("qd", qd, shape_tail=(2,), ndim=(1, 2))
-    K = as_float_array("stiffness", stiffness, shape_tail=(2,), ndim=(1, 2))
+    jm = resolve_joint_model(joint_model)
+    rigid = jm == eng.JointModel.RIGID
+    K = as_float_array("stiffness", stiffness, shape_tail=(2,), ndim=(1, 2),
+                       allow_nonfinite=rigid)
+    if rigid and np.any(np.isnan(K) | (K == -np.inf)):
+        raise ValueError(f"stiffness = {K.tolist()} N m/rad contains NaN or -inf; the rigid "
+                         f"model accepts any stiffness >= 0 including inf (it is not used)")
     hm = resolve_head(head)
     d = None if direction is None else as_float_array("direction", direction, shape_tail=(2,),
                                                       ndim=(1, 2))
     vh = None if head_velocity is None else as_float_array(
         "head_velocity", head_velocity, shape_tail=(2,), ndim=(1, 2))
     fixed_arm = check_bool("fixed_arm", fixed_arm)
+    frozen = jm == eng.JointModel.FROZEN_EQUILIBRIUM
+    Bm = None if motor_inertia is None else as_float_array(
+        "motor_inertia", motor_inertia, shape_tail=(2,), ndim=(1, 2))
+    if frozen and Bm is not None:
+        raise ValueError(f"motor_inertia = {Bm.tolist()} kg m^2 is only used by joint_model "
+                         f"'flexible-joint' or 'rigid'; the frozen equilibrium holds the motor "
+                         f"side at q(t0) (omit motor_inertia, or choose another joint_model)")
+    if fixed_arm and not frozen:
+        raise ValueError(f"fixed_arm = True holds the arm still, so joint_model = "
+                         f"{jm.name.lower().replace('_', '-')!r} has no meaning; use "
+                         f"joint_model 'frozen-equilibrium' (the default) with fixed_arm")
     integrator = check_choice("integrator", integrator, ("fixed", "dense"))
     dt = check_range("dt", dt, 1e-8, 1e-3, unit="s")
     duration = check_range("duration", duration, 1e-4, 10.0, unit="s")
@@ -654,7 +825,8 @@ def _simulate_impacts(arm, q, qd, stiffness, *, head, direction, head_velocity, 
                          f"{MAX_STEPS}; use a larger dt or a shorter duration")
     # ---- shapes: (2,) or (N, 2), rows 1 or N ----
     named = [(nm, a) for nm, a in (("q", q), ("qd", qd), ("stiffness", K), ("direction", d),
-                                     ("head_velocity", vh)) if a is not None]
+                                     ("head_velocity", vh), ("motor_inertia", Bm))
+             if a is not None]
     n = max(a.shape[0] if a.ndim == 2 else 1 for _, a in named)
     if q.ndim == 2 and q.shape[0] == 0:
         n = 0
@@ -663,16 +835,24 @@ def _simulate_impacts(arm, q, qd, stiffness, *, head, direction, head_velocity, 
     qd = _rows("qd", qd, n, ref)
     K = _rows("stiffness", K, n, ref)
     vh = np.zeros((n, 2)) if vh is None else _rows("head_velocity", vh, n, ref)
+    B = np.zeros((n, 2)) if Bm is None else _rows("motor_inertia", Bm, n, ref)
     # ---- ranges and physical plausibility ----
     if warn_area:
         check_angles("q", q, arm, stacklevel=stacklevel)
     elif np.any(np.abs(q) > MAX_ANGLE):
         check_angles("q", q, arm)
     check_range_array("qd", qd, -MAX_JOINT_SPEED, MAX_JOINT_SPEED, unit="rad/s")
-    check_range_array("stiffness", K, 0.0, math.inf, unit="N m/rad")
+    check_range_array("stiffness", K, 0.0, math.inf, unit="N m/rad")   # inf: rigid only
     check_range_array("head_velocity", vh, -MAX_HEAD_SPEED, MAX_HEAD_SPEED, unit="m/s")
-    if not fixed_arm and n:
-        check_stiffness(K, q, arm, eng.FREE_STRIDE * dt, dt)
+    check_range_array("motor_inertia", B, 0.0, MAX_MOTOR_INERTIA, unit="kg m^2")
+    # the largest RK4 step the chosen integrator takes (free flight); cases with a history
+    # always run the fixed engine
+    stride = eng.FREE_STRIDE if integrator == "fixed" else max(eng.FREE_STRIDE,
+                                                                 eng.DENSE_FREE_STRIDE)
+    if not fixed_arm and n and frozen:
+        check_stiffness(K, q, arm, stride * dt, dt)
+    elif jm == eng.JointModel.FLEXIBLE_JOINT and n:
+        check_flexible_stiffness(K, q, B, arm, stride * dt, dt)
     hist_idx = _history_indices(history, n)
     if hist_idx.size * (nsteps + 1) * eng.NHIST * 8 > MAX_HISTORY_BYTES:
         raise ValueError(f"history: {hist_idx.size} histories of {nsteps + 1} steps need "
@@ -697,7 +877,7 @@ def _simulate_impacts(arm, q, qd, stiffness, *, head, direction, head_velocity, 
         (np.linalg.norm(vh, axis=1) > 0)
     mode = eng.ArmMode.FIXED if fixed_arm else eng.ArmMode.FLEXIBLE
     cases = eng.pack_cases(n, q=q, qd=0.0 if fixed_arm else qd, K=K, u=u, v_head=vh,
-                           arm_mode=int(mode))
+                           arm_mode=int(mode), joint_model=int(jm), B=B)
     hist_of = np.full(n, -1, dtype=np.int64)
     hist_of[hist_idx] = np.arange(hist_idx.size)
     hp = eng.pack_head(hm)
@@ -726,6 +906,10 @@ def _simulate_impacts(arm, q, qd, stiffness, *, head, direction, head_velocity, 
     df = pd.DataFrame({"q1": q[:, 0], "q2": q[:, 1], "qd1": qd[:, 0], "qd2": qd[:, 1],
                        "K1": K[:, 0], "K2": K[:, 1], "ux": u[:, 0], "uy": u[:, 1],
                        "tcp_speed": speed})
+    if not frozen:       # the frozen equilibrium keeps its historical columns
+        df.insert(6, "joint_model", jm.name.lower().replace("_", "-"))
+        df.insert(7, "B1", B[:, 0])
+        df.insert(8, "B2", B[:, 1])
     df = pd.concat([df, eng.SUMMARY.frame(SUM)], axis=1)
     df = _check_run(df, sel, hm, stacklevel=stacklevel)
     hists = {int(i): eng.HIST.frame(HIST[j]) for j, i in enumerate(hist_idx)}

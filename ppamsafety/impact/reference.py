@@ -12,14 +12,16 @@ import math
 
 import numpy as np
 
-from .._validation import as_float_array, check_choice, check_finite_result, check_range
+from .._validation import (as_float_array, check_choice, check_finite_result, check_range,
+                           check_range_array)
 from ..plant import geometry as geo
 from ..plant import layout as lay
 from ..units import G0
 from . import engine as eng
 from .hic import hic
-from .model import (MAX_STEPS, check_angles, check_arm, check_pass_through, check_stiffness,
-                    resolve_head)
+from .model import (MAX_MOTOR_INERTIA, MAX_STEPS, check_angles, check_arm,
+                    check_flexible_stiffness, check_pass_through, check_stiffness, resolve_head,
+                    resolve_joint_model)
 
 #: Integration methods of :func:`scipy.integrate.solve_ivp` accepted.
 METHODS = ("RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")
@@ -27,7 +29,8 @@ METHODS = ("RK45", "RK23", "DOP853", "Radau", "BDF", "LSODA")
 
 def simulate_impact_scipy(arm, q, qd, stiffness, *, head=None, method: str = "RK45",
                           rtol: float = 1e-9, atol: float = 1e-12, dt: float = 2e-5,
-                          duration: float = 0.05) -> dict:
+                          duration: float = 0.05, joint_model="frozen-equilibrium",
+                          motor_inertia=None) -> dict:
     """One impact by ``solve_ivp`` (tool velocity direction, head at rest).
 
     Same model and input checks as :func:`ppamsafety.impact.model.simulate_impacts`
@@ -57,19 +60,35 @@ def simulate_impact_scipy(arm, q, qd, stiffness, *, head=None, method: str = "RK
         Output grid step [s] in [1e-8, 1e-3] (HIC sampling).
     duration : float
         Simulated time [s] in [1e-4, 10], at least dt.
+    joint_model : str or JointModel
+        Motor-side convention, as in
+        :func:`~ppamsafety.impact.model.simulate_impacts`.
+    motor_inertia : array_like, shape (2,), optional
+        Motor-side inertias [kg m^2] (flexible joint, rigid), each in
+        [0, :data:`~ppamsafety.impact.model.MAX_MOTOR_INERTIA`]; default 0.
 
     Returns
     -------
     dict
         ``F_max`` [N], ``HIC36``, ``HIC15``, ``delta_max`` [m], ``nfev``
-        (right-hand side evaluations).
+        (right-hand side evaluations), ``E_balance_error`` [-] (as in the
+        engine's summary).
     """
     from scipy.integrate import solve_ivp
 
     arm = check_arm(arm)
     q = as_float_array("q", q, ndim=1, shape_tail=(2,))
     qd = as_float_array("qd", qd, ndim=1, shape_tail=(2,))
-    K = as_float_array("stiffness", stiffness, ndim=1, shape_tail=(2,))
+    jm = resolve_joint_model(joint_model)
+    K = as_float_array("stiffness", stiffness, ndim=1, shape_tail=(2,),
+                       allow_nonfinite=jm == eng.JointModel.RIGID)
+    if np.any(np.isnan(K)):
+        raise ValueError(f"stiffness = {K.tolist()} N m/rad contains NaN")
+    B = np.zeros(2) if motor_inertia is None else as_float_array(
+        "motor_inertia", motor_inertia, ndim=1, shape_tail=(2,))
+    check_range_array("motor_inertia", B, 0.0, MAX_MOTOR_INERTIA, unit="kg m^2")
+    if jm == eng.JointModel.FROZEN_EQUILIBRIUM and motor_inertia is not None:
+        raise ValueError("motor_inertia is only used by joint_model 'flexible-joint' or 'rigid'")
     hm = resolve_head(head)
     method = check_choice("method", method, METHODS)
     rtol = check_range("rtol", rtol, 1e-14, 1e-2)
@@ -84,14 +103,18 @@ def simulate_impact_scipy(arm, q, qd, stiffness, *, head=None, method: str = "RK
         raise ValueError(f"qd = {qd.tolist()} rad/s is outside [-1000, 1000] rad/s")
     if np.any(K < 0):
         raise ValueError(f"stiffness = {K.tolist()} N m/rad must be non-negative")
-    check_stiffness(K[None, :], q[None, :], arm, dt, dt)
+    if jm == eng.JointModel.FROZEN_EQUILIBRIUM:
+        check_stiffness(K[None, :], q[None, :], arm, dt, dt)
+    elif jm == eng.JointModel.FLEXIBLE_JOINT:
+        check_flexible_stiffness(K[None, :], q[None, :], B[None, :], arm, dt, dt)
     v = geo.jacobian(q, arm) @ qd
     sp = float(np.linalg.norm(v))
     if sp == 0.0:
         raise ValueError(f"qd = {qd.tolist()}: the tool is at rest, there is no impact")
     check_pass_through(hm, [sp])
     case = eng.pack_cases(1, q=q, qd=qd, K=K, u=v / sp,
-                          v_head=0.0, arm_mode=int(eng.ArmMode.FLEXIBLE))[0]
+                          v_head=0.0, arm_mode=int(eng.ArmMode.FLEXIBLE),
+                          joint_model=int(jm), B=B)[0]
     P = np.array(lay.pack(arm))
     hp = eng.pack_head(hm)
     y0 = np.empty(eng.NY)
@@ -114,6 +137,8 @@ def simulate_impact_scipy(arm, q, qd, stiffness, *, head=None, method: str = "RK
         F[i], delta[i], _, _ = eng.impact_rhs(sol.y[:, i], case, P, hp, dy)
     check_finite_result("the scipy impact solution", F, "these inputs")
     a = F / (hm.mass * G0)
+    e0 = eng._energy(y0, case, P, hp)
+    e1 = eng._energy(sol.y[:, -1], case, P, hp) + sol.y[eng.Y_ED, -1]
     return {"F_max": float(F.max()), "HIC36": hic(a, dt).value,
             "HIC15": hic(a, dt, window=0.015).value, "delta_max": float(delta.max()),
-            "nfev": int(sol.nfev)}
+            "nfev": int(sol.nfev), "E_balance_error": float((e1 - e0) / e0)}

@@ -204,6 +204,69 @@ def plot_stiffness_sweep(df, *, reference=None, two_body=None):
     return fig
 
 
+def plot_stiffness_conventions(sweep, *, thesis=None, reference=None):
+    """F_max against joint stiffness for each motor-side convention (cf. fig. 6.3).
+
+    Parameters
+    ----------
+    sweep : pandas.DataFrame
+        Columns ``convention`` (``"frozen-equilibrium"``, ``"flexible-joint"``,
+        ``"rigid"``), ``B_label``, ``k`` [Nm/rad] (inf for rigid rows) and
+        ``F_max`` [N] (the long table of the stiffness study).
+    thesis : dict, optional
+        Fig. 6.3's reference (:data:`~ppamsafety.impact.thesis_data.FIG_6_3`):
+        a band from ``F_level_N`` to ``F_level_N + max_change_N`` over
+        ``k_min``..``k_max``.
+    reference : (float, float), optional
+        The experiment's joint stiffnesses K1, K2 [Nm/rad], drawn as lines.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Two panels: the whole range, and a zoom on 1..6000 Nm/rad (changes in N).
+    """
+    fig, axes = new_figure(1, 2, figsize=(11, 4.2))
+    colors = ["tab:blue", "tab:orange", "tab:green", "tab:purple", "tab:brown", "tab:olive"]
+    fin = sweep[np.isfinite(sweep["k"])]
+    kmax = float(fin["k"].max())
+    for ax, zoom in zip(axes, (False, True)):
+        fr = fin[fin.convention == "frozen-equilibrium"]
+        base = fr["F_max"].iloc[0] if zoom else 0.0
+        sel = fr[fr.k <= (thesis["k_max"] if zoom and thesis else np.inf)]
+        ax.semilogx(sel["k"], sel["F_max"] - base, "o-", color="k", ms=3,
+                    label="frozen equilibrium")
+        for i, (lab, g) in enumerate(fin[fin.convention == "flexible-joint"].groupby(
+                "B_label", sort=False)):
+            b0 = g["F_max"].iloc[0] if zoom else 0.0
+            gg = g[g.k <= (thesis["k_max"] if zoom and thesis else np.inf)]
+            c = colors[i % len(colors)]
+            ax.semilogx(gg["k"], gg["F_max"] - b0, "s-", color=c, ms=3,
+                        label=f"flexible joint, {lab}")
+            rg = sweep[(sweep.convention == "rigid") & (sweep.B_label == lab)]
+            if len(rg) and not zoom:
+                ax.plot([kmax], [float(rg["F_max"].iloc[0])], marker=">", color=c, ls="none")
+        if thesis is not None:
+            if zoom:
+                ax.fill_between([thesis["k_min"], thesis["k_max"]], 0.0,
+                                thesis["max_change_N"], color="tab:red", alpha=0.15,
+                                label=f"thesis fig. 6.3: rise < {thesis['max_change_N']:g} N")
+            else:
+                ax.axhline(thesis["F_level_N"], color="tab:red", ls="--", lw=0.8,
+                           label=f"thesis level (Table 6.1, {thesis['F_level_N']:.0f} N)")
+        if reference is not None:
+            for kk in reference:
+                ax.axvline(kk, color="tab:gray", lw=0.6)
+        ax.set_xlabel("joint stiffness k (both joints) [Nm/rad]")
+        ax.set_ylabel("F_max - F_max(k = 1) [N]" if zoom else "F_max [N]")
+        ax.set_title("zoom on fig. 6.3's range" if zoom
+                     else "F_max (markers at the right: rigid limit H + diag(B))")
+        ax.grid(alpha=0.3, which="both")
+    axes[0].legend(fontsize=7, loc="upper left")
+    axes[1].legend(fontsize=7, loc="lower left")
+    fig.tight_layout()
+    return fig
+
+
 def plot_head_fit(pairs, curve, *, drop=None, title: str = ""):
     """Table 6.1 (HIC, F_max) pairs against the fitted model's HIC(F_max) curve.
 
