@@ -117,8 +117,17 @@ def test_closed_loop_battery_fast_subset(case):
 
 @pytest.mark.slow
 def test_closed_loop_battery_full():
-    """Every case, three seeds, two closed-loop experiments: >= 5 of 6 correct per case."""
-    failures, rows = [], {}
+    """Every case, three seeds, two closed-loop experiments: >= 5 of 6 correct per case, and
+    the fitted parameters within the tolerances of :func:`check_parameters` in >= 5 of 6 runs
+    per case.
+
+    Known limitation, measured and kept visible rather than hidden: the Coulomb coefficients
+    fitted from noisy velocities are biased (errors in variables, see
+    tests/test_diagnose_battery.py); under PID on the 5 s circle, seed 2, c1 comes out +44 %
+    (friction alone) and +47 % (with the dead time) against the 35 % tolerance, i.e. one run
+    in six of each friction case.  The test prints every miss.
+    """
+    rows, misses = {}, {}
     for case, (eff, _) in CASES.items():
         good = 0
         for seed in (1, 2, 3):
@@ -132,16 +141,13 @@ def test_closed_loop_battery_full():
                     try:
                         check_parameters(case, dg)
                     except AssertionError as exc:
-                        failures.append(f"{case} {ref} seed {seed}: {exc}")
+                        misses.setdefault(case, []).append(f"{ref} seed {seed}: {exc}")
         assert good >= 5, (case, rows[case])
-    other = [f for f in failures if not f.startswith("friction")]
-    assert not other, other
-    if failures:
-        # known limitation, kept visible (not a loosened tolerance): the Coulomb coefficients
-        # fitted from noisy velocities are biased (errors in variables, see
-        # tests/test_diagnose_battery.py); in closed loop under PID on the 5 s circle one of
-        # three seeds misses the open-loop battery's 35 % (c1 +47 %, seed 2)
-        pytest.xfail(f"Coulomb coefficient outside 35 %: {failures}")
+    for case, lst in misses.items():
+        print(f"parameter miss, {case}: {lst}")
+    assert all(len(lst) <= 1 for lst in misses.values()), misses
+    # only the Coulomb friction bias is known; any other parameter miss is a regression
+    assert all(case.startswith("friction") for case in misses), misses
 
 
 @pytest.mark.slow
