@@ -762,11 +762,20 @@ def state_derivative(x, set_values, arm, *, tau_ext=None) -> np.ndarray:
     """
     x = _state("x", x)
     u = check_pressures("set_values", set_values, tail=NU)
-    shape = np.broadcast_shapes(x.shape[:-1], u.shape[:-1])
+    tau = None if tau_ext is None else torques("tau_ext", tau_ext)
+    lead = [("x", x.shape), ("set_values", u.shape)] + (
+        [] if tau is None else [("tau_ext", tau.shape)])
+    try:
+        shape = np.broadcast_shapes(*(s[:-1] for _, s in lead))
+    except ValueError:
+        raise ValueError("the leading dimensions of " + ", ".join(
+            f"{n} (shape {s})" for n, s in lead) + " do not broadcast against each other; "
+            "allowed: x (..., 8), set_values (..., 4), tau_ext (..., 2) with broadcastable "
+            "'...'") from None
     xf = np.ascontiguousarray(np.broadcast_to(x, shape + (NX,)).reshape(-1, NX))
     uf = np.ascontiguousarray(np.broadcast_to(u, shape + (NU,)).reshape(-1, NU))
-    tf = np.zeros((xf.shape[0], 2)) if tau_ext is None else np.ascontiguousarray(
-        np.broadcast_to(torques("tau_ext", tau_ext), shape + (2,)).reshape(-1, 2))
+    tf = np.zeros((xf.shape[0], 2)) if tau is None else np.ascontiguousarray(
+        np.broadcast_to(tau, shape + (2,)).reshape(-1, 2))
     out = np.empty_like(xf)
     _rhs_many(xf, uf, tf, lay.pack(arm), out)
     return check_finite_result("state_derivative", out.reshape(shape + (NX,)), "these x, "
