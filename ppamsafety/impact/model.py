@@ -590,8 +590,10 @@ def simulate_impacts(arm, q, qd, stiffness, *, head: HeadContactModel | str | No
         (:func:`~ppamsafety.impact.engine.impact_batch_dense`), about 3.5x
         faster; F_max, HIC36 and HIC15 within 2e-4 relative of the fixed
         engine and of solve_ivp at rtol 1e-10 (tests/test_impact_dense.py;
-        measured 6e-5 on 1000 random impacts).  Cases with a recorded history
-        always use ``"fixed"``.
+        measured 6e-5 on 1000 random impacts).  Cases with a recorded history,
+        and cases whose stiffness its free-flight step (DENSE_FREE_STRIDE x
+        ``dt``) cannot resolve (:func:`stiffness_limit`), always use
+        ``"fixed"``.
 
     Returns
     -------
@@ -633,6 +635,47 @@ def _simulate_impacts(arm, q, qd, stiffness, *, head, direction, head_velocity, 
                       duration, history, integrator, warn_area, stacklevel):
     """:func:`simulate_impacts`; ``warn_area=False`` for states of a simulated closed-loop
     record (their working-area excursions are the controller's, not a user's mistake)."""
+    integrator = check_choice("integrator", integrator, ("fixed", "dense"))
+    prep = _prepare_impacts(arm, q, qd, stiffness, head=head, direction=direction,
+                            head_velocity=head_velocity, fixed_arm=fixed_arm, dt=dt,
+                            duration=duration, history=history, warn_area=warn_area,
+                            stacklevel=stacklevel + 1)
+    n = prep.cases.shape[0]
+    SUM = np.zeros((n, eng.NSUM))
+    HIST = np.zeros((prep.hist_idx.size, prep.nsteps + 1, eng.NHIST))
+    SUM[prep.sel] = _run_cases(prep, prep.sel, integrator, HIST)
+    df = _summary_frame(prep, np.arange(n), SUM, stacklevel=stacklevel)
+    hists = {int(i): eng.HIST.frame(HIST[j]) for j, i in enumerate(prep.hist_idx)}
+    return ImpactResults(df, hists, prep.head, prep.dt, prep.duration)
+
+
+@dataclass
+class _Prepared:
+    """Validated, packed impact cases (:func:`_prepare_impacts`), ready for the kernels."""
+
+    q: np.ndarray
+    qd: np.ndarray
+    K: np.ndarray
+    u: np.ndarray
+    speed: np.ndarray
+    cases: np.ndarray
+    sel: np.ndarray
+    hist_idx: np.ndarray
+    hist_of: np.ndarray
+    hp: np.ndarray
+    P: np.ndarray
+    head: HeadContactModel
+    dt: float
+    duration: float
+    nsteps: int
+    w36: int
+    w15: int
+    dense_k_limit: np.ndarray
+
+
+def _prepare_impacts(arm, q, qd, stiffness, *, head, direction, head_velocity, fixed_arm, dt,
+                     duration, history, warn_area, stacklevel):
+    """Validate the inputs of :func:`simulate_impacts` and pack the kernel rows (no run)."""
     arm = check_arm(arm)
     q = as_float_array("q", q, shape_tail=(2,), ndim=(1, 2))
     qd = as_float_array("qd", qd, shape_tail=(2,), ndim=(1, 2))
@@ -643,7 +686,6 @@ def _simulate_impacts(arm, q, qd, stiffness, *, head, direction, head_velocity, 
     vh = None if head_velocity is None else as_float_array(
         "head_velocity", head_velocity, shape_tail=(2,), ndim=(1, 2))
     fixed_arm = check_bool("fixed_arm", fixed_arm)
-    integrator = check_choice("integrator", integrator, ("fixed", "dense"))
     dt = check_range("dt", dt, 1e-8, 1e-3, unit="s")
     duration = check_range("duration", duration, 1e-4, 10.0, unit="s")
     if duration < dt:
@@ -700,33 +742,62 @@ def _simulate_impacts(arm, q, qd, stiffness, *, head, direction, head_velocity, 
                            arm_mode=int(mode))
     hist_of = np.full(n, -1, dtype=np.int64)
     hist_of[hist_idx] = np.arange(hist_idx.size)
-    hp = eng.pack_head(hm)
-    SUM = np.zeros((n, eng.NSUM))
-    HIST = np.zeros((hist_idx.size, nsteps + 1, eng.NHIST))
     sel = np.nonzero(active)[0]
     w36 = int(math.floor(0.036 / dt * (1 + 1e-9)))
     w15 = int(math.floor(0.015 / dt * (1 + 1e-9)))
-    out = np.zeros((sel.size, eng.NSUM))
-    P = np.array(lay.pack(arm))
+    # the dense integrator's free-flight steps resolve these joint stiffnesses (fixed arm: any)
+    klim = np.full(n, np.inf) if fixed_arm or not n else \
+        stiffness_limit(q, arm, eng.DENSE_FREE_STRIDE * dt)
+    return _Prepared(q=q, qd=qd, K=K, u=u, speed=speed, cases=cases, sel=sel,
+                     hist_idx=hist_idx, hist_of=hist_of, hp=eng.pack_head(hm),
+                     P=np.array(lay.pack(arm)), head=hm, dt=float(dt),
+                     duration=float(duration), nsteps=nsteps, w36=w36, w15=w15,
+                     dense_k_limit=klim)
+
+
+def _run_cases(prep: _Prepared, idx, integrator: str, HIST=None) -> np.ndarray:
+    """Summary rows (len(idx), NSUM) of the active cases ``idx`` of ``prep``.
+
+    ``"dense"`` runs :func:`~ppamsafety.impact.engine.impact_batch_dense` except
+    for cases with a recorded history (into ``HIST``, indexed by
+    ``prep.hist_of``) and cases whose joint stiffness exceeds
+    :func:`stiffness_limit` at the dense integrator's free-flight step
+    (DENSE_FREE_STRIDE x dt, five times the fixed engine's), which take the
+    fixed-step engine.  A case's row depends only on its own case row (never
+    on the other cases of the call).
+    """
+    idx = np.asarray(idx, dtype=np.int64)
+    cases = prep.cases[idx]
+    hist_of = prep.hist_of[idx]
+    if HIST is None:
+        HIST = np.zeros((0, prep.nsteps + 1, eng.NHIST))
+        hist_of = np.full(idx.size, -1, dtype=np.int64)
+    out = np.zeros((idx.size, eng.NSUM))
+    args = (prep.P, prep.hp, prep.dt, prep.nsteps, prep.w36, prep.w15)
     if integrator == "dense":
-        dense = hist_of[sel] < 0
+        dense = (hist_of < 0) & (prep.K[idx].max(axis=1) <= prep.dense_k_limit[idx])
         od = np.zeros((int(dense.sum()), eng.NSUM))
-        eng.impact_batch_dense(np.ascontiguousarray(cases[sel][dense]), P, hp, float(dt), nsteps,
-                               w36, w15, od)
+        eng.impact_batch_dense(np.ascontiguousarray(cases[dense]), *args, od)
         out[dense] = od
-        sel_f = sel[~dense]
-        of = np.zeros((sel_f.size, eng.NSUM))
-        eng.impact_batch(np.ascontiguousarray(cases[sel_f]), P, hp, float(dt), nsteps, w36, w15,
-                         of, HIST, np.ascontiguousarray(hist_of[sel_f]))
+        of = np.zeros((int((~dense).sum()), eng.NSUM))
+        eng.impact_batch(np.ascontiguousarray(cases[~dense]), *args, of, HIST,
+                         np.ascontiguousarray(hist_of[~dense]))
         out[~dense] = of
     else:
-        eng.impact_batch(np.ascontiguousarray(cases[sel]), P, hp, float(dt), nsteps, w36, w15,
-                         out, HIST, np.ascontiguousarray(hist_of[sel]))
-    SUM[sel] = out
+        eng.impact_batch(np.ascontiguousarray(cases), *args, out, HIST,
+                         np.ascontiguousarray(hist_of))
+    return out
+
+
+def _summary_frame(prep: _Prepared, rows, SUM, *, stacklevel: int) -> pd.DataFrame:
+    """The summary DataFrame of the cases ``rows`` of ``prep`` (SUM: their summary rows,
+    zero for cases at rest), with the post-run checks (:func:`_check_run`)."""
+    rows = np.asarray(rows, dtype=np.int64)
+    q, qd, K, u = prep.q[rows], prep.qd[rows], prep.K[rows], prep.u[rows]
     df = pd.DataFrame({"q1": q[:, 0], "q2": q[:, 1], "qd1": qd[:, 0], "qd2": qd[:, 1],
                        "K1": K[:, 0], "K2": K[:, 1], "ux": u[:, 0], "uy": u[:, 1],
-                       "tcp_speed": speed})
+                       "tcp_speed": prep.speed[rows]})
     df = pd.concat([df, eng.SUMMARY.frame(SUM)], axis=1)
-    df = _check_run(df, sel, hm, stacklevel=stacklevel)
-    hists = {int(i): eng.HIST.frame(HIST[j]) for j, i in enumerate(hist_idx)}
-    return ImpactResults(df, hists, hm, float(dt), float(duration))
+    active = np.zeros(prep.cases.shape[0], dtype=bool)
+    active[prep.sel] = True
+    return _check_run(df, np.nonzero(active[rows])[0], prep.head, stacklevel=stacklevel + 1)
