@@ -504,19 +504,21 @@ def _history_indices(history, n: int) -> np.ndarray:
     return np.array(list(dict.fromkeys(idx)), dtype=np.int64)
 
 
-def _check_run(df, sel, hm, stacklevel):
-    """Post-run checks: energy balance, non-finite values, pass-through; columns + warnings."""
+def _check_run(df, sel, hm, stacklevel, vals=None):
+    """Post-run checks: energy balance, non-finite values, pass-through; columns + warnings.
+
+    ``vals``: the summary rows (n, NSUM) of ``df`` if at hand (saves reading them back)."""
     n = len(df)
     cols = eng.SUMMARY_COLUMNS
-    vals = df[cols].to_numpy()
+    vals = df[cols].to_numpy() if vals is None else vals
     act = np.zeros(n, dtype=bool)
     act[sel] = True
     nonfinite = ~np.isfinite(vals) & act[:, None]
-    through = act & ~(df["delta_max"].to_numpy() < hm.radius)
-    err = df["E_balance_error"].to_numpy()
+    through = act & ~(vals[:, eng.R_DMAX] < hm.radius)
+    err = vals[:, eng.R_EBAL]
     energy_ok = ~act | (np.abs(err) <= ENERGY_TOL)
-    status = np.where(act, "ok", "at rest").astype(object)
     flagged = np.nonzero(nonfinite.any(axis=1) | through | ~energy_ok)[0]
+    status = np.where(act, "ok", "at rest").astype(object)
     for i in flagged:
         reasons = []
         if nonfinite[i].any():
@@ -670,7 +672,8 @@ class _Prepared:
     nsteps: int
     w36: int
     w15: int
-    dense_k_limit: np.ndarray
+    arm: object
+    fixed_arm: bool
 
 
 def _prepare_impacts(arm, q, qd, stiffness, *, head, direction, head_velocity, fixed_arm, dt,
@@ -745,14 +748,11 @@ def _prepare_impacts(arm, q, qd, stiffness, *, head, direction, head_velocity, f
     sel = np.nonzero(active)[0]
     w36 = int(math.floor(0.036 / dt * (1 + 1e-9)))
     w15 = int(math.floor(0.015 / dt * (1 + 1e-9)))
-    # the dense integrator's free-flight steps resolve these joint stiffnesses (fixed arm: any)
-    klim = np.full(n, np.inf) if fixed_arm or not n else \
-        stiffness_limit(q, arm, eng.DENSE_FREE_STRIDE * dt)
     return _Prepared(q=q, qd=qd, K=K, u=u, speed=speed, cases=cases, sel=sel,
                      hist_idx=hist_idx, hist_of=hist_of, hp=eng.pack_head(hm),
                      P=np.array(lay.pack(arm)), head=hm, dt=float(dt),
                      duration=float(duration), nsteps=nsteps, w36=w36, w15=w15,
-                     dense_k_limit=klim)
+                     arm=arm, fixed_arm=fixed_arm)
 
 
 def _run_cases(prep: _Prepared, idx, integrator: str, HIST=None) -> np.ndarray:
@@ -775,7 +775,11 @@ def _run_cases(prep: _Prepared, idx, integrator: str, HIST=None) -> np.ndarray:
     out = np.zeros((idx.size, eng.NSUM))
     args = (prep.P, prep.hp, prep.dt, prep.nsteps, prep.w36, prep.w15)
     if integrator == "dense":
-        dense = (hist_of < 0) & (prep.K[idx].max(axis=1) <= prep.dense_k_limit[idx])
+        dense = hist_of < 0
+        if not prep.fixed_arm and idx.size:
+            # the dense integrator's free-flight steps must resolve the joint springs
+            klim = stiffness_limit(prep.q[idx], prep.arm, eng.DENSE_FREE_STRIDE * prep.dt)
+            dense &= prep.K[idx].max(axis=1) <= klim
         od = np.zeros((int(dense.sum()), eng.NSUM))
         eng.impact_batch_dense(np.ascontiguousarray(cases[dense]), *args, od)
         out[dense] = od
@@ -793,11 +797,17 @@ def _summary_frame(prep: _Prepared, rows, SUM, *, stacklevel: int) -> pd.DataFra
     """The summary DataFrame of the cases ``rows`` of ``prep`` (SUM: their summary rows,
     zero for cases at rest), with the post-run checks (:func:`_check_run`)."""
     rows = np.asarray(rows, dtype=np.int64)
-    q, qd, K, u = prep.q[rows], prep.qd[rows], prep.K[rows], prep.u[rows]
-    df = pd.DataFrame({"q1": q[:, 0], "q2": q[:, 1], "qd1": qd[:, 0], "qd2": qd[:, 1],
-                       "K1": K[:, 0], "K2": K[:, 1], "ux": u[:, 0], "uy": u[:, 1],
-                       "tcp_speed": prep.speed[rows]})
-    df = pd.concat([df, eng.SUMMARY.frame(SUM)], axis=1)
+    SUM = np.asarray(SUM, dtype=float).reshape(rows.size, eng.NSUM)
+    data = np.empty((rows.size, len(_INPUT_COLUMNS) + eng.NSUM))       # one block: one copy
+    data[:, 0:2], data[:, 2:4], data[:, 4:6] = prep.q[rows], prep.qd[rows], prep.K[rows]
+    data[:, 6:8], data[:, 8] = prep.u[rows], prep.speed[rows]
+    data[:, len(_INPUT_COLUMNS):] = SUM
+    df = pd.DataFrame(data, columns=_INPUT_COLUMNS + list(eng.SUMMARY_COLUMNS))
     active = np.zeros(prep.cases.shape[0], dtype=bool)
     active[prep.sel] = True
-    return _check_run(df, np.nonzero(active[rows])[0], prep.head, stacklevel=stacklevel + 1)
+    return _check_run(df, np.nonzero(active[rows])[0], prep.head, stacklevel=stacklevel + 1,
+                      vals=SUM)
+
+
+#: Input columns of the impact summary, before :data:`~ppamsafety.impact.engine.SUMMARY_COLUMNS`.
+_INPUT_COLUMNS = ["q1", "q2", "qd1", "qd2", "K1", "K2", "ux", "uy", "tcp_speed"]
