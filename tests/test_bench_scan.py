@@ -1,6 +1,6 @@
 """Speed of the pruned every-instant scan (issue 11, item 4); slow, `pytest -m slow`.
 
-Measured on the shared 2-core machine under load (one run, process time): 25.2x over the
+Measured on the shared 2-core machine (one run, process time): 24.9x over the
 20 experiments (50-90x on the step responses and the fast switch controllers, 6-17x on the slow
 switch controllers, whose flat speed profile leaves thousands of instants whose a-priori bounds
 reach the worst value; those are screened with the dense-output integrator, about 3x cheaper
