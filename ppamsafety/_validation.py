@@ -360,8 +360,9 @@ def check_increasing(name: str, arr: np.ndarray, *, strict: bool = True) -> np.n
 def check_range_array(name: str, arr: np.ndarray, lo: float = -math.inf, hi: float = math.inf,
                       *, unit: str = "") -> np.ndarray:
     """Check that every entry of a finite array lies in ``[lo, hi]``; name the first offender."""
-    bad = np.argwhere((arr < lo) | (arr > hi))
-    if bad.size:
+    out = (arr < lo) | (arr > hi)
+    if out.any():                   # the common case (all in range) costs one pass
+        bad = np.argwhere(out)
         idx = tuple(int(i) for i in bad[0])
         u = f" {unit}" if unit else ""
         where = f"[{', '.join(map(str, idx))}]" if arr.ndim else ""

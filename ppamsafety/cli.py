@@ -102,6 +102,16 @@ def _positive(text: str) -> float:
     return v
 
 
+def _positive_int(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer (allowed: >= 1)") from None
+    if v < 1:
+        raise argparse.ArgumentTypeError(f"{v} is not positive (allowed: integers >= 1)")
+    return v
+
+
 def _nonnegative(text: str) -> float:
     v = _finite(text)
     if v < 0.0:
@@ -124,7 +134,7 @@ def _cmd_report(args) -> int:
     from .report.build import build_report
 
     index = build_report(args.outdir, quick=args.quick, only=args.only,
-                         overwrite=args.overwrite)
+                         overwrite=args.overwrite, processes=args.processes)
     print(f"report written to {index}")
     return EXIT_OK
 
@@ -320,6 +330,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="comma-separated study names to run (default: all)")
     r.add_argument("--overwrite", action="store_true",
                    help="replace a previous ppamsafety report in OUTDIR (never other files)")
+    r.add_argument("--processes", type=_positive_int, default=None, metavar="N",
+                   help="studies run at the same time in worker processes (default: every "
+                        "core; 1: one after the other in this process)")
     r.set_defaults(func=_cmd_report)
     d = sub.add_parser("identify", help="identify parameters from a measured data file",
                        description="Identify parameters from a measured record (format: "

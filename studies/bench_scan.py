@@ -4,12 +4,13 @@ For each of the 20 Table 6.1 experiments (step and switch, 10 controller
 variants each), interleaved in one run: the straightforward scan
 (``evaluate_experiment(..., instants="all")``: every instant simulated) and the
 pruned scan (:func:`ppamsafety.impact.instants.worst_instant`: rigorous
-F_max/HIC bounds, only instants that can be the worst are simulated).  Checks
+F_max/HIC bounds, then a dense-output screening with a margin, only instants
+that can be the worst are simulated exactly).  Checks
 that both give the same worst instant and the same F_max/HIC36 (exact float
 equality) and prints the process (CPU) and wall times with their ratios.
 Both run on one process here (the safety study spreads experiments over 2).
 
-Run:  PYTHONPATH=. python studies/bench_scan.py [--every N] [--experiments K]
+Run (from the repository root):  PYTHONPATH=. python studies/bench_scan.py [--every N] [--experiments K]
 """
 
 import argparse
@@ -51,10 +52,10 @@ def main(every=1, experiments=None, repeats=1, verbose=True):
     evaluate_experiment(r0, arm, instants="all", every=500, min_speed=MIN_SPEED)
     worst_instant(r0, arm, every=500, min_speed=MIN_SPEED)
     tot = {"old_cpu": 0.0, "old_wall": 0.0, "new_cpu": 0.0, "new_wall": 0.0}
-    n_all = n_sim = 0
+    n_all = n_sim = n_scr = 0
     identical = True
     if verbose:
-        print(f"{'experiment':<34s} {'instants':>8s} {'simulated':>9s} {'old cpu s':>9s} "
+        print(f"{'experiment':<34s} {'instants':>8s} {'screened':>8s} {'simulated':>9s} {'old cpu s':>9s} "
               f"{'new cpu s':>9s} {'ratio':>7s}  same worst")
     for exp, i in runs:
         label, ctrl = thesis_variants()[i]
@@ -76,16 +77,18 @@ def main(every=1, experiments=None, repeats=1, verbose=True):
         identical &= same
         n_all += len(old)
         n_sim += new.n_simulated
+        n_scr += new.n_screened
         if verbose:
-            print(f"{exp + ': ' + label:<34s} {len(old):8d} {new.n_simulated:9d} "
+            print(f"{exp + ': ' + label:<34s} {len(old):8d} {new.n_screened:8d} {new.n_simulated:9d} "
                   f"{best['old_cpu']:9.2f} {best['new_cpu']:9.2f} "
                   f"{best['old_cpu'] / max(best['new_cpu'], 1e-9):6.1f}x  {same}")
-    out = {**tot, "instants": n_all, "simulated": n_sim, "all_identical": identical,
+    out = {**tot, "instants": n_all, "simulated": n_sim, "screened": n_scr,
+           "all_identical": identical,
            "speedup_cpu": tot["old_cpu"] / tot["new_cpu"],
            "speedup_wall": tot["old_wall"] / tot["new_wall"]}
     if verbose:
         print(f"\n{'total (' + str(len(runs)) + ' experiments, every ' + str(every) + ' ms)':<34s} "
-              f"{n_all:8d} {n_sim:9d} {tot['old_cpu']:9.2f} {tot['new_cpu']:9.2f}")
+              f"{n_all:8d} {n_scr:8d} {n_sim:9d} {tot['old_cpu']:9.2f} {tot['new_cpu']:9.2f}")
         print(f"speed-up, process time: {out['speedup_cpu']:.1f}x   wall time: "
               f"{out['speedup_wall']:.1f}x   (target >= 10x)   same worst cases: {identical}")
     return out

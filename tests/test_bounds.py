@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 
 from ppamsafety.experiments.catalog import run_thesis_experiment, thesis_variants
+from ppamsafety.impact.engine import DENSE_FREE_STRIDE, FREE_STRIDE
 from ppamsafety.impact.bounds import MASS_GRID, _min_eig_mass, impact_bounds, min_effective_mass
-from ppamsafety.impact.instants import evaluate_experiment, worst_instant
+from ppamsafety.impact.instants import SCREEN_MARGIN, evaluate_experiment, worst_instant
 from ppamsafety.impact.model import effective_mass, simulate_impacts
 from ppamsafety.params import thesis_arm
 from ppamsafety.params.head import head_model
@@ -46,6 +47,42 @@ def test_bounds_exceed_simulated_values_on_random_impacts(arm, head_kw):
     assert np.all(np.isfinite(fb)) and s.F_max.max() > 10.0      # the cases do hit hard
     # and they are bounds worth having: within a factor 10 for F_max at the median
     assert np.median(fb / np.maximum(s.F_max, 1e-12)) < 10.0
+    # the screening of worst_instant: dense-output values x (1 + margin) bound the exact ones
+    d = simulate_impacts(arm, q, qd, K, head=head, integrator="dense").summary
+    for c in ("F_max", "HIC36"):
+        assert np.all(d[c] * (1.0 + SCREEN_MARGIN) >= s[c]), c
+
+
+@pytest.mark.parametrize("speed", [1e-3, 2e-2, 0.3])
+def test_screening_bounds_slow_and_stiff_impacts(arm, speed):
+    """Adversarial states for the screening margin: slow tools (long, soft contacts), joint
+    stiffness at the engine's limit, arm near the stretched/folded singularities."""
+    from ppamsafety.impact.model import stiffness_limit
+    rng = np.random.default_rng(int(speed * 1e3))
+    n = 400
+    q = np.stack([rng.uniform(-np.pi, np.pi, n),
+                  rng.choice([0.05, 3.09, -0.05, -3.09, -1.2], n) + rng.normal(0, 0.02, n)], 1)
+    qd = rng.normal(size=(n, 2))
+    v = np.linalg.norm(np.einsum("nij,nj->ni", jacobian(q, arm), qd), axis=1)
+    qd *= (speed / np.maximum(v, 1e-12))[:, None]
+    # half at the dense integrator's own limit (its free-flight step), half beyond it up to
+    # the fixed engine's (those take the fixed engine: identical values)
+    lim = np.where(np.arange(n) % 2 == 0, stiffness_limit(q, arm, DENSE_FREE_STRIDE * 2e-5),
+                   stiffness_limit(q, arm, FREE_STRIDE * 2e-5))
+    K = lim[:, None] * rng.uniform(0.05, 0.999, (n, 2))
+    with pytest.warns(UserWarning):            # outside the working area
+        s = simulate_impacts(arm, q, qd, K).summary
+    with pytest.warns(UserWarning):
+        d = simulate_impacts(arm, q, qd, K, integrator="dense").summary
+    hit = s.F_max > 0
+    assert hit.sum() > n / 2
+    for c in ("F_max", "HIC36", "HIC15"):
+        assert np.all(d[c] * (1.0 + SCREEN_MARGIN) >= s[c]), c
+        # the margin is generous: the largest deviation is far below it
+        assert np.max(np.abs(d[c][hit] / s[c][hit] - 1.0)) < SCREEN_MARGIN / 10
+    stiff = (K.max(axis=1) > stiffness_limit(q, arm, DENSE_FREE_STRIDE * 2e-5))
+    assert stiff.sum() > n / 3
+    np.testing.assert_array_equal(d.F_max[stiff], s.F_max[stiff])
 
 
 def test_bounds_hold_with_a_moving_head(arm):
@@ -95,9 +132,18 @@ def test_worst_instant_finds_the_same_worst_cases_as_the_full_scan(arm):
     sim = t.simulated.to_numpy()
     np.testing.assert_array_equal(t.F_max[sim], full.F_max[sim])    # simulated rows: same values
     assert t.F_max[~sim].isna().all()
-    # every pruned instant has a bound below the best: it cannot be the worst
-    assert np.all((t.F_bound[~sim] < w.worst_F.F_max) & (t.HIC36_bound[~sim] < w.worst_HIC.HIC36))
+    # every pruned instant has a bound (or a screening value with its margin) below the best:
+    # it cannot be the worst
+    scr = t.screened.to_numpy()
+    assert w.n_screened == scr.sum() and w.n_screened < len(full) / 4
+    up_f = np.where(scr, t.F_screen * (1 + SCREEN_MARGIN), t.F_bound)
+    up_h = np.where(scr, t.HIC36_screen * (1 + SCREEN_MARGIN), t.HIC36_bound)
+    assert np.all((up_f[~sim] < w.worst_F.F_max) & (up_h[~sim] < w.worst_HIC.HIC36))
     assert np.all(t.F_bound >= full.F_max) and np.all(t.HIC36_bound >= full.HIC36)
+    assert np.all(up_f[scr] >= full.F_max[scr]) and np.all(up_h[scr] >= full.HIC36[scr])
+    # without screening: the same worst rows
+    w2 = worst_instant(res, arm, every=3, min_speed=1e-3, screen=False)
+    assert w2.n_screened == 0 and w2.worst_F.equals(w.worst_F) and w2.worst_HIC.equals(w.worst_HIC)
 
 
 def test_worst_instant_rejects_bad_arguments(arm):
@@ -107,3 +153,5 @@ def test_worst_instant_rejects_bad_arguments(arm):
         worst_instant(res, arm, chunk=0)
     with pytest.raises(TypeError, match="head"):
         worst_instant(res, arm, head=3.0)
+    with pytest.raises(TypeError, match="screen"):
+        worst_instant(res, arm, screen="yes")

@@ -131,3 +131,31 @@ def test_a_reader_that_leaves_early_is_not_an_error():
     err = p.stderr.read().decode()
     assert p.wait(timeout=300) == 0
     assert "Traceback" not in err and "error" not in err
+
+
+def test_report_in_worker_processes_equals_the_serial_report(tmp_path):
+    """Sections run in parallel worker processes; the report is assembled in the order asked
+    for and its text is that of the serial run (up to the measured run times)."""
+    import re
+
+    from ppamsafety.report.build import build_report
+
+    only = ["stiffness", "design"]                         # not in registry order
+    a = build_report(tmp_path / "a", quick=True, only=only, progress=False, processes=2)
+    b = build_report(tmp_path / "b", quick=True, only=only, progress=False, processes=1)
+    strip = lambda t: re.sub(r"ran in [0-9.]+ s", "ran in - s", t)     # noqa: E731
+    ta, tb = strip(a.read_text()), strip(b.read_text())
+    assert ta == tb and ta.index("Study `stiffness`") < ta.index("Study `design`")
+    assert sorted(p.name for p in a.parent.glob("*.png")) == \
+        sorted(p.name for p in b.parent.glob("*.png"))
+    # a second run schedules by the recorded times and still writes the same report
+    a2 = build_report(tmp_path / "a", quick=True, only=only, progress=False, processes=2,
+                      overwrite=True)
+    assert strip(a2.read_text()) == tb
+    with pytest.raises(ValueError, match="processes"):
+        build_report(tmp_path / "c", quick=True, only=only, processes=0)
+
+
+def test_report_processes_option_is_validated(tmp_path, capsys):
+    assert main(["report", "--outdir", str(tmp_path / "r"), "--processes", "0"]) == 2
+    assert "not positive" in capsys.readouterr().err

@@ -352,7 +352,16 @@ def check_pass_through(hm: HeadContactModel, closing_speed) -> None:
         (cases with speed <= 0 are not checked).
     """
     v = np.atleast_1d(np.asarray(closing_speed, dtype=float))
-    for i in np.nonzero(v > 0)[0]:
+    pos = np.nonzero(v > 0)[0]
+    if pos.size == 0:
+        return
+    # max_penetration grows strictly with the speed: if the fastest case stops clear of the
+    # centre (with a relative margin far above rounding), every case does; else find the first
+    vmax = float(v[pos].max())
+    if vmax <= 1e3 and max_penetration(hm.mass, vmax, hm.stiffness, hm.exponent,
+                                       hm.damping) < hm.radius * (1.0 - 1e-9):
+        return
+    for i in pos:
         if v[i] > 1e3:
             raise ValueError(f"case {int(i)}: closing speed {v[i]:.4g} m/s of tool and head "
                              f"(qd, head_velocity) exceeds 1000 m/s")
@@ -635,19 +644,21 @@ def _history_indices(history, n: int) -> np.ndarray:
     return np.array(list(dict.fromkeys(idx)), dtype=np.int64)
 
 
-def _check_run(df, sel, hm, stacklevel):
-    """Post-run checks: energy balance, non-finite values, pass-through; columns + warnings."""
+def _check_run(df, sel, hm, stacklevel, vals=None):
+    """Post-run checks: energy balance, non-finite values, pass-through; columns + warnings.
+
+    ``vals``: the summary rows (n, NSUM) of ``df`` if at hand (saves reading them back)."""
     n = len(df)
     cols = eng.SUMMARY_COLUMNS
-    vals = df[cols].to_numpy()
+    vals = df[cols].to_numpy() if vals is None else vals
     act = np.zeros(n, dtype=bool)
     act[sel] = True
     nonfinite = ~np.isfinite(vals) & act[:, None]
-    through = act & ~(df["delta_max"].to_numpy() < hm.radius)
-    err = df["E_balance_error"].to_numpy()
+    through = act & ~(vals[:, eng.R_DMAX] < hm.radius)
+    err = vals[:, eng.R_EBAL]
     energy_ok = ~act | (np.abs(err) <= ENERGY_TOL)
-    status = np.where(act, "ok", "at rest").astype(object)
     flagged = np.nonzero(nonfinite.any(axis=1) | through | ~energy_ok)[0]
+    status = np.where(act, "ok", "at rest").astype(object)
     for i in flagged:
         reasons = []
         if nonfinite[i].any():
@@ -724,8 +735,11 @@ def simulate_impacts(arm, q, qd, stiffness, *, head: HeadContactModel | str | No
         (:func:`~ppamsafety.impact.engine.impact_batch_dense`), about 3.5x
         faster; F_max, HIC36 and HIC15 within 2e-4 relative of the fixed
         engine and of solve_ivp at rtol 1e-10 (tests/test_impact_dense.py;
-        measured 6e-5 on 1000 random impacts).  Cases with a recorded history
-        always use ``"fixed"``.
+        measured 6e-5 on 1000 random impacts).  Cases with a recorded history,
+        cases whose stiffness its free-flight step (DENSE_FREE_STRIDE x
+        ``dt``) cannot resolve (:func:`stiffness_limit`), and the
+        ``"flexible-joint"`` and ``"rigid"`` conventions always use
+        ``"fixed"``.
     joint_model : {"frozen-equilibrium", "flexible-joint", "rigid"} or JointModel
         What holds the motor side of the joint springs
         (:class:`~ppamsafety.impact.engine.JointModel`): ``"frozen-equilibrium"``
@@ -787,6 +801,52 @@ def _simulate_impacts(arm, q, qd, stiffness, *, head, direction, head_velocity, 
                       joint_model="frozen-equilibrium", motor_inertia=None):
     """:func:`simulate_impacts`; ``warn_area=False`` for states of a simulated closed-loop
     record (their working-area excursions are the controller's, not a user's mistake)."""
+    integrator = check_choice("integrator", integrator, ("fixed", "dense"))
+    prep = _prepare_impacts(arm, q, qd, stiffness, head=head, direction=direction,
+                            head_velocity=head_velocity, fixed_arm=fixed_arm, dt=dt,
+                            duration=duration, history=history, warn_area=warn_area,
+                            stacklevel=stacklevel + 1, joint_model=joint_model,
+                            motor_inertia=motor_inertia)
+    n = prep.cases.shape[0]
+    SUM = np.zeros((n, eng.NSUM))
+    HIST = np.zeros((prep.hist_idx.size, prep.nsteps + 1, eng.NHIST))
+    SUM[prep.sel] = _run_cases(prep, prep.sel, integrator, HIST)
+    df = _summary_frame(prep, np.arange(n), SUM, stacklevel=stacklevel)
+    hists = {int(i): eng.HIST.frame(HIST[j]) for j, i in enumerate(prep.hist_idx)}
+    return ImpactResults(df, hists, prep.head, prep.dt, prep.duration)
+
+
+@dataclass
+class _Prepared:
+    """Validated, packed impact cases (:func:`_prepare_impacts`), ready for the kernels."""
+
+    q: np.ndarray
+    qd: np.ndarray
+    K: np.ndarray
+    u: np.ndarray
+    speed: np.ndarray
+    cases: np.ndarray
+    sel: np.ndarray
+    hist_idx: np.ndarray
+    hist_of: np.ndarray
+    hp: np.ndarray
+    P: np.ndarray
+    head: HeadContactModel
+    dt: float
+    duration: float
+    nsteps: int
+    w36: int
+    w15: int
+    arm: object
+    fixed_arm: bool
+    joint_model: "eng.JointModel" = eng.JointModel.FROZEN_EQUILIBRIUM
+    B: np.ndarray | None = None
+
+
+def _prepare_impacts(arm, q, qd, stiffness, *, head, direction, head_velocity, fixed_arm, dt,
+                     duration, history, warn_area, stacklevel,
+                     joint_model="frozen-equilibrium", motor_inertia=None):
+    """Validate the inputs of :func:`simulate_impacts` and pack the kernel rows (no run)."""
     arm = check_arm(arm)
     q = as_float_array("q", q, shape_tail=(2,), ndim=(1, 2))
     qd = as_float_array("qd", qd, shape_tail=(2,), ndim=(1, 2))
@@ -814,7 +874,6 @@ def _simulate_impacts(arm, q, qd, stiffness, *, head, direction, head_velocity, 
         raise ValueError(f"fixed_arm = True holds the arm still, so joint_model = "
                          f"{jm.name.lower().replace('_', '-')!r} has no meaning; use "
                          f"joint_model 'frozen-equilibrium' (the default) with fixed_arm")
-    integrator = check_choice("integrator", integrator, ("fixed", "dense"))
     dt = check_range("dt", dt, 1e-8, 1e-3, unit="s")
     duration = check_range("duration", duration, 1e-4, 10.0, unit="s")
     if duration < dt:
@@ -845,14 +904,13 @@ def _simulate_impacts(arm, q, qd, stiffness, *, head, direction, head_velocity, 
     check_range_array("stiffness", K, 0.0, math.inf, unit="N m/rad")   # inf: rigid only
     check_range_array("head_velocity", vh, -MAX_HEAD_SPEED, MAX_HEAD_SPEED, unit="m/s")
     check_range_array("motor_inertia", B, 0.0, MAX_MOTOR_INERTIA, unit="kg m^2")
-    # the largest RK4 step the chosen integrator takes (free flight); cases with a history
-    # always run the fixed engine
-    stride = eng.FREE_STRIDE if integrator == "fixed" else max(eng.FREE_STRIDE,
-                                                                 eng.DENSE_FREE_STRIDE)
+    # the fixed engine's largest RK4 step (free flight) must resolve the springs; the dense
+    # integrator takes longer steps and hands the cases it cannot resolve to the fixed engine
+    # (:func:`_run_cases`)
     if not fixed_arm and n and frozen:
-        check_stiffness(K, q, arm, stride * dt, dt)
+        check_stiffness(K, q, arm, eng.FREE_STRIDE * dt, dt)
     elif jm == eng.JointModel.FLEXIBLE_JOINT and n:
-        check_flexible_stiffness(K, q, B, arm, stride * dt, dt)
+        check_flexible_stiffness(K, q, B, arm, eng.FREE_STRIDE * dt, dt)
     hist_idx = _history_indices(history, n)
     if hist_idx.size * (nsteps + 1) * eng.NHIST * 8 > MAX_HISTORY_BYTES:
         raise ValueError(f"history: {hist_idx.size} histories of {nsteps + 1} steps need "
@@ -880,37 +938,75 @@ def _simulate_impacts(arm, q, qd, stiffness, *, head, direction, head_velocity, 
                            arm_mode=int(mode), joint_model=int(jm), B=B)
     hist_of = np.full(n, -1, dtype=np.int64)
     hist_of[hist_idx] = np.arange(hist_idx.size)
-    hp = eng.pack_head(hm)
-    SUM = np.zeros((n, eng.NSUM))
-    HIST = np.zeros((hist_idx.size, nsteps + 1, eng.NHIST))
     sel = np.nonzero(active)[0]
     w36 = int(math.floor(0.036 / dt * (1 + 1e-9)))
     w15 = int(math.floor(0.015 / dt * (1 + 1e-9)))
-    out = np.zeros((sel.size, eng.NSUM))
-    P = np.array(lay.pack(arm))
+    return _Prepared(q=q, qd=qd, K=K, u=u, speed=speed, cases=cases, sel=sel,
+                     hist_idx=hist_idx, hist_of=hist_of, hp=eng.pack_head(hm),
+                     P=np.array(lay.pack(arm)), head=hm, dt=float(dt),
+                     duration=float(duration), nsteps=nsteps, w36=w36, w15=w15,
+                     arm=arm, fixed_arm=fixed_arm, joint_model=jm, B=B)
+
+
+def _run_cases(prep: _Prepared, idx, integrator: str, HIST=None) -> np.ndarray:
+    """Summary rows (len(idx), NSUM) of the active cases ``idx`` of ``prep``.
+
+    ``"dense"`` runs :func:`~ppamsafety.impact.engine.impact_batch_dense` except
+    for cases with a recorded history (into ``HIST``, indexed by
+    ``prep.hist_of``) and cases whose joint stiffness exceeds
+    :func:`stiffness_limit` at the dense integrator's free-flight step
+    (DENSE_FREE_STRIDE x dt, five times the fixed engine's), which take the
+    fixed-step engine.  A case's row depends only on its own case row (never
+    on the other cases of the call).
+    """
+    idx = np.asarray(idx, dtype=np.int64)
+    cases = prep.cases[idx]
+    hist_of = prep.hist_of[idx]
+    if HIST is None:
+        HIST = np.zeros((0, prep.nsteps + 1, eng.NHIST))
+        hist_of = np.full(idx.size, -1, dtype=np.int64)
+    out = np.zeros((idx.size, eng.NSUM))
+    args = (prep.P, prep.hp, prep.dt, prep.nsteps, prep.w36, prep.w15)
     if integrator == "dense":
-        dense = hist_of[sel] < 0
+        # the dense integrator is written for the frozen equilibrium (and the fixed arm)
+        dense = (hist_of < 0) & (prep.joint_model == eng.JointModel.FROZEN_EQUILIBRIUM)
+        if not prep.fixed_arm and idx.size:
+            # the dense integrator's free-flight steps must resolve the joint springs
+            klim = stiffness_limit(prep.q[idx], prep.arm, eng.DENSE_FREE_STRIDE * prep.dt)
+            dense &= prep.K[idx].max(axis=1) <= klim
         od = np.zeros((int(dense.sum()), eng.NSUM))
-        eng.impact_batch_dense(np.ascontiguousarray(cases[sel][dense]), P, hp, float(dt), nsteps,
-                               w36, w15, od)
+        eng.impact_batch_dense(np.ascontiguousarray(cases[dense]), *args, od)
         out[dense] = od
-        sel_f = sel[~dense]
-        of = np.zeros((sel_f.size, eng.NSUM))
-        eng.impact_batch(np.ascontiguousarray(cases[sel_f]), P, hp, float(dt), nsteps, w36, w15,
-                         of, HIST, np.ascontiguousarray(hist_of[sel_f]))
+        of = np.zeros((int((~dense).sum()), eng.NSUM))
+        eng.impact_batch(np.ascontiguousarray(cases[~dense]), *args, of, HIST,
+                         np.ascontiguousarray(hist_of[~dense]))
         out[~dense] = of
     else:
-        eng.impact_batch(np.ascontiguousarray(cases[sel]), P, hp, float(dt), nsteps, w36, w15,
-                         out, HIST, np.ascontiguousarray(hist_of[sel]))
-    SUM[sel] = out
-    df = pd.DataFrame({"q1": q[:, 0], "q2": q[:, 1], "qd1": qd[:, 0], "qd2": qd[:, 1],
-                       "K1": K[:, 0], "K2": K[:, 1], "ux": u[:, 0], "uy": u[:, 1],
-                       "tcp_speed": speed})
-    if not frozen:       # the frozen equilibrium keeps its historical columns
-        df.insert(6, "joint_model", jm.name.lower().replace("_", "-"))
-        df.insert(7, "B1", B[:, 0])
-        df.insert(8, "B2", B[:, 1])
-    df = pd.concat([df, eng.SUMMARY.frame(SUM)], axis=1)
-    df = _check_run(df, sel, hm, stacklevel=stacklevel)
-    hists = {int(i): eng.HIST.frame(HIST[j]) for j, i in enumerate(hist_idx)}
-    return ImpactResults(df, hists, hm, float(dt), float(duration))
+        eng.impact_batch(np.ascontiguousarray(cases), *args, out, HIST,
+                         np.ascontiguousarray(hist_of))
+    return out
+
+
+def _summary_frame(prep: _Prepared, rows, SUM, *, stacklevel: int) -> pd.DataFrame:
+    """The summary DataFrame of the cases ``rows`` of ``prep`` (SUM: their summary rows,
+    zero for cases at rest), with the post-run checks (:func:`_check_run`)."""
+    rows = np.asarray(rows, dtype=np.int64)
+    SUM = np.asarray(SUM, dtype=float).reshape(rows.size, eng.NSUM)
+    data = np.empty((rows.size, len(_INPUT_COLUMNS) + eng.NSUM))       # one block: one copy
+    data[:, 0:2], data[:, 2:4], data[:, 4:6] = prep.q[rows], prep.qd[rows], prep.K[rows]
+    data[:, 6:8], data[:, 8] = prep.u[rows], prep.speed[rows]
+    data[:, len(_INPUT_COLUMNS):] = SUM
+    df = pd.DataFrame(data, columns=_INPUT_COLUMNS + list(eng.SUMMARY_COLUMNS))
+    if prep.joint_model != eng.JointModel.FROZEN_EQUILIBRIUM:
+        # the frozen equilibrium keeps its historical columns
+        df.insert(6, "joint_model", prep.joint_model.name.lower().replace("_", "-"))
+        df.insert(7, "B1", prep.B[rows, 0])
+        df.insert(8, "B2", prep.B[rows, 1])
+    active = np.zeros(prep.cases.shape[0], dtype=bool)
+    active[prep.sel] = True
+    return _check_run(df, np.nonzero(active[rows])[0], prep.head, stacklevel=stacklevel + 1,
+                      vals=SUM)
+
+
+#: Input columns of the impact summary, before :data:`~ppamsafety.impact.engine.SUMMARY_COLUMNS`.
+_INPUT_COLUMNS = ["q1", "q2", "qd1", "qd2", "K1", "K2", "ux", "uy", "tcp_speed"]

@@ -13,7 +13,9 @@ Users pick a model by name (:func:`head_model`) or build their own
 
 from __future__ import annotations
 
+import functools
 import math
+import types
 from dataclasses import dataclass, replace
 
 from .._validation import check_range, check_str
@@ -209,7 +211,8 @@ class HeadContactModel:
 THESIS_FRONTAL = dict(stiffness=9.5e5, exponent=1.5, damping=3.3e6)
 
 
-def _models() -> dict:
+@functools.lru_cache(maxsize=1)
+def _models() -> types.MappingProxyType:
     th = HeadContactModel(
         name="thesis-frontal", mass=5.0, radius=0.1, **THESIS_FRONTAL,
         source="Reconstructed: Hunt-Crossley fit to the (HIC, F_max) pairs of thesis Table 6.1 "
@@ -224,7 +227,8 @@ def _models() -> dict:
     child = th.replace(name="child-frontal", mass=3.0,
                        source="thesis-frontal contact with a 3 kg head (illustrative child "
                               "variant; the contact stiffness is kept, only the mass changes)")
-    return {m.name: m for m in (th, iso, face, child)}
+    # built once (frozen models; a read-only mapping): every impact call resolves its head
+    return types.MappingProxyType({m.name: m for m in (th, iso, face, child)})
 
 
 def head_model(name: str = "thesis-frontal") -> HeadContactModel:

@@ -8,21 +8,50 @@ so no matplotlib backend is selected here or anywhere in the package.
 The folder is written through :class:`ppamsafety.output.OutputFolder`: a
 previous report is replaced only with ``overwrite=True`` and a folder holding
 files ppamsafety did not write is never used.
+
+**Parallel sections.**  Studies are independent (each computes, renders and
+writes its own artifacts), so with ``processes > 1`` they run in that many
+worker processes, longest first (the wall times of the previous report in the
+folder's ``metrics.json``; sections never timed before go first), and the
+report is assembled in the order of the studies (``only``, or
+:data:`~ppamsafety.studies.REGISTRY`) whatever the completion order.  A new section needs nothing to benefit.  Studies that
+start their own worker processes (the safety scan, the lambda sweep) still
+do; the operating system shares the cores.
 """
 
 from __future__ import annotations
 
 import json
+import os
 import time
+from concurrent.futures import FIRST_EXCEPTION, ProcessPoolExecutor, wait
 from pathlib import Path
 
+from .._validation import check_int
 from ..output import OutputFolder
 from ..studies import REGISTRY, run_study
 from .html import report_page
 
 
+def _timed_study(name: str, stage, quick: bool):
+    """Run one study into ``stage``; (StudyResult, wall time [s]).  Top level: picklable."""
+    t0 = time.perf_counter()
+    res = run_study(name, stage, quick=quick)      # compute -> render -> write
+    return res, time.perf_counter() - t0
+
+
+def _previous_times(out: Path) -> dict:
+    """Study wall times [s] of the previous report in ``out`` (empty if none or unreadable)."""
+    try:
+        prev = json.loads((out / "metrics.json").read_text())
+        return {k: float(v["wall_time_s"]) for k, v in prev.items()
+                if isinstance(v, dict) and "wall_time_s" in v}
+    except (OSError, ValueError, TypeError, KeyError):
+        return {}
+
+
 def build_report(outdir="reports", *, quick: bool = False, only=None, progress: bool = True,
-                 overwrite: bool = False) -> Path:
+                 overwrite: bool = False, processes: int | None = None) -> Path:
     """Run the studies and write ``outdir/index.md``, ``index.html``, figures and tables.
 
     ``index.html`` is the same report as one page with section navigation
@@ -43,6 +72,10 @@ def build_report(outdir="reports", *, quick: bool = False, only=None, progress: 
     overwrite : bool
         Replace a previous ppamsafety output in ``outdir`` (its toolkit-written
         files only).  If a study fails, the previous report is left untouched.
+    processes : int, optional
+        Studies run at the same time, each in its own worker process (default:
+        the CPU count, at most the number of studies); 1 runs them one after
+        the other in this process.  The report is the same either way.
 
     Returns
     -------
@@ -57,18 +90,41 @@ def build_report(outdir="reports", *, quick: bool = False, only=None, progress: 
     unknown = [n for n in names if n not in REGISTRY]
     if unknown:
         raise ValueError(f"unknown studies {unknown}; choose from {REGISTRY}")
+    if processes is None:
+        processes = os.cpu_count() or 1
+    processes = min(check_int("processes", processes, 1, 1024), len(names))
     out = Path(outdir)
+    previous = _previous_times(out)
     with OutputFolder(outdir, kind="report", overwrite=overwrite) as stage:
+        done = {}
+
+        def report(name, res, dt):
+            done[name] = (res, dt)
+            if progress:
+                print(f"[report] {name}: {dt:.1f} s, {len(res.artifacts)} artifacts", flush=True)
+
+        if processes == 1:
+            for name in names:
+                report(name, *_timed_study(name, stage, quick))
+        else:
+            # longest first (never timed: first), so the last to finish is a short one
+            order = sorted(names, key=lambda n: -previous.get(n, float("inf")))
+            pool = ProcessPoolExecutor(max_workers=processes)
+            try:
+                futures = {pool.submit(_timed_study, n, stage, quick): n for n in order}
+                pending = set(futures)
+                while pending:
+                    finished, pending = wait(pending, return_when=FIRST_EXCEPTION)
+                    for f in finished:
+                        report(futures[f], *f.result())     # re-raises a study's error
+            finally:
+                pool.shutdown(wait=True, cancel_futures=True)
         sections, metrics = [], {}
-        for name in names:
-            t0 = time.perf_counter()
-            res = run_study(name, stage, quick=quick)      # compute -> render -> write
-            dt = time.perf_counter() - t0
+        for name in names:                                  # the order asked for
+            res, dt = done[name]
             metrics[name] = {**res.metrics, "wall_time_s": round(dt, 2)}
             sections.append(f"## {res.title}\n\n{res.markdown.strip()}\n\n*Study `{name}` ran in "
                             f"{dt:.1f} s.*\n")
-            if progress:
-                print(f"[report] {name}: {dt:.1f} s, {len(res.artifacts)} artifacts", flush=True)
         header = ("# ppamsafety report\n\nGenerated by `ppamsafety report`"
                   f"{' --quick' if quick else ''}. Every number below was computed by the code in "
                   "this repository; thesis values are quoted for comparison with their table or "
