@@ -42,6 +42,7 @@ import os
 import secrets
 import shutil
 import tempfile
+import warnings
 from pathlib import Path, PurePosixPath
 
 MARKER = ".ppamsafety-output"
@@ -154,6 +155,16 @@ def inspect_output_folder(folder, *, overwrite: bool = False, _exclude: str | No
     if not p.exists():
         return {"files": set(), "kind": None, "dirs": set()}
     entries = _entries(p, exclude=_exclude)
+    stale = sorted({e.split("/", 1)[0] for e in entries if e.startswith(_STAGING_PREFIX)})
+    if stale:
+        # staging folders of an interrupted run (killed before it could clean up): ours by
+        # name, never user data; left in place (nothing is deleted), and not a reason to
+        # refuse the folder
+        entries = [e for e in entries if e.split("/", 1)[0] not in stale]
+        warnings.warn(f"output folder '{p}' holds {len(stale)} staging folder(s) of an "
+                      f"interrupted ppamsafety run ({_few(stale, 3)}); they are ignored and "
+                      f"left in place, delete them when no run is using this folder",
+                      UserWarning, stacklevel=3)
     if not entries:
         return {"files": set(), "kind": None, "dirs": set()}
     marker = read_marker(p)

@@ -49,6 +49,26 @@ def test_folder_with_user_file_is_refused_and_untouched(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["thesis.tex"]
 
 
+def test_staging_folder_of_a_killed_run_neither_blocks_nor_is_deleted(tmp_path):
+    """A run killed by SIGKILL cannot remove its staging folder; the next run with the flag
+    must still work, warn about the leftover and leave it (and its contents) in place."""
+    _marked(tmp_path, ["old.csv"])
+    stale = tmp_path / ".ppamsafety-staging-dead1234"
+    stale.mkdir()
+    (stale / "half.png").write_text("partial")
+    with pytest.warns(UserWarning, match="interrupted"):
+        with OutputFolder(tmp_path, kind="report", overwrite=True) as stage:
+            _write(stage, **{"new.csv": "n"})
+    assert (tmp_path / "new.csv").read_text() == "n" and not (tmp_path / "old.csv").exists()
+    assert (stale / "half.png").read_text() == "partial"
+    assert read_marker(tmp_path)["files"] == ["new.csv"]
+    # a user file is still refused, leftover or not
+    (tmp_path / "mine.txt").write_text("x")
+    with pytest.warns(UserWarning), pytest.raises(OutputError, match="mine.txt"):
+        with OutputFolder(tmp_path, kind="report", overwrite=True):
+            pytest.fail("must not be entered")
+
+
 def test_marked_folder_needs_the_flag(tmp_path):
     _marked(tmp_path, ["old.csv"])
     with pytest.raises(OutputError, match="--overwrite"):
