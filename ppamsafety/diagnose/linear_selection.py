@@ -37,7 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import stats
 
-from .selection import ALPHA, CV_SEGMENTS, Step
+from .selection import ALPHA, CV_SEGMENTS, Step, rank_step
 
 
 @dataclass(frozen=True, eq=False)
@@ -232,25 +232,10 @@ def forward_selection_linear(e0, columns: dict, admissible, *, alpha: float = AL
                          "gain_per_equation": d / max(f.m, 1)})
         for r in rows:
             r["in_bounds"] = bool(admissible(fits[r["name"]], r["name"]))
-            r["eligible"] = bool(r["delta_bic"] < 0 and r["p_value"] < alpha / len(rest)
-                                 and r["cv_gain"] > 0 and r["in_bounds"]
-                                 and r["gain_per_equation"] >= min_gain_per_equation)
-        adm = [r for r in rows if r["in_bounds"]]
-        bics = np.array([current.bic] + [r["bic"] for r in adm])
-        w = np.exp(-(bics - bics.min()) / 2)
-        w /= w.sum()
-        for r in rows:
-            r["bic_weight"] = 0.0
-        for r, wi in zip(adm, w[1:]):
-            r["bic_weight"] = float(wi)
-        rows.sort(key=lambda r: r["bic"])
-        ok = [r for r in rows if r["eligible"]]
-        chosen = ok[0]["name"] if ok else None
-        if chosen is not None:
-            others = [r["bic"] for r in adm if r["name"] != chosen] + [current.bic]
-            ok[0]["evidence_ratio_log10"] = float((min(others) - ok[0]["bic"]) / 2
-                                                  / math.log(10))
-        steps.append(Step(tuple(selected), rows, chosen, current.bic, cur_cv, float(w[0])))
+        chosen, w0 = rank_step(rows, current.bic, alpha=alpha, n_candidates=len(rest),
+                               extra_rule=lambda r: r["gain_per_equation"]
+                               >= min_gain_per_equation)
+        steps.append(Step(tuple(selected), rows, chosen, current.bic, cur_cv, w0))
         if chosen is None:
             break
         selected.append(chosen)

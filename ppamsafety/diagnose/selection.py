@@ -394,6 +394,63 @@ class Step:
     current_weight: float
 
 
+def rank_step(rows: list, current_bic: float, *, alpha: float, n_candidates: int,
+              extra_rule=None):
+    """The naming rule of one forward-selection step, shared by arm and tester records.
+
+    A candidate is *eligible* when (a) its BIC is below the current model's,
+    (b) the likelihood-ratio test gives p < ``alpha / n_candidates``
+    (Bonferroni), (c) the cross-validation gain is positive, (d) its parameters
+    are admissible (``row["in_bounds"]``) and ``extra_rule(row)`` holds when
+    given.  BIC weights are computed among the admissible models (the current
+    one and every candidate whose parameters are physically possible); the
+    rows are sorted by BIC and the best eligible one is chosen, with its
+    evidence ratio (log10) against the runner-up.
+
+    Parameters
+    ----------
+    rows : list of dict
+        One row per candidate with ``name``, ``bic``, ``delta_bic``,
+        ``p_value``, ``cv_gain`` and ``in_bounds``; completed in place with
+        ``eligible``, ``bic_weight`` and, for the chosen one,
+        ``evidence_ratio_log10``, and sorted by BIC.
+    current_bic : float
+        BIC of the current model.
+    alpha : float, keyword-only
+        Level of the likelihood-ratio test before the Bonferroni division.
+    n_candidates : int, keyword-only
+        Number of candidates compared in this step (Bonferroni divisor).
+    extra_rule : callable, optional, keyword-only
+        ``row -> bool``, a further eligibility rule (the tester's effect size).
+
+    Returns
+    -------
+    chosen : str or None
+        The named candidate, or None when none is eligible.
+    current_weight : float
+        BIC weight of the current model.
+    """
+    for r in rows:
+        r["eligible"] = bool(r["delta_bic"] < 0 and r["p_value"] < alpha / n_candidates
+                             and r["cv_gain"] > 0 and r["in_bounds"]
+                             and (extra_rule is None or extra_rule(r)))
+    adm = [r for r in rows if r["in_bounds"]]
+    bics = np.array([current_bic] + [r["bic"] for r in adm])
+    w = np.exp(-(bics - bics.min()) / 2)
+    w /= w.sum()
+    for r in rows:
+        r["bic_weight"] = 0.0
+    for r, wi in zip(adm, w[1:]):
+        r["bic_weight"] = float(wi)
+    rows.sort(key=lambda r: r["bic"])
+    ok = [r for r in rows if r["eligible"]]
+    chosen = ok[0]["name"] if ok else None
+    if chosen is not None:
+        others = [r["bic"] for r in adm if r["name"] != chosen] + [current_bic]
+        ok[0]["evidence_ratio_log10"] = float((min(others) - ok[0]["bic"]) / 2 / math.log(10))
+    return chosen, float(w[0])
+
+
 def forward_selection(prob: Problem, candidates=None, *, alpha: float = ALPHA,
                       max_effects: int = 4) -> tuple:
     """Forward selection with refit (module docstring).
@@ -434,25 +491,8 @@ def forward_selection(prob: Problem, candidates=None, *, alpha: float = ALPHA,
                          "cv_chi2": cv, "cv_gain": cur_cv - cv})
         for r in rows:
             r["in_bounds"] = in_bounds(prob, fits[r["name"]], r["name"])
-            r["eligible"] = bool(r["delta_bic"] < 0 and r["p_value"] < alpha / len(rest)
-                                 and r["cv_gain"] > 0 and r["in_bounds"])
-        # BIC weights among the admissible models: the current one and every candidate
-        # whose parameters are physically possible
-        adm = [r for r in rows if r["in_bounds"]]
-        bics = np.array([current.bic] + [r["bic"] for r in adm])
-        w = np.exp(-(bics - bics.min()) / 2)
-        w /= w.sum()
-        for r in rows:
-            r["bic_weight"] = 0.0
-        for r, wi in zip(adm, w[1:]):
-            r["bic_weight"] = float(wi)
-        rows.sort(key=lambda r: r["bic"])
-        ok = [r for r in rows if r["eligible"]]
-        chosen = ok[0]["name"] if ok else None
-        if chosen is not None:
-            others = [r["bic"] for r in adm if r["name"] != chosen] + [current.bic]
-            ok[0]["evidence_ratio_log10"] = float((min(others) - ok[0]["bic"]) / 2 / math.log(10))
-        steps.append(Step(tuple(selected), rows, chosen, current.bic, cur_cv, float(w[0])))
+        chosen, w0 = rank_step(rows, current.bic, alpha=alpha, n_candidates=len(rest))
+        steps.append(Step(tuple(selected), rows, chosen, current.bic, cur_cv, w0))
         if chosen is None:
             break
         selected.append(chosen)
@@ -660,5 +700,5 @@ def subsystem_channels(name: str) -> tuple:
 
 __all__ = ["Problem", "make_problem", "at_model", "resample", "bootstrap_frequency",
            "BOOTSTRAP_REPLICATES", "Fit", "fit_model", "cv_chi2", "Step",
-           "forward_selection", "parameter_table", "in_bounds", "subsystem_channels", "ALPHA", "RHO_MAX",
-           "CV_SEGMENTS"]
+           "forward_selection", "rank_step", "parameter_table", "in_bounds",
+           "subsystem_channels", "ALPHA", "RHO_MAX", "CV_SEGMENTS"]

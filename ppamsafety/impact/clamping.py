@@ -50,11 +50,10 @@ from ..params.head import HeadContactModel
 from ..plant import dynamics as dyn
 from ..plant import geometry as geo
 from ..plant import layout as lay
-from ..plant.dynamics import coriolis_cs, mass_matrix_cs
-from ..plant.geometry import tcp_kinematics_cs
+from ..plant.dynamics import coriolis_cs
 from . import engine as eng
 from .contact import hunt_crossley_elastic, hunt_crossley_force, hunt_crossley_potential
-from .engine import C_K, C_Q, C_QD, C_U, HP_B, HP_K, HP_M, HP_N, HP_R
+from .engine import C_K, C_Q, C_QD, C_U, HP_B, HP_K, HP_M, HP_N, HP_R, arm_terms
 from .model import (MAX_STEPS, check_angles, check_arm, check_pass_through, check_stiffness,
                     resolve_head)
 
@@ -102,12 +101,8 @@ ENERGY_TOL = 1e-3
 
 @leaf
 def _terms(y, P):
-    c1, s1 = math.cos(y[Y_Q]), math.sin(y[Y_Q])
-    c2, s2 = math.cos(y[Y_Q + 1]), math.sin(y[Y_Q + 1])
-    c12, s12 = c1 * c2 - s1 * s2, s1 * c2 + c1 * s2
-    h11, h12, h22 = mass_matrix_cs(c2, s2, P)
-    x, yy, j11, j12, j21, j22 = tcp_kinematics_cs(c1, s1, c12, s12, P)
-    return c2, s2, h11, h12, h22, x, yy, j11, j12, j21, j22
+    """:func:`~ppamsafety.impact.engine.arm_terms` at the link angles of the clamping state."""
+    return arm_terms(y[Y_Q], y[Y_Q + 1], P)
 
 
 @leaf

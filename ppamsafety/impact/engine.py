@@ -255,14 +255,34 @@ def pack_head(head) -> np.ndarray:
 
 
 @leaf
-def _arm_terms(y, P):
-    """cos/sin of q2, inertia matrix entries and TCP kinematics at state ``y``."""
-    c1, s1 = math.cos(y[Y_Q]), math.sin(y[Y_Q])
-    c2, s2 = math.cos(y[Y_Q + 1]), math.sin(y[Y_Q + 1])
+def arm_terms(q1, q2, P):
+    """cos/sin of q2, inertia matrix entries and TCP kinematics at the angles q1, q2 [rad].
+
+    Parameters
+    ----------
+    q1, q2 : float
+        Link angles [rad].
+    P : ndarray of float64, shape (NP,)
+        Packed plant parameter row (:data:`ppamsafety.plant.layout.PLANT`).
+
+    Returns
+    -------
+    tuple of float
+        ``(cos q2, sin q2, H11, H12, H22, x_tcp, y_tcp, J11, J12, J21, J22)``
+        (kg m^2, m, m/rad).
+    """
+    c1, s1 = math.cos(q1), math.sin(q1)
+    c2, s2 = math.cos(q2), math.sin(q2)
     c12, s12 = c1 * c2 - s1 * s2, s1 * c2 + c1 * s2
     h11, h12, h22 = mass_matrix_cs(c2, s2, P)
     x, yy, j11, j12, j21, j22 = tcp_kinematics_cs(c1, s1, c12, s12, P)
     return c2, s2, h11, h12, h22, x, yy, j11, j12, j21, j22
+
+
+@leaf
+def _arm_terms(y, P):
+    """:func:`arm_terms` at the link angles of the impact state ``y`` (layout :data:`STATE`)."""
+    return arm_terms(y[Y_Q], y[Y_Q + 1], P)
 
 
 @leaf

@@ -72,7 +72,7 @@ class StudyResult:
 
 #: Study modules in report order (module names inside ppamsafety.studies).
 REGISTRY = ["design", "tracking", "responses", "smc", "head_model", "safety", "worst_direction",
-            "stiffness", "lambda_sweep", "iso_15066", "reaction", "interaction", "effects",
+            "stiffness", "lambda_sweep", "effects", "interaction", "iso_15066", "reaction",
             "diagnose_sawtooth", "diagnose_cases"]
 
 
