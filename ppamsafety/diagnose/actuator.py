@@ -143,11 +143,9 @@ def actuator_record(data) -> tuple:
     if data.kind != "actuator":
         raise ValueError(f"{data.source}: data.kind = {data.kind!r}; the test-bench diagnosis "
                          f"needs kind = 'actuator'")
-    notes = []
-    a0, b0 = max(data.segments, key=lambda s: s[1] - s[0])
-    if len(data.segments) > 1:
-        notes.append(f"the record has {len(data.segments)} gap-free segments; the longest "
-                     f"(rows {a0}..{b0 - 1}) is diagnosed")
+    from .residuals import longest_segment
+
+    a0, b0, notes = longest_segment(data)
     n = b0 - a0
     if n < MIN_SAMPLES:
         raise ValueError(f"{data.source}: the diagnosed segment has {n} samples; at least "

@@ -31,13 +31,12 @@ effect under identical rules (constants :data:`~.selection.ALPHA`,
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
 from scipy import stats
 
-from .selection import ALPHA, CV_SEGMENTS, Step, rank_step
+from .selection import ALPHA, CV_SEGMENTS, Step, aicc, bic, rank_step
 
 
 @dataclass(frozen=True, eq=False)
@@ -75,14 +74,13 @@ class LinearFit:
 
     @property
     def bic(self) -> float:
-        """chi2 + k ln m."""
-        return self.chi2 + self.k * math.log(self.m)
+        """chi2 + k ln m (:func:`~ppamsafety.diagnose.selection.bic`)."""
+        return bic(self.chi2, self.k, self.m)
 
     @property
     def aicc(self) -> float:
-        """chi2 + 2k + 2k(k+1)/(m-k-1)."""
-        k, m = self.k, self.m
-        return self.chi2 + 2 * k + (2 * k * (k + 1) / (m - k - 1) if m - k - 1 > 0 else math.inf)
+        """Small-sample AIC (:func:`~ppamsafety.diagnose.selection.aicc`)."""
+        return aicc(self.chi2, self.k, self.m)
 
     def rho(self) -> float:
         """Residual-to-noise RMS ratio (all equations)."""

@@ -133,6 +133,29 @@ class ArmRecord:
                          self.rows)
 
 
+def longest_segment(data) -> tuple:
+    """The longest gap-free segment of a record, the one a diagnosis analyses.
+
+    Parameters
+    ----------
+    data : MeasuredData
+        A loaded record (``data.segments``: row ranges split at gaps).
+
+    Returns
+    -------
+    a, b : int
+        First and one-past-last row.
+    notes : list of str
+        A note naming the segment when the record has more than one.
+    """
+    a, b = max(data.segments, key=lambda s: s[1] - s[0])
+    notes = []
+    if len(data.segments) > 1:
+        notes.append(f"the record has {len(data.segments)} gap-free segments; the longest "
+                     f"(rows {a}..{b - 1}) is diagnosed")
+    return a, b, notes
+
+
 def arm_record(data) -> tuple:
     """The longest gap-free segment of an arm record with q, qd, p and u, as an :class:`ArmRecord`.
 
@@ -159,11 +182,7 @@ def arm_record(data) -> tuple:
         raise ValueError(f"{data.source}: the diagnosis replays the record with the measured "
                          f"valve set values and compares q, qd, p; missing column(s) "
                          f"{', '.join(missing)}")
-    notes = []
-    a, b = max(data.segments, key=lambda s: s[1] - s[0])
-    if len(data.segments) > 1:
-        notes.append(f"the record has {len(data.segments)} gap-free segments; the longest "
-                     f"(rows {a}..{b - 1}) is diagnosed")
+    a, b, notes = longest_segment(data)
     f = data.frame.iloc[a:b]
     t = f["t"].to_numpy(dtype=float)
     if t.size < 200:
@@ -554,6 +573,7 @@ def replay(rec: ArmRecord, rows, *, shifts=None, substeps: int = 1) -> np.ndarra
     return simulate(None, rec.x0(), U, dt=rec.dt, substeps=substeps, params=rows)
 
 
-__all__ = ["ArmRecord", "arm_record", "BlockSystem", "block_system", "block_noise",
-           "channel_noise", "noise_draws", "replay", "hysteresis_signature", "model_vector", "row_from_mu", "delayed", "MU_NAMES",
+__all__ = ["ArmRecord", "arm_record", "longest_segment", "BlockSystem", "block_system",
+           "block_noise", "channel_noise", "noise_draws", "replay", "hysteresis_signature",
+           "model_vector", "row_from_mu", "delayed", "MU_NAMES",
            "MU_UNITS", "NMU", "CHANNELS", "CHANNEL_UNITS", "SUBSYSTEM", "BLOCK_SECONDS"]

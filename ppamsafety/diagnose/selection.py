@@ -170,6 +170,45 @@ def at_model(prob: Problem, mu) -> Problem:
                    _xcache=prob._xcache)
 
 
+def bic(chi2: float, k: int, m: int) -> float:
+    """Bayesian information criterion with a known noise level: chi2 + k ln m.
+
+    Parameters
+    ----------
+    chi2 : float
+        Sum of squared whitened residuals.
+    k : int
+        Number of fitted parameters.
+    m : int
+        Number of equations (> 0).
+
+    Returns
+    -------
+    float
+    """
+    return chi2 + k * math.log(m)
+
+
+def aicc(chi2: float, k: int, m: int) -> float:
+    """Small-sample corrected AIC with a known noise level: chi2 + 2k + 2k(k+1)/(m-k-1).
+
+    Parameters
+    ----------
+    chi2 : float
+        Sum of squared whitened residuals.
+    k : int
+        Number of fitted parameters.
+    m : int
+        Number of equations.
+
+    Returns
+    -------
+    float
+        ``inf`` when m <= k + 1.
+    """
+    return chi2 + 2 * k + (2 * k * (k + 1) / (m - k - 1) if m - k - 1 > 0 else math.inf)
+
+
 @dataclass(frozen=True, eq=False)
 class Fit:
     """A fitted model (nominal + extensions ``names``).
@@ -213,12 +252,13 @@ class Fit:
 
     @property
     def bic(self) -> float:
-        return self.chi2 + self.k * math.log(self.m)
+        """chi2 + k ln m (:func:`bic`)."""
+        return bic(self.chi2, self.k, self.m)
 
     @property
     def aicc(self) -> float:
-        k, m = self.k, self.m
-        return self.chi2 + 2 * k + (2 * k * (k + 1) / (m - k - 1) if m - k - 1 > 0 else math.inf)
+        """Small-sample AIC (:func:`aicc`)."""
+        return aicc(self.chi2, self.k, self.m)
 
     def rho(self) -> np.ndarray:
         """Residual-to-noise RMS ratio per channel (all blocks)."""
@@ -700,5 +740,5 @@ def subsystem_channels(name: str) -> tuple:
 
 __all__ = ["Problem", "make_problem", "at_model", "resample", "bootstrap_frequency",
            "BOOTSTRAP_REPLICATES", "Fit", "fit_model", "cv_chi2", "Step",
-           "forward_selection", "rank_step", "parameter_table", "in_bounds",
+           "forward_selection", "rank_step", "bic", "aicc", "parameter_table", "in_bounds",
            "subsystem_channels", "ALPHA", "RHO_MAX", "CV_SEGMENTS"]

@@ -177,6 +177,14 @@ def stiffness_limit(q, arm, step: float) -> np.ndarray:
     return lam * (2.0 * math.pi / (STEPS_PER_PERIOD * step)) ** 2
 
 
+def _step_remedy(dt: float, limit: float, k: float) -> str:
+    """The remedy part of a too-stiff message: the step that would resolve ``k`` [N m/rad]
+    (the limit scales as 1/dt^2), or none when even dt = 1e-8 s would not."""
+    dt_ok = dt * math.sqrt(limit / k)
+    return (f"use dt <= {dt_ok:.3g} s, or " if dt_ok >= 1e-8 else
+            "this is beyond any integration step (dt >= 1e-8 s): use ")
+
+
 def check_stiffness(K: np.ndarray, q: np.ndarray, arm, step: float, dt: float,
                     name: str = "stiffness") -> np.ndarray:
     """Refuse joint stiffnesses the integration step cannot resolve (:func:`stiffness_limit`).
@@ -205,10 +213,7 @@ def check_stiffness(K: np.ndarray, q: np.ndarray, arm, step: float, dt: float,
     bad = np.nonzero(K.max(axis=1) > lim)[0]
     if bad.size:
         i = int(bad[0])
-        k = float(K[i].max())
-        dt_ok = dt * math.sqrt(lim[i] / k)
-        remedy = (f"use dt <= {dt_ok:.3g} s, or " if dt_ok >= 1e-8 else
-                  "this is beyond any integration step (dt >= 1e-8 s): use ")
+        remedy = _step_remedy(dt, lim[i], float(K[i].max()))
         raise ValueError(
             f"{name}[{i}] = {K[i].tolist()} N m/rad is beyond the validity of the flexible-joint "
             f"impact model at dt = {dt:g} s: the joint spring's period 2 pi sqrt(m/k) must span "
@@ -322,9 +327,7 @@ def check_flexible_stiffness(K: np.ndarray, q: np.ndarray, B: np.ndarray, arm, s
     bad = np.nonzero(kk > lim)[0]
     if bad.size:
         i = int(bad[0])
-        dt_ok = dt * math.sqrt(lim[i] / kk[i])
-        remedy = (f"use dt <= {dt_ok:.3g} s, or " if dt_ok >= 1e-8 else
-                  "this is beyond any integration step (dt >= 1e-8 s): use ")
+        remedy = _step_remedy(dt, lim[i], kk[i])
         raise ValueError(
             f"{name}[{i}] = {K[i].tolist()} N m/rad with motor_inertia = {B[i].tolist()} kg m^2 "
             f"is beyond the resolution of the flexible-joint impact model at dt = {dt:g} s: the "
