@@ -9,9 +9,12 @@ from ppamsafety.impact.hic import (
     half_sine_optimal_width,
     hic,
     hic_bruteforce,
+    _unimodal_peak,
+    hic_branch_and_bound,
     hic_bruteforce_kernel,
     hic_half_sine,
     hic_kernel,
+    hic_unimodal,
     hic_rectangular,
 )
 
@@ -84,6 +87,62 @@ def test_random_small_signals_match_bruteforce_exactly():
         v_ref, _, _ = hic_bruteforce_kernel(a, 1e-4, wn)
         assert v == pytest.approx(v_ref, rel=1e-12, abs=0.0), (trial, n, wn)
         assert 1 <= j - i <= wn or v == 0.0
+
+
+def _random_unimodal(gen, n):
+    """A seeded random weakly unimodal record: zero tails, plateaus, ties, spikes, ramps."""
+    p = int(gen.integers(0, n))
+    rise = np.sort(gen.random(p) * (gen.random(p) < 0.8))
+    fall = np.sort(gen.random(n - p) * (gen.random(n - p) < 0.8))[::-1]
+    a = np.concatenate([rise, fall])
+    kind = int(gen.integers(0, 4))
+    if kind == 1:
+        a = np.round(4 * a) / 4            # plateaus and exact ties between the two flanks
+    elif kind == 2:
+        a = 1e3 * a ** 8                   # a sharp spike on long, tiny tails
+    elif kind == 3:
+        a[a < 0.3] = 0.0                   # a compact pulse inside zero tails
+    return a
+
+
+def test_unimodal_records_take_the_greedy_path_and_match_bruteforce():
+    """800 seeded random unimodal records (N, Wn random): the O(N) path = brute force, rel 1e-12.
+
+    Also the dispatcher sends them to :func:`hic_unimodal` (same value and pair) and the
+    branch and bound agrees; the returned pair is a valid window with that value.
+    """
+    gen = np.random.default_rng(11)
+    for trial in range(800):
+        n, wn = int(gen.integers(2, 300)), int(gen.integers(1, 350))
+        a = _random_unimodal(gen, n)
+        p = _unimodal_peak(a)
+        assert p >= 0 and a[p] == a.max() and (p == 0 or a[p - 1] < a[p]), trial
+        v, i, j = hic_kernel(a, 1e-4, wn)
+        assert (v, i, j) == hic_unimodal(a, 1e-4, wn, p), trial
+        v_ref, _, _ = hic_bruteforce_kernel(a, 1e-4, wn)
+        v_bb, _, _ = hic_branch_and_bound(a, 1e-4, wn)
+        assert v == pytest.approx(v_ref, rel=1e-12, abs=0.0), (trial, n, wn)
+        assert v_bb == pytest.approx(v_ref, rel=1e-12, abs=0.0), (trial, n, wn)
+        if v > 0.0:
+            assert 1 <= j - i <= wn
+            assert v == pytest.approx(window_hic(a, 1e-4, i * 1e-4, j * 1e-4), rel=1e-12)
+
+
+@pytest.mark.parametrize("a, unimodal", [
+    ([0.0, 1.0, 2.0, 2.0, 1.0, 0.0], True),
+    ([3.0, 2.0, 1.0], True),
+    ([1.0, 2.0, 3.0], True),
+    ([0.0, 0.0, 0.0], True),
+    ([1.0, 0.0, 1.0], False),
+    ([0.0, 2.0, 1.0, 1.5, 0.0], False),
+    ([0.0, 1.0, 0.0, 0.0, 1e-300], False),
+])
+def test_unimodal_peak_detects_single_pulses(a, unimodal):
+    """Hand-made records: a second rise, however small, sends the record to branch and bound."""
+    p = _unimodal_peak(np.asarray(a))
+    assert (p >= 0) == unimodal
+    if unimodal:
+        assert a[p] == max(a) and all(x < a[p] for x in a[:p])
 
 
 def test_all_zero_signal_has_hic_zero():

@@ -53,7 +53,7 @@ from ..plant.dynamics import coriolis_cs, mass_matrix_cs
 from ..plant.geometry import tcp_kinematics_cs
 from ..units import G0
 from .contact import hunt_crossley_elastic, hunt_crossley_force, hunt_crossley_potential
-from .hic import hic_kernel
+from .hic import hic_branch_and_bound, hic_kernel
 
 
 class JointModel(IntEnum):
@@ -426,9 +426,15 @@ def initial_state(case, P, hp, y):
         y[Y_THD], y[Y_THD + 1] = case[C_QD], case[C_QD + 1]
 
 
-@leaf
+@kernel
 def _rk4(y, h, case, P, hp, k1, k2, k3, k4, yt):
-    """One RK4 step of length h; ``k1`` must already hold the derivative at y."""
+    """One RK4 step of length h; ``k1`` must already hold the derivative at y.
+
+    A compiled function of its own, not a leaf: both engines call it from
+    several places, and inlining :func:`impact_rhs` three times at each call
+    site made their first compilation take 70 s instead of 30 s (measured,
+    same results, run time within 2 %).
+    """
     for i in range(NY):
         yt[i] = y[i] + 0.5 * h * k1[i]
     impact_rhs(yt, case, P, hp, k2)
@@ -538,10 +544,12 @@ def impact_batch(CASES, P, hp, dt, nsteps, w36, w15, SUM, HIST, hist_of):
                 s += 1
         r = SUM[c]
         r[R_FMAX], r[R_TFMAX] = fmax, tmax
-        r[R_HIC36], i1, i2 = hic_kernel(acc, dt, w36)
+        # the reference engine keeps the general branch and bound, so that comparing it with
+        # the dense engine (single-pulse HIC path) also cross-checks the two HIC algorithms
+        r[R_HIC36], i1, i2 = hic_branch_and_bound(acc, dt, w36)
         r[R_W36], r[R_W36 + 1] = i1 * dt, i2 * dt
         if i2 - i1 > w15:      # else the HIC36 window is admissible for HIC15, so they are equal
-            r[R_HIC15], i1, i2 = hic_kernel(acc, dt, w15)
+            r[R_HIC15], i1, i2 = hic_branch_and_bound(acc, dt, w15)
         else:
             r[R_HIC15] = r[R_HIC36]
         r[R_W15], r[R_W15 + 1] = i1 * dt, i2 * dt

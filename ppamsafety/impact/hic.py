@@ -9,7 +9,13 @@ On uniform samples a_k = a(k dt) the integral is the trapezoidal rule, i.e. the
 difference of the cumulative trapezoid S (S_0 = 0, S_{k+1} = S_k + dt (a_k + a_{k+1})/2),
 and windows are index pairs (i, j) with 1 <= j - i <= Wn.
 
-**Exact fast algorithm** (:func:`hic_kernel`).  Branch and bound over blocks
+**Single pulse** (:func:`hic_unimodal`, chosen by :func:`hic_kernel` when the
+samples rise to one maximum and then fall, plateaus allowed: 99 % of the
+impacts of ``studies/bench_impact.py``).  The window of every length L with
+the largest area is found by growing it from the largest trapezoid segment
+towards the larger neighbour, so HIC is exact in O(N).
+
+**Any record** (:func:`hic_branch_and_bound`).  Branch and bound over blocks
 I x J = [i0, i1] x [j0, j1] of index pairs.  For every pair in a block, with
 area D = S_j - S_i and length L = j - i, HIC = D * m^1.5 = dt L m^2.5 with the
 mean m = D / (dt L).  Because a >= 0, S is non-decreasing, so D <= S_j1 - S_i0,
@@ -166,8 +172,115 @@ def _push(blocks, bounds, top, c, b, best):
 
 
 @kernel
+def _unimodal_peak(a):
+    """Index of the first maximum of ``a`` if ``a`` is weakly unimodal, else -1.
+
+    Weakly unimodal: non-decreasing up to the first maximum and non-increasing
+    after it (plateaus allowed, zero tails included).
+    """
+    n = a.shape[0]
+    p = 0
+    while p + 1 < n and a[p + 1] >= a[p]:
+        p += 1
+    k = p
+    while k + 1 < n and a[k + 1] <= a[k]:
+        k += 1
+    if k != n - 1:
+        return -1
+    while p > 0 and a[p - 1] == a[p]:      # the first sample of a top plateau
+        p -= 1
+    return p
+
+
+@kernel
+def hic_unimodal(a, dt, max_window_samples, p):
+    """Exact HIC of a weakly unimodal record by growing the window greedily: ``(value, i, j)``.
+
+    ``p`` is the index of the first maximum of ``a`` (:func:`_unimodal_peak`).
+    The trapezoid segments b_k = (a_k + a_{k+1}) dt / 2 of a unimodal record
+    are unimodal (float addition and scaling are monotone).  Starting from the
+    largest segment and adding, each time, the larger of the two neighbouring
+    segments gives, for every length L, a window whose segments are all at
+    least as large as every segment outside it (by induction: outside
+    segments decrease away from the window), i.e. the largest area of any
+    window of length L.  HIC is the maximum over L <= ``max_window_samples``
+    of dt L (area / (dt L))^2.5, so evaluating the greedy window of every
+    length gives the brute-force maximum, in O(N) instead of O(N Wn).  The
+    area is taken from the cumulative trapezoid as in :func:`hic_bruteforce_kernel`;
+    once both neighbours are zero the area can only stay while the width
+    grows, so the search stops there.
+
+    Parameters
+    ----------
+    a : ndarray of float64, shape (N,)
+        Head acceleration magnitude samples [g], non-negative, finite and
+        weakly unimodal (not checked here; see :func:`hic_kernel`).
+    dt : float
+        Sample spacing [s].
+    max_window_samples : int
+        Window limit Wn in whole sample intervals.
+    p : int
+        Index of the first maximum of ``a``.
+    """
+    n = a.shape[0]
+    wn = min(max_window_samples, n - 1)
+    if wn < 1:
+        return 0.0, 0, 0
+    s = _cumulative_area(a, dt)
+    # the largest segment touches the peak sample: [p - 1, p] or [p, p + 1]
+    if p == n - 1 or (p > 0 and a[p - 1] > a[p + 1]):
+        i = p - 1
+    else:
+        i = p
+    j = i + 1
+    best, bi, bj = _window_hic(s[j] - s[i], dt), i, j
+    for w in range(2, wn + 1):
+        left = a[i - 1] + a[i] if i > 0 else -1.0       # neighbouring segments (x 2 / dt)
+        right = a[j] + a[j + 1] if j < n - 1 else -1.0
+        if left <= 0.0 and right <= 0.0:
+            break
+        if left >= right:
+            i -= 1
+        else:
+            j += 1
+        v = _window_hic(s[j] - s[i], dt * w)
+        if v > best:
+            best, bi, bj = v, i, j
+    if best == 0.0:
+        return 0.0, 0, 1
+    return best, bi, bj
+
+
+@kernel
 def hic_kernel(a, dt, max_window_samples):
-    """Exact HIC by branch and bound (module docstring): ``(value, i, j)``.
+    """Exact HIC: ``(value, i, j)``; O(N) for unimodal records, else branch and bound.
+
+    A weakly unimodal record (a single pulse, the usual impact) goes to
+    :func:`hic_unimodal`; any other to :func:`hic_branch_and_bound`.  Both
+    give the maximum of :func:`hic_bruteforce_kernel` (the pair may differ on
+    exact ties; the value up to the rounding of the cumulative area).
+
+    Parameters
+    ----------
+    a : ndarray of float64, shape (N,)
+        Head acceleration magnitude samples [g], non-negative and finite (not
+        checked here; see :func:`hic`).
+    dt : float
+        Sample spacing [s].
+    max_window_samples : int
+        Window limit Wn in whole sample intervals (W / dt rounded down);
+        values above N - 1 act as N - 1.
+    """
+    if a.shape[0] >= 2:
+        p = _unimodal_peak(a)
+        if p >= 0:
+            return hic_unimodal(a, dt, max_window_samples, p)
+    return hic_branch_and_bound(a, dt, max_window_samples)
+
+
+@kernel
+def hic_branch_and_bound(a, dt, max_window_samples):
+    """Exact HIC of any record by branch and bound (module docstring): ``(value, i, j)``.
 
     ``a`` [g] non-negative samples, ``dt`` [s], windows 1 <= j - i <= ``max_window_samples``.
     Same maximum as :func:`hic_bruteforce_kernel` (the pair may differ on exact ties);
@@ -356,7 +469,7 @@ def hic(a, dt, *, window=0.036) -> HICResult:
     -------
     HICResult
         The maximum over all sample windows (trapezoidal integral), computed by the
-        branch and bound of :func:`hic_kernel`; identical to :func:`hic_bruteforce`.
+        :func:`hic_kernel`; the same maximum as :func:`hic_bruteforce`.
     """
     return _evaluate(hic_kernel, hic_batch_kernel, a, dt, window)
 
