@@ -363,6 +363,20 @@ def _run_dask(func, cases, todo, keys, name, scheduler, processes, finish, on_er
         close()
 
 
+def _run_pool(func, cases, todo, nproc, finish, on_error) -> None:
+    """Run the cases ``todo`` in ``nproc`` worker processes, handing each result to ``finish``."""
+    with ProcessPoolExecutor(max_workers=nproc) as pool:
+        futures = {pool.submit(_call, func, cases[i]): i for i in todo}
+        for fut in as_completed(futures):
+            if fut.cancelled():
+                continue
+            exc = fut.exception()
+            ok = finish(futures[fut], None if exc else fut.result(), exc)
+            if not ok and on_error == "raise":
+                for other in futures:      # not started yet: cancel; running: finish
+                    other.cancel()
+
+
 def run_sweep(func, cases=None, *, name: str | None = None, cache_dir=None,
               processes: int | None = 1, progress: bool = True, on_error: str = "record",
               grid: Mapping | None = None, backend: str = "local",
@@ -509,27 +523,23 @@ def run_sweep(func, cases=None, *, name: str | None = None, cache_dir=None,
         if backend == "dask":
             if todo:
                 _run_dask(func, cases, todo, keys, name, scheduler, processes, finish, on_error)
-        elif nproc <= 1:
-            for i in todo:
+        else:
+            # The first case runs in this process even with several workers: the kernels it
+            # compiles are then inherited by the forked workers (or found in the on-disk
+            # cache) instead of being compiled by every worker at once on a cold cache.
+            rest = list(todo)
+            while rest:
+                i = rest.pop(0)
                 try:
                     out = func(**cases[i])
                 except Exception as exc:
                     ok = finish(i, exc=exc)
                 else:
                     ok = finish(i, out)
-                if not ok and on_error == "raise":
+                if (not ok and on_error == "raise") or nproc > 1:
                     break
-        else:
-            with ProcessPoolExecutor(max_workers=nproc) as pool:
-                futures = {pool.submit(_call, func, cases[i]): i for i in todo}
-                for fut in as_completed(futures):
-                    if fut.cancelled():
-                        continue
-                    exc = fut.exception()
-                    ok = finish(futures[fut], None if exc else fut.result(), exc)
-                    if not ok and on_error == "raise":
-                        for other in futures:      # not started yet: cancel; running: finish
-                            other.cancel()
+            if rest and nproc > 1 and (ok or on_error != "raise"):
+                _run_pool(func, cases, rest, min(nproc, len(rest)), finish, on_error)
     finally:
         bar.close()
 

@@ -45,6 +45,21 @@ def test_run_sweep_combines_cases_with_a_grid(tmp_path):
     assert h.calls_of(calls) == {0: 1, 1: 1, 2: 1}
 
 
+def test_first_case_runs_in_this_process_the_rest_in_workers(tmp_path):
+    """With several processes the first case runs here (its compiled kernels are then
+    inherited by the forked workers instead of compiled by each), the others in workers;
+    a failing case is still recorded and the sweep goes on."""
+    calls = tmp_path / "calls"
+    calls.mkdir()
+    df = run_sweep(h.counted, [{"calls_dir": str(calls)}], grid={"x": [0, 1, 2, 3, 4, 5]},
+                   processes=2, on_error="record", progress=False)
+    pids = {int(f.split("-")[0][1:]): int(f.split("-")[1][3:]) for f in os.listdir(calls)}
+    assert pids[0] == os.getpid()
+    assert all(pids[x] != os.getpid() for x in range(1, 6))
+    assert h.calls_of(calls) == {x: 1 for x in range(6)}
+    assert list(df.status) == ["ok", "ok", "ok", "failed", "ok", "ok"]
+
+
 @pytest.mark.parametrize("kwargs, exc, words", [
     ({"backend": "slurm"}, ValueError, ["backend = 'slurm'", "'local'", "'dask'"]),
     ({"scheduler": "tcp://127.0.0.1:1"}, ValueError, ["scheduler", "backend='dask'"]),

@@ -14,7 +14,10 @@ writes its own artifacts), so with ``processes > 1`` they run in that many
 worker processes, longest first (the wall times of the previous report in the
 folder's ``metrics.json``; sections never timed before go first), and the
 report is assembled in the order of the studies (``only``, or
-:data:`~ppamsafety.studies.REGISTRY`) whatever the completion order.  A new section needs nothing to benefit.  Studies that
+:data:`~ppamsafety.studies.REGISTRY`) whatever the completion order.  Before
+the sections start, the workers compile the large kernels between them
+(:mod:`ppamsafety.report.warmup`), so that a cold kernel cache is not filled
+by every worker at once.  A new section needs nothing to benefit.  Studies that
 start their own worker processes (the safety scan, the lambda sweep) still
 do; the operating system shares the cores.
 """
@@ -30,6 +33,7 @@ from pathlib import Path
 from .._validation import check_int
 from ..output import OutputFolder
 from ..studies import REGISTRY, run_study
+from . import warmup
 from .html import report_page
 
 
@@ -111,6 +115,9 @@ def build_report(outdir="reports", *, quick: bool = False, only=None, progress: 
             order = sorted(names, key=lambda n: -previous.get(n, float("inf")))
             pool = ProcessPoolExecutor(max_workers=processes)
             try:
+                # compile the large kernels once, split between the workers (report.warmup)
+                for f in [pool.submit(warmup.run_task, i) for i in range(len(warmup.TASKS))]:
+                    f.result()
                 futures = {pool.submit(_timed_study, n, stage, quick): n for n in order}
                 pending = set(futures)
                 while pending:
