@@ -74,7 +74,7 @@ import math
 
 import numpy as np
 
-from .._jit import leaf
+from .._jit import kernel, leaf
 from .._validation import check_instance, check_range
 from ..layouts import Field, Layout
 from ..plant.dynamics import coriolis_cs, friction_cs, gravity_cs, mass_matrix_cs
@@ -148,9 +148,12 @@ def dead_zone(fx, fy, fmin):
     return fx, fy
 
 
-@leaf
+@kernel
 def estimator_step(E, ES, Pe, k, dt, qm, qdm, pm, out, scratch):
     """One sample of both force estimators.
+
+    Compiled on its own (not inlined): the closed loop and the collision kernel
+    both call it, once per control period, so it is compiled once for both.
 
     Parameters
     ----------

@@ -27,7 +27,7 @@ __all__ = ["TASKS", "closed_loop_kernels", "impact_kernels", "contact_kernels", 
 
 def closed_loop_kernels() -> None:
     """The closed loop (:func:`~ppamsafety.experiments.run_batch`) and the coupled collision
-    (:func:`~ppamsafety.impact.collision.simulate_collision`): about 45 s on a cold cache."""
+    (:func:`~ppamsafety.impact.collision.simulate_collision`): about 40 s on a cold cache."""
     from ..control import PID
     from ..control.estimation import ForceEstimator
     from ..experiments import ExperimentCase, run_batch
