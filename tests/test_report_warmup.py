@@ -9,7 +9,7 @@ from ppamsafety.impact.model import simulate_impacts
 from ppamsafety.params import thesis_arm
 from ppamsafety.report import warmup
 
-KERNELS = {"closed_loop_kernels": [_run_batch, collision._run_collision],
+KERNELS = {"closed_loop_kernels": [_run_batch], "collision_kernels": [collision._run_collision],
            "impact_kernels": [engine.impact_batch, engine.impact_batch_dense],
            "contact_kernels": [clamping.clamp_batch, twobody._twobody_batch]}
 

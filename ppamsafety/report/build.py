@@ -116,9 +116,12 @@ def build_report(outdir="reports", *, quick: bool = False, only=None, progress: 
             pool = ProcessPoolExecutor(max_workers=processes)
             try:
                 # compile the large kernels once, split between the workers (report.warmup)
-                for f in [pool.submit(warmup.run_task, i) for i in range(len(warmup.TASKS))]:
+                warm = [pool.submit(warmup.run_task, i) for i in range(len(warmup.TASKS))]
+                for f in warm[:warmup.BLOCKING]:
                     f.result()
                 futures = {pool.submit(_timed_study, n, stage, quick): n for n in order}
+                for f in warm[warmup.BLOCKING:]:
+                    f.result()
                 pending = set(futures)
                 while pending:
                     finished, pending = wait(pending, return_when=FIRST_EXCEPTION)
