@@ -12,7 +12,7 @@ import time
 
 import numpy as np
 
-from ppamsafety.impact.hic import (_unimodal_peak, hic, hic_branch_and_bound, hic_bruteforce,
+from ppamsafety.impact.hic import (_hic_branch_and_bound, _unimodal_peak, hic, hic_bruteforce,
                                   hic_kernel)
 from ppamsafety.impact.model import simulate_impacts
 from ppamsafety.impact.reference import simulate_impact_scipy
@@ -71,8 +71,8 @@ def main(n_batch=5000, n_scipy=40):
     t_hic, _ = best_of(lambda: hic(a, 2e-5), 20)
     t_bf, _ = best_of(lambda: hic_bruteforce(a, 2e-5), 3)
     wn = int(0.036 / 2e-5 + 1e-9)
-    hic_branch_and_bound(a, 2e-5, wn)
-    t_bb, _ = best_of(lambda: hic_branch_and_bound(a, 2e-5, wn), 20)
+    _hic_branch_and_bound(a, 2e-5, wn)
+    t_bb, _ = best_of(lambda: _hic_branch_and_bound(a, 2e-5, wn), 20)
     hic_kernel(a, 2e-5, wn)
     t_k, _ = best_of(lambda: hic_kernel(a, 2e-5, wn), 20)
     pulse = "single pulse" if _unimodal_peak(a) >= 0 else "not a single pulse"

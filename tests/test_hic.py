@@ -6,15 +6,15 @@ import numpy as np
 import pytest
 
 from ppamsafety.impact.hic import (
+    _hic_branch_and_bound,
+    _hic_unimodal,
+    _unimodal_peak,
     half_sine_optimal_width,
     hic,
     hic_bruteforce,
-    _unimodal_peak,
-    hic_branch_and_bound,
     hic_bruteforce_kernel,
     hic_half_sine,
     hic_kernel,
-    hic_unimodal,
     hic_rectangular,
 )
 
@@ -108,7 +108,7 @@ def _random_unimodal(gen, n):
 def test_unimodal_records_take_the_greedy_path_and_match_bruteforce():
     """800 seeded random unimodal records (N, Wn random): the O(N) path = brute force, rel 1e-12.
 
-    Also the dispatcher sends them to :func:`hic_unimodal` (same value and pair) and the
+    Also the dispatcher sends them to :func:`_hic_unimodal` (same value and pair) and the
     branch and bound agrees; the returned pair is a valid window with that value.
     """
     gen = np.random.default_rng(11)
@@ -118,9 +118,9 @@ def test_unimodal_records_take_the_greedy_path_and_match_bruteforce():
         p = _unimodal_peak(a)
         assert p >= 0 and a[p] == a.max() and (p == 0 or a[p - 1] < a[p]), trial
         v, i, j = hic_kernel(a, 1e-4, wn)
-        assert (v, i, j) == hic_unimodal(a, 1e-4, wn, p), trial
+        assert (v, i, j) == _hic_unimodal(a, 1e-4, wn, p), trial
         v_ref, _, _ = hic_bruteforce_kernel(a, 1e-4, wn)
-        v_bb, _, _ = hic_branch_and_bound(a, 1e-4, wn)
+        v_bb, _, _ = _hic_branch_and_bound(a, 1e-4, wn)
         assert v == pytest.approx(v_ref, rel=1e-12, abs=0.0), (trial, n, wn)
         assert v_bb == pytest.approx(v_ref, rel=1e-12, abs=0.0), (trial, n, wn)
         if v > 0.0:

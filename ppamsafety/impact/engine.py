@@ -53,7 +53,7 @@ from ..plant.dynamics import coriolis_cs, mass_matrix_cs
 from ..plant.geometry import tcp_kinematics_cs
 from ..units import G0
 from .contact import hunt_crossley_elastic, hunt_crossley_force, hunt_crossley_potential
-from .hic import hic_branch_and_bound, hic_kernel
+from .hic import _hic_branch_and_bound, hic_kernel
 
 
 class JointModel(IntEnum):
@@ -546,10 +546,10 @@ def impact_batch(CASES, P, hp, dt, nsteps, w36, w15, SUM, HIST, hist_of):
         r[R_FMAX], r[R_TFMAX] = fmax, tmax
         # the reference engine keeps the general branch and bound, so that comparing it with
         # the dense engine (single-pulse HIC path) also cross-checks the two HIC algorithms
-        r[R_HIC36], i1, i2 = hic_branch_and_bound(acc, dt, w36)
+        r[R_HIC36], i1, i2 = _hic_branch_and_bound(acc, dt, w36)
         r[R_W36], r[R_W36 + 1] = i1 * dt, i2 * dt
         if i2 - i1 > w15:      # else the HIC36 window is admissible for HIC15, so they are equal
-            r[R_HIC15], i1, i2 = hic_branch_and_bound(acc, dt, w15)
+            r[R_HIC15], i1, i2 = _hic_branch_and_bound(acc, dt, w15)
         else:
             r[R_HIC15] = r[R_HIC36]
         r[R_W15], r[R_W15 + 1] = i1 * dt, i2 * dt

@@ -9,13 +9,13 @@ On uniform samples a_k = a(k dt) the integral is the trapezoidal rule, i.e. the
 difference of the cumulative trapezoid S (S_0 = 0, S_{k+1} = S_k + dt (a_k + a_{k+1})/2),
 and windows are index pairs (i, j) with 1 <= j - i <= Wn.
 
-**Single pulse** (:func:`hic_unimodal`, chosen by :func:`hic_kernel` when the
+**Single pulse** (:func:`_hic_unimodal`, chosen by :func:`hic_kernel` when the
 samples rise to one maximum and then fall, plateaus allowed: 99 % of the
 impacts of ``studies/bench_impact.py``).  The window of every length L with
 the largest area is found by growing it from the largest trapezoid segment
 towards the larger neighbour, so HIC is exact in O(N).
 
-**Any record** (:func:`hic_branch_and_bound`).  Branch and bound over blocks
+**Any record** (:func:`_hic_branch_and_bound`).  Branch and bound over blocks
 I x J = [i0, i1] x [j0, j1] of index pairs.  For every pair in a block, with
 area D = S_j - S_i and length L = j - i, HIC = D * m^1.5 = dt L m^2.5 with the
 mean m = D / (dt L).  Because a >= 0, S is non-decreasing, so D <= S_j1 - S_i0,
@@ -193,7 +193,7 @@ def _unimodal_peak(a):
 
 
 @kernel
-def hic_unimodal(a, dt, max_window_samples, p):
+def _hic_unimodal(a, dt, max_window_samples, p):
     """Exact HIC of a weakly unimodal record by growing the window greedily: ``(value, i, j)``.
 
     ``p`` is the index of the first maximum of ``a`` (:func:`_unimodal_peak`).
@@ -256,7 +256,7 @@ def hic_kernel(a, dt, max_window_samples):
     """Exact HIC: ``(value, i, j)``; O(N) for unimodal records, else branch and bound.
 
     A weakly unimodal record (a single pulse, the usual impact) goes to
-    :func:`hic_unimodal`; any other to :func:`hic_branch_and_bound`.  Both
+    :func:`_hic_unimodal`; any other to :func:`_hic_branch_and_bound`.  Both
     give the maximum of :func:`hic_bruteforce_kernel` (the pair may differ on
     exact ties; the value up to the rounding of the cumulative area).
 
@@ -274,12 +274,12 @@ def hic_kernel(a, dt, max_window_samples):
     if a.shape[0] >= 2:
         p = _unimodal_peak(a)
         if p >= 0:
-            return hic_unimodal(a, dt, max_window_samples, p)
-    return hic_branch_and_bound(a, dt, max_window_samples)
+            return _hic_unimodal(a, dt, max_window_samples, p)
+    return _hic_branch_and_bound(a, dt, max_window_samples)
 
 
 @kernel
-def hic_branch_and_bound(a, dt, max_window_samples):
+def _hic_branch_and_bound(a, dt, max_window_samples):
     """Exact HIC of any record by branch and bound (module docstring): ``(value, i, j)``.
 
     ``a`` [g] non-negative samples, ``dt`` [s], windows 1 <= j - i <= ``max_window_samples``.
