@@ -25,6 +25,7 @@ Set ``NUMBA_DISABLE_JIT=1`` to run the kernels as plain Python for debugging.
 import os
 
 import numba
+import numpy as np
 from numba import njit
 
 from ._sourcehash import source_hash as _source_hash
@@ -48,4 +49,27 @@ _configure_cache()
 kernel = njit(cache=True, error_model="numpy")
 leaf = njit(cache=True, error_model="numpy", inline="always")
 
-__all__ = ["kernel", "leaf"]
+
+def kernel_array(a) -> np.ndarray:
+    """``a`` as the one array type the kernels are compiled for: float64, C-contiguous, writable.
+
+    numba compiles a kernel once per argument *type*, and a read-only row (the
+    cached ``plant.layout.pack(arm)``) or a Fortran-ordered or strided array
+    is a different type from a writable C-contiguous one: passing both
+    compiles the kernel, and every kernel it calls, a second time (1-3 s
+    each for the small kernels, measured).  Python functions call their
+    kernels with this.  Copies only when ``a`` is not already of that type.
+
+    Parameters
+    ----------
+    a : array_like
+        Values (already validated by the caller).
+
+    Returns
+    -------
+    numpy.ndarray
+    """
+    return np.require(a, np.float64, ["C_CONTIGUOUS", "WRITEABLE", "ALIGNED"])
+
+
+__all__ = ["kernel", "kernel_array", "leaf"]

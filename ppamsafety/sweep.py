@@ -403,7 +403,10 @@ def run_sweep(func, cases=None, *, name: str | None = None, cache_dir=None,
     processes : int or None
         Worker processes (1 = run in this process; None = every available
         core).  More than the available cores gives a warning and is capped at
-        the number of cores.  With ``backend="dask"`` and no ``scheduler``: the
+        the number of cores.  With the local backend and more cases than
+        workers, the first case runs in this process before the workers
+        start, so that the kernels it compiles are inherited by them instead
+        of compiled by each on a cold cache.  With ``backend="dask"`` and no ``scheduler``: the
         number of workers of the ``LocalCluster`` (ignored with a scheduler).
     progress : bool
         Show a progress bar.
@@ -524,22 +527,29 @@ def run_sweep(func, cases=None, *, name: str | None = None, cache_dir=None,
             if todo:
                 _run_dask(func, cases, todo, keys, name, scheduler, processes, finish, on_error)
         else:
-            # The first case runs in this process even with several workers: the kernels it
-            # compiles are then inherited by the forked workers (or found in the on-disk
-            # cache) instead of being compiled by every worker at once on a cold cache.
-            rest = list(todo)
-            while rest:
-                i = rest.pop(0)
+            # With more cases than workers the first case runs in this process before the
+            # pool starts: the kernels it compiles are then inherited by the forked workers
+            # (or found in the on-disk cache) instead of compiled by every worker at once on
+            # a cold cache.  With at most one case per worker that would only serialise.
+            if nproc <= 1:
+                here, pooled = list(todo), []
+            elif len(todo) > nproc:
+                here, pooled = list(todo[:1]), list(todo[1:])
+            else:
+                here, pooled = [], list(todo)
+            stop = False
+            for i in here:
                 try:
                     out = func(**cases[i])
                 except Exception as exc:
                     ok = finish(i, exc=exc)
                 else:
                     ok = finish(i, out)
-                if (not ok and on_error == "raise") or nproc > 1:
+                if not ok and on_error == "raise":
+                    stop = True
                     break
-            if rest and nproc > 1 and (ok or on_error != "raise"):
-                _run_pool(func, cases, rest, min(nproc, len(rest)), finish, on_error)
+            if pooled and not stop:
+                _run_pool(func, cases, pooled, min(nproc, len(pooled)), finish, on_error)
     finally:
         bar.close()
 

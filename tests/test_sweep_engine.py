@@ -45,19 +45,53 @@ def test_run_sweep_combines_cases_with_a_grid(tmp_path):
     assert h.calls_of(calls) == {0: 1, 1: 1, 2: 1}
 
 
-def test_first_case_runs_in_this_process_the_rest_in_workers(tmp_path):
-    """With several processes the first case runs here (its compiled kernels are then
+def _pids(calls):
+    """x -> pid of the process that computed it (one marker file per computation)."""
+    return {int(f.split("-")[0][1:]): int(f.split("-")[1][3:]) for f in os.listdir(calls)}
+
+
+def test_first_case_runs_in_this_process_the_rest_in_workers(tmp_path, monkeypatch):
+    """With more cases than workers the first case runs here (its compiled kernels are then
     inherited by the forked workers instead of compiled by each), the others in workers;
     a failing case is still recorded and the sweep goes on."""
+    import ppamsafety.sweep as sweep_mod
+
+    monkeypatch.setattr(sweep_mod, "_available_cores", lambda: 2)   # really use 2 workers
     calls = tmp_path / "calls"
     calls.mkdir()
     df = run_sweep(h.counted, [{"calls_dir": str(calls)}], grid={"x": [0, 1, 2, 3, 4, 5]},
                    processes=2, on_error="record", progress=False)
-    pids = {int(f.split("-")[0][1:]): int(f.split("-")[1][3:]) for f in os.listdir(calls)}
+    pids = _pids(calls)
     assert pids[0] == os.getpid()
     assert all(pids[x] != os.getpid() for x in range(1, 6))
     assert h.calls_of(calls) == {x: 1 for x in range(6)}
     assert list(df.status) == ["ok", "ok", "ok", "failed", "ok", "ok"]
+
+
+def test_no_more_cases_than_workers_all_run_in_workers(tmp_path, monkeypatch):
+    """Two cases on two workers: running one here first would only serialise them."""
+    import ppamsafety.sweep as sweep_mod
+
+    monkeypatch.setattr(sweep_mod, "_available_cores", lambda: 2)
+    calls = tmp_path / "calls"
+    calls.mkdir()
+    run_sweep(h.counted, [{"calls_dir": str(calls)}], grid={"x": [0, 1]}, processes=2,
+              progress=False)
+    assert all(pid != os.getpid() for pid in _pids(calls).values())
+
+
+def test_first_case_failing_with_raise_starts_no_workers(tmp_path, monkeypatch):
+    """on_error="raise": the first case fails in this process, no other case is computed."""
+    import ppamsafety.sweep as sweep_mod
+    from ppamsafety.sweep import SweepError
+
+    monkeypatch.setattr(sweep_mod, "_available_cores", lambda: 2)
+    calls = tmp_path / "calls"
+    calls.mkdir()
+    with pytest.raises(SweepError, match=r"case 0 .*'x': 3.* failed: ValueError"):
+        run_sweep(h.counted, [{"calls_dir": str(calls)}], grid={"x": [3, 0, 1, 2]},
+                  processes=2, on_error="raise", progress=False)
+    assert h.calls_of(calls) == {3: 1}
 
 
 @pytest.mark.parametrize("kwargs, exc, words", [

@@ -57,7 +57,7 @@ from enum import IntEnum
 import numpy as np
 import pandas as pd
 
-from .._jit import kernel, leaf
+from .._jit import kernel, kernel_array, leaf
 from .._validation import (InvalidTypeError, as_float_array, check_int, check_range,
                            check_shape, describe)
 from ..control.dispatch import NINT, NSCRATCH, NSTATE, controller_step
@@ -786,16 +786,16 @@ def simulate_collision(case, *, head_position, head=None, head_velocity=(0.0, 0.
     est.check_period(dt)
     x0 = case.x0 if case.x0 is not None else rest_state(ref.field("q_d")[0], arm)[0]
     x0 = np.array(x0, dtype=float)
-    # writable copies, as in run_batch: a read-only row is a different numba type and would
+    # writable rows, as in run_batch: a read-only row is a different numba type and would
     # compile controller_step, rk4_step and plant_rhs a second time (about 15 s, cold cache)
-    Pp = np.array(lay.pack(arm))
+    Pp = kernel_array(lay.pack(arm))
     _check_valves(Pp, dt, substeps, case.name)
     r0 = forward_kinematics(x0[:2], arm)
     if t_on == 0.0 and np.hypot(*(xh0 - r0)) <= hm.radius:
         raise ValueError(f"head_position = {xh0.tolist()} m lies within the head radius "
                          f"{hm.radius:g} m of the initial tool point {r0.tolist()} m")
     kind, C, sizes, Pm = _controller_rows(arm, case.controller)
-    Pm = np.array(Pm)
+    Pm = kernel_array(Pm)
     n = ref.n_steps
     noise = (case.sensors.noise_samples(n) if case.sensors.noise
              else np.zeros((n, SENSOR_NOISE.size)))
@@ -811,7 +811,7 @@ def simulate_collision(case, *, head_position, head=None, head_velocity=(0.0, 0.
     HS = np.zeros(NH)
     status, kdet, d_end = _run_collision(x0, np.ascontiguousarray(ref.data), Pp, Pm, kind, C,
                                   np.array(sizes, dtype=np.int64), case.sensors.pack(), noise,
-                                  float(dt), substeps, est.pack(), np.array(est.model_row(arm)),
+                                  float(dt), substeps, est.pack(), kernel_array(est.model_row(arm)),
                                   pack_head(hm), CP, LOG, ILOG, CLOG, REFLOG, FINE, HS)
     status = RunStatus(int(status))
     if status == RunStatus.MISSED_CONTACT:

@@ -10,8 +10,8 @@ difference of the cumulative trapezoid S (S_0 = 0, S_{k+1} = S_k + dt (a_k + a_{
 and windows are index pairs (i, j) with 1 <= j - i <= Wn.
 
 **Single pulse** (:func:`_hic_unimodal`, chosen by :func:`hic_kernel` when the
-samples rise to one maximum and then fall, plateaus allowed: 99 % of the
-impacts of ``studies/bench_impact.py``).  The window of every length L with
+samples rise to one maximum and then fall, plateaus allowed: 298 of the
+first 300 impacts of ``studies/bench_impact.py``, measured on their histories).  The window of every length L with
 the largest area is found by growing it from the largest trapezoid segment
 towards the larger neighbour, so HIC is exact in O(N).
 
@@ -258,7 +258,9 @@ def hic_kernel(a, dt, max_window_samples):
     A weakly unimodal record (a single pulse, the usual impact) goes to
     :func:`_hic_unimodal`; any other to :func:`_hic_branch_and_bound`.  Both
     give the maximum of :func:`hic_bruteforce_kernel` (the pair may differ on
-    exact ties; the value up to the rounding of the cumulative area).
+    exact ties; the value up to the rounding of the cumulative area, which
+    grows with the record length: 3e-12 relative among the tied windows of
+    20000 equal samples).
 
     Parameters
     ----------
@@ -469,7 +471,9 @@ def hic(a, dt, *, window=0.036) -> HICResult:
     -------
     HICResult
         The maximum over all sample windows (trapezoidal integral), computed by the
-        :func:`hic_kernel`; the same maximum as :func:`hic_bruteforce`.
+        :func:`hic_kernel`; the maximum of :func:`hic_bruteforce` up to the rounding of the
+        cumulative area (below 1e-12 relative for records of 10^4 samples; exactly tied
+        windows of a long constant record can differ by 1e-11 at 2 x 10^5 samples).
     """
     return _evaluate(hic_kernel, hic_batch_kernel, a, dt, window)
 

@@ -17,7 +17,7 @@ import math
 
 import numpy as np
 
-from .._jit import kernel
+from .._jit import kernel, kernel_array
 from .._validation import (as_float_array, check_finite_result, check_positive, check_range,
                            check_range_array)
 from ..units import G0
@@ -133,9 +133,8 @@ def two_body_impact(speed, *, arm_mass, head_mass: float = 5.0, stiffness: float
     acc = np.empty(nsteps + 1)
     w36 = int(math.floor(0.036 / dt * (1 + 1e-9)))
     w15 = int(math.floor(0.015 / dt * (1 + 1e-9)))
-    _twobody_batch(np.ascontiguousarray(v, dtype=float), np.ascontiguousarray(mu),
-                   np.ascontiguousarray(mh, dtype=float), float(stiffness), float(exponent),
-                   float(damping), float(dt), nsteps, w36, w15, out, acc)
+    _twobody_batch(kernel_array(v), kernel_array(mu), kernel_array(mh), float(stiffness),
+                   float(exponent), float(damping), float(dt), nsteps, w36, w15, out, acc)
     check_finite_result("two_body_impact", out,
                         f"stiffness = {stiffness:g}, exponent = {exponent:g}, "
                         f"damping = {damping:g}, dt = {dt:g}")

@@ -33,7 +33,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from .._jit import kernel, leaf
+from .._jit import kernel, kernel_array, leaf
 
 from .._validation import as_float_array, check_bool, check_range  # noqa: F401
 from ._checks import accelerations, angles, check_pressures, checks_arm, speeds, torques  # noqa: F401
@@ -274,7 +274,8 @@ def _evaluate(kind, q, qd, arm, params):
     qf = np.ascontiguousarray(np.broadcast_to(q, lead + (2,)).reshape(-1, 2))
     qdf = np.ascontiguousarray(np.broadcast_to(qd, lead + (2,)).reshape(-1, 2))
     out = np.empty((qf.shape[0], _WIDTH[kind]))
-    _dyn_many(kind, qf, qdf, _params_vector(arm, params), out)
+    _dyn_many(kind, kernel_array(qf), kernel_array(qdf), kernel_array(_params_vector(arm, params)),
+              out)
     return out, lead
 
 

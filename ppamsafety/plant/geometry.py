@@ -17,7 +17,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from .._jit import kernel, leaf
+from .._jit import kernel, kernel_array, leaf
 
 from .._validation import as_float_array
 from ._checks import accelerations, angles, check_pressures, checks_arm, speeds, torques  # noqa: F401
@@ -212,7 +212,7 @@ def _points_many(q, P, out):
 
 def _flat_q(q):
     q = angles("q", q)
-    return q.reshape(-1, 2), q.shape[:-1]
+    return kernel_array(q.reshape(-1, 2)), q.shape[:-1]
 
 
 @checks_arm
@@ -233,7 +233,7 @@ def attachment_points(q, arm) -> np.ndarray:
     """
     qf, lead = _flat_q(q)
     out = np.empty((qf.shape[0], 8, 2))
-    _points_many(qf, lay.pack(arm), out)
+    _points_many(qf, kernel_array(lay.pack(arm)), out)
     return out.reshape(lead + (8, 2))
 
 
@@ -257,7 +257,7 @@ def muscle_lengths(q, arm, *, with_derivatives: bool = False):
     qf, lead = _flat_q(q)
     n = qf.shape[0]
     d, h, dh = np.empty((n, 4)), np.empty((n, 4)), np.empty((n, 4))
-    _lengths_many(qf, lay.pack(arm), d, h, dh)
+    _lengths_many(qf, kernel_array(lay.pack(arm)), d, h, dh)
     shp = lead + (4,)
     if with_derivatives:
         return d.reshape(shp), h.reshape(shp), dh.reshape(shp)
@@ -319,7 +319,7 @@ def design_connection_lengths(P, geometry, eps_min: float, eps_max: float) -> np
             q = np.empty((x.size, 2))
             q[:, joint], q[:, 1 - joint] = x, other
             d, h, dh = np.empty((x.size, 4)), np.empty((x.size, 4)), np.empty((x.size, 4))
-            _lengths_many(q, P, d, h, dh)
+            _lengths_many(q, kernel_array(P), d, h, dh)
             return sign * d[:, k]
 
         grid = np.linspace(lo, hi, 2001)
@@ -383,7 +383,7 @@ def forward_kinematics(q, arm) -> np.ndarray:
     """
     qf, lead = _flat_q(q)
     out, jac = np.empty((qf.shape[0], 2)), np.empty((qf.shape[0], 2, 2))
-    _fk_many(qf, lay.pack(arm), out, jac)
+    _fk_many(qf, kernel_array(lay.pack(arm)), out, jac)
     return out.reshape(lead + (2,))
 
 
@@ -400,7 +400,7 @@ def jacobian(q, arm) -> np.ndarray:
     """
     qf, lead = _flat_q(q)
     out, jac = np.empty((qf.shape[0], 2)), np.empty((qf.shape[0], 2, 2))
-    _fk_many(qf, lay.pack(arm), out, jac)
+    _fk_many(qf, kernel_array(lay.pack(arm)), out, jac)
     return jac.reshape(lead + (2, 2))
 
 

@@ -131,7 +131,7 @@ import math
 
 import numpy as np
 
-from .._jit import kernel, leaf
+from .._jit import kernel, kernel_array, leaf
 
 from .._validation import (as_float_array, check_bool, check_finite_result, check_int,
                            check_range)
@@ -558,6 +558,8 @@ def simulate(arm, x0, set_values, *, dt: float = 1e-3, substeps: int = 2,
         Z = np.array(np.broadcast_to(Z if Z.ndim == 2 else Z[None], (B, Z.shape[-1])))
         _check_effect_state(Z, rows)
     out = np.empty((B, U.shape[1] + 1, NX))
+    X0, U, T, rows = kernel_array(X0), kernel_array(U), kernel_array(T), kernel_array(rows)
+    Z = kernel_array(Z)
     _simulate_batch(X0, Z, U, T, float(dt), substeps, rows, out)
     bad = np.argwhere(~np.isfinite(out))
     if bad.size:
@@ -590,7 +592,7 @@ def initial_effect_state(rows) -> np.ndarray:
         raise ValueError(f"rows must have shape ({lay.NP},) or (B, {lay.NP}), got {rows.shape}")
     n = lay.effect_state_lengths(rows)
     Z = np.zeros((rows.shape[0], int(n.max())))
-    _init_many(Z, np.ascontiguousarray(rows))
+    _init_many(Z, kernel_array(rows))
     return Z
 
 
@@ -777,7 +779,8 @@ def state_derivative(x, set_values, arm, *, tau_ext=None) -> np.ndarray:
     tf = np.zeros((xf.shape[0], 2)) if tau is None else np.ascontiguousarray(
         np.broadcast_to(tau, shape + (2,)).reshape(-1, 2))
     out = np.empty_like(xf)
-    _rhs_many(xf, uf, tf, lay.pack(arm), out)
+    _rhs_many(kernel_array(xf), kernel_array(uf), kernel_array(tf), kernel_array(lay.pack(arm)),
+              out)
     return check_finite_result("state_derivative", out.reshape(shape + (NX,)), "these x, "
                                "set_values (the state is outside the model's valid range)")
 

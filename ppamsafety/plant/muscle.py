@@ -26,7 +26,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from .._jit import kernel, leaf
+from .._jit import kernel, kernel_array, leaf
 
 from .._validation import as_float_array, check_int
 from ._checks import accelerations, angles, check_pressures, checks_arm, speeds, torques  # noqa: F401
@@ -203,9 +203,9 @@ def _eval_many(kind, k, eps, P, out):
 def _evaluate(kind, group, eps, arm):
     k = check_int("group", group, 1, 4) - 1
     e = as_float_array("eps", eps)
-    flat = np.ascontiguousarray(e.reshape(-1))
+    flat = kernel_array(e.reshape(-1))
     out = np.empty_like(flat)
-    _eval_many(kind, k, flat, lay.pack(arm), out)
+    _eval_many(kind, k, flat, kernel_array(lay.pack(arm)), out)
     return out.reshape(e.shape)
 
 

@@ -18,7 +18,7 @@
 from __future__ import annotations
 
 import numpy as np
-from .._jit import kernel, leaf
+from .._jit import kernel, kernel_array, leaf
 
 from .._validation import as_float_array, check_range, check_range_array
 from ._checks import (PRESSURE_MAX, accelerations, angles, check_pressures,  # noqa: F401
@@ -209,7 +209,7 @@ def joint_stiffness(q, pressures, arm) -> np.ndarray:
     qf = np.ascontiguousarray(np.broadcast_to(q, shape + (2,)).reshape(-1, 2))
     pf = np.ascontiguousarray(np.broadcast_to(p, shape + (4,)).reshape(-1, 4))
     out = np.empty((qf.shape[0], 2))
-    _stiffness_many(qf, pf, lay.pack(arm), out)
+    _stiffness_many(kernel_array(qf), kernel_array(pf), kernel_array(lay.pack(arm)), out)
     return out.reshape(shape + (2,))
 
 
@@ -239,9 +239,9 @@ def gravity_compensation(q, arm, *, params=None) -> np.ndarray:
 
 def _gravity_compensation_row(q, Pc) -> np.ndarray:
     """:func:`gravity_compensation` for a packed row ``Pc``."""
-    qf = np.ascontiguousarray(q.reshape(-1, 2))
+    qf = kernel_array(q.reshape(-1, 2))
     out = np.empty((qf.shape[0], 2))
-    _gc_many(qf, Pc, out)
+    _gc_many(qf, kernel_array(Pc), out)
     return out.reshape(q.shape[:-1] + (2,))
 
 

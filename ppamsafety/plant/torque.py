@@ -18,7 +18,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from .._jit import kernel, leaf
+from .._jit import kernel, kernel_array, leaf
 
 from .geometry import _flat_q, group_length_lever
 from . import layout as lay
@@ -131,7 +131,7 @@ def _eval(q, P):
     qf, lead = _flat_q(q)
     n = qf.shape[0]
     mt, dmt, vol = np.empty((n, 4)), np.empty((n, 4)), np.empty((n, 4))
-    _many(qf, P, mt, dmt, vol)
+    _many(qf, kernel_array(P), mt, dmt, vol)
     shp = lead + (4,)
     return mt.reshape(shp), dmt.reshape(shp), vol.reshape(shp)
 

@@ -14,10 +14,10 @@ writes its own artifacts), so with ``processes > 1`` they run in that many
 worker processes, longest first (the wall times of the previous report in the
 folder's ``metrics.json``; sections never timed before go first), and the
 report is assembled in the order of the studies (``only``, or
-:data:`~ppamsafety.studies.REGISTRY`) whatever the completion order.  Before
-the sections start, the workers compile the large kernels between them
-(:mod:`ppamsafety.report.warmup`), so that a cold kernel cache is not filled
-by every worker at once.  A new section needs nothing to benefit.  Studies that
+:data:`~ppamsafety.studies.REGISTRY`) whatever the completion order.  For the
+full report, before the sections start, the workers compile the large
+kernels between them (:mod:`ppamsafety.report.warmup`), so that a cold
+kernel cache is not filled by every worker at once.  A new section needs nothing to benefit.  Studies that
 start their own worker processes (the safety scan, the lambda sweep) still
 do; the operating system shares the cores.
 """
@@ -27,6 +27,7 @@ from __future__ import annotations
 import json
 import os
 import time
+import warnings
 from concurrent.futures import FIRST_EXCEPTION, ProcessPoolExecutor, wait
 from pathlib import Path
 
@@ -42,6 +43,22 @@ def _timed_study(name: str, stage, quick: bool):
     t0 = time.perf_counter()
     res = run_study(name, stage, quick=quick)      # compute -> render -> write
     return res, time.perf_counter() - t0
+
+
+def _warm_up(pool) -> None:
+    """Run :data:`warmup.TASKS <ppamsafety.report.warmup.TASKS>` in ``pool`` and wait for them.
+
+    Only an optimisation: a failing task is reported as a warning and the
+    sections run anyway (they compile what they need and report their own
+    errors).
+    """
+    futures = [pool.submit(warmup.run_task, i) for i in range(len(warmup.TASKS))]
+    for i, f in enumerate(futures):
+        exc = f.exception()
+        if exc is not None:
+            warnings.warn(f"report warm-up task {warmup.TASKS[i].__name__} failed "
+                          f"({type(exc).__name__}: {exc}); the sections compile their kernels "
+                          "themselves", RuntimeWarning, stacklevel=3)
 
 
 def _previous_times(out: Path) -> dict:
@@ -115,13 +132,9 @@ def build_report(outdir="reports", *, quick: bool = False, only=None, progress: 
             order = sorted(names, key=lambda n: -previous.get(n, float("inf")))
             pool = ProcessPoolExecutor(max_workers=processes)
             try:
-                # compile the large kernels once, split between the workers (report.warmup)
-                warm = [pool.submit(warmup.run_task, i) for i in range(len(warmup.TASKS))]
-                for f in warm[:warmup.BLOCKING]:
-                    f.result()
+                if only is None:        # the full report: compile the large kernels once,
+                    _warm_up(pool)      # split between the workers (report.warmup)
                 futures = {pool.submit(_timed_study, n, stage, quick): n for n in order}
-                for f in warm[warmup.BLOCKING:]:
-                    f.result()
                 pending = set(futures)
                 while pending:
                     finished, pending = wait(pending, return_when=FIRST_EXCEPTION)

@@ -8,40 +8,35 @@ by side: on 2 cores both workers spent their first 31 s compiling the same
 closed loop, and the safety scan's own workers compiled the dense impact
 engine twice more (measured with numba's compile events, issue 11).
 
-:func:`~ppamsafety.report.build.build_report` therefore first runs the tasks
-of :data:`TASKS` in its worker pool, one per worker, and starts the sections
-once the closed loop and the impact engines are compiled.  Each task calls
-the public functions on a tiny problem, so the kernels are compiled for
-exactly the argument types of the real calls; the other workers then load
-them from the cache in a fraction of a second.  The collision kernel calls
-the closed loop's controller and plant kernels, so its task comes after the
-closed loop's.  With a warm cache a task only loads kernels.
+For the full report :func:`~ppamsafety.report.build.build_report` therefore
+first runs the tasks of :data:`TASKS` in its worker pool and starts the
+sections once all have finished (on 2 cores: the closed loop and the
+collision kernel in one worker, the impact engines and the contact models in
+the other, about 50 s).  Each task calls the public functions on a tiny
+problem, so the kernels are compiled for exactly the argument types of the
+real calls; the other workers then load them from the cache in a fraction of
+a second.  With a warm cache a task only loads kernels (a few seconds).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["BLOCKING", "TASKS", "closed_loop_kernels", "collision_kernels", "contact_kernels",
-           "impact_kernels", "run_task"]
+__all__ = ["TASKS", "closed_loop_kernels", "contact_kernels", "impact_kernels", "run_task"]
 
 
 def closed_loop_kernels() -> None:
     """The closed loop (:func:`~ppamsafety.experiments.run_batch`) with its controller, plant,
-    sensor and estimator kernels: about 30 s on a cold cache."""
+    sensor and estimator kernels (about 30 s on a cold cache), then the head coupled to it
+    (:func:`~ppamsafety.impact.collision.simulate_collision`, about 14 s more), which calls
+    those kernels: in one task, so that they are never compiled twice at the same time."""
     from ..experiments import run_batch
-
-    run_batch([_warm_case()])
-
-
-def collision_kernels() -> None:
-    """The head coupled to the closed loop
-    (:func:`~ppamsafety.impact.collision.simulate_collision`): about 14 s on a cold
-    cache, once the closed loop's kernels are compiled."""
     from ..impact.collision import simulate_collision
 
+    case = _warm_case()
+    run_batch([case])
     # a head far away: the whole kernel is compiled whatever the run does
-    simulate_collision(_warm_case(), head_position=np.array([5.0, 5.0]))
+    simulate_collision(case, head_position=np.array([5.0, 5.0]))
 
 
 def _warm_case():
@@ -82,12 +77,8 @@ def contact_kernels() -> None:
     two_body_impact(1.0, arm_mass=2.0, stiffness=1e7, exponent=1.5, duration=1e-3)
 
 
-#: Warm-up tasks.  The sections start once the first :data:`BLOCKING` have finished (every
-#: section needs the closed loop, most the impact engines); the collision kernel, which
-#: calls the closed loop's kernels, comes after them, and only one section needs it.
-TASKS = (closed_loop_kernels, impact_kernels, collision_kernels, contact_kernels)
-#: Number of leading :data:`TASKS` the sections wait for.
-BLOCKING = 2
+#: Warm-up tasks, longest first; they share no kernel, so they can run at the same time.
+TASKS = (closed_loop_kernels, impact_kernels, contact_kernels)
 
 
 def run_task(index: int) -> None:
