@@ -66,7 +66,7 @@ def impact_kernels() -> None:
 
 def contact_kernels() -> None:
     """Clamping against a wall and the two-body model (:mod:`~ppamsafety.impact.clamping`,
-    :mod:`~ppamsafety.impact.twobody`): about 10 s on a cold cache."""
+    :mod:`~ppamsafety.impact.twobody`): about 7 s on a cold cache."""
     from ..impact.clamping import simulate_clamping
     from ..impact.twobody import two_body_impact
     from ..params import thesis_arm
