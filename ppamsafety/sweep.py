@@ -406,8 +406,9 @@ def run_sweep(func, cases=None, *, name: str | None = None, cache_dir=None,
         the number of cores.  With the local backend and more cases than
         workers, the first case runs in this process before the workers
         start, so that the kernels it compiles are inherited by them instead
-        of compiled by each on a cold cache.  With ``backend="dask"`` and no ``scheduler``: the
-        number of workers of the ``LocalCluster`` (ignored with a scheduler).
+        of compiled by each on a cold cache.  With ``backend="dask"`` and no
+        ``scheduler``: the number of workers of the ``LocalCluster`` (ignored
+        with a scheduler).
     progress : bool
         Show a progress bar.
     on_error : {"record", "raise"}

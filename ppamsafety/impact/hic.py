@@ -11,9 +11,10 @@ and windows are index pairs (i, j) with 1 <= j - i <= Wn.
 
 **Single pulse** (:func:`_hic_unimodal`, chosen by :func:`hic_kernel` when the
 samples rise to one maximum and then fall, plateaus allowed: 298 of the
-first 300 impacts of ``studies/bench_impact.py``, measured on their histories).  The window of every length L with
-the largest area is found by growing it from the largest trapezoid segment
-towards the larger neighbour, so HIC is exact in O(N).
+first 300 impacts of ``studies/bench_impact.py``, measured on their
+histories).  The window of every length L with the largest area is found by
+growing it from the largest trapezoid segment towards the larger neighbour,
+so HIC is exact in O(N).
 
 **Any record** (:func:`_hic_branch_and_bound`).  Branch and bound over blocks
 I x J = [i0, i1] x [j0, j1] of index pairs.  For every pair in a block, with

@@ -14,12 +14,13 @@ writes its own artifacts), so with ``processes > 1`` they run in that many
 worker processes, longest first (the wall times of the previous report in the
 folder's ``metrics.json``; sections never timed before go first), and the
 report is assembled in the order of the studies (``only``, or
-:data:`~ppamsafety.studies.REGISTRY`) whatever the completion order.  For the
-full report, before the sections start, the workers compile the large
-kernels between them (:mod:`ppamsafety.report.warmup`), so that a cold
-kernel cache is not filled by every worker at once.  A new section needs nothing to benefit.  Studies that
-start their own worker processes (the safety scan, the lambda sweep) still
-do; the operating system shares the cores.
+:data:`~ppamsafety.studies.REGISTRY`) whatever the completion order.  A new
+section needs nothing to benefit.  For the full report, before the sections
+start, the workers compile the large kernels between them
+(:mod:`ppamsafety.report.warmup`), so that a cold kernel cache is not filled
+by every worker at once.  Studies that start their own worker processes (the
+safety scan, the lambda sweep) still do; the operating system shares the
+cores.
 """
 
 from __future__ import annotations
