@@ -135,8 +135,17 @@ def two_body_impact(speed, *, arm_mass, head_mass: float = 5.0, stiffness: float
     w15 = int(math.floor(0.015 / dt * (1 + 1e-9)))
     _twobody_batch(kernel_array(v), kernel_array(mu), kernel_array(mh), float(stiffness),
                    float(exponent), float(damping), float(dt), nsteps, w36, w15, out, acc)
+    def span(x):
+        if np.size(x) == 0:
+            return "[]"
+        return f"{np.min(x):g}" if np.ptp(x) == 0 else f"{np.min(x):g}..{np.max(x):g}"
+
+    # an overflow can come from any input (e.g. a tiny mass with a stiff, damped contact):
+    # the message names them all
     check_finite_result("two_body_impact", out,
-                        f"stiffness = {stiffness:g}, exponent = {exponent:g}, "
-                        f"damping = {damping:g}, dt = {dt:g}")
+                        f"speed = {span(v)} m/s, arm_mass = {span(ma)} kg, "
+                        f"head_mass = {span(mh)} kg, stiffness = {stiffness:g}, "
+                        f"exponent = {exponent:g}, damping = {damping:g}, dt = {dt:g}, "
+                        f"duration = {duration:g}")
     keys = ["F_max", "t_Fmax", "HIC36", "HIC15", "delta_max", "separation_speed"]
     return {key: out[:, i] for i, key in enumerate(keys)}

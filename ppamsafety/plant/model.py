@@ -706,7 +706,7 @@ def hysteresis_factors(states, arm=None, *, params=None, effect_state=None):
         z = z if z.flags.writeable else z.copy()
     eps = np.empty((X.shape[0], 4))
     fac = np.empty((X.shape[0], 4))
-    _hysteresis_along(X, z, P, eps, fac)
+    _hysteresis_along(kernel_array(X), kernel_array(z), kernel_array(P), eps, fac)
     return eps, fac
 
 
