@@ -53,7 +53,7 @@ from ..plant.dynamics import coriolis_cs, mass_matrix_cs
 from ..plant.geometry import tcp_kinematics_cs
 from ..units import G0
 from .contact import hunt_crossley_elastic, hunt_crossley_force, hunt_crossley_potential
-from .hic import _hic_branch_and_bound, hic_kernel
+from .hic import hic_pair_kernel
 
 
 class JointModel(IntEnum):
@@ -464,6 +464,22 @@ def _write_history(h, s, dt, f, delta, a, y, case, P, hp):
     h[W_VH], h[W_VH + 1] = y[Y_VH], y[Y_VH + 1]
 
 
+@kernel
+def _summarize(r, acc, dt, w36, w15, general, fmax, tmax, dmax, tcont, v0, e0, y, case, P, hp):
+    """Fill the :data:`SUMMARY` row ``r`` of one impact from its head acceleration ``acc`` [g]
+    and final state ``y``; shared by both engines (``general``: HIC by branch and bound only,
+    see :func:`~.hic.hic_pair_kernel`)."""
+    r[R_FMAX], r[R_TFMAX] = fmax, tmax
+    r[R_HIC36], i1, i2, r[R_HIC15], j1, j2 = hic_pair_kernel(acc, dt, w36, w15, general)
+    r[R_W36], r[R_W36 + 1] = i1 * dt, i2 * dt
+    r[R_W15], r[R_W15 + 1] = j1 * dt, j2 * dt
+    r[R_DMAX], r[R_AMAX] = dmax, fmax / (hp[HP_M] * G0)
+    r[R_EHEAD] = 0.5 * hp[HP_M] * (y[Y_VH] * y[Y_VH] + y[Y_VH + 1] * y[Y_VH + 1])
+    r[R_EDISS] = y[Y_ED]
+    r[R_TCONT], r[R_VTCP0], r[R_E0] = tcont, v0, e0
+    r[R_EBAL] = (_energy(y, case, P, hp) + y[Y_ED] - e0) / max(e0, 1e-300)
+
+
 #: Free-flight steps are FREE_STRIDE times the contact step ...
 FREE_STRIDE = 20
 #: ... and are only taken while the gap exceeds this [m] plus twice the closing distance.
@@ -542,22 +558,10 @@ def impact_batch(CASES, P, hp, dt, nsteps, w36, w15, SUM, HIST, hist_of):
             else:
                 _rk4(y, dt, case, P, hp, k1, k2, k3, k4, yt)
                 s += 1
-        r = SUM[c]
-        r[R_FMAX], r[R_TFMAX] = fmax, tmax
         # the reference engine keeps the general branch and bound, so that comparing it with
         # the dense engine (single-pulse HIC path) also cross-checks the two HIC algorithms
-        r[R_HIC36], i1, i2 = _hic_branch_and_bound(acc, dt, w36)
-        r[R_W36], r[R_W36 + 1] = i1 * dt, i2 * dt
-        if i2 - i1 > w15:      # else the HIC36 window is admissible for HIC15, so they are equal
-            r[R_HIC15], i1, i2 = _hic_branch_and_bound(acc, dt, w15)
-        else:
-            r[R_HIC15] = r[R_HIC36]
-        r[R_W15], r[R_W15 + 1] = i1 * dt, i2 * dt
-        r[R_DMAX], r[R_AMAX] = dmax, fmax / (hp[HP_M] * G0)
-        r[R_EHEAD] = 0.5 * hp[HP_M] * (y[Y_VH] * y[Y_VH] + y[Y_VH + 1] * y[Y_VH + 1])
-        r[R_EDISS] = y[Y_ED]
-        r[R_TCONT], r[R_VTCP0], r[R_E0] = tcont, v0, e0
-        r[R_EBAL] = (_energy(y, case, P, hp) + y[Y_ED] - e0) / max(e0, 1e-300)
+        _summarize(SUM[c], acc, dt, w36, w15, True, fmax, tmax, dmax, tcont, v0, e0, y, case,
+                   P, hp)
 
 
 #: Step of the dense-output integrator, in grid intervals dt (see :func:`impact_batch_dense`).
@@ -728,17 +732,5 @@ def impact_batch_dense(CASES, P, hp, dt, nsteps, w36, w15, SUM):
                 dmax = max(dmax, delta0)
                 if f0 > 0.0:
                     tcont += dt
-        r = SUM[c]
-        r[R_FMAX], r[R_TFMAX] = fmax, tmax
-        r[R_HIC36], i1, i2 = hic_kernel(acc, dt, w36)
-        r[R_W36], r[R_W36 + 1] = i1 * dt, i2 * dt
-        if i2 - i1 > w15:
-            r[R_HIC15], i1, i2 = hic_kernel(acc, dt, w15)
-        else:
-            r[R_HIC15] = r[R_HIC36]
-        r[R_W15], r[R_W15 + 1] = i1 * dt, i2 * dt
-        r[R_DMAX], r[R_AMAX] = dmax, fmax / mg
-        r[R_EHEAD] = 0.5 * hp[HP_M] * (y[Y_VH] * y[Y_VH] + y[Y_VH + 1] * y[Y_VH + 1])
-        r[R_EDISS] = y[Y_ED]
-        r[R_TCONT], r[R_VTCP0], r[R_E0] = tcont, v0, e0
-        r[R_EBAL] = (_energy(y, case, P, hp) + y[Y_ED] - e0) / max(e0, 1e-300)
+        _summarize(SUM[c], acc, dt, w36, w15, False, fmax, tmax, dmax, tcont, v0, e0, y, case,
+                   P, hp)

@@ -282,6 +282,40 @@ def hic_kernel(a, dt, max_window_samples):
 
 
 @kernel
+def hic_pair_kernel(a, dt, w36, w15, general):
+    """HIC36 and HIC15 of one record: ``(hic36, i1, i2, hic15, j1, j2)`` (windows in samples).
+
+    When the HIC36 window spans at most ``w15`` samples it is admissible for
+    HIC15 too, so HIC15 equals HIC36 with the same window and is not searched
+    again.
+
+    Parameters
+    ----------
+    a : ndarray of float64, shape (N,)
+        Head acceleration magnitude samples [g], non-negative and finite (not
+        checked here).
+    dt : float
+        Sample spacing [s].
+    w36, w15 : int
+        The window limits 36 ms and 15 ms in whole sample intervals.
+    general : bool
+        True: always :func:`_hic_branch_and_bound` (the reference engine's
+        choice); False: :func:`hic_kernel`.
+    """
+    if general:
+        h36, i1, i2 = _hic_branch_and_bound(a, dt, w36)
+    else:
+        h36, i1, i2 = hic_kernel(a, dt, w36)
+    if i2 - i1 <= w15:
+        return h36, i1, i2, h36, i1, i2
+    if general:
+        h15, j1, j2 = _hic_branch_and_bound(a, dt, w15)
+    else:
+        h15, j1, j2 = hic_kernel(a, dt, w15)
+    return h36, i1, i2, h15, j1, j2
+
+
+@kernel
 def _hic_branch_and_bound(a, dt, max_window_samples):
     """Exact HIC of any record by branch and bound (module docstring): ``(value, i, j)``.
 

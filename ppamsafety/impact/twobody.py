@@ -22,7 +22,7 @@ from .._validation import (as_float_array, check_finite_result, check_positive, 
                            check_range_array)
 from ..units import G0
 from .contact import hunt_crossley_force
-from .hic import hic_kernel
+from .hic import hic_pair_kernel
 
 
 @kernel
@@ -49,8 +49,7 @@ def _twobody_batch(V, MU, MH, k, n, b, dt, nsteps, w36, w15, out, acc):
             k4v = -hunt_crossley_force(d4, dd4, k, n, b) / mu
             d += dt / 6.0 * (dd + 2.0 * dd2 + 2.0 * dd3 + dd4)
             dd += dt / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v)
-        h36, i1, i2 = hic_kernel(acc, dt, w36)
-        h15 = hic_kernel(acc, dt, w15)[0] if i2 - i1 > w15 else h36
+        h36, _, _, h15, _, _ = hic_pair_kernel(acc, dt, w36, w15, False)
         out[c, 0], out[c, 1], out[c, 2], out[c, 3], out[c, 4] = fmax, tmax, h36, h15, dmax
         out[c, 5] = -dd   # final relative velocity (separation speed once apart)
 
