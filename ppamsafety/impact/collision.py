@@ -57,7 +57,7 @@ from enum import IntEnum
 import numpy as np
 import pandas as pd
 
-from .._jit import kernel, kernel_array, leaf
+from .._jit import kernel, kernel_array
 from .._validation import (InvalidTypeError, as_float_array, check_int, check_range,
                            check_shape, describe)
 from ..control.dispatch import NINT, NSCRATCH, NSTATE, controller_step
@@ -170,7 +170,7 @@ FT_F, FT_A = FINE_TRACE.offsets("F", "a_head_g")
 NFINE = FINE_TRACE.size
 
 
-@leaf
+@kernel
 def _contact(x, hs, P, hp):
     """Contact at plant state x, head state hs: (F, nx, ny, delta, ddelta, vx, vy, J)."""
     xt, yt = tcp_position(x[X_Q], x[X_Q + 1], P)
@@ -186,7 +186,7 @@ def _contact(x, hs, P, hp):
     return f, nx, ny, delta, dd, vx, vy, j11, j12, j21, j22
 
 
-@leaf
+@kernel
 def _head_rhs(hs, f, nx, ny, vx, vy, delta, dd, hp, CP, dh):
     """Head derivative with contact force f along n (tool -> head) and the neck."""
     fnx = -CP[CC_KN] * (hs[H_X] - CP[CC_XH0]) - CP[CC_BN] * hs[H_V]
@@ -217,7 +217,7 @@ def _coupled_rhs(x, hs, z, u, P, hp, CP, dx, dh, tau, buf):
     return f
 
 
-@leaf
+@kernel
 def _coupled_rk4(x, hs, z, u, h, P, hp, CP, k1, k2, k3, k4, xt, g1, g2, g3, g4, ht, tau, buf):
     """One coupled RK4 step of plant and head; returns (F, |a_head|) at the step start."""
     f = _coupled_rhs(x, hs, z, u, P, hp, CP, k1, g1, tau, buf)
@@ -245,7 +245,7 @@ def _coupled_rk4(x, hs, z, u, h, P, hp, CP, k1, k2, k3, k4, xt, g1, g2, g3, g4, 
     return f, a
 
 
-@leaf
+@kernel
 def _head_free_rk4(hs, h, hp, CP, g1, g2, g3, g4, ht):
     """One RK4 step of the head alone (no contact; neck only)."""
     _head_rhs(hs, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, hp, CP, g1)

@@ -42,7 +42,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._jit import kernel, leaf
+from .._jit import kernel
 from .._validation import as_float_array, check_finite_result, check_nonnegative, check_positive
 
 _SLACK = 1.0 + 1e-12  # bounds are inflated by this factor against their own rounding
@@ -50,7 +50,7 @@ _LEAF = 64  # blocks with at most this many index pairs are evaluated exactly
 _STACK = 256  # depth-first stack; it holds <= 2 log2(N) + 2 < 130 blocks for any int64 N
 
 
-@leaf
+@kernel
 def _window_hic(area, width):
     """HIC of one window of ``area`` [g s] and ``width`` [s]: width * (area/width)^2.5."""
     m = area / width
@@ -122,7 +122,8 @@ def _range_max_table(a):
     while (1 << levels) <= n:
         levels += 1
     t = np.empty((levels, n))
-    t[0] = a
+    for p in range(n):      # a loop, not t[0] = a: the array assignment compiles numba's
+        t[0, p] = a[p]      # shape-mismatch error formatting (2.4 s of first compilation)
     for k in range(1, levels):
         h = 1 << (k - 1)
         for p in range(n - (1 << k) + 1):
@@ -133,7 +134,7 @@ def _range_max_table(a):
     return t, lg
 
 
-@leaf
+@kernel
 def _clip(i0, i1, j0, j1, wn, nxt, prv):
     """Shrink a block to valid, non-dominated pairs (empty: i0 > i1 or j0 > j1 on return)."""
     i0 = nxt[max(i0, j0 - wn)]
@@ -145,7 +146,7 @@ def _clip(i0, i1, j0, j1, wn, nxt, prv):
     return i0, i1, j0, j1
 
 
-@leaf
+@kernel
 def _bound(c, s, dt, wn, t, lg, offset):
     """Upper bound of HIC over a clipped block ``c = (i0, i1, j0, j1)``; 0 if it is empty.
 
@@ -161,7 +162,7 @@ def _bound(c, s, dt, wn, t, lg, offset):
     return mean * math.sqrt(mean) * min(area, dt * min(j1 - i0, wn) * mean) * _SLACK
 
 
-@leaf
+@kernel
 def _push(blocks, bounds, top, c, b, best):
     """Push block ``c`` with bound ``b`` unless it cannot beat ``best``; return the new top."""
     if b <= best:

@@ -17,8 +17,9 @@ report is assembled in the order of the studies (``only``, or
 :data:`~ppamsafety.studies.REGISTRY`) whatever the completion order.  A new
 section needs nothing to benefit.  For the full report, before the sections
 start, the workers compile the large kernels between them
-(:mod:`ppamsafety.report.warmup`), so that a cold kernel cache is not filled
-by every worker at once.  Studies that start their own worker processes (the
+(:mod:`ppamsafety.report.warmup`; a task starts once the tasks whose kernels it
+calls are done, and the sections once every task has started), so that a cold
+kernel cache is not filled by every worker at once.  Studies that start their own worker processes (the
 safety scan, the lambda sweep) still do; the operating system shares the
 cores.
 """
@@ -29,7 +30,7 @@ import json
 import os
 import time
 import warnings
-from concurrent.futures import FIRST_EXCEPTION, ProcessPoolExecutor, wait
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from pathlib import Path
 
 from .._validation import check_int
@@ -46,20 +47,50 @@ def _timed_study(name: str, stage, quick: bool):
     return res, time.perf_counter() - t0
 
 
-def _warm_up(pool) -> None:
-    """Run :data:`warmup.TASKS <ppamsafety.report.warmup.TASKS>` in ``pool`` and wait for them.
+def _run_in_pool(pool, processes: int, order, stage, quick: bool, warm: bool, report) -> None:
+    """Run the warm-up tasks (if ``warm``) and the studies ``order`` in ``pool``.
 
-    Only an optimisation: a failing task is reported as a warning and the
-    sections run anyway (they compile what they need and report their own
-    errors).
+    At most ``processes`` jobs run at a time, so that every job submitted starts
+    at once.  A free worker takes the first warm-up task of
+    :data:`warmup.TASKS <ppamsafety.report.warmup.TASKS>` whose
+    :attr:`~ppamsafety.report.warmup.Task.after` tasks have finished; once every
+    task has started, it takes the next study of ``order``.  A warm-up task is
+    only an optimisation: one that fails is reported as a warning and the
+    studies compile what they need themselves.  A study's error is raised here
+    (``report(name, result, seconds)`` is called for each study that finished).
     """
-    futures = [pool.submit(warmup.run_task, i) for i in range(len(warmup.TASKS))]
-    for i, f in enumerate(futures):
-        exc = f.exception()
-        if exc is not None:
-            warnings.warn(f"report warm-up task {warmup.TASKS[i].__name__} failed "
-                          f"({type(exc).__name__}: {exc}); the sections compile their kernels "
-                          "themselves", RuntimeWarning, stacklevel=3)
+    tasks = warmup.TASKS if warm else ()
+    finished_tasks, started_tasks = set(), set()
+    queue = list(order)
+    running = {}                 # future -> ("task", index) or ("study", name)
+    while queue or running or len(started_tasks) < len(tasks):
+        while len(running) < processes:
+            ready = [i for i, t in enumerate(tasks) if t.name not in started_tasks
+                     and all(a in finished_tasks for a in t.after)]
+            if ready:
+                started_tasks.add(tasks[ready[0]].name)
+                running[pool.submit(warmup.run_task, ready[0])] = ("task", ready[0])
+            elif len(started_tasks) == len(tasks) and queue:
+                name = queue.pop(0)
+                running[pool.submit(_timed_study, name, stage, quick)] = ("study", name)
+            else:
+                break
+        if not running:          # tasks waiting for tasks that never run: a bad TASKS table
+            stuck = sorted({t.name for t in tasks} - started_tasks)
+            raise RuntimeError(f"report warm-up: tasks {stuck} wait for tasks that are not in "
+                               "warmup.TASKS")
+        finished, _ = wait(running, return_when=FIRST_COMPLETED)
+        for f in finished:
+            kind, key = running.pop(f)
+            if kind == "study":
+                report(key, *f.result())                    # re-raises a study's error
+                continue
+            finished_tasks.add(tasks[key].name)
+            exc = f.exception()
+            if exc is not None:
+                warnings.warn(f"report warm-up task {tasks[key].name} failed "
+                              f"({type(exc).__name__}: {exc}); the sections compile their "
+                              "kernels themselves", RuntimeWarning, stacklevel=3)
 
 
 def _previous_times(out: Path) -> dict:
@@ -133,14 +164,9 @@ def build_report(outdir="reports", *, quick: bool = False, only=None, progress: 
             order = sorted(names, key=lambda n: -previous.get(n, float("inf")))
             pool = ProcessPoolExecutor(max_workers=processes)
             try:
-                if only is None:        # the full report: compile the large kernels once,
-                    _warm_up(pool)      # split between the workers (report.warmup)
-                futures = {pool.submit(_timed_study, n, stage, quick): n for n in order}
-                pending = set(futures)
-                while pending:
-                    finished, pending = wait(pending, return_when=FIRST_EXCEPTION)
-                    for f in finished:
-                        report(futures[f], *f.result())     # re-raises a study's error
+                # the full report first compiles the large kernels once, split between the
+                # workers (report.warmup)
+                _run_in_pool(pool, processes, order, stage, quick, only is None, report)
             finally:
                 pool.shutdown(wait=True, cancel_futures=True)
         sections, metrics = [], {}

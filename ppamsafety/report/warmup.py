@@ -9,34 +9,49 @@ closed loop, and the safety scan's own workers compiled the dense impact
 engine twice more (measured with numba's compile events, issue 11).
 
 For the full report :func:`~ppamsafety.report.build.build_report` therefore
-first runs the tasks of :data:`TASKS` in its worker pool and starts the
-sections once all have finished (on 2 cores: the closed loop and the
-collision kernel in one worker, the impact engines and the contact models in
-the other, about 50 s).  Each task calls the public functions on a tiny
-problem, so the kernels are compiled for exactly the argument types of the
-real calls; the other workers then load them from the cache in a fraction of
-a second.  With a warm cache a task only loads kernels (a few seconds).
+first runs the tasks of :data:`TASKS` in its worker pool, each as soon as the
+tasks it comes :attr:`~Task.after` have finished, and starts the sections once
+every task has started.  The tasks are small enough to keep both workers of a
+2-core machine busy: the compiled closed loop calls the controller step and
+the plant's RK4 step as functions of their own, so those two compile first,
+side by side (:func:`controller_kernels`, :func:`plant_kernels`), and the
+closed loop and the collision kernel then load them from the cache instead of
+compiling them again.  Each other task calls the public functions on a tiny
+problem, so the kernels are compiled for exactly the argument types of the real
+calls; ``tests/test_report_warmup.py`` checks that those calls compile nothing
+more.  With a warm cache a task only loads kernels (a fraction of a second to
+a few seconds).
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+from typing import Callable
+
 import numpy as np
 
-__all__ = ["TASKS", "closed_loop_kernels", "contact_kernels", "impact_kernels", "run_task"]
+__all__ = ["TASKS", "Task", "closed_loop_kernels", "collision_kernels", "contact_kernels",
+           "controller_kernels", "impact_kernels", "plant_kernels", "run_task"]
 
 
 def closed_loop_kernels() -> None:
-    """The closed loop (:func:`~ppamsafety.experiments.run_batch`) with its controller, plant,
-    sensor and estimator kernels (about 30 s on a cold cache), then the head coupled to it
-    (:func:`~ppamsafety.impact.collision.simulate_collision`, about 14 s more), which calls
-    those kernels: in one task, so that they are never compiled twice at the same time."""
+    """The closed loop (:func:`~ppamsafety.experiments.run_batch`) with its sensor models,
+    calling the kernels of :func:`controller_kernels` and :func:`plant_kernels`: about 8 s
+    on a cold cache once those are compiled."""
     from ..experiments import run_batch
+
+    run_batch([_warm_case()])
+
+
+def collision_kernels() -> None:
+    """The head coupled to the closed loop (:func:`~ppamsafety.impact.collision.simulate_collision`),
+    which calls the kernels of :func:`controller_kernels` and :func:`plant_kernels`: about 10 s
+    on a cold cache once those are compiled.  It runs after :func:`closed_loop_kernels`, whose
+    small set-up kernels (the rest state, the sensors) it shares."""
     from ..impact.collision import simulate_collision
 
-    case = _warm_case()
-    run_batch([case])
     # a head far away: the whole kernel is compiled whatever the run does
-    simulate_collision(case, head_position=np.array([5.0, 5.0]))
+    simulate_collision(_warm_case(), head_position=np.array([5.0, 5.0]))
 
 
 def _warm_case():
@@ -77,8 +92,66 @@ def contact_kernels() -> None:
     two_body_impact(1.0, arm_mass=2.0, stiffness=1e7, exponent=1.5, duration=1e-3)
 
 
-#: Warm-up tasks, longest first; they share no kernel, so they can run at the same time.
-TASKS = (closed_loop_kernels, impact_kernels, contact_kernels)
+def _compile(dispatcher, codes: str) -> None:
+    """Compile ``dispatcher`` for the argument types spelled by ``codes``.
+
+    One letter per argument: ``A`` a float64, C-contiguous, writable 1-d array
+    (:func:`~ppamsafety._jit.kernel_array`, and every row the compiled loops
+    slice), ``i`` an int64, ``f`` a float64.  These are the types the closed
+    loop passes (numba's compile events, issue 11).  ``compile`` also writes
+    the result to the on-disk cache, where the calling kernels find it.
+    """
+    from numba import types
+
+    kinds = {"A": types.Array(types.float64, 1, "C"), "i": types.int64, "f": types.float64}
+    dispatcher.compile(tuple(kinds[c] for c in codes))
+
+
+def controller_kernels() -> None:
+    """The controller step of every kind (:func:`~ppamsafety.control.dispatch.controller_step`),
+    as the closed loop and the collision kernel call it: about 11 s on a cold cache."""
+    from ..control.dispatch import controller_step
+
+    _compile(controller_step, "iAAAifAAAAAAAA")
+
+
+def plant_kernels() -> None:
+    """The plant's RK4 step (:func:`~ppamsafety.plant.model.rk4_step`, with the plant derivative)
+    and the force estimator's step, as the closed loop calls them: about 8 s on a cold cache."""
+    from ..control.estimation import estimator_step
+    from ..plant.model import rk4_step
+
+    _compile(rk4_step, "AAAAfAA")
+    _compile(estimator_step, "AAAifAAAAA")
+
+
+@dataclass(frozen=True)
+class Task:
+    """One warm-up task: ``run()`` compiles its kernels once the tasks named in ``after`` are done.
+
+    Attributes
+    ----------
+    run : callable
+        A top-level function of this module without arguments.
+    after : tuple of str
+        Names (``run.__name__``) of the tasks whose kernels ``run`` calls.
+    """
+
+    run: Callable[[], None]
+    after: tuple = ()
+
+    @property
+    def name(self) -> str:
+        """``run.__name__``."""
+        return self.run.__name__
+
+
+#: Warm-up tasks in order of priority (the start of the longest chain first); a task may start
+#: once the tasks it comes after have finished.
+TASKS = (Task(controller_kernels), Task(plant_kernels), Task(impact_kernels),
+         Task(closed_loop_kernels, after=("controller_kernels", "plant_kernels")),
+         Task(collision_kernels, after=("closed_loop_kernels",)),
+         Task(contact_kernels))
 
 
 def run_task(index: int) -> None:
@@ -93,4 +166,4 @@ def run_task(index: int) -> None:
         raise TypeError(f"index must be an int, got {type(index).__name__} {index!r}")
     if not 0 <= index < len(TASKS):
         raise ValueError(f"index = {index} is not a task; allowed 0..{len(TASKS) - 1}")
-    TASKS[index]()
+    TASKS[index].run()
