@@ -41,13 +41,17 @@ def test_real_calls_use_the_warm_up_types():
     """Study-sized calls after the warm-up (other controllers, references, batch sizes) find
     their kernels compiled for exactly their types: one signature per kernel, so the warm-up
     compiled what the report runs and nothing is compiled twice.  (A kernel loaded from the
-    cache does not type the kernels it calls; the fresh-cache test below covers those.)"""
+    cache does not type the kernels it calls; the fresh-cache test below covers those.)  The
+    Python API calls the controller step with the same row types
+    (``Controller.step``, checked here too)."""
     for i in range(len(warmup.TASKS)):
         warmup.run_task(i)
+    compiled = {k: list(k.signatures) for ks in KERNELS.values() for k in ks}
     arm = thesis_arm()
     ref = thesis_reference(arm, "step", duration=2.5)
     case = ExperimentCase(arm, JointPSMC(lam=0.4, ki=2.0 * BAR), ref, name="psmc")
     run_batch([case, ExperimentCase(arm, PID(), ref, estimator=ForceEstimator(), name="pid")])
+    JointPSMC().step(arm, np.array([0.8, -1.2]), np.zeros(2), np.zeros(4), ref.data[0])
     simulate_collision(case, head_position=np.array([4.0, -4.0]), reaction=Reaction.RETRACT)
     q = np.array([[0.8, -1.2], [1.0, -1.6]])
     for integrator in ("fixed", "dense"):
@@ -58,7 +62,11 @@ def test_real_calls_use_the_warm_up_types():
                     duration=2e-3)
     for task, kernels in KERNELS.items():
         for k in kernels:
-            assert len(k.signatures) == 1, (task, k.py_func.__name__, k.signatures)
+            # nothing new; and a single signature for the kernels only the report's paths call
+            # (other tests call the controller and plant steps with other row types)
+            assert k.signatures == compiled[k], (task, k.py_func.__name__, k.signatures)
+            if task not in ("controller_kernels", "plant_kernels"):
+                assert len(k.signatures) == 1, (task, k.py_func.__name__, k.signatures)
 
 
 @pytest.mark.parametrize("index, exc", [(-1, ValueError), (len(warmup.TASKS), ValueError),
@@ -175,3 +183,26 @@ def test_a_failing_task_warns_and_the_studies_still_run(monkeypatch):
 def test_a_task_waiting_for_an_unknown_task_is_an_error(monkeypatch):
     with pytest.raises(RuntimeError, match="not in warmup.TASKS"):
         _scheduled(monkeypatch, [("a", 0.01, False, ("nowhere",))])
+
+
+def test_report_workers_use_one_blas_thread():
+    """The report's worker initializer limits BLAS to one thread (the workers fill the cores)."""
+    import subprocess
+    import sys
+
+    script = ("import numpy; from threadpoolctl import threadpool_info; "
+              "from ppamsafety.report.build import _one_blas_thread; _one_blas_thread(); "
+              "print(sorted({p['num_threads'] for p in threadpool_info() "
+              "if p['user_api'] == 'blas'}))")
+    out = subprocess.run([sys.executable, "-c", script], check=True, capture_output=True,
+                         text=True, timeout=300).stdout.strip()
+    assert out == "[1]", out
+
+
+def test_typical_times_name_registered_studies():
+    """The scheduling hint for a folder without a previous report names only real studies."""
+    from ppamsafety.report.build import TYPICAL_SECONDS
+    from ppamsafety.studies import REGISTRY
+
+    assert set(TYPICAL_SECONDS) <= set(REGISTRY)
+    assert all(v > 0 for v in TYPICAL_SECONDS.values())

@@ -39,6 +39,7 @@ import numbers
 
 from .._validation import (InvalidTypeError, as_float_array, describe, check_finite_result, check_instance, check_range,
                            check_range_array, check_shape, check_vector)
+from .._jit import kernel_array
 from ..layouts import Layout
 
 
@@ -241,8 +242,12 @@ class Controller:
         fe = (np.zeros(ESTIMATOR_INTERNALS.size) if f_est is None else as_float_array(
             "f_est", f_est, shape_tail=(ESTIMATOR_INTERNALS.size,)).reshape(-1))
         out = np.zeros(2)
-        controller_step(int(self.kind), self.pack(), self.state, self.model_row(arm), self._k,
-                        dt, qm, qdm, pm, r, fe, out, self.internals, np.zeros(self.SCRATCH))
+        # every row as the closed loop passes it (writable, C-contiguous float64; the cached
+        # rows are read-only): another type would compile controller_step again, about 11 s
+        controller_step(int(self.kind), kernel_array(self.pack()), self.state,
+                        kernel_array(self.model_row(arm)), self._k, dt, kernel_array(qm),
+                        kernel_array(qdm), kernel_array(pm), kernel_array(r), kernel_array(fe),
+                        out, self.internals, np.zeros(self.SCRATCH))
         self._k += 1
         return check_finite_result(f"{type(self).__name__}.step output Delta p", out,
                                    f"q_meas = {qm.tolist()}, qd_meas = {qdm.tolist()}, "

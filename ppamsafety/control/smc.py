@@ -32,7 +32,7 @@ from enum import IntEnum
 
 import numpy as np
 
-from .._jit import leaf
+from .._jit import kernel, leaf
 from .._validation import check_instance, check_vector
 from ..params.inertia import LinkInertia
 from ..layouts import Field, Layout, check_flag
@@ -90,7 +90,7 @@ X_BUF, X_MT, X_VOL, X_DMT, X_FP, X_GP = SMC_SCRATCH.offsets(
     "qdd_buf", "mt", "vol", "dmt", "fp", "gp")
 
 
-@leaf
+@kernel
 def model_qdd(q1, q2, w1, w2, p, Pm, buf):
     """Model joint accelerations for state (q, qd, p) (compiled, unchecked).
 
@@ -159,10 +159,16 @@ def smc_step(C, S, Pm, dt, qm, qdm, pm, ref, dp, internals, scratch):
     """
     buf = scratch[X_BUF:X_BUF + 12]
     q1, q2, w1, w2 = qm[0], qm[1], qdm[0], qdm[1]
-    a1, a2 = model_qdd(q1, q2, w1, w2, pm, Pm, buf)
     mt = scratch[X_MT:X_MT + 4]
     vol = scratch[X_VOL:X_VOL + 4]
     torque_kernel(q1, q2, Pm, mt, scratch[X_DMT:X_DMT + 4], vol)
+    # the muscle torques depend on q and p only: model_qdd at (q, qd + h) is the forward
+    # dynamics at these torques, so the measured state and the four velocity perturbations
+    # share one torque evaluation (same values as model_qdd; it is the costly part, to run
+    # and to compile)
+    t1 = pm[0] * mt[0] + pm[1] * mt[1]
+    t2 = pm[2] * mt[2] + pm[3] * mt[3]
+    a1, a2 = forward_dynamics(q1, q2, w1, w2, t1, t2, Pm)
     # pressure drift (valve towards p_m, polytropic coupling) and input direction
     fp = scratch[X_FP:X_FP + 4]
     gp = scratch[X_GP:X_GP + 4]
@@ -182,10 +188,10 @@ def smc_step(C, S, Pm, dt, qm, qdm, pm, ref, dp, internals, scratch):
     d2q1 = model_qdd(q1 - H_Q, q2, w1, w2, pm, Pm, buf)
     d1q2 = model_qdd(q1, q2 + H_Q, w1, w2, pm, Pm, buf)
     d2q2 = model_qdd(q1, q2 - H_Q, w1, w2, pm, Pm, buf)
-    d1w1 = model_qdd(q1, q2, w1 + H_W, w2, pm, Pm, buf)
-    d2w1 = model_qdd(q1, q2, w1 - H_W, w2, pm, Pm, buf)
-    d1w2 = model_qdd(q1, q2, w1, w2 + H_W, pm, Pm, buf)
-    d2w2 = model_qdd(q1, q2, w1, w2 - H_W, pm, Pm, buf)
+    d1w1 = forward_dynamics(q1, q2, w1 + H_W, w2, t1, t2, Pm)
+    d2w1 = forward_dynamics(q1, q2, w1 - H_W, w2, t1, t2, Pm)
+    d1w2 = forward_dynamics(q1, q2, w1, w2 + H_W, t1, t2, Pm)
+    d2w2 = forward_dynamics(q1, q2, w1, w2 - H_W, t1, t2, Pm)
     mimo = int(C[P_COUPLING]) == SMCCoupling.MIMO
     acc = (a1, a2)
     hinv = ((hi11, hi12), (hi12, hi22))

@@ -12,7 +12,8 @@ files ppamsafety did not write is never used.
 **Parallel sections.**  Studies are independent (each computes, renders and
 writes its own artifacts), so with ``processes > 1`` they run in that many
 worker processes, longest first (the wall times of the previous report in the
-folder's ``metrics.json``; sections never timed before go first), and the
+folder's ``metrics.json``, else :data:`TYPICAL_SECONDS`; sections never timed
+before go first), and the
 report is assembled in the order of the studies (``only``, or
 :data:`~ppamsafety.studies.REGISTRY`) whatever the completion order.  A new
 section needs nothing to benefit.  For the full report, before the sections
@@ -93,6 +94,29 @@ def _run_in_pool(pool, processes: int, order, stage, quick: bool, warm: bool, re
                               "kernels themselves", RuntimeWarning, stacklevel=3)
 
 
+def _one_blas_thread() -> None:
+    """Worker initializer: one BLAS thread per report worker (``threadpoolctl``).
+
+    The workers already keep every core busy; a BLAS thread pool of their own
+    only spins on the small matrices of the studies and takes CPU time from
+    the other workers (the diagnosis study: 19.1 s of CPU for 16.9 s of wall
+    time with OpenBLAS's default two threads, 16.6 s for 16.6 s with one).
+    """
+    from threadpoolctl import threadpool_limits
+
+    threadpool_limits(limits=1)
+
+
+#: Wall times [s] of the studies in a full report on 2 cores with a cold kernel cache (measured
+#: 2026-11-23, issue 11).  Only a scheduling hint for a folder without a previous report: the
+#: longest studies start first, so that the last to finish is a short one (in the order of the
+#: registry, the longest study came last and the report took about 10 s longer).
+TYPICAL_SECONDS = {"diagnose_cases": 23.5, "effects": 14.0, "smc": 12.9, "tracking": 12.7,
+                   "worst_direction": 6.9, "safety": 7.4, "head_model": 6.5, "interaction": 4.2,
+                   "iso_15066": 4.9, "design": 2.8, "reaction": 3.6, "responses": 3.1,
+                   "lambda_sweep": 3.4, "diagnose_sawtooth": 3.4, "stiffness": 1.4}
+
+
 def _previous_times(out: Path) -> dict:
     """Study wall times [s] of the previous report in ``out`` (empty if none or unreadable)."""
     try:
@@ -160,9 +184,11 @@ def build_report(outdir="reports", *, quick: bool = False, only=None, progress: 
             for name in names:
                 report(name, *_timed_study(name, stage, quick))
         else:
-            # longest first (never timed: first), so the last to finish is a short one
-            order = sorted(names, key=lambda n: -previous.get(n, float("inf")))
-            pool = ProcessPoolExecutor(max_workers=processes)
+            # longest first (never timed: first), so the last to finish is a short one;
+            # without a previous report, by the typical times
+            times = previous or TYPICAL_SECONDS
+            order = sorted(names, key=lambda n: -times.get(n, float("inf")))
+            pool = ProcessPoolExecutor(max_workers=processes, initializer=_one_blas_thread)
             try:
                 # the full report first compiles the large kernels once, split between the
                 # workers (report.warmup)

@@ -118,7 +118,9 @@ def write_artifact(obj, path) -> str:
     if isinstance(obj, pd.DataFrame):
         obj.to_csv(path, index=False)
     elif hasattr(obj, "savefig"):
-        obj.savefig(path, dpi=150)
+        from ..report.figures import save
+
+        save(obj, path)
     else:
         raise TypeError(f"artifact {str(path)!r} is a {type(obj).__name__}; expected a "
                         "matplotlib Figure or a pandas DataFrame")
