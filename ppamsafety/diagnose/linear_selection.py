@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .selection import ALPHA, CV_SEGMENTS, Step, aicc, bic, chi2_sf, rank_step
+from .selection import ALPHA, CV_SEGMENTS, Step, aicc, bic, _chi2_sf, rank_step
 
 
 @dataclass(frozen=True, eq=False)
@@ -224,7 +224,7 @@ def forward_selection_linear(e0, columns: dict, admissible, *, alpha: float = AL
             cv = cv_chi2_linear(e0, columns, selected + [n], fold)
             rows.append({"name": n, "k": f.k - current.k, "chi2": f.chi2, "bic": f.bic,
                          "aicc": f.aicc, "delta_bic": f.bic - current.bic, "lr_stat": d,
-                         "lr_df": df, "p_value": chi2_sf(max(d, 0.0), df),
+                         "lr_df": df, "p_value": _chi2_sf(max(d, 0.0), df),
                          "cv_chi2": cv, "cv_gain": cur_cv - cv,
                          "gain_per_equation": d / max(f.m, 1)})
         for r in rows:

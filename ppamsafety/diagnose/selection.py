@@ -83,7 +83,7 @@ def _normal_quantile(p: float) -> float:
     return float(stats.norm.ppf(p))
 
 
-def chi2_sf(x: float, df: int) -> float:
+def _chi2_sf(x: float, df: int) -> float:
     """Upper tail of the chi2 distribution, P(X > x) with ``df`` degrees of freedom.
 
     The value of ``scipy.stats.chi2.sf(x, df)`` (both call the same special function,
@@ -120,7 +120,10 @@ class Problem:
         Dead-time shifts profiled (None: 1 .. ``max_shift``; the bootstrap
         fixes the full record's best shift).
     _xcache : dict
-        Designs per dead-time shift (internal cache).
+        Designs per dead-time shift (internal cache, shared with :func:`at_model`'s copies).
+    _memo : dict
+        Candidate directions and whitened nominal residuals of this problem (internal
+        cache; the forward selection fits every candidate three times per step).
     """
 
     bs: BlockSystem
@@ -133,6 +136,7 @@ class Problem:
     floor: np.ndarray | None = None
     shift_grid: tuple | None = None
     _xcache: dict = field(default_factory=dict, repr=False)
+    _memo: dict = field(default_factory=dict, repr=False)
 
     def X(self, shift: int) -> np.ndarray:
         """The design for a dead time of ``shift`` samples (cached).
@@ -188,7 +192,7 @@ def at_model(prob: Problem, mu) -> Problem:
     from .residuals import block_noise
 
     return replace(prob, sigma=_floored(block_noise(*prob.noise, mu), prob.floor),
-                   _xcache=prob._xcache)
+                   _xcache=prob._xcache, _memo={})
 
 
 def bic(chi2: float, k: int, m: int) -> float:
@@ -288,7 +292,15 @@ class Fit:
 
 def _directions(prob: Problem, names):
     """Directions D (NMU, K) in mu, extra prediction columns E (nb, 6, K) or None, the
-    candidate slices of phi and whether a dead time is profiled."""
+    candidate slices of phi and whether a dead time is profiled (remembered per problem)."""
+    key = ("directions", tuple(names))
+    if key not in prob._memo:
+        prob._memo[key] = _directions_of(prob, names)
+    D, slices, grid, E = prob._memo[key]
+    return D, dict(slices), grid, E
+
+
+def _directions_of(prob: Problem, names):
     cands = library(names)
     Ds, Es, slices, j = [], [], {}, 0
     nb = prob.bs.nb
@@ -337,7 +349,10 @@ def _solve(prob, D, shift, mask, E=None):
     X = prob.X(shift)
     nb, nc, nm = X.shape
     Xf = X.reshape(nb * nc, nm)                 # BLAS products (einsum does not use BLAS here)
-    base = (prob.bs.y - (Xf @ prob.mu0).reshape(nb, nc)) / prob.sigma
+    key = ("base", shift)
+    if key not in prob._memo:                   # whitened residual of the nominal model
+        prob._memo[key] = (prob.bs.y - (Xf @ prob.mu0).reshape(nb, nc)) / prob.sigma
+    base = prob._memo[key]
     P = (Xf @ D).reshape(nb, nc, D.shape[1])
     if E is not None:
         P = P + E
@@ -548,7 +563,7 @@ def forward_selection(prob: Problem, candidates=None, *, alpha: float = ALPHA,
             cv = cv_chi2(prob, selected + [n])
             rows.append({"name": n, "k": f.k - current.k, "chi2": f.chi2, "bic": f.bic,
                          "aicc": f.aicc, "delta_bic": f.bic - current.bic, "lr_stat": d,
-                         "lr_df": df, "p_value": chi2_sf(max(d, 0.0), df),
+                         "lr_df": df, "p_value": _chi2_sf(max(d, 0.0), df),
                          "cv_chi2": cv, "cv_gain": cur_cv - cv})
         for r in rows:
             r["in_bounds"] = in_bounds(prob, fits[r["name"]], r["name"])
