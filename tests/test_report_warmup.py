@@ -206,3 +206,12 @@ def test_typical_times_name_registered_studies():
 
     assert set(TYPICAL_SECONDS) <= set(REGISTRY)
     assert all(v > 0 for v in TYPICAL_SECONDS.values())
+
+
+@pytest.mark.parametrize("kwargs, match", [({"run": "closed_loop_kernels"}, "run"),
+                                           ({"run": warmup.plant_kernels, "after": "x"}, "after"),
+                                           ({"run": warmup.plant_kernels, "after": (1,)},
+                                            "after")])
+def test_bad_task_is_named(kwargs, match):
+    with pytest.raises(TypeError, match=match):
+        warmup.Task(**kwargs)

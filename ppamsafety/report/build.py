@@ -13,16 +13,15 @@ files ppamsafety did not write is never used.
 writes its own artifacts), so with ``processes > 1`` they run in that many
 worker processes, longest first (the wall times of the previous report in the
 folder's ``metrics.json``, else :data:`TYPICAL_SECONDS`; sections never timed
-before go first), and the
-report is assembled in the order of the studies (``only``, or
+before go first), and the report is assembled in the order of the studies (``only``, or
 :data:`~ppamsafety.studies.REGISTRY`) whatever the completion order.  A new
 section needs nothing to benefit.  For the full report, before the sections
 start, the workers compile the large kernels between them
 (:mod:`ppamsafety.report.warmup`; a task starts once the tasks whose kernels it
 calls are done, and the sections once every task has started), so that a cold
-kernel cache is not filled by every worker at once.  Studies that start their own worker processes (the
-safety scan, the lambda sweep) still do; the operating system shares the
-cores.
+kernel cache is not filled by every worker at once.  Each worker runs one BLAS
+thread.  Studies that start their own worker processes (the safety scan, the
+lambda sweep) still do; the operating system shares the cores.
 """
 
 from __future__ import annotations
@@ -102,8 +101,10 @@ def _one_blas_thread() -> None:
     the other workers (the diagnosis study: 19.1 s of CPU for 16.9 s of wall
     time with OpenBLAS's default two threads, 16.6 s for 16.6 s with one).
     """
-    from threadpoolctl import threadpool_limits
-
+    try:
+        from threadpoolctl import threadpool_limits
+    except ImportError:      # a declared dependency, but only an optimisation: never fail on it
+        return
     threadpool_limits(limits=1)
 
 

@@ -44,9 +44,10 @@ def closed_loop_kernels() -> None:
 
 
 def collision_kernels() -> None:
-    """The head coupled to the closed loop (:func:`~ppamsafety.impact.collision.simulate_collision`),
-    which calls the kernels of :func:`controller_kernels` and :func:`plant_kernels`: about 10 s
-    on a cold cache once those are compiled.  It runs after :func:`closed_loop_kernels`, whose
+    """The head coupled to the closed loop
+    (:func:`~ppamsafety.impact.collision.simulate_collision`), which calls the kernels of
+    :func:`controller_kernels` and :func:`plant_kernels`: about 10 s on a cold cache once
+    those are compiled.  It runs after :func:`closed_loop_kernels`, whose
     small set-up kernels (the rest state, the sensors) it shares."""
     from ..impact.collision import simulate_collision
 
@@ -134,11 +135,19 @@ class Task:
     run : callable
         A top-level function of this module without arguments.
     after : tuple of str
-        Names (``run.__name__``) of the tasks whose kernels ``run`` calls.
+        Names (``run.__name__``) of the tasks to wait for: those whose kernels ``run``
+        calls or shares, which it then loads from the cache instead of compiling them again.
     """
 
     run: Callable[[], None]
     after: tuple = ()
+
+    def __post_init__(self):
+        if not callable(self.run):
+            raise TypeError(f"run must be a callable, got {type(self.run).__name__} "
+                            f"{self.run!r}")
+        if not (isinstance(self.after, tuple) and all(isinstance(a, str) for a in self.after)):
+            raise TypeError(f"after must be a tuple of task names (str), got {self.after!r}")
 
     @property
     def name(self) -> str:
