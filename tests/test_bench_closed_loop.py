@@ -37,7 +37,7 @@ def test_batch_of_100_within_target(bench):
 def test_benchmark_cases_are_what_they_claim(bench):
     cases = bench.batch_cases()
     assert len(cases) == bench.N_BATCH
-    assert len({(c["controller"].lam, c["controller"].ki) for c in cases}) == bench.N_BATCH
+    assert len({(c.controller.lam, c.controller.ki) for c in cases}) == bench.N_BATCH
     arm, c, ref, sens = bench.single_case()
     assert ref.duration == pytest.approx(bench.DURATION)
     assert sens.encoder and sens.velocity == "ipt"
