@@ -51,8 +51,8 @@ def _twobody_batch(V, MU, MH, k, n, b, dt, nsteps, w36, w15, out, acc):
             dd += dt / 6.0 * (k1v + 2.0 * k2v + 2.0 * k3v + k4v)
             if d < 0.0 and dd <= 0.0:
                 # apart and not closing, and no other force acts: every later force is
-                # exactly 0 and dd stays as it is, so the rest of the record is zeros (same
-                # result as stepping on; the contact lasts a few ms of the 50 ms simulated)
+                # exactly 0 and dd stays as it is, so the rest of the record is zeros and
+                # stepping on would change no result
                 for r in range(s + 1, nsteps + 1):
                     acc[r] = 0.0
                 break
