@@ -13,7 +13,9 @@
   but not when it is large: with every leaf a plain kernel, 10 s of open-loop
   plant took 0.040 s instead of 0.023 s and the SMC study 80 % longer, and a
   non-inlined impact derivative in the RK4 step cost 11 %.  So: ``leaf`` for
-  the plant and controller helpers on the hot path, ``kernel`` for the rest;
+  the plant and controller helpers inside the RK4 step and the controller
+  step, ``kernel`` for the rest (the sensor models, the once-per-period
+  effect helpers, the impact, collision, clamping and HIC helpers);
   where a large function is hot in one place only, compile one source both
   ways (``engine._impact_rhs_inline`` inside the RK4 step, ``impact_rhs``
   elsewhere).

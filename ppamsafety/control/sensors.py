@@ -41,7 +41,7 @@ from enum import IntEnum
 
 import numpy as np
 
-from .._jit import leaf
+from .._jit import kernel
 from .._validation import check_bool, check_int, check_range, check_vector
 from ..layouts import Field, Layout, check_flag
 from ..units import BAR
@@ -268,7 +268,7 @@ def initial_sensor_state(q0) -> np.ndarray:
     return SENSOR_STATE.empty()
 
 
-@leaf
+@kernel
 def sensor_reset(st):
     """Reset the sensor state ``st`` in place: no pulses seen (see :func:`initial_sensor_state`).
 
@@ -283,7 +283,7 @@ def sensor_reset(st):
         st[S_TPREV + j] = T_NEVER
 
 
-@leaf
+@kernel
 def encoder_count(q, res):
     """Encoder count of angle ``q`` [rad] (floor of q/resolution).
 
@@ -302,7 +302,7 @@ def encoder_count(q, res):
     return math.floor(q / res)
 
 
-@leaf
+@kernel
 def sensor_init(q1, q2, cfg, st):
     """Set the counts of the sensor state ``st`` to the angles (q1, q2).
 
@@ -321,7 +321,7 @@ def sensor_init(q1, q2, cfg, st):
     st[S_COUNT + 1] = encoder_count(q2, cfg[C_RES])
 
 
-@leaf
+@kernel
 def sensor_track(j, q_old, q_new, t_old, h, cfg, st):
     """Register the encoder edges of joint ``j`` while q moves q_old -> q_new in [t_old, t_old + h].
 
@@ -372,7 +372,7 @@ def sensor_track(j, q_old, q_new, t_old, h, cfg, st):
     st[S_READ + j] = d * w if w >= cfg[C_DEAD] else 0.0
 
 
-@leaf
+@kernel
 def sensor_read(j, q_true, qd_true, t, cfg, st):
     """Measured (angle, velocity) of joint ``j`` at sample time ``t``.
 
@@ -410,7 +410,7 @@ def sensor_read(j, q_true, qd_true, t, cfg, st):
     return qm, st[S_READ + j]
 
 
-@leaf
+@kernel
 def pressure_read(p, cfg, out):
     """Measured gauge pressures (4) [Pa] of true pressures ``p`` into ``out``.
 

@@ -190,7 +190,7 @@ _MEM_INPUT = MEMORY.offset("input")
 _MEM_DEPTH = MEMORY.offset("depth")
 
 
-@leaf
+@kernel
 def effect_state_length(P):
     """Length of the effect-state vector z that plant row ``P`` needs.
 
@@ -247,7 +247,7 @@ def effects_update(x, z, u, P):
                 z[Z_HYST_DIR + k] = 1.0 if du > 0.0 else -1.0
 
 
-@leaf
+@kernel
 def effects_init(z, P):
     """Set the effect state ``z`` of plant row ``P`` to its value at t = 0 (in place).
 
@@ -274,7 +274,7 @@ def effects_init(z, P):
         z[Z_DELAY_COUNT] = 0.0
 
 
-@leaf
+@kernel
 def valve_delay(z, u, P):
     """Valve dead time: replace the set values ``u`` (4) [Pa] in place by u_i[k - d_i].
 
