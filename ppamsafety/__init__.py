@@ -5,4 +5,6 @@ thesis arm, :mod:`ppamsafety.plant` for the physics, and the ``ppamsafety report
 command for the full report.
 """
 
-__version__ = "0.1.0"
+from ._version import __version__
+
+__all__ = ["__version__"]

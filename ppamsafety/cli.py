@@ -25,12 +25,11 @@ from __future__ import annotations
 
 import argparse
 import math
-import os
-import re
 import sys
-import traceback
 
-EXIT_OK, EXIT_FAILURE, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
+from ._commandline import EXIT_OK
+from ._commandline import Parser as _Parser
+from ._commandline import _split_multi_value, run_guarded  # noqa: F401  (tests use both)
 
 _EPILOG = """\
 exit status:
@@ -43,39 +42,6 @@ output: a folder is created if missing; a non-empty folder is used only if it is
 ppamsafety output (marker file .ppamsafety-output) holding nothing but files ppamsafety wrote,
 and is replaced only with --overwrite. An existing file is never overwritten without --overwrite.
 """
-
-#: Options taking several values; ``--q=-1 -80`` is split into ``--q -1 -80`` for them.
-_MULTI_VALUE = ("--q", "--qd", "--stiffness")
-
-
-class _Parser(argparse.ArgumentParser):
-    """ArgumentParser that reads ``-1e5`` and ``-.5E-3`` as numbers, not as options.
-
-    argparse (Python < 3.13) recognises negative numbers only without an
-    exponent; this widens its number pattern (the same idea as Python 3.13's
-    own, which accepts any ``-`` followed by a digit).  The parser has no
-    option that looks like a number, so nothing is shadowed.
-    """
-
-    def __init__(self, *args, **kwargs):
-        kwargs.setdefault("formatter_class", argparse.RawDescriptionHelpFormatter)
-        super().__init__(*args, **kwargs)
-        self._negative_number_matcher = re.compile(
-            r"^-(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$|^-(inf|infinity|nan)$", re.IGNORECASE)
-
-
-def _split_multi_value(argv: list[str]) -> list[str]:
-    out = []
-    for i, a in enumerate(argv):
-        if a == "--":
-            return out + argv[i:]
-        opt, eq, val = a.partition("=")
-        if eq and opt in _MULTI_VALUE:
-            out += [opt, val]
-        else:
-            out.append(a)
-    return out
-
 
 def _finite(text: str) -> float:
     try:
@@ -120,7 +86,7 @@ def _nonnegative(text: str) -> float:
 
 
 def _study_names(text: str) -> list[str]:
-    from .studies import REGISTRY
+    from .sections import REGISTRY
 
     names = [n.strip() for n in text.split(",") if n.strip()]
     if not names:
@@ -478,66 +444,6 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
     i = sub.add_parser("info", help="print the thesis arm's key parameters")
     i.set_defaults(func=_cmd_info)
     return p
-
-
-def _error(msg: str) -> None:
-    print(f"ppamsafety: error: {msg}", file=sys.stderr)
-
-
-def run_guarded(parser: argparse.ArgumentParser, func, argv=None) -> int:
-    """Parse ``argv`` and run ``func(args)``, turning every error into an exit status.
-
-    Usage errors print argparse's message and give 2 (``--help`` gives 0); a
-    ``ValueError``, ``TypeError`` or ``OSError`` (bad input, including
-    :class:`ppamsafety.output.OutputError`) prints ``ppamsafety: error: ...``
-    and gives 2; any other exception prints one line asking to report it and
-    gives 1.  No traceback unless the environment sets ``PPAMSAFETY_DEBUG=1``.
-
-    Parameters
-    ----------
-    parser : argparse.ArgumentParser
-        Parser of the command line.
-    func : callable
-        ``func(args) -> int``: runs the command on the parsed namespace and
-        returns its exit status.
-    argv : sequence of str, optional
-        Arguments without the program name (default ``sys.argv[1:]``).
-
-    Returns
-    -------
-    int
-        Exit status (``func``'s, or 0, 1, 2 or the interrupt status as
-        above).
-    """
-    argv = list(sys.argv[1:] if argv is None else argv)
-    debug = os.environ.get("PPAMSAFETY_DEBUG", "") not in ("", "0")
-    try:
-        args = parser.parse_args(_split_multi_value([str(a) for a in argv]))
-    except SystemExit as exc:          # argparse: --help (0) or a usage error (2)
-        return exc.code if isinstance(exc.code, int) else EXIT_USAGE
-    try:
-        return func(args)
-    except BrokenPipeError:            # e.g. `ppamsafety impact ... | head`: the reader left
-        try:                           # early; nothing is wrong with the command or its input
-            devnull = os.open(os.devnull, os.O_WRONLY)
-            os.dup2(devnull, sys.stdout.fileno())   # no second error when Python flushes
-        except (OSError, ValueError):
-            pass
-        return EXIT_OK
-    except KeyboardInterrupt:
-        print("ppamsafety: interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
-    except (ValueError, TypeError, OSError) as exc:
-        if debug:
-            traceback.print_exc()
-        _error(str(exc) or type(exc).__name__)
-        return EXIT_USAGE
-    except Exception as exc:           # not the user's fault
-        if debug:
-            traceback.print_exc()
-        _error(f"internal failure ({type(exc).__name__}: {exc}); please report this with the "
-               f"command line used (PPAMSAFETY_DEBUG=1 shows the traceback)")
-        return EXIT_FAILURE
 
 
 def main(argv=None) -> int:

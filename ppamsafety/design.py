@@ -7,7 +7,7 @@ Reproduces the design figures of thesis chapter 2 as data:
 * the maximum load the arm can hold anywhere (fig. 2.15, Appendix A.4).
 
 All functions return result objects holding pandas DataFrames; plotting lives
-in :mod:`ppamsafety.report.figures` (``result.plot()`` delegates there).
+in :mod:`ppamsafety.plots.design` (``result.plot()`` delegates there).
 """
 
 from __future__ import annotations
@@ -22,6 +22,7 @@ from .params.inertia import LINK_PRIORS, RADIUS_OF_GYRATION, LinkInertia
 from .plant import geometry as geo
 from .plant import pneumatics as pn
 from .plant import torque
+from .plots.design import plot_torque_functions, plot_stiffness_map, plot_max_load
 from .units import BAR, DEG
 
 
@@ -67,9 +68,8 @@ class TorqueFunctions:
         Parameters
         ----------
         **kwargs
-            Passed to :func:`ppamsafety.report.figures.plot_torque_functions`.
+            Passed to :func:`ppamsafety.plots.design.plot_torque_functions`.
         """
-        from .report.figures import plot_torque_functions
         return plot_torque_functions(self, **kwargs)
 
 
@@ -128,9 +128,8 @@ class StiffnessMap:
         Parameters
         ----------
         **kwargs
-            Passed to :func:`ppamsafety.report.figures.plot_stiffness_map`.
+            Passed to :func:`ppamsafety.plots.design.plot_stiffness_map`.
         """
-        from .report.figures import plot_stiffness_map
         return plot_stiffness_map(self, **kwargs)
 
 
@@ -212,9 +211,8 @@ class MaxLoadMap:
         Parameters
         ----------
         **kwargs
-            Passed to :func:`ppamsafety.report.figures.plot_max_load`.
+            Passed to :func:`ppamsafety.plots.design.plot_max_load`.
         """
-        from .report.figures import plot_max_load
         return plot_max_load(self, **kwargs)
 
 

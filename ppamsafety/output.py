@@ -195,7 +195,7 @@ def inspect_output_folder(folder, *, overwrite: bool = False, _exclude: str | No
 
 
 def _write_marker(folder: Path, kind: str, files, dirs=()) -> None:
-    from . import __version__
+    from ._version import __version__
 
     dirs = sorted(set(dirs))
     data = {"tool": "ppamsafety", "version": __version__, "kind": kind,

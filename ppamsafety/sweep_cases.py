@@ -13,7 +13,7 @@ an error that names the parameter, its value and the allowed values.
 
 With the default parameters (``instants="heuristic"``, no stiffness
 override, no sensor noise) the case follows the code path of Table 6.1
-(:mod:`ppamsafety.studies.safety`): :func:`run_thesis_experiment` and
+(:mod:`ppamsafety.sections.safety`): :func:`run_thesis_experiment` and
 :func:`~ppamsafety.impact.instants.evaluate_experiment` with the same
 arguments, so it reproduces the table's numbers exactly.
 """
@@ -81,7 +81,7 @@ def _check_stiffness(v):
 
 
 def _check_head(v):
-    from .params.head import head_model_names
+    from .impact.head import head_model_names
 
     names = head_model_names()
     if not isinstance(v, str) or v not in names:
@@ -142,7 +142,7 @@ PARAMETERS = {
     "stiffness": (_check_stiffness,
                   "joint stiffness of the impacts [Nm/rad]: None = (2.18) from the pressures "
                   "at the instant, a number for both joints or a pair [K1, K2]"),
-    "head": (_check_head, "head contact model name (ppamsafety.params.head.head_model_names)"),
+    "head": (_check_head, "head contact model name (ppamsafety.impact.head.head_model_names)"),
     "effects": (_check_effects, "plant effects; only {} for now (ArmParameters.effects will "
                                 "pass through)"),
     "instants": (lambda v: _check_choice("instants", v, INSTANTS),
@@ -311,7 +311,7 @@ def safety_case(experiment: str = "step", controller: str = "PID", *, lam=None, 
         Joint stiffness used in the impacts [Nm/rad]: None = (2.18) from the
         pressures at each instant (thesis); a value overrides it (fig. 6.3).
     head : str
-        Head contact model name (:func:`ppamsafety.params.head.head_model`).
+        Head contact model name (:func:`ppamsafety.impact.head.head_model`).
     effects : dict or None
         Plant effects.  Only ``{}``/None for now: the effects
         (``ArmParameters.effects``) are being added to the plant and will be
@@ -348,7 +348,7 @@ def safety_case(experiment: str = "step", controller: str = "PID", *, lam=None, 
     from .experiments.catalog import ControllerVariant
     from .experiments.metrics import tracking_stats
     from .params import thesis_arm
-    from .params.head import head_model
+    from .impact.head import head_model
 
     p = check_case(experiment=experiment, controller=controller, lam=lam, kp_bar=kp_bar,
                    ki_bar=ki_bar, kd_bar=kd_bar, task_kp=task_kp, task_ki=task_ki,

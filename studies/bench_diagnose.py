@@ -42,9 +42,9 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from ppamsafety.diagnose import diagnose, synthesize
-from ppamsafety.diagnose.candidates import library
-from ppamsafety.diagnose.residuals import (arm_record, channel_noise, model_vector, replay,
-                                           row_from_mu)
+from ppamsafety.diagnose.arm.candidates import library
+from ppamsafety.diagnose.arm.residuals import (arm_record, channel_noise, model_vector, replay,
+                                               row_from_mu)
 from ppamsafety.params import thesis_arm
 from ppamsafety.plant import layout as lay
 

@@ -21,7 +21,7 @@ import numpy as np
 from ppamsafety.experiments.catalog import run_thesis_experiment, thesis_variants
 from ppamsafety.impact.instants import evaluate_experiment, worst_instant
 from ppamsafety.params import thesis_arm
-from ppamsafety.studies.safety import EXPERIMENTS, MIN_SPEED
+from ppamsafety.sections.safety import EXPERIMENTS, MIN_SPEED
 
 
 def _timed(f):

@@ -3,7 +3,7 @@
 Run alone:  python studies/iso_15066.py [outdir] [--quick] [--overwrite]
 """
 
-from ppamsafety.studies import main
+from ppamsafety.sections import main
 
 if __name__ == "__main__":
     raise SystemExit(main("iso_15066"))

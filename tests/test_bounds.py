@@ -11,7 +11,7 @@ from ppamsafety.impact.bounds import MASS_GRID, _min_eig_mass, impact_bounds, mi
 from ppamsafety.impact.instants import SCREEN_MARGIN, evaluate_experiment, worst_instant
 from ppamsafety.impact.model import effective_mass, simulate_impacts
 from ppamsafety.params import thesis_arm
-from ppamsafety.params.head import head_model
+from ppamsafety.impact.head import head_model
 from ppamsafety.plant.geometry import jacobian
 from ppamsafety.units import DEG
 

@@ -8,9 +8,9 @@ import pytest
 from ppamsafety.cli import main
 from ppamsafety.data import load_measured, synthetic_static
 from ppamsafety.diagnose import diagnose, synthesize
-from ppamsafety.diagnose.candidates import REGISTRY, VOCABULARY, Candidate, register
-from ppamsafety.diagnose.noise import second_difference_sigma
-from ppamsafety.diagnose.residuals import arm_record, block_system, model_vector
+from ppamsafety.diagnose.arm.candidates import REGISTRY, VOCABULARY, Candidate, register
+from ppamsafety.diagnose.core.noise import second_difference_sigma
+from ppamsafety.diagnose.arm.residuals import arm_record, block_system, model_vector
 from ppamsafety.plant import layout as lay
 
 

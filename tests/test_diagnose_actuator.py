@@ -18,13 +18,12 @@ import pytest
 from ppamsafety.cli import main
 from ppamsafety.data import MeasuredData, load_measured
 from ppamsafety.diagnose import diagnose, synthesize
-from ppamsafety.diagnose.actuator import (actuator_record, diagnose_actuator,
-                                          motion_direction, residual_noise)
-from ppamsafety.diagnose.actuator_battery import (CASES, confusion_matrix, outcome,
-                                                  parameter_failures, required_rate,
-                                                  run_battery)
-from ppamsafety.diagnose.actuator_synthesize import synthesize_actuator
-from ppamsafety.diagnose.noise import interpolation_sigma, second_difference_sigma
+from ppamsafety.diagnose.bench.pipeline import (actuator_record, diagnose_actuator,
+                                                motion_direction, residual_noise)
+from ppamsafety.diagnose.bench.battery import (CASES, confusion_matrix, outcome, parameter_failures,
+                                               required_rate, run_battery)
+from ppamsafety.diagnose.bench.synthesize import synthesize_actuator
+from ppamsafety.diagnose.core.noise import interpolation_sigma, second_difference_sigma
 
 pytestmark = pytest.mark.filterwarnings("ignore::ppamsafety.data.MeasuredDataWarning")
 

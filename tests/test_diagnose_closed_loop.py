@@ -15,7 +15,7 @@ import pytest
 
 from ppamsafety.data import load_measured
 from ppamsafety.diagnose import diagnose, synthesize
-from ppamsafety.diagnose.residuals import arm_record, block_system, model_vector, replay
+from ppamsafety.diagnose.arm.residuals import arm_record, block_system, model_vector, replay
 from ppamsafety.params import thesis_arm
 from ppamsafety.plant import layout as lay
 

@@ -8,8 +8,8 @@ import pytest
 from ppamsafety.cli import main
 from ppamsafety.data import load_measured
 from ppamsafety.diagnose import diagnose, synthesize
-from ppamsafety.diagnose.residuals import hysteresis_signature
-from ppamsafety.diagnose.static import static_record
+from ppamsafety.diagnose.arm.residuals import hysteresis_signature
+from ppamsafety.diagnose.arm.static import static_record
 from ppamsafety.params import thesis_arm
 from ppamsafety.params.effects import Effects
 from ppamsafety.plant.model import hysteresis_factors

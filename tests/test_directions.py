@@ -11,7 +11,7 @@ from ppamsafety.impact.bounds import impact_bounds
 from ppamsafety.impact.model import simulate_impacts
 from ppamsafety.impact.twobody import two_body_impact
 from ppamsafety.params import thesis_arm
-from ppamsafety.params.head import head_model
+from ppamsafety.impact.head import head_model
 from ppamsafety.plant import dynamics as dyn
 from ppamsafety.plant import geometry as geo
 

@@ -13,7 +13,8 @@ import pytest
 
 from ppamsafety.hysteresis import DELTA_25_FIBRES, EPS_MAX, initial_memory, preisach_response, w_fit
 from ppamsafety.hysteresis.memory import STATE_LENGTH
-from ppamsafety.params.effects import Effects, history_of_memory
+from ppamsafety.hysteresis.memory import history_of_memory
+from ppamsafety.params.effects import Effects
 from ppamsafety.plant import layout as lay
 from ppamsafety.plant import model
 from ppamsafety.units import BAR, DEG

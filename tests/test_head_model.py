@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from ppamsafety.impact import head_fit as hf
-from ppamsafety.params.head import HeadContactModel, head_model, head_model_names
+from ppamsafety.impact.head import HeadContactModel, head_model, head_model_names
 from ppamsafety.units import G0
 
 
@@ -42,7 +42,7 @@ def test_iso_effective_spring_of_a_linear_contact_is_k():
 
 
 def test_stored_thesis_model_is_the_fit_output(arm):
-    """params.head stores the rounded output of fit_thesis_head (provenance check)."""
+    """impact.head stores the rounded output of fit_thesis_head (provenance check)."""
     fit = hf.fit_thesis_head(arm)
     h = head_model()
     assert h.exponent == fit.exponent == 1.5

@@ -7,7 +7,7 @@ from ppamsafety.impact import contact
 from ppamsafety.impact.model import effective_mass, simulate_impacts
 from ppamsafety.impact.reference import simulate_impact_scipy
 from ppamsafety.impact.twobody import two_body_impact
-from ppamsafety.params.head import head_model
+from ppamsafety.impact.head import head_model
 from ppamsafety.plant import geometry as geo
 from ppamsafety.units import DEG
 

@@ -20,7 +20,7 @@ from ppamsafety.impact.model import (ENERGY_TOL, effective_mass, flexible_stiffn
 from ppamsafety.impact.reference import simulate_impact_scipy
 from ppamsafety.impact.twobody import two_body_impact
 from ppamsafety.params import thesis_arm
-from ppamsafety.params.head import head_model
+from ppamsafety.impact.head import head_model
 from ppamsafety.plant import dynamics as dyn
 from ppamsafety.plant import geometry as geo
 

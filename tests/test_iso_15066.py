@@ -13,7 +13,7 @@ from ppamsafety.impact.pfl import (linear_peak_force, max_relative_speed, reduce
                                    transfer_energy_pressure)
 from ppamsafety.impact.twobody import two_body_impact
 from ppamsafety.params import thesis_arm
-from ppamsafety.params.head import head_model
+from ppamsafety.impact.head import head_model
 from ppamsafety.params.iso_ts_15066 import FACE, SKULL_FOREHEAD, BodyRegion, body_region
 from ppamsafety.plant import geometry as geo
 from ppamsafety.plant.torque import torque_functions
@@ -197,7 +197,7 @@ def test_static_bound_invalid_inputs(arm):
 # ---- the study in quick mode -------------------------------------------------------------
 
 def test_iso_study_quick():
-    from ppamsafety.studies import iso_15066 as s
+    from ppamsafety.sections import iso_15066 as s
 
     st = s.compute(quick=True)
     m = st.metrics
@@ -240,7 +240,7 @@ def test_iso_study_quick():
 
 
 def test_lambda_bound_interpolation():
-    from ppamsafety.studies.iso_15066 import _lambda_min
+    from ppamsafety.sections.iso_15066 import _lambda_min
 
     # Log-linear crossing: F = 200 N at 0.1 s, 50 N at 1 s, limit 100 N ->
     # lambda = 0.1 x 10^((200 - 100) / (200 - 50)) = 0.1 x 10^(2/3) = 0.46416 s.

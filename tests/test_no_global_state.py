@@ -28,8 +28,8 @@ def test_importing_every_module_leaves_matplotlib_alone():
                        timeout=600)
     assert r.returncode == 0, r.stderr
     out = json.loads(r.stdout.strip().splitlines()[-1])
-    assert "ppamsafety.report.figures" in out["modules"]
-    assert "ppamsafety.report.control_figures" in out["modules"]
+    assert "ppamsafety.plots.figure" in out["modules"]
+    assert "ppamsafety.plots.control" in out["modules"]
     assert not out["pyplot"], "some ppamsafety module imports matplotlib.pyplot"
     assert out["same_backend"], "some ppamsafety module selects a matplotlib backend"
 

@@ -221,7 +221,7 @@ def test_report_replaces_its_own_folder_only_with_the_flag(tmp_path, capsys):
 
 
 def test_study_script_uses_the_same_rules(tmp_path, capsys):
-    from ppamsafety.studies import main as study_main
+    from ppamsafety.sections import main as study_main
 
     (tmp_path / "mine.txt").write_text("precious")
     assert study_main("design", [str(tmp_path), "--quick", "--overwrite"]) == 2

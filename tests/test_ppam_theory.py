@@ -87,7 +87,8 @@ def test_polynomial_fit_2_3():
 
 
 def test_theoretical_muscles_coefficients():
-    from ppamsafety.params import theoretical_muscles, thesis_muscles
+    from ppamsafety.params import thesis_muscles
+    from ppamsafety.plant.ppam_theory import theoretical_muscles
     ms = theoretical_muscles(slenderness=S, l0=0.06)
     ref = thesis_muscles()
     assert [g.n_muscles for g in ms.groups] == [g.n_muscles for g in ref.groups]
@@ -112,7 +113,8 @@ def test_bad_input_raises(call):
 def test_theoretical_max_load_minimum_finite():
     """Max-load map (fig. 2.15) with the theoretical muscles: finite minimum (coarse grid)."""
     from ppamsafety import design
-    from ppamsafety.params import theoretical_muscles, thesis_arm
+    from ppamsafety.params import thesis_arm
+    from ppamsafety.plant.ppam_theory import theoretical_muscles
     arm = thesis_arm().replace(muscles=theoretical_muscles())
     ml = design.max_load_map(arm, links=design.cad_links(), n1=41, n2=41)
     ident = design.max_load_map(thesis_arm(), links=design.cad_links(), n1=41, n2=41)

@@ -27,7 +27,8 @@ from ppamsafety.params import (BaseParameters, LinkInertia, MuscleGroup, Pneumat
                                identified_dynamic, thesis_arm, thesis_geometry, thesis_muscles,
                                thesis_valves)
 from ppamsafety.params.geometry import group_length_range
-from ppamsafety.params.head import HeadContactModel, head_model, hunt_crossley_max_penetration
+from ppamsafety.impact.head import HeadContactModel, head_model
+from ppamsafety.impact.contact import hunt_crossley_max_penetration
 
 FAST = settings(max_examples=60, deadline=None, suppress_health_check=list(HealthCheck))
 SLOW = settings(max_examples=15, deadline=None, suppress_health_check=list(HealthCheck))

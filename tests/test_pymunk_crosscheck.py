@@ -22,7 +22,7 @@ pytest.importorskip("pymunk")
 from ppamsafety.impact.model import simulate_impacts  # noqa: E402
 from ppamsafety.impact.pymunk_engine import HISTORY_COLUMNS, simulate_impact_pymunk  # noqa: E402
 from ppamsafety.params import thesis_arm  # noqa: E402
-from ppamsafety.params.head import head_model  # noqa: E402
+from ppamsafety.impact.head import head_model  # noqa: E402
 from ppamsafety.plant.geometry import jacobian  # noqa: E402
 from ppamsafety.units import DEG  # noqa: E402
 

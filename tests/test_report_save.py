@@ -8,7 +8,7 @@ import pytest
 from matplotlib.figure import Figure
 from matplotlib.layout_engine import ConstrainedLayoutEngine, PlaceHolderLayoutEngine
 
-from ppamsafety.report.figures import save
+from ppamsafety.plots.figure import save
 
 
 def _figure(layout=None):

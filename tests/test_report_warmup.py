@@ -202,7 +202,7 @@ def test_report_workers_use_one_blas_thread():
 def test_typical_times_name_registered_studies():
     """The scheduling hint for a folder without a previous report names only real studies."""
     from ppamsafety.report.build import TYPICAL_SECONDS
-    from ppamsafety.studies import REGISTRY
+    from ppamsafety.sections import REGISTRY
 
     assert set(TYPICAL_SECONDS) <= set(REGISTRY)
     assert all(v > 0 for v in TYPICAL_SECONDS.values())

@@ -7,7 +7,7 @@ import pandas as pd
 import pytest
 
 from ppamsafety.experiments import conclusions as cc
-from ppamsafety.studies import REGISTRY, Section, StudyResult, run_study
+from ppamsafety.sections import REGISTRY, Section, SectionResult, run_section
 
 
 def test_registry_order():
@@ -26,8 +26,8 @@ def test_registry_order():
              "smc_chattering_sweep.csv"]),
 ])
 def test_study_runs_quick_and_writes_its_files(tmp_path, name, files):
-    res = run_study(name, tmp_path, quick=True)
-    assert isinstance(res, StudyResult) and res.title and res.markdown
+    res = run_section(name, tmp_path, quick=True)
+    assert isinstance(res, SectionResult) and res.title and res.markdown
     for f in files:
         assert (tmp_path / f).exists(), f
         assert f in res.markdown or f.endswith(".csv") or f in " ".join(res.artifacts)
@@ -40,7 +40,7 @@ def test_responses_in_three_parts_compute_writes_nothing(tmp_path, monkeypatch):
     """compute -> study object (no files, no figures), plot -> Figures, render -> Section."""
     from matplotlib.figure import Figure
 
-    from ppamsafety.studies import responses
+    from ppamsafety.sections import responses
 
     monkeypatch.chdir(tmp_path)
     study = responses.compute(quick=True)
@@ -64,10 +64,10 @@ def test_responses_in_three_parts_compute_writes_nothing(tmp_path, monkeypatch):
 
 
 def test_study_arguments_are_checked():
-    from ppamsafety.studies import lambda_sweep, resolve_arm, safety, study_module, write_artifact
+    from ppamsafety.sections import lambda_sweep, resolve_arm, safety, section_module, write_artifact
 
-    with pytest.raises(ValueError, match="unknown study name='nope'"):
-        study_module("nope")
+    with pytest.raises(ValueError, match="unknown report section name='nope'"):
+        section_module("nope")
     with pytest.raises(TypeError, match="arm must be an ArmParameters"):
         resolve_arm("thesis")
     for mod in (safety, lambda_sweep):
@@ -78,7 +78,7 @@ def test_study_arguments_are_checked():
 
 
 def test_tracking_table_has_thesis_values_and_ratios(tmp_path):
-    from ppamsafety.studies import tracking
+    from ppamsafety.sections import tracking
 
     th = tracking.thesis_table()
     assert len(th) == 30
@@ -94,7 +94,7 @@ def test_tracking_table_has_thesis_values_and_ratios(tmp_path):
 def _thesis_like_tables():
     """Toolkit-format tables built from the thesis' own Table 5.2 and plausible responses."""
     from ppamsafety.experiments import catalog
-    from ppamsafety.studies import tracking
+    from ppamsafety.sections import tracking
 
     fam = {lab: (catalog.variant_family(c), catalog.variant_lambda(c))
            for lab, c in catalog.thesis_variants()}

@@ -1,11 +1,11 @@
-"""The discrepancy-diagnosis report section (ppamsafety.studies.diagnose_cases), quick mode."""
+"""The discrepancy-diagnosis report section (ppamsafety.sections.diagnose_cases), quick mode."""
 
 import numpy as np
 
-from ppamsafety.diagnose.summary_fit import AXES, axis, fit_summary, plant_at, whitened
+from ppamsafety.diagnose.arm.summary_fit import AXES, axis, fit_summary, plant_at, whitened
 from ppamsafety.params import thesis_arm
 from ppamsafety.plant import layout as lay
-from ppamsafety.studies import REGISTRY, diagnose_cases
+from ppamsafety.sections import REGISTRY, diagnose_cases
 
 
 def test_section_quick_names_both_hidden_effects_and_shrinks_the_gap(tmp_path):

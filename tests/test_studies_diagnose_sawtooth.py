@@ -1,8 +1,8 @@
-"""Case study (a) (ppamsafety.studies.diagnose_sawtooth), quick mode."""
+"""Case study (a) (ppamsafety.sections.diagnose_sawtooth), quick mode."""
 
 import pytest
 
-from ppamsafety.studies import diagnose_sawtooth
+from ppamsafety.sections import diagnose_sawtooth
 
 
 @pytest.fixture(scope="module")

@@ -1,9 +1,9 @@
-"""The effects study (ppamsafety.studies.effects): quick compute -> render, and the sawtooth physics."""
+"""The effects study (ppamsafety.sections.effects): quick compute -> render, and the sawtooth physics."""
 
 import numpy as np
 import pytest
 
-from ppamsafety.studies import REGISTRY, effects
+from ppamsafety.sections import REGISTRY, effects
 
 
 @pytest.fixture(scope="module")

@@ -2,14 +2,14 @@
 
 import pytest
 
-from ppamsafety.studies import (head_model, lambda_sweep, run_study, safety, stiffness,
+from ppamsafety.sections import (head_model, lambda_sweep, run_section, safety, stiffness,
                                 write_section)
 
 
 @pytest.fixture(scope="module")
 def safety_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("safety")
-    return out, run_study("safety", out, quick=True)
+    return out, run_section("safety", out, quick=True)
 
 
 def test_safety_study_writes_its_artifacts(safety_run):
@@ -50,7 +50,7 @@ def test_worst_direction_study_quick():
     effective mass grows faster aside than the normal speed falls); PSMC stays below the
     660 N maxilla tolerance, PID's step does not."""
     from ppamsafety.params.head import MAXILLA_FRACTURE_N
-    from ppamsafety.studies import worst_direction as wd
+    from ppamsafety.sections import worst_direction as wd
 
     study = wd.compute(quick=True)
     t = study.to_pandas()

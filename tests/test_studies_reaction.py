@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from ppamsafety.impact.collision import Reaction
-from ppamsafety.studies import reaction
+from ppamsafety.sections import reaction
 
 
 @pytest.fixture(scope="module")

@@ -82,7 +82,7 @@ def test_cli_runs_table_6_1_reduced_and_reproduces_the_safety_study(tmp_path, ca
     from ppamsafety.experiments.catalog import run_thesis_experiment
     from ppamsafety.impact.instants import evaluate_experiment
     from ppamsafety.params import thesis_arm
-    from ppamsafety.params.head import head_model
+    from ppamsafety.impact.head import head_model
 
     out = tmp_path / "t61"
     def argv(n, *extra):

@@ -12,7 +12,7 @@ from ppamsafety.control import SensorConfig
 from ppamsafety.experiments import catalog
 from ppamsafety.experiments.thesis_data import VARIANT_KEYS, join_thesis, table_5_2
 from ppamsafety.impact.thesis_data import join_table_6_1, table_6_1, table_6_1_long
-from ppamsafety.studies import tracking
+from ppamsafety.sections import tracking
 
 
 def test_thesis_tables_are_keyed_by_the_variant_fields():

@@ -21,7 +21,7 @@ from ppamsafety.impact.reference import simulate_impact_scipy
 from ppamsafety.impact.thesis_data import FIG_6_3, join_table_6_1
 from ppamsafety.impact.twobody import two_body_impact
 from ppamsafety.params import thesis_arm
-from ppamsafety.params.head import HeadContactModel, head_model
+from ppamsafety.impact.head import HeadContactModel, head_model
 from ppamsafety.units import DEG
 
 ARM = thesis_arm()

@@ -14,7 +14,8 @@ from ppamsafety.params import (ArmGeometry, BaseParameters, LinkInertia, MuscleG
                                PneumaticParams, Valve, ValveSet, identified_dynamic, thesis_arm,
                                thesis_geometry, thesis_muscles, thesis_valves)
 from ppamsafety.params.geometry import group_lengths
-from ppamsafety.params.head import head_model, hunt_crossley_max_penetration
+from ppamsafety.impact.head import head_model
+from ppamsafety.impact.contact import hunt_crossley_max_penetration
 from ppamsafety.units import BAR
 
 

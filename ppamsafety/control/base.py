@@ -23,8 +23,7 @@ these declarations.
 All controllers output a pressure difference Delta p per joint [Pa]
 (Delta-p approach (3.7)); the runner turns it into valve set values.
 
-Reference row (per sample, 12 values, :data:`REF_COLUMNS` of
-:mod:`ppamsafety.experiments.trajectories`): q_d (2), qd_d (2), qdd_d (2),
+Reference row (per sample, 12 values, declared in :mod:`.reference`): q_d (2), qd_d (2), qdd_d (2),
 qddd_d (2) [rad, rad/s, ...], r_d (2), rd_d (2) [m, m/s].  Kernels index it
 with the ``R_*`` constants below.
 """
@@ -41,6 +40,7 @@ from .._validation import (InvalidTypeError, as_float_array, describe, check_fin
                            check_range_array, check_shape, check_vector)
 from .._jit import kernel_array
 from ..layouts import Layout
+from .reference import NREF, R_Q_D, R_QD_D, R_QDD_D, R_QDDD_D, R_R_D, R_RD_D
 
 
 class ControllerKind(IntEnum):
@@ -58,13 +58,7 @@ KIND_GC, KIND_PID, KIND_PSMC_JOINT, KIND_PSMC_TASK, KIND_SMC, KIND_ADMITTANCE = 
     ControllerKind.GC, ControllerKind.PID, ControllerKind.PSMC_JOINT, ControllerKind.PSMC_TASK,
     ControllerKind.SMC, ControllerKind.ADMITTANCE)
 
-# -- reference row -------------------------------------------------------------------------
-# The reference row is declared in ``experiments/trajectories.py`` (``REFERENCE_ROW``); the
-# controller kernels read it through these offsets.  (``ppamsafety.experiments`` loads its
-# submodules lazily, so importing the trajectories module from here is not circular.)
-from ..experiments.trajectories import (NREF, R_Q_D, R_QD_D, R_QDD_D,  # noqa: E402
-                                        R_QDDD_D, R_R_D, R_RD_D)
-
+# -- reference row (declared in .reference) ------------------------------------------------
 R_Q, R_QD, R_QDD, R_QDDD = R_Q_D, R_QD_D, R_QDD_D, R_QDDD_D   #: q_d, its 1st..3rd derivatives
 R_X, R_Y = R_R_D, R_R_D + 1          #: x_d, y_d [m] (the two slots of the r_d field)
 R_XD, R_YD = R_RD_D, R_RD_D + 1      #: xd_d, yd_d [m/s] (the two slots of rd_d)

@@ -253,7 +253,7 @@ class SlidingModeControl(Controller):
     -----
     The thesis gives no SMC gains.  The defaults (poles 40 1/s, K = 3000
     rad/s^3, Gamma = 10 rad/s^2, i.e. a gain K/Gamma = 300 1/s inside the
-    boundary layer) were chosen by simulation (:mod:`ppamsafety.studies.smc`,
+    boundary layer) were chosen by simulation (:mod:`ppamsafety.sections.smc`,
     which repeats the search and reports it): circle with period 5 s as in
     §4.4.1, realistic sensors (encoder, inter-pulse-timing velocity), SISO
     coupling, exact valve model; on a grid poles {10, 20, 40, 80} x K/Gamma

@@ -117,7 +117,7 @@ class Identification:
 
     def to_dict(self) -> dict:
         """Everything as a JSON-ready dict (no NaN: non-finite numbers become None)."""
-        from .. import __version__
+        from .._version import __version__
 
         problems = {}
         for name in self.results:

@@ -18,7 +18,8 @@ is missing, its fitted parameters, and the gap shrinking.
 Documentation: ``docs/diagnose.md``.
 """
 
-from .diagnosis import Diagnosis, diagnose  # noqa: F401
+from .core.result import Diagnosis  # noqa: F401
+from .diagnosis import diagnose
 from .synthesize import synthesize
 
 __all__ = ["Diagnosis", "diagnose", "synthesize"]

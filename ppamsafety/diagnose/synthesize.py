@@ -1,306 +1,22 @@
-"""The generator of hidden-effect data (issue 10 item 6): rehearse the diagnosis.
+"""The hidden-effect data generator, :func:`synthesize`: rehearsal records for the diagnosis.
 
-:func:`synthesize` simulates an experiment on a plant that differs from the
-nominal arm by the given effects, adds seeded measurement noise and returns a
-record in the measured-data format (:class:`ppamsafety.data.MeasuredData`,
-``.save(path)``).  The record carries **no hint** of what is hidden: the
-metadata are the same for every effect (kind, experiment, sample rate, a
-generic description and the seed), the set values are those the experimenter
-computed with the *nominal* arm, and nothing else is written.
-
-Effects (``NAME=VALUE``; vectors as comma-separated values, a single value
-is used for every joint/valve):
-
-* every field of :class:`ppamsafety.params.effects.Effects` (absolute values
-  in SI units): ``payload_mass`` [kg], ``friction_coulomb`` [N m],
-  ``friction_viscous`` [N m s/rad], ``valve_offset`` [Pa], ``valve_gain``
-  [-], ``valve_time_constant`` [s], ``polytropic_n`` [-], and the fields
-  other branches add (e.g. ``hysteresis_delta``);
-* relative forms: ``friction_coulomb_factor``, ``friction_viscous_factor``,
-  ``valve_gain_factor``, ``valve_time_constant_factor`` (x nominal),
-  ``valve_offset_delta`` [Pa] (+ nominal);
-* ``valve_dead_time`` [s]: the set values act this much later (realised as
-  a delayed input, exact for an open-loop record);
-* effects outside the diagnosis library, to test that it refuses to name
-  them: ``geometry.<field>`` (e.g. ``geometry.L1`` [m], a wrong link
-  length in the model), ``pressure_sensor_offset`` [Pa] (added to the
-  recorded p, every muscle or a vector of 4).
-
-Noise ``"table-3.2"``: white Gaussian noise with the Table 3.2 variances on
-q (3.46e-6, 2.59e-6 rad^2) and qd (1.63e-4, 2.32e-5 rad^2/s^2) and 500 Pa
-standard deviation on p (our choice, see
-:data:`ppamsafety.identify.static.PRESSURE_NOISE_STD`); ``"none"``: exact
-samples.
-
-Experiments
------------
-``"open-loop"``
-    The Fourier excitation of the valves (§3.5.2.4), coefficients drawn with
-    the seed; the set values are computed in advance, so a valve dead time
-    is realised exactly as a delayed input.
-``"closed-loop"``
-    A thesis experiment of the catalogue (``reference``: ``"step"``,
-    ``"switch"``, ``"circle5"``, ``"circle10"``, ``"circle20"``) under a
-    thesis controller variant (``controller``: a label of
-    :func:`ppamsafety.experiments.catalog.thesis_variants`, e.g.
-    ``"PSMC joint Ki=2 λ=0.4"``), run by the compiled closed loop
-    (:func:`ppamsafety.experiments.closed_loop.run_batch`) on the plant
-    with the hidden effects while the controller keeps the nominal model.
-    The record holds what the controller saw and sent: the angles and
-    velocities it measured (exact sensors plus the Table 3.2 noise, drawn by
-    :class:`~ppamsafety.control.sensors.SensorConfig` with the seed, so the
-    measurement noise is *fed back* into the set values, as on the real
-    arm), the pressures (+ 500 Pa noise, an independent seeded stream) and
-    the set values u1..u4 the controller sent (before any valve dead time,
-    which here is the plant effect ``Effects.valve_dead_time`` inside the
-    loop).  Metadata: ``reference`` and ``[controller] variant`` as
-    ``docs/measured_data.md`` specifies -- the same whatever is hidden.
+The arm generator is :mod:`ppamsafety.diagnose.arm.synthesize`, the test-bench
+generator :mod:`ppamsafety.diagnose.bench.synthesize`; this front door picks one
+by ``kind`` and checks that the options belong to it.
 """
 
 from __future__ import annotations
 
-import math
-
-import numpy as np
-import pandas as pd
-
-from .._validation import check_choice, check_int, check_range
-
-EXPERIMENTS = ("open-loop", "closed-loop", "static-sawtooth")
-#: Defaults of the closed-loop record: controller variant label and catalogue reference.
-DEFAULT_CONTROLLER = "PSMC joint Ki=2 λ=0.4"
-DEFAULT_REFERENCE = "circle10"
-#: One tooth of the sawtooth set angles [deg] (the text does not give the sequence of fig. 3.1;
-#: the same choice as :mod:`ppamsafety.studies.effects`: both joints up and down together in
-#: 10 deg steps over the part of the working area the arm can hold).
-SAWTOOTH_Q1_DEG = (30.0, 40.0, 50.0, 60.0, 70.0, 80.0, 70.0, 60.0, 50.0, 40.0)
-SAWTOOTH_Q2_DEG = (-95.0, -85.0, -75.0, -65.0, -55.0, -45.0, -55.0, -65.0, -75.0, -85.0)
-#: Teeth of the default sawtooth.
-SAWTOOTH_TEETH = 2
-#: Gradual change, pause and data window per level [s] (§3.5.1.6: "a 3 second pause ...
-#: then data was taken during 1 second"; the 1 s ramp is our choice).
-SAWTOOTH_RAMP_S, SAWTOOTH_SETTLE_S, SAWTOOTH_WINDOW_S = 1.0, 3.0, 1.0
-#: Standard deviation of the synthetic muscle-force noise [N] (our choice; the thesis gives
-#: no force-sensor noise).
-FORCE_NOISE_STD = 2.0
-NOISES = ("table-3.2", "none")
-RELATIVE = {"friction_coulomb_factor": ("friction_coulomb", 2), "friction_viscous_factor":
-            ("friction_viscous", 2), "valve_gain_factor": ("valve_gain", 4),
-            "valve_time_constant_factor": ("valve_time_constant", 4)}
-_VECTOR_LEN = {"friction_coulomb": 2, "friction_viscous": 2, "valve_offset": 4, "valve_gain": 4,
-               "valve_time_constant": 4, "hysteresis_delta": 4}
-
-
-def _as_list(name, value, n):
-    if isinstance(value, str):
-        value = [float(v) for v in value.split(",")]
-    if np.isscalar(value):
-        value = [float(value)] * n
-    value = [float(v) for v in value]
-    if len(value) == 1:
-        value = value * n
-    if len(value) != n:
-        raise ValueError(f"effect {name} needs 1 or {n} values, got {len(value)}: {value}")
-    return tuple(value)
-
-
-def _nominal_vector(arm, field):
-    if field == "friction_coulomb":
-        return np.array(arm.plant_base.coulomb)
-    if field == "friction_viscous":
-        return np.array(arm.plant_base.viscous)
-    vs = arm.valves.valves
-    return np.array({"valve_gain": [v.v2 for v in vs], "valve_offset": [v.v1 for v in vs],
-                     "valve_time_constant": [v.time_constant for v in vs]}[field])
-
-
-def plant_with(arm, effects: dict):
-    """The plant (ArmParameters) and the extra hidden quantities for ``effects``.
-
-    Parameters
-    ----------
-    arm : ArmParameters
-        Nominal arm.
-    effects : dict
-        ``{name: value}`` (see the module docstring).
-
-    Returns
-    -------
-    plant : ArmParameters
-    dead_time : float
-        [s]
-    sensor_offset : numpy.ndarray, shape (4,)
-        [Pa]
-    """
-    from ..params.effects import Effects
-
-    if not isinstance(effects, dict):
-        raise TypeError(f"effects must be a dict {{name: value}}, got {type(effects).__name__}")
-    fx, geo = {}, {}
-    dead, offset = 0.0, np.zeros(4)
-    fields = Effects.__dataclass_fields__
-    for name, value in effects.items():
-        if name in RELATIVE:
-            f, n = RELATIVE[name]
-            fx[f] = tuple(_nominal_vector(arm, f) * np.array(_as_list(name, value, n)))
-        elif name == "valve_offset_delta":
-            fx["valve_offset"] = tuple(_nominal_vector(arm, "valve_offset")
-                                       + np.array(_as_list(name, value, 4)))
-        elif name == "valve_dead_time":
-            dead = check_range("effect valve_dead_time", float(value), 0.0, 1.0, unit="s")
-        elif name == "pressure_sensor_offset":
-            offset = np.array(_as_list(name, value, 4))
-        elif name.startswith("geometry."):
-            geo[name.split(".", 1)[1]] = float(value)
-        elif name in fields:
-            fx[name] = _as_list(name, value, _VECTOR_LEN[name]) if name in _VECTOR_LEN else (
-                float(value) if not isinstance(value, (list, tuple)) else tuple(value))
-        else:
-            raise ValueError(f"unknown effect {name!r}; allowed: Effects fields "
-                             f"{sorted(fields)}, {sorted(RELATIVE)}, valve_offset_delta, "
-                             f"valve_dead_time, pressure_sensor_offset, geometry.<field>")
-    plant = arm
-    if geo:
-        plant = plant.replace(geometry=plant.geometry.replace(**geo))
-    if fx:
-        plant = plant.replace(effects=Effects(**fx))
-    return plant, dead, offset
-
-
-def sawtooth_set_angles(levels=None, *, dt: float = 1e-3, ramp: float = SAWTOOTH_RAMP_S,
-                        settle: float = SAWTOOTH_SETTLE_S, window: float = SAWTOOTH_WINDOW_S):
-    """Set angles of the static sawtooth (thesis §3.5.1.6) and its data windows.
-
-    The first level is held for ``settle + window``; every further level is
-    reached by a raised-cosine ramp of ``ramp`` seconds and held for
-    ``settle + window``; data are taken in the last ``window`` seconds.
-
-    Parameters
-    ----------
-    levels : array_like, shape (m, 2), optional
-        Set angles per level [rad], m >= 3; default :data:`SAWTOOTH_TEETH`
-        teeth of :data:`SAWTOOTH_Q1_DEG` / :data:`SAWTOOTH_Q2_DEG`, closed at
-        the start level.
-    dt : float, keyword-only
-        Sample time [s].
-    ramp, settle, window : float, keyword-only
-        Durations [s] (> 0).
-
-    Returns
-    -------
-    t : numpy.ndarray, shape (N,)
-        Time [s].
-    q_d : numpy.ndarray, shape (N, 2)
-        Set angles [rad].
-    windows : numpy.ndarray of int, shape (m, 2)
-        First and one-past-last sample of each data window.
-    """
-    if levels is None:
-        q1 = SAWTOOTH_Q1_DEG * SAWTOOTH_TEETH + SAWTOOTH_Q1_DEG[:1]
-        q2 = SAWTOOTH_Q2_DEG * SAWTOOTH_TEETH + SAWTOOTH_Q2_DEG[:1]
-        levels = np.radians(np.stack([q1, q2], 1))
-    lv = np.asarray(levels, dtype=float)
-    if lv.ndim != 2 or lv.shape[1] != 2 or lv.shape[0] < 3 or not np.all(np.isfinite(lv)):
-        raise ValueError(f"levels must be finite with shape (m >= 3, 2) [rad], got shape "
-                         f"{lv.shape}")
-    dt = check_range("dt", dt, 1e-4, 0.01, unit="s")
-    for name, v in (("ramp", ramp), ("settle", settle), ("window", window)):
-        check_range(name, v, 0.0, 600.0, lo_open=True, unit="s")
-    hold = settle + window
-    m = lv.shape[0]
-    starts = np.array([0.0] + [hold + i * (ramp + hold) for i in range(m - 1)])
-    n = int(round((hold + (m - 1) * (ramp + hold)) / dt))
-    t = np.arange(n) * dt
-    q = np.tile(lv[0], (n, 1))
-    for i in range(1, m):
-        s = np.clip((t - starts[i]) / ramp, 0.0, 1.0)
-        on = t >= starts[i]
-        q[on] = lv[i - 1] + (0.5 * (1 - np.cos(np.pi * s[on])))[:, None] * (lv[i] - lv[i - 1])
-    ends = starts + np.where(np.arange(m) > 0, ramp, 0.0) + hold
-    k1 = np.minimum(np.round(ends / dt).astype(int), n)
-    k0 = k1 - int(round(window / dt))
-    return t, q, np.stack([k0, k1], 1)
-
-
-def gravity_compensation_set_values(q_d, arm) -> np.ndarray:
-    """Valve set values of the static gravity compensation at the set angles (§3.5.1.5) [Pa].
-
-    Delta p_gc of (3.18)-(3.19) with the identified gravity terms (Table 3.1),
-    the pressures p_m +- Delta p (clipped to [0, p_max]) and the inverse of
-    the static valve model (3.12): what the experimenter computes with the
-    nominal model, whatever the plant hides.
-
-    Parameters
-    ----------
-    q_d : array_like, shape (N, 2)
-        Set angles [rad].
-    arm : ArmParameters
-        The nominal model.
-
-    Returns
-    -------
-    numpy.ndarray, shape (N, 4)
-    """
-    from ..plant.pneumatics import delta_p_pressures, gravity_compensation, valve_set_values
-
-    dp = gravity_compensation(q_d, arm)
-    return valve_set_values(delta_p_pressures(dp, arm), arm)
-
-
-def _sawtooth(plant, arm, noise, seed, duration, dt, dead, offset):
-    """Samples of the data windows of the static sawtooth (see :func:`synthesize`)."""
-    from ..data.synthetic import VELOCITY_NOISE_VARIANCES
-    from ..identify.static import ANGLE_NOISE_VARIANCES, PRESSURE_NOISE_STD
-    from ..plant.geometry import contractions
-    from ..plant.model import hysteresis_factors, rest_state, simulate
-    from ..plant.muscle import muscle_force
-    from .residuals import delayed
-
-    t, qd_set, windows = sawtooth_set_angles(dt=dt)
-    if duration is not None:
-        keep = int(np.sum(t[windows[:, 1] - 1] < duration))
-        if keep < 3:
-            raise ValueError(f"duration = {duration} s holds {keep} sawtooth levels; at least 3 "
-                             f"are needed (one level takes "
-                             f"{SAWTOOTH_RAMP_S + SAWTOOTH_SETTLE_S + SAWTOOTH_WINDOW_S} s)")
-        windows = windows[:keep]
-        t, qd_set = t[:windows[-1, 1]], qd_set[:windows[-1, 1]]
-    u = gravity_compensation_set_values(qd_set, arm)
-    x0, _ = rest_state(qd_set[0], plant)
-    shift = int(round(dead / dt))
-    substeps = max(2, int(math.ceil(dt / min(1e-3, 0.5 * min(
-        v.time_constant for v in arm.valves.valves)))))
-    X = simulate(plant, x0, delayed(u, shift), dt=dt, substeps=substeps)[:t.size]
-    if plant.effects.hysteresis_delta is not None:
-        eps, fac = hysteresis_factors(X, plant)
-    else:
-        eps, fac = contractions(X[:, :2], arm), np.ones((t.size, 4))
-    F = np.stack([muscle_force(k + 1, eps[:, k], X[:, 4 + k], arm) for k in range(4)], 1) * fac
-    idx = np.concatenate([np.arange(a, b) for a, b in windows])
-    q, qd, p, F = X[idx, :2].copy(), X[idx, 2:4].copy(), X[idx, 4:8] + offset, F[idx]
-    if noise == "table-3.2":
-        rng = np.random.default_rng(seed)
-        q += rng.normal(size=q.shape) * np.sqrt(ANGLE_NOISE_VARIANCES)
-        qd += rng.normal(size=qd.shape) * np.sqrt(VELOCITY_NOISE_VARIANCES)
-        p += rng.normal(size=p.shape) * PRESSURE_NOISE_STD
-        F += rng.normal(size=F.shape) * FORCE_NOISE_STD
-    cols = {"t": t[idx], "q1": q[:, 0], "q2": q[:, 1], "qd1": qd[:, 0], "qd2": qd[:, 1]}
-    for name, arr in (("p", p), ("u", u[idx]), ("F", F)):
-        for i in range(4):
-            cols[f"{name}{i + 1}"] = arr[:, i]
-    cols["q1_d"], cols["q2_d"] = qd_set[idx, 0], qd_set[idx, 1]
-    meta = {"kind": "arm", "experiment": "static-sawtooth",
-            "description": "synthetic static gravity-compensation sawtooth (thesis 3.5.1.6): "
-                           f"{len(windows)} rest points, {SAWTOOTH_WINDOW_S:g} s of data each",
-            "source": f"ppamsafety synthesize (seed {seed}, noise {noise})"}
-    return meta, pd.DataFrame(cols)
+from .._validation import check_choice
+from .arm.synthesize import DEFAULT_CONTROLLER, DEFAULT_REFERENCE, synthesize_arm
+from .bench.synthesize import synthesize_actuator
 
 
 def synthesize(experiment: str | None = None, effects=None, *, noise: str | None = None,
                seed: int = 0, duration: float | None = None, dt: float = 1e-3, arm=None,
                controller: str = DEFAULT_CONTROLLER, reference: str = DEFAULT_REFERENCE,
                kind: str = "arm", **tester):
-    """A record of ``experiment`` on a plant with hidden ``effects`` (module docstring).
+    """A record of ``experiment`` on a plant with hidden ``effects``.
 
     Parameters
     ----------
@@ -310,21 +26,21 @@ def synthesize(experiment: str | None = None, effects=None, *, noise: str | None
         closed-loop thesis experiment (``controller``, ``reference``); or
         ``"static-sawtooth"``, the static gravity-compensation validation of
         §3.5.1.6 -- set angles stepped in a sawtooth
-        (:func:`sawtooth_set_angles`), the set values of the static gravity
+        (:func:`~ppamsafety.diagnose.arm.synthesize.sawtooth_set_angles`), the set values of the static gravity
         compensation at the set angles computed with the *nominal* model
-        (:func:`gravity_compensation_set_values`, a feed-forward: no
+        (:func:`~ppamsafety.diagnose.arm.synthesize.gravity_compensation_set_values`, a feed-forward: no
         feedback), the plant simulated through every ramp and pause, and only
         the samples of the 1 s data windows recorded (columns t, q, qd, p, u,
         the muscle forces F1..F4 of the plant and the set angles q1_d, q2_d;
         ``t`` jumps between windows).
         Actuator (``kind="actuator"``, default ``"tensile"``): a tensile-tester
-        record (:func:`ppamsafety.diagnose.actuator_synthesize.synthesize_actuator`).
+        record (:func:`ppamsafety.diagnose.bench.synthesize.synthesize_actuator`).
     effects : dict, optional
         ``{name: value}``; default none (the nominal plant).  Actuator effects:
-        :data:`ppamsafety.diagnose.actuator_synthesize.EFFECTS`.
+        :data:`ppamsafety.diagnose.bench.synthesize.EFFECTS`.
     noise : {"table-3.2", "none"} or {"tester", "none"}, optional, keyword-only
         Arm default ``"table-3.2"`` (the sawtooth's forces then get
-        :data:`FORCE_NOISE_STD`); actuator default ``"tester"``.
+        :data:`~ppamsafety.diagnose.arm.synthesize.FORCE_NOISE_STD`); actuator default ``"tester"``.
     seed : int, keyword-only
         Seed of the excitation and of the noise.
     duration : float, optional, keyword-only
@@ -346,7 +62,7 @@ def synthesize(experiment: str | None = None, effects=None, *, noise: str | None
         What is measured: the arm, or one actuator on a test bench.
     **tester
         Keyword options of
-        :func:`~ppamsafety.diagnose.actuator_synthesize.synthesize_actuator`
+        :func:`~ppamsafety.diagnose.bench.synthesize.synthesize_actuator`
         (``protocol``, ``pressures``, ``cycles``, ``period``, ``eps_range``,
         ``sample_rate``, ``force_law``, ``l0``, ``position``, ``jitter``);
         only with ``kind="actuator"``.
@@ -357,8 +73,6 @@ def synthesize(experiment: str | None = None, effects=None, *, noise: str | None
     """
     kind = check_choice("kind", kind, ("arm", "actuator"))
     if kind == "actuator":
-        from .actuator_synthesize import synthesize_actuator
-
         if experiment is not None and experiment != "tensile":
             raise ValueError(f"experiment = {experiment!r} is not available for kind = "
                              f"'actuator'; allowed: 'tensile'")
@@ -376,152 +90,10 @@ def synthesize(experiment: str | None = None, effects=None, *, noise: str | None
     if tester:
         raise TypeError(f"synthesize() got option(s) {sorted(tester)} that exist only for "
                         f"kind = 'actuator'")
-    experiment = "open-loop" if experiment is None else experiment
-    noise = "table-3.2" if noise is None else noise
-    from ..data.synthetic import _arm
-    from ..identify.static import PRESSURE_NOISE_STD
-
-    experiment = check_choice("experiment", experiment, EXPERIMENTS)
-    noise = check_choice("noise", noise, NOISES)
-    seed = check_int("seed", seed, 0)
-    if duration is not None:
-        duration = check_range("duration", duration, 0.5, 3600.0, unit="s")
-    dt = check_range("dt", dt, 1e-4, 0.01, unit="s")
-    arm = _arm(arm)
-    plant, dead, offset = plant_with(arm, {} if effects is None else effects)
-    if experiment == "static-sawtooth":
-        from ..data.measured import MeasuredData
-
-        meta, frame = _sawtooth(plant, arm, noise, seed, duration, dt, dead, offset)
-        return MeasuredData(meta, frame, source="synthesize")
-    duration = 10.0 if duration is None else duration
-    if experiment == "closed-loop":
-        return _closed_loop(arm, plant, dead, offset, noise=noise, seed=seed,
-                            duration=duration, dt=dt, controller=controller,
-                            reference=reference, p_std=PRESSURE_NOISE_STD)
-    return _open_loop(arm, plant, dead, offset, noise=noise, seed=seed, duration=duration,
-                      dt=dt, p_std=PRESSURE_NOISE_STD)
+    return synthesize_arm("open-loop" if experiment is None else experiment, effects,
+                          noise="table-3.2" if noise is None else noise, seed=seed,
+                          duration=duration, dt=dt, arm=arm, controller=controller,
+                          reference=reference)
 
 
-def _open_loop(arm, plant, dead, offset, *, noise, seed, duration, dt, p_std):
-    """The open-loop Fourier-excitation record (see :func:`synthesize`)."""
-    from ..data.synthetic import VELOCITY_NOISE_VARIANCES, default_excitation
-    from ..identify.excitation import equilibrium_for
-    from ..identify.static import ANGLE_NOISE_VARIANCES
-    from ..plant.model import rest_state, simulate
-    from .residuals import delayed
-
-    exc = default_excitation(arm, seed=seed)
-    q0 = equilibrium_for(exc.delta_p([0.0])[0], arm)
-    x0, _ = rest_state(q0, plant)
-    n = int(round(duration / dt))
-    t = np.arange(n) * dt
-    u = exc.set_values(t, arm)
-    shift = int(round(dead / dt))
-    substeps = max(2, int(math.ceil(dt / min(1e-3, 0.5 * min(
-        v.time_constant for v in arm.valves.valves)))))
-    X = simulate(plant, x0, delayed(u, shift), dt=dt, substeps=substeps)[:n]
-    q, qd, p = X[:, :2].copy(), X[:, 2:4].copy(), X[:, 4:8].copy() + offset
-    if noise == "table-3.2":
-        rng = np.random.default_rng(seed)
-        q += rng.normal(size=q.shape) * np.sqrt(ANGLE_NOISE_VARIANCES)
-        qd += rng.normal(size=qd.shape) * np.sqrt(VELOCITY_NOISE_VARIANCES)
-        p += rng.normal(size=p.shape) * p_std
-    meta = {"kind": "arm", "experiment": "open-loop", "sample_rate": 1.0 / dt,
-            "description": "synthetic open-loop Fourier excitation record",
-            "source": f"ppamsafety synthesize (seed {seed}, noise {noise})"}
-    return _record(meta, t, q, qd, p, u)
-
-
-def _record(meta, t, q, qd, p, u, extra=None):
-    from ..data.measured import MeasuredData
-
-    cols = {"t": t, "q1": q[:, 0], "q2": q[:, 1], "qd1": qd[:, 0], "qd2": qd[:, 1]}
-    for i in range(4):
-        cols[f"p{i + 1}"] = p[:, i]
-    for i in range(4):
-        cols[f"u{i + 1}"] = u[:, i]
-    return MeasuredData(meta, pd.DataFrame(cols), source="synthesize")
-
-
-def closed_loop_case(arm, plant, *, controller: str = DEFAULT_CONTROLLER,
-                     reference: str = DEFAULT_REFERENCE, duration: float = 10.0,
-                     dt: float = 1e-3, noise: bool = True, seed: int = 0, dead_time: float = 0.0):
-    """The closed-loop case a synthetic closed-loop record is made of (see :func:`synthesize`).
-
-    Parameters
-    ----------
-    arm : ArmParameters
-        Nominal arm (the reference is planned on it).
-    plant : ArmParameters
-        The plant truth (with the hidden effects).
-    controller : str, keyword-only
-        Thesis variant label.
-    reference : str, keyword-only
-        Thesis experiment name.
-    duration : float, keyword-only
-        Length [s].
-    dt : float, keyword-only
-        Control period [s].
-    noise : bool, keyword-only
-        Table 3.2 noise on the measured q, qd (fed back).
-    seed : int, keyword-only
-        Seed of that noise.
-    dead_time : float, keyword-only
-        Valve dead time [s], realised as ``Effects.valve_dead_time`` in
-        whole control periods.
-
-    Returns
-    -------
-    ExperimentCase
-    """
-    from ..control.sensors import SensorConfig
-    from ..experiments.case import ExperimentCase
-    from ..experiments.catalog import EXPERIMENTS as NAMED
-    from ..experiments.catalog import thesis_reference, thesis_variants
-
-    variants = {v.label: v for v in thesis_variants()}
-    if not isinstance(controller, str) or controller not in variants:
-        raise ValueError(f"controller = {controller!r} is not a thesis variant label; "
-                         f"allowed: {list(variants)}")
-    reference = check_choice("reference", reference, NAMED)
-    ref = thesis_reference(arm, reference, duration=duration, dt=dt)
-    k = int(round(check_range("dead_time", dead_time, 0.0, 0.1, unit="s") / dt))
-    if k:
-        plant = plant.replace(effects=plant.effects.replace(valve_dead_time=(k,) * 4))
-    sens = SensorConfig(encoder=False, velocity="ideal", noise=bool(noise), seed=seed)
-    return ExperimentCase(plant, variants[controller].controller, ref, sensors=sens,
-                          name=f"{reference}: {controller}")
-
-
-def _closed_loop(arm, plant, dead, offset, *, noise, seed, duration, dt, controller,
-                 reference, p_std):
-    """The closed-loop record (see :func:`synthesize`)."""
-    from ..experiments.closed_loop import run_batch
-
-    case = closed_loop_case(arm, plant, controller=controller, reference=reference,
-                            duration=duration, dt=dt, noise=noise == "table-3.2", seed=seed,
-                            dead_time=dead)
-    res = run_batch([case], dt=dt)[0]
-    if res.diverged:
-        raise ValueError(f"the closed loop diverged with these effects "
-                         f"({res.divergence_reason}); no record")
-    n = int(round(duration / dt))
-    sig = res.signals
-    q = sig("q1_meas", "q2_meas")[:n].copy()
-    qd = sig("qd1_meas", "qd2_meas")[:n].copy()
-    p = sig("p1", "p2", "p3", "p4")[:n].copy() + offset
-    u = sig("u1", "u2", "u3", "u4")[:n].copy()
-    t = np.arange(q.shape[0]) * dt
-    if noise == "table-3.2":
-        p += np.random.default_rng([seed, 1]).normal(size=p.shape) * p_std
-    meta = {"kind": "arm", "experiment": "closed-loop", "sample_rate": 1.0 / dt,
-            "description": f"synthetic closed-loop record: {reference}, {controller}",
-            "source": f"ppamsafety synthesize (seed {seed}, noise {noise})",
-            "reference": reference, "controller": {"variant": controller}}
-    return _record(meta, t, q, qd, p, u)
-
-
-__all__ = ["synthesize", "plant_with", "closed_loop_case", "sawtooth_set_angles",
-           "gravity_compensation_set_values", "EXPERIMENTS", "NOISES", "FORCE_NOISE_STD",
-           "DEFAULT_CONTROLLER", "DEFAULT_REFERENCE"]
+__all__ = ["synthesize"]

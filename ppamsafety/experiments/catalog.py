@@ -417,8 +417,24 @@ def run_thesis_experiment(arm, name: str, variants=None, *, sensors: SensorConfi
     return run_batch(cases, dt=dt, substeps=substeps)
 
 
+def results_by_label(results) -> dict:
+    """The runs of :func:`run_thesis_experiment` keyed by their variant label.
+
+    Parameters
+    ----------
+    results : iterable of ExperimentResult
+        Runs whose ``meta["label"]`` names their variant (e.g. ``"PSMC joint Ki=2 λ=0.4"``).
+
+    Returns
+    -------
+    dict
+        Label -> run (a later run with the same label replaces an earlier one).
+    """
+    return {r.meta["label"]: r for r in results}
+
+
 __all__ = ["EXPERIMENTS", "CIRCLE_PERIODS", "THESIS_LAMBDAS", "THESIS_KI_BAR", "CIRCLE_WARMUP",
            "CIRCLE_EVAL", "DEFAULT_DURATIONS", "STEP_TIMES", "SWITCH_TIME", "Family",
            "ControllerVariant", "as_variant", "label_of", "variant_label", "variant_family",
            "variant_lambda",
-           "thesis_variants", "thesis_reference", "run_thesis_experiment"]
+           "thesis_variants", "thesis_reference", "run_thesis_experiment", "results_by_label"]

@@ -32,6 +32,7 @@ from ..plant.geometry import tcp_jacobian, tcp_position
 from ..plant.model import (NWORK, NX, X_P, X_Q, X_QD, effect_state_length, effects_init,
                            rk4_step, valve_delay)
 from ..plant.pneumatics import delta_p_to_set_values
+from ..plots.control import plot_experiment
 from .case import ExperimentCase, as_cases
 from .interaction import EXTERNAL_INPUT, external_joint_torque, external_rows
 from .trajectories import REF_COLUMNS, Reference
@@ -344,10 +345,9 @@ class ExperimentResult:
         Parameters
         ----------
         **kwargs
-            Passed to :func:`ppamsafety.report.control_figures.plot_experiment`
+            Passed to :func:`ppamsafety.plots.control.plot_experiment`
             (``title``, ``t_range``).
         """
-        from ..report.control_figures import plot_experiment
         return plot_experiment(self, **kwargs)
 
 

@@ -2,9 +2,8 @@
 
 A :class:`Reference` holds, per 1 kHz sample, the joint reference and its
 first three derivatives and the task-space reference and its velocity: one
-row of the declared layout :data:`REFERENCE_ROW` (``"reference row"``), whose
-offsets :data:`R_Q_D`, :data:`R_QD_D`, :data:`R_QDD_D`, :data:`R_QDDD_D`,
-:data:`R_R_D`, :data:`R_RD_D` are the ones the controller kernels read.  Task-space paths are converted
+row of the declared layout :data:`~ppamsafety.control.reference.REFERENCE_ROW`
+(``"reference row"``), declared with the controllers that read it.  Task-space paths are converted
 to joint space with the elbow-up inverse kinematics; joint derivatives are
 obtained by differentiating on a grid 8x finer than the control period
 (second-order central differences), separately on each smooth segment so a
@@ -32,31 +31,13 @@ import pandas as pd
 
 from .._validation import (as_float_array, check_finite, check_increasing, check_instance,
                            check_int, check_range, check_shape, check_str, check_vector)
-from ..layouts import Field, Layout
+from ..control.reference import (NREF, R_Q_D, R_QD_D, R_QDD_D, R_QDDD_D,  # noqa: F401
+                                 R_R_D, R_RD_D, REF_COLUMNS, REFERENCE_ROW)
 from ..plant import geometry as geo
 from ..units import DEG
 
 CIRCLE_CENTER = (0.44, 0.18)
 CIRCLE_RADIUS = 0.10
-
-#: One reference sample (thesis §5.3.4): joint reference and its first three
-#: time derivatives (elbow-up inverse kinematics of the task-space path),
-#: task-space reference of the tool centre point and its velocity.
-REFERENCE_ROW = Layout("reference row", [
-    Field("q_d", 2, "rad", "desired link angles q1_d, q2_d", columns=("q1_d", "q2_d")),
-    Field("qd_d", 2, "rad/s", "desired joint velocities", columns=("qd1_d", "qd2_d")),
-    Field("qdd_d", 2, "rad/s^2", "desired joint accelerations", columns=("qdd1_d", "qdd2_d")),
-    Field("qddd_d", 2, "rad/s^3", "desired joint jerks", columns=("qddd1_d", "qddd2_d")),
-    Field("r_d", 2, "m", "desired tool-centre-point position (x, y)", columns=("x_d", "y_d")),
-    Field("rd_d", 2, "m/s", "desired tool-centre-point velocity", columns=("xd_d", "yd_d")),
-])
-#: Offsets of the fields of :data:`REFERENCE_ROW` (module constants for the kernels).
-R_Q_D, R_QD_D, R_QDD_D, R_QDDD_D, R_R_D, R_RD_D = REFERENCE_ROW.offsets(
-    "q_d", "qd_d", "qdd_d", "qddd_d", "r_d", "rd_d")
-#: Length of a reference row.
-NREF = REFERENCE_ROW.size
-#: Column names of :attr:`Reference.data` (generated from :data:`REFERENCE_ROW`).
-REF_COLUMNS = REFERENCE_ROW.columns()
 
 
 @dataclass(frozen=True)

@@ -15,12 +15,12 @@ Modules (one concept each):
 from .everett import C_THESIS, D_THESIS, THESIS_WEIGHT, PreisachWeight, everett
 from .force import (DELTA_25_FIBRES, DELTA_40_FIBRES, EPS_MAX, hysteresis_factor,
                     scaled_contraction, scaled_input)
-from .memory import (MAX_DEPTH, MEMORY, STATE_LENGTH, initial_memory, preisach_output,
-                     preisach_peek, preisach_update)
+from .memory import (MAX_DEPTH, MEMORY, STATE_LENGTH, history_of_memory, initial_memory,
+                     preisach_output, preisach_peek, preisach_update)
 from .preisach import major_loop, preisach_response, w_fit
 
 __all__ = ["C_THESIS", "D_THESIS", "DELTA_25_FIBRES", "DELTA_40_FIBRES", "EPS_MAX",
            "MAX_DEPTH", "MEMORY", "PreisachWeight", "STATE_LENGTH", "THESIS_WEIGHT", "everett",
-           "hysteresis_factor", "initial_memory", "major_loop", "preisach_output",
+           "history_of_memory", "hysteresis_factor", "initial_memory", "major_loop", "preisach_output",
            "preisach_peek", "preisach_response", "preisach_update", "scaled_contraction",
            "scaled_input", "w_fit"]

@@ -357,5 +357,41 @@ def initial_memory(initial="negative", *, weight: PreisachWeight = THESIS_WEIGHT
     return z
 
 
-__all__ = ["MAX_DEPTH", "MEMORY", "STATE_LENGTH", "advance", "initial_memory",
+def history_of_memory(row) -> tuple:
+    """The past-input history that rebuilds a Preisach memory row exactly.
+
+    Parameters
+    ----------
+    row : array_like, shape (STATE_LENGTH,)
+        A memory row (layout :data:`MEMORY`), e.g. one
+        group's slice of the effect state returned by
+        ``plant.model.simulate(..., return_effect_state=True)``.
+
+    Returns
+    -------
+    tuple of float
+        The stored extrema x_0 .. x_{n-1} followed by the current input: fed
+        through the operator (:func:`ppamsafety.hysteresis.initial_memory`) it
+        reproduces the row (the prefix sums are recomputed by the same
+        operations).  Use it for ``ppamsafety.params.Effects.hysteresis_initial``.
+
+    Raises
+    ------
+    ValueError
+        If ``row`` has the wrong shape or is not a valid memory row.
+    """
+    h = as_float_array("row", row)
+    if h.shape != (STATE_LENGTH,):
+        raise ValueError(f"row must have shape ({STATE_LENGTH},), got {h.shape}")
+    n = h[MEMORY.offset("depth")]
+    if not (n == int(n) and 1 <= n <= MAX_DEPTH):
+        raise ValueError(f"row is not a memory row: depth {n!r} outside 1..{MAX_DEPTH}")
+    hist = np.append(MEMORY.read(h, "extrema")[:int(n)], MEMORY.read(h, "input"))
+    if not (np.all(np.isfinite(hist)) and np.all(np.abs(hist) <= 1.0) and abs(hist[0]) == 1.0):
+        raise ValueError(f"row is not a memory row: its history {hist!r} must lie in [-1, 1] and "
+                         "start at a saturation value -1 or +1")
+    return tuple(float(v) for v in hist)
+
+
+__all__ = ["history_of_memory", "MAX_DEPTH", "MEMORY", "STATE_LENGTH", "advance", "initial_memory",
            "preisach_output", "preisach_peek", "preisach_update", "run", "state_length"]

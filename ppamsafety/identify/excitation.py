@@ -31,6 +31,7 @@ import numpy as np
 import pandas as pd
 
 from .._validation import check_int, check_range
+from ..plots.identify import plot_excitation
 from .dynamic import DynamicData, filtered_regressor
 
 #: Thesis limits on the excitation response (§3.5.2.4).
@@ -319,19 +320,8 @@ class ExcitationDesign:
         arm : ArmParameters, optional
             Not used: the curve depends on the excitation only.
         """
-        from matplotlib.figure import Figure
-
         t = np.linspace(0.0, self.excitation.period, 1001)
-        dp = self.excitation.delta_p(t)
-        fig = Figure(figsize=(6, 3))
-        ax = fig.subplots()
-        for j in range(2):
-            ax.plot(t, dp[:, j] / 1e5, label=f"joint {j + 1}")
-        ax.set_xlabel("t [s]")
-        ax.set_ylabel("Delta p [bar]")
-        ax.set_title(f"cond = {self.condition_number:.3g}")
-        ax.legend()
-        return fig
+        return plot_excitation(t, self.excitation.delta_p(t), condition_number=self.condition_number)
 
 
 def _metrics(X, dt, arm, n_period, friction, sign_velocity):

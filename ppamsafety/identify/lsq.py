@@ -19,7 +19,7 @@ variance sigma^2 / w_i:
 
 :class:`LSQResult` carries estimates, standard errors, intervals, covariance,
 residuals and units; ``.to_pandas()`` gives one row per parameter, ``.plot()``
-(matplotlib imported lazily) shows measured vs predicted and the residuals.
+(:mod:`ppamsafety.plots.identify`) shows measured vs predicted and the residuals.
 """
 
 from __future__ import annotations
@@ -30,6 +30,7 @@ import numpy as np
 import pandas as pd
 
 from .._validation import check_range
+from ..plots.identify import plot_fit
 
 
 def as_samples(name: str, value, *, ncols: int | None = None, ndim: int = 1) -> np.ndarray:
@@ -200,24 +201,7 @@ class LSQResult:
         max_points : int, keyword-only
             At most this many (evenly strided) samples are drawn.
         """
-        from matplotlib.figure import Figure   # lazy: plotting is optional
-
-        stride = max(1, self.measured.size // int(max_points))
-        y, yh = self.measured[::stride], self.predicted[::stride]
-        fig = Figure(figsize=(9, 3.5))
-        ax1, ax2 = fig.subplots(1, 2)
-        ax1.plot(y, yh, ".", ms=2)
-        lo, hi = float(min(y.min(), yh.min())), float(max(y.max(), yh.max()))
-        ax1.plot([lo, hi], [lo, hi], "k--", lw=0.8)
-        ax1.set_xlabel(f"measured {self.quantity}")
-        ax1.set_ylabel(f"predicted {self.quantity}")
-        ax1.set_title(self.method)
-        ax2.plot(np.arange(y.size) * stride, y - yh, lw=0.6)
-        ax2.set_xlabel("equation index")
-        ax2.set_ylabel(f"residual {self.quantity}")
-        ax2.set_title(f"RMS {self.residual_rms:.3g}, cond {self.condition_number:.3g}")
-        fig.tight_layout()
-        return fig
+        return plot_fit(self, max_points=max_points)
 
 
 def solve(A, y, *, names, units, weights=None, confidence: float = 0.95,

@@ -46,11 +46,12 @@ from .._jit import kernel
 from .._validation import (as_float_array, check_choice, check_finite_result, check_int,
                            check_range)
 from ..layouts import Field, Layout
-from ..params.head import HeadContactModel
+from .head import HeadContactModel
 from ..plant import dynamics as dyn
 from ..plant import geometry as geo
 from ..plant import layout as lay
 from ..plant.dynamics import coriolis_cs
+from ..plots.iso import plot_clamping_histories
 from . import engine as eng
 from .contact import hunt_crossley_elastic, hunt_crossley_force, hunt_crossley_potential
 from .engine import C_K, C_Q, C_QD, C_U, HP_B, HP_K, HP_M, HP_N, HP_R, arm_terms
@@ -367,8 +368,6 @@ class ClampingResults:
 
     def plot(self):
         """Tool-head force histories of every case (a ``Figure``)."""
-        from ..report.iso_figures import plot_clamping_histories
-
         return plot_clamping_histories(self)
 
 

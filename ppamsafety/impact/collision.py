@@ -3,7 +3,7 @@
 The impact engine (:mod:`ppamsafety.impact.engine`, thesis §6.3.2) freezes the
 arm on constant joint springs and ignores controller and valves: valid for the
 first few ms of one impact.  Here the head (a free rigid sphere, Hunt-Crossley
-contact (6.2), :class:`~ppamsafety.params.head.HeadContactModel`) is coupled to
+contact (6.2), :class:`~ppamsafety.impact.head.HeadContactModel`) is coupled to
 the *full* closed loop of :mod:`ppamsafety.experiments.closed_loop` -- sensors,
 force estimators, controller, Delta-p approach, valves (first-order (3.2),
 time constants ``ValveSet``), muscle pressures (3.6) and rigid-body dynamics
@@ -66,7 +66,7 @@ from ..control.estimation import (EI_R, ESTIMATOR_SCRATCH, ESTIMATOR_STATE, Forc
 from ..experiments.closed_loop import (DIVERGENCE_VELOCITY, IL_EST, IL_F, L_DP, L_INT, L_P, L_Q,
                                        L_QD, L_QDM, L_QM, L_T, L_U, L_X, L_XD, L_Y, L_YD, NEST,
                                        Z_INTERNALS, Z_PARAMS, Z_SCRATCH, Z_STATE)
-from ..experiments.trajectories import NREF, R_Q_D, R_R_D
+from ..control.reference import NREF, R_Q_D, R_R_D
 from ..control.sensors import (N_Q, N_QD, NSENSOR, SENSOR_NOISE, pressure_read, sensor_init,
                                sensor_read, sensor_reset, sensor_track)
 from ..layouts import Field, Layout
@@ -75,6 +75,7 @@ from ..plant.geometry import tcp_jacobian, tcp_position
 from ..plant.model import (NWORK, NX, X_P, X_Q, X_QD, effect_state_length, effects_init,
                            effects_update, plant_rhs, rk4_step, valve_delay)
 from ..plant.pneumatics import delta_p_to_set_values
+from ..plots.reaction import plot_collision
 from ..units import G0
 from .contact import hunt_crossley_elastic, hunt_crossley_force
 from .engine import HP_B, HP_K, HP_M, HP_N, HP_R, pack_head
@@ -623,14 +624,13 @@ class CollisionResult:
         return df
 
     def plot(self, **kwargs):
-        """Force, positions and residual vs time (:func:`ppamsafety.report.reaction_figures.plot_collision`).
+        """Force, positions and residual vs time (:func:`ppamsafety.plots.reaction.plot_collision`).
 
         Parameters
         ----------
         **kwargs
             Passed to the plot function (``title``, ``t_range``).
         """
-        from ..report.reaction_figures import plot_collision
         return plot_collision(self, **kwargs)
 
 

@@ -14,7 +14,7 @@ Along this solution k + b v > 0, so the force never needs clipping.
 
 The law exists once, here, as the compiled scalar :func:`hunt_crossley_force`
 (with its elastic part and potential); the impact kernels inline it, the NumPy
-level (:meth:`ppamsafety.params.head.HeadContactModel.force`) calls the batched
+level (:meth:`ppamsafety.impact.head.HeadContactModel.force`) calls the batched
 :func:`hunt_crossley_force_batch`, and the pymunk cross-check calls the scalar
 function from its Python callback.
 """
@@ -108,6 +108,38 @@ def hunt_crossley_force_batch(delta, delta_dot, k, n, b, out):
         out[i] = hunt_crossley_force(delta[i], delta_dot[i], k, n, b)
 
 
+def hunt_crossley_max_penetration(mass: float, v0: float, k: float, n: float, b: float) -> float:
+    """Maximum penetration [m] of a mass hitting a rigid wall, Hunt-Crossley contact.
+
+    Closed form of Marhefka & Orin (1999), the one implementation of it
+    (:func:`max_penetration` validates its inputs and calls this; the head models
+    of :mod:`.head` check themselves with it): delta_max =
+    [(n+1) m/b^2 (b v0 - k ln(1 + b v0/k))]^(1/(n+1)), -> [(n+1) m v0^2/(2k)]^(1/(n+1))
+    for b -> 0.  Inputs already validated (positive, finite).
+
+    Parameters
+    ----------
+    mass : float
+        Moving mass [kg].
+    v0 : float
+        Approach speed at first contact [m/s], > 0.
+    k : float
+        Contact stiffness [N/m^n], > 0.
+    n : float
+        Contact exponent [-].
+    b : float
+        Hunt-Crossley damping [N s/m^(n+1)], >= 0 (a series expansion is used
+        for b v0/k < 1e-3, which includes b = 0).
+    """
+    x = b * v0 / k
+    if x < 1e-3:   # x - ln(1 + x) = x^2/2 - x^3/3 + x^4/4 - ..., avoids cancellation
+        level = (mass * v0 * v0 / (2.0 * k)
+                 * (1.0 - 2.0 * x / 3.0 + x * x / 2.0 - 2.0 * x ** 3 / 5.0))
+    else:
+        level = mass / (b * b) * (b * v0 - k * math.log1p(x))   # = delta_max^(n+1)/(n+1)
+    return ((n + 1.0) * level) ** (1.0 / (n + 1.0)) if level > 0.0 else 0.0
+
+
 def _check(mass, v0, k, n, b):
     return (check_range("mass", mass, 0.0, 1e6, lo_open=True, unit="kg"),
             check_range("v0", v0, 0.0, 1e3, lo_open=True, unit="m/s"),
@@ -146,8 +178,6 @@ def max_penetration(mass, v0, k, n, b=0.0) -> float:
         Out-of-range input, or a result that is not a positive finite number
         (under- or overflow for extreme combinations).
     """
-    from ..params.head import hunt_crossley_max_penetration
-
     m, v0, k, n, b = _check(mass, v0, k, n, b)
     out = hunt_crossley_max_penetration(m, v0, k, n, b)
     check_finite_result("max_penetration", out, f"mass = {m:g}, v0 = {v0:g}, k = {k:g}, "

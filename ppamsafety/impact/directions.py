@@ -85,6 +85,7 @@ from .._validation import (as_float_array, check_bool, check_int, check_range, c
 from ..plant import dynamics as dyn
 from ..plant import geometry as geo
 from ..plant import layout as lay
+from ..plots.impact import plot_direction_polar
 from ..units import G0
 from . import engine as eng
 from .bounds import impact_bounds
@@ -377,13 +378,12 @@ class DirectionSweep:
         Parameters
         ----------
         **kwargs
-            Passed to :func:`ppamsafety.report.impact_figures.plot_direction_polar`.
+            Passed to :func:`ppamsafety.plots.impact.plot_direction_polar`.
 
         Returns
         -------
         matplotlib.figure.Figure
         """
-        from ..report.impact_figures import plot_direction_polar
         return plot_direction_polar([self], **kwargs)
 
 
@@ -654,7 +654,7 @@ class WorstDirection:
         Parameters
         ----------
         **kwargs
-            Passed to :func:`ppamsafety.report.impact_figures.plot_direction_polar`.
+            Passed to :func:`ppamsafety.plots.impact.plot_direction_polar`.
 
         Returns
         -------

@@ -236,7 +236,7 @@ def pack_cases(n: int, **fields) -> np.ndarray:
 
 
 def pack_head(head) -> np.ndarray:
-    """The :data:`HEAD` row of a :class:`~ppamsafety.params.head.HeadContactModel`.
+    """The :data:`HEAD` row of a :class:`~ppamsafety.impact.head.HeadContactModel`.
 
     Parameters
     ----------

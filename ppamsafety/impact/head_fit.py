@@ -103,7 +103,7 @@ def hybrid3_drop_peak_g(stiffness, exponent, damping, *, dt=1e-6) -> float:
         Contact exponent n [-], in [1, 3].
     damping : float
         Hunt-Crossley damping b [N s/m^(n+1)], >= 0 (the ranges of
-        :class:`~ppamsafety.params.head.HeadContactModel`).
+        :class:`~ppamsafety.impact.head.HeadContactModel`).
     dt : float, keyword-only
         Integration step [s], in [1e-8, 1e-4] (default 1e-6).
     """

@@ -20,11 +20,12 @@ import pandas as pd
 from .._validation import (InvalidTypeError, as_float_array, check_bool, check_choice,
                            check_finite_result, check_int, check_range,
                            check_range_array, check_same_rows, check_str, describe)
-from ..params.head import HeadContactModel, head_model, head_model_names
+from .head import HeadContactModel, head_model, head_model_names
 from ..plant import dynamics as dyn
 from ..plant import geometry as geo
 from ..plant import layout as lay
 from ..plant._checks import check_arm  # noqa: F401  (also used by reference, pymunk, instants)
+from ..plots.impact import plot_impact_history
 from . import engine as eng
 from .contact import max_penetration
 
@@ -63,7 +64,7 @@ def resolve_head(head, name: str = "head") -> HeadContactModel:
     Parameters
     ----------
     head : HeadContactModel, str or None
-        The model, one of :func:`~ppamsafety.params.head.head_model_names`, or
+        The model, one of :func:`~ppamsafety.impact.head.head_model_names`, or
         ``None`` for ``"thesis-frontal"``.
     name : str
         Argument name used in error messages.
@@ -616,13 +617,12 @@ class ImpactResults:
             Case whose time history is plotted (default: the first with a
             history).
         **kwargs
-            Passed to :func:`ppamsafety.report.impact_figures.plot_impact_history`.
+            Passed to :func:`ppamsafety.plots.impact.plot_impact_history`.
 
         Returns
         -------
         matplotlib.figure.Figure
         """
-        from ..report.impact_figures import plot_impact_history
         if index is None:
             if not self.histories:
                 raise MissingHistoryError("index: no history was recorded (pass history=True "
@@ -712,7 +712,7 @@ def simulate_impacts(arm, q, qd, stiffness, *, head: HeadContactModel | str | No
         step; not used by the rigid model (which also accepts ``np.inf``).
     head : HeadContactModel or str, keyword-only
         Head model or its name (default ``"thesis-frontal"``; see
-        :func:`~ppamsafety.params.head.head_model_names`).
+        :func:`~ppamsafety.impact.head.head_model_names`).
     direction : array_like, shape (N, 2) or (2,), optional
         Vector from the tool point to the head centre (normalised; non-zero);
         default the TCP velocity direction relative to the head (the worst

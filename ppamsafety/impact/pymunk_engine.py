@@ -56,7 +56,7 @@ import numpy as np
 import pandas as pd
 
 from .._validation import as_float_array, check_finite_result, check_int, check_range
-from ..params.head import HeadContactModel
+from .head import HeadContactModel
 from ..layouts import Field, Layout
 from ..units import G0
 from .contact import hunt_crossley_elastic, hunt_crossley_force

@@ -28,10 +28,10 @@ import numpy as np
 
 from .._validation import check_instance, check_range
 from .effects import Effects
-from .geometry import ArmGeometry, thesis_geometry
+from .geometry import GROUP_FIELDS, ArmGeometry, group_length_range, thesis_geometry
 from .inertia import (BaseParameters, LinkInertia, derive_physical_links, identified_dynamic,
                       identified_static_gravity)
-from .muscles import MuscleSet, thesis_muscles
+from .muscles import MAX_CONTRACTION, MuscleSet, thesis_muscles
 from .pneumatics import PneumaticParams, thesis_pneumatics
 from .valves import ValveSet, thesis_valves
 
@@ -135,18 +135,18 @@ def _check_muscles_fit(geometry: ArmGeometry, muscles: MuscleSet) -> None:
     working area (a PPAM cannot be stretched beyond l0, and contracts at most
     40 %, §2.2).  Then every membrane and group length is positive.
     """
-    from ..plant.layout import _muscle_terms   # local: plant imports params
-    from .geometry import GROUP_FIELDS, group_length_range
-    from .muscles import MAX_CONTRACTION
-
     ranges = group_length_range(geometry)
-    lconn = _muscle_terms(geometry, muscles)[0]
-    for k, (grp, lc, (dmin, dmax)) in enumerate(zip(muscles.groups, lconn, ranges)):
+    for k, (grp, (dmin, dmax)) in enumerate(zip(muscles.groups, ranges)):
         joint = 1 if k < 2 else 2
         flds = ", ".join(f"ArmGeometry.{n}" for n in GROUP_FIELDS[k + 1])
         area = (f"q{joint} in [{np.degrees(getattr(geometry, f'q{joint}_min')):.4g}, "
                 f"{np.degrees(getattr(geometry, f'q{joint}_max')):.4g}] deg")
         membrane = grp.n_muscles * grp.l0
+        # the design rule (A.35)-(A.38) on the grid extremes (plant.geometry refines them for
+        # the simulation): groups 1, 3 at eps_min at their longest, 2, 4 at eps_max at their
+        # shortest
+        lc = (dmax - membrane * (1.0 - muscles.eps_min) if k in (0, 2)
+              else dmin - membrane * (1.0 - muscles.eps_max))
         what = (f"ArmParameters: muscle group {k + 1} ({grp.name!r}; {grp.n_muscles} x l0 = "
                 f"{grp.l0:g} m; group length {dmin:.4g} to {dmax:.4g} m over {area})")
         if not (np.isfinite(lc) and lc > 0.0):

@@ -146,42 +146,6 @@ def _history(name, value):
     return tuple(float(v) for v in h)
 
 
-def history_of_memory(row) -> tuple:
-    """The past-input history that rebuilds a Preisach memory row exactly.
-
-    Parameters
-    ----------
-    row : array_like, shape (STATE_LENGTH,)
-        A memory row (layout :data:`ppamsafety.hysteresis.MEMORY`), e.g. one
-        group's slice of the effect state returned by
-        ``plant.model.simulate(..., return_effect_state=True)``.
-
-    Returns
-    -------
-    tuple of float
-        The stored extrema x_0 .. x_{n-1} followed by the current input: fed
-        through the operator (:func:`ppamsafety.hysteresis.initial_memory`) it
-        reproduces the row (the prefix sums are recomputed by the same
-        operations).  Use it for ``Effects.hysteresis_initial``.
-
-    Raises
-    ------
-    ValueError
-        If ``row`` has the wrong shape or is not a valid memory row.
-    """
-    from .._validation import as_float_array
-    from ..hysteresis.memory import MAX_DEPTH, MEMORY, STATE_LENGTH
-
-    h = as_float_array("row", row)
-    if h.shape != (STATE_LENGTH,):
-        raise ValueError(f"row must have shape ({STATE_LENGTH},), got {h.shape}")
-    n = h[MEMORY.offset("depth")]
-    if not (n == int(n) and 1 <= n <= MAX_DEPTH):
-        raise ValueError(f"row is not a memory row: depth {n!r} outside 1..{MAX_DEPTH}")
-    return _history("row", np.append(MEMORY.read(h, "extrema")[:int(n)],
-                                      MEMORY.read(h, "input")))
-
-
 def _hysteresis_initial(value):
     """Normalise ``Effects.hysteresis_initial``: a name or 4 histories (tuple of tuples)."""
     name = "Effects.hysteresis_initial"
@@ -248,7 +212,7 @@ class Effects:
         contraction eps_s (a sequence in [-1, 1] starting at -1 or +1, e.g.
         ``(-1, 0.3, -0.2)``) for all groups, or four such histories, one per
         group (a saved memory row becomes a history with
-        :func:`history_of_memory`).  Stored as four tuples.
+        :func:`ppamsafety.hysteresis.memory.history_of_memory`).  Stored as four tuples.
     hysteresis_exact_stages : bool
         Evaluate the Preisach output exactly (``preisach_peek``) in every
         RK4 stage instead of by the secant of the last step (default False:
@@ -345,7 +309,7 @@ class Effects:
         return replace(self, **changes)
 
 
-__all__ = ["Effects", "history_of_memory", "PAYLOAD_MASS_MAX", "FRICTION_MAX", "VALVE_OFFSET_MAX",
+__all__ = ["Effects", "PAYLOAD_MASS_MAX", "FRICTION_MAX", "VALVE_OFFSET_MAX",
            "VALVE_GAIN_RANGE", "VALVE_TIME_CONSTANT_MIN", "VALVE_TIME_CONSTANT_MAX",
            "POLYTROPIC_RANGE", "HYSTERESIS_DELTA_RANGE", "HYSTERESIS_INITIAL_NAMES",
            "VALVE_DEAD_TIME_MAX"]

@@ -169,40 +169,5 @@ def thesis_muscles() -> MuscleSet:
     return MuscleSet(groups=groups, eps_min=0.05, eps_max=0.30)
 
 
-def theoretical_muscles(slenderness: float = 6.0, l0: float = 6.0 * CM,
-                        eps_range=None) -> MuscleSet:
-    """The thesis' muscle groups with the theoretical force law instead of Table B.1.
-
-    Same names, n_m = (4, 3, 4, 3) and design limits (5 %, 30 %) as
-    :func:`thesis_muscles`, but every group gets the coefficients
-    l0^2 * (f0..f4) of the (2.3) fit of the theoretical PPAM force function
-    f_t0(eps, l0/R) (Daerden's model, thesis §2.2.2, fig. 2.2), as used at
-    design time (§2.3.3.5, fig. 2.15).  See :mod:`ppamsafety.plant.ppam_theory`.
-
-    Parameters
-    ----------
-    slenderness : float
-        l0/R [-] in [1, 50]; thesis: 6 (§2.3.3.1).
-    l0 : float
-        Uncontracted membrane length [m] in (0, 1]; thesis: 6 cm.
-    eps_range : tuple of 2 float, optional
-        Contraction range [-] of the (2.3) fit, see
-        :func:`ppamsafety.plant.ppam_theory.fit_polynomial`; default
-        ``ppam_theory.DEFAULT_FIT_RANGE`` = (0.03, 0.32).
-
-    Returns
-    -------
-    MuscleSet
-        Four groups with the theoretical coefficients [N/Pa].
-    """
-    from ..plant.ppam_theory import DEFAULT_FIT_RANGE, theoretical_coefficients
-    coef = theoretical_coefficients(slenderness, l0,
-                                    DEFAULT_FIT_RANGE if eps_range is None else eps_range)
-    base = thesis_muscles()
-    groups = tuple(MuscleGroup(name=g.name, n_muscles=g.n_muscles, coefficients=coef, l0=l0,
-                               slenderness=slenderness) for g in base.groups)
-    return MuscleSet(groups=groups, eps_min=base.eps_min, eps_max=base.eps_max)
-
-
-__all__ = ["MuscleGroup", "MuscleSet", "thesis_muscles", "theoretical_muscles",
+__all__ = ["MuscleGroup", "MuscleSet", "thesis_muscles",
            "TABLE_B1_N_PER_BAR", "MAX_CONTRACTION"]

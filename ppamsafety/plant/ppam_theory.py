@@ -12,7 +12,7 @@ puts it below 3 % for N > 15 fibres (the arm's muscles have N = 25).
 
 Pure NumPy/SciPy and not in any hot loop: evaluate it at design time, or use
 the cached (2.3) fit :func:`fit_polynomial` / :func:`theoretical_coefficients`
-(what the thesis did, and what :func:`ppamsafety.params.muscles.theoretical_muscles`
+(what the thesis did, and what :func:`theoretical_muscles`
 feeds to the plant).
 
 Derivation (all symbols SI; gauge pressure p [Pa])
@@ -92,6 +92,8 @@ from functools import lru_cache
 import numpy as np
 
 from .._validation import as_float_array, check_range, check_range_array
+from ..params.muscles import MuscleGroup, MuscleSet, thesis_muscles
+from ..units import CM
 
 #: Slenderness range accepted (same as :class:`ppamsafety.params.MuscleGroup`).
 SLENDERNESS_RANGE = (1.0, 50.0)
@@ -328,5 +330,39 @@ def theoretical_coefficients(slenderness, l0, eps_range=DEFAULT_FIT_RANGE) -> tu
     return tuple(l0 ** 2 * c for c in fit_polynomial(s, eps_range))
 
 
-__all__ = ["f_t0", "v0", "max_contraction", "fit_polynomial", "theoretical_coefficients",
+def theoretical_muscles(slenderness: float = 6.0, l0: float = 6.0 * CM,
+                        eps_range=None) -> MuscleSet:
+    """The thesis' muscle groups with the theoretical force law instead of Table B.1.
+
+    Same names, n_m = (4, 3, 4, 3) and design limits (5 %, 30 %) as
+    :func:`thesis_muscles`, but every group gets the coefficients
+    l0^2 * (f0..f4) of the (2.3) fit of the theoretical PPAM force function
+    f_t0(eps, l0/R) (Daerden's model, thesis §2.2.2, fig. 2.2), as used at
+    design time (§2.3.3.5, fig. 2.15).  See :mod:`ppamsafety.plant.ppam_theory`.
+
+    Parameters
+    ----------
+    slenderness : float
+        l0/R [-] in [1, 50]; thesis: 6 (§2.3.3.1).
+    l0 : float
+        Uncontracted membrane length [m] in (0, 1]; thesis: 6 cm.
+    eps_range : tuple of 2 float, optional
+        Contraction range [-] of the (2.3) fit, see
+        :func:`ppamsafety.plant.ppam_theory.fit_polynomial`; default
+        ``ppam_theory.DEFAULT_FIT_RANGE`` = (0.03, 0.32).
+
+    Returns
+    -------
+    MuscleSet
+        Four groups with the theoretical coefficients [N/Pa].
+    """
+    coef = theoretical_coefficients(slenderness, l0,
+                                    DEFAULT_FIT_RANGE if eps_range is None else eps_range)
+    base = thesis_muscles()
+    groups = tuple(MuscleGroup(name=g.name, n_muscles=g.n_muscles, coefficients=coef, l0=l0,
+                               slenderness=slenderness) for g in base.groups)
+    return MuscleSet(groups=groups, eps_min=base.eps_min, eps_max=base.eps_max)
+
+
+__all__ = ["theoretical_muscles", "f_t0", "v0", "max_contraction", "fit_polynomial", "theoretical_coefficients",
            "shape_state", "DEFAULT_FIT_RANGE", "SLENDERNESS_RANGE", "EPS_LOWEST"]

@@ -1,1 +1,1 @@
-"""Tables and figures (the only place that imports matplotlib) and report assembly."""
+"""Report assembly: the builder, the HTML page, the warm-up of the compiled kernels."""

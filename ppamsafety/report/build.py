@@ -1,8 +1,8 @@
 """Regenerate the report folder from scratch by running every registered study.
 
 Each study is computed, rendered and its artifacts written by
-:func:`ppamsafety.studies.run_study`.  Figures are pyplot-free
-:class:`matplotlib.figure.Figure` objects (see :mod:`ppamsafety.report.figures`),
+:func:`ppamsafety.sections.run_section`.  Figures are pyplot-free
+:class:`matplotlib.figure.Figure` objects (see :mod:`ppamsafety.plots.figure`),
 so no matplotlib backend is selected here or anywhere in the package.
 
 The folder is written through :class:`ppamsafety.output.OutputFolder`: a
@@ -14,7 +14,7 @@ writes its own artifacts), so with ``processes > 1`` they run in that many
 worker processes, longest first (the wall times of the previous report in the
 folder's ``metrics.json``, else :data:`TYPICAL_SECONDS`; sections never timed
 before go first), and the report is assembled in the order of the studies (``only``, or
-:data:`~ppamsafety.studies.REGISTRY`) whatever the completion order.  A new
+:data:`~ppamsafety.sections.REGISTRY`) whatever the completion order.  A new
 section needs nothing to benefit.  For the full report, before the sections
 start, the workers compile the large kernels between them
 (:mod:`ppamsafety.report.warmup`; a task starts once the tasks whose kernels it
@@ -35,15 +35,15 @@ from pathlib import Path
 
 from .._validation import check_int
 from ..output import OutputFolder
-from ..studies import REGISTRY, run_study
+from ..sections import REGISTRY, run_section
 from . import warmup
 from .html import report_page
 
 
 def _timed_study(name: str, stage, quick: bool):
-    """Run one study into ``stage``; (StudyResult, wall time [s]).  Top level: picklable."""
+    """Run one study into ``stage``; (SectionResult, wall time [s]).  Top level: picklable."""
     t0 = time.perf_counter()
-    res = run_study(name, stage, quick=quick)      # compute -> render -> write
+    res = run_section(name, stage, quick=quick)      # compute -> render -> write
     return res, time.perf_counter() - t0
 
 
@@ -144,7 +144,7 @@ def build_report(outdir="reports", *, quick: bool = False, only=None, progress: 
     quick : bool
         Coarser grids and shorter sweeps (for smoke tests).
     only : iterable of str, optional
-        Run only these study names (see :data:`ppamsafety.studies.REGISTRY`).
+        Run only these study names (see :data:`ppamsafety.sections.REGISTRY`).
     progress : bool
         Print one line per study.
     overwrite : bool

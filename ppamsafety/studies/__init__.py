@@ -1,233 +1,27 @@
-"""Studies in three parts: compute, plot, render.
+"""Former name of :mod:`ppamsafety.sections`, kept so that existing imports keep working.
 
-Every study module ``ppamsafety.studies.<name>`` defines
-
-* ``compute(*, quick=False, arm=None, ...) -> <Name>Study``: runs the
-  simulations and returns a dataclass holding DataFrames, arrays, result
-  objects and a ``metrics`` dict.  It writes no file, makes no figure and
-  formats no Markdown.  The study object has ``to_pandas()`` (its main table)
-  and ``plot()`` (its figures, ``{file name: Figure}``, made by the plot
-  functions of :mod:`ppamsafety.report`).
-* ``render(study) -> Section``: formatting only -- the Markdown text of the
-  report section and the artifacts (file name, Figure or DataFrame) it
-  references.
-
-:func:`write_section` writes the artifacts of a :class:`Section` to a folder
-and :func:`run_study` chains the three steps; the report builder
-(:func:`ppamsafety.report.build.build_report`) and :func:`main` (one study
-alone, ``python studies/<script>.py [outdir] [--quick]``) use it.
+The report-section modules were renamed "sections" so that "study" means one thing: a
+sweep study (a TOML study file run by ``ppamsafety sweep``, :mod:`ppamsafety.study_files`).
+``from ppamsafety.studies import responses`` still gives the section module
+:mod:`ppamsafety.sections.responses`; new code imports :mod:`ppamsafety.sections`.
 """
 
-from __future__ import annotations
-
 import importlib
-from dataclasses import dataclass, field
-from pathlib import Path
+
+from ..sections import (REGISTRY, Section, SectionResult, main, run_section, section_module,
+                        write_artifact, write_section)
+
+#: Former names of :func:`ppamsafety.sections.run_section`, ``section_module`` and
+#: :class:`~ppamsafety.sections.SectionResult`.
+run_study, study_module, StudyResult = run_section, section_module, SectionResult
 
 
-@dataclass
-class Section:
-    """A rendered report section, not yet written to disk.
-
-    Attributes
-    ----------
-    title : str
-        Section title in the report.
-    markdown : str
-        Section body (Markdown; references the artifacts by file name).
-    artifacts : list of (str, object)
-        (file name, content) pairs: a matplotlib ``Figure`` is written as PNG
-        (150 dpi), a pandas ``DataFrame`` as CSV without index.
-    metrics : dict
-        Headline numbers, for tests and for ``metrics.json``.
-    """
-
-    title: str
-    markdown: str
-    artifacts: list = field(default_factory=list)
-    metrics: dict = field(default_factory=dict)
+def __getattr__(name):
+    # a section module by its old path: `from ppamsafety.studies import responses`
+    if name in REGISTRY:
+        return importlib.import_module(f"ppamsafety.sections.{name}")
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
-@dataclass
-class StudyResult:
-    """What a study wrote: a :class:`Section` after :func:`write_section`.
-
-    Attributes
-    ----------
-    title : str
-        Section title in the report.
-    markdown : str
-        Section body (Markdown, may reference the artifacts by file name).
-    artifacts : list of str
-        Files written (figures, CSV tables).
-    metrics : dict
-        Headline numbers, for tests and for the issue notes.
-    """
-
-    title: str
-    markdown: str
-    artifacts: list = field(default_factory=list)
-    metrics: dict = field(default_factory=dict)
-
-
-#: Study modules in report order (module names inside ppamsafety.studies).
-REGISTRY = ["design", "tracking", "responses", "smc", "head_model", "safety", "worst_direction",
-            "stiffness", "lambda_sweep", "effects", "interaction", "iso_15066", "reaction",
-            "diagnose_sawtooth", "diagnose_cases"]
-
-
-def resolve_arm(arm):
-    """The arm a study runs: ``arm``, or the thesis arm when None.
-
-    Parameters
-    ----------
-    arm : ppamsafety.params.ArmParameters or None
-        Arm parameters.
-
-    Returns
-    -------
-    ppamsafety.params.ArmParameters
-        ``arm`` or :func:`ppamsafety.params.thesis_arm`.
-    """
-    from ..params import ArmParameters, thesis_arm
-
-    if arm is None:
-        return thesis_arm()
-    if not isinstance(arm, ArmParameters):
-        raise TypeError(f"arm must be an ArmParameters or None, not {type(arm).__name__}")
-    return arm
-
-
-def write_artifact(obj, path) -> str:
-    """Write one artifact: a Figure as PNG (150 dpi), a DataFrame as CSV (no index).
-
-    Parameters
-    ----------
-    obj : matplotlib.figure.Figure or pandas.DataFrame
-        The content.
-    path : path-like
-        Target file.
-
-    Returns
-    -------
-    str
-        ``str(path)``.
-    """
-    import pandas as pd
-
-    if isinstance(obj, pd.DataFrame):
-        obj.to_csv(path, index=False)
-    elif hasattr(obj, "savefig"):
-        from ..report.figures import save
-
-        save(obj, path)
-    else:
-        raise TypeError(f"artifact {str(path)!r} is a {type(obj).__name__}; expected a "
-                        "matplotlib Figure or a pandas DataFrame")
-    return str(path)
-
-
-def write_section(section: Section, outdir) -> StudyResult:
-    """Write the artifacts of a rendered section into ``outdir``.
-
-    Parameters
-    ----------
-    section : Section
-        Output of a study's ``render``.
-    outdir : path-like
-        Existing folder; the artifacts are written under their file names.
-
-    Returns
-    -------
-    StudyResult
-        The section's text and metrics with the paths written.
-    """
-    out = Path(outdir)
-    paths = [write_artifact(obj, out / name) for name, obj in section.artifacts]
-    return StudyResult(section.title, section.markdown, paths, dict(section.metrics))
-
-
-def study_module(name: str):
-    """The module ``ppamsafety.studies.<name>`` of a registered study.
-
-    Parameters
-    ----------
-    name : str
-        One of :data:`REGISTRY`.
-
-    Returns
-    -------
-    module
-        The study module (with ``compute`` and ``render``).
-    """
-    if name not in REGISTRY:
-        raise ValueError(f"unknown study name={name!r}; choose from {REGISTRY}")
-    return importlib.import_module(f"{__name__}.{name}")
-
-
-def run_study(name: str, outdir, *, quick: bool = False) -> StudyResult:
-    """Compute, render and write one study: ``write_section(render(compute(quick)), outdir)``.
-
-    Parameters
-    ----------
-    name : str
-        Study name (see :data:`REGISTRY`).
-    outdir : path-like
-        Existing folder the artifacts are written to.
-    quick : bool
-        Coarser grids and shorter runs (smoke tests).
-
-    Returns
-    -------
-    StudyResult
-        Title, Markdown, written paths and metrics.
-    """
-    mod = study_module(name)
-    return write_section(mod.render(mod.compute(quick=quick)), outdir)
-
-
-def main(name: str, argv=None) -> int:
-    """Run one study alone: ``python studies/<script>.py [outdir] [--quick] [--overwrite]``.
-
-    The study writes into ``outdir`` (default ``reports``) under the rules of
-    :mod:`ppamsafety.output`: a missing or empty folder is used; a previous
-    ppamsafety output is updated only with ``--overwrite`` (files of the same
-    name are replaced, the other toolkit files are kept); a folder holding
-    files ppamsafety did not write is refused.
-
-    Parameters
-    ----------
-    name : str
-        Study name (see :data:`REGISTRY`).
-    argv : list of str, optional
-        Command-line arguments (default ``sys.argv[1:]``).
-
-    Returns
-    -------
-    int
-        Exit status: 0 success, 2 bad usage or input, 1 failure (see
-        :func:`ppamsafety.cli.main`).
-    """
-    import argparse
-
-    from ..cli import run_guarded
-    from ..output import OutputFolder
-
-    if name not in REGISTRY:
-        raise ValueError(f"unknown study {name!r}; choose from {REGISTRY}")
-    p = argparse.ArgumentParser(prog=f"studies/{name}.py",
-                                description=f"Run the study {name!r} alone.")
-    p.add_argument("outdir", nargs="?", default="reports",
-                   help="output folder (default: reports)")
-    p.add_argument("--quick", action="store_true", help="coarse grids and short sweeps")
-    p.add_argument("--overwrite", action="store_true",
-                   help="replace files of a previous ppamsafety output in OUTDIR")
-
-    def run(args):
-        with OutputFolder(args.outdir, kind="study", overwrite=args.overwrite,
-                          clean=False) as stage:
-            res = run_study(name, stage, quick=args.quick)
-        print(f"# {res.title}\n\n{res.markdown}")
-        return 0
-
-    return run_guarded(p, run, argv)
+__all__ = ["REGISTRY", "Section", "SectionResult", "StudyResult", "main", "run_section", "run_study",
+           "section_module", "study_module", "write_artifact", "write_section"]

@@ -1,0 +1,3 @@
+"""Diagnosis of arm records (open loop, closed loop, static sawtooth): block residuals per
+subsystem, the arm's candidate library, forward selection with its bootstrap, the pipeline,
+the hidden-effect generator and the fit of effects to summary statistics (Table 5.2)."""

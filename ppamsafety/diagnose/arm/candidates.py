@@ -1,0 +1,313 @@
+"""The library of candidate effects: what each one is, its parameters, its signature, its fit.
+
+Each :class:`Candidate` is one physical effect the model may be missing,
+with a fixed name from :data:`VOCABULARY` (the ``name`` written in
+``diagnosis.json``), its parameters (unit, bounds, meaning), the signature
+it leaves (which subsystem residual of :mod:`ppamsafety.diagnose.residuals`
+it shows in, and the operating-region pattern), and a **model extension**
+fitted by regression: either directions in the model vector mu (the
+extension is ``mu = mu0 + D phi``, so the block residual changes by
+``X D phi``, linear in phi) or a profiled grid parameter (dead time) that
+changes X itself.  Every extension maps back to a plant row
+(:func:`ppamsafety.diagnose.residuals.row_from_mu`) so that its effect on
+the full simulation can be shown by a batched rollout.
+
+Adding a candidate = one :func:`register` call (see the entries at the end
+of this module).  An effect that is not a direction of mu (hysteresis)
+brings its own regression columns, built with the block system
+(``Candidate.columns``).
+
+Arm library (open/closed-loop arm records)
+------------------------------------------
+=====================  ==========  =================================================
+name                   subsystem   parameters
+=====================  ==========  =================================================
+valve_offset_gain      pressure    v1_1..v1_4 [Pa], v2_1..v2_4 [-]  (3.12)
+valve_lag              pressure    T_1..T_4 [s]  (3.2)
+valve_dead_time        pressure    d [s], common to the four valves
+polytropic_exponent    pressure    n [-]  (3.3)
+joint_friction         torque      c1, c2 [N m], b1, b2 [N m s/rad]  (3.30)
+payload                torque      M [kg] at the load point A_L (2.19), (A.21)
+hysteresis             torque      delta [-] (3.35), shared by the 4 groups     
+=====================  ==========  =================================================
+
+Names on a tester (actuator records) have their own vocabulary and library:
+:mod:`ppamsafety.diagnose.bench.candidates`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..core.parameter import Parameter
+from .residuals import MU_A, MU_B, MU_COUL, MU_K, MU_N, MU_THETA, MU_VISC, NMU
+
+#: Fixed vocabulary of effect names on an arm (the ``name`` field of ``diagnosis.json``).
+VOCABULARY = ("hysteresis", "joint_friction", "valve_offset_gain", "valve_lag",
+              "valve_dead_time", "payload", "polytropic_exponent")
+#: Largest valve dead time searched [s] (the grid is every sample up to it).
+DEAD_TIME_MAX = 0.06
+
+
+@dataclass(frozen=True, eq=False)
+class Candidate:
+    """A candidate effect (see the module docstring).
+
+    Attributes
+    ----------
+    name : str
+        From :data:`VOCABULARY`.
+    subsystem : str
+        ``"pressure"`` or ``"torque"``: the block-residual channels it changes.
+    parameters : tuple of Parameter
+        Reported parameters (physical).
+    signature : str
+        Where and how it shows (for the report and the reviewer).
+    directions : callable or None
+        ``directions(mu0, arm) -> (NMU, k)``: the directions of mu it frees.
+    physical : callable
+        ``physical(mu, phi, shift_seconds) -> (len(parameters),)``: the
+        reported values from the fitted model vector, this candidate's own
+        coefficients phi and the dead time.
+    grid : bool
+        True for the profiled dead-time parameter (no linear coefficients).
+    plant_effect : callable or None
+        ``plant_effect(values, arm) -> dict`` of :class:`~ppamsafety.params.effects.Effects`
+        overrides reproducing the effect (for rehearsal), None if not a plant effect.
+    columns : str or None
+        Key of :attr:`ppamsafety.diagnose.residuals.BlockSystem.extra`: regression
+        columns (nb, 6, k) added to the *prediction* of the block residual
+        (prediction = X mu + columns phi), for an effect that is not a
+        direction of mu (hysteresis: a torque proportional to the Preisach
+        output of the measured contraction history).  ``directions`` must
+        then be None; the k coefficients are this candidate's phi.
+    """
+
+    name: str
+    subsystem: str
+    parameters: tuple
+    signature: str
+    physical: object
+    directions: object = None
+    grid: bool = False
+    plant_effect: object = field(default=None, repr=False)
+    columns: str | None = None
+
+    @property
+    def n_params(self) -> int:
+        """Number of fitted parameters (the count charged by the criterion)."""
+        return len(self.parameters)
+
+
+REGISTRY: dict = {}
+
+
+def register(candidate: Candidate) -> Candidate:
+    """Add ``candidate`` to the library (its name must be in a vocabulary and new).
+
+    Parameters
+    ----------
+    candidate : Candidate
+    """
+    if not isinstance(candidate, Candidate):
+        raise TypeError(f"candidate must be a Candidate, got {type(candidate).__name__}")
+    if candidate.name not in VOCABULARY:
+        raise ValueError(f"candidate name {candidate.name!r} is not in the vocabulary "
+                         f"{VOCABULARY}")
+    if candidate.name in REGISTRY:
+        raise ValueError(f"candidate {candidate.name!r} is already registered")
+    if candidate.subsystem not in ("pressure", "torque"):
+        raise ValueError(f"candidate {candidate.name!r}: subsystem {candidate.subsystem!r} is "
+                         f"not 'pressure' or 'torque'")
+    REGISTRY[candidate.name] = candidate
+    return candidate
+
+
+def library(names=None) -> tuple:
+    """The registered candidates (all, or those named), in registry order.
+
+    Parameters
+    ----------
+    names : sequence of str, optional
+        Subset of names; unknown names raise ValueError.
+    """
+    if names is None:
+        return tuple(REGISTRY.values())
+    bad = [n for n in names if n not in REGISTRY]
+    if bad:
+        raise ValueError(f"unknown candidate(s) {bad}; registered: {list(REGISTRY)}")
+    return tuple(REGISTRY[n] for n in names)
+
+
+# --------------------------------------------------------------------------- entries
+
+def _kappa(mu):
+    return np.array([mu[MU_K + 3 * i] for i in range(4)])
+
+
+def _dirs_offset_gain(mu0, arm=None):
+    D = np.zeros((NMU, 8))
+    for i in range(4):
+        D[MU_A + 3 * i, i] = 1.0
+        D[MU_B + 3 * i, 4 + i] = 1.0
+    return D
+
+
+def _phys_offset_gain(mu, phi, shift):
+    k = _kappa(mu)
+    return np.concatenate([[mu[MU_A + 3 * i] / k[i] for i in range(4)],
+                           [mu[MU_B + 3 * i] / k[i] for i in range(4)]])
+
+
+def _dirs_lag(mu0, arm=None):
+    # T changes with v1, v2 fixed: (a, b, kappa) = kappa (v1, v2, 1)
+    D = np.zeros((NMU, 4))
+    k = _kappa(mu0)
+    for i in range(4):
+        D[MU_A + 3 * i, i] = mu0[MU_A + 3 * i] / k[i]
+        D[MU_B + 3 * i, i] = mu0[MU_B + 3 * i] / k[i]
+        D[MU_K + 3 * i, i] = 1.0
+    return D
+
+
+def _dirs_poly(mu0, arm=None):
+    D = np.zeros((NMU, 1))
+    D[MU_N, 0] = 1.0
+    return D
+
+
+def _dirs_friction(mu0, arm=None):
+    D = np.zeros((NMU, 4))
+    D[MU_COUL, 0] = D[MU_COUL + 1, 1] = D[MU_VISC, 2] = D[MU_VISC + 1, 3] = 1.0
+    return D
+
+
+def _dirs_payload(mu0, arm=None):
+    from ...params import thesis_arm
+    from ...plant.layout import payload_theta
+
+    g = (thesis_arm() if arm is None else arm).geometry
+    D = np.zeros((NMU, 1))
+    D[MU_THETA:MU_THETA + 6, 0] = payload_theta(1.0, g.L1, g.LL, g.dL)
+    return D
+
+
+BAR = 1e5
+
+register(Candidate(
+    "valve_offset_gain", "pressure",
+    tuple(Parameter(f"v1_{i}", "Pa", -0.5 * BAR, 0.5 * BAR, f"static offset of valve {i} (3.12)")
+          for i in range(1, 5)) +
+    tuple(Parameter(f"v2_{i}", "-", 0.5, 1.5, f"static gain of valve {i} (3.12)")
+          for i in range(1, 5)),
+    "pressure residual of the valve(s) concerned; a bias that follows the set value "
+    "(offset: constant drift rate; gain: proportional to u), independent of the motion",
+    _phys_offset_gain, _dirs_offset_gain,
+    plant_effect=lambda v, arm: {"valve_offset": tuple(v[:4]), "valve_gain": tuple(v[4:])}))
+
+register(Candidate(
+    "valve_lag", "pressure",
+    tuple(Parameter(f"T_{i}", "s", 5e-3, 1.0, f"time constant of valve {i} (3.2); "
+                    f"plausible range of a proportional pressure valve (thesis 45-60 ms)")
+          for i in range(1, 5)),
+    "pressure residual proportional to the valve error v1 + v2 u - p: largest when the set "
+    "value moves fast (phase lag), zero in steady state",
+    lambda mu, phi, shift: 1.0 / _kappa(mu), _dirs_lag,
+    plant_effect=lambda v, arm: {"valve_time_constant": tuple(v)}))
+
+register(Candidate(
+    "valve_dead_time", "pressure",
+    (Parameter("d", "s", 0.0, DEAD_TIME_MAX, "pure delay of all four valves"),),
+    "pressure residual like a lag but with the shape of the set value's derivative "
+    "delayed: the set value acts d later on all valves",
+    lambda mu, phi, shift: np.array([shift]), None, grid=True,
+    plant_effect=None))
+
+register(Candidate(
+    "polytropic_exponent", "pressure",
+    (Parameter("n", "-", 1.0, 1.4, "polytropic exponent (3.3)"),),
+    "pressure residual proportional to the volume-change term (P_atm + p) m_tau qd / V: "
+    "changes sign with the velocity of the joint, zero at rest",
+    lambda mu, phi, shift: np.array([mu[MU_N]]), _dirs_poly,
+    plant_effect=lambda v, arm: {"polytropic_n": float(v[0])}))
+
+register(Candidate(
+    "joint_friction", "torque",
+    (Parameter("c1", "N m", 0.0, 10.0, "Coulomb friction of joint 1 (3.30)"),
+     Parameter("c2", "N m", 0.0, 10.0, "Coulomb friction of joint 2 (3.30)"),
+     Parameter("b1", "N m s/rad", 0.0, 10.0, "viscous friction of joint 1 (3.30)"),
+     Parameter("b2", "N m s/rad", 0.0, 10.0, "viscous friction of joint 2 (3.30)")),
+    "torque residual that opposes the motion: its sign follows the velocity sign "
+    "(Coulomb) and its size the speed (viscous); no configuration dependence",
+    lambda mu, phi, shift: np.array([mu[MU_COUL], mu[MU_COUL + 1], mu[MU_VISC],
+                                     mu[MU_VISC + 1]]),
+    _dirs_friction,
+    plant_effect=lambda v, arm: {"friction_coulomb": (float(v[0]), float(v[1])),
+                                 "friction_viscous": (float(v[2]), float(v[3]))}))
+
+
+def _payload_candidate():
+    return Candidate(
+        "payload", "torque",
+        (Parameter("M", "kg", 0.0, 5.0, "point mass at the load point A_L (2.19)"),),
+        "torque residual of both joints with the gravity shape (cos of the link angles, "
+        "largest with the forearm horizontal) plus inertia; independent of the velocity sign",
+        lambda mu, phi, shift: np.array([phi[0]]), _dirs_payload,
+        plant_effect=lambda v, arm: {"payload_mass": float(v[0])})
+
+
+register(_payload_candidate())
+
+
+#: Name of the hysteresis regression columns in ``BlockSystem.extra``.
+HYSTERESIS_COLUMNS = "hysteresis"
+
+
+def _maybe_register_hysteresis():
+    """Hysteresis (3.35): one delta shared by the four muscle groups.
+
+    The plant multiplies the force of group k in the joint torques by
+    ``1 + delta_k (W_k - W_fit(eps_s,k))`` (:mod:`ppamsafety.plant.model`),
+    so the torque of joint j gains ``sum_k delta_k p_k m_tau,k (W_k - W_fit)``:
+    linear in delta given the Preisach output W_k of the *measured*
+    contraction history (contractions from the measured q through the
+    geometry).  The columns are built by
+    :func:`ppamsafety.diagnose.residuals.hysteresis_signature` with the
+    plant's own operator (:func:`ppamsafety.plant.model.hysteresis_factors`
+    with delta = 1).
+
+    Parameterisation: one delta for all four groups.  The arm's four muscle
+    groups are the same 25-fibre muscles (thesis §3.6.5 fits one delta =
+    0.139 for them), so one parameter is the physical hypothesis and the
+    criterion charges k = 1.  Four deltas would cost 3 more parameters in BIC
+    for a difference the thesis gives no reason to expect, and the two
+    antagonists of a joint move in opposite directions, so their columns are
+    strongly (negatively) correlated in a torque residual: per-muscle deltas
+    are poorly determined from torques alone.  A muscle whose delta differs
+    shows as a residual left over (``partial`` / unexplained).
+    """
+    from ...params.effects import Effects
+
+    if "hysteresis_delta" not in Effects.__dataclass_fields__:
+        return
+    register(Candidate(
+        "hysteresis", "torque",
+        (Parameter("delta", "-", 0.0, 1.0, "hysteresis scale delta of (3.35), one value for "
+                   "the four muscle groups (thesis §3.6.5: 0.139 for the arm's 25-fibre "
+                   "muscles)"),),
+        "torque (and muscle-force) residual that depends on the direction of the last "
+        "contraction change: force below the model while a muscle contracts, above while it "
+        "extends (§3.5.1.6, fig. 3.2); rising angles settle low, falling ones high",
+        lambda mu, phi, shift: np.array([phi[0]]), None, columns=HYSTERESIS_COLUMNS,
+        plant_effect=lambda v, arm: {"hysteresis_delta": (float(min(max(v[0], 0.0), 1.0)),)
+                                     * 4}))
+
+
+_maybe_register_hysteresis()
+
+__all__ = ["Candidate", "Parameter", "REGISTRY", "register", "library", "VOCABULARY",
+           "ACTUATOR_VOCABULARY", "DEAD_TIME_MAX", "HYSTERESIS_COLUMNS"]
+_ = math

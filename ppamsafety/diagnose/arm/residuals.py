@@ -1,0 +1,557 @@
+"""Residuals of an arm record against the current model, per channel and per subsystem.
+
+The thesis localised its hysteresis error by comparing each subsystem with
+measurements on its own (§3.5.1.6).  For an arm record with the valve set
+values ``u1..u4``, the measured ``q, qd, p`` (open loop, or a closed loop
+whose set values were logged -- the plant is driven exactly as measured
+either way) three residuals are formed:
+
+pressure vs the valve model (channels ``p1..p4``, Pa)
+    The valve/pressure ODE (3.2), (3.6) with the static valve error (3.12)::
+
+        dp_i/dt = a_i + b_i u_i - kappa_i p_i - n (P_atm + p_i) m_tau,i qd_j / V_i
+
+    with a = v1/T, b = v2/T, kappa = 1/T, integrated over a block of L
+    samples [t_a, t_b]:  p_i(t_b) - p_i(t_a) = a_i (t_b - t_a) + b_i Int u_i
+    - kappa_i Int p_i - n Int h_i.  Measured p, q, qd drive the right-hand
+    side, so the valve is isolated from the arm.  u is held over each sample
+    (zero-order hold, exact sum); the other integrals are trapezoidal.
+torque vs the rigid-body model (channels ``tau1, tau2``, N m s)
+    (3.29) in the integral form of the acceleration-free regressor of
+    :mod:`ppamsafety.identify.dynamic` (H qd = W1 theta, Hdot qd = W2 theta,
+    C qd + G + tau_f = W3 theta)::
+
+        Int tau dt = [W1 theta]_{t_a}^{t_b} + Int (W3 - W2) theta dt
+
+    with tau = sum_i p_i m_tau,i(q) from the *measured* pressures through the
+    torque functions (2.17).  This is the Slotine-Li filtering of (3.26) with
+    a box filter instead of the first-order one: no derivative of a noisy
+    signal is taken, and -- unlike the first-order filter, whose outputs are
+    correlated over ~1/omega -- non-overlapping blocks with distinct end
+    samples give residuals that are *independent* under white measurement
+    noise, which the statistics of :mod:`ppamsafety.diagnose.selection` need.
+angles vs the full simulation (channels ``q1, q2``, rad; also qd, p)
+    :func:`replay`: the plant model (:func:`ppamsafety.plant.model.simulate`,
+    batched over parameter variants) from the measured first state with the
+    measured set values.  Output error: it shows the gap a user sees, not
+    where it comes from.
+
+Both block residuals are linear in the *model vector* mu (:data:`MU_NAMES`,
+23 entries: a, b, kappa of the four valves, n, theta1..theta6, c1, c2, b1,
+b2), ``prediction = X mu``; every candidate effect of
+:mod:`ppamsafety.diagnose.candidates` is a direction (or a change of X) in
+that space, which is why they can be fitted by linear regression.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..._validation import check_int, check_range
+from ...data.measured import P as P_COLS
+from ...data.measured import Q as Q_COLS
+from ...data.measured import QD as QD_COLS
+from ...data.measured import U as U_COLS
+from ...data.measured import MeasuredData
+from ..core.record import longest_segment
+from ..core.noise import noise_floor, second_difference_sigma
+
+#: Names and units of the model vector mu (see the module docstring).
+MU_NAMES = tuple(f"{k}_valve{i}" for i in range(1, 5) for k in ("a", "b", "kappa")) + (
+    "n", "theta1", "theta2", "theta3", "theta4", "theta5", "theta6", "c1", "c2", "b1", "b2")
+MU_UNITS = ("Pa/s", "1/s", "1/s") * 4 + ("-", "kg m", "kg m", "kg m^2", "kg m", "kg m", "kg m^2",
+                                         "N m", "N m", "N m s/rad", "N m s/rad")
+NMU = len(MU_NAMES)
+#: Offsets into mu: valve i has a at MU_A + 3 i, b at MU_B + 3 i, kappa at MU_K + 3 i.
+MU_A, MU_B, MU_K = 0, 1, 2
+MU_N = MU_NAMES.index("n")
+MU_THETA = MU_NAMES.index("theta1")        #: theta1..theta6, then c1, c2, b1, b2
+MU_COUL = MU_NAMES.index("c1")
+MU_VISC = MU_NAMES.index("b1")
+#: Residual channels of the block system, their units and subsystems.
+CHANNELS = ("p1", "p2", "p3", "p4", "tau1", "tau2")
+CHANNEL_UNITS = ("Pa", "Pa", "Pa", "Pa", "N m s", "N m s")
+SUBSYSTEM = {"pressure": (0, 1, 2, 3), "torque": (4, 5)}
+#: Default block length [s]: long against the sample time (endpoint noise averages
+#: against the integrated model error), short against the 10 s excitation period.
+BLOCK_SECONDS = 0.05
+
+
+@dataclass(frozen=True, eq=False)
+class ArmRecord:
+    """The arrays of one gap-free arm record that the diagnosis uses (SI units).
+
+    Attributes
+    ----------
+    t : numpy.ndarray, shape (N,)
+        Time [s].
+    q, qd : numpy.ndarray, shape (N, 2)
+        Measured angles [rad], velocities [rad/s].
+    p : numpy.ndarray, shape (N, 4)
+        Measured gauge pressures [Pa].
+    u : numpy.ndarray, shape (N, 4)
+        Valve set values [Pa] (held over each sample interval).
+    dt : float
+        Sample time [s].
+    source : str
+        File or label.
+    rows : tuple of (int, int)
+        The row range of the data used.
+    """
+
+    t: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+    p: np.ndarray
+    u: np.ndarray
+    dt: float
+    source: str = "<data>"
+    rows: tuple = (0, 0)
+
+    def __len__(self) -> int:
+        return self.t.size
+
+    def x0(self) -> np.ndarray:
+        """Measured first state [q, qd, p] (8,)."""
+        return np.concatenate([self.q[0], self.qd[0], self.p[0]])
+
+    def perturbed(self, sq, sqd, sp, rng) -> "ArmRecord":
+        """A copy with extra white noise added (the set values unchanged).
+
+        Parameters
+        ----------
+        sq, sqd, sp : array_like
+            Standard deviations for q (2,), qd (2,), p (4,).
+        rng : numpy.random.Generator
+            Source of the noise.
+        """
+        n = len(self)
+        return ArmRecord(self.t, self.q + rng.normal(size=(n, 2)) * sq,
+                         self.qd + rng.normal(size=(n, 2)) * sqd,
+                         self.p + rng.normal(size=(n, 4)) * sp, self.u, self.dt, self.source,
+                         self.rows)
+
+
+def arm_record(data) -> tuple:
+    """The longest gap-free segment of an arm record with q, qd, p and u, as an :class:`ArmRecord`.
+
+    Parameters
+    ----------
+    data : MeasuredData
+        kind ``"arm"``, experiment ``"open-loop"`` or ``"closed-loop"`` with
+        columns q1, q2, qd1, qd2, p1..p4, u1..u4.
+
+    Returns
+    -------
+    ArmRecord
+    list of str
+        Notes (e.g. segments left out).
+    """
+    if not isinstance(data, MeasuredData):
+        raise TypeError(f"data must be a MeasuredData, got {type(data).__name__}")
+    if data.kind != "arm" or data.experiment not in ("open-loop", "closed-loop"):
+        raise ValueError(f"{data.source}: the arm diagnosis needs an arm open-loop or closed-loop "
+                         f"record; this is a {data.kind} {data.experiment} record")
+    need = (*Q_COLS, *QD_COLS, *P_COLS, *U_COLS)
+    missing = [c for c in need if not data.has(c)]
+    if missing:
+        raise ValueError(f"{data.source}: the diagnosis replays the record with the measured "
+                         f"valve set values and compares q, qd, p; missing column(s) "
+                         f"{', '.join(missing)}")
+    a, b, notes = longest_segment(data)
+    f = data.frame.iloc[a:b]
+    t = f["t"].to_numpy(dtype=float)
+    if t.size < 200:
+        raise ValueError(f"{data.source}: the diagnosed segment has {t.size} samples; at least "
+                         f"200 are needed (several 50 ms blocks)")
+    dt = float(np.median(np.diff(t)))
+    rec = ArmRecord(t=t - t[0], q=f[list(Q_COLS)].to_numpy(dtype=float),
+                    qd=f[list(QD_COLS)].to_numpy(dtype=float),
+                    p=f[list(P_COLS)].to_numpy(dtype=float),
+                    u=f[list(U_COLS)].to_numpy(dtype=float), dt=dt, source=data.source,
+                    rows=(int(a), int(b)))
+    return rec, notes
+
+
+def model_vector(row) -> np.ndarray:
+    """The model vector mu (:data:`MU_NAMES`) of a packed plant row.
+
+    Parameters
+    ----------
+    row : numpy.ndarray, shape (NP,)
+        :func:`ppamsafety.plant.layout.pack` row.
+    """
+    from ...plant import layout as lay
+
+    read = lay.PLANT.read
+    tv, v1, v2 = read(row, "tv"), read(row, "v1"), read(row, "v2")
+    mu = np.empty(NMU)
+    for i in range(4):
+        mu[MU_A + 3 * i] = v1[i] / tv[i]
+        mu[MU_B + 3 * i] = v2[i] / tv[i]
+        mu[MU_K + 3 * i] = 1.0 / tv[i]
+    mu[MU_N] = float(read(row, "n_poly"))
+    mu[MU_THETA:MU_THETA + 6] = read(row, "theta")
+    mu[MU_COUL:MU_COUL + 2] = read(row, "coulomb")
+    mu[MU_VISC:MU_VISC + 2] = read(row, "viscous")
+    return mu
+
+
+def row_from_mu(row, mu) -> np.ndarray:
+    """A copy of plant row ``row`` with the quantities of ``mu`` written back (v1, v2, T, n, theta,
+    friction).
+
+    Parameters
+    ----------
+    row : numpy.ndarray, shape (NP,)
+    mu : numpy.ndarray, shape (NMU,)
+    """
+    from ...plant import layout as lay
+
+    out = np.array(row, dtype=float)
+    kappa = np.array([mu[MU_K + 3 * i] for i in range(4)])
+    if np.any(kappa <= 0):
+        raise ValueError(f"row_from_mu: valve 1/T must be > 0, got {kappa}")
+    out[lay.PLANT.slice("tv")] = 1.0 / kappa
+    out[lay.PLANT.slice("v1")] = [mu[MU_A + 3 * i] / kappa[i] for i in range(4)]
+    out[lay.PLANT.slice("v2")] = [mu[MU_B + 3 * i] / kappa[i] for i in range(4)]
+    out[lay.PLANT.slice("n_poly")] = mu[MU_N]
+    out[lay.PLANT.slice("theta")] = mu[MU_THETA:MU_THETA + 6]
+    out[lay.PLANT.slice("coulomb")] = mu[MU_COUL:MU_COUL + 2]
+    out[lay.PLANT.slice("viscous")] = mu[MU_VISC:MU_VISC + 2]
+    return out
+
+
+def _cumtrapz(g, dt):
+    """Trapezoidal running integral along axis 0, starting at 0."""
+    c = np.zeros_like(g)
+    c[1:] = np.cumsum(0.5 * (g[1:] + g[:-1]) * dt, axis=0)
+    return c
+
+
+def _cumzoh(u, dt):
+    """Running integral of a zero-order-hold signal: C[k] = dt sum_{j<k} u[j]."""
+    c = np.zeros_like(u)
+    c[1:] = np.cumsum(u[:-1] * dt, axis=0)
+    return c
+
+
+def delayed(u, shift: int) -> np.ndarray:
+    """``u`` delayed by ``shift`` samples (the first value held before the start).
+
+    Parameters
+    ----------
+    u : numpy.ndarray, shape (N, k)
+    shift : int
+        Delay in samples, >= 0.
+    """
+    if shift == 0:
+        return u
+    return np.concatenate([np.repeat(u[:1], shift, axis=0), u[:-shift]])
+
+
+@dataclass(frozen=True, eq=False)
+class BlockSystem:
+    """The block-integral equations of a record: ``y`` (nb, 6) and ``X`` (nb, 6, NMU).
+
+    prediction = X @ mu, residual = y - X @ mu (channels :data:`CHANNELS`).
+
+    Attributes
+    ----------
+    y : numpy.ndarray, shape (nb, 6)
+    X : numpy.ndarray, shape (nb, 6, NMU)
+    starts, stops : numpy.ndarray of int, shape (nb,)
+        First and last sample of every block.
+    u : numpy.ndarray, shape (N, 4)
+        The set values (to build the dead-time variants).
+    dt : float
+        Sample time [s].
+    features : dict
+        Per-block operating-region descriptors (mean q, qd, p, time).
+    extra : dict
+        Regression columns of candidates that are not directions of mu,
+        name -> (nb, 6, k), added to the prediction (``Candidate.columns``;
+        ``"hysteresis"``: see :func:`hysteresis_signature`).
+    """
+
+    y: np.ndarray
+    X: np.ndarray
+    starts: np.ndarray
+    stops: np.ndarray
+    u: np.ndarray = field(repr=False)
+    dt: float = 0.0
+    features: dict = field(default_factory=dict, repr=False)
+    extra: dict = field(default_factory=dict, repr=False)
+
+    @property
+    def nb(self) -> int:
+        return self.y.shape[0]
+
+    def with_dead_time(self, shift: int) -> np.ndarray:
+        """X with the valve input delayed by ``shift`` samples (dead time ``shift dt``).
+
+        Parameters
+        ----------
+        shift : int
+            Delay in samples (0: X itself, copied).
+        """
+        X = self.X.copy()
+        if shift:
+            c = _cumzoh(delayed(self.u, shift), self.dt)
+            iu = c[self.stops] - c[self.starts]
+            for i in range(4):
+                X[:, i, MU_B + 3 * i] = iu[:, i]
+        return X
+
+
+def hysteresis_signature(q, p, arm, *, initial="negative") -> tuple:
+    """Muscle forces and joint torques of the hysteresis (3.35) per unit delta along measured data.
+
+    The plant's force of group k is ``p_k f_k(eps_k) (1 + delta_k (W_k -
+    W_fit(eps_s,k)))`` and its torque contribution ``p_k m_tau,k (1 + ...)``
+    (:mod:`ppamsafety.plant.model`).  Here the Preisach output W_k is that of
+    the *measured* contraction history (eps_k from the measured q through the
+    geometry, each sample committed as the end of one step, exactly as the
+    plant commits its steps: :func:`ppamsafety.plant.model.hysteresis_factors`
+    with delta = 1), so the torque change is ``delta * h_tau`` with
+    ``h_tau,j = sum_{k of joint j} p_k m_tau,k (W_k - W_fit)``.
+
+    Parameters
+    ----------
+    q : numpy.ndarray, shape (N, 2)
+        Measured joint angles [rad], in time order.
+    p : numpy.ndarray, shape (N, 4)
+        Measured gauge pressures [Pa].
+    arm : ArmParameters
+        Geometry and muscles of the model.
+    initial : str or sequence, keyword-only
+        Preisach memory before the first sample (``Effects.hysteresis_initial``;
+        default ``"negative"``: every muscle brought to its smallest
+        contraction first, thesis §3.6.6).
+
+    Returns
+    -------
+    h : numpy.ndarray, shape (N, 4)
+        W_k - W_fit(eps_s,k) per group [-].
+    h_tau : numpy.ndarray, shape (N, 2)
+        Joint torque per unit delta [N m].
+    eps : numpy.ndarray, shape (N, 4)
+        Contractions [-].
+    """
+    from ...params.effects import Effects
+    from ...plant.model import hysteresis_factors
+    from ...plant.torque import torque_functions
+
+    q = np.asarray(q, dtype=float)
+    p = np.asarray(p, dtype=float)
+    unit = arm.replace(effects=Effects(hysteresis_delta=(1.0,) * 4, hysteresis_initial=initial))
+    states = np.zeros((q.shape[0], 8))
+    states[:, :2] = q
+    eps, fac = hysteresis_factors(states, unit)
+    h = fac - 1.0
+    mt = torque_functions(q, arm)
+    ph = p * mt * h
+    return h, np.stack([ph[:, 0] + ph[:, 1], ph[:, 2] + ph[:, 3]], axis=1), eps
+
+
+def block_system(rec: ArmRecord, arm, *, block_seconds: float = BLOCK_SECONDS,
+                 extra: bool = True) -> BlockSystem:
+    """Build the block-integral equations of ``rec`` for the geometry/muscles of ``arm``.
+
+    Parameters
+    ----------
+    rec : ArmRecord
+    arm : ArmParameters
+        Known geometry, muscle force law and friction smoothing (the model).
+    block_seconds : float, keyword-only
+        Block length [s]; blocks have distinct end samples and do not overlap.
+    extra : bool, keyword-only
+        Also build the regression columns of the non-mu candidates
+        (:attr:`BlockSystem.extra`; the hysteresis torque, one column shared
+        by the four groups).
+
+    Returns
+    -------
+    BlockSystem
+    """
+    from ...identify.dynamic import w_matrices
+    from ...plant.torque import group_volumes, torque_functions
+
+    block_seconds = check_range("block_seconds", block_seconds, 0.0, 10.0, lo_open=True,
+                                unit="s")
+    dt = rec.dt
+    L = max(int(round(block_seconds / dt)), 3)
+    n = len(rec)
+    starts = np.arange(0, n - L + 1, L)
+    stops = starts + L - 1
+    if starts.size < 8:
+        raise ValueError(f"{rec.source}: {n} samples give only {starts.size} blocks of "
+                         f"{L} samples; need at least 8 (shorter block_seconds or a longer record)")
+    mt = torque_functions(rec.q, arm)
+    vol = group_volumes(rec.q, arm)
+    patm = arm.pneumatics.p_atm
+    w = np.repeat(rec.qd, 2, axis=1)                   # qd_j of each group (1, 1, 2, 2)
+    h = (patm + rec.p) * mt * w / vol
+    c_p = _cumtrapz(rec.p, dt)
+    c_h = _cumtrapz(h, dt)
+    c_u = _cumzoh(rec.u, dt)
+    nb = starts.size
+    X = np.zeros((nb, 6, NMU))
+    y = np.zeros((nb, 6))
+    span = (stops - starts) * dt
+    for i in range(4):
+        X[:, i, MU_A + 3 * i] = span
+        X[:, i, MU_B + 3 * i] = c_u[stops, i] - c_u[starts, i]
+        X[:, i, MU_K + 3 * i] = -(c_p[stops, i] - c_p[starts, i])
+        X[:, i, MU_N] = -(c_h[stops, i] - c_h[starts, i])
+        y[:, i] = rec.p[stops, i] - rec.p[starts, i]
+    W1, W2, W3 = w_matrices(rec.q, rec.qd, arm, friction=True,
+                            sign_velocity=arm.friction_velocity)
+    c_w = _cumtrapz(W3 - W2, dt)
+    tau = np.stack([rec.p[:, 0] * mt[:, 0] + rec.p[:, 1] * mt[:, 1],
+                    rec.p[:, 2] * mt[:, 2] + rec.p[:, 3] * mt[:, 3]], axis=1)
+    c_tau = _cumtrapz(tau, dt)
+    X[:, 4:6, MU_THETA:] = (W1[stops] - W1[starts]) + (c_w[stops] - c_w[starts])
+    y[:, 4:6] = c_tau[stops] - c_tau[starts]
+
+    def bmean(x):
+        c = _cumtrapz(x, dt)
+        return (c[stops] - c[starts]) / span[:, None]
+
+    feats = {"t": 0.5 * (rec.t[starts] + rec.t[stops]), "q": bmean(rec.q), "qd": bmean(rec.qd),
+             "p": bmean(rec.p)}
+    ext = {}
+    if extra:
+        from .candidates import HYSTERESIS_COLUMNS
+
+        _, h_tau, _ = hysteresis_signature(rec.q, rec.p, arm)
+        c_h = _cumtrapz(h_tau, dt)
+        E = np.zeros((nb, 6, 1))
+        # the measured torque is tau(p) + delta h_tau = X theta, so the block residual
+        # y - X mu = -delta Int h_tau: the prediction gains -Int h_tau per unit delta
+        E[:, 4:6, 0] = -(c_h[stops] - c_h[starts])
+        ext[HYSTERESIS_COLUMNS] = E
+    return BlockSystem(y=y, X=X, starts=starts, stops=stops, u=rec.u, dt=dt, features=feats,
+                       extra=ext)
+
+
+def channel_noise(rec: ArmRecord) -> dict:
+    """Measurement-noise standard deviations of q, qd, p estimated from the data.
+
+    See :mod:`ppamsafety.diagnose.noise`; floored for noise-free records.
+
+    Parameters
+    ----------
+    rec : ArmRecord
+
+    Returns
+    -------
+    dict
+        ``{"q": (2,), "qd": (2,), "p": (4,)}``.
+    """
+    sq = noise_floor(second_difference_sigma(rec.q), np.ptp(rec.q, axis=0) + 1.0)
+    sqd = noise_floor(second_difference_sigma(rec.qd), np.ptp(rec.qd, axis=0) + 1.0)
+    sp = noise_floor(second_difference_sigma(rec.p), np.ptp(rec.p, axis=0) + 1e5)
+    return {"q": sq, "qd": sqd, "p": sp}
+
+
+def noise_draws(rec: ArmRecord, arm, noise: dict, *, block_seconds: float = BLOCK_SECONDS,
+                draws: int = 4, seed: int = 0) -> tuple:
+    """Changes of the block system caused by extra measurement noise (Monte Carlo).
+
+    White noise of the estimated standard deviations (``noise``) is added to
+    q, qd and p (seeded) and the block system rebuilt; the changes dY, dX
+    give the noise part of the residual of *any* model vector mu as
+    dY - dX mu (the residual is linear in mu), see :func:`block_noise`.
+
+    Parameters
+    ----------
+    rec : ArmRecord
+    arm : ArmParameters
+    noise : dict
+        ``{"q": (2,), "qd": (2,), "p": (4,)}`` standard deviations.
+    block_seconds : float, keyword-only
+    draws : int, keyword-only
+    seed : int, keyword-only
+
+    Returns
+    -------
+    dY : numpy.ndarray, shape (draws, nb, 6)
+    dX : numpy.ndarray, shape (draws, nb, 6, NMU)
+    """
+    draws = check_int("draws", draws, 1, 1000)
+    base = block_system(rec, arm, block_seconds=block_seconds, extra=False)
+    rng = np.random.default_rng(seed)
+    dY, dX = [], []
+    for _ in range(draws):
+        s = block_system(rec.perturbed(noise["q"], noise["qd"], noise["p"], rng), arm,
+                         block_seconds=block_seconds, extra=False)
+        dY.append(s.y - base.y)
+        dX.append(s.X - base.X)
+    return np.array(dY), np.array(dX)
+
+
+def block_noise(dY, dX, mu, scale=None) -> np.ndarray:
+    """Standard deviation of each block-residual channel due to measurement noise alone.
+
+    For a correct model the residual would have this standard deviation (the
+    record's own noise is already in it; adding the same amount again changes
+    the residual by a statistically equal amount, to first order).  It
+    depends on the model (e.g. velocity noise enters through H(q) qd), hence
+    on ``mu``.
+
+    Parameters
+    ----------
+    dY, dX : numpy.ndarray
+        From :func:`noise_draws`.
+    mu : numpy.ndarray, shape (NMU,)
+        Model vector.
+    scale : numpy.ndarray, shape (6,), optional
+        Channel magnitudes for the floor of a noise-free record.
+
+    Returns
+    -------
+    numpy.ndarray, shape (6,)
+        In the units of :data:`CHANNEL_UNITS`.
+    """
+    sig = np.sqrt(np.mean((dY - dX @ mu) ** 2, axis=(0, 1)))
+    scale = np.array([1e5] * 4 + [1.0] * 2) if scale is None else scale
+    return noise_floor(sig, scale)
+
+
+def replay(rec: ArmRecord, rows, *, shifts=None, substeps: int = 1) -> np.ndarray:
+    """Simulate the record with the measured set values for every plant row (one batched call).
+
+    Parameters
+    ----------
+    rec : ArmRecord
+    rows : numpy.ndarray, shape (B, NP)
+        Packed plant rows (model variants).
+    shifts : sequence of int, optional
+        Per row, a valve dead time in samples (the set values delayed).
+    substeps : int, keyword-only
+        RK4 steps per sample (1 is enough at 1 kHz for valve time constants
+        >= 2 ms: h/T <= 0.5).
+
+    Returns
+    -------
+    numpy.ndarray, shape (B, N, 8)
+        Simulated [q, qd, p] at the sample times.
+    """
+    from ...plant.model import simulate
+
+    rows = np.atleast_2d(rows)
+    B = rows.shape[0]
+    U = np.empty((B, len(rec) - 1, 4))
+    for b in range(B):
+        s = 0 if shifts is None else int(shifts[b])
+        U[b] = delayed(rec.u, s)[:-1]
+    return simulate(None, rec.x0(), U, dt=rec.dt, substeps=substeps, params=rows)
+
+
+__all__ = ["ArmRecord", "arm_record", "BlockSystem", "block_system",
+           "block_noise", "channel_noise", "noise_draws", "replay", "hysteresis_signature",
+           "model_vector", "row_from_mu", "delayed", "MU_NAMES",
+           "MU_UNITS", "NMU", "CHANNELS", "CHANNEL_UNITS", "SUBSYSTEM", "BLOCK_SECONDS"]

@@ -1,0 +1,281 @@
+"""Hidden-effect records of one actuator on a tensile tester (rehearsal data for the tester diagnosis).
+
+:func:`synthesize_actuator` writes a record in the measured-data format
+(``kind = "actuator"``, ``experiment = "tensile"``) whose metadata are the
+same whatever is hidden: kind, experiment, sample rate (omitted with
+jittered sampling), the *nominal* force law, a generic description and the
+seed.
+
+Protocols:
+
+``"sawtooth"`` (default)
+    Position-controlled quasi-static test: at each pressure of
+    ``pressures`` (default 1, 1.5 and 2.5 bar, the thesis' tensile records,
+    §3.6.5) the contraction follows ``cycles`` triangles between
+    ``eps_range`` (default 5 % .. 25 %, around the 7-20 % range of
+    applications, §3.6.6), each of period ``period`` x (1, 0.6, 1.4, ...)
+    (varying speeds, as the thesis' manual loops of 8 s and 40 s, §3.6.1),
+    after a 2 s hold at the lower contraction during which the pressure
+    moves to its new level (ramp of 1 s).
+``"pressure-sweep"``
+    Fixed contraction (the middle of ``eps_range``), the pressure swept
+    ``cycles`` times between the lowest and the highest of ``pressures``.
+
+The regulated pressure is not constant (as on a real bench): a 1 % slow
+ripple and a -1.5 kPa dip while the muscle contracts (the regulator lags
+the volume change); the record carries it, so it is no discrepancy.
+
+Effects (``{name: value}``, SI):
+
+in the tester library
+    ``hysteresis_delta`` [-]: (3.35) with the Preisach operator of §3.6,
+    memory from negative saturation (the test starts on the stretched
+    muscle, §3.6.6); ``friction_coulomb`` [N] and ``friction_viscous``
+    [N s/m]: a force ``c sign(v) + b v`` opposing the motion (v = l0 d eps/dt,
+    the sign kept through rests); ``force_law_scale`` [-]: the true law is
+    (1 + s) x the nominal one (a slenderness l0/R known only roughly,
+    §3.6.1); ``force_law_delta`` [N/Pa]: five values added to a0..a4;
+outside the library
+    ``force_sensor_offset`` [N] (added to the recorded force);
+    ``pressure_sensor_offset`` [Pa] (added to the recorded pressure);
+    ``backlash`` [m]: play of total width ``backlash`` between the measured
+    crosshead position and the muscle end (the muscle's contraction is the
+    play operator of the measured one); ``leak_rate`` [1/s]: the muscle
+    leaks behind the pressure sensor, which sits at the regulator: its
+    pressure decays as exp(-leak_rate tau) after each pressure change tau
+    seconds ago while the sensor keeps reading the regulated pressure.
+
+Noise ``"tester"``: white Gaussian noise of 1 N on the force (a 0.1 %
+class load cell of a few kN), 500 Pa on the pressure (the arm's choice,
+:data:`ppamsafety.identify.static.PRESSURE_NOISE_STD`) and 10 um on the
+position (contraction noise 10 um / l0); ``"none"``: exact samples.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pandas as pd
+
+from ..._validation import (as_float_array, check_bool, check_choice, check_int, check_range,
+                            check_vector)
+
+NOISES = ("tester", "none")
+PROTOCOLS = ("sawtooth", "pressure-sweep")
+#: Noise of the "tester" level: force [N], pressure [Pa], position [m] (module docstring).
+FORCE_NOISE_STD = 1.0
+PRESSURE_NOISE_STD = 500.0
+POSITION_NOISE_STD = 10e-6
+#: Thesis tensile pressures (§3.6.5) [Pa] and muscle length l0 = 6 cm (fig. 3.16) [m].
+THESIS_PRESSURES = (1.0e5, 1.5e5, 2.5e5)
+THESIS_L0 = 0.06
+EFFECTS = ("hysteresis_delta", "friction_coulomb", "friction_viscous", "force_law_scale",
+           "force_law_delta", "force_sensor_offset", "pressure_sensor_offset", "backlash",
+           "leak_rate")
+#: Hold at each pressure change [s] and the pressure ramp inside it [s].
+HOLD_SECONDS, RAMP_SECONDS = 2.0, 1.0
+
+
+def _check_effects(effects) -> dict:
+    if effects is None:
+        return {}
+    if not isinstance(effects, dict):
+        raise TypeError(f"effects must be a dict {{name: value}}, got {type(effects).__name__}")
+    out = {}
+    for name, value in effects.items():
+        if name not in EFFECTS:
+            raise ValueError(f"unknown effect {name!r} for kind='actuator'; allowed: "
+                             f"{', '.join(EFFECTS)}")
+        if name == "force_law_delta":
+            if isinstance(value, str):
+                value = [float(v) for v in value.split(",")]
+            out[name] = np.array(check_vector(f"effect {name}", value, 5, -1.0, 1.0,
+                                              unit="N/Pa"))
+            continue
+        v = float(value)
+        lim = {"hysteresis_delta": (0.0, 0.5, "-"), "friction_coulomb": (0.0, 1e5, "N"),
+               "friction_viscous": (0.0, 1e7, "N s/m"), "force_law_scale": (-0.5, 0.5, "-"),
+               "force_sensor_offset": (-1e5, 1e5, "N"),
+               "pressure_sensor_offset": (-1e6, 1e6, "Pa"), "backlash": (0.0, 0.05, "m"),
+               "leak_rate": (0.0, 10.0, "1/s")}[name]
+        out[name] = check_range(f"effect {name}", v, lim[0], lim[1], unit=lim[2])
+    return out
+
+
+def _knots(protocol, pressures, cycles, period, eps_range):
+    """Piecewise-linear (time, eps, p_set) knots of the protocol."""
+    lo, hi = eps_range
+    speeds = (1.0, 0.6, 1.4)
+    T, E, P = [0.0], [lo], [pressures[0]]
+    if protocol == "sawtooth":
+        for i, p in enumerate(pressures):
+            if i:
+                T += [T[-1] + RAMP_SECONDS]
+                E += [lo]
+                P += [p]
+            T += [T[-1] + HOLD_SECONDS - (RAMP_SECONDS if i else 0.0)]
+            E += [lo]
+            P += [p]
+            for c in range(cycles):
+                tc = period * speeds[c % 3]
+                T += [T[-1] + tc / 2, T[-1] + tc]
+                E += [hi, lo]
+                P += [p, p]
+    else:
+        mid = 0.5 * (lo + hi)
+        pmin, pmax = min(pressures), max(pressures)
+        T, E, P = [0.0, HOLD_SECONDS], [mid, mid], [pmin, pmin]
+        for c in range(cycles):
+            tc = period * speeds[c % 3]
+            T += [T[-1] + tc / 2, T[-1] + tc]
+            E += [mid, mid]
+            P += [pmax, pmin]
+    return np.array(T), np.array(E), np.array(P)
+
+
+def _play(x, half):
+    """Play (backlash) operator of half-width ``half`` on a sampled input, starting centred."""
+    y = np.empty_like(x)
+    y[0] = x[0]
+    for k in range(1, x.size):
+        y[k] = min(max(y[k - 1], x[k] - half), x[k] + half)
+    return y
+
+
+def synthesize_actuator(effects=None, *, noise: str = "tester", seed: int = 0,
+                        protocol: str = "sawtooth", pressures=THESIS_PRESSURES,
+                        cycles: int = 3, period: float = 20.0, eps_range=(0.05, 0.25),
+                        sample_rate: float = 50.0, force_law=None, l0: float = THESIS_L0,
+                        position: bool = False, jitter: float = 0.0):
+    """A tensile-tester record of one actuator with hidden ``effects`` (module docstring).
+
+    Parameters
+    ----------
+    effects : dict, optional
+        ``{name: value}`` from :data:`EFFECTS` (SI units); default none.
+    noise : {"tester", "none"}, keyword-only
+        Measurement noise level.
+    seed : int, keyword-only
+        Seed of the noise, the ripple phase and the sampling jitter.
+    protocol : {"sawtooth", "pressure-sweep"}, keyword-only
+        Contraction sawtooth at constant pressures, or a pressure sweep at fixed contraction.
+    pressures : sequence of float, keyword-only
+        Gauge pressures [Pa], each in (0, 10] bar; default 1, 1.5, 2.5 bar.
+    cycles : int, keyword-only
+        Triangles per pressure (sawtooth) or pressure sweeps, 1..100.
+    period : float, keyword-only
+        Nominal period of one cycle [s], 0.5..3600 (cycles alternate x1, x0.6, x1.4).
+    eps_range : (float, float), keyword-only
+        Lowest and highest contraction [-], 0 < lo < hi < 0.45.
+    sample_rate : float, keyword-only
+        Mean sampling rate [Hz], 1..10^4.
+    force_law : sequence of 5 float, optional, keyword-only
+        Nominal a0..a4 of (3.9) [N/Pa] written in the metadata (default
+        Table B.1 group 1); a cylinder: ``[0, A, 0, 0, 0]``.
+    l0 : float, keyword-only
+        Uncontracted length [m], (0, 1].
+    position : bool, keyword-only
+        Write the length ``position`` [m] instead of ``contraction``.
+    jitter : float, keyword-only
+        Relative jitter of the sampling intervals, [0, 0.9]; > 0 gives
+        non-uniform sampling (no sample_rate in the metadata).
+
+    Returns
+    -------
+    MeasuredData
+    """
+    from ...data.measured import MeasuredData
+    from ...hysteresis import EPS_MAX, preisach_response, scaled_input, w_fit
+    from ...hysteresis.tensile import DEFAULT_FORCE_LAW
+
+    fx = _check_effects(effects)
+    noise = check_choice("noise", noise, NOISES)
+    seed = check_int("seed", seed, 0)
+    protocol = check_choice("protocol", protocol, PROTOCOLS)
+    pressures = check_vector("pressures", pressures, None, 0.0, 1e6, lo_open=True, unit="Pa")
+    if not pressures:
+        raise ValueError("pressures must hold at least one pressure [Pa]")
+    cycles = check_int("cycles", cycles, 1, 100)
+    period = check_range("period", period, 0.5, 3600.0, unit="s")
+    eps_range = check_vector("eps_range", eps_range, 2, 0.0, 0.45, lo_open=True)
+    if not eps_range[0] < eps_range[1]:
+        raise ValueError(f"eps_range = {eps_range} must be (lo, hi) with lo < hi")
+    rate = check_range("sample_rate", sample_rate, 1.0, 1e4, unit="Hz")
+    a = np.asarray(DEFAULT_FORCE_LAW if force_law is None else
+                   as_float_array("force_law", force_law), float)
+    if a.shape != (5,) or a[0] < 0 or np.max(np.abs(a)) > 1.0:
+        raise ValueError(f"force_law = {a.tolist()} must be 5 coefficients a0..a4 in N/Pa with "
+                         f"a0 >= 0 and |a_i| <= 1")
+    l0 = check_range("l0", l0, 0.0, 1.0, lo_open=True, unit="m")
+    position = check_bool("position", position)
+    jitter = check_range("jitter", jitter, 0.0, 0.9)
+    rng = np.random.default_rng(seed)
+
+    T, E, P = _knots(protocol, pressures, cycles, period, eps_range)
+    dt = 1.0 / rate
+    n_est = int(T[-1] * rate) + 1
+    if jitter > 0:
+        steps = dt * (1.0 + jitter * rng.uniform(-1.0, 1.0, n_est + 10))
+        t = np.concatenate([[0.0], np.cumsum(steps)])
+        t = t[t <= T[-1]]
+    else:
+        t = np.arange(n_est) * dt
+    eps_cmd = np.interp(t, T, E)
+    p_set = np.interp(t, T, P)
+    # direction and speed of the commanded motion (exact, from the knots)
+    seg = np.clip(np.searchsorted(T, t, side="right") - 1, 0, T.size - 2)
+    rate_cmd = (E[seg + 1] - E[seg]) / (T[seg + 1] - T[seg])
+    s = np.sign(rate_cmd)
+    for k in range(1, s.size):                    # keep the sign of the last motion at rest
+        if s[k] == 0:
+            s[k] = s[k - 1]
+    eps_true = eps_cmd
+    if "backlash" in fx:
+        eps_true = _play(eps_cmd, 0.5 * fx["backlash"] / l0)
+    phase = rng.uniform(0, 2 * math.pi)
+    p_reg = p_set * (1.0 + 0.01 * np.sin(2 * math.pi * t / 9.7 + phase)) - 1500.0 * (s > 0) * (
+        rate_cmd != 0)
+    p_muscle = p_reg
+    if fx.get("leak_rate", 0.0) > 0:
+        changes = T[np.flatnonzero(np.diff(P) != 0)]
+        last = np.zeros_like(t)
+        for c in changes:
+            last = np.where(t >= c, c, last)
+        p_muscle = p_reg * np.exp(-fx["leak_rate"] * (t - last))
+    a_true = a * (1.0 + fx.get("force_law_scale", 0.0)) + fx.get("force_law_delta", 0.0)
+    e = eps_true
+    f_law = p_muscle * ((a_true[0] / e if a_true[0] != 0 else 0.0) + a_true[1]
+                        + e * (a_true[2] + e * (a_true[3] + e * a_true[4])))
+    force = f_law.copy()
+    if fx.get("hysteresis_delta", 0.0) > 0:
+        es = scaled_input(e, EPS_MAX)
+        W = preisach_response(es, initial="negative", clip=True)
+        sl, ic = w_fit()
+        force = f_law * (1.0 + fx["hysteresis_delta"] * (W - (sl * es + ic)))
+    v = l0 * rate_cmd
+    force = force - fx.get("friction_coulomb", 0.0) * s - fx.get("friction_viscous", 0.0) * v
+    force = force + fx.get("force_sensor_offset", 0.0)
+    p_rec = p_reg + fx.get("pressure_sensor_offset", 0.0)
+    pos = l0 * (1.0 - eps_cmd)
+    if noise == "tester":
+        force = force + rng.normal(0.0, FORCE_NOISE_STD, t.size)
+        p_rec = p_rec + rng.normal(0.0, PRESSURE_NOISE_STD, t.size)
+        pos = pos + rng.normal(0.0, POSITION_NOISE_STD, t.size)
+    cols = {"t": t, "force": force, "pressure": p_rec}
+    if position:
+        cols["position"] = pos
+    else:
+        cols["contraction"] = (l0 - pos) / l0
+    meta = {"kind": "actuator", "experiment": "tensile",
+            "description": "synthetic tensile-tester record of one actuator",
+            "source": f"ppamsafety synthesize (seed {seed}, noise {noise})",
+            "force_law": {"name": "nominal", "a": [float(x) for x in a], "l0": float(l0)}}
+    if jitter == 0:
+        meta = {**{k: meta[k] for k in ("kind", "experiment")}, "sample_rate": rate,
+                **{k: meta[k] for k in ("description", "source", "force_law")}}
+    return MeasuredData(meta, pd.DataFrame(cols), source="synthesize")
+
+
+__all__ = ["synthesize_actuator", "EFFECTS", "NOISES", "PROTOCOLS", "THESIS_PRESSURES",
+           "THESIS_L0", "FORCE_NOISE_STD", "PRESSURE_NOISE_STD", "POSITION_NOISE_STD"]

@@ -1,0 +1,329 @@
+"""Figures of the discrepancy diagnosis (pyplot-free ``matplotlib.figure.Figure``).
+
+Each function takes computed data and returns a Figure; nothing here simulates.
+
+* test-bench diagnoses: :func:`actuator_force_figure`, :func:`actuator_residual_figure`
+  take the :class:`~ppamsafety.diagnose.diagnosis.Diagnosis` of an actuator record
+  (``kind == "actuator"``) and draw from its ``replay`` and ``blocks`` data;
+* the report section :mod:`ppamsafety.sections.diagnose_cases`:
+  :func:`plot_summary_profiles`, :func:`plot_gap`, :func:`plot_confusion`;
+* case study (a), :mod:`ppamsafety.sections.diagnose_sawtooth`:
+  :func:`plot_sawtooth_diagnosis`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .figure import new_figure
+
+
+def _check(dg, kind: str = "actuator"):
+    if not all(hasattr(dg, a) for a in ("kind", "replay", "blocks", "residual_rms", "names")):
+        raise TypeError(f"dg must be a Diagnosis, got {type(dg).__name__}")
+    if (dg.kind == "actuator") != (kind == "actuator"):
+        raise ValueError(f"dg.kind = {dg.kind!r}: this figure is for {kind} diagnoses")
+
+
+def arm_replay_figure(dg):
+    """Measured vs before vs after (full simulation) for q, qd, p of an arm diagnosis.
+
+    Parameters
+    ----------
+    dg : Diagnosis
+        Diagnosis of an arm record (``replay`` holds ``t`` and the ``measured``,
+        ``before`` and ``after`` arrays, one column per channel, the channel names
+        ``channels`` and their SI ``units``; ``"Pa"`` is drawn in bar).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    _check(dg, "arm")
+    r = dg.replay
+    t, channels, units = r["t"], r["channels"], r["units"]
+    step = max(1, t.size // 4000)
+    fig, axs = new_figure(4, 2, figsize=(11, 9), layout="constrained", sharex=True)
+    for k, ax in enumerate(axs.T.ravel()):
+        scale = 1e-5 if units[k] == "Pa" else 1.0
+        unit = "bar" if units[k] == "Pa" else units[k]
+        mk = dict(marker="o", ms=3, ls="none") if r.get("static") else {}
+        ax.plot(t[::step], r["measured"][::step, k] * scale, color="0.6", lw=0.8,
+                label="measured", **mk)
+        ax.plot(t[::step], r["before"][::step, k] * scale, "C3", lw=0.9,
+                label="model before", **(dict(mk, marker="s", mfc="none") if mk else {}))
+        ax.plot(t[::step], r["after"][::step, k] * scale, color="C0", lw=0.9,
+                label="model after", **(dict(mk, marker="x") if mk else {"ls": "--"}))
+        rr = dg.residual_rms.get(channels[k])
+        if rr is not None:
+            ax.set_title(f"{channels[k]}: RMS error {rr['before']:.3g} -> "
+                         f"{rr['after']:.3g} {units[k]}", fontsize=8)
+        ax.set_ylabel(f"{channels[k]} [{unit}]", fontsize=8)
+    axs[0, 0].legend(fontsize=7)
+    axs[-1, 0].set_xlabel("t [s]")
+    axs[-1, 1].set_xlabel("t [s]")
+    found = ", ".join(dg.names) or "nothing named"
+    fig.suptitle(f"{dg.source}: {found}" + ("; UNEXPLAINED residual remains"
+                                          if dg.unexplained else ""), fontsize=9)
+    return fig
+
+
+def arm_blocks_figure(dg):
+    """Whitened block residuals per subsystem channel of an arm diagnosis, before and after.
+
+    Parameters
+    ----------
+    dg : Diagnosis
+        Diagnosis of an arm record (``blocks`` holds ``t``, the whitened
+        ``before`` and ``after`` residuals, one column per channel, and the
+        channel names ``channels``).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    _check(dg, "arm")
+    b = dg.blocks
+    channels = b["channels"]
+    fig, axs = new_figure(3, 2, figsize=(11, 7), layout="constrained", sharex=True)
+    for c, ax in enumerate(axs.T.ravel()):
+        ax.plot(b["t"], b["before"][:, c], ".", ms=2, color="C3", label="before")
+        ax.plot(b["t"], b["after"][:, c], ".", ms=2, color="C0", label="after")
+        ax.axhspan(-2, 2, color="0.9", zorder=0)
+        ax.set_ylabel(f"{channels[c]} / noise", fontsize=8)
+    axs[0, 0].legend(fontsize=7)
+    fig.suptitle("block residuals divided by their noise level (grey band: +-2)", fontsize=9)
+    return fig
+
+
+def actuator_force_figure(dg):
+    """Measured vs nominal vs diagnosed force, against contraction (loops) and time.
+
+    Parameters
+    ----------
+    dg : Diagnosis
+        Diagnosis of an actuator record.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    _check(dg)
+    r = dg.replay
+    t, eps = r["t"], r["eps"] * 100.0
+    step = max(1, t.size // 6000)
+    fig, (ax1, ax2) = new_figure(2, 1, figsize=(11, 7.5), layout="constrained")
+    sl = slice(None, None, step)
+    ax1.plot(eps[sl], r["measured"][sl], ".", ms=1.5, color="0.55", label="measured")
+    ax1.plot(eps[sl], r["before"][sl], "C3", lw=0.6, label="nominal law (3.9)")
+    ax1.plot(eps[sl], r["after"][sl], "C0", lw=0.6, label="diagnosed")
+    ax1.set_xlabel("contraction eps [%]")
+    ax1.set_ylabel("force [N]")
+    ax1.legend(fontsize=7)
+    rr = dg.residual_rms["force"]
+    ax1.set_title(f"force vs contraction: RMS error {rr['before']:.3g} -> {rr['after']:.3g} N "
+                  f"(noise {rr['noise']:.3g} N)", fontsize=8)
+    ax2.plot(t[sl], r["measured"][sl] - r["before"][sl], color="C3", lw=0.6,
+             label="measured - nominal")
+    ax2.plot(t[sl], r["measured"][sl] - r["after"][sl], color="C0", lw=0.6,
+             label="measured - diagnosed")
+    ax2.axhspan(-2 * rr["noise"], 2 * rr["noise"], color="0.9", zorder=0)
+    ax2.set_xlabel("t [s]")
+    ax2.set_ylabel("force residual [N]")
+    ax2.legend(fontsize=7)
+    found = ", ".join(dg.names) or "nothing named"
+    fig.suptitle(f"{dg.source}: {found}" + ("; UNEXPLAINED residual remains"
+                                            if dg.unexplained else ""), fontsize=9)
+    return fig
+
+
+def actuator_residual_figure(dg):
+    """Residual divided by its noise level against time and contraction, before and after.
+
+    Parameters
+    ----------
+    dg : Diagnosis
+        Diagnosis of an actuator record.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    _check(dg)
+    b = dg.blocks
+    d = dg.replay["direction"]
+    step = max(1, b["t"].size // 6000)
+    sl = slice(None, None, step)
+    fig, axs = new_figure(2, 2, figsize=(11, 6), layout="constrained")
+    for j, key in enumerate(("before", "after")):
+        e = b[key][:, 0]
+        axs[0, j].plot(b["t"][sl], e[sl], ".", ms=1.5, color="C3" if j == 0 else "C0")
+        axs[0, j].axhspan(-2, 2, color="0.9", zorder=0)
+        axs[0, j].set_xlabel("t [s]")
+        axs[0, j].set_ylabel(f"residual / noise ({key})", fontsize=8)
+        for s, c, lab in ((1, "C1", "contracting"), (-1, "C2", "extending"),
+                          (0, "0.5", "no motion yet")):
+            m = (d == s)[sl]
+            if np.any(m):
+                axs[1, j].plot(b["eps"][sl][m] * 100, e[sl][m], ".", ms=1.5, color=c, label=lab)
+        axs[1, j].axhspan(-2, 2, color="0.9", zorder=0)
+        axs[1, j].set_xlabel("contraction eps [%]")
+        axs[1, j].set_ylabel(f"residual / noise ({key})", fontsize=8)
+    axs[1, 0].legend(fontsize=7)
+    fig.suptitle("force residual divided by its noise level (grey band: +-2), by direction of "
+                 "motion", fontsize=9)
+    return fig
+
+
+def plot_summary_profiles(fit, *, rank_tol: float):
+    """chi2 profile along every effect axis and the singular values of the sensitivity.
+
+    Parameters
+    ----------
+    fit : ppamsafety.diagnose.summary_fit.SummaryFit
+        Result of :func:`~ppamsafety.diagnose.summary_fit.fit_summary`.
+    rank_tol : float, keyword-only
+        Singular values below this fraction of the largest do not count towards the rank
+        (drawn as a dotted line; ``summary_fit.RANK_TOL``).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Left: chi2 / number of statistics against theta (0 = nominal plant,
+        1 = largest plausible magnitude) per effect, the nominal level dashed.
+        Right: singular values of the whitened sensitivity matrix (divided by
+        the largest), the rank threshold dotted.
+    """
+    fig, (a, b) = new_figure(1, 2, figsize=(11, 4.2), gridspec_kw={"width_ratios": [2, 1]})
+    prof = fit.profiles
+    for k, (name, g) in enumerate(prof.groupby("effect", sort=False)):
+        ls = "-" if k < 10 else "--"
+        a.plot(g.theta, g.chi2 / fit.m, ls, lw=1.3, label=name)
+    a.axhline(fit.nominal_chi2 / fit.m, color="k", ls="--", lw=0.8, label="nominal plant")
+    a.axhline(1.0, color="0.5", ls=":", lw=0.8, label="data uncertainty")
+    a.set_yscale("log")
+    a.set_xlabel("theta (0: nominal, 1: largest plausible magnitude)")
+    a.set_ylabel("chi2 / statistic")
+    a.set_title("Table 5.2: fit of one effect at a time", fontsize=9)
+    a.legend(fontsize=7, ncol=2)
+    a.grid(alpha=0.3)
+    sv = fit.singular_values
+    b.semilogy(np.arange(1, sv.size + 1), sv, "o-")
+    b.axhline(rank_tol, color="0.5", ls=":", lw=0.8)
+    b.set_xlabel("singular value index")
+    b.set_ylabel("s_i / s_1")
+    b.set_title(f"sensitivity: rank {fit.rank} of {sv.size}, condition {fit.condition:.3g}",
+                fontsize=9)
+    b.grid(alpha=0.3)
+    fig.tight_layout()
+    return fig
+
+
+def plot_gap(residual_rms: dict, *, title: str = ""):
+    """Replay RMS error per channel before and after the diagnosis, relative to the noise.
+
+    Parameters
+    ----------
+    residual_rms : dict
+        ``Diagnosis.residual_rms`` (channels q1..p4 with before, after, noise).
+    title : str
+        Figure title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Bars of before / after RMS divided by the channel's noise level
+        (log scale).
+    """
+    chans = [c for c in residual_rms if not c.startswith("block_")]
+    before = np.array([residual_rms[c]["before"] / residual_rms[c]["noise"] for c in chans])
+    after = np.array([residual_rms[c]["after"] / residual_rms[c]["noise"] for c in chans])
+    fig, ax = new_figure(1, 1, figsize=(7, 3.5))
+    x = np.arange(len(chans))
+    ax.bar(x - 0.2, before, 0.4, color="C3", label="nominal model")
+    ax.bar(x + 0.2, after, 0.4, color="C0", label="after the diagnosis")
+    ax.axhline(1.0, color="k", lw=0.8, ls=":")
+    ax.set_xticks(x, chans)
+    ax.set_yscale("log")
+    ax.set_ylabel("replay RMS error / noise")
+    ax.set_title(title, fontsize=9)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def plot_confusion(matrix):
+    """The blind battery's confusion matrix (hidden effects x named effects).
+
+    Parameters
+    ----------
+    matrix : pandas.DataFrame
+        Counts; index: hidden case, columns: named set.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    fig, ax = new_figure(1, 1, figsize=(1.2 + 0.9 * matrix.shape[1], 1.0 + 0.45 * matrix.shape[0]))
+    v = matrix.to_numpy(dtype=float)
+    ax.imshow(v, cmap="Blues", vmin=0, vmax=max(v.max(), 1), aspect="auto")
+    for i in range(v.shape[0]):
+        for j in range(v.shape[1]):
+            if v[i, j]:
+                ax.text(j, i, f"{int(v[i, j])}", ha="center", va="center", fontsize=8)
+    ax.set_xticks(range(v.shape[1]), [str(c) for c in matrix.columns], rotation=35,
+                  ha="right", fontsize=7)
+    ax.set_yticks(range(v.shape[0]), [str(c) for c in matrix.index], fontsize=7)
+    ax.set_xlabel("named by the diagnosis")
+    ax.set_ylabel("hidden in the record")
+    fig.tight_layout()
+    return fig
+
+
+def plot_sawtooth_diagnosis(rest, metrics):
+    """Measured vs model-before vs model-after rest angles, and the muscle-force residuals.
+
+    Parameters
+    ----------
+    rest : pandas.DataFrame
+        :attr:`ppamsafety.sections.diagnose_sawtooth.DiagnoseSawtoothStudy.rest_points`.
+    metrics : dict
+        The study's metrics (RMS numbers for the titles).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    fig, axs = new_figure(3, 1, figsize=(11, 8), layout="constrained", sharex=True)
+    k = rest["rest point"].to_numpy()
+    for j, ax in enumerate(axs[:2]):
+        q = f"q{j + 1}"
+        ax.plot(k, rest[f"{q}_set_deg"], "k:", marker="_", label="set angle")
+        ax.plot(k, rest[f"{q}_measured_deg"], "o", color="0.4", ms=5, label="measured")
+        ax.plot(k, rest[f"{q}_before_deg"], "s", mfc="none", color="C3", ms=7,
+                label="model before")
+        ax.plot(k, rest[f"{q}_after_deg"], "x", color="C0", ms=7, label="model after")
+        ax.set_ylabel(f"{q} [deg]")
+        ax.set_title(f"{q}: model vs measured RMS {metrics[f'rms_{q}_before_deg']:.3f} -> "
+                     f"{metrics[f'rms_{q}_after_deg']:.3f} deg", fontsize=9)
+    axs[0].legend(fontsize=7, ncol=4)
+    ax = axs[2]
+    w = 0.2
+    for i in range(4):
+        ax.bar(k + (i - 1.5) * w, rest[f"F{i + 1}_residual_before_N"], w, color=f"C{i}",
+               alpha=0.5, label=f"F{i + 1} before")
+        ax.plot(k + (i - 1.5) * w, rest[f"F{i + 1}_residual_after_N"], "_", color=f"C{i}", ms=8)
+    ax.axhline(0.0, color="k", lw=0.5)
+    ax.set_ylabel("measured - model force [N]")
+    ax.set_xlabel("rest point")
+    ax.legend(fontsize=7, ncol=4)
+    ax.set_title("muscle-force residual (bars: nominal model, dashes: with the fitted delta)",
+                 fontsize=9)
+    fig.suptitle(f"hidden hysteresis delta = {metrics['delta_hidden']:.3f}: named "
+                 f"{metrics['named']}, delta = {metrics['delta_fit']:.4f}", fontsize=10)
+    _ = np
+    return fig
+
+
+__all__ = ["actuator_force_figure", "actuator_residual_figure", "plot_summary_profiles", "plot_gap",
+           "plot_confusion", "plot_sawtooth_diagnosis"]

@@ -1,0 +1,233 @@
+"""The sections of the report, each in three parts: compute, plot, render.
+
+Every section module ``ppamsafety.sections.<name>`` defines
+
+* ``compute(*, quick=False, arm=None, ...) -> <Name>Study``: runs the
+  simulations and returns a dataclass holding DataFrames, arrays, result
+  objects and a ``metrics`` dict.  It writes no file, makes no figure and
+  formats no Markdown.  The result object has ``to_pandas()`` (its main table)
+  and ``plot()`` (its figures, ``{file name: Figure}``, composed from the plot
+  functions of :mod:`ppamsafety.plots`).
+* ``render(study) -> Section``: formatting only -- the Markdown text of the
+  report section and the artifacts (file name, Figure or DataFrame) it
+  references.
+
+:func:`write_section` writes the artifacts of a :class:`Section` to a folder
+and :func:`run_section` chains the three steps; the report builder
+(:func:`ppamsafety.report.build.build_report`) and :func:`main` (one section
+alone, ``python studies/<name>.py [outdir] [--quick]``) use it.
+
+"Section" is a part of the report; "study" means a sweep study (a TOML study
+file run by ``ppamsafety sweep``, :mod:`ppamsafety.study_files`).
+"""
+
+from __future__ import annotations
+
+import importlib
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .._commandline import Parser, run_guarded
+from ..output import OutputFolder
+from ..plots.figure import save
+
+
+@dataclass
+class Section:
+    """A rendered report section, not yet written to disk.
+
+    Attributes
+    ----------
+    title : str
+        Section title in the report.
+    markdown : str
+        Section body (Markdown; references the artifacts by file name).
+    artifacts : list of (str, object)
+        (file name, content) pairs: a matplotlib ``Figure`` is written as PNG
+        (150 dpi), a pandas ``DataFrame`` as CSV without index.
+    metrics : dict
+        Headline numbers, for tests and for ``metrics.json``.
+    """
+
+    title: str
+    markdown: str
+    artifacts: list = field(default_factory=list)
+    metrics: dict = field(default_factory=dict)
+
+
+@dataclass
+class SectionResult:
+    """What a section wrote: a :class:`Section` after :func:`write_section`.
+
+    Attributes
+    ----------
+    title : str
+        Section title in the report.
+    markdown : str
+        Section body (Markdown, may reference the artifacts by file name).
+    artifacts : list of str
+        Files written (figures, CSV tables).
+    metrics : dict
+        Headline numbers, for tests and for the issue notes.
+    """
+
+    title: str
+    markdown: str
+    artifacts: list = field(default_factory=list)
+    metrics: dict = field(default_factory=dict)
+
+
+#: Section modules in report order (module names inside ppamsafety.sections).
+REGISTRY = ["design", "tracking", "responses", "smc", "head_model", "safety", "worst_direction",
+            "stiffness", "lambda_sweep", "effects", "interaction", "iso_15066", "reaction",
+            "diagnose_sawtooth", "diagnose_cases"]
+
+
+def resolve_arm(arm):
+    """The arm a section runs: ``arm``, or the thesis arm when None.
+
+    Parameters
+    ----------
+    arm : ppamsafety.params.ArmParameters or None
+        Arm parameters.
+
+    Returns
+    -------
+    ppamsafety.params.ArmParameters
+        ``arm`` or :func:`ppamsafety.params.thesis_arm`.
+    """
+    from ..params import ArmParameters, thesis_arm
+
+    if arm is None:
+        return thesis_arm()
+    if not isinstance(arm, ArmParameters):
+        raise TypeError(f"arm must be an ArmParameters or None, not {type(arm).__name__}")
+    return arm
+
+
+def write_artifact(obj, path) -> str:
+    """Write one artifact: a Figure as PNG (150 dpi), a DataFrame as CSV (no index).
+
+    Parameters
+    ----------
+    obj : matplotlib.figure.Figure or pandas.DataFrame
+        The content.
+    path : path-like
+        Target file.
+
+    Returns
+    -------
+    str
+        ``str(path)``.
+    """
+    import pandas as pd
+
+    if isinstance(obj, pd.DataFrame):
+        obj.to_csv(path, index=False)
+    elif hasattr(obj, "savefig"):
+
+        save(obj, path)
+    else:
+        raise TypeError(f"artifact {str(path)!r} is a {type(obj).__name__}; expected a "
+                        "matplotlib Figure or a pandas DataFrame")
+    return str(path)
+
+
+def write_section(section: Section, outdir) -> SectionResult:
+    """Write the artifacts of a rendered section into ``outdir``.
+
+    Parameters
+    ----------
+    section : Section
+        Output of a study's ``render``.
+    outdir : path-like
+        Existing folder; the artifacts are written under their file names.
+
+    Returns
+    -------
+    SectionResult
+        The section's text and metrics with the paths written.
+    """
+    out = Path(outdir)
+    paths = [write_artifact(obj, out / name) for name, obj in section.artifacts]
+    return SectionResult(section.title, section.markdown, paths, dict(section.metrics))
+
+
+def section_module(name: str):
+    """The module ``ppamsafety.sections.<name>`` of a registered section.
+
+    Parameters
+    ----------
+    name : str
+        One of :data:`REGISTRY`.
+
+    Returns
+    -------
+    module
+        The section module (with ``compute`` and ``render``).
+    """
+    if name not in REGISTRY:
+        raise ValueError(f"unknown report section name={name!r}; choose from {REGISTRY}")
+    return importlib.import_module(f"{__name__}.{name}")
+
+
+def run_section(name: str, outdir, *, quick: bool = False) -> SectionResult:
+    """Compute, render and write one section: ``write_section(render(compute(quick)), outdir)``.
+
+    Parameters
+    ----------
+    name : str
+        Section name (see :data:`REGISTRY`).
+    outdir : path-like
+        Existing folder the artifacts are written to.
+    quick : bool
+        Coarser grids and shorter runs (smoke tests).
+
+    Returns
+    -------
+    SectionResult
+        Title, Markdown, written paths and metrics.
+    """
+    mod = section_module(name)
+    return write_section(mod.render(mod.compute(quick=quick)), outdir)
+
+
+def main(name: str, argv=None) -> int:
+    """Run one section alone: ``python studies/<name>.py [outdir] [--quick] [--overwrite]``.
+
+    The section writes into ``outdir`` (default ``reports``) under the rules of
+    :mod:`ppamsafety.output`: a missing or empty folder is used; a previous
+    ppamsafety output is updated only with ``--overwrite`` (files of the same
+    name are replaced, the other toolkit files are kept); a folder holding
+    files ppamsafety did not write is refused.
+
+    Parameters
+    ----------
+    name : str
+        Section name (see :data:`REGISTRY`).
+    argv : list of str, optional
+        Command-line arguments (default ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        Exit status: 0 success, 2 bad usage or input, 1 failure (see
+        :func:`ppamsafety.cli.main`).
+    """
+    if name not in REGISTRY:
+        raise ValueError(f"unknown report section {name!r}; choose from {REGISTRY}")
+    p = Parser(prog=f"studies/{name}.py", description=f"Run the report section {name!r} alone.")
+    p.add_argument("outdir", nargs="?", default="reports",
+                   help="output folder (default: reports)")
+    p.add_argument("--quick", action="store_true", help="coarse grids and short sweeps")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace files of a previous ppamsafety output in OUTDIR")
+
+    def run(args):
+        with OutputFolder(args.outdir, kind="study", overwrite=args.overwrite,
+                          clean=False) as stage:
+            res = run_section(name, stage, quick=args.quick)
+        print(f"# {res.title}\n\n{res.markdown}")
+        return 0
+
+    return run_guarded(p, run, argv)

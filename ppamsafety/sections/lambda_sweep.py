@@ -1,0 +1,161 @@
+"""A safety-versus-tracking sweep over lambda and Ki of joint-space PSMC.
+
+The sweep users run all day: for each (lambda, Ki) the step response is
+simulated and crashed into the head at the four instants, and the circle
+(P = 10 s) is tracked, so the designer sees what safety costs in accuracy.
+Runs through :func:`ppamsafety.sweep.run_sweep` (progress bar, resumable,
+several processes).
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from ..control import JointPSMC
+from ..experiments.catalog import CIRCLE_WARMUP, run_thesis_experiment
+from ..impact.instants import evaluate_experiment
+from ..params import thesis_arm
+from ..markdown import markdown_table
+from ..plots.impact import plot_lambda_sweep
+from ..sweep import run_sweep
+from ..units import BAR
+from . import Section
+
+
+def lambda_case(lam: float, ki_bar: float, circle_duration: float) -> dict:
+    """Worst step impact and circle tracking error of one joint PSMC tuning (sweep case).
+
+    Parameters
+    ----------
+    lam : float
+        PSMC lambda [s].
+    ki_bar : float
+        Integral gain [bar/(rad s)].
+    circle_duration : float
+        Length of the circle run (P = 10 s) [s].
+
+    Returns
+    -------
+    dict
+        ``F_max`` [N], ``HIC36``, ``tcp_speed`` [m/s] of the worst step
+        impact, ``circle_err_mean`` and ``circle_err_max`` [m].
+    """
+    arm = thesis_arm()
+    c = JointPSMC(lam=lam, ki=ki_bar * BAR)
+    step = run_thesis_experiment(arm, "step", [("c", c)])[0]
+    ev = evaluate_experiment(step, arm).summary
+    circ = run_thesis_experiment(arm, "circle10", [("c", JointPSMC(lam=lam, ki=ki_bar * BAR))],
+                                 duration=circle_duration)[0]
+    k0 = int(round(min(CIRCLE_WARMUP, circle_duration / 2) / 1e-3))
+    err = circ.tracking_error()[k0:]
+    return {"F_max": float(ev.F_max.max()), "HIC36": float(ev.HIC36.max()),
+            "tcp_speed": float(ev.tcp_speed.max()), "circle_err_mean": float(np.nanmean(err)),
+            "circle_err_max": float(np.nanmax(err))}
+
+
+@dataclass
+class LambdaSweepStudy:
+    """Result of :func:`compute`: step-impact safety and circle tracking per (lambda, Ki).
+
+    Attributes
+    ----------
+    lambdas : tuple of float
+        PSMC lambda values [s].
+    kis : tuple of float
+        Integral gains [bar/(rad s)].
+    circle_duration : float
+        Length of each circle run [s].
+    processes : int
+        Worker processes of the sweep.
+    table : pandas.DataFrame
+        One row per case: ``lam``, ``Ki_bar``, ``circle_duration``, ``F_max``
+        [N], ``HIC36``, ``tcp_speed`` [m/s], ``circle_err_mean``,
+        ``circle_err_max`` [m].
+    metrics : dict
+        Headline numbers.
+    """
+
+    lambdas: tuple
+    kis: tuple
+    circle_duration: float
+    processes: int
+    table: pd.DataFrame
+    metrics: dict = field(default_factory=dict)
+
+    def to_pandas(self) -> pd.DataFrame:
+        """The sweep table."""
+        return self.table.copy()
+
+    def plot(self) -> dict:
+        """The study's figures, ``{file name: Figure}``."""
+        return {"lambda_sweep.png": plot_lambda_sweep(self.table, tracking="circle_err_mean")}
+
+
+def compute(*, quick: bool = False, arm=None, processes: int | None = None) -> LambdaSweepStudy:
+    """Sweep lambda x Ki of joint PSMC: step-impact safety against circle tracking.
+
+    Parameters
+    ----------
+    quick : bool
+        3 x 2 cases with 10 s circles instead of 7 x 3 with 45 s.
+    arm : None
+        Must be None: :func:`lambda_case` rebuilds the thesis arm in worker
+        processes (sweep cases are JSON-serialisable).
+    processes : int, optional
+        Worker processes (default: min(2, CPU count)).
+
+    Returns
+    -------
+    LambdaSweepStudy
+        The sweep table and metrics.
+    """
+    if arm is not None:
+        raise ValueError(f"arm={arm!r} is not supported by the lambda sweep: its cases run the "
+                         "thesis arm in worker processes; pass arm=None")
+    lams = (0.1, 0.4, 1.5) if quick else (0.05, 0.1, 0.2, 0.4, 0.8, 1.5, 2.5)
+    kis = (2.0, 12.0) if quick else (2.0, 6.0, 12.0)
+    dur = 10.0 if quick else 45.0
+    cases = [{"lam": lam, "ki_bar": ki, "circle_duration": dur} for ki in kis for lam in lams]
+    procs = processes or min(2, os.cpu_count() or 1)
+    df = run_sweep(lambda_case, cases, name="lambda-sweep", processes=procs, progress=False,
+                   on_error="raise")
+    df = df.rename(columns={"ki_bar": "Ki_bar"})
+    return LambdaSweepStudy(lambdas=lams, kis=kis, circle_duration=dur, processes=procs,
+                            table=df, metrics={"cases": len(df)})
+
+
+def render(study: LambdaSweepStudy) -> Section:
+    """The report section of the lambda sweep (formatting only).
+
+    Parameters
+    ----------
+    study : LambdaSweepStudy
+        Output of :func:`compute`.
+
+    Returns
+    -------
+    Section
+        Markdown and artifacts (figure, ``lambda_sweep.csv``).
+    """
+    df, lams, kis, dur, procs = (study.table, study.lambdas, study.kis, study.circle_duration,
+                                 study.processes)
+    show = df.drop(columns=["circle_duration"])
+    safe = df[df.F_max < 660.0]
+    best = safe.loc[safe.circle_err_mean.idxmin()] if len(safe) else None
+    md = f"""Joint-space PSMC (Table 5.1 gains otherwise) for lambda in {list(lams)} s and Ki in {list(kis)}
+bar/(rad s): worst step-response impact (four instants, head `thesis-frontal`) and circle tracking
+(P = 10 s, {dur - min(CIRCLE_WARMUP, dur / 2):.0f} s evaluated). {len(df)} cases via `ppamsafety.sweep.run_sweep`
+on {procs} processes.
+
+{markdown_table(show, digits=4)}
+
+{'' if best is None else f"Below the 660 N maxilla line, the best tracking is lambda = {best.lam:g} s with Ki = {best.Ki_bar:g} bar/(rad s): mean error {1e3 * best.circle_err_mean:.2f} mm, F_max {best.F_max:.0f} N."}
+
+![lambda sweep](lambda_sweep.png)
+"""
+    arts = [("lambda_sweep.csv", df), *study.plot().items()]
+    return Section("Safety against tracking: a lambda x Ki sweep", md, arts, dict(study.metrics))

@@ -1,0 +1,315 @@
+"""Collision safety of the controllers: Table 6.1 and every impact instant (thesis §6.3.3)."""
+
+from __future__ import annotations
+
+import os
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from ..experiments.catalog import run_thesis_experiment, thesis_variants, variant_family
+from ..impact.instants import (HEURISTICS, evaluate_experiment, heuristic_instants, impact_states,
+                               worst_instant)
+from ..impact.thesis_data import join_table_6_1
+from ..params import thesis_arm
+from ..params.head import MAXILLA_FRACTURE_N
+from ..impact.head import head_model
+from ..markdown import markdown_table
+from ..plots.impact import plot_fmax_over_time, plot_safety_table, plot_worst_histories
+from ..sweep import run_sweep
+from . import Section
+
+EXPERIMENTS = ("step", "switch")
+#: Instants with a slower tool are skipped in the every-instant scan [m/s] (F < 1 N there).
+MIN_SPEED = 1e-3
+
+
+def every_instant_case(experiment: str, index: int, every: int) -> pd.DataFrame:
+    """Impacts at every ``every``-th ms of one thesis experiment variant (sweep case).
+
+    Parameters
+    ----------
+    experiment : str
+        Thesis experiment name (``"step"`` or ``"switch"``).
+    index : int
+        Variant index in :func:`~ppamsafety.experiments.catalog.thesis_variants`.
+    every : int
+        Impact instant stride [ms of the 1 ms record].
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``t0`` [s], ``tcp_speed`` [m/s], ``F_bound`` [N], ``HIC36_bound``,
+        ``screened``, ``simulated``, ``F_max`` [N], ``HIC36``, ``HIC15``, ``label`` per impact
+        instant (:func:`~ppamsafety.impact.instants.worst_instant`: instants
+        whose rigorous bounds lie below the worst simulated values are not
+        simulated and have NaN F_max/HIC; the maxima are those of the full scan).
+    """
+    arm = thesis_arm()
+    label, ctrl = thesis_variants()[index]
+    res = run_thesis_experiment(arm, experiment, [(label, ctrl)])[0]
+    w = worst_instant(res, arm, every=every, min_speed=MIN_SPEED)
+    return w.table[["t0", "tcp_speed", "F_bound", "HIC36_bound", "screened", "simulated",
+                    "F_max", "HIC36", "HIC15"]].assign(label=label)
+
+
+def _heuristic_table(arm, head, runs=None):
+    """Table 6.1: worst impacts of the thesis variants at the four heuristic instants.
+
+    ``runs`` may hold already computed ``{experiment: list of ExperimentResult}``
+    (the ten thesis variants of :func:`run_thesis_experiment` on ``arm``) to reuse.
+    """
+    rows, states, worst = [], {}, {}
+    for exp in EXPERIMENTS:
+        res = run_thesis_experiment(arm, exp) if runs is None else runs[exp]
+        for r in res:
+            label = r.meta["label"]
+            res_ev = evaluate_experiment(r, arm, head=head, history=True)
+            ev = res_ev.summary
+            w = ev.loc[ev["HIC36"].idxmax()]
+            wf = ev.loc[ev["F_max"].idxmax()]
+            rows.append({"experiment": exp, "label": label, "family": r.meta["family"],
+                         "lambda": r.meta["lambda_s"], "HIC36": w.HIC36, "HIC15": w.HIC15,
+                         "F_max": wf.F_max, "instant_HIC": w.instant, "t0_HIC": w.t0,
+                         "tcp_speed": wf.tcp_speed, "K1": wf.K1, "K2": wf.K2,
+                         **r.meta["variant"].keys()})
+            states[(exp, label)] = impact_states(r, arm)
+            worst[(exp, label)] = res_ev.histories[int(ev["HIC36"].idxmax())]
+    df = join_table_6_1(pd.DataFrame(rows), complete=True)    # on the variant fields
+    df["HIC_ratio"] = df["HIC36"] / df["HIC_thesis"]
+    df["Fmax_ratio"] = df["F_max"] / df["Fmax_thesis"]
+    return df, states, worst
+
+
+def _conclusions(df) -> pd.DataFrame:
+    out = []
+    for exp in EXPERIMENTS:
+        sub = df[df.experiment == exp]
+        pid = sub[sub.family == "PID"].iloc[0]
+        psmc = sub[sub.family != "PID"]
+        ratio = pid.HIC36 / psmc.HIC36.max()
+        out.append({"conclusion": f"{exp}: PID HIC at least 10x every PSMC",
+                    "holds": bool(ratio >= 10), "numbers": f"PID {pid.HIC36:.3g} / worst PSMC "
+                    f"{psmc.HIC36.max():.3g} = {ratio:.1f}x"})
+        mono = []
+        for fam, g in psmc.groupby("family"):
+            g = g.sort_values("lambda")
+            mono.append(bool(np.all(np.diff(g.HIC36) < 0) and np.all(np.diff(g.F_max) < 0)))
+        out.append({"conclusion": f"{exp}: HIC and F_max fall with lambda (each PSMC family)",
+                    "holds": all(mono), "numbers": ", ".join(
+                        f"{fam}: HIC {' > '.join(f'{v:.3g}' for v in g.sort_values('lambda').HIC36)}"
+                        for fam, g in psmc.groupby("family"))})
+        if exp == "step":
+            out.append({"conclusion": "step: PID crosses the 660 N maxilla line",
+                        "holds": bool(pid.F_max > MAXILLA_FRACTURE_N),
+                        "numbers": f"PID F_max {pid.F_max:.0f} N"})
+        out.append({"conclusion": f"{exp}: every PSMC stays below 660 N",
+                    "holds": bool(psmc.F_max.max() < MAXILLA_FRACTURE_N),
+                    "numbers": f"largest PSMC F_max {psmc.F_max.max():.0f} N"})
+    return pd.DataFrame(out)
+
+
+#: Variants whose worst step-response impact histories are plotted.
+WORST_HISTORY_VARIANTS = ("PID", "PSMC joint Ki=2 λ=0.4", "PSMC joint Ki=12 λ=0.4",
+                          "PSMC task λ=0.4")
+#: (experiment, variant) pairs whose every-instant F_max is plotted.
+FMAX_OVER_TIME_RUNS = (("step", "PID"), ("step", "PSMC joint Ki=2 λ=0.4"), ("switch", "PID"),
+                       ("switch", "PSMC joint Ki=2 λ=0.4"))
+
+
+@dataclass
+class SafetyStudy:
+    """Result of :func:`compute`: Table 6.1 and the every-instant scan.
+
+    Attributes
+    ----------
+    quick : bool
+        The scan used every 20th ms instead of every ms.
+    head : HeadContactModel
+        Head model of the impacts.
+    table : pandas.DataFrame
+        Worst impacts per (experiment, variant) at the four heuristic
+        instants with the thesis values and ratios (SI units).
+    conclusions : pandas.DataFrame
+        The thesis' safety conclusions: ``conclusion``, ``holds``, ``numbers``.
+    worst : dict
+        (experiment, label) -> time history of the worst (HIC36) impact.
+    heuristic_marks : dict
+        (experiment, label) -> {heuristic name: impact instant t0 [s]}.
+    scan : pandas.DataFrame
+        Every-instant scan: ``experiment``, ``index``, ``every`` and the
+        columns of :func:`every_instant_case` (F_max/HIC NaN where pruned).
+    miss : pandas.DataFrame
+        Four-instant heuristic vs every instant, per experiment and variant.
+    processes : int
+        Worker processes of the scan.
+    metrics : dict
+        Headline numbers (including the wall times of the table and the scan).
+    """
+
+    quick: bool
+    head: object
+    table: pd.DataFrame
+    conclusions: pd.DataFrame
+    worst: dict
+    heuristic_marks: dict
+    scan: pd.DataFrame
+    miss: pd.DataFrame
+    processes: int
+    metrics: dict = field(default_factory=dict)
+
+    def to_pandas(self) -> pd.DataFrame:
+        """Table 6.1 reproduced (toolkit, thesis, ratios, impact instant and stiffness)."""
+        return self.table[["experiment", "label", "HIC36", "HIC_thesis", "HIC_ratio", "F_max",
+                           "Fmax_thesis", "Fmax_ratio", "instant_HIC", "tcp_speed", "K1",
+                           "K2"]].copy()
+
+    def plot(self) -> dict:
+        """The study's figures, ``{file name: Figure}``."""
+        return _figures(self)
+
+
+def _figures(study) -> dict:
+    """Figures of the collision-safety study (Table 6.1, worst histories, every instant).
+
+    Parameters
+    ----------
+    study : ppamsafety.sections.safety.SafetyStudy
+        Output of :func:`ppamsafety.sections.safety.compute`.
+
+    Returns
+    -------
+    dict
+        File name -> Figure.
+    """
+    items = [(f"step: {label}", study.worst[("step", label)]) for label in WORST_HISTORY_VARIANTS]
+    scan = study.scan
+    plot_items = [(f"{exp}: {label}", scan[(scan.experiment == exp) & (scan.label == label)],
+                   study.heuristic_marks[(exp, label)]) for exp, label in FMAX_OVER_TIME_RUNS]
+    return {"safety_table_6_1.png": plot_safety_table(study.table),
+            "safety_worst_histories.png": plot_worst_histories(
+                items, title="worst step-response impacts"),
+            "safety_fmax_over_time.png": plot_fmax_over_time(plot_items)}
+
+
+def compute(*, quick: bool = False, arm=None, processes: int | None = None) -> SafetyStudy:
+    """Reproduce Table 6.1 and scan every impact instant of the step and switch experiments.
+
+    Parameters
+    ----------
+    quick : bool
+        Scan every 20th ms instead of every ms.
+    arm : None
+        Must be None: the scan's worker processes rebuild the thesis arm
+        (:func:`every_instant_case` takes JSON-serialisable cases only).
+    processes : int, optional
+        Worker processes of the scan (default: min(2, CPU count)).
+
+    Returns
+    -------
+    SafetyStudy
+        Tables, histories, scan and metrics.
+    """
+    if arm is not None:
+        raise ValueError(f"arm={arm!r} is not supported by the safety study: its scan runs the "
+                         "thesis arm in worker processes; pass arm=None")
+    arm = thesis_arm()
+    head = head_model()
+    t0 = time.perf_counter()
+    df, states, worst = _heuristic_table(arm, head)
+    t_table = time.perf_counter() - t0
+    concl = _conclusions(df)
+
+    # every instant
+    every = 20 if quick else 1
+    nvar = len(thesis_variants())
+    cases = [{"experiment": e, "index": i, "every": every} for e in EXPERIMENTS
+             for i in range(nvar)]
+    procs = processes or min(2, os.cpu_count() or 1)
+    t1 = time.perf_counter()
+    scan = run_sweep(every_instant_case, cases, name="safety-every-instant", processes=procs,
+                     progress=False, on_error="raise")
+    t_scan = time.perf_counter() - t1
+    n_impacts = int(len(scan))
+    n_simulated = int(scan["simulated"].sum())
+    n_screened = int(scan["screened"].sum())
+    miss_rows = []
+    for (exp, label), g in scan.groupby(["experiment", "label"], sort=False):
+        h = df[(df.experiment == exp) & (df.label == label)].iloc[0]
+        mh, mf = g.HIC36.max(), g.F_max.max()
+        miss_rows.append({"experiment": exp, "label": label, "HIC36 4 instants": h.HIC36,
+                          "HIC36 every instant": mh, "HIC miss %": 100 * (1 - h.HIC36 / mh),
+                          "F_max 4 instants": h.F_max, "F_max every instant": mf,
+                          "F_max miss %": 100 * (1 - h.F_max / mf),
+                          "t0 of worst": g.loc[g.HIC36.idxmax(), "t0"]})
+    miss = pd.DataFrame(miss_rows)
+    found = int(((miss["HIC miss %"] <= 0.05) & (miss["F_max miss %"] <= 0.05)).sum())
+    marks = {}
+    for key, st in states.items():
+        marks[key] = {k: float(st["t"].iloc[v]) for k, v in heuristic_instants(st).items()}
+    metrics = {"table_wall_time_s": t_table, "scan_wall_time_s": t_scan, "scan_impacts": n_impacts,
+               "scan_simulated": n_simulated, "scan_screened": n_screened,
+               "heuristic_found": found, "experiments": len(miss),
+               "conclusions_hold": int(concl.holds.sum()), "conclusions": len(concl),
+               "pid_step_F_max": float(df[(df.experiment == "step") & (df.family == "PID")].F_max.iloc[0]),
+               "pid_step_HIC": float(df[(df.experiment == "step") & (df.family == "PID")].HIC36.iloc[0])}
+    return SafetyStudy(quick=quick, head=head, table=df, conclusions=concl, worst=worst,
+                       heuristic_marks=marks, scan=scan, miss=miss, processes=procs,
+                       metrics=metrics)
+
+
+def render(study: SafetyStudy) -> Section:
+    """The report section of the safety study (formatting only).
+
+    Parameters
+    ----------
+    study : SafetyStudy
+        Output of :func:`compute`.
+
+    Returns
+    -------
+    Section
+        Markdown and artifacts (figures and CSV tables).
+    """
+    quick, head, concl, miss = study.quick, study.head, study.conclusions, study.miss
+    show = study.to_pandas()
+    n_impacts, t_scan = study.metrics["scan_impacts"], study.metrics["scan_wall_time_s"]
+    procs, found = study.processes, study.metrics["heuristic_found"]
+    md = f"""Head model `{head.name}` (see the head-model section), flexible-joint arm with the stiffness
+(2.18) at the impact instant, 50 ms, RK4 at {20} us. Four impact instants per experiment as in the
+thesis (largest TCP speed, |qd1|, |qd2|, ||qd||); the worst is kept.
+
+**Table 6.1 reproduced** (toolkit, thesis, ratio):
+
+{markdown_table(show.drop(columns=["K1", "K2"]), digits=3)}
+
+![Table 6.1](safety_table_6_1.png)
+
+**The thesis' conclusions:**
+
+{markdown_table(concl)}
+
+**Worst step-response impacts:** ![histories](safety_worst_histories.png)
+
+**Every instant** ({'every 20 ms (quick mode)' if quick else 'every 1 ms'}; instants with a TCP slower than
+{MIN_SPEED * 1e3:g} mm/s skipped, {n_impacts} impact instants in {t_scan:.1f} s on {procs} processes; the
+{study.metrics.get("scan_screened", 0)} instants whose rigorous F_max/HIC bounds reach the worst simulated value are
+screened with the dense-output integrator, and only the {study.metrics["scan_simulated"]} whose screening value
+(plus a 1 % margin) still reaches it are simulated exactly: the maxima are exactly those of simulating every
+instant). Does the four-instant heuristic find the worst case?
+
+{markdown_table(miss, digits=3)}
+
+The heuristic finds the worst HIC and F_max (within 0.05 %) in {found} of {len(miss)} experiments; the
+"miss" columns give by how much it underestimates otherwise.
+
+![F_max over time](safety_fmax_over_time.png)
+"""
+    arts = [("safety_table_6_1.csv", show), ("safety_conclusions.csv", concl),
+            *study.plot().items(), ("safety_every_instant.csv", miss)]
+    return Section("Collision safety: Table 6.1 and every impact instant (thesis §6.3.3)", md,
+                   arts, dict(study.metrics))
+
+__all__ = ["compute", "render", "SafetyStudy", "every_instant_case", "HEURISTICS", "variant_family"]
