@@ -26,10 +26,18 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+import warnings
 
 from ._commandline import EXIT_OK
 from ._commandline import Parser as _Parser
 from ._commandline import _split_multi_value, run_guarded  # noqa: F401  (tests use both)
+from .output import atomic_write, check_new_file, inspect_output_folder
+from .units import BAR, DEG
+
+# Each subcommand imports the part of the library it runs inside its own function: importing
+# all of it costs 3-9 s (numba, scipy, pandas), and `ppamsafety --help` or a usage error should
+# answer at once.  These imports run downward (the CLI is the top layer); nothing else in the
+# package imports inside a function except to defer a heavy dependency (docs/architecture.md).
 
 _EPILOG = """\
 exit status:
@@ -106,10 +114,8 @@ def _cmd_report(args) -> int:
 
 
 def _cmd_identify(args) -> int:
-    import warnings
 
     from .data import MeasuredDataWarning, identify_measured, load_measured
-    from .output import inspect_output_folder
 
     inspect_output_folder(args.out, overwrite=args.overwrite)   # fail before computing
     with warnings.catch_warnings():
@@ -164,11 +170,9 @@ def _cmd_sweep(args) -> int:
 
 
 def _cmd_diagnose(args) -> int:
-    import warnings
 
     from .data import MeasuredDataWarning, load_measured
     from .diagnose import diagnose
-    from .output import inspect_output_folder
 
     inspect_output_folder(args.out, overwrite=args.overwrite)   # fail before computing
     with warnings.catch_warnings():
@@ -240,9 +244,7 @@ def _cmd_impact(args) -> int:
     import numpy as np
 
     from .impact.model import simulate_impacts
-    from .output import atomic_write, check_new_file
     from .params import thesis_arm
-    from .units import DEG
 
     if args.history is not None:        # fail before simulating, not after
         check_new_file(args.history, overwrite=args.overwrite, name="--history")
@@ -270,7 +272,6 @@ def _cmd_info(args) -> int:
     import numpy as np
 
     from .params import thesis_arm
-    from .units import BAR
 
     arm = thesis_arm()
     L = arm.links

@@ -18,6 +18,7 @@ import numpy as np
 import pandas as pd
 
 from ._validation import check_instance, check_int, check_range
+from .params import ArmParameters
 from .params.inertia import LINK_PRIORS, RADIUS_OF_GYRATION, LinkInertia
 from .plant import geometry as geo
 from .plant import pneumatics as pn
@@ -27,7 +28,6 @@ from .units import BAR, DEG
 
 
 def _arm(arm):
-    from .params import ArmParameters
     return check_instance("arm", arm, ArmParameters)
 
 

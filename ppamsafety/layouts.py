@@ -42,6 +42,7 @@ from dataclasses import dataclass
 from typing import Iterable, Mapping, Sequence
 
 import numpy as np
+import pandas as pd
 
 #: Every layout declared so far, by name (filled as modules are imported).
 REGISTRY: dict = {}
@@ -245,8 +246,6 @@ class Layout:
 
     def table(self):
         """The declaration as a DataFrame: field, offset, length, unit, meaning."""
-        import pandas as pd
-
         return pd.DataFrame([{"field": f.name, "offset": self._offset[f.name], "length": f.length,
                               "unit": f.unit, "meaning": f.doc} for f in self.fields])
 
@@ -377,8 +376,6 @@ class Layout:
         ValueError
             If ``rows`` does not have shape ``(n, size)``.
         """
-        import pandas as pd
-
         a = np.asarray(rows)
         if a.ndim != 2 or a.shape[1] != self.size:
             raise ValueError(f"layout {self.name!r}: rows must have shape (n, {self.size}), "

@@ -45,6 +45,8 @@ import tempfile
 import warnings
 from pathlib import Path, PurePosixPath
 
+from ._version import __version__
+
 MARKER = ".ppamsafety-output"
 """Name of the marker file of a ppamsafety output folder."""
 
@@ -195,8 +197,6 @@ def inspect_output_folder(folder, *, overwrite: bool = False, _exclude: str | No
 
 
 def _write_marker(folder: Path, kind: str, files, dirs=()) -> None:
-    from ._version import __version__
-
     dirs = sorted(set(dirs))
     data = {"tool": "ppamsafety", "version": __version__, "kind": kind,
             "files": sorted(f for f in set(files) if not _under(f, dirs))}

@@ -47,6 +47,7 @@ previous cache is cleared and everything recomputed).
 
 from __future__ import annotations
 
+import importlib.util
 import math
 import tomllib
 from dataclasses import dataclass, field
@@ -289,8 +290,6 @@ def history_format() -> str:
     (a ~55 MB wheel, only needed for this optional output), so without it the
     histories are written as CSV.
     """
-    import importlib.util
-
     for mod in ("pyarrow", "fastparquet"):
         if importlib.util.find_spec(mod) is not None:
             return "parquet"

@@ -26,7 +26,16 @@ from collections.abc import Mapping
 import numpy as np
 import pandas as pd
 
-from .impact.instants import HEURISTICS
+from .control import PID, JointPSMC, TaskPSMC, SensorConfig
+from .experiments.catalog import (CIRCLE_PERIODS, CIRCLE_WARMUP, run_thesis_experiment,
+                                  ControllerVariant)
+from .experiments.metrics import tracking_stats
+from .impact.head import head_model_names, head_model
+from .impact.instants import HEURISTICS, evaluate_experiment, heuristic_instants, impact_states
+from .impact.model import simulate_impacts
+from .params import thesis_arm
+from .sweep import _check_cases, grid_cases, run_sweep
+from .units import BAR
 
 #: Experiment names (thesis catalog).
 EXPERIMENTS = ("step", "switch", "circle5", "circle10", "circle20")
@@ -81,8 +90,6 @@ def _check_stiffness(v):
 
 
 def _check_head(v):
-    from .impact.head import head_model_names
-
     names = head_model_names()
     if not isinstance(v, str) or v not in names:
         raise ValueError(f"head = {v!r} is not a head model name; allowed: {names}")
@@ -214,8 +221,6 @@ DEFAULTS = {"experiment": "step", "controller": "PID", "lam": None, "kp_bar": No
 
 
 def _bar(v):
-    from .units import BAR
-
     return None if v is None else (np.asarray(v, float) * BAR if isinstance(v, list) else v * BAR)
 
 
@@ -240,8 +245,6 @@ def make_controller(controller: str = "PID", *, lam=None, kp_bar=None, ki_bar=No
         Built exactly as :func:`~ppamsafety.experiments.catalog.thesis_variants`
         builds the same variant.
     """
-    from .control import PID, JointPSMC, TaskPSMC
-
     kw = {}
     if controller == "PSMC task":
         for k, v in (("lam", lam), ("kp", task_kp), ("ki", task_ki), ("kd", task_kd)):
@@ -260,9 +263,6 @@ def make_controller(controller: str = "PID", *, lam=None, kp_bar=None, ki_bar=No
 
 def _impacts(result, arm, instants, every, head, stiffness):
     """Impacts of a record; the same calls as the safety study without a stiffness override."""
-    from .impact.instants import evaluate_experiment, heuristic_instants, impact_states
-    from .impact.model import simulate_impacts
-
     if stiffness is None and instants in ("heuristic", "all"):
         kw = {"every": every, "min_speed": MIN_SPEED} if instants == "all" else {}
         return evaluate_experiment(result, arm, instants=instants, head=head, **kw)
@@ -343,13 +343,6 @@ def safety_case(experiment: str = "step", controller: str = "PID", *, lam=None, 
         [m] (task-space tracking error; circles after the 5 s warm-up, NaN if
         the run diverged) and ``diverged``.
     """
-    from .control import SensorConfig
-    from .experiments.catalog import CIRCLE_PERIODS, CIRCLE_WARMUP, run_thesis_experiment
-    from .experiments.catalog import ControllerVariant
-    from .experiments.metrics import tracking_stats
-    from .params import thesis_arm
-    from .impact.head import head_model
-
     p = check_case(experiment=experiment, controller=controller, lam=lam, kp_bar=kp_bar,
                    ki_bar=ki_bar, kd_bar=kd_bar, task_kp=task_kp, task_ki=task_ki,
                    task_kd=task_kd, stiffness=stiffness, head=head, effects=effects,
@@ -387,9 +380,6 @@ def safety_case(experiment: str = "step", controller: str = "PID", *, lam=None, 
 
 def _impacts_one(result, arm, row, head) -> pd.DataFrame:
     """Time history of one impact (a summary row of :func:`_impacts`)."""
-    from .impact.instants import impact_states
-    from .impact.model import simulate_impacts
-
     st = impact_states(result, arm)
     k = int(np.argmin(np.abs(st["t"].to_numpy() - row.t0)))
     r = st.iloc[k]
@@ -430,8 +420,6 @@ def safety_sweep(cases=None, *, grid=None, name: str = "safety", cache_dir=None,
     pandas.DataFrame
         Case parameters, ``status``, ``error`` and the :func:`safety_case` results.
     """
-    from .sweep import _check_cases, grid_cases, run_sweep
-
     all_cases = _check_cases([{}] if cases is None else cases)
     if grid is not None:
         all_cases = [{**c, **g} for c in all_cases for g in grid_cases(grid)]

@@ -46,7 +46,7 @@ from ppamsafety.diagnose.arm.candidates import library
 from ppamsafety.diagnose.arm.residuals import (arm_record, channel_noise, model_vector, replay,
                                                row_from_mu)
 from ppamsafety.params import thesis_arm
-from ppamsafety.plant import layout as lay
+from ppamsafety.plant import packing
 
 TARGET_S = 60.0          #: issue target for a 60 s record [s]
 HIDDEN = {"payload_mass": 0.4, "valve_dead_time": 0.02}
@@ -56,7 +56,7 @@ DEAD_GRID_S = 0.06       #: dead-time grid of the straightforward profile [s]
 
 def straightforward_step(rec, arm):
     """First forward-selection step by output error; returns (seconds, simulations, table)."""
-    row0 = lay.pack(arm)
+    row0 = packing.pack(arm)
     mu0 = model_vector(row0)
     noise = channel_noise(rec)
     sig = np.concatenate([noise["q"], noise["qd"], noise["p"]])

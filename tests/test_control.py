@@ -5,7 +5,7 @@ import pytest
 
 from ppamsafety.control import (PID, GravityCompensation, JointPSMC, SensorConfig,
                                 SlidingModeControl, TaskPSMC)
-from ppamsafety.control.base import NREF
+from ppamsafety.control.reference import NREF
 from ppamsafety.experiments import closed_loop as cl
 from ppamsafety.experiments.case import ExperimentCase
 from ppamsafety.experiments import trajectories as tr

@@ -18,7 +18,7 @@ import pytest
 from ppamsafety.control import (PID, ControllerKind, GCMode, GravityCompensation, JointPSMC,
                                 PIDDerivative, SensorConfig, SlidingModeControl, SMCCoupling,
                                 TaskPSMC)
-from ppamsafety.control import base, dispatch
+from ppamsafety.control import CONTROLLER_CLASSES, base, dispatch, reference
 from ppamsafety.control.admittance import AdmittancePSMC
 from ppamsafety.control.estimation import ESTIMATOR_INTERNALS
 from ppamsafety.control.sensors import (SENSOR_CONFIG, SENSOR_STATE, VelocitySource,
@@ -71,29 +71,29 @@ def _random_reference(arm, n, rng):
     base_ref = tr.joint_steps(arm, q_levels=[[50 * DEG, -80 * DEG]], t_changes=[],
                               duration=n * T)
     data = base_ref.data.copy()
-    data[:, base.R_Q:base.R_Q + 2] += rng.normal(scale=0.02, size=(n, 2))
-    data[:, base.R_QD:base.R_QD + 2] += rng.normal(scale=0.1, size=(n, 2))
-    data[:, base.R_QDD:base.R_QDD + 2] += rng.normal(scale=0.5, size=(n, 2))
-    data[:, base.R_QDDD:base.R_QDDD + 2] += rng.normal(scale=2.0, size=(n, 2))
-    r = geo.forward_kinematics(data[:, base.R_Q:base.R_Q + 2], arm)
-    data[:, base.R_X], data[:, base.R_Y] = r[:, 0], r[:, 1]
-    data[:, base.R_XD:base.R_XD + 2] += rng.normal(scale=0.01, size=(n, 2))
+    data[:, reference.R_Q:reference.R_Q + 2] += rng.normal(scale=0.02, size=(n, 2))
+    data[:, reference.R_QD:reference.R_QD + 2] += rng.normal(scale=0.1, size=(n, 2))
+    data[:, reference.R_QDD:reference.R_QDD + 2] += rng.normal(scale=0.5, size=(n, 2))
+    data[:, reference.R_QDDD:reference.R_QDDD + 2] += rng.normal(scale=2.0, size=(n, 2))
+    r = geo.forward_kinematics(data[:, reference.R_Q:reference.R_Q + 2], arm)
+    data[:, reference.R_X], data[:, reference.R_Y] = r[:, 0], r[:, 1]
+    data[:, reference.R_XD:reference.R_XD + 2] += rng.normal(scale=0.01, size=(n, 2))
     return Reference("random", base_ref.t, data, T)
 
 
 # -- declarations ---------------------------------------------------------------------------
 def test_reference_constants_match_the_reference_columns():
     """The controllers' reference offsets are those of the declared reference row."""
-    assert base.NREF == len(tr.REF_COLUMNS)
+    assert reference.NREF == len(tr.REF_COLUMNS)
     for const, col in [("R_Q", "q1_d"), ("R_QD", "qd1_d"), ("R_QDD", "qdd1_d"),
                        ("R_QDDD", "qddd1_d"), ("R_X", "x_d"), ("R_Y", "y_d"), ("R_XD", "xd_d"),
                        ("R_YD", "yd_d")]:
-        assert getattr(base, const) == tr.REF_COLUMNS.index(col)
+        assert getattr(reference, const) == tr.REF_COLUMNS.index(col)
 
 
 def test_buffers_are_sized_from_the_declarations():
     """Every kind's declared need fits the allocated buffers, which are computed maxima."""
-    classes = dispatch.CONTROLLER_CLASSES
+    classes = CONTROLLER_CLASSES
     assert set(classes) == set(ControllerKind)
     for name, attr in [("CONTROLLER_ROW_WIDTH", lambda c: c.PARAMS.size),
                        ("NSTATE", lambda c: c.STATE.size),
@@ -135,7 +135,7 @@ def test_internal_names_come_from_the_layouts():
         "s1", "s2", "a11", "a22", "b1", "b2", "u_smc1", "u_smc2"]
     assert cl.INTERNAL_NAMES[ControllerKind.PID] == ["pid1", "pid2", "integral1", "integral2"]
     assert ControllerKind.GC not in cl.INTERNAL_NAMES
-    for kind, cls in dispatch.CONTROLLER_CLASSES.items():
+    for kind, cls in CONTROLLER_CLASSES.items():
         assert cl.INTERNAL_NAMES.get(kind, []) == cls.INTERNALS.columns()
     assert cl.LOG_COLUMNS == cl.LOG.columns() and cl.NLOG == len(cl.LOG_COLUMNS)
     assert cl.LOG_COLUMNS[:23] == ["t", "q1", "q2", "qd1", "qd2", "p1", "p2", "p3", "p4",
@@ -351,14 +351,14 @@ def test_internals_of_other_kinds_mean_what_their_names_say(arm, kind):
 _CACHE_PROBE = r"""
 import json, numpy as np
 from ppamsafety.params import thesis_arm
-from ppamsafety.control import dispatch, ControllerKind
+from ppamsafety.control import CONTROLLER_CLASSES, ControllerKind, dispatch
 from ppamsafety.experiments.trajectories import REFERENCE_ROW as REF
 from ppamsafety.plant.geometry import forward_kinematics
 arm = thesis_arm()
 q = np.radians([50, -80])
 ref = REF.pack(q_d=q, qd_d=0.0, qdd_d=0.0, qddd_d=0.0, r_d=forward_kinematics(q, arm),
                rd_d=0.0)                          # a consistent hold reference
-for cls in dispatch.CONTROLLER_CLASSES.values():
+for cls in CONTROLLER_CLASSES.values():
     cls().step(arm, q, np.zeros(2), np.full(4, 2e5), ref)
 st = dispatch.controller_step.stats
 print(json.dumps({"hits": sum(st.cache_hits.values()), "misses": sum(st.cache_misses.values())}))

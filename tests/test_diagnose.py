@@ -11,7 +11,7 @@ from ppamsafety.diagnose import diagnose, synthesize
 from ppamsafety.diagnose.arm.candidates import REGISTRY, VOCABULARY, Candidate, register
 from ppamsafety.diagnose.core.noise import second_difference_sigma
 from ppamsafety.diagnose.arm.residuals import arm_record, block_system, model_vector
-from ppamsafety.plant import layout as lay
+from ppamsafety.plant import packing
 
 
 def test_noise_estimator_recovers_white_noise_on_smooth_signal():
@@ -28,7 +28,7 @@ def test_block_residual_of_the_exact_model_is_zero(arm):
     (trapezoid at 1 kHz), far below the noise (500 Pa, 2e-3 N m s)."""
     rec, _ = arm_record(synthesize(noise="none", seed=0, duration=3.0))
     bs = block_system(rec, arm)
-    r = bs.y - bs.X @ model_vector(lay.pack(arm))
+    r = bs.y - bs.X @ model_vector(packing.pack(arm))
     assert np.max(np.abs(r[:, :4])) < 5.0           # Pa
     assert np.max(np.abs(r[:, 4:])) < 2e-5          # N m s
 

@@ -17,7 +17,7 @@ from ppamsafety.data import load_measured
 from ppamsafety.diagnose import diagnose, synthesize
 from ppamsafety.diagnose.arm.residuals import arm_record, block_system, model_vector, replay
 from ppamsafety.params import thesis_arm
-from ppamsafety.plant import layout as lay
+from ppamsafety.plant import packing
 
 ARM = thesis_arm()
 NOM_T = np.array([v.time_constant for v in ARM.valves.valves])
@@ -55,11 +55,11 @@ def test_closed_loop_replay_with_the_sent_set_values_reproduces_the_record():
     """Noise-free, nominal plant: replaying the logged set values open loop gives back the
     closed-loop trajectory (same plant, same RK4 step): the logged u is what the valves got."""
     rec, _ = arm_record(synthesize("closed-loop", noise="none", seed=0, duration=3.0))
-    X = replay(rec, lay.pack(ARM)[None])[0]
+    X = replay(rec, packing.pack(ARM)[None])[0]
     assert np.max(np.abs(X[:, :2] - rec.q)) < 1e-9          # rad
     assert np.max(np.abs(X[:, 4:] - rec.p)) < 1e-4          # Pa
     bs = block_system(rec, ARM)
-    r = bs.y - bs.X @ model_vector(lay.pack(ARM))
+    r = bs.y - bs.X @ model_vector(packing.pack(ARM))
     assert np.max(np.abs(r[:, :4])) < 5.0                   # Pa (trapezoid at 1 kHz)
     assert np.max(np.abs(r[:, 4:])) < 2e-5                  # N m s
 

@@ -12,6 +12,7 @@ import pytest
 from ppamsafety.params import ArmParameters
 from ppamsafety.params.effects import Effects
 from ppamsafety.plant import dynamics as dyn
+from ppamsafety.plant import packing
 from ppamsafety.plant import geometry as geo
 from ppamsafety.plant import layout as lay
 from ppamsafety.plant import model, torque
@@ -34,11 +35,11 @@ def _with(arm, **effects):
 # --- defaults, validation, views ------------------------------------------------------------
 def test_default_is_off_and_the_row_is_bitwise_nominal(arm):
     assert arm.effects == Effects() and not arm.effects.any and arm.effects.enabled() == ()
-    P = lay.pack(arm)
+    P = packing.pack(arm)
     for a in (arm.replace(effects=Effects()), _with(arm, payload_mass=0.0)):
-        np.testing.assert_array_equal(lay.pack(a), P)
+        np.testing.assert_array_equal(packing.pack(a), P)
     assert lay.PLANT.read(P, "effect_state_length") == 0.0
-    assert not any(np.any(v) for v in lay.plant_effects(P).values())
+    assert not any(np.any(v) for v in packing.plant_effects(P).values())
     np.testing.assert_array_equal(P[lay.EFFECTS_START:], lay.EFFECTS.empty())
 
 
@@ -50,9 +51,9 @@ def test_effects_change_only_the_plant_truth_view(arm):
     stateful = {"hysteresis_delta", "hysteresis_initial", "hysteresis_exact_stages",
                 "valve_dead_time"}
     assert set(fx.enabled()) == set(Effects.__dataclass_fields__) - stateful
-    np.testing.assert_array_equal(lay.controller_view(a), lay.controller_view(arm))
-    np.testing.assert_array_equal(lay.model_view(a), lay.model_view(arm))
-    P, P0 = lay.pack(a), lay.pack(arm)
+    np.testing.assert_array_equal(packing.controller_view(a), packing.controller_view(arm))
+    np.testing.assert_array_equal(packing.model_view(a), packing.model_view(arm))
+    P, P0 = packing.pack(a), packing.pack(arm)
     read = lay.PLANT.read
     np.testing.assert_array_equal(read(P, "coulomb"), fx.friction_coulomb)
     np.testing.assert_array_equal(read(P, "viscous"), fx.friction_viscous)
@@ -60,7 +61,7 @@ def test_effects_change_only_the_plant_truth_view(arm):
     np.testing.assert_array_equal(read(P, "v2"), fx.valve_gain)
     np.testing.assert_array_equal(read(P, "tv"), fx.valve_time_constant)
     assert read(P, "n_poly") == fx.polytropic_n and read(P, "payload_mass") == M_P
-    assert all(bool(v) for k, v in lay.plant_effects(P).items()
+    assert all(bool(v) for k, v in packing.plant_effects(P).items()
                if k not in ("hysteresis_mode", "dead_time_mode"))
     assert int(P[lay.PAYLOAD_MODE]) == lay.Switch.ON
     # nothing else moved: geometry, muscles, pressures, theta2 (the link-1 offset)
@@ -71,8 +72,8 @@ def test_effects_change_only_the_plant_truth_view(arm):
         np.testing.assert_array_equal(read(P, name), read(P0, name), err_msg=name)
     assert P[lay.THETA2] == P0[lay.THETA2]
     # one override alone sets only its own flag
-    P1 = lay.pack(_with(arm, valve_gain=fx.valve_gain))
-    flags = lay.plant_effects(P1)
+    P1 = packing.pack(_with(arm, valve_gain=fx.valve_gain))
+    flags = packing.plant_effects(P1)
     assert flags["valve_gain_mode"] and sum(bool(v) for v in flags.values()) == 1
     np.testing.assert_array_equal(read(P1, "v1"), read(P0, "v1"))
 
@@ -111,14 +112,14 @@ def test_effects_type_errors(arm):
 def test_with_effects_rejects_pack_time_effects(arm):
     for name in lay.PACK_TIME_EFFECTS:
         with pytest.raises(ValueError, match="ArmParameters.effects"):
-            lay.with_effects(lay.pack(arm), **{name: 1.0})
+            packing.with_effects(packing.pack(arm), **{name: 1.0})
 
 
 # --- payload ----------------------------------------------------------------------------------
 def test_payload_is_the_parallel_axis_change_of_theta(arm):
     g = arm.geometry
-    d = lay.PLANT.read(lay.pack(_with(arm, payload_mass=M_P)), "theta") - \
-        lay.PLANT.read(lay.pack(arm), "theta")
+    d = lay.PLANT.read(packing.pack(_with(arm, payload_mass=M_P)), "theta") - \
+        lay.PLANT.read(packing.pack(arm), "theta")
     expect = M_P * np.array([g.L1, 0.0, g.L1 ** 2, g.LL, g.dL, g.LL ** 2 + g.dL ** 2])
     np.testing.assert_allclose(d, expect, rtol=1e-13, atol=1e-16)
 
@@ -162,7 +163,7 @@ def test_payload_dynamics_equal_the_point_mass_lagrangian(arm):
     Tolerance 1e-10 (H [kg m^2], G [N m], C qd [N m]).
     """
     a = _with(arm, payload_mass=M_P)
-    P = lay.pack(arm)
+    P = packing.pack(arm)
     q = RNG.uniform([0.3, -2.2], [1.8, -0.5], size=(12, 2))
     qd = RNG.normal(scale=1.5, size=(12, 2))
     dH = dyn.inertia_matrix(q, a) - dyn.inertia_matrix(q, arm)

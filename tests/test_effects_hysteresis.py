@@ -16,6 +16,7 @@ from ppamsafety.hysteresis.memory import STATE_LENGTH
 from ppamsafety.hysteresis.memory import history_of_memory
 from ppamsafety.params.effects import Effects
 from ppamsafety.plant import layout as lay
+from ppamsafety.plant import packing
 from ppamsafety.plant import model
 from ppamsafety.units import BAR, DEG
 
@@ -63,7 +64,7 @@ def test_effects_validation_names_the_field():
 
 
 def test_pack_hysteresis_and_dead_time(arm):
-    P = lay.pack(_hyst(arm, valve_dead_time=(0, 2, 5, 1)))
+    P = packing.pack(_hyst(arm, valve_dead_time=(0, 2, 5, 1)))
     read = lay.PLANT.read
     assert read(P, "hysteresis_mode") == lay.Switch.ON and read(P, "dead_time_mode") == lay.Switch.ON
     np.testing.assert_array_equal(read(P, "hysteresis_delta"), DELTA)
@@ -73,9 +74,9 @@ def test_pack_hysteresis_and_dead_time(arm):
     assert read(P, "dead_time_length") == 6
     assert read(P, "effect_state_length") == lay.EFFECT_STATE.size + 4 * 6
     with pytest.raises(ValueError, match="pack-time effect"):
-        lay.with_effects(P, hysteresis_delta=0.2)
+        packing.with_effects(P, hysteresis_delta=0.2)
     # controller views ignore the plant effects
-    np.testing.assert_array_equal(lay.controller_view(_hyst(arm)), lay.controller_view(arm))
+    np.testing.assert_array_equal(packing.controller_view(_hyst(arm)), packing.controller_view(arm))
 
 
 def test_initial_memory_options(arm):
@@ -84,7 +85,7 @@ def test_initial_memory_options(arm):
                        (hist, [initial_memory(hist)] * 4),
                        ((hist, (1.0, -0.5), (-1.0,), (1.0,)),
                         [initial_memory(h) for h in (hist, (1.0, -0.5), (-1.0,), (1.0,))])):
-        P = lay.pack(_hyst(arm, hysteresis_initial=init))
+        P = packing.pack(_hyst(arm, hysteresis_initial=init))
         z = model.initial_effect_state(P)[0]
         np.testing.assert_array_equal(z[lay.Z_HYST:lay.Z_HYST + 4 * STATE_LENGTH],
                                       np.concatenate(rows))
@@ -112,8 +113,8 @@ def test_delta_zero_is_bitwise_the_nominal_plant(arm):
 
 def test_hysteresis_off_row_is_bitwise_nominal(arm):
     """Every new effect field at its default: the packed row is the nominal one."""
-    P = lay.pack(arm.replace(effects=Effects(hysteresis_initial="positive")))
-    np.testing.assert_array_equal(P, lay.pack(arm))
+    P = packing.pack(arm.replace(effects=Effects(hysteresis_initial="positive")))
+    np.testing.assert_array_equal(P, packing.pack(arm))
     assert lay.PLANT.read(P, "effect_state_length") == 0
 
 

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from ppamsafety.plant import model
+from ppamsafety.plant import model, packing
 from ppamsafety.units import BAR
 
 
@@ -90,9 +90,9 @@ def test_effect_state_is_sized_per_row_and_untouched_with_effects_off(arm):
 
     x0, U = _step_inputs(arm, 400)
     default = model.simulate(arm, x0, U)
-    rows = np.stack([lay.with_effects(lay.pack(arm), effect_state_length=3),
-                     lay.with_effects(lay.pack(arm), effect_state_length=1)])
-    np.testing.assert_array_equal(lay.effect_state_lengths(rows), [3, 1])
+    rows = np.stack([packing.with_effects(packing.pack(arm), effect_state_length=3),
+                     packing.with_effects(packing.pack(arm), effect_state_length=1)])
+    np.testing.assert_array_equal(packing.effect_state_lengths(rows), [3, 1])
     z0 = np.array([[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]])
     X, z = model.simulate(None, np.stack([x0, x0]), U, params=rows, effect_state=z0,
                           return_effect_state=True)
@@ -106,13 +106,13 @@ def test_effect_state_is_sized_per_row_and_untouched_with_effects_off(arm):
 def test_effect_parameters_are_validated(arm):
     from ppamsafety.plant import layout as lay
 
-    P = lay.pack(arm)
+    P = packing.pack(arm)
     assert lay.PLANT.read(P, "effect_state_length") == 0.0           # all effects off
     for bad in (-1, 2.5, True, "3"):
         with pytest.raises(ValueError, match="effect_state_length"):
-            lay.with_effects(P, effect_state_length=bad)
+            packing.with_effects(P, effect_state_length=bad)
     with pytest.raises(KeyError, match="no field"):
-        lay.with_effects(P, hysteresis=1)
+        packing.with_effects(P, hysteresis=1)
     row = np.array(P)
     row[lay.NZ] = 0.5
     x0, U = _step_inputs(arm, 10)

@@ -9,6 +9,7 @@ import pytest
 import ppamsafety
 from ppamsafety.params.muscles import TABLE_B1_N_PER_BAR
 from ppamsafety.plant import layout as lay
+from ppamsafety.plant import packing
 from ppamsafety.plant import muscle
 from ppamsafety.units import BAR
 
@@ -32,12 +33,12 @@ def test_declared_layout_keeps_the_hand_numbered_order():
 
 
 def test_pack_fills_fields_by_name(arm):
-    P = lay.pack(arm)
+    P = packing.pack(arm)
     assert P.shape == (lay.NP,) and not P.flags.writeable
     np.testing.assert_array_equal(lay.PLANT.read(P, "theta"), arm.plant_base.as_vector())
-    np.testing.assert_array_equal(lay.PLANT.read(lay.model_view(arm), "theta"),
+    np.testing.assert_array_equal(lay.PLANT.read(packing.model_view(arm), "theta"),
                                   arm.model.as_vector())
-    np.testing.assert_array_equal(lay.PLANT.read(lay.controller_view(arm), "theta"),
+    np.testing.assert_array_equal(lay.PLANT.read(packing.controller_view(arm), "theta"),
                                   arm.model_gravity.as_vector())
     assert P[lay.THETA4] == arm.plant_base.as_vector()[3]
     np.testing.assert_array_equal(lay.PLANT.read(P, "p_mean"), arm.pneumatics.p_mean)
@@ -88,11 +89,12 @@ def test_pack_time_muscle_data_use_the_kernel_polynomial(arm, monkeypatch):
             calls[_name] += 1
             return _orig(*a)
         monkeypatch.setattr(muscle, name, spy)
-    terms = lay._muscle_terms.__wrapped__(arm.geometry, arm.muscles)   # bypass the cache
+    terms = muscle.muscle_terms.__wrapped__(arm.muscles)       # bypass the cache
     assert all(n >= 4 for n in calls.values()), calls
-    assert terms == lay._muscle_terms(arm.geometry, arm.muscles)
+    assert terms == muscle.muscle_terms(arm.muscles)
+    assert packing._muscle_terms(arm.geometry, arm.muscles)[1:] == terms    # pack uses them
     # the root is where the kernel force law reaches zero
-    P = lay.pack(arm)
+    P = packing.pack(arm)
     for k, grp in enumerate(arm.muscles.groups):
         e0 = P[lay.EPS_F0 + k]
         if e0 < 0.6:

@@ -4,7 +4,7 @@ import numpy as np
 
 from ppamsafety.diagnose.arm.summary_fit import AXES, axis, fit_summary, plant_at, whitened
 from ppamsafety.params import thesis_arm
-from ppamsafety.plant import layout as lay
+from ppamsafety.plant import packing
 from ppamsafety.sections import REGISTRY, diagnose_cases
 
 
@@ -45,10 +45,10 @@ def test_effect_axes_cover_the_library_and_change_the_plant_row():
     expect = {f.replace("valve_offset", "valve_offset") for f in fields}
     assert {"payload_mass", "valve_dead_time", "polytropic_n"} <= covered
     assert len(AXES) == len(expect)
-    base = lay.pack(arm)
+    base = packing.pack(arm)
     for a in AXES:
         assert plant_at(arm, a.name, 0.0) is arm
-        assert not np.array_equal(lay.pack(plant_at(arm, a.name, 1.0)), base), a.name
+        assert not np.array_equal(packing.pack(plant_at(arm, a.name, 1.0)), base), a.name
     assert axis("valve_dead_time").value(0.5) == 0.015
 
 

@@ -92,7 +92,7 @@ def test_cli_runs_table_6_1_reduced_and_reproduces_the_safety_study(tmp_path, ca
     assert main(argv(1)) == 0
     df = pd.read_csv(out / "table_6_1.csv")
     assert len(df) == 1 and df.status[0] == "ok" and df.label[0] == "PID"
-    # what ppamsafety/studies/safety.py::_heuristic_table does for the step experiment
+    # what ppamsafety/sections/safety.py::_heuristic_table does for the step experiment
     arm = thesis_arm()
     r = run_thesis_experiment(arm, "step")[0]                  # all ten variants in one batch
     ev = evaluate_experiment(r, arm, head=head_model(), history=True).summary

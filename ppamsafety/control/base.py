@@ -30,38 +30,20 @@ with the ``R_*`` constants below.
 
 from __future__ import annotations
 
-from enum import IntEnum
+import numbers
 
 import numpy as np
 
-import numbers
-
+from .._jit import kernel_array
 from .._validation import (InvalidTypeError, as_float_array, describe, check_finite_result, check_instance, check_range,
                            check_range_array, check_shape, check_vector)
-from .._jit import kernel_array
 from ..layouts import Layout
-from .reference import NREF, R_Q_D, R_QD_D, R_QDD_D, R_QDDD_D, R_R_D, R_RD_D
+from ..params.arm import ArmParameters
+from ..plant.packing import controller_view
+from .dispatch import EMPTY, controller_step
+from .estimation import ESTIMATOR_INTERNALS
+from .reference import NREF, R_Q
 
-
-class ControllerKind(IntEnum):
-    """Code of a controller kind, selecting its compiled step function."""
-
-    GC = 0
-    PID = 1
-    PSMC_JOINT = 2
-    PSMC_TASK = 3
-    SMC = 4
-    ADMITTANCE = 5
-
-
-KIND_GC, KIND_PID, KIND_PSMC_JOINT, KIND_PSMC_TASK, KIND_SMC, KIND_ADMITTANCE = (
-    ControllerKind.GC, ControllerKind.PID, ControllerKind.PSMC_JOINT, ControllerKind.PSMC_TASK,
-    ControllerKind.SMC, ControllerKind.ADMITTANCE)
-
-# -- reference row (declared in .reference) ------------------------------------------------
-R_Q, R_QD, R_QDD, R_QDDD = R_Q_D, R_QD_D, R_QDD_D, R_QDDD_D   #: q_d, its 1st..3rd derivatives
-R_X, R_Y = R_R_D, R_R_D + 1          #: x_d, y_d [m] (the two slots of the r_d field)
-R_XD, R_YD = R_RD_D, R_RD_D + 1      #: xd_d, yd_d [m/s] (the two slots of rd_d)
 
 #: Largest |angle| accepted by :meth:`Controller.step` [rad] (one turn: the joints of the
 #: arm cannot turn further, §2.2).
@@ -75,10 +57,6 @@ P_ATM_MAX = 1.01325e5
 PRESSURE_MAX = 1.0e7
 #: Largest |entry| of a reference row accepted by :meth:`Controller.step` (SI units).
 REF_MAX = 1.0e9
-
-#: An empty layout, for a controller without state or internals.
-EMPTY = Layout("empty", [], register=False)
-
 
 def pair(name: str, value, *, lo: float = 0.0, hi: float = np.inf, unit: str = "",
          lo_open: bool = False) -> tuple:
@@ -153,7 +131,7 @@ class Controller:
         Parameters
         ----------
         arm : ArmParameters
-            The arm whose controller view (:func:`~ppamsafety.plant.layout.controller_view`)
+            The arm whose controller view (:func:`~ppamsafety.plant.packing.controller_view`)
             is packed.
 
         Returns
@@ -161,7 +139,6 @@ class Controller:
         numpy.ndarray
             The model row (layout ``PLANT``).
         """
-        from ..plant.layout import controller_view
         return controller_view(arm)
 
     def describe(self) -> dict:
@@ -217,10 +194,6 @@ class Controller:
             For an argument of the wrong type, shape, a non-finite value or
             a ``dt`` out of range (the message names the argument).
         """
-        from ..params.arm import ArmParameters
-        from .dispatch import controller_step
-        from .estimation import ESTIMATOR_INTERNALS
-
         check_instance("arm", arm, ArmParameters)
         dt = check_range("dt", dt, 1e-6, 1.0, unit="s")
         qm = check_range_array("q_meas", check_shape(

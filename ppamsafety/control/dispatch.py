@@ -1,36 +1,76 @@
 """One compiled entry point for every controller kind, and the buffer sizes of the runner.
 
 The sizes of the buffers the closed-loop runner and :meth:`Controller.step`
-hand to a step function are computed here from the layouts every controller
-class declares (``PARAMS``, ``STATE``, ``INTERNALS``, ``SCRATCH``), never
-written as literals: a buffer cannot be smaller than a declared need.
+hand to a step function are computed here from the rows every controller
+law declares (:data:`DECLARED`: parameters, state, internals, scratch), never
+written as literals: a buffer cannot be smaller than a declared need.  The
+controller classes read their declarations from :data:`DECLARED`.
 """
 
 from __future__ import annotations
 
-from .._jit import kernel
-from .admittance import AdmittancePSMC, admittance_step
-from .base import (KIND_ADMITTANCE, KIND_GC, KIND_PID, KIND_PSMC_JOINT, KIND_PSMC_TASK, KIND_SMC,
-                   ControllerKind)
-from .gravity import GravityCompensation, gc_step
-from .pid import PID, pid_step
-from .psmc import JointPSMC, TaskPSMC, psmc_joint_step, psmc_task_step
-from .smc import SlidingModeControl, smc_step
+from typing import NamedTuple
 
-#: The controller class of every kind.
-CONTROLLER_CLASSES = {KIND_GC: GravityCompensation, KIND_PID: PID,
-                      KIND_PSMC_JOINT: JointPSMC, KIND_PSMC_TASK: TaskPSMC,
-                      KIND_SMC: SlidingModeControl, KIND_ADMITTANCE: AdmittancePSMC}
-assert set(CONTROLLER_CLASSES) == set(ControllerKind), "a controller kind has no class"
+from .._jit import kernel
+from ..layouts import Layout
+from .kinds import (KIND_ADMITTANCE, KIND_GC, KIND_PID, KIND_PSMC_JOINT, KIND_PSMC_TASK, KIND_SMC,
+                    ControllerKind)
+from .laws.admittance import (ADMITTANCE_INTERNALS, ADMITTANCE_PARAMS, ADMITTANCE_SCRATCH,
+                              ADMITTANCE_STATE, admittance_step)
+from .laws.gravity import GC_PARAMS, GC_SCRATCH, gc_step
+from .laws.pid import PID_INTERNALS, PID_PARAMS, PID_STATE, pid_step
+from .laws.psmc import (JOINT_PSMC_INTERNALS, JOINT_PSMC_PARAMS, JOINT_PSMC_STATE,
+                        TASK_PSMC_INTERNALS, TASK_PSMC_PARAMS, TASK_PSMC_SCRATCH, TASK_PSMC_STATE,
+                        psmc_joint_step, psmc_task_step)
+from .laws.smc import SMC_INTERNALS, SMC_PARAMS, SMC_SCRATCH, smc_step
+
+#: An empty layout, for a law without state or internals.
+EMPTY = Layout("empty", [], register=False)
+
+
+class Declared(NamedTuple):
+    """The rows one controller kind's law declares (:mod:`ppamsafety.control.laws`).
+
+    Parameters
+    ----------
+    params : Layout
+        The packed parameter row (gains, limits, flag codes).
+    state : Layout
+        The state carried from one sample to the next.
+    internals : Layout
+        The signals logged per step (the closed-loop log's internal columns).
+    scratch : int
+        Number of work floats one step may use.
+    """
+
+    params: Layout      #: packed parameter row (gains, limits, flag codes)
+    state: Layout       #: state carried from one sample to the next
+    internals: Layout   #: signals logged per step
+    scratch: int        #: work floats one step may use
+
+
+#: What the law of every kind declares; the controller classes take theirs from here.
+DECLARED = {
+    KIND_GC: Declared(GC_PARAMS, EMPTY, EMPTY, GC_SCRATCH.size),
+    KIND_PID: Declared(PID_PARAMS, PID_STATE, PID_INTERNALS, GC_SCRATCH.size),
+    KIND_PSMC_JOINT: Declared(JOINT_PSMC_PARAMS, JOINT_PSMC_STATE, JOINT_PSMC_INTERNALS,
+                              GC_SCRATCH.size),
+    KIND_PSMC_TASK: Declared(TASK_PSMC_PARAMS, TASK_PSMC_STATE, TASK_PSMC_INTERNALS,
+                             TASK_PSMC_SCRATCH.size),
+    KIND_SMC: Declared(SMC_PARAMS, EMPTY, SMC_INTERNALS, SMC_SCRATCH.size),
+    KIND_ADMITTANCE: Declared(ADMITTANCE_PARAMS, ADMITTANCE_STATE, ADMITTANCE_INTERNALS,
+                              ADMITTANCE_SCRATCH.size),
+}
+assert set(DECLARED) == set(ControllerKind), "a controller kind has no law"
 
 #: Widest parameter row of any kind (width of the runner's padded parameter table).
-CONTROLLER_ROW_WIDTH = max(c.PARAMS.size for c in CONTROLLER_CLASSES.values())
+CONTROLLER_ROW_WIDTH = max(d.params.size for d in DECLARED.values())
 #: Longest controller state of any kind.
-NSTATE = max(c.STATE.size for c in CONTROLLER_CLASSES.values())
+NSTATE = max(d.state.size for d in DECLARED.values())
 #: Most internals any kind logs (width of the log's internal columns).
-NINT = max(c.INTERNALS.size for c in CONTROLLER_CLASSES.values())
+NINT = max(d.internals.size for d in DECLARED.values())
 #: Largest scratch need of any kind.
-NSCRATCH = max(c.SCRATCH for c in CONTROLLER_CLASSES.values())
+NSCRATCH = max(d.scratch for d in DECLARED.values())
 
 
 def declared_sizes(kind) -> tuple:
@@ -41,8 +81,8 @@ def declared_sizes(kind) -> tuple:
     kind : ControllerKind or int
         The controller kind.
     """
-    c = CONTROLLER_CLASSES[ControllerKind(kind)]
-    return c.PARAMS.size, c.STATE.size, c.INTERNALS.size, c.SCRATCH
+    d = DECLARED[ControllerKind(kind)]
+    return d.params.size, d.state.size, d.internals.size, d.scratch
 
 
 @kernel
@@ -51,8 +91,7 @@ def controller_step(kind, C, S, Pm, k, dt, qm, qdm, pm, ref, fest, dp, internals
 
     Compiled; the arguments are not checked (:meth:`Controller.step` checks
     them).  Every array is a flat float64 row; the layouts named below are
-    those the controller class of ``kind`` declares (``PARAMS``, ``STATE``,
-    ``INTERNALS``, ``SCRATCH``, see :data:`CONTROLLER_CLASSES`).  The runner
+    those the law of ``kind`` declares (:data:`DECLARED`).  The runner
     passes rows padded to :data:`CONTROLLER_ROW_WIDTH`, :data:`NSTATE`,
     :data:`NINT` and :data:`NSCRATCH`; a kind reads only its own prefix.
 

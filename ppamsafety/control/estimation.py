@@ -75,10 +75,12 @@ import math
 import numpy as np
 
 from .._jit import kernel, leaf
-from .._validation import check_instance, check_range
+from .._validation import check_instance, check_range, as_float_array
 from ..layouts import Field, Layout
+from ..params.inertia import BaseParameters
 from ..plant.dynamics import coriolis_cs, friction_cs, gravity_cs, mass_matrix_cs
 from ..plant.geometry import tcp_jacobian
+from ..plant.packing import pack
 from ..plant.torque import torque_kernel
 
 #: Thesis values (§5.4.2-5.4.3): forgetting factor, observer gain [rad/s], filter
@@ -313,8 +315,6 @@ class ForceEstimator:
 
     def __init__(self, *, mu: float = MU_THESIS, k_i: float = K_I_THESIS,
                  omega: float = OMEGA_THESIS, p0: float = 10.0, model=None):
-        from ..params.inertia import BaseParameters
-
         self.mu = check_range("ForceEstimator.mu", mu, 0.0, 1.0, lo_open=True)
         self.k_i = check_range("ForceEstimator.k_i", k_i, 0.0, 1e4, lo_open=True, unit="rad/s")
         self.omega = check_range("ForceEstimator.omega", omega, 0.0, 1e4, lo_open=True,
@@ -349,7 +349,6 @@ class ForceEstimator:
         arm : ArmParameters
             Supplies geometry, torque functions and (default) ``arm.model``.
         """
-        from ..plant.layout import pack
         return pack(arm, arm.model if self.model is None else self.model)
 
     def describe(self) -> dict:
@@ -376,7 +375,6 @@ def apply_dead_zone(force, f_min: float = DEAD_ZONE_THESIS) -> np.ndarray:
     -------
     numpy.ndarray, shape (..., 2)
     """
-    from .._validation import as_float_array
     f = as_float_array("force", force, shape_tail=(2,))
     f_min = check_range("f_min", f_min, 0.0, 1e6, unit="N")
     return np.where(np.linalg.norm(f, axis=-1, keepdims=True) <= f_min, 0.0, f)

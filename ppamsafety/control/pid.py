@@ -15,15 +15,17 @@ Default gains: Table 5.1 (a), converted from bar to Pa.
 
 from __future__ import annotations
 
-from enum import IntEnum
 
 import numpy as np
 
-from .._jit import leaf
-from ..layouts import Field, Layout, check_flag
+from ..layouts import check_flag
 from ..units import BAR
-from .base import KIND_PID, R_Q, R_QD, Controller, pair
-from .gravity import GC_SCRATCH, add_gravity_compensation, gc_mode
+from .base import Controller, pair
+from .dispatch import DECLARED
+from .gravity import gc_mode
+from .kinds import KIND_PID
+from .laws.pid import PIDDerivative, PID_PARAMS
+
 
 #: Table 5.1 (a): Kp [bar/rad], Ki [bar/(rad s)], Kd [bar s/rad] per joint.
 TABLE_5_1_PID = {"kp": (2.0, 1.5), "ki": (2.0, 2.0), "kd": (0.1, 0.1)}
@@ -60,75 +62,6 @@ def check_position_feedback(owner: str, kp, ki, kd) -> None:
                 f"Kp > 0 or Ki > 0 (Table 5.1: Kp = 2 bar/rad = 2e5 Pa/rad)")
 
 
-class PIDDerivative(IntEnum):
-    """Source of the PID derivative term."""
-
-    VELOCITY = 0        #: edot = qd_d - qd_meas
-    DIFFERENCE = 1      #: edot = (e[k] - e[k-1]) / T
-
-
-PID_PARAMS = Layout("PID parameters", [
-    Field("kp", 2, "Pa/rad", "proportional gains (Table 5.1 (a))"),
-    Field("ki", 2, "Pa/(rad s)", "integral gains"),
-    Field("kd", 2, "Pa s/rad", "derivative gains"),
-    Field("derivative", 1, "code", "PIDDerivative: derivative source"),
-    Field("gc", 1, "code", "GCMode: gravity compensation"),
-])
-P_KP, P_KI, P_KD, P_DERIV, P_GC = PID_PARAMS.offsets("kp", "ki", "kd", "derivative", "gc")
-
-PID_STATE = Layout("PID state", [
-    Field("integral", 2, "rad s", "backward-Euler error integral sum(e) T"),
-    Field("e_prev", 2, "rad", "previous error e[k-1] (difference derivative)"),
-])
-S_INT, S_EPREV = PID_STATE.offsets("integral", "e_prev")
-
-PID_INTERNALS = Layout("PID internals", [
-    Field("pid", 2, "Pa", "PID output Delta p before gravity compensation"),
-    Field("integral", 2, "rad s", "error integral (state)"),
-])
-I_PID, I_INT = PID_INTERNALS.offsets("pid", "integral")
-
-
-@leaf
-def pid_step(C, S, Pm, dt, qm, qdm, ref, dp, internals, scratch):
-    """One PID update (compiled; arguments are not checked).
-
-    Parameters
-    ----------
-    C : numpy.ndarray
-        Parameter row (layout ``PID_PARAMS``).
-    S : numpy.ndarray
-        State (layout ``PID_STATE``), updated in place.
-    Pm : numpy.ndarray
-        Controller's model row (layout ``PLANT``).
-    dt : float
-        Control period [s].
-    qm, qdm : numpy.ndarray, shape (2,)
-        Measured angles [rad] and velocities [rad/s].
-    ref : numpy.ndarray, shape (12,)
-        Reference row.
-    dp : numpy.ndarray, shape (2,)
-        Output Delta p [Pa], written.
-    internals : numpy.ndarray
-        Logged internals (layout ``PID_INTERNALS``), written.
-    scratch : numpy.ndarray
-        Work memory (``GC_SCRATCH``).
-    """
-    difference = int(C[P_DERIV]) == PIDDerivative.DIFFERENCE
-    for j in range(2):
-        e = ref[R_Q + j] - qm[j]
-        S[S_INT + j] += dt * e
-        if difference:
-            ed = (e - S[S_EPREV + j]) / dt
-        else:
-            ed = ref[R_QD + j] - qdm[j]
-        S[S_EPREV + j] = e
-        dp[j] = C[P_KP + j] * e + C[P_KI + j] * S[S_INT + j] + C[P_KD + j] * ed
-        internals[I_PID + j] = dp[j]
-        internals[I_INT + j] = S[S_INT + j]
-    add_gravity_compensation(int(C[P_GC]), Pm, qm, ref, 0.0, 0.0, dp, scratch)
-
-
 class PID(Controller):
     """PID with static gravity compensation.
 
@@ -151,10 +84,7 @@ class PID(Controller):
 
     kind = KIND_PID
     name = "PID"
-    PARAMS = PID_PARAMS
-    STATE = PID_STATE
-    INTERNALS = PID_INTERNALS
-    SCRATCH = GC_SCRATCH.size
+    PARAMS, STATE, INTERNALS, SCRATCH = DECLARED[KIND_PID]
 
     def __init__(self, *, kp=None, ki=None, kd=None, derivative: str = "velocity",
                  gravity_compensation="desired"):

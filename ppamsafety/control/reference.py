@@ -30,6 +30,12 @@ NREF = REFERENCE_ROW.size
 #: Column names of a reference table (generated from :data:`REFERENCE_ROW`).
 REF_COLUMNS = REFERENCE_ROW.columns()
 
+#: Offsets of single slots, as the controller kernels read them.
+R_Q, R_QD, R_QDD, R_QDDD = R_Q_D, R_QD_D, R_QDD_D, R_QDDD_D   #: q_d, its 1st..3rd derivatives
+R_X, R_Y = R_R_D, R_R_D + 1          #: x_d, y_d [m] (the two slots of the r_d field)
+R_XD, R_YD = R_RD_D, R_RD_D + 1      #: xd_d, yd_d [m/s] (the two slots of rd_d)
+
 
 __all__ = ["REFERENCE_ROW", "R_Q_D", "R_QD_D", "R_QDD_D", "R_QDDD_D", "R_R_D", "R_RD_D", "NREF",
-           "REF_COLUMNS"]
+           "REF_COLUMNS", "R_Q", "R_QD", "R_QDD", "R_QDDD", "R_X", "R_Y", "R_XD",
+           "R_YD"]

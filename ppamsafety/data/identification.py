@@ -37,6 +37,14 @@ import numpy as np
 import pandas as pd
 
 from .._validation import check_bool, check_choice, check_instance, check_int, check_range
+from .._version import __version__
+from ..identify.dynamic import DynamicData, identify_dynamic
+from ..identify.static import (identify_gravity, identify_muscle, identify_valves,
+                               torques_from_forces)
+from ..output import OutputFolder
+from ..params import thesis_arm
+from ..params.arm import ArmParameters
+from ..plant.torque import joint_torques
 from .measured import F, P, Q, QD, U, MeasuredData
 
 KINDS = ("static", "dynamic")
@@ -117,8 +125,6 @@ class Identification:
 
     def to_dict(self) -> dict:
         """Everything as a JSON-ready dict (no NaN: non-finite numbers become None)."""
-        from .._version import __version__
-
         problems = {}
         for name in self.results:
             d = _lsq_dict(self._lsq(name))
@@ -158,8 +164,6 @@ class Identification:
         list of pathlib.Path
             The files written.
         """
-        from ..output import OutputFolder
-
         check_bool("overwrite", overwrite)
         text = json.dumps(self.to_dict(), indent=1, allow_nan=False, ensure_ascii=False) + "\n"
         table = self.to_pandas()
@@ -174,9 +178,6 @@ class Identification:
 
 
 def _static(data: MeasuredData, arm, method, confidence, notes):
-    from ..identify.static import (identify_gravity, identify_muscle, identify_valves,
-                                   torques_from_forces)
-
     results, extra, settings = {}, {}, {}
     if data.kind == "actuator":
         if method == "WLS":
@@ -203,8 +204,6 @@ def _static(data: MeasuredData, arm, method, confidence, notes):
         tau = torques_from_forces(q, data.column(*F), arm)
         settings["torques_from"] = "forces F1..F4 through the lever arms (3.17)"
     else:
-        from ..plant.torque import joint_torques
-
         tau = joint_torques(q, data.column(*P), arm)
         settings["torques_from"] = ("pressures p1..p4 through the torque functions (2.17) of "
                                     "the nominal muscle law")
@@ -221,9 +220,6 @@ def _static(data: MeasuredData, arm, method, confidence, notes):
 
 
 def _dynamic(data: MeasuredData, arm, method, friction, drop, confidence, sign_velocity, notes):
-    from ..identify.dynamic import DynamicData, identify_dynamic
-    from ..plant.torque import joint_torques
-
     if data.kind != "arm" or data.experiment not in ("open-loop", "closed-loop"):
         raise ValueError(f"{data.source}: --kind dynamic needs an arm open-loop or closed-loop "
                          f"record; this is a {data.kind} {data.experiment} record")
@@ -289,9 +285,6 @@ def identify_measured(data, kind: str, *, method: str = "LS", friction: bool = T
     -------
     Identification
     """
-    from ..params import thesis_arm
-    from ..params.arm import ArmParameters
-
     check_instance("data", data, MeasuredData)
     kind = check_choice("kind", kind, KINDS)
     method = check_choice("method", method, METHODS)

@@ -37,6 +37,10 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from ..experiments.catalog import (THESIS_KI_BAR, THESIS_LAMBDAS, label_of, EXPERIMENTS as NAMED,
+                                   Family)
+from ..output import atomic_write, check_new_file
+
 #: Version of the format written by :meth:`MeasuredData.save` (``format_version`` key).
 FORMAT_VERSION = 1
 KINDS = ("arm", "actuator")
@@ -152,8 +156,6 @@ def _parse_toml(text: str, where: str) -> dict:
 
 
 def _thesis_variant_labels() -> tuple:
-    from ..experiments.catalog import THESIS_KI_BAR, THESIS_LAMBDAS, label_of
-
     labels = ["PID"]
     labels += [label_of("PSMC joint", ki, lam) for ki in THESIS_KI_BAR for lam in THESIS_LAMBDAS]
     labels += [label_of("PSMC task", math.nan, lam) for lam in THESIS_LAMBDAS]
@@ -206,15 +208,11 @@ def _check_meta(meta: dict, src: str, columns, warn) -> dict:
         has_cols = all(c in columns for c in Q_D)
         if ref is None or ref == "columns":
             if not has_cols:
-                from ..experiments.catalog import EXPERIMENTS as NAMED
-
                 raise MeasuredDataError(
                     f"{src}: a closed-loop record needs its reference: metadata reference = one "
                     f"of {', '.join(map(repr, NAMED))} (a thesis experiment) or the columns "
                     f"q1_d, q2_d [rad]")
         else:
-            from ..experiments.catalog import EXPERIMENTS as NAMED
-
             if ref not in NAMED:
                 raise MeasuredDataError(f"{src}: metadata reference = {ref!r} is not a thesis "
                                         f"experiment ({', '.join(map(repr, NAMED))}) nor "
@@ -280,7 +278,6 @@ def _check_controller(ctrl, src):
             raise MeasuredDataError(f"{src}: give controller.variant or controller.family, "
                                     f"not both")
         return
-    from ..experiments.catalog import Family
 
     fams = [f.value for f in Family]
     if ctrl.get("family") not in fams:
@@ -719,8 +716,6 @@ class MeasuredData:
         pathlib.Path
             ``path``.
         """
-        from ..output import atomic_write, check_new_file
-
         if not isinstance(sidecar, bool):
             raise TypeError(f"sidecar must be True or False, got {sidecar!r}")
         p = check_new_file(path, overwrite=overwrite, name="measured data file")

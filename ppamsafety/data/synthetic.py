@@ -22,6 +22,12 @@ import numpy as np
 import pandas as pd
 
 from .._validation import check_bool, check_int, check_range, check_vector
+from ..identify.excitation import FourierExcitation, default_offset, equilibrium_for
+from ..identify.static import (equilibrium_configurations, static_experiment, FORCE_NOISE_VARIANCES,
+                               PRESSURE_NOISE_STD, ANGLE_NOISE_VARIANCES)
+from ..params import thesis_arm
+from ..params.arm import ArmParameters
+from ..plant.model import rest_state, simulate
 from .measured import MeasuredData
 
 #: Velocity noise variances of qd1, qd2 [rad^2/s^2], Table 3.2 (first signal).
@@ -29,9 +35,6 @@ VELOCITY_NOISE_VARIANCES = (1.63e-4, 2.32e-5)
 
 
 def _arm(arm):
-    from ..params import thesis_arm
-    from ..params.arm import ArmParameters
-
     if arm is None:
         return thesis_arm()
     if not isinstance(arm, ArmParameters):
@@ -62,8 +65,6 @@ def synthetic_static(arm=None, *, n: int = 31, seed: int = 0, noise: bool = True
         kind ``"arm"``, experiment ``"static-sawtooth"``; columns t, q1, q2,
         F1..F4, p1..p4, u1..u4.
     """
-    from ..identify.static import equilibrium_configurations, static_experiment
-
     arm = _arm(arm)
     n = check_int("n", n, 3, 10000)
     seed = check_int("seed", seed, 0)
@@ -120,8 +121,6 @@ def synthetic_tensile(arm=None, *, group: int = 1, coefficients=None,
     MeasuredData
         kind ``"actuator"``, experiment ``"tensile"``.
     """
-    from ..identify.static import FORCE_NOISE_VARIANCES, PRESSURE_NOISE_STD
-
     arm = _arm(arm)
     group = check_int("group", group, 1, 4)
     g = arm.muscles.groups[group - 1]
@@ -175,8 +174,6 @@ def default_excitation(arm=None, *, seed: int = 0, amplitude: float = 3e4):
     -------
     FourierExcitation
     """
-    from ..identify.excitation import FourierExcitation, default_offset
-
     arm = _arm(arm)
     amplitude = check_range("amplitude", amplitude, 0.0, 3e5, lo_open=True, unit="Pa")
     rng = np.random.default_rng(check_int("seed", seed, 0))
@@ -223,10 +220,6 @@ def synthetic_excitation(arm=None, excitation=None, *, periods: float = 1.0, dt:
         kind ``"arm"``, experiment ``"open-loop"``; columns t, q1, q2, qd1,
         qd2, p1..p4, u1..u4.
     """
-    from ..identify.excitation import FourierExcitation, equilibrium_for
-    from ..identify.static import ANGLE_NOISE_VARIANCES, PRESSURE_NOISE_STD
-    from ..plant.model import rest_state, simulate
-
     arm = _arm(arm)
     exc = default_excitation(arm) if excitation is None else excitation
     if not isinstance(exc, FourierExcitation):

@@ -31,6 +31,7 @@ from dataclasses import dataclass
 from .._validation import check_instance, check_range, check_str, check_vector
 from ..control import PID, JointPSMC, SensorConfig, TaskPSMC
 from ..control.base import Controller
+from ..params.arm import ArmParameters
 from ..units import BAR
 from . import trajectories as tr
 from .case import ExperimentCase
@@ -296,7 +297,6 @@ def _check_name(name) -> str:
 
 
 def _check_arm(arm):
-    from ..params.arm import ArmParameters
     return check_instance("arm", arm, ArmParameters)
 
 

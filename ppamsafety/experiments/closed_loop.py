@@ -21,16 +21,18 @@ import pandas as pd
 
 from .._jit import kernel
 from .._validation import check_int, check_range
-from ..control.dispatch import CONTROLLER_CLASSES, NINT, NSCRATCH, NSTATE, controller_step
+from ..control import CONTROLLER_CLASSES
+from ..control.dispatch import NINT, NSCRATCH, NSTATE, controller_step
 from ..control.estimation import (ESTIMATOR_INTERNALS, ESTIMATOR_PARAMS, ESTIMATOR_SCRATCH,
                                   ESTIMATOR_STATE, estimator_step)
 from ..control.sensors import (N_Q, N_QD, NSENSOR, SENSOR_NOISE, SensorConfig, pressure_read,
                                sensor_init, sensor_read, sensor_reset, sensor_track)
 from ..layouts import Field, Layout
 from ..plant import layout as lay
+from ..plant import packing
 from ..plant.geometry import tcp_jacobian, tcp_position
-from ..plant.model import (NWORK, NX, X_P, X_Q, X_QD, effect_state_length, effects_init,
-                           rk4_step, valve_delay)
+from ..plant.model import (NWORK, NX, X_P, X_Q, X_QD, effect_state_length, effects_init, rk4_step,
+                           valve_delay, check_valve_step, rest_state)
 from ..plant.pneumatics import delta_p_to_set_values
 from ..plots.control import plot_experiment
 from .case import ExperimentCase, as_cases
@@ -370,8 +372,6 @@ def _controller_rows(arm, controller):
 
 def _check_valves(row, dt: float, substeps: int, name: str) -> None:
     """:func:`~ppamsafety.plant.model.check_valve_step` for one case, naming it and the fix."""
-    from ..plant.model import check_valve_step
-
     h = dt / substeps
     try:
         check_valve_step(row, h)
@@ -420,8 +420,6 @@ def run_batch(cases, *, dt: float = 1e-3, substeps: int = 1) -> list:
         For references of different lengths or sample periods, a bad dict
         key, or a valve time constant shorter than dt/substeps.
     """
-    from ..plant.model import rest_state
-
     dt = check_range("dt", dt, 1e-5, 0.1, unit="s")
     substeps = check_int("substeps", substeps, 1, 1000)
     if isinstance(cases, (ExperimentCase, str, bytes)) or not hasattr(cases, "__iter__"):
@@ -459,7 +457,7 @@ def run_batch(cases, *, dt: float = 1e-3, substeps: int = 1) -> list:
         if x0 is None:
             x0 = rest_state(ref.field("q_d")[0], arm)[0]
         X0.append(np.asarray(x0, dtype=float))
-        PP.append(lay.pack(arm))
+        PP.append(packing.pack(arm))
         _check_valves(PP[-1], dt, substeps, c.name)
         kind, C, sizes, Pm = _controller_rows(arm, c.controller)
         KIND.append(kind)

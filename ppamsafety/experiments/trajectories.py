@@ -33,6 +33,7 @@ from .._validation import (as_float_array, check_finite, check_increasing, check
                            check_int, check_range, check_shape, check_str, check_vector)
 from ..control.reference import (NREF, R_Q_D, R_QD_D, R_QDD_D, R_QDDD_D,  # noqa: F401
                                  R_R_D, R_RD_D, REF_COLUMNS, REFERENCE_ROW)
+from ..params.arm import ArmParameters
 from ..plant import geometry as geo
 from ..units import DEG
 
@@ -167,7 +168,6 @@ def _segment(arm, path, t0, t1, dt, oversample=8):
 
 
 def _arm(arm):
-    from ..params.arm import ArmParameters
     return check_instance("arm", arm, ArmParameters)
 
 

@@ -12,6 +12,7 @@ from __future__ import annotations
 import functools
 
 import numpy as np
+import pandas as pd
 
 from .._validation import as_float_array, check_int
 from .everett import THESIS_WEIGHT, PreisachWeight, check_weight
@@ -128,8 +129,6 @@ def major_loop(n: int = 2000, *, weight: PreisachWeight = THESIS_WEIGHT):
         "descending") and ``W_fit`` (the line of :func:`w_fit` for the same
         n and weight), all dimensionless.
     """
-    import pandas as pd
-
     u = sine_period(n)
     wv = preisach_response(u, weight=weight)
     slope, intercept = w_fit(n, weight=weight)

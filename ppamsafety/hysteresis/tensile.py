@@ -37,6 +37,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+import pandas as pd
 
 from .._jit import kernel, leaf
 from .._validation import (as_float_array, check_int, check_nonnegative, check_positive,
@@ -191,8 +192,6 @@ def simulate_tensile_test(delta: float, *, pressure: float = TENSILE_PRESSURE,
         ``eps_s`` (3.34), ``W`` (Preisach output).  ``attrs`` holds
         ``delta``, ``pressure`` [Pa], ``force_law`` and ``eps_max``.
     """
-    import pandas as pd
-
     delta = check_range("delta", delta, 0.0, 0.5)
     p = check_positive("pressure", pressure, unit="Pa")
     a = _check_coefficients(force_law)

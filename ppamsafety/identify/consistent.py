@@ -76,6 +76,7 @@ optimistic for the strongly autocorrelated filtered residuals.
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -190,8 +191,6 @@ def _scaled_lmis(cp, theta, m1, m2, L1):
 
 
 def _solve(prob, cp, what):
-    import warnings
-
     with warnings.catch_warnings():   # "may be inaccurate": the status is checked below and
         warnings.simplefilter("ignore", UserWarning)   # every estimate is re-verified in NumPy
         try:

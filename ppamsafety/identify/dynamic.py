@@ -58,6 +58,10 @@ import numpy as np
 import pandas as pd
 
 from .._validation import check_int, check_range
+from ..params.inertia import BaseParameters
+from ..plant.dynamics import regressor as plant_regressor
+from ..plant.model import state_derivative
+from ..plant.torque import joint_torques
 from .lsq import LSQResult, as_samples, same_length, solve
 
 #: Filter cut-off of (3.21): 5 Hz, omega = 10 pi rad/s.
@@ -103,8 +107,6 @@ def regressor(q, qd, qdd, arm, *, friction: bool = True, sign_velocity: float | 
     gravity_acc : float, optional, keyword-only
         g [m/s^2]; default ``arm.gravity``.
     """
-    from ..plant.dynamics import regressor as plant_regressor
-
     q = as_samples("q", q, ncols=2, ndim=2)
     qd = as_samples("qd", qd, ncols=2, ndim=2)
     qdd = as_samples("qdd", qdd, ncols=2, ndim=2)
@@ -288,14 +290,11 @@ class DynamicData:
         with_qdd : bool, keyword-only
         set_values : array_like, optional, keyword-only
         """
-        from ..plant.torque import joint_torques
-
         X = as_samples("states", states, ncols=8, ndim=2)
         qdd = None
         if with_qdd:
             if set_values is None:
                 raise ValueError("from_states: with_qdd=True needs set_values")
-            from ..plant.model import state_derivative
 
             U = as_samples("set_values", set_values, ncols=4, ndim=2)
             if U.shape[0] == X.shape[0] - 1:
@@ -434,8 +433,6 @@ class DynamicResult:
         Raises ValueError (from BaseParameters) when an estimated inertia
         (theta3, theta6) or friction coefficient is not positive.
         """
-        from ..params.inertia import BaseParameters
-
         t = self.theta
         return BaseParameters(*[float(v) for v in t[:6]], coulomb=(float(t[6]), float(t[7])),
                               viscous=(float(t[8]), float(t[9])))

@@ -31,6 +31,8 @@ import numpy as np
 import pandas as pd
 
 from .._validation import check_int, check_range
+from ..plant.model import rest_state, simulate
+from ..plant.pneumatics import delta_p_pressures, valve_set_values, gravity_compensation
 from ..plots.identify import plot_excitation
 from .dynamic import DynamicData, filtered_regressor
 
@@ -107,8 +109,6 @@ class FourierExcitation:
         arm : ArmParameters
             Supplies the mean pressures, p_max and the valve statics (3.12).
         """
-        from ..plant.pneumatics import delta_p_pressures, valve_set_values
-
         return valve_set_values(delta_p_pressures(self.delta_p(t), arm), arm)
 
     def to_pandas(self) -> pd.DataFrame:
@@ -171,8 +171,6 @@ def default_offset(arm, q_centre=None) -> np.ndarray:
     q_centre : array_like, shape (2,), optional
         Configuration [rad]; default :func:`centre_configuration`.
     """
-    from ..plant.pneumatics import gravity_compensation
-
     q = centre_configuration(arm) if q_centre is None else np.asarray(q_centre, dtype=float)
     return gravity_compensation(q, arm, params=arm.plant_base)
 
@@ -212,7 +210,6 @@ def equilibrium_for(delta_p, arm, *, q_guess=None) -> np.ndarray:
     """
     from scipy.optimize import fsolve
 
-    from ..plant.pneumatics import gravity_compensation
 
     dp = np.asarray(delta_p, dtype=float)
     if dp.shape != (2,) or not np.all(np.isfinite(dp)):
@@ -255,8 +252,6 @@ def simulate_excitation(arm, excitation: FourierExcitation, *, periods: float = 
     with_qdd : bool, keyword-only
         Store the exact accelerations (for validation tests).
     """
-    from ..plant.model import rest_state, simulate
-
     if not isinstance(excitation, FourierExcitation):
         raise TypeError(f"excitation must be a FourierExcitation, got {type(excitation).__name__}")
     check_range("periods", periods, 0.0, 1e4, lo_open=True)
@@ -382,7 +377,6 @@ def design_excitation(arm, *, harmonics: int = 5, period: float = 10.0, friction
     """
     from scipy.optimize import minimize
 
-    from ..plant.model import rest_state, simulate
 
     harmonics = check_int("harmonics", harmonics, 1, 50)
     check_range("period", period, 0.1, 1000.0, unit="s")

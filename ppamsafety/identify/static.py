@@ -31,6 +31,10 @@ import numpy as np
 import pandas as pd
 
 from .._validation import check_int, check_nonnegative, check_range
+from ..params.inertia import BaseParameters
+from ..plant.geometry import lever_arms, contractions
+from ..plant.muscle import force_function
+from ..plant.pneumatics import static_pressures, valve_set_values
 from .lsq import LSQResult, as_samples, same_length, solve
 
 #: Names, units of the static gravity parameters in the order of (3.15) / Table 3.1.
@@ -183,8 +187,6 @@ def torques_from_forces(q, forces, arm) -> np.ndarray:
     arm : ArmParameters
         Supplies the geometry.
     """
-    from ..plant.geometry import lever_arms
-
     q = as_samples("q", q, ncols=2, ndim=2)
     F = as_samples("forces", forces, ncols=4, ndim=2)
     same_length(q=q, forces=F)
@@ -252,8 +254,6 @@ def gravity_base_parameters(result: LSQResult, template):
         Supplies the inertial and friction entries the static experiment
         cannot identify.
     """
-    from ..params.inertia import BaseParameters
-
     if not isinstance(result, LSQResult) or result.names != GRAVITY_NAMES:
         raise TypeError("result must be the LSQResult of identify_gravity")
     if not isinstance(template, BaseParameters):
@@ -275,8 +275,6 @@ def true_gravity_parameters(base) -> np.ndarray:
 
 def _holdable(q, arm) -> np.ndarray:
     """True where the static pressures and the set values delivering them are in [0, p_max]."""
-    from ..plant.pneumatics import static_pressures
-
     pmax = arm.pneumatics.p_max
     p = static_pressures(q, arm)
     v1 = np.array([v.v1 for v in arm.valves.valves])
@@ -402,10 +400,6 @@ def static_experiment(arm, q, *, seed: int = 0, noise: bool = True,
     -------
     StaticExperiment
     """
-    from ..plant.geometry import contractions
-    from ..plant.muscle import force_function
-    from ..plant.pneumatics import static_pressures, valve_set_values
-
     q = as_samples("q", q, ncols=2, ndim=2)
     fv = np.asarray(force_noise_var, dtype=float)
     av = np.asarray(angle_noise_var, dtype=float)

@@ -46,11 +46,11 @@ from .._jit import kernel
 from .._validation import (as_float_array, check_choice, check_finite_result, check_int,
                            check_range)
 from ..layouts import Field, Layout
-from .head import HeadContactModel
 from ..plant import dynamics as dyn
 from ..plant import geometry as geo
-from ..plant import layout as lay
+from ..plant import packing
 from ..plant.dynamics import coriolis_cs
+from ..plant.torque import torque_functions
 from ..plots.iso import plot_clamping_histories
 from . import engine as eng
 from .contact import hunt_crossley_elastic, hunt_crossley_force, hunt_crossley_potential
@@ -320,7 +320,7 @@ def _prepare(arm, q, qd, stiffness, head, wall, dt, duration, step_for_check):
     u = v / sp[:, None]
     cases = eng.pack_cases(n, q=q, qd=qd, K=K, u=u, v_head=0.0,
                            arm_mode=int(eng.ArmMode.FLEXIBLE))
-    P = np.array(lay.pack(arm))
+    P = np.array(packing.pack(arm))
     hp = eng.pack_head(hm)
     r = geo.forward_kinematics(q, arm)
     offset = np.einsum("ni,ni->n", r + hm.radius * u, u)
@@ -526,8 +526,6 @@ def static_force_bound(q, direction, arm, *, mode: str = "hardware",
         One row per configuration: ``F_u`` [N] (the bound), ``p1``..``p4``
         [Pa] (pressures attaining it), ``tau1``, ``tau2`` [N m].
     """
-    from ..plant.torque import torque_functions
-
     arm = check_arm(arm)
     q = np.atleast_2d(as_float_array("q", q, ndim=(1, 2), shape_tail=(2,)))
     d = np.atleast_2d(as_float_array("direction", direction, ndim=(1, 2), shape_tail=(2,)))

@@ -63,23 +63,28 @@ from .._validation import (InvalidTypeError, as_float_array, check_int, check_ra
 from ..control.dispatch import NINT, NSCRATCH, NSTATE, controller_step
 from ..control.estimation import (EI_R, ESTIMATOR_SCRATCH, ESTIMATOR_STATE, ForceEstimator,
                                   estimator_step)
-from ..experiments.closed_loop import (DIVERGENCE_VELOCITY, IL_EST, IL_F, L_DP, L_INT, L_P, L_Q,
-                                       L_QD, L_QDM, L_QM, L_T, L_U, L_X, L_XD, L_Y, L_YD, NEST,
-                                       Z_INTERNALS, Z_PARAMS, Z_SCRATCH, Z_STATE)
 from ..control.reference import NREF, R_Q_D, R_R_D
 from ..control.sensors import (N_Q, N_QD, NSENSOR, SENSOR_NOISE, pressure_read, sensor_init,
                                sensor_read, sensor_reset, sensor_track)
+from ..experiments.case import ExperimentCase
+from ..experiments.closed_loop import (DIVERGENCE_VELOCITY, IL_EST, IL_F, L_DP, L_INT, L_P, L_Q,
+                                       L_QD, L_QDM, L_QM, L_T, L_U, L_X, L_XD, L_Y, L_YD, NEST,
+                                       Z_INTERNALS, Z_PARAMS, Z_SCRATCH, Z_STATE, ExperimentResult,
+                                       NILOG, NLOG, _EST_NAMES, _EXT_NAMES, _check_valves,
+                                       _controller_rows)
+from ..experiments.trajectories import Reference
 from ..layouts import Field, Layout
-from ..plant import layout as lay
-from ..plant.geometry import tcp_jacobian, tcp_position
+from ..plant import packing
+from ..plant.geometry import tcp_jacobian, tcp_position, forward_kinematics
 from ..plant.model import (NWORK, NX, X_P, X_Q, X_QD, effect_state_length, effects_init,
-                           effects_update, plant_rhs, rk4_step, valve_delay)
+                           effects_update, plant_rhs, rk4_step, valve_delay, rest_state)
 from ..plant.pneumatics import delta_p_to_set_values
 from ..plots.reaction import plot_collision
 from ..units import G0
 from .contact import hunt_crossley_elastic, hunt_crossley_force
 from .engine import HP_B, HP_K, HP_M, HP_N, HP_R, pack_head
 from .hic import hic_kernel
+from .model import resolve_head
 
 
 class Reaction(IntEnum):
@@ -480,7 +485,6 @@ def calibrate_threshold(free_run, *, margin: float = DETECTION_MARGIN) -> np.nda
     numpy.ndarray, shape (2,)
         Thresholds on |r_1|, |r_2| [N m].
     """
-    from ..experiments.closed_loop import ExperimentResult
     if not isinstance(free_run, ExperimentResult):
         raise InvalidTypeError(f"free_run must be an ExperimentResult, got {describe(free_run)}")
     margin = check_range("margin", margin, 1.0, 1e3)
@@ -512,8 +516,6 @@ def head_touching(free_run, k0: int, head=None) -> tuple:
     u : numpy.ndarray, shape (2,)
         Unit TCP velocity direction at k0.
     """
-    from ..experiments.closed_loop import ExperimentResult
-    from .model import resolve_head
     if not isinstance(free_run, ExperimentResult):
         raise InvalidTypeError(f"free_run must be an ExperimentResult, got {describe(free_run)}")
     k0 = check_int("k0", k0, 0, len(free_run.t) - 1)
@@ -751,15 +753,6 @@ def simulate_collision(case, *, head_position, head=None, head_velocity=(0.0, 0.
     UserWarning
         If the closed loop diverged.
     """
-    from ..experiments.case import ExperimentCase
-    from ..experiments.closed_loop import (INTERACTION_LOG, NILOG, NLOG, ExperimentResult,
-                                           _EST_NAMES, _EXT_NAMES, _check_valves,
-                                           _controller_rows)
-    from ..experiments.trajectories import Reference
-    from ..plant.model import rest_state
-    from ..plant.geometry import forward_kinematics
-    from .model import resolve_head
-
     if not isinstance(case, ExperimentCase):
         raise InvalidTypeError(f"case must be an ExperimentCase, got {describe(case)}")
     if case.has_external_input:
@@ -788,7 +781,7 @@ def simulate_collision(case, *, head_position, head=None, head_velocity=(0.0, 0.
     x0 = np.array(x0, dtype=float)
     # writable rows, as in run_batch: a read-only row is a different numba type and would
     # compile controller_step, rk4_step and plant_rhs a second time (about 15 s, cold cache)
-    Pp = kernel_array(lay.pack(arm))
+    Pp = kernel_array(packing.pack(arm))
     _check_valves(Pp, dt, substeps, case.name)
     r0 = forward_kinematics(x0[:2], arm)
     if t_on == 0.0 and np.hypot(*(xh0 - r0)) <= hm.radius:

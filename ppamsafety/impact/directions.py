@@ -75,7 +75,7 @@ from __future__ import annotations
 import functools
 import math
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
@@ -84,13 +84,15 @@ from .._validation import (as_float_array, check_bool, check_int, check_range, c
                            check_finite_result)
 from ..plant import dynamics as dyn
 from ..plant import geometry as geo
-from ..plant import layout as lay
+from ..plant import packing
 from ..plots.impact import plot_direction_polar
 from ..units import G0
 from . import engine as eng
 from .bounds import impact_bounds
+from .instants import impact_states, _check_result
 from .model import (ENERGY_TOL, MAX_JOINT_SPEED, check_angles, check_arm, check_pass_through,
                     check_stiffness, resolve_head)
+from .twobody import two_body_impact
 
 #: Largest |psi| searched [rad]: 89 deg (v_n = |v_tcp| cos(psi) > 0; at 90 deg the tool grazes).
 PSI_LIMIT = math.radians(89.0)
@@ -195,8 +197,6 @@ class TwoBodyPredictor:
 
 @functools.lru_cache(maxsize=16)
 def _table(hm, vmax):
-    from .twobody import two_body_impact
-
     v = np.geomspace(TABLE_VMIN, vmax, TABLE_POINTS)
     arm_mass = 1.0 / (1.0 / TABLE_MU - 1.0 / hm.mass)
     r = two_body_impact(v, arm_mass=arm_mass, head_mass=hm.mass, stiffness=hm.stiffness,
@@ -286,7 +286,7 @@ class _Engine:
     """
 
     def __init__(self, arm, hm, dt, duration):
-        self.P = np.array(lay.pack(arm))
+        self.P = np.array(packing.pack(arm))
         self.hp = eng.pack_head(hm)
         self.dt = float(dt)
         self.nsteps = int(math.ceil(duration / dt - 1e-9))
@@ -666,7 +666,6 @@ class WorstDirection:
 
 
 def _states(result, arm, every, min_speed):
-    from .instants import impact_states
     st = impact_states(result, arm)
     idx = np.arange(0, len(st), every)
     idx = idx[st["tcp_speed"].to_numpy()[idx] >= min_speed] if min_speed > 0 else idx
@@ -780,8 +779,6 @@ def worst_direction(result, arm, *, every: int = 1, head=None, dt: float = 2e-5,
     -------
     WorstDirection
     """
-    from .instants import _check_result
-
     result = _check_result(result)
     arm = check_arm(arm)
     every = check_int("every", every, 1, 10 ** 6)

@@ -646,7 +646,7 @@ def impact_batch_dense(CASES, P, hp, dt, nsteps, w36, w15, SUM):
     CASES : numpy.ndarray, shape (N, NCASE)
         Impact cases, rows of :data:`CASE`.
     P : numpy.ndarray
-        Arm parameter vector (:func:`ppamsafety.plant.layout.pack`).
+        Arm parameter vector (:func:`ppamsafety.plant.packing.pack`).
     hp : numpy.ndarray
         Head row (:data:`HEAD`).
     dt : float

@@ -35,7 +35,10 @@ import pandas as pd
 
 from .._validation import (as_float_array, check_finite_result, check_instance, check_positive,
                            check_range, check_range_array, check_real)
+from ..params import ArmParameters
+from ..plant import geometry as geo
 from ..units import DEG, G0
+from .model import effective_mass
 from .thesis_data import table_6_1_pairs
 from .twobody import two_body_impact
 
@@ -47,7 +50,6 @@ ISO_TS_15066_FOREHEAD_FORCE = 130.0  # N, quasi-static permissible force, skull/
 
 
 def _arm(arm):
-    from ..params import ArmParameters   # local: params is imported by the impact package
     return check_instance("arm", arm, ArmParameters)
 
 
@@ -82,8 +84,6 @@ def default_arm_mass(arm) -> float:
         The arm (links, geometry); TypeError otherwise.
     """
     arm = _arm(arm)
-    from ..plant import geometry as geo
-    from .model import effective_mass
 
     q = np.array([50 * DEG, -80 * DEG])
     return float(effective_mass(q, geo.jacobian(q, arm)[:, 0], arm))

@@ -18,16 +18,18 @@ import pandas as pd
 from .._validation import (InvalidTypeError, check_bool, check_choice, check_instance,
                            check_int,
                            check_nonnegative, describe)
+from ..experiments.closed_loop import ExperimentResult
 from ..plant import geometry as geo
 from ..plant.pneumatics import joint_stiffness
 from . import engine as eng
+from .bounds import impact_bounds
 from .model import ImpactResults, _simulate_impacts, check_arm, resolve_head, simulate_impacts  # noqa: F401
+from .model import _prepare_impacts, _run_cases, _summary_frame
 
 HEURISTICS = ("max TCP speed", "max |qd1|", "max |qd2|", "max ||qd||")
 
 
 def _check_result(result):
-    from ..experiments.closed_loop import ExperimentResult
     return check_instance("result", result, ExperimentResult)
 
 
@@ -256,9 +258,6 @@ def worst_instant(result, arm, *, every: int = 1, head=None, dt: float = 2e-5,
     -------
     WorstInstants
     """
-    from .bounds import impact_bounds
-    from .model import _prepare_impacts, _run_cases, _summary_frame
-
     every = check_int("every", every, 1, 10 ** 6)
     chunk = check_int("chunk", chunk, 1, 10 ** 6)
     screen = check_bool("screen", screen)

@@ -20,14 +20,14 @@ import pandas as pd
 from .._validation import (InvalidTypeError, as_float_array, check_bool, check_choice,
                            check_finite_result, check_int, check_range,
                            check_range_array, check_same_rows, check_str, describe)
-from .head import HeadContactModel, head_model, head_model_names
 from ..plant import dynamics as dyn
 from ..plant import geometry as geo
-from ..plant import layout as lay
+from ..plant import packing
 from ..plant._checks import check_arm  # noqa: F401  (also used by reference, pymunk, instants)
 from ..plots.impact import plot_impact_history
 from . import engine as eng
 from .contact import max_penetration
+from .head import HeadContactModel, head_model, head_model_names
 
 # ---- plausibility thresholds (issue 8) -----------------------------------------------------
 #: Joint angles beyond this magnitude [rad] are refused: no revolute joint of a planar
@@ -946,7 +946,7 @@ def _prepare_impacts(arm, q, qd, stiffness, *, head, direction, head_velocity, f
     w15 = int(math.floor(0.015 / dt * (1 + 1e-9)))
     return _Prepared(q=q, qd=qd, K=K, u=u, speed=speed, cases=cases, sel=sel,
                      hist_idx=hist_idx, hist_of=hist_of, hp=eng.pack_head(hm),
-                     P=np.array(lay.pack(arm)), head=hm, dt=float(dt),
+                     P=np.array(packing.pack(arm)), head=hm, dt=float(dt),
                      duration=float(duration), nsteps=nsteps, w36=w36, w15=w15,
                      arm=arm, fixed_arm=fixed_arm, joint_model=jm, B=B)
 

@@ -56,12 +56,13 @@ import numpy as np
 import pandas as pd
 
 from .._validation import as_float_array, check_finite_result, check_int, check_range
-from .head import HeadContactModel
 from ..layouts import Field, Layout
 from ..units import G0
 from .contact import hunt_crossley_elastic, hunt_crossley_force
 from .engine import HIST as _HIST
+from .head import HeadContactModel
 from .hic import hic
+from .model import check_angles, check_arm, check_pass_through, check_stiffness, resolve_head
 
 #: Columns of :attr:`PymunkImpact.history`: the main engine's history fields of the same
 #: names and meaning (:data:`ppamsafety.impact.engine.HIST`) and the dissipated energy.
@@ -202,7 +203,6 @@ def simulate_impact_pymunk(arm, q, qd, stiffness, *, head: HeadContactModel | st
     except ImportError as exc:  # pragma: no cover - depends on the environment
         raise ImportError("simulate_impact_pymunk needs pymunk (pip install pymunk)") from exc
 
-    from .model import check_angles, check_arm, check_pass_through, check_stiffness, resolve_head
 
     arm = check_arm(arm)
     q = as_float_array("q", q, shape_tail=(2,))

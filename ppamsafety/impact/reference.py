@@ -15,7 +15,7 @@ import numpy as np
 from .._validation import (as_float_array, check_choice, check_finite_result, check_range,
                            check_range_array)
 from ..plant import geometry as geo
-from ..plant import layout as lay
+from ..plant import packing
 from ..units import G0
 from . import engine as eng
 from .hic import hic
@@ -115,7 +115,7 @@ def simulate_impact_scipy(arm, q, qd, stiffness, *, head=None, method: str = "RK
     case = eng.pack_cases(1, q=q, qd=qd, K=K, u=v / sp,
                           v_head=0.0, arm_mode=int(eng.ArmMode.FLEXIBLE),
                           joint_model=int(jm), B=B)[0]
-    P = np.array(lay.pack(arm))
+    P = np.array(packing.pack(arm))
     hp = eng.pack_head(hm)
     y0 = np.empty(eng.NY)
     eng.initial_state(case, P, hp, y0)

@@ -11,6 +11,9 @@ import math
 
 import pandas as pd
 
+from .._validation import InvalidTypeError, check_bool, describe
+from ..experiments.thesis_data import join_thesis
+
 #: Thesis Table 6.1 (§6.3.3): HIC and F_max [N] of the worst of four impact instants
 #: for the step response (fig. 5.17) and the trajectory switch (fig. 5.15), printed
 #: values.  Columns: label (the thesis' wording), controller (family), Ki
@@ -96,9 +99,6 @@ def join_table_6_1(results: pd.DataFrame, *, complete: bool | None = None) -> pd
     pandas.DataFrame
         ``results`` (row order kept) with ``HIC_thesis`` and ``Fmax_thesis``.
     """
-    from .._validation import InvalidTypeError, check_bool, describe
-    from ..experiments.thesis_data import join_thesis
-
     if not isinstance(results, pd.DataFrame):
         raise InvalidTypeError(f"results must be a pandas DataFrame, got {describe(results)}")
     missing = [c for c in ("controller_family", "ki_bar", "lambda_s", "experiment")

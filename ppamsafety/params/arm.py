@@ -62,7 +62,7 @@ class ArmParameters:
     effects : Effects
         Optional plant effects (payload, truth-vs-model friction, valves,
         polytropic exponent), all off by default.  Read only by the plant
-        truth row ``plant.layout.pack(arm)``, never by the controllers' views
+        truth row ``plant.packing.pack(arm)``, never by the controllers' views
         (see :mod:`ppamsafety.params.effects`).
 
     Notes

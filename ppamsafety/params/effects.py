@@ -9,7 +9,7 @@ the packed plant row is bitwise the nominal one.
 Which view sees what
 --------------------
 ``ArmParameters.effects`` is read by exactly one function,
-:func:`ppamsafety.plant.layout.pack` *without* a ``dynamics`` argument -- the
+:func:`ppamsafety.plant.packing.pack` *without* a ``dynamics`` argument -- the
 **plant truth** row that the simulators integrate (``plant.model.simulate``,
 the closed loop, the impact models) and that the plant-level NumPy helpers
 (``plant.dynamics.inertia_matrix(q, arm)``, ``plant.model.rest_state`` ...)

@@ -17,6 +17,8 @@ import inspect
 import numpy as np
 
 from .._validation import as_float_array, check_instance, check_range_array
+from ..params.arm import ArmParameters
+from ..params.inertia import BaseParameters
 
 ANGLE_MAX = 2 * np.pi
 SPEED_MAX = 1.0e3
@@ -28,7 +30,6 @@ TORQUE_MAX = 1.0e4
 
 def check_arm(arm, name: str = "arm"):
     """``arm`` if it is an :class:`~ppamsafety.params.ArmParameters`, else ``TypeError``."""
-    from ..params.arm import ArmParameters
     return check_instance(name, arm, ArmParameters)
 
 
@@ -36,7 +37,6 @@ def check_params(params, name: str = "params"):
     """``params`` if None or a :class:`~ppamsafety.params.BaseParameters`, else ``TypeError``."""
     if params is None:
         return None
-    from ..params.inertia import BaseParameters
     return check_instance(name, params, BaseParameters)
 
 

@@ -13,7 +13,7 @@ m1 d_G1, I_zO,1 + m2 L1^2, m2 L_G2, m2 d_G2, I_zS,2]::
 
 Friction (3.30) is Coulomb + viscous; the plant uses a smooth Coulomb term
 c tanh(qd / v_s) (see ``ArmParameters.friction_velocity``).  Which
-coefficients: the plant-truth row (``layout.pack(arm)``) holds
+coefficients: the plant-truth row (``packing.pack(arm)``) holds
 ``arm.links.coulomb/viscous`` (by default the identified Table 3.5 values, so
 nominally truth = belief) unless ``arm.effects.friction_coulomb/viscous``
 override them; the controllers' rows hold ``arm.model`` (Table 3.5) or
@@ -33,11 +33,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from .._jit import kernel, kernel_array, leaf
 
+from .._jit import kernel, kernel_array, leaf
 from .._validation import as_float_array, check_bool, check_range  # noqa: F401
+from . import packing
 from ._checks import accelerations, angles, check_pressures, checks_arm, speeds, torques  # noqa: F401
-from . import layout as lay
 from .layout import COUL, GRAV, L1, THETA1, THETA2, THETA3, THETA4, THETA5, THETA6, VFRIC, VISC
 
 
@@ -241,7 +241,7 @@ def forward_dynamics(q1, q2, w1, w2, tau1, tau2, P):
 
 
 def _params_vector(arm, params):
-    return lay.pack(arm) if params is None else lay.pack(arm, params)
+    return packing.pack(arm) if params is None else packing.pack(arm, params)
 
 
 @kernel

@@ -15,13 +15,14 @@ and an :class:`~ppamsafety.params.ArmParameters`.
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 
 import numpy as np
-from .._jit import kernel, kernel_array, leaf
 
+from .._jit import kernel, kernel_array, leaf
 from .._validation import as_float_array
-from ._checks import accelerations, angles, check_pressures, checks_arm, speeds, torques  # noqa: F401
 from . import layout as lay
+from ._checks import accelerations, angles, check_pressures, checks_arm, speeds, torques  # noqa: F401
 from .layout import (D12, D22, D32, D33, D42, D43, DL, L1, L2, L12, L22, L32, L33, L42, L43,
                      LL, X11, X21, Y11, Y21)
 
@@ -233,7 +234,7 @@ def attachment_points(q, arm) -> np.ndarray:
     """
     qf, lead = _flat_q(q)
     out = np.empty((qf.shape[0], 8, 2))
-    _points_many(qf, kernel_array(lay.pack(arm)), out)
+    _points_many(qf, kernel_array(geometry_row(arm.geometry, arm.muscles)), out)
     return out.reshape(lead + (8, 2))
 
 
@@ -257,7 +258,7 @@ def muscle_lengths(q, arm, *, with_derivatives: bool = False):
     qf, lead = _flat_q(q)
     n = qf.shape[0]
     d, h, dh = np.empty((n, 4)), np.empty((n, 4)), np.empty((n, 4))
-    _lengths_many(qf, kernel_array(lay.pack(arm)), d, h, dh)
+    _lengths_many(qf, kernel_array(geometry_row(arm.geometry, arm.muscles)), d, h, dh)
     shp = lead + (4,)
     if with_derivatives:
         return d.reshape(shp), h.reshape(shp), dh.reshape(shp)
@@ -334,6 +335,40 @@ def design_connection_lengths(P, geometry, eps_min: float, eps_max: float) -> np
     return out
 
 
+@lru_cache(maxsize=128)
+def geometry_row(geometry, muscles=None) -> np.ndarray:
+    """The plant row with the fields the kinematics kernels read; every other slot 0.
+
+    The same values as in :func:`ppamsafety.plant.packing.pack`, so kinematics
+    need no full packed row.
+
+    Parameters
+    ----------
+    geometry : ArmGeometry
+        Attachment points, link lengths and working area [m, rad].
+    muscles : MuscleSet, optional
+        With it, the row also holds ``n_muscles``, ``l0`` and the connection
+        lengths of :func:`design_connection_lengths` (what the muscle-length and
+        contraction kernels read).
+
+    Returns
+    -------
+    numpy.ndarray, shape (NP,)
+        Read-only row (layout :data:`~ppamsafety.plant.layout.PLANT`).
+    """
+    values = lay.geometry_values(geometry)
+    if muscles is not None:
+        groups = muscles.groups
+        values.update(n_muscles=[g.n_muscles for g in groups], l0=[g.l0 for g in groups])
+        P = lay.partial_row(values)
+        P[lay.LCONN:lay.LCONN + 4] = design_connection_lengths(P, geometry, muscles.eps_min,
+                                                               muscles.eps_max)
+    else:
+        P = lay.partial_row(values)
+    P.setflags(write=False)
+    return P
+
+
 @checks_arm
 def connection_lengths(arm) -> np.ndarray:
     """Connection lengths L_conn,i of the arm (Table A.1) [m], shape (4,).
@@ -343,7 +378,7 @@ def connection_lengths(arm) -> np.ndarray:
     arm : ArmParameters
         The arm.
     """
-    return np.array(lay.pack(arm)[lay.LCONN:lay.LCONN + 4])
+    return np.array(geometry_row(arm.geometry, arm.muscles)[lay.LCONN:lay.LCONN + 4])
 
 
 @checks_arm
@@ -357,7 +392,7 @@ def contractions(q, arm) -> np.ndarray:
     arm : ArmParameters
         The arm.
     """
-    P = lay.pack(arm)
+    P = geometry_row(arm.geometry, arm.muscles)
     d = muscle_lengths(q, arm)
     nm, l0, lc = P[lay.NM:lay.NM + 4], P[lay.L0:lay.L0 + 4], P[lay.LCONN:lay.LCONN + 4]
     return (lc + nm * l0 - d) / (nm * l0)
@@ -383,7 +418,7 @@ def forward_kinematics(q, arm) -> np.ndarray:
     """
     qf, lead = _flat_q(q)
     out, jac = np.empty((qf.shape[0], 2)), np.empty((qf.shape[0], 2, 2))
-    _fk_many(qf, kernel_array(lay.pack(arm)), out, jac)
+    _fk_many(qf, kernel_array(geometry_row(arm.geometry, arm.muscles)), out, jac)
     return out.reshape(lead + (2,))
 
 
@@ -400,7 +435,7 @@ def jacobian(q, arm) -> np.ndarray:
     """
     qf, lead = _flat_q(q)
     out, jac = np.empty((qf.shape[0], 2)), np.empty((qf.shape[0], 2, 2))
-    _fk_many(qf, kernel_array(lay.pack(arm)), out, jac)
+    _fk_many(qf, kernel_array(geometry_row(arm.geometry, arm.muscles)), out, jac)
     return jac.reshape(lead + (2, 2))
 
 

@@ -28,7 +28,7 @@ fixed once and for all::
     rk4_step(x, z, u, tau_ext, h, P, work)       # ends with effects_update(x, z, u, P)
     effects_update(x, z, u, P)                   # once per RK4 step, after the step
 
-With every effect off (the default of :func:`~ppamsafety.plant.layout.pack`)
+With every effect off (the default of :func:`~ppamsafety.plant.packing.pack`)
 ``z`` is empty, :func:`effects_update` does nothing and the results are
 bitwise those of the plant without the extension point
 (``tests/test_golden.py``).
@@ -44,8 +44,8 @@ How to add an effect
    ``tests/test_layouts.py`` round-trips them automatically.  Give the
    effect a way to be switched on: a field of
    :class:`~ppamsafety.params.effects.Effects` (``ArmParameters.effects``)
-   that :func:`~ppamsafety.plant.layout.pack` writes into the plant-truth
-   row, and/or :func:`~ppamsafety.plant.layout.with_effects` for packed rows.
+   that :func:`~ppamsafety.plant.packing.pack` writes into the plant-truth
+   row, and/or :func:`~ppamsafety.plant.packing.with_effects` for packed rows.
 2. *State.*  Declare the contents of its state in ``EFFECT_STATE`` (fixed
    size), or, for a variable-length memory, an offset/length pair in its
    parameters.  Whoever switches the effect on sets ``effect_state_length``
@@ -69,7 +69,7 @@ How to add an effect
 
 An effect that is a pure change of plant *parameters* needs none of steps
 2-4: it is folded into the plant-truth row by
-:func:`~ppamsafety.plant.layout.pack` from ``ArmParameters.effects``
+:func:`~ppamsafety.plant.packing.pack` from ``ArmParameters.effects``
 (:class:`~ppamsafety.params.effects.Effects`) and only flagged in the effect
 section.  That is how the parameter-only effects work -- payload at A_L (folded
 into theta), plant friction, valve offset/gain/time constant and polytropic
@@ -132,22 +132,22 @@ import math
 import numpy as np
 
 from .._jit import kernel, kernel_array, leaf
-
 from .._validation import (as_float_array, check_bool, check_finite_result, check_int,
                            check_range)
-from ._checks import (accelerations, angles, check_arm, check_pressures, checks_arm,  # noqa: F401
-                      speeds, torques)
 from ..hysteresis.force import hysteresis_factor, scaled_contraction
 from ..hysteresis.memory import MAX_DEPTH, MEMORY, preisach_output, preisach_peek, \
     preisach_update
 from ..layouts import Field, Layout
 from . import layout as lay
+from . import packing
+from ._checks import (accelerations, angles, check_arm, check_pressures, checks_arm,  # noqa: F401
+                      speeds, torques)
 from .dynamics import forward_dynamics_cs
 from .layout import (DEAD, DEAD_LEN, DEAD_MODE, HYST_DELTA, HYST_EPS_MAX, HYST_INIT,
                      HYST_MODE, HYST_ROW, HYST_STAGES, HYST_WFIT_INTERCEPT, HYST_WFIT_SLOPE, NZ,
                      Z_DELAY, Z_DELAY_COUNT, Z_HYST, Z_HYST_DIR, Z_HYST_SLOPE, Z_HYST_W,
                      HysteresisStages, Switch)
-from .pneumatics import pressure_rates
+from .pneumatics import pressure_rates, static_pressures
 from .torque import group_contraction, group_terms, torque_kernel_cs
 
 #: The plant state x, one row per batch case (thesis (3.1), (3.6)).
@@ -528,7 +528,7 @@ def simulate(arm, x0, set_values, *, dt: float = 1e-3, substeps: int = 2,
         for i, a in enumerate(arms):
             check_arm(a, "arm" if len(arms) == 1 and not isinstance(arm, (list, tuple))
                       else f"arm[{i}]")
-        rows = np.array([lay.pack(a) for a in arms])
+        rows = np.array([packing.pack(a) for a in arms])
     else:
         rows = np.atleast_2d(as_float_array("params", params, shape_tail=(lay.NP,)))
     B = max(B, rows.shape[0])
@@ -546,7 +546,7 @@ def simulate(arm, x0, set_values, *, dt: float = 1e-3, substeps: int = 2,
         T = torques("tau_ext", tau_ext)
         T = np.array(np.broadcast_to(T if T.ndim == 3 else T[None], (B, U.shape[1], 2)))
     check_valve_step(rows, dt / substeps)
-    nz = int(lay.effect_state_lengths(rows).max())
+    nz = int(packing.effect_state_lengths(rows).max())
     if effect_state is None:
         Z = initial_effect_state(rows)
     else:
@@ -590,7 +590,7 @@ def initial_effect_state(rows) -> np.ndarray:
     rows = np.atleast_2d(np.asarray(rows, dtype=float))   # inf allowed: closed valves
     if rows.ndim != 2 or rows.shape[1] != lay.NP:
         raise ValueError(f"rows must have shape ({lay.NP},) or (B, {lay.NP}), got {rows.shape}")
-    n = lay.effect_state_lengths(rows)
+    n = packing.effect_state_lengths(rows)
     Z = np.zeros((rows.shape[0], int(n.max())))
     _init_many(Z, kernel_array(rows))
     return Z
@@ -685,7 +685,7 @@ def hysteresis_factors(states, arm=None, *, params=None, effect_state=None):
     if params is None:
         if arm is None:
             raise ValueError("hysteresis_factors needs arm or params")
-        P = lay.pack(arm)
+        P = packing.pack(arm)
     else:
         P = as_float_array("params", params, shape_tail=(lay.NP,))
         if P.ndim != 1:
@@ -779,7 +779,7 @@ def state_derivative(x, set_values, arm, *, tau_ext=None) -> np.ndarray:
     tf = np.zeros((xf.shape[0], 2)) if tau is None else np.ascontiguousarray(
         np.broadcast_to(tau, shape + (2,)).reshape(-1, 2))
     out = np.empty_like(xf)
-    _rhs_many(kernel_array(xf), kernel_array(uf), kernel_array(tf), kernel_array(lay.pack(arm)),
+    _rhs_many(kernel_array(xf), kernel_array(uf), kernel_array(tf), kernel_array(packing.pack(arm)),
               out)
     return check_finite_result("state_derivative", out.reshape(shape + (NX,)), "these x, "
                                "set_values (the state is outside the model's valid range)")
@@ -825,8 +825,6 @@ def rest_state(q, arm) -> tuple[np.ndarray, np.ndarray]:
     x0 : numpy.ndarray, shape (8,)
     set_values : numpy.ndarray, shape (4,)
     """
-    from .pneumatics import static_pressures
-
     q = angles("q", q)
     if q.shape != (2,):
         raise ValueError(f"q must be a single configuration of shape (2,), got {q.shape}")
@@ -834,7 +832,7 @@ def rest_state(q, arm) -> tuple[np.ndarray, np.ndarray]:
     if np.any(p < 0) or np.any(p > arm.pneumatics.p_max):
         raise ValueError(f"rest_state: configuration q = {q} needs pressures {p} Pa outside "
                          f"[0, {arm.pneumatics.p_max:g}] Pa")
-    P = lay.pack(arm)
+    P = packing.pack(arm)
     v1 = lay.PLANT.read(P, "v1")
     v2 = lay.PLANT.read(P, "v2")
     return np.concatenate([q, [0.0, 0.0], p]), (p - v1) / v2

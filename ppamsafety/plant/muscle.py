@@ -17,20 +17,21 @@ F = -p dV/dl with l = l0 (1 - eps), gives for one muscle::
 
 so V(eps) = V(eps_a) + l0 * integral_{eps_a}^{eps} f, integrated in closed
 form (a0 ln(eps/eps_a) + a1 (eps - eps_a) + ...).  The anchor V(eps_a) is
-explained in :func:`ppamsafety.plant.layout.anchor_volume`.  A group of
+explained in :func:`anchor_volume`.  A group of
 n_m muscles holds n_m V.
 """
 
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 
 import numpy as np
-from .._jit import kernel, kernel_array, leaf
 
+from .._jit import kernel, kernel_array, leaf
 from .._validation import as_float_array, check_int
-from ._checks import accelerations, angles, check_pressures, checks_arm, speeds, torques  # noqa: F401
 from . import layout as lay
+from ._checks import accelerations, angles, check_pressures, checks_arm, speeds, torques  # noqa: F401
 from .layout import COEF, EPS_F0, EPS_FLOOR, L0, V_C
 
 
@@ -205,7 +206,7 @@ def _evaluate(kind, group, eps, arm):
     e = as_float_array("eps", eps)
     flat = kernel_array(e.reshape(-1))
     out = np.empty_like(flat)
-    _eval_many(kind, k, flat, kernel_array(lay.pack(arm)), out)
+    _eval_many(kind, k, flat, kernel_array(muscle_row(arm.muscles)), out)
     return out.reshape(e.shape)
 
 
@@ -258,6 +259,112 @@ def antiderivative(coefficients, eps) -> np.ndarray:
         Contraction [-], > 0.
     """
     return _coef_eval(1, coefficients, eps)
+
+
+def zero_force_contraction(coef, eps_a: float, eps_hi: float = 0.6) -> float:
+    """First contraction above ``eps_a`` where the force polynomial (3.9) is zero.
+
+    The polynomial is evaluated by the plant's own kernel (:func:`poly_value`).
+
+    Parameters
+    ----------
+    coef : array_like, shape (5,)
+        Force-law coefficients a0..a4 (3.9) [N/Pa].
+    eps_a : float
+        Anchor contraction [-] where the search starts.
+    eps_hi : float
+        Largest contraction searched [-]; returned when the force stays positive.
+
+    Returns
+    -------
+    float
+        The zero-force contraction [-].
+    """
+    from scipy.optimize import brentq
+
+    e = np.linspace(eps_a, eps_hi, 5001)
+    f = polynomial(coef, e)
+    idx = np.nonzero(f <= 0.0)[0]
+    if idx.size == 0:
+        return eps_hi
+    j = idx[0]
+    a0, a1, a2, a3, a4 = (float(c) for c in coef)
+    fun = lambda x: poly_value(a0, a1, a2, a3, a4, x)  # noqa: E731
+    return float(brentq(fun, e[j - 1], e[j])) if j > 0 else float(e[0])
+
+
+def anchor_volume(group, eps_a: float) -> float:
+    """Volume of one muscle at the anchor contraction ``eps_a`` [m^3].
+
+    The fitted force law (3.9) has an a0/eps term whose integral diverges at
+    eps = 0, so the volume cannot be integrated from the uncontracted cylinder
+    directly.  Near eps = 0 the membrane bulge grows like sqrt(eps), so
+    dV/deps ~ c/sqrt(eps); matching c to the fitted dV/deps = l0 F/p at eps_a
+    gives V(eps_a) = pi R^2 l0 + 2 eps_a l0 f(eps_a), with the cylinder of
+    radius R = l0/slenderness as the eps = 0 value (thesis fig. 2.4 scale).
+
+    Parameters
+    ----------
+    group : MuscleGroup
+        The muscle group (force-law coefficients (3.9), membrane length l0
+        [m], radius [m]).
+    eps_a : float
+        Anchor contraction [-] (``MuscleSet.eps_min``), > 0.
+    """
+    f_a = float(polynomial(group.coefficients, eps_a))
+    r = group.radius
+    return float(np.pi * r ** 2 * group.l0 + 2.0 * eps_a * group.l0 * max(f_a, 0.0))
+
+
+@lru_cache(maxsize=64)
+def muscle_terms(muscles) -> tuple:
+    """Derived data of the four muscle groups the force and volume kernels read.
+
+    Parameters
+    ----------
+    muscles : MuscleSet
+        The muscle groups and their contraction range.
+
+    Returns
+    -------
+    eps_a, eps_f0, v_c : tuple of 4 float
+        Anchor contraction ``eps_min`` [-], zero-force contraction
+        (:func:`zero_force_contraction`) [-] and volume constant (volume at
+        ``eps_a`` (:func:`anchor_volume`) minus l0 times the force-law
+        antiderivative there) [m^3] of each group.
+    """
+    groups = muscles.groups
+    eps_a = (muscles.eps_min,) * 4
+    eps_f0 = tuple(zero_force_contraction(g.coefficients, muscles.eps_min) for g in groups)
+    v_c = tuple(anchor_volume(g, muscles.eps_min)
+                - g.l0 * float(antiderivative(g.coefficients, muscles.eps_min)) for g in groups)
+    return eps_a, eps_f0, v_c
+
+
+@lru_cache(maxsize=64)
+def muscle_row(muscles) -> np.ndarray:
+    """The plant row with the fields the muscle kernels read; every other slot 0.
+
+    The same values as in :func:`ppamsafety.plant.packing.pack`, so the force and
+    volume of a muscle need no full packed row.
+
+    Parameters
+    ----------
+    muscles : MuscleSet
+        The muscle groups.
+
+    Returns
+    -------
+    numpy.ndarray, shape (NP,)
+        Read-only row (layout :data:`~ppamsafety.plant.layout.PLANT`).
+    """
+    groups = muscles.groups
+    eps_a, eps_f0, v_c = muscle_terms(muscles)
+    P = lay.partial_row({"n_muscles": [g.n_muscles for g in groups], "l0": [g.l0 for g in groups],
+                         "coef": [c for g in groups for c in g.coefficients],
+                         "eps_anchor": eps_a, "eps_f0": eps_f0, "v_c": v_c})
+    P.setflags(write=False)
+    return P
 
 
 @checks_arm

@@ -18,13 +18,13 @@
 from __future__ import annotations
 
 import numpy as np
-from .._jit import kernel, kernel_array, leaf
 
+from .._jit import kernel, kernel_array, leaf
 from .._validation import as_float_array, check_range, check_range_array
+from ..units import DEG
+from . import packing
 from ._checks import (PRESSURE_MAX, accelerations, angles, check_pressures,  # noqa: F401
                       checks_arm, speeds, torques)
-from ..units import DEG
-from . import layout as lay
 from .dynamics import gravity_torque
 from .layout import NPOLY, PATM, PM1, PM2, PMAX, TV, V1, V2
 from .torque import torque_kernel
@@ -148,7 +148,7 @@ def gravity_compensation_dp(q1, q2, Pc, mt, dmt, vol):
     """Delta-p for static gravity compensation (3.18)-(3.19) [Pa].
 
     ``Pc`` is the controller's packed view (identified gravity terms, see
-    :func:`ppamsafety.plant.layout.controller_view`).  Scratch arrays
+    :func:`ppamsafety.plant.packing.controller_view`).  Scratch arrays
     ``mt``, ``dmt``, ``vol`` of length 4 are overwritten.  Returns
     ``(dp1, dp2)``.
 
@@ -209,7 +209,7 @@ def joint_stiffness(q, pressures, arm) -> np.ndarray:
     qf = np.ascontiguousarray(np.broadcast_to(q, shape + (2,)).reshape(-1, 2))
     pf = np.ascontiguousarray(np.broadcast_to(p, shape + (4,)).reshape(-1, 4))
     out = np.empty((qf.shape[0], 2))
-    _stiffness_many(kernel_array(qf), kernel_array(pf), kernel_array(lay.pack(arm)), out)
+    _stiffness_many(kernel_array(qf), kernel_array(pf), kernel_array(packing.pack(arm)), out)
     return out.reshape(shape + (2,))
 
 
@@ -233,7 +233,7 @@ def gravity_compensation(q, arm, *, params=None) -> np.ndarray:
         Rigid-body parameters the compensation believes in.
     """
     q = angles("q", q)
-    return _gravity_compensation_row(q, lay.pack(arm, arm.model_gravity if params is None
+    return _gravity_compensation_row(q, packing.pack(arm, arm.model_gravity if params is None
                                                  else params))
 
 
@@ -305,7 +305,7 @@ def static_pressures(q, arm, *, params=None) -> np.ndarray:
     """Gauge pressures holding ``q`` in static equilibrium with the Delta-p approach [Pa].
 
     Uses (3.18)-(3.19) with ``params`` (default: the *plant truth* row
-    ``layout.pack(arm)``, including the payload of ``arm.effects``, so the
+    ``packing.pack(arm)``, including the payload of ``arm.effects``, so the
     result is a true equilibrium of the simulated arm).  Not clipped, so that
     an infeasible configuration shows up as a pressure outside [0, p_max].
 
@@ -320,7 +320,7 @@ def static_pressures(q, arm, *, params=None) -> np.ndarray:
     """
     if params is None:
         q = angles("q", q)
-        dp = _gravity_compensation_row(q, lay.pack(arm))
+        dp = _gravity_compensation_row(q, packing.pack(arm))
     else:
         dp = gravity_compensation(q, arm, params=params)
     return delta_p_pressures(dp, arm, clip=False)

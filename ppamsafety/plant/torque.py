@@ -18,11 +18,11 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from .._jit import kernel, kernel_array, leaf
 
-from .geometry import _flat_q, group_length_lever
-from . import layout as lay
+from .._jit import kernel, kernel_array, leaf
+from . import packing
 from ._checks import accelerations, angles, check_pressures, checks_arm, speeds, torques  # noqa: F401
+from .geometry import _flat_q, group_length_lever
 from .layout import L0, LCONN, NM
 from .muscle import dforce_deps, force_per_pressure, muscle_volume
 
@@ -152,7 +152,7 @@ def torque_functions(q, arm, *, with_derivative: bool = False):
     with_derivative : bool, keyword-only
         Also return d m_tau,i/dq [N m/(Pa rad)].
     """
-    mt, dmt, _ = _eval(q, lay.pack(arm))
+    mt, dmt, _ = _eval(q, packing.pack(arm))
     return (mt, dmt) if with_derivative else mt
 
 
@@ -167,7 +167,7 @@ def group_volumes(q, arm) -> np.ndarray:
     arm : ArmParameters
         The arm.
     """
-    return _eval(q, lay.pack(arm))[2]
+    return _eval(q, packing.pack(arm))[2]
 
 
 @checks_arm

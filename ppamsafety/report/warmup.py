@@ -29,6 +29,19 @@ from dataclasses import dataclass
 from typing import Callable
 
 import numpy as np
+from numba import types
+
+from ..control import PID
+from ..control.dispatch import controller_step
+from ..control.estimation import ForceEstimator, estimator_step
+from ..experiments import run_batch, ExperimentCase
+from ..experiments.catalog import thesis_reference
+from ..impact.clamping import simulate_clamping
+from ..impact.collision import simulate_collision
+from ..impact.model import simulate_impacts
+from ..impact.twobody import two_body_impact
+from ..params import thesis_arm
+from ..plant.model import rk4_step
 
 __all__ = ["TASKS", "Task", "closed_loop_kernels", "collision_kernels", "contact_kernels",
            "controller_kernels", "impact_kernels", "plant_kernels", "run_task"]
@@ -38,8 +51,6 @@ def closed_loop_kernels() -> None:
     """The closed loop (:func:`~ppamsafety.experiments.run_batch`) with its sensor models,
     calling the kernels of :func:`controller_kernels` and :func:`plant_kernels`: about 8 s
     on a cold cache once those are compiled."""
-    from ..experiments import run_batch
-
     run_batch([_warm_case()])
 
 
@@ -49,20 +60,12 @@ def collision_kernels() -> None:
     :func:`controller_kernels` and :func:`plant_kernels`: about 10 s on a cold cache once
     those are compiled.  It runs after :func:`closed_loop_kernels`, whose
     small set-up kernels (the rest state, the sensors) it shares."""
-    from ..impact.collision import simulate_collision
-
     # a head far away: the whole kernel is compiled whatever the run does
     simulate_collision(_warm_case(), head_position=np.array([5.0, 5.0]))
 
 
 def _warm_case():
     """A 2.05 s PID step with the force estimator (the shortest step experiment)."""
-    from ..control import PID
-    from ..control.estimation import ForceEstimator
-    from ..experiments import ExperimentCase
-    from ..experiments.catalog import thesis_reference
-    from ..params import thesis_arm
-
     arm = thesis_arm()
     ref = thesis_reference(arm, "step", duration=2.05)
     return ExperimentCase(arm, PID(), ref, estimator=ForceEstimator(), name="warm-up")
@@ -71,9 +74,6 @@ def _warm_case():
 def impact_kernels() -> None:
     """The fixed-step and the dense-output impact engines
     (:func:`~ppamsafety.impact.simulate_impacts`): about 30 s on a cold cache."""
-    from ..impact.model import simulate_impacts
-    from ..params import thesis_arm
-
     arm = thesis_arm()
     q, qd, k = np.array([0.9, -1.4]), np.array([1.0, 1.0]), np.array([40.0, 20.0])
     simulate_impacts(arm, q, qd, k, duration=1e-3)
@@ -83,10 +83,6 @@ def impact_kernels() -> None:
 def contact_kernels() -> None:
     """Clamping against a wall and the two-body model (:mod:`~ppamsafety.impact.clamping`,
     :mod:`~ppamsafety.impact.twobody`): about 7 s on a cold cache."""
-    from ..impact.clamping import simulate_clamping
-    from ..impact.twobody import two_body_impact
-    from ..params import thesis_arm
-
     arm = thesis_arm()
     simulate_clamping(arm, np.array([0.9, -1.4]), np.array([1.0, 1.0]), np.array([40.0, 20.0]),
                       duration=1e-3)
@@ -102,8 +98,6 @@ def _compile(dispatcher, codes: str) -> None:
     loop passes (numba's compile events, issue 11).  ``compile`` also writes
     the result to the on-disk cache, where the calling kernels find it.
     """
-    from numba import types
-
     kinds = {"A": types.Array(types.float64, 1, "C"), "i": types.int64, "f": types.float64}
     dispatcher.compile(tuple(kinds[c] for c in codes))
 
@@ -111,17 +105,12 @@ def _compile(dispatcher, codes: str) -> None:
 def controller_kernels() -> None:
     """The controller step of every kind (:func:`~ppamsafety.control.dispatch.controller_step`),
     as the closed loop and the collision kernel call it: about 11 s on a cold cache."""
-    from ..control.dispatch import controller_step
-
     _compile(controller_step, "iAAAifAAAAAAAA")
 
 
 def plant_kernels() -> None:
     """The plant's RK4 step (:func:`~ppamsafety.plant.model.rk4_step`, with the plant derivative)
     and the force estimator's step, as the closed loop calls them: about 8 s on a cold cache."""
-    from ..control.estimation import estimator_step
-    from ..plant.model import rk4_step
-
     _compile(rk4_step, "AAAAfAA")
     _compile(estimator_step, "AAAifAAAAA")
 

@@ -27,8 +27,11 @@ import importlib
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import pandas as pd
+
 from .._commandline import Parser, run_guarded
 from ..output import OutputFolder
+from ..params import ArmParameters, thesis_arm
 from ..plots.figure import save
 
 
@@ -96,8 +99,6 @@ def resolve_arm(arm):
     ppamsafety.params.ArmParameters
         ``arm`` or :func:`ppamsafety.params.thesis_arm`.
     """
-    from ..params import ArmParameters, thesis_arm
-
     if arm is None:
         return thesis_arm()
     if not isinstance(arm, ArmParameters):
@@ -120,8 +121,6 @@ def write_artifact(obj, path) -> str:
     str
         ``str(path)``.
     """
-    import pandas as pd
-
     if isinstance(obj, pd.DataFrame):
         obj.to_csv(path, index=False)
     elif hasattr(obj, "savefig"):

@@ -8,10 +8,11 @@ import numpy as np
 import pandas as pd
 
 from .. import design
-from ..plant import geometry as geo
-from ..plant.ppam_theory import theoretical_muscles
-from ..plant import pneumatics as pn
 from ..markdown import markdown_table
+from ..plant import geometry as geo
+from ..plant import pneumatics as pn
+from ..plant.muscle import force_function, force_polynomial
+from ..plant.ppam_theory import theoretical_muscles
 from ..units import BAR, DEG, MM
 from . import Section, resolve_arm
 
@@ -115,7 +116,6 @@ def compute(*, quick: bool = False, arm=None) -> DesignStudy:
     inner = d[(d.q1_rad > g.q1_min + 5 * DEG) & (d.q1_rad < g.q1_max - 5 * DEG)
               & (d.q2_rad > g.q2_min + 5 * DEG) & (d.q2_rad < g.q2_max - 5 * DEG)]
 
-    from ..plant.muscle import force_function, force_polynomial
     eps = geo.contractions(d[["q1_rad", "q2_rad"]].to_numpy(), arm)
     e1max, e4max = eps[:, 0].max(), eps[:, 3].max()
     f1_edge = float(force_function(1, e1max, arm)) * BAR

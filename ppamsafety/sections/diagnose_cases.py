@@ -33,6 +33,9 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from ..diagnose import diagnose, synthesize
+from ..diagnose.arm.summary_fit import (TableDesign, fit_pair, fit_summary, CONFOUNDED_COS,
+                                        PRINT_STD, RANK_TOL, REPRODUCIBILITY, axis)
 from ..markdown import markdown_table
 from ..plots.diagnose import plot_confusion, plot_gap
 from . import Section, resolve_arm
@@ -60,15 +63,11 @@ BATTERY_RECORD = {"reference": "circle10", "controller": "PSMC joint Ki=2 λ=0.4
 
 
 def _report_design():
-    from ..diagnose.arm.summary_fit import TableDesign
-
     return TableDesign(variants=("PID", "PSMC joint Ki=12 λ=0.4", "PSMC task λ=0.4"),
                        periods=(5.0, 10.0), warmup=3.0, window=10.0)
 
 
 def _quick_design():
-    from ..diagnose.arm.summary_fit import TableDesign
-
     return TableDesign(variants=("PID",), periods=(5.0,), warmup=1.0, window=5.0)
 
 
@@ -191,8 +190,6 @@ def run_battery(battery: dict, *, reference: str, controller: str, duration: flo
     pandas.DataFrame
         case, expected, named, correct, unexplained, seconds.
     """
-    from ..diagnose import diagnose, synthesize
-
     if not isinstance(battery, dict) or not battery:
         raise ValueError(f"battery must be a non-empty dict, got {battery!r:.80}")
     rows = []
@@ -234,9 +231,6 @@ def compute(*, quick: bool = False, arm=None) -> DiagnoseCasesStudy:
     -------
     DiagnoseCasesStudy
     """
-    from ..diagnose import diagnose, synthesize
-    from ..diagnose.arm.summary_fit import fit_pair, fit_summary
-
     arm = resolve_arm(arm)
     timings = {}
     t0 = time.perf_counter()
@@ -312,8 +306,6 @@ def render(study: DiagnoseCasesStudy) -> Section:
     study : DiagnoseCasesStudy
         Output of :func:`compute`.
     """
-    from ..diagnose.arm.summary_fit import CONFOUNDED_COS, PRINT_STD, RANK_TOL, REPRODUCIBILITY, axis
-
     dg, fit, s = study.case_c, study.summary, study
     figs = study.plot()
     L = []

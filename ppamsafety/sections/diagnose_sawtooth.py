@@ -20,6 +20,9 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from .._validation import check_int, check_range
+from ..diagnose import diagnose, synthesize
+from ..diagnose.arm.static import static_record
 from ..hysteresis import DELTA_25_FIBRES
 from ..markdown import markdown_table
 from ..plots.diagnose import plot_sawtooth_diagnosis
@@ -97,10 +100,6 @@ def compute(*, quick: bool = False, arm=None, delta: float = HIDDEN_DELTA,
     -------
     DiagnoseSawtoothStudy
     """
-    from .._validation import check_int, check_range
-    from ..diagnose import diagnose, synthesize
-    from ..diagnose.arm.static import static_record
-
     arm = resolve_arm(arm)
     delta = check_range("delta", delta, 0.0, 1.0, lo_open=True)
     seed = check_int("seed", seed, 0)

@@ -26,7 +26,7 @@ together in 10 deg steps over the part of the working area the arm can hold
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from types import SimpleNamespace
 
 import numpy as np
@@ -39,15 +39,14 @@ from ..experiments.closed_loop import run_batch
 from ..experiments.conclusions import conclusions_table, evaluate_conclusions
 from ..experiments.trajectories import REFERENCE_ROW, Reference
 from ..hysteresis import DELTA_25_FIBRES
-from ..params.effects import Effects
 from ..impact.head import head_model
+from ..markdown import markdown_table
+from ..params.effects import Effects
 from ..plant import geometry as geo
 from ..plant.model import hysteresis_factors
 from ..plant.muscle import muscle_force
-from ..markdown import markdown_table
 from ..plots.effects import (plot_ratio_shift, plot_sawtooth_angles, plot_sawtooth_errors,
                              plot_sawtooth_forces)
-from ..units import DEG
 from . import Section, resolve_arm, responses, safety, tracking
 
 #: Hysteresis scale delta per muscle group (25-fibre muscles, thesis §3.6.5) [-].
@@ -86,8 +85,6 @@ def hysteresis_arm(arm, delta: float = HYSTERESIS_DELTA):
     ppamsafety.params.ArmParameters
         The same arm whose plant truth carries the hysteresis.
     """
-    from dataclasses import replace
-
     return arm.replace(effects=replace(arm.effects, hysteresis_delta=(float(delta),) * 4))
 
 

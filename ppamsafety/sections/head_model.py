@@ -6,9 +6,11 @@ from dataclasses import dataclass, field
 
 import pandas as pd
 
+from ..control import PID
+from ..experiments.catalog import run_thesis_experiment
 from ..impact import head_fit as hf
-from ..impact.instants import evaluate_experiment
 from ..impact.head import head_model, head_model_names
+from ..impact.instants import evaluate_experiment
 from ..markdown import markdown_table
 from ..plots.impact import plot_head_fit
 from . import Section, resolve_arm
@@ -72,9 +74,6 @@ def compute(*, quick: bool = False, arm=None) -> HeadModelStudy:
     HeadModelStudy
         Fits, tables and metrics.
     """
-    from ..control import PID
-    from ..experiments.catalog import run_thesis_experiment
-
     arm = resolve_arm(arm)
     stored = head_model()
     fits = {n: hf.fit_thesis_head(arm, exponent=n) for n in ((1.5,) if quick else (1.0, 1.5, 2.0))}

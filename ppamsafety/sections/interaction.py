@@ -39,9 +39,12 @@ from ..experiments import ExperimentCase, run_batch
 from ..experiments import trajectories as tr
 from ..experiments.closed_loop import ExperimentResult
 from ..experiments.interaction import Hand, piecewise_targets
+from ..identify.dynamic import identify_dynamic
+from ..identify.excitation import design_excitation, simulate_excitation
+from ..impact.instants import evaluate_experiment
+from ..markdown import markdown_table
 from ..params.effects import Effects
 from ..plant import geometry as geo
-from ..markdown import markdown_table
 from ..plots.interaction import (plot_force_estimates, plot_interaction_path, plot_observer_step,
                                  plot_release)
 from . import Section, resolve_arm
@@ -73,9 +76,6 @@ def identify_model(plant_arm, *, quick: bool = False):
     BaseParameters
         LS estimate with friction (smooth Coulomb law of the plant).
     """
-    from ..identify.dynamic import identify_dynamic
-    from ..identify.excitation import design_excitation, simulate_excitation
-
     d = design_excitation(plant_arm, n_random=4 if quick else 8, maxfev=4 if quick else 24,
                           seed=1)
     data = simulate_excitation(plant_arm, d.excitation, periods=2, with_qdd=False)
@@ -241,7 +241,6 @@ def compute(*, quick: bool = False, arm=None) -> InteractionStudy:
     rr = run_batch([ExperimentCase(arm, c, rref, hand=rhand, name=f"release {k}")
                     for k, c in ctrls.items()], dt=dt)
     release = dict(zip(ctrls, rr))
-    from ..impact.instants import evaluate_experiment
     krel = int(round(t_rel / dt))
     rrows = []
     for k, r in release.items():

@@ -43,19 +43,19 @@ from ..experiments.catalog import ControllerVariant, run_thesis_experiment, thes
 from ..experiments.closed_loop import run_batch
 from ..experiments.interaction import Hand
 from ..impact.clamping import simulate_clamping, static_force_bound
+from ..impact.head import head_model
 from ..impact.instants import heuristic_instants, impact_states
-from ..impact.model import simulate_impacts
-from ..impact.model import effective_mass
+from ..impact.model import effective_mass, simulate_impacts
 from ..impact.pfl import (linear_peak_force, reduced_mass, region_limits,
                           robot_effective_mass_annex_a)
 from ..impact.thesis_data import table_6_1
 from ..impact.twobody import two_body_impact
-from ..impact.head import head_model
-from ..params.iso_ts_15066 import FACE, SKULL_FOREHEAD, THESIS_ARM_MASS
 from ..markdown import markdown_table
+from ..params.iso_ts_15066 import FACE, SKULL_FOREHEAD, THESIS_ARM_MASS
+from ..plant.geometry import jacobian
+from ..plots import iso as f
 from ..units import BAR, DEG
 from . import Section, resolve_arm
-from ..plots import iso as f
 
 REGIONS = (SKULL_FOREHEAD, FACE)
 EXPERIMENTS = ("step", "switch")
@@ -283,7 +283,6 @@ def _hc_vs_linear(arm, worst, m_r_annex):
         hcs = worst[(worst["head_model"] == "thesis HC") & worst.label.isin(thesis)].set_index("label")
         for _, r in s.iterrows():
             q = np.array([r.q1, r.q2])
-            from ..plant.geometry import jacobian
             vt = jacobian(q, arm) @ np.array([r.qd1, r.qd2])
             m_own = float(effective_mass(q, vt, arm))
             mu_own = reduced_mass(region.effective_mass, m_own)

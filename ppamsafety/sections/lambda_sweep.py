@@ -18,8 +18,8 @@ import pandas as pd
 from ..control import JointPSMC
 from ..experiments.catalog import CIRCLE_WARMUP, run_thesis_experiment
 from ..impact.instants import evaluate_experiment
-from ..params import thesis_arm
 from ..markdown import markdown_table
+from ..params import thesis_arm
 from ..plots.impact import plot_lambda_sweep
 from ..sweep import run_sweep
 from ..units import BAR

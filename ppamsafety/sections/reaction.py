@@ -44,11 +44,11 @@ from ..impact.collision import (DETECTION_MARGIN, Reaction, calibrate_threshold,
                                 head_touching, simulate_collision)
 from ..impact.instants import heuristic_instants, impact_states
 from ..impact.model import resolve_head, simulate_impacts
+from ..markdown import markdown_table
 from ..params.head import MAXILLA_FRACTURE_N
 from ..plant.geometry import jacobian
 from ..plant.pneumatics import joint_stiffness
 from ..plant.torque import torque_functions
-from ..markdown import markdown_table
 from ..plots.reaction import plot_collision, plot_reactions
 from ..units import BAR
 from . import Section, resolve_arm

@@ -15,10 +15,10 @@ import pandas as pd
 
 from ..experiments import catalog
 from ..experiments.metrics import response_table
+from ..experiments.trajectories import CIRCLE_CENTER, CIRCLE_RADIUS
 from ..markdown import markdown_table
 from ..plots.control import plot_lambda_recovery, plot_step_comparison, plot_switch
 from . import Section, resolve_arm
-from ..experiments.trajectories import CIRCLE_CENTER, CIRCLE_RADIUS
 
 TOL_ANGLE = np.radians(1.0)   #: band around the new q1 set angle for reach/settling [rad]
 TOL_TCP = 0.005               #: band around the new circle after the switch [m]

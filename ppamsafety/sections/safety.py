@@ -10,13 +10,13 @@ import numpy as np
 import pandas as pd
 
 from ..experiments.catalog import run_thesis_experiment, thesis_variants, variant_family
+from ..impact.head import head_model
 from ..impact.instants import (HEURISTICS, evaluate_experiment, heuristic_instants, impact_states,
                                worst_instant)
 from ..impact.thesis_data import join_table_6_1
+from ..markdown import markdown_table
 from ..params import thesis_arm
 from ..params.head import MAXILLA_FRACTURE_N
-from ..impact.head import head_model
-from ..markdown import markdown_table
 from ..plots.impact import plot_fmax_over_time, plot_safety_table, plot_worst_histories
 from ..sweep import run_sweep
 from . import Section

@@ -36,9 +36,9 @@ from ..experiments import trajectories as tr
 from ..experiments.case import ExperimentCase
 from ..experiments.closed_loop import run_batch
 from ..experiments.metrics import chattering_index, command_increment_rms, tracking_stats
+from ..markdown import markdown_table
 from ..params import thesis_arm
 from ..params.valves import DEFAULT_TIME_CONSTANTS
-from ..markdown import markdown_table
 from ..plots.control import plot_smc_chattering, plot_smc_commands
 from ..units import BAR
 from . import Section, resolve_arm

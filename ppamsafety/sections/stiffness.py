@@ -29,15 +29,15 @@ import pandas as pd
 from ..control import PID
 from ..experiments.catalog import run_thesis_experiment
 from ..impact import engine as eng
+from ..impact.head import head_model
 from ..impact.instants import heuristic_instants, impact_states
 from ..impact.model import (effective_mass, flexible_stiffness_limit, simulate_impacts,
                             stiffness_limit)
 from ..impact.thesis_data import FIG_6_3
 from ..impact.twobody import two_body_impact
-from ..impact.head import head_model
+from ..markdown import markdown_table
 from ..plant import dynamics as dyn
 from ..plant import geometry as geo
-from ..markdown import markdown_table
 from ..plots.impact import plot_stiffness_conventions
 from . import Section, resolve_arm
 

@@ -491,7 +491,7 @@ inter-pulse-timing velocity with 16-bit counter and dead band). Error ||r_d − 
 ### Table 5.2 reproduced
 
 Each cell: toolkit / thesis (ratio toolkit/thesis), in mm. Thesis values typed in from Table 5.2
-(row labels reconstructed, see `ppamsafety/studies/tracking.py`). Full precision:
+(row labels reconstructed, see `ppamsafety/sections/tracking.py`). Full precision:
 `tracking_table_5_2.csv` (and `tracking_table_5_2_ideal_velocity.csv` for ideal velocity).
 
 {markdown_table(comparison_markdown(cmp))}

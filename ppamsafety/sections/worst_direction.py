@@ -20,10 +20,10 @@ import pandas as pd
 
 from ..experiments.catalog import run_thesis_experiment, thesis_variants
 from ..impact.directions import two_body_predictor, worst_direction
-from ..impact.thesis_data import join_table_6_1
-from ..params.head import MAXILLA_FRACTURE_N
 from ..impact.head import head_model
+from ..impact.thesis_data import join_table_6_1
 from ..markdown import markdown_table
+from ..params.head import MAXILLA_FRACTURE_N
 from ..plots.impact import plot_direction_polar, plot_direction_ratios
 from . import Section, resolve_arm
 

@@ -42,8 +42,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ...params import thesis_arm
+from ...params.effects import Effects
+from ...plant.packing import payload_theta
 from ..core.parameter import Parameter
-from .residuals import MU_A, MU_B, MU_COUL, MU_K, MU_N, MU_THETA, MU_VISC, NMU
+from .residuals import (HYSTERESIS_COLUMNS, MU_A, MU_B, MU_COUL, MU_K, MU_N, MU_THETA, MU_VISC,
+                        NMU)
 
 #: Fixed vocabulary of effect names on an arm (the ``name`` field of ``diagnosis.json``).
 VOCABULARY = ("hysteresis", "joint_friction", "valve_offset_gain", "valve_lag",
@@ -186,9 +190,6 @@ def _dirs_friction(mu0, arm=None):
 
 
 def _dirs_payload(mu0, arm=None):
-    from ...params import thesis_arm
-    from ...plant.layout import payload_theta
-
     g = (thesis_arm() if arm is None else arm).geometry
     D = np.zeros((NMU, 1))
     D[MU_THETA:MU_THETA + 6, 0] = payload_theta(1.0, g.L1, g.LL, g.dL)
@@ -262,10 +263,6 @@ def _payload_candidate():
 register(_payload_candidate())
 
 
-#: Name of the hysteresis regression columns in ``BlockSystem.extra``.
-HYSTERESIS_COLUMNS = "hysteresis"
-
-
 def _maybe_register_hysteresis():
     """Hysteresis (3.35): one delta shared by the four muscle groups.
 
@@ -289,8 +286,6 @@ def _maybe_register_hysteresis():
     are poorly determined from torques alone.  A muscle whose delta differs
     shows as a residual left over (``partial`` / unexplained).
     """
-    from ...params.effects import Effects
-
     if "hysteresis_delta" not in Effects.__dataclass_fields__:
         return
     register(Candidate(
@@ -309,5 +304,5 @@ def _maybe_register_hysteresis():
 _maybe_register_hysteresis()
 
 __all__ = ["Candidate", "Parameter", "REGISTRY", "register", "library", "VOCABULARY",
-           "ACTUATOR_VOCABULARY", "DEAD_TIME_MAX", "HYSTERESIS_COLUMNS"]
+           "DEAD_TIME_MAX", "HYSTERESIS_COLUMNS"]
 _ = math

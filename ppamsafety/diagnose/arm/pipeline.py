@@ -13,13 +13,23 @@ from __future__ import annotations
 
 import math
 import time
+from dataclasses import replace
 
 import numpy as np
 import pandas as pd
 
-from ..._validation import check_bool, check_int, check_range
-from .residuals import CHANNELS
+from ..._validation import check_int, check_range
+from ...params import thesis_arm
+from ...params.arm import ArmParameters
+from ...plant import packing
 from ..core.result import HIGH_CONFIDENCE, Diagnosis
+from .candidates import REGISTRY
+from .residuals import (CHANNELS, row_from_mu, CHANNEL_UNITS, SUBSYSTEM, arm_record, block_system,
+                        channel_noise, model_vector, noise_draws, replay)
+from .selection import (bootstrap_frequency, fit_model, forward_selection, make_problem,
+                        parameter_table, BOOTSTRAP_REPLICATES)
+from .static import (STATIC_CANDIDATES, force_residuals, static_equilibria, static_floor,
+                     static_noise, static_noise_draws, static_record, static_system)
 
 #: Replay channels (full simulation vs measured).
 REPLAY_CHANNELS = ("q1", "q2", "qd1", "qd2", "p1", "p2", "p3", "p4")
@@ -30,7 +40,6 @@ def _where(prob, e, feats, rho_max):
     """Operating regions of significant residual (see :func:`diagnose`)."""
     from scipy import stats
 
-    from .residuals import CHANNELS
 
     nb = e.shape[0]
     rows = []
@@ -92,11 +101,6 @@ def after_row(arm, fit, params) -> np.ndarray:
     -------
     numpy.ndarray, shape (NP,)
     """
-    from dataclasses import replace
-
-    from ...plant import layout as lay
-    from .candidates import REGISTRY
-    from .residuals import row_from_mu
 
     over = {}
     for n in fit.names:
@@ -107,7 +111,7 @@ def after_row(arm, fit, params) -> np.ndarray:
     if "hysteresis_delta" in over and over["hysteresis_delta"][0] <= 0.0:
         over.pop("hysteresis_delta")
     base = arm.replace(effects=replace(arm.effects, **over)) if over else arm
-    return row_from_mu(lay.pack(base), fit.mu)
+    return row_from_mu(packing.pack(base), fit.mu)
 
 
 def diagnose_arm(data, *, arm=None, candidates=None, block_seconds: float = 0.05,
@@ -149,15 +153,6 @@ def diagnose_arm(data, *, arm=None, candidates=None, block_seconds: float = 0.05
     Diagnosis
 
     """
-    from ...params import thesis_arm
-    from ...params.arm import ArmParameters
-    from ...plant import layout as lay
-    from .candidates import REGISTRY
-    from .residuals import (CHANNEL_UNITS, CHANNELS, SUBSYSTEM, arm_record, block_system, channel_noise,
-                            model_vector, noise_draws, replay)
-    from .selection import (bootstrap_frequency, fit_model, forward_selection, make_problem,
-                            parameter_table)
-
     t0 = time.perf_counter()
     arm = thesis_arm() if arm is None else arm
     if not isinstance(arm, ArmParameters):
@@ -167,17 +162,13 @@ def diagnose_arm(data, *, arm=None, candidates=None, block_seconds: float = 0.05
     if experiment is not None and experiment != data.experiment:
         raise ValueError(f"experiment = {experiment!r} does not match the record's metadata "
                          f"experiment = {data.experiment!r}")
-    from .selection import BOOTSTRAP_REPLICATES
 
     bootstrap = BOOTSTRAP_REPLICATES if bootstrap is None else check_int("bootstrap", bootstrap,
                                                                          0, 10000)
     static = data.experiment == "static-sawtooth"
-    row0 = lay.pack(arm)
+    row0 = packing.pack(arm)
     mu0 = model_vector(row0)
     if static:
-        from .static import (STATIC_CANDIDATES, force_residuals, static_equilibria, static_floor,
-                             static_noise, static_noise_draws, static_record, static_system)
-
         rec, notes = static_record(data)
         noise = static_noise(rec)
         bs = static_system(rec, arm)

@@ -50,13 +50,18 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..._validation import check_int, check_range
+from ...data.measured import MeasuredData
 from ...data.measured import P as P_COLS
 from ...data.measured import Q as Q_COLS
 from ...data.measured import QD as QD_COLS
 from ...data.measured import U as U_COLS
-from ...data.measured import MeasuredData
-from ..core.record import longest_segment
+from ...identify.dynamic import w_matrices
+from ...params.effects import Effects
+from ...plant import layout as lay
+from ...plant.model import hysteresis_factors, simulate
+from ...plant.torque import torque_functions, group_volumes
 from ..core.noise import noise_floor, second_difference_sigma
+from ..core.record import longest_segment
 
 #: Names and units of the model vector mu (see the module docstring).
 MU_NAMES = tuple(f"{k}_valve{i}" for i in range(1, 5) for k in ("a", "b", "kappa")) + (
@@ -74,6 +79,9 @@ MU_VISC = MU_NAMES.index("b1")
 CHANNELS = ("p1", "p2", "p3", "p4", "tau1", "tau2")
 CHANNEL_UNITS = ("Pa", "Pa", "Pa", "Pa", "N m s", "N m s")
 SUBSYSTEM = {"pressure": (0, 1, 2, 3), "torque": (4, 5)}
+#: Name of the hysteresis regression columns in ``BlockSystem.extra`` (the candidate of the
+#: same name in :mod:`.candidates` reads them).
+HYSTERESIS_COLUMNS = "hysteresis"
 #: Default block length [s]: long against the sample time (endpoint noise averages
 #: against the integrated model error), short against the 10 s excitation period.
 BLOCK_SECONDS = 0.05
@@ -181,10 +189,8 @@ def model_vector(row) -> np.ndarray:
     Parameters
     ----------
     row : numpy.ndarray, shape (NP,)
-        :func:`ppamsafety.plant.layout.pack` row.
+        :func:`ppamsafety.plant.packing.pack` row.
     """
-    from ...plant import layout as lay
-
     read = lay.PLANT.read
     tv, v1, v2 = read(row, "tv"), read(row, "v1"), read(row, "v2")
     mu = np.empty(NMU)
@@ -208,8 +214,6 @@ def row_from_mu(row, mu) -> np.ndarray:
     row : numpy.ndarray, shape (NP,)
     mu : numpy.ndarray, shape (NMU,)
     """
-    from ...plant import layout as lay
-
     out = np.array(row, dtype=float)
     kappa = np.array([mu[MU_K + 3 * i] for i in range(4)])
     if np.any(kappa <= 0):
@@ -340,10 +344,6 @@ def hysteresis_signature(q, p, arm, *, initial="negative") -> tuple:
     eps : numpy.ndarray, shape (N, 4)
         Contractions [-].
     """
-    from ...params.effects import Effects
-    from ...plant.model import hysteresis_factors
-    from ...plant.torque import torque_functions
-
     q = np.asarray(q, dtype=float)
     p = np.asarray(p, dtype=float)
     unit = arm.replace(effects=Effects(hysteresis_delta=(1.0,) * 4, hysteresis_initial=initial))
@@ -376,9 +376,6 @@ def block_system(rec: ArmRecord, arm, *, block_seconds: float = BLOCK_SECONDS,
     -------
     BlockSystem
     """
-    from ...identify.dynamic import w_matrices
-    from ...plant.torque import group_volumes, torque_functions
-
     block_seconds = check_range("block_seconds", block_seconds, 0.0, 10.0, lo_open=True,
                                 unit="s")
     dt = rec.dt
@@ -424,8 +421,6 @@ def block_system(rec: ArmRecord, arm, *, block_seconds: float = BLOCK_SECONDS,
              "p": bmean(rec.p)}
     ext = {}
     if extra:
-        from .candidates import HYSTERESIS_COLUMNS
-
         _, h_tau, _ = hysteresis_signature(rec.q, rec.p, arm)
         c_h = _cumtrapz(h_tau, dt)
         E = np.zeros((nb, 6, 1))
@@ -540,8 +535,6 @@ def replay(rec: ArmRecord, rows, *, shifts=None, substeps: int = 1) -> np.ndarra
     numpy.ndarray, shape (B, N, 8)
         Simulated [q, qd, p] at the sample times.
     """
-    from ...plant.model import simulate
-
     rows = np.atleast_2d(rows)
     B = rows.shape[0]
     U = np.empty((B, len(rec) - 1, 4))

@@ -57,17 +57,17 @@ effect that leaves its subsystem far above the noise is reported as
 
 from __future__ import annotations
 
-import functools
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
-from scipy import special, stats
+from scipy import stats
 
-from .candidates import DEAD_TIME_MAX, library
+from ..._validation import check_int
 from ..core.criteria import (ALPHA, CV_SEGMENTS, RHO_MAX, Step, _chi2_sf, _normal_quantile, aicc,
                              bic, rank_step)
-from .residuals import SUBSYSTEM, BlockSystem
+from .candidates import DEAD_TIME_MAX, library, REGISTRY
+from .residuals import SUBSYSTEM, BlockSystem, block_noise
 
 #: 95 % quantile of chi2 with one degree of freedom (the dead-time profile interval).
 _CHI2_95_1 = float(stats.chi2.ppf(0.95, 1))
@@ -147,8 +147,6 @@ def make_problem(bs: BlockSystem, mu0, noise, arm, *, floor=None) -> Problem:
     floor : array_like, shape (6,), optional, keyword-only
         Lower bound of the noise level per channel (see :class:`Problem`).
     """
-    from .residuals import block_noise
-
     seg = np.minimum((np.arange(bs.nb) * CV_SEGMENTS) // bs.nb, CV_SEGMENTS - 1)
     max_shift = max(1, int(round(DEAD_TIME_MAX / bs.dt)))
     mu0 = np.asarray(mu0, float)
@@ -165,9 +163,6 @@ def at_model(prob: Problem, mu) -> Problem:
     prob : Problem
     mu : numpy.ndarray, shape (NMU,)
     """
-    from dataclasses import replace
-
-    from .residuals import block_noise
 
     return replace(prob, sigma=_floored(block_noise(*prob.noise, mu), prob.floor),
                    _xcache=prob._xcache, _memo={})
@@ -450,8 +445,6 @@ def resample(prob: Problem, idx, *, shift_grid=None) -> Problem:
     shift_grid : tuple of int, optional, keyword-only
         Dead-time shifts to profile in the resampled problem.
     """
-    from dataclasses import replace
-
     idx = np.asarray(idx, dtype=int)
     bs = prob.bs
     nbs = replace(bs, y=bs.y[idx], X=bs.X[idx], starts=bs.starts[idx], stops=bs.stops[idx],
@@ -513,8 +506,6 @@ def bootstrap_frequency(prob: Problem, candidates=None, *, replicates: int = BOO
     info : dict
         ``replicates``, ``block_length``, ``seed``, ``method``.
     """
-    from ..._validation import check_int
-
     replicates = check_int("replicates", replicates, 1, 10000)
     seed = check_int("seed", seed, 0)
     nb = prob.bs.nb
@@ -556,8 +547,6 @@ def in_bounds(prob: Problem, fit: Fit, name: str) -> bool:
     name : str
         One of ``fit.names``.
     """
-    from .candidates import REGISTRY
-
     tab = parameter_table(prob, fit)[name]
     return all(tab[p.name]["ci_low"] >= p.lo - 0.5 * (p.hi - p.lo)
                and tab[p.name]["ci_high"] <= p.hi + 0.5 * (p.hi - p.lo)
@@ -579,8 +568,6 @@ def parameter_table(prob: Problem, fit: Fit, confidence: float = 0.95) -> dict:
     dict
         name -> {parameter: {value, unit, ci_low, ci_high, std_error, nominal}}.
     """
-    from .candidates import REGISTRY
-
     D, slices, _, _ = _directions(prob, fit.names)
     z = _normal_quantile(0.5 + confidence / 2)
     dt = prob.bs.dt
@@ -625,8 +612,6 @@ def subsystem_channels(name: str) -> tuple:
     name : str
         Candidate name.
     """
-    from .candidates import REGISTRY
-
     return SUBSYSTEM[REGISTRY[name].subsystem]
 
 

@@ -40,8 +40,17 @@ from dataclasses import dataclass
 import numpy as np
 
 from ...data.measured import MeasuredData
+from ...hysteresis.force import hysteresis_factor, scaled_contraction
+from ...hysteresis.memory import preisach_peek, preisach_update
+from ...identify.dynamic import w_matrices
+from ...plant import layout as lay
+from ...plant.dynamics import gravity_torque
+from ...plant.model import initial_effect_state
+from ...plant.muscle import muscle_force
+from ...plant.torque import torque_functions, group_contraction, torque_kernel
 from ..core.noise import noise_floor, second_difference_sigma
-from .residuals import MU_A, MU_B, MU_K, MU_THETA, NMU, BlockSystem
+from .residuals import (MU_A, MU_B, MU_K, MU_THETA, NMU, BlockSystem, HYSTERESIS_COLUMNS,
+                        hysteresis_signature)
 
 #: An interval of ``t`` longer than this many median intervals separates two rest points.
 WINDOW_GAP_FACTOR = 1.5
@@ -188,9 +197,6 @@ def static_noise(rec: StaticRecord) -> dict:
 
 def _equations(qm, pm, um, arm):
     """y (m, 6) and X (m, 6, NMU) of the rest-point balances from window means."""
-    from ...identify.dynamic import w_matrices
-    from ...plant.torque import torque_functions
-
     m = qm.shape[0]
     X = np.zeros((m, 6, NMU))
     y = np.zeros((m, 6))
@@ -225,9 +231,6 @@ def static_system(rec: StaticRecord, arm) -> BlockSystem:
         and ``qd`` = the change of the mean angle since the previous rest
         point (the direction of approach, the region where hysteresis shows).
     """
-    from .candidates import HYSTERESIS_COLUMNS
-    from .residuals import hysteresis_signature
-
     qm, pm = rec.means(rec.q), rec.means(rec.p)
     um = None if rec.u is None else rec.means(rec.u)
     y, X = _equations(qm, pm, um, arm)
@@ -254,8 +257,6 @@ def static_floor(rec: StaticRecord, arm) -> np.ndarray:
     numpy.ndarray, shape (6,)
         p1..p4 [Pa/s], tau1, tau2 [N m].
     """
-    from ...plant.torque import torque_functions
-
     qm, pm = rec.means(rec.q), rec.means(rec.p)
     ph = np.abs(pm * torque_functions(qm, arm))
     kappa = np.array([1.0 / v.time_constant for v in arm.valves.valves])
@@ -326,9 +327,6 @@ def force_residuals(rec: StaticRecord, arm, noise: dict, delta: float = 0.0) -> 
         ``delta_forces_se`` (standard error) and per-muscle
         ``delta_per_muscle`` [-].
     """
-    from ...plant.muscle import muscle_force
-    from .residuals import hysteresis_signature
-
     if rec.F is None:
         return None
     h, _, eps = hysteresis_signature(rec.q, rec.p, arm)
@@ -379,12 +377,6 @@ def static_equilibria(rec: StaticRecord, rows, *, steps: int = CONTINUATION_STEP
     """
     from scipy.optimize import fsolve
 
-    from ...hysteresis.force import hysteresis_factor, scaled_contraction
-    from ...hysteresis.memory import preisach_peek, preisach_update
-    from ...plant import layout as lay
-    from ...plant.dynamics import gravity_torque
-    from ...plant.model import initial_effect_state
-    from ...plant.torque import group_contraction, torque_kernel
 
     rows = np.atleast_2d(np.asarray(rows, dtype=float))
     qm, pm = rec.means(rec.q), rec.means(rec.p)

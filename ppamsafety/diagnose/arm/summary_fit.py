@@ -50,13 +50,22 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
 
 from ..._validation import check_range
+from ...control import SensorConfig
+from ...experiments.case import ExperimentCase
+from ...experiments.catalog import thesis_reference, thesis_variants
+from ...experiments.closed_loop import run_batch
+from ...experiments.metrics import tracking_stats
+from ...experiments.thesis_data import table_5_2
+from ...params import thesis_arm
 from ...plots.diagnose import plot_summary_profiles
+from .synthesize import plant_with
 
 #: Relative run-to-run reproducibility of a tracking statistic (our assumption, see above).
 REPRODUCIBILITY = 0.10
@@ -155,8 +164,6 @@ def plant_at(arm, name: str, theta: float, *, dt: float = 1e-3):
     -------
     ArmParameters
     """
-    from .synthesize import plant_with
-
     theta = check_range("theta", theta, 0.0, 1.0)
     ax = axis(name)
     if theta == 0.0:
@@ -238,12 +245,6 @@ def simulate_table(arm, plants: list, design: TableDesign, *, dt: float = 1e-3) 
     numpy.ndarray, shape (len(plants), len(variants) * len(periods), 2)
         [mean, max] [m] per cell (variant-major); NaN for a diverged run.
     """
-    from ...control import SensorConfig
-    from ...experiments.case import ExperimentCase
-    from ...experiments.catalog import thesis_reference, thesis_variants
-    from ...experiments.closed_loop import run_batch
-    from ...experiments.metrics import tracking_stats
-
     variants = {v.label: v for v in thesis_variants()}
     bad = [v for v in design.variants if v not in variants]
     if bad:
@@ -254,7 +255,6 @@ def simulate_table(arm, plants: list, design: TableDesign, *, dt: float = 1e-3) 
     sens = SensorConfig()
     cases = [ExperimentCase(pl, variants[v].controller, refs[P], sensors=sens)
              for pl in plants for v in design.variants for P in design.periods]
-    import warnings
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)        # divergence: NaN statistics
         res = run_batch(cases, dt=dt)
@@ -272,8 +272,6 @@ def thesis_cells(design: TableDesign) -> np.ndarray:
     ----------
     design : TableDesign
     """
-    from ...experiments.thesis_data import table_5_2
-
     t = table_5_2()
     out = []
     for v in design.variants:
@@ -416,8 +414,6 @@ def fit_summary(arm=None, *, effects=None, thetas=(0.0, 0.5, 1.0), design=None,
     -------
     SummaryFit
     """
-    from ...params import thesis_arm
-
     t0 = time.perf_counter()
     arm = thesis_arm() if arm is None else arm
     names = [a.name for a in AXES] if effects is None else [axis(n).name for n in effects]
@@ -545,7 +541,6 @@ def fit_pair(fit: SummaryFit, arm=None, names=None, *, fine: int = 41) -> PairFi
     """
     from scipy.interpolate import RegularGridInterpolator
 
-    from ...params import thesis_arm
 
     if not isinstance(fit, SummaryFit):
         raise TypeError(f"fit must be a SummaryFit, got {type(fit).__name__}")

@@ -65,6 +65,20 @@ import numpy as np
 import pandas as pd
 
 from ..._validation import check_choice, check_int, check_range
+from ...control.sensors import SensorConfig
+from ...data.measured import MeasuredData
+from ...data.synthetic import VELOCITY_NOISE_VARIANCES, _arm, default_excitation
+from ...experiments.case import ExperimentCase
+from ...experiments.catalog import EXPERIMENTS as NAMED, thesis_reference, thesis_variants
+from ...experiments.closed_loop import run_batch
+from ...identify.excitation import equilibrium_for
+from ...identify.static import ANGLE_NOISE_VARIANCES, PRESSURE_NOISE_STD
+from ...params.effects import Effects
+from ...plant.geometry import contractions
+from ...plant.model import hysteresis_factors, rest_state, simulate
+from ...plant.muscle import muscle_force
+from ...plant.pneumatics import delta_p_pressures, gravity_compensation, valve_set_values
+from .residuals import delayed
 
 EXPERIMENTS = ("open-loop", "closed-loop", "static-sawtooth")
 #: Defaults of the closed-loop record: controller variant label and catalogue reference.
@@ -132,8 +146,6 @@ def plant_with(arm, effects: dict):
     sensor_offset : numpy.ndarray, shape (4,)
         [Pa]
     """
-    from ...params.effects import Effects
-
     if not isinstance(effects, dict):
         raise TypeError(f"effects must be a dict {{name: value}}, got {type(effects).__name__}")
     fx, geo = {}, {}
@@ -241,21 +253,12 @@ def gravity_compensation_set_values(q_d, arm) -> np.ndarray:
     -------
     numpy.ndarray, shape (N, 4)
     """
-    from ...plant.pneumatics import delta_p_pressures, gravity_compensation, valve_set_values
-
     dp = gravity_compensation(q_d, arm)
     return valve_set_values(delta_p_pressures(dp, arm), arm)
 
 
 def _sawtooth(plant, arm, noise, seed, duration, dt, dead, offset):
     """Samples of the data windows of the static sawtooth (see :func:`synthesize`)."""
-    from ...data.synthetic import VELOCITY_NOISE_VARIANCES
-    from ...identify.static import ANGLE_NOISE_VARIANCES, PRESSURE_NOISE_STD
-    from ...plant.geometry import contractions
-    from ...plant.model import hysteresis_factors, rest_state, simulate
-    from ...plant.muscle import muscle_force
-    from .residuals import delayed
-
     t, qd_set, windows = sawtooth_set_angles(dt=dt)
     if duration is not None:
         keep = int(np.sum(t[windows[:, 1] - 1] < duration))
@@ -336,9 +339,6 @@ def synthesize_arm(experiment: str = "open-loop", effects=None, *, noise: str = 
     -------
     MeasuredData
     """
-    from ...data.synthetic import _arm
-    from ...identify.static import PRESSURE_NOISE_STD
-
     experiment = check_choice("experiment", experiment, EXPERIMENTS)
     noise = check_choice("noise", noise, NOISES)
     seed = check_int("seed", seed, 0)
@@ -348,8 +348,6 @@ def synthesize_arm(experiment: str = "open-loop", effects=None, *, noise: str = 
     arm = _arm(arm)
     plant, dead, offset = plant_with(arm, {} if effects is None else effects)
     if experiment == "static-sawtooth":
-        from ...data.measured import MeasuredData
-
         meta, frame = _sawtooth(plant, arm, noise, seed, duration, dt, dead, offset)
         return MeasuredData(meta, frame, source="synthesize")
     duration = 10.0 if duration is None else duration
@@ -363,12 +361,6 @@ def synthesize_arm(experiment: str = "open-loop", effects=None, *, noise: str = 
 
 def _open_loop(arm, plant, dead, offset, *, noise, seed, duration, dt, p_std):
     """The open-loop Fourier-excitation record (see :func:`synthesize`)."""
-    from ...data.synthetic import VELOCITY_NOISE_VARIANCES, default_excitation
-    from ...identify.excitation import equilibrium_for
-    from ...identify.static import ANGLE_NOISE_VARIANCES
-    from ...plant.model import rest_state, simulate
-    from .residuals import delayed
-
     exc = default_excitation(arm, seed=seed)
     q0 = equilibrium_for(exc.delta_p([0.0])[0], arm)
     x0, _ = rest_state(q0, plant)
@@ -392,8 +384,6 @@ def _open_loop(arm, plant, dead, offset, *, noise, seed, duration, dt, p_std):
 
 
 def _record(meta, t, q, qd, p, u, extra=None):
-    from ...data.measured import MeasuredData
-
     cols = {"t": t, "q1": q[:, 0], "q2": q[:, 1], "qd1": qd[:, 0], "qd2": qd[:, 1]}
     for i in range(4):
         cols[f"p{i + 1}"] = p[:, i]
@@ -433,11 +423,6 @@ def closed_loop_case(arm, plant, *, controller: str = DEFAULT_CONTROLLER,
     -------
     ExperimentCase
     """
-    from ...control.sensors import SensorConfig
-    from ...experiments.case import ExperimentCase
-    from ...experiments.catalog import EXPERIMENTS as NAMED
-    from ...experiments.catalog import thesis_reference, thesis_variants
-
     variants = {v.label: v for v in thesis_variants()}
     if not isinstance(controller, str) or controller not in variants:
         raise ValueError(f"controller = {controller!r} is not a thesis variant label; "
@@ -455,8 +440,6 @@ def closed_loop_case(arm, plant, *, controller: str = DEFAULT_CONTROLLER,
 def _closed_loop(arm, plant, dead, offset, *, noise, seed, duration, dt, controller,
                  reference, p_std):
     """The closed-loop record (see :func:`synthesize`)."""
-    from ...experiments.closed_loop import run_batch
-
     case = closed_loop_case(arm, plant, controller=controller, reference=reference,
                             duration=duration, dt=dt, noise=noise == "table-3.2", seed=seed,
                             dead_time=dead)
@@ -480,6 +463,6 @@ def _closed_loop(arm, plant, dead, offset, *, noise, seed, duration, dt, control
     return _record(meta, t, q, qd, p, u)
 
 
-__all__ = ["synthesize", "plant_with", "closed_loop_case", "sawtooth_set_angles",
+__all__ = ["synthesize_arm", "plant_with", "closed_loop_case", "sawtooth_set_angles",
            "gravity_compensation_set_values", "EXPERIMENTS", "NOISES", "FORCE_NOISE_STD",
            "DEFAULT_CONTROLLER", "DEFAULT_REFERENCE"]

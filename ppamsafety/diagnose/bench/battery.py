@@ -31,10 +31,17 @@ true one over the measured contraction range.
 
 from __future__ import annotations
 
+import time
+import warnings
+
 import numpy as np
 import pandas as pd
 
 from ..._validation import check_int
+from ...data.measured import MeasuredDataWarning
+from ...hysteresis.tensile import DEFAULT_FORCE_LAW
+from .pipeline import diagnose_actuator
+from .synthesize import synthesize_actuator
 
 #: case -> (hidden effects, expected named set, or None outside the library)
 CASES = {
@@ -98,8 +105,6 @@ def parameter_failures(case: str, dg, force_law=None, eps_range=(0.05, 0.25)) ->
     Coulomb friction (the diagnosis then fits c alone, which includes b |v|):
     ``b`` is only checked when it was fitted.
     """
-    from ...hysteresis.tensile import DEFAULT_FORCE_LAW
-
     fx = CASES[case][0]
     pair = len([k for k in fx if k != "friction_viscous"]) > 1
     p = {e["name"]: e["parameters"] for e in dg.effects}
@@ -155,13 +160,6 @@ def run_battery(cases=None, seeds=(1, 2, 3, 4, 5), **options) -> pd.DataFrame:
         ``confidence_levels``, ``outcome``, ``ok`` (correct/refused),
         ``parameter_failures``, ``rho_after``, ``seconds``.
     """
-    import time
-    import warnings
-
-    from ...data.measured import MeasuredDataWarning
-    from .synthesize import synthesize_actuator
-    from .pipeline import diagnose_actuator
-
     cases = list(CASES) if cases is None else list(cases)
     bad = [c for c in cases if c not in CASES]
     if bad:

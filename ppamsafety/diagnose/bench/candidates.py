@@ -49,6 +49,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy import stats
 
+from ...hysteresis import EPS_MAX, preisach_response, scaled_input, w_fit
 from ..core.parameter import Parameter
 
 #: Fixed vocabulary of effect names on a tester (actuator records).
@@ -206,8 +207,6 @@ def _friction(ctx):
 
 
 def _hysteresis(ctx):
-    from ...hysteresis import EPS_MAX, preisach_response, scaled_input, w_fit
-
     s = ctx["direction"]
     moving = np.flatnonzero(s != 0)
     if moving.size == 0:

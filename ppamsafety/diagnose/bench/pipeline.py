@@ -42,7 +42,13 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from ..._validation import check_range
+from ..._validation import check_range, as_float_array
+from ...data.measured import MeasuredData
+from ..core.linear_selection import fit_linear, forward_selection_linear
+from ..core.noise import interpolation_sigma, MAD_GAUSS
+from ..core.record import longest_segment
+from ..core.result import HIGH_CONFIDENCE, Diagnosis
+from .candidates import build_extensions, ACTUATOR_VOCABULARY
 
 #: Minimum samples of the diagnosed segment.
 MIN_SAMPLES = 30
@@ -136,14 +142,11 @@ def actuator_record(data) -> tuple:
     list of str
         Notes.
     """
-    from ...data.measured import MeasuredData
-
     if not isinstance(data, MeasuredData):
         raise TypeError(f"data must be a MeasuredData, got {type(data).__name__}")
     if data.kind != "actuator":
         raise ValueError(f"{data.source}: data.kind = {data.kind!r}; the test-bench diagnosis "
                          f"needs kind = 'actuator'")
-    from ..core.record import longest_segment
 
     a0, b0, notes = longest_segment(data)
     n = b0 - a0
@@ -191,8 +194,6 @@ def motion_direction(eps, threshold: float, rest: float = 0.0) -> np.ndarray:
     -------
     numpy.ndarray of int, shape (N,)
     """
-    from ..._validation import as_float_array
-
     e = as_float_array("eps", eps)
     if e.ndim != 1:
         raise ValueError(f"eps must be 1-D, got shape {e.shape}")
@@ -388,8 +389,6 @@ def residual_noise(t, r) -> tuple:
     estimates : dict
         stride -> sigma estimate [N].
     """
-    from ..core.noise import interpolation_sigma
-
     est = {}
     s = 1
     while s <= MAX_STRIDE and r[::s].size >= MIN_STRIDE_SAMPLES:
@@ -432,8 +431,6 @@ def local_sigma(t, r, stride: int = 1) -> np.ndarray:
     numpy.ndarray, shape (N,)
         [N].
     """
-    from ..core.noise import MAD_GAUSS
-
     ts, xs = t[::stride], r[::stride]
     w = (ts[2:] - ts[1:-1]) / (ts[2:] - ts[:-2])
     d = np.abs(xs[1:-1] - (w * xs[:-2] + (1.0 - w) * xs[2:])) / np.sqrt(1.0 + w ** 2
@@ -513,12 +510,6 @@ def diagnose_actuator(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
     -------
     Diagnosis
     """
-    from .candidates import build_extensions
-    from .candidates import ACTUATOR_VOCABULARY
-    from ..core.result import HIGH_CONFIDENCE, Diagnosis
-    from ..core.linear_selection import fit_linear, forward_selection_linear
-    from ..core.noise import interpolation_sigma
-
     t0 = time.perf_counter()
     check_range("alpha", alpha, 0.0, 0.5, lo_open=True)
     check_range("rho_max", rho_max, 1.0, 100.0)

@@ -60,6 +60,9 @@ import pandas as pd
 
 from ..._validation import (as_float_array, check_bool, check_choice, check_int, check_range,
                             check_vector)
+from ...data.measured import MeasuredData
+from ...hysteresis import EPS_MAX, preisach_response, scaled_input, w_fit
+from ...hysteresis.tensile import DEFAULT_FORCE_LAW
 
 NOISES = ("tester", "none")
 PROTOCOLS = ("sawtooth", "pressure-sweep")
@@ -185,10 +188,6 @@ def synthesize_actuator(effects=None, *, noise: str = "tester", seed: int = 0,
     -------
     MeasuredData
     """
-    from ...data.measured import MeasuredData
-    from ...hysteresis import EPS_MAX, preisach_response, scaled_input, w_fit
-    from ...hysteresis.tensile import DEFAULT_FORCE_LAW
-
     fx = _check_effects(effects)
     noise = check_choice("noise", noise, NOISES)
     seed = check_int("seed", seed, 0)

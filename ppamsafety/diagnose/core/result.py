@@ -9,13 +9,14 @@ from __future__ import annotations
 
 import json
 import math
-import time
 from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
 
-from ..._validation import check_bool, check_int, check_range
+from ..._validation import check_bool
+from ..._version import __version__
+from ...output import OutputFolder
 from ...plots.diagnose import (actuator_force_figure, actuator_residual_figure, arm_blocks_figure,
                                arm_replay_figure)
 
@@ -137,8 +138,6 @@ class Diagnosis:
 
     def to_dict(self) -> dict:
         """The ``diagnosis.json`` content (schema in ``docs/diagnose.md``)."""
-        from ..._version import __version__
-
         def eff(e):
             return {k: e[k] for k in ("name", "parameters", "evidence", "confidence",
                                       "confidence_level", "subsystem")}
@@ -241,8 +240,6 @@ class Diagnosis:
         -------
         list of pathlib.Path
         """
-        from ...output import OutputFolder
-
         check_bool("overwrite", overwrite)
         text = json.dumps(self.to_dict(), indent=1, allow_nan=False, ensure_ascii=False) + "\n"
         md = self.report_markdown()
