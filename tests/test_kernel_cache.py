@@ -1,4 +1,4 @@
-"""The compiled-kernel cache key (issue 23.1).
+"""The compiled-kernel cache key (issue 23.1) and the pruning of old cache folders (23.2).
 
 The key tests edit a temporary copy of the package source, never the package itself: the key
 is computed from a source tree (``kernel_source_hash(root)``), nothing is imported from it.
@@ -12,11 +12,13 @@ import os
 import shutil
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
 
 import ppamsafety
+from ppamsafety import _jit
 from ppamsafety._sourcehash import kernel_dependencies, kernel_source_hash, source_hash
 
 PACKAGE = Path(ppamsafety.__file__).resolve().parent
@@ -277,3 +279,125 @@ def test_the_static_closure_covers_what_importing_the_kernels_runs(tmp_path):
     assert len(r["compiled"]) >= 50, r["compiled"]
     outside = sorted({m for _, m in r["compiled"]} - set(r["kernel_modules"]))
     assert not outside, outside
+
+
+# --- (d) pruning -----------------------------------------------------------------------------
+
+
+def _age(path: Path, age: float) -> Path:
+    """Set the times of ``path`` and its subfolders to ``age`` seconds ago."""
+    t = time.time() - age
+    for p in [*(q for q in path.rglob("*") if q.is_dir() and not q.is_symlink()), path]:
+        os.utime(p, (t, t))
+    return path
+
+
+def _cache_folder(base: Path, i: int, age: float) -> Path:
+    """A folder ``numba-<16 hex>`` as numba fills it, last used ``age`` seconds ago."""
+    path = base / f"numba-{i:016x}"
+    sub = path / "work_src_ppamsafety_plant"
+    sub.mkdir(parents=True)
+    (sub / "model.rk4_step-100.py311.nbi").write_bytes(b"i")
+    (sub / "model.rk4_step-100.py311.1.nbc").write_bytes(b"c")
+    (sub / "model.rk4_step-100.py311.nbi.tmp.0123abcd").write_bytes(b"t")   # an interrupted save
+    return _age(path, age)
+
+
+def test_pruning_keeps_the_newest_and_the_current_and_never_touches_foreign_files(tmp_path):
+    base = tmp_path / "cache"
+    current = _cache_folder(base, 99, age=7 * 86400.0)        # oldest, but this process' own
+    ours = [_cache_folder(base, i, age=86400.0 * (i + 1)) for i in range(6)]   # newest first
+    foreign = {
+        "other": base / "other",                                 # not a numba-<hash> name
+        "short": base / "numba-abc",
+        "upper": base / "numba-0000000000000ABC",
+        "file": base / "numba-00000000000000f1",                  # a file, not a folder
+        "extra": _cache_folder(base, 0xf2, age=0.0),             # holds a file of its own
+        "link": base / "numba-00000000000000f3",                  # a symbolic link
+        "linked": _cache_folder(base, 0xf4, age=0.0),            # holds a symbolic link
+    }
+    for name in ("other", "short", "upper"):
+        foreign[name].mkdir()
+        (foreign[name] / "x.nbi").write_text("x")
+    foreign["file"].write_text("x")
+    (foreign["extra"] / "notes.txt").write_text("mine")
+    target = tmp_path / "elsewhere"
+    target.mkdir()
+    (target / "x.nbi").write_text("x")
+    foreign["link"].symlink_to(target)
+    (foreign["linked"] / "work_src_ppamsafety_plant" / "link.nbi").symlink_to(target / "x.nbi")
+    for name in ("other", "short", "upper", "extra", "linked"):
+        _age(foreign[name], 30 * 86400.0)
+
+    removed = _jit._prune_caches(str(base), str(current), keep=3)
+
+    assert sorted(removed) == sorted(str(p) for p in ours[2:])
+    assert current.is_dir() and ours[0].is_dir() and ours[1].is_dir()
+    assert all(p.exists() or p.is_symlink() for p in foreign.values())
+    assert (foreign["extra"] / "notes.txt").read_text() == "mine"
+    assert all((foreign[n] / "x.nbi").exists() for n in ("other", "short", "upper"))
+    assert (target / "x.nbi").read_text() == "x"
+    assert _jit._prune_caches(str(base), str(current), keep=3) == []    # nothing left to do
+    assert _jit._prune_caches(str(base), str(current), keep=1) == [str(p) for p in ours[:2]]
+
+
+def test_pruning_keeps_folders_used_recently(tmp_path):
+    """Within MIN_AGE a folder is kept however many newer ones there are (protects a process
+    that holds no lock), and its subfolders count: numba writes there."""
+    base = tmp_path / "cache"
+    current = _cache_folder(base, 1, age=0.0)
+    recent = _cache_folder(base, 2, age=_jit.MIN_AGE / 2)
+    written = _cache_folder(base, 3, age=30 * 86400.0)
+    os.utime(written / "work_src_ppamsafety_plant")            # numba just wrote a file there
+    assert _jit._prune_caches(str(base), str(current), keep=1) == []
+    assert _jit._prune_caches(str(base), str(current), keep=1, min_age=0.0) == sorted(
+        [str(recent), str(written)], key=lambda p: p != str(written))
+
+
+def test_pruning_never_deletes_a_folder_in_use(tmp_path):
+    """A folder whose lock another process holds (here: another open file description in this
+    process, as flock locks belong to those) is kept, however old."""
+    fcntl = pytest.importorskip("fcntl")
+    base = tmp_path / "cache"
+    current = _cache_folder(base, 1, age=0.0)
+    old = _cache_folder(base, 2, age=30 * 86400.0)
+    fd = os.open(old / _jit._IN_USE, os.O_RDWR | os.O_CREAT)
+    _age(old, 30 * 86400.0)                 # creating the lock file touched the folder
+    try:
+        fcntl.flock(fd, fcntl.LOCK_SH)
+        assert _jit._prune_caches(str(base), str(current), keep=1) == []
+        assert old.is_dir()
+    finally:
+        os.close(fd)
+    assert _jit._prune_caches(str(base), str(current), keep=1) == [str(old)]
+    assert not old.exists()
+
+
+def test_a_process_keeps_its_folder_locked(tmp_path):
+    """Another process (with the package imported) holds the lock of its folder: pruning from
+    here keeps it; once it exits, the folder goes."""
+    base = tmp_path / "cache"
+    mine = _cache_folder(base, 1, age=0.0)
+    env = {**os.environ, "PPAMSAFETY_CACHE_DIR": str(base)}
+    env.pop("NUMBA_CACHE_DIR", None)
+    env["PYTHONPATH"] = str(PACKAGE.parent) + os.pathsep + env.get("PYTHONPATH", "")
+    script = ("import sys, numba, ppamsafety._jit; print(numba.config.CACHE_DIR, flush=True); "
+              "sys.stdin.read()")
+    p = subprocess.Popen([sys.executable, "-c", script], env=env, stdin=subprocess.PIPE,
+                         stdout=subprocess.PIPE, text=True, cwd=tmp_path)
+    try:
+        theirs = Path(p.stdout.readline().strip())
+        assert theirs.parent == base and theirs.is_dir() and theirs != mine
+        t = time.time() - 30 * 86400.0
+        os.utime(theirs, (t, t))
+        assert _jit._prune_caches(str(base), str(mine), keep=1) == []
+    finally:
+        p.communicate("", timeout=60)
+    assert _jit._prune_caches(str(base), str(mine), keep=1) == [str(theirs)]
+
+
+def test_pruning_failures_warn_and_never_raise(tmp_path):
+    with pytest.warns(RuntimeWarning, match="could not list"):
+        assert _jit._prune_caches(str(tmp_path / "missing"), str(tmp_path / "x")) == []
+    with pytest.raises(ValueError, match="keep"):
+        _jit._prune_caches(str(tmp_path), str(tmp_path / "x"), keep=0)
