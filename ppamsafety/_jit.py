@@ -21,36 +21,274 @@
   elsewhere).
 
 Cache location.  numba invalidates a cached function only when *its own*
-source file changes, not when a kernel it calls in another module does, so a
-stale cache could silently run old physics after an edit.  The cache
-therefore lives in a directory named after a hash of every source file of
-the package (``~/.cache/ppamsafety/numba-<hash>``, or
-``$PPAMSAFETY_CACHE_DIR/numba-<hash>``): any edit gives a fresh cache.  An
-explicit ``NUMBA_CACHE_DIR`` set by the user is respected.
+source file changes, not when a kernel it calls in another module does (nor a
+module constant it reads from there, such as a layout offset), so a stale
+cache could silently run old physics after an edit.  The cache therefore
+lives in a folder named after :func:`~ppamsafety._sourcehash.kernel_source_hash`
+(``~/.cache/ppamsafety/numba-<key>``, or ``$PPAMSAFETY_CACHE_DIR/numba-<key>``):
+a hash of every module compiled code can depend on (the modules defining
+kernels and, transitively, what they import at module level -- found from the
+source tree, see :mod:`ppamsafety._sourcehash`), of the Python, numba, llvmlite,
+numpy and other imported package versions, and of the numba settings that
+change machine code (``NUMBA_BOUNDSCHECK``, ``NUMBA_OPT`` ...).  An edit of
+anything a kernel can reach gives a fresh folder, and every kernel compiles
+again; an edit of a study, a figure module that no kernel module imports, the
+command line or the docs keeps the folder.  The analysis of the source tree is
+stored next to the folders (``kernel-deps``), so a process only parses the
+files edited since (a whole-tree lookup takes about 10 ms).
+
+Each process holds a shared lock on its folder (``.ppamsafety-in-use``) and
+touches it, and then deletes the folders of other keys beyond the
+:data:`KEEP_CACHES` most recently used (:func:`_prune_caches`): only
+``numba-<16 hex digits>`` folders holding nothing but numba cache files, not
+used for :data:`MIN_AGE`, and only when no running process holds their lock
+(a failed deletion is a warning, never an error).  Without ``fcntl``
+(Windows) nothing is deleted.  An explicit ``NUMBA_CACHE_DIR`` set by the
+user is respected (no key, no pruning).
 
 Set ``NUMBA_DISABLE_JIT=1`` to run the kernels as plain Python for debugging.
 """
 
 import os
+import re
+import shutil
+import time
+import warnings
 
 import numba
 import numpy as np
 from numba import njit
 
-from ._sourcehash import source_hash as _source_hash
+from ._sourcehash import kernel_source_hash
+
+try:
+    import fcntl
+except ImportError:          # Windows: no advisory locks, so old caches are never deleted
+    fcntl = None
+
+#: Kernel cache folders kept under the cache root (the current one included): the most
+#: recently used, e.g. the current branch, another worktree and the previous edit.
+KEEP_CACHES = 3
+#: Kernel cache folders used less than this long ago are never deleted [s]: protects a
+#: process that does not hold the folder's lock (an older version, a file system without
+#: locks) while it runs.
+MIN_AGE = 3600.0
+#: Names of the kernel cache folders (the key is 16 hex digits).
+_CACHE_NAME = re.compile(r"numba-[0-9a-f]{16}")
+#: Files numba writes into a cache folder: index, data, and their temporary files.
+_NUMBA_FILE = re.compile(r".+\.nb[ic](\.tmp\.[0-9a-f]+)?")
+#: Lock file of a cache folder: shared by each process using the folder.
+_IN_USE = ".ppamsafety-in-use"
+#: Open descriptor of the lock file of this process' folder (held until the process exits).
+_held_lock = None
+
+
+def _cache_root() -> str:
+    """Folder of the kernel cache folders: ``$PPAMSAFETY_CACHE_DIR`` or ``~/.cache/ppamsafety``."""
+    return os.environ.get("PPAMSAFETY_CACHE_DIR") or os.path.join(
+        os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "ppamsafety")
 
 
 def _configure_cache() -> None:
+    """Point numba's cache at ``<cache root>/numba-<key>`` and delete old folders of other keys."""
     if os.environ.get("NUMBA_CACHE_DIR"):
         return
-    base = os.environ.get("PPAMSAFETY_CACHE_DIR") or os.path.join(
-        os.environ.get("XDG_CACHE_HOME") or os.path.expanduser("~/.cache"), "ppamsafety")
-    path = os.path.join(base, f"numba-{_source_hash()}")
+    base = _cache_root()
     try:
-        os.makedirs(path, exist_ok=True)
+        os.makedirs(base, exist_ok=True)
     except OSError:          # read-only home: fall back to numba's default locations
         return
+    key = kernel_source_hash(cache_dir=os.path.join(base, "kernel-deps"))
+    path = os.path.join(base, f"numba-{key}")
+    try:
+        _use_folder(path)
+    except OSError:          # not writable: fall back to numba's default locations
+        return
     numba.config.CACHE_DIR = path
+    _prune_caches(base, path)
+
+
+def _same_file(fd: int, path: str) -> bool:
+    """Whether ``path`` still names the open file ``fd`` (False once its folder was deleted)."""
+    try:
+        a, b = os.fstat(fd), os.stat(path)
+    except FileNotFoundError:
+        return False
+    return (a.st_dev, a.st_ino) == (b.st_dev, b.st_ino)
+
+
+def _use_folder(path: str) -> None:
+    """Create the cache folder ``path`` if needed, hold its shared lock, and touch it.
+
+    A process pruning old folders deletes one only while holding its lock
+    exclusively; if it deleted ``path`` between this process creating it and
+    taking the lock, the folder is created again.
+
+    Parameters
+    ----------
+    path : str
+        The cache folder.
+    """
+    global _held_lock
+    for _ in range(10):
+        os.makedirs(path, exist_ok=True)
+        if fcntl is None:
+            break
+        lock = os.path.join(path, _IN_USE)
+        try:
+            fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
+        except FileNotFoundError:        # deleted by a pruner since makedirs: again
+            continue
+        try:
+            fcntl.flock(fd, fcntl.LOCK_SH)   # waits only while a pruner deletes the folder
+        except OSError:      # no locks on this file system: unprotected, but nobody prunes it
+            os.close(fd)
+            break
+        if _same_file(fd, lock):
+            if _held_lock is not None:
+                os.close(_held_lock)
+            _held_lock = fd
+            break
+        os.close(fd)                     # deleted while this process waited: again
+    else:
+        warnings.warn(f"kernel cache {path}: could not lock it (deleted 10 times while "
+                      "locking); using it unprotected", RuntimeWarning, stacklevel=2)
+    try:
+        os.utime(path)                   # most recently used: kept by every pruner
+    except OSError as exc:
+        warnings.warn(f"kernel cache {path}: could not mark it used ({exc}); it may be "
+                      "deleted by another process", RuntimeWarning, stacklevel=2)
+
+
+def _holds_only_numba_files(path: str) -> bool:
+    """Whether every entry under ``path`` is a numba cache file, our lock file or a folder.
+
+    Symbolic links and any other file make it False: such a folder was not
+    made by this module and is never deleted.
+    """
+    def fail(exc):
+        raise exc
+
+    for dirpath, dirnames, filenames in os.walk(path, onerror=fail):
+        for name in dirnames + filenames:
+            if os.path.islink(os.path.join(dirpath, name)):
+                return False
+        if not all(f == _IN_USE or _NUMBA_FILE.fullmatch(f) for f in filenames):
+            return False
+    return True
+
+
+def _remove_if_unused(path: str) -> bool:
+    """Delete the cache folder ``path`` unless a process holds its lock or it holds other files.
+
+    Parameters
+    ----------
+    path : str
+        A ``numba-<key>`` folder.
+
+    Returns
+    -------
+    bool
+        Whether it was deleted.
+    """
+    try:
+        if not _holds_only_numba_files(path):
+            return False
+        lock = os.path.join(path, _IN_USE)
+        fd = os.open(lock, os.O_RDWR | os.O_CREAT, 0o644)
+    except FileNotFoundError:            # deleted by another process meanwhile
+        return False
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            return False                 # in use by a running process
+        if not _same_file(fd, lock):     # deleted by another pruner meanwhile
+            return False
+        shutil.rmtree(path)
+        return True
+    finally:
+        os.close(fd)
+
+
+def _last_used(path: str) -> float:
+    """Latest modification time [s since the epoch] of the folder ``path`` and its subfolders.
+
+    A process touches its folder when it starts (:func:`_use_folder`), and
+    numba writes its files into subfolders (one per source folder), whose
+    times therefore also follow processes that do not touch the folder.
+    """
+    t = os.stat(path, follow_symlinks=False).st_mtime
+    with os.scandir(path) as it:
+        for e in it:
+            if e.is_dir(follow_symlinks=False):
+                t = max(t, e.stat(follow_symlinks=False).st_mtime)
+    return t
+
+
+def _prune_caches(base: str, current: str, keep: int = KEEP_CACHES,
+                  min_age: float = MIN_AGE) -> list:
+    """Delete the kernel cache folders under ``base`` but ``current`` and the most recently used.
+
+    Only folders named ``numba-<16 hex digits>`` (not symbolic links) holding
+    nothing but numba cache files are candidates.  Of them the ``keep - 1``
+    most recently used (:func:`_last_used`) are kept besides ``current``, and
+    so is every folder used less than ``min_age`` ago or whose lock a running
+    process holds.  Never raises for a file system error: a folder that cannot
+    be read or deleted is a ``RuntimeWarning``.  Without ``fcntl`` nothing is
+    deleted.
+
+    Parameters
+    ----------
+    base : str
+        The cache root.
+    current : str
+        This process' folder (kept).
+    keep : int
+        Folders kept, ``current`` included (>= 1).
+    min_age : float
+        Folders used less than this long ago are kept [s] (>= 0).
+
+    Returns
+    -------
+    list of str
+        The deleted folders.
+    """
+    if isinstance(keep, bool) or not isinstance(keep, int) or keep < 1:
+        raise ValueError(f"keep must be an int >= 1, got {keep!r}")
+    if not (isinstance(min_age, (int, float)) and min_age >= 0):
+        raise ValueError(f"min_age must be a number >= 0 [s], got {min_age!r}")
+    if fcntl is None:
+        return []
+    candidates = []
+    try:
+        with os.scandir(base) as it:
+            entries = [e for e in it if _CACHE_NAME.fullmatch(e.name)
+                       and e.name != os.path.basename(current)
+                       and e.is_dir(follow_symlinks=False)]
+    except OSError as exc:
+        warnings.warn(f"could not list the kernel caches in {base}: {exc}", RuntimeWarning,
+                      stacklevel=2)
+        return []
+    for e in entries:
+        try:
+            candidates.append((-_last_used(e.path), e.name, e.path))
+        except FileNotFoundError:        # deleted by another process meanwhile
+            continue
+        except OSError as exc:
+            warnings.warn(f"could not read the kernel cache {e.path}: {exc}", RuntimeWarning,
+                          stacklevel=2)
+    removed, now = [], time.time()
+    for minus_t, _, path in sorted(candidates)[keep - 1:]:
+        if now + minus_t < min_age:
+            continue
+        try:
+            if _remove_if_unused(path):
+                removed.append(path)
+        except OSError as exc:
+            warnings.warn(f"could not delete the old kernel cache {path}: {exc}",
+                          RuntimeWarning, stacklevel=2)
+    return removed
 
 
 _configure_cache()

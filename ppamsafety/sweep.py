@@ -9,7 +9,10 @@ of cases (dicts of JSON-serialisable parameters).  :func:`run_sweep`
   cases (pass the same ``cache_dir``),
 * reuses a cached case only if the case, the sweep name, the source code of
   ``func`` and the source of the whole package are unchanged (see
-  :func:`case_key`): an edit never returns results of the old code,
+  :func:`case_key`): an edit never returns results of the old code.  The
+  package part is :func:`ppamsafety._sourcehash.source_hash`, every file, not
+  the compiled-kernel key (which ignores studies, figures and the command
+  line): a result also depends on the Python code around the kernels,
 * runs cases on ``processes`` worker processes (the compiled kernels are
   cached on disk, so workers do not recompile),
 * records a failing case (its parameters, ``status="failed"`` and the error)
@@ -89,6 +92,9 @@ def _code_fingerprint(code) -> str:
 
 def function_hash(func) -> str:
     """Hash of what ``func`` computes: its source, its bytecode and the package source.
+
+    The package source is :func:`ppamsafety._sourcehash.source_hash` (every
+    ``*.py`` of the package), not the narrower key of the compiled-kernel cache.
 
     The source is ``inspect.getsource(func)``; if it is not available, the
     qualified name and the bytes of its module file.  The bytecode of the

@@ -1,12 +1,14 @@
 """Compile the large kernels once, split between the report's worker processes.
 
 Numba compiles a kernel on its first call and keeps it in an on-disk cache
-(:mod:`ppamsafety._jit`).  With a cold cache -- a fresh clone, or after any
-edit of the package -- the report's worker processes would otherwise start
-sections that need the same kernels at the same moment and compile them side
-by side: on 2 cores both workers spent their first 31 s compiling the same
-closed loop, and the safety scan's own workers compiled the dense impact
-engine twice more (measured with numba's compile events, issue 11).
+(:mod:`ppamsafety._jit`).  With a cold cache -- a fresh clone, or after an
+edit of code the kernels depend on (see
+:func:`~ppamsafety._sourcehash.kernel_source_hash`; an edit of a study or of
+the command line keeps the cache) -- the report's worker processes would
+otherwise start sections that need the same kernels at the same moment and
+compile them side by side: on 2 cores both workers spent their first 31 s
+compiling the same closed loop, and the safety scan's own workers compiled
+the dense impact engine twice more (measured with numba's compile events, issue 11).
 
 For the full report :func:`~ppamsafety.report.build.build_report` therefore
 first runs the tasks of :data:`TASKS` in its worker pool, each as soon as the
