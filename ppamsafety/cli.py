@@ -93,14 +93,14 @@ def _nonnegative(text: str) -> float:
     return v
 
 
-def _study_names(text: str) -> list[str]:
+def _section_names(text: str) -> list[str]:
     from .sections import REGISTRY
 
     names = [n.strip() for n in text.split(",") if n.strip()]
     if not names:
         raise argparse.ArgumentTypeError(
-            f"{text!r} names no study; give comma-separated names from {', '.join(REGISTRY)} "
-            f"(omit --only to run them all)")
+            f"{text!r} names no report section; give comma-separated names from "
+            f"{', '.join(REGISTRY)} (omit --only to run them all)")
     return names
 
 
@@ -293,8 +293,8 @@ def build_parser() -> argparse.ArgumentParser:
     r = sub.add_parser("report", help="regenerate the report folder from scratch", epilog=_EPILOG)
     r.add_argument("--outdir", default="reports", help="output folder (default: reports)")
     r.add_argument("--quick", action="store_true", help="coarse grids and short sweeps")
-    r.add_argument("--only", type=_study_names, default=None, metavar="NAMES",
-                   help="comma-separated study names to run (default: all)")
+    r.add_argument("--only", type=_section_names, default=None, metavar="NAMES",
+                   help="comma-separated report section names to run (default: all)")
     r.add_argument("--overwrite", action="store_true",
                    help="replace a previous ppamsafety report in OUTDIR (never other files)")
     r.add_argument("--processes", type=_positive_int, default=None, metavar="N",

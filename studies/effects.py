@@ -1,8 +1,8 @@
 """The thesis revisited with muscle hysteresis in the plant (sawtooth, Tables 5.2 and 6.1).
 
-Run alone:  python studies/effects.py [outdir] [--quick] [--overwrite]
+Regenerates the report section ``effects`` (:mod:`ppamsafety.sections.effects`) alone:
+    python studies/effects.py [outdir] [--quick] [--overwrite]
 """
-
 from ppamsafety.sections import main
 
 if __name__ == "__main__":

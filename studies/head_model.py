@@ -1,8 +1,8 @@
 """Reconstruction of the thesis' head contact model and its evidence.
 
-Run alone:  python studies/head_model.py [outdir] [--quick] [--overwrite]
+Regenerates the report section ``head_model`` (:mod:`ppamsafety.sections.head_model`) alone:
+    python studies/head_model.py [outdir] [--quick] [--overwrite]
 """
-
 from ppamsafety.sections import main
 
 if __name__ == "__main__":

@@ -1,8 +1,8 @@
 """Physical interaction: force estimation, admittance control and the release hazard (§5.4).
 
-Run alone:  python studies/interaction.py [outdir] [--quick] [--overwrite]
+Regenerates the report section ``interaction`` (:mod:`ppamsafety.sections.interaction`) alone:
+    python studies/interaction.py [outdir] [--quick] [--overwrite]
 """
-
 from ppamsafety.sections import main
 
 if __name__ == "__main__":

@@ -1,8 +1,8 @@
 """Safety against tracking over a lambda x Ki grid of joint PSMC.
 
-Run alone:  python studies/lambda_sweep.py [outdir] [--quick] [--overwrite]
+Regenerates the report section ``lambda_sweep`` (:mod:`ppamsafety.sections.lambda_sweep`) alone:
+    python studies/lambda_sweep.py [outdir] [--quick] [--overwrite]
 """
-
 from ppamsafety.sections import main
 
 if __name__ == "__main__":

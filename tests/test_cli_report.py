@@ -18,9 +18,9 @@ def test_help_exits_cleanly():
     assert "report" in r.stdout
 
 
-def test_unknown_study_is_a_clear_error(tmp_path, capsys):
+def test_unknown_section_is_a_clear_error(tmp_path, capsys):
     assert main(["report", "--outdir", str(tmp_path / "r"), "--only", "nonsense"]) == 2
-    assert "unknown studies" in capsys.readouterr().err
+    assert "unknown report sections" in capsys.readouterr().err
 
 
 def test_report_regenerates_from_scratch(tmp_path):
@@ -109,16 +109,16 @@ def test_bad_impact_values_are_refused(argv, words, capsys):
 def test_empty_only_is_an_error_not_everything(only, tmp_path, capsys):
     out = tmp_path / "r"
     assert main(["report", "--outdir", str(out), "--only", only]) == 2
-    assert "names no study" in capsys.readouterr().err
+    assert "names no report section" in capsys.readouterr().err
     assert not out.exists()
 
 
 def test_build_report_checks_only(tmp_path):
     from ppamsafety.report.build import build_report
 
-    with pytest.raises(ValueError, match="names no study"):
+    with pytest.raises(ValueError, match="names no report section"):
         build_report(tmp_path / "r", only=[])
-    with pytest.raises(TypeError, match="list of study names"):
+    with pytest.raises(TypeError, match="list of section names"):
         build_report(tmp_path / "r", only="design")
     assert not (tmp_path / "r").exists()
 

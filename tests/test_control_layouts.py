@@ -18,7 +18,7 @@ import pytest
 from ppamsafety.control import (PID, ControllerKind, GCMode, GravityCompensation, JointPSMC,
                                 PIDDerivative, SensorConfig, SlidingModeControl, SMCCoupling,
                                 TaskPSMC)
-from ppamsafety.control import CONTROLLER_CLASSES, base, dispatch, reference
+from ppamsafety.control import CONTROLLER_CLASSES, dispatch, reference
 from ppamsafety.control.admittance import AdmittancePSMC
 from ppamsafety.control.estimation import ESTIMATOR_INTERNALS
 from ppamsafety.control.sensors import (SENSOR_CONFIG, SENSOR_STATE, VelocitySource,

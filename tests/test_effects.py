@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from ppamsafety.params import ArmParameters
-from ppamsafety.params.effects import Effects
+from ppamsafety.params.effects import EffectKind, Effects
 from ppamsafety.plant import dynamics as dyn
 from ppamsafety.plant import packing
 from ppamsafety.plant import geometry as geo
@@ -48,9 +48,7 @@ def test_effects_change_only_the_plant_truth_view(arm):
     fx = TRUTH.replace(payload_mass=M_P)
     a = arm.replace(effects=fx)
     # every parameter-only effect (the effects with state: tests/test_effects_hysteresis.py)
-    stateful = {"hysteresis_delta", "hysteresis_initial", "hysteresis_exact_stages",
-                "valve_dead_time"}
-    assert set(fx.enabled()) == set(Effects.__dataclass_fields__) - stateful
+    assert set(fx.enabled()) == set(Effects.names(EffectKind.PARAMETER))
     np.testing.assert_array_equal(packing.controller_view(a), packing.controller_view(arm))
     np.testing.assert_array_equal(packing.model_view(a), packing.model_view(arm))
     P, P0 = packing.pack(a), packing.pack(arm)
@@ -61,8 +59,13 @@ def test_effects_change_only_the_plant_truth_view(arm):
     np.testing.assert_array_equal(read(P, "v2"), fx.valve_gain)
     np.testing.assert_array_equal(read(P, "tv"), fx.valve_time_constant)
     assert read(P, "n_poly") == fx.polytropic_n and read(P, "payload_mass") == M_P
-    assert all(bool(v) for k, v in packing.plant_effects(P).items()
-               if k not in ("hysteresis_mode", "dead_time_mode"))
+    # the flags on are those the parameter effects set, each alone (nothing else is on)
+    on = {k for k, v in packing.plant_effects(P).items() if v}
+    alone = set()
+    for name in Effects.names(EffectKind.PARAMETER):
+        Pn = packing.pack(_with(arm, **{name: getattr(fx, name)}))
+        alone |= {k for k, v in packing.plant_effects(Pn).items() if v}
+    assert on == alone and len(on) >= 6
     assert int(P[lay.PAYLOAD_MODE]) == lay.Switch.ON
     # nothing else moved: geometry, muscles, pressures, theta2 (the link-1 offset)
     others = [f.name for f in lay.PLANT.fields if f.name not in
@@ -281,3 +284,48 @@ def test_mixed_effects_batch_equals_separate_runs_bitwise(arm):
     # the rows really differ (each effect changes the response)
     for b in range(1, 4):
         assert np.abs(batch[b] - batch[0]).max() > 1e-3
+
+
+# --- joint torque bias (a stateless effect the kernels read) ---------------------------------
+BIAS = (0.8, -0.5)                         #: constant joint torques of the tests [N m]
+
+
+def test_torque_bias_is_the_kernel_kind_and_only_the_plant_sees_it(arm):
+    assert Effects.kind("joint_torque_bias") is EffectKind.KERNEL
+    a = _with(arm, joint_torque_bias=BIAS)
+    np.testing.assert_array_equal(packing.controller_view(a), packing.controller_view(arm))
+    P = packing.pack(a)
+    assert int(P[lay.TORQUE_BIAS_MODE]) == lay.Switch.ON
+    np.testing.assert_array_equal(lay.PLANT.read(P, "torque_bias"), BIAS)
+    assert lay.PLANT.read(P, "effect_state_length") == 0.0          # stateless: no z
+
+
+def test_torque_bias_accelerates_the_arm_by_the_inverse_inertia(arm):
+    """From the nominal rest state the bias is the only unbalanced torque: H qdd = b (3.1)."""
+    q = np.radians([50, -80])
+    x0, u = model.rest_state(q, arm)
+    a = _with(arm, joint_torque_bias=BIAS)
+    qdd = model.state_derivative(x0, u, a)[2:4]
+    expect = np.linalg.solve(dyn.inertia_matrix(q, arm), np.array(BIAS))
+    np.testing.assert_allclose(qdd, expect, rtol=1e-10, atol=1e-12)
+    assert np.abs(qdd).min() > 0.1                                   # rad/s^2: really moves
+
+
+def test_torque_bias_equilibrium_is_held_by_the_muscles(arm):
+    """rest_state of the biased plant balances gravity minus the bias (the shared kernel)."""
+    q = np.radians([50, -80])
+    a = _with(arm, joint_torque_bias=BIAS)
+    x0, u = model.rest_state(q, a)
+    np.testing.assert_allclose(model.state_derivative(x0, u, a)[2:4], 0.0, atol=1e-10)
+    X = model.simulate(a, x0, np.tile(u, (200, 1)))                  # 0.2 s at rest
+    np.testing.assert_allclose(X[-1, :2], q, atol=1e-9)
+    # the muscles of the biased plant hold a different pressure difference
+    assert np.abs(x0[4:] - model.rest_state(q, arm)[0][4:]).max() > 100.0    # Pa
+
+
+@pytest.mark.parametrize("value, match", [((25.0, 0.0), r"joint_torque_bias\[0\]"),
+                                          ((1.0,), "2 entries"),
+                                          ((math.nan, 0.0), r"joint_torque_bias\[0\]")])
+def test_torque_bias_is_validated(value, match):
+    with pytest.raises(ValueError, match=match):
+        Effects(joint_torque_bias=value)

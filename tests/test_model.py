@@ -86,8 +86,6 @@ def test_explicit_zero_effect_state_equals_the_default(arm):
 
 def test_effect_state_is_sized_per_row_and_untouched_with_effects_off(arm):
     """Rows may ask for different z lengths; with no effect on, z and x are unaffected."""
-    from ppamsafety.plant import layout as lay
-
     x0, U = _step_inputs(arm, 400)
     default = model.simulate(arm, x0, U)
     rows = np.stack([packing.with_effects(packing.pack(arm), effect_state_length=3),

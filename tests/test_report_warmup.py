@@ -152,7 +152,7 @@ def _scheduled(monkeypatch, tasks, studies=("s1", "s2"), processes=2):
 
     monkeypatch.setattr(warmup, "TASKS", tuple(warmup.Task(task(*spec[:3]), after=spec[3])
                                                for spec in tasks))
-    monkeypatch.setattr(build, "_timed_study", fake_study)
+    monkeypatch.setattr(build, "_timed_section", fake_study)
     reported = []
     with ThreadPoolExecutor(processes) as pool:
         build._run_in_pool(pool, processes, list(studies), None, False, True,
@@ -197,15 +197,6 @@ def test_report_workers_use_one_blas_thread():
     out = subprocess.run([sys.executable, "-c", script], check=True, capture_output=True,
                          text=True, timeout=300).stdout.strip()
     assert out == "[1]", out
-
-
-def test_typical_times_name_registered_studies():
-    """The scheduling hint for a folder without a previous report names only real studies."""
-    from ppamsafety.report.build import TYPICAL_SECONDS
-    from ppamsafety.sections import REGISTRY
-
-    assert set(TYPICAL_SECONDS) <= set(REGISTRY)
-    assert all(v > 0 for v in TYPICAL_SECONDS.values())
 
 
 @pytest.mark.parametrize("kwargs, match", [({"run": "closed_loop_kernels"}, "run"),

@@ -36,7 +36,13 @@ hysteresis_delta         hysteresis_* and the effect state z    §3.6, (3.31)-(3
                          (Preisach memory per muscle group)     delta in [0, 1]
 hysteresis_initial       hysteresis_initial (memory rows)       §3.6.6: "negative"
 valve_dead_time          dead_time_* and a delay line in z      §4.2.4; [0, 100] periods
+joint_torque_bias        torque_bias_* (read by plant_rhs and   a constant disturbance
+                         the static equilibria)                 torque; [-20, 20] N m
 =======================  =====================================  ==========================
+
+Each field is declared with its :class:`EffectKind` (how it reaches the simulation:
+folded into parameters, read by the kernels, with state, or an option of another effect)
+and, where the diagnosis fits it to summary statistics, its :class:`MagnitudeAxis`.
 
 Ranges.  Payload: the arm holds about 2 kg everywhere in its working area
 and more away from its edges (§2.3.3.5, fig. 2.15); 5 kg, twice its own mass
@@ -100,7 +106,8 @@ errors of the measurement, not of the plant; they live in
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+import enum
+from dataclasses import dataclass, field, fields, replace
 
 import numpy as np
 
@@ -125,6 +132,9 @@ POLYTROPIC_RANGE = (1.0, 1.4)
 HYSTERESIS_DELTA_RANGE = (0.0, 1.0)
 #: Largest valve dead time [control periods] (typo guard, see the module docstring).
 VALVE_DEAD_TIME_MAX = 100
+#: Largest |constant joint torque| of ``Effects.joint_torque_bias`` [N m]: about twice the
+#: gravity torque of the thesis arm's shoulder at full reach (a typo guard, not physics).
+JOINT_TORQUE_BIAS_MAX = 20.0
 #: Named initial Preisach memories (§3.6.6; :func:`ppamsafety.hysteresis.initial_memory`).
 HYSTERESIS_INITIAL_NAMES = ("negative", "positive")
 
@@ -178,6 +188,72 @@ def _vector(name, value, n, check):
     return tuple(check(f"Effects.{name}[{i}]", v) for i, v in enumerate(value))
 
 
+class EffectKind(enum.Enum):
+    """How an effect reaches the simulation: what adding one of its kind touches.
+
+    ``docs/architecture.md`` has a recipe ("files you will touch") per kind.
+    """
+
+    #: Folded into the plant row's *parameters* when the arm is packed (payload into theta,
+    #: an override of friction, valves, polytropic exponent); the kernels are untouched.
+    PARAMETER = "parameter"
+    #: Stateless, read by the kernels at every evaluation from the row's effect section
+    #: (the joint torque bias).
+    KERNEL = "kernel"
+    #: Carries memory between steps in the effect state z (hysteresis, valve dead time).
+    STATE = "state"
+    #: Not an effect: an option of another one (``Effects.option_of(name)``).
+    OPTION = "option"
+
+
+@dataclass(frozen=True)
+class MagnitudeAxis:
+    """An effect's magnitude axis theta in [0, 1], from the nominal plant to its largest
+    plausible magnitude (the fit of effects to summary statistics,
+    :mod:`ppamsafety.diagnose.arm.summary_fit`).
+
+    Attributes
+    ----------
+    name : str
+        Axis name: the ``Effects`` field, or its relative form (``friction_coulomb_factor``:
+        a multiple of the nominal value; ``valve_offset_delta``: an offset added to it),
+        as :func:`ppamsafety.diagnose.arm.synthesize.plant_with` reads it.
+    unit : str
+        Unit of the physical magnitude.
+    nominal, full : float
+        Physical magnitude at theta = 0 and theta = 1.
+    reason : str
+        Why ``full`` is the largest plausible magnitude.
+    """
+
+    name: str
+    unit: str
+    nominal: float
+    full: float
+    reason: str
+
+    def value(self, theta: float) -> float:
+        """Physical magnitude at ``theta``.
+
+        Parameters
+        ----------
+        theta : float
+            Position on the axis, in [0, 1].
+
+        Returns
+        -------
+        float
+        """
+        return self.nominal + theta * (self.full - self.nominal)
+
+
+def _effect(default, kind: EffectKind, *, length: int = 1, unit: str = "", axis=None,
+            option_of: str | None = None):
+    """A field of :class:`Effects` with what the rest of the toolkit reads about it."""
+    return field(default=default, metadata={"kind": kind, "length": length, "unit": unit,
+                                            "axis": axis, "option_of": option_of})
+
+
 @dataclass(frozen=True)
 class Effects:
     """Optional plant effects, all off by default (see the module docstring).
@@ -222,19 +298,56 @@ class Effects:
         Transport delay of the set value of each valve, in whole control
         periods (input samples of ``plant.model.simulate``), in [0, 100];
         None = no dead time.
+    joint_torque_bias : tuple of 2 float or None
+        A constant joint torque per joint [N m], in [-20, 20], added to the muscle
+        torques of the plant (a disturbance the model lacks: a cable's drag, a spring,
+        an offset load); the static equilibria of the plant truth include it.  None =
+        none.
+
+    Every field carries its :class:`EffectKind` (``Effects.kind(name)``), its length, its
+    unit and, where the diagnosis fits it to summary statistics, its
+    :class:`MagnitudeAxis` (``Effects.axes()``).
     """
 
-    payload_mass: float = 0.0
-    friction_coulomb: tuple | None = None
-    friction_viscous: tuple | None = None
-    valve_offset: tuple | None = None
-    valve_gain: tuple | None = None
-    valve_time_constant: tuple | None = None
-    polytropic_n: float | None = None
-    hysteresis_delta: tuple | None = None
-    hysteresis_initial: object = "negative"
-    hysteresis_exact_stages: bool = False
-    valve_dead_time: tuple | None = None
+    payload_mass: float = _effect(0.0, EffectKind.PARAMETER, unit="kg", axis=MagnitudeAxis(
+        "payload_mass", "kg", 0.0, 1.0, "an object of up to 1 kg held at A_L (the arm holds "
+        "~2 kg, §2.3.3.5)"))
+    friction_coulomb: tuple | None = _effect(None, EffectKind.PARAMETER, length=2, unit="N m",
+                                             axis=MagnitudeAxis(
+        "friction_coulomb_factor", "x nominal", 1.0, 10.0, "Coulomb friction up to 10x "
+        "Table 3.5 (a worn or over-tightened bearing)"))
+    friction_viscous: tuple | None = _effect(None, EffectKind.PARAMETER, length=2,
+                                             unit="N m s/rad", axis=MagnitudeAxis(
+        "friction_viscous_factor", "x nominal", 1.0, 4.0, "viscous friction up to 4x "
+        "Table 3.5"))
+    valve_offset: tuple | None = _effect(None, EffectKind.PARAMETER, length=4, unit="Pa",
+                                         axis=MagnitudeAxis(
+        "valve_offset_delta", "Pa", 0.0, 10000.0, "static valve offset +0.1 bar on every "
+        "valve, the deviations 'as high as 0.1 bar' of §3.5.1.2"))
+    valve_gain: tuple | None = _effect(None, EffectKind.PARAMETER, length=4, axis=MagnitudeAxis(
+        "valve_gain_factor", "x nominal", 1.0, 0.7, "static valve gain down to 0.7x "
+        "(inside the 0.5-1.5 range of Effects)"))
+    valve_time_constant: tuple | None = _effect(None, EffectKind.PARAMETER, length=4, unit="s",
+                                                axis=MagnitudeAxis(
+        "valve_time_constant_factor", "x nominal", 1.0, 3.0, "valve time constant up to 3x "
+        "(45/60 ms -> 135/180 ms: a long tube, a slow valve)"))
+    polytropic_n: float | None = _effect(None, EffectKind.PARAMETER, axis=MagnitudeAxis(
+        "polytropic_n", "-", 1.4, 1.0, "isentropic -> isothermal (§3.3)"))
+    hysteresis_delta: tuple | None = _effect(None, EffectKind.STATE, length=4,
+                                             axis=MagnitudeAxis(
+        "hysteresis_delta", "-", 0.0, 0.3, "muscle hysteresis up to the 40-fibre value "
+        "0.299 (§3.6.5; 25 fibres: 0.139)"))
+    hysteresis_initial: object = _effect("negative", EffectKind.OPTION,
+                                         option_of="hysteresis_delta")
+    hysteresis_exact_stages: bool = _effect(False, EffectKind.OPTION,
+                                            option_of="hysteresis_delta")
+    valve_dead_time: tuple | None = _effect(None, EffectKind.STATE, length=4,
+                                            unit="control periods", axis=MagnitudeAxis(
+        "valve_dead_time", "s", 0.0, 0.03, "transport delay up to 30 ms (three 10 ms "
+        "fieldbus frames, §4.2.4)"))
+    # no magnitude axis: the Table 5.2 fit (diagnose_cases) covers the effects it covered
+    # when the bias was added; a bias would need an axis of its own there
+    joint_torque_bias: tuple | None = _effect(None, EffectKind.KERNEL, length=2, unit="N m")
 
     def __post_init__(self):
         def fric(unit):
@@ -273,6 +386,10 @@ class Effects:
         object.__setattr__(self, "valve_dead_time", _vector(
             "valve_dead_time", self.valve_dead_time, 4,
             lambda n, v: check_int(n, v, 0, VALVE_DEAD_TIME_MAX)))
+        object.__setattr__(self, "joint_torque_bias", _vector(
+            "joint_torque_bias", self.joint_torque_bias, 2,
+            lambda n, v: check_range(n, v, -JOINT_TORQUE_BIAS_MAX, JOINT_TORQUE_BIAS_MAX,
+                                     unit="N m")))
 
     @property
     def hysteresis(self) -> bool:
@@ -287,14 +404,108 @@ class Effects:
     def enabled(self) -> tuple:
         """Names of the effects that are on (fields differing from the default).
 
-        ``hysteresis_initial`` and ``hysteresis_exact_stages`` are options of
-        the hysteresis, not effects: they are never listed (and are ignored
-        while ``hysteresis_delta`` is None).
+        Options (:attr:`EffectKind.OPTION`, e.g. ``hysteresis_initial``) are not
+        effects: they are never listed (and are ignored while their effect is off).
         """
         off = Effects()
-        return tuple(f for f in self.__dataclass_fields__
-                     if f not in ("hysteresis_initial", "hysteresis_exact_stages")
-                     and getattr(self, f) != getattr(off, f))
+        return tuple(f for f in self.names() if getattr(self, f) != getattr(off, f))
+
+    @classmethod
+    def names(cls, kind: EffectKind | None = None) -> tuple:
+        """The effect fields, in declaration order: all (no options), or those of ``kind``.
+
+        Parameters
+        ----------
+        kind : EffectKind, optional
+            Only the effects of this kind (``EffectKind.OPTION``: the options).
+
+        Returns
+        -------
+        tuple of str
+        """
+        if kind is not None and not isinstance(kind, EffectKind):
+            raise TypeError(f"kind must be an EffectKind or None, got {kind!r}")
+        return tuple(f.name for f in fields(cls)
+                     if (f.metadata["kind"] is not EffectKind.OPTION if kind is None
+                         else f.metadata["kind"] is kind))
+
+    @classmethod
+    def kind(cls, name: str) -> EffectKind:
+        """The :class:`EffectKind` of field ``name``.
+
+        Parameters
+        ----------
+        name : str
+            A field of :class:`Effects`.
+
+        Returns
+        -------
+        EffectKind
+        """
+        return cls._field(name).metadata["kind"]
+
+    @classmethod
+    def length(cls, name: str) -> int:
+        """Number of values of field ``name`` (1 for a scalar, 2 per joint, 4 per group).
+
+        Parameters
+        ----------
+        name : str
+            A field of :class:`Effects`.
+
+        Returns
+        -------
+        int
+        """
+        return cls._field(name).metadata["length"]
+
+    @classmethod
+    def option_of(cls, name: str) -> str | None:
+        """The effect that option ``name`` belongs to (None for an effect).
+
+        Parameters
+        ----------
+        name : str
+            A field of :class:`Effects`.
+
+        Returns
+        -------
+        str or None
+        """
+        return cls._field(name).metadata["option_of"]
+
+    @classmethod
+    def axis(cls, name: str):
+        """The :class:`MagnitudeAxis` field ``name`` declares, or None.
+
+        Parameters
+        ----------
+        name : str
+            A field of :class:`Effects`.
+
+        Returns
+        -------
+        MagnitudeAxis or None
+        """
+        return cls._field(name).metadata["axis"]
+
+    @classmethod
+    def axes(cls) -> tuple:
+        """The :class:`MagnitudeAxis` of every effect that has one, in declaration order.
+
+        Returns
+        -------
+        tuple of MagnitudeAxis
+        """
+        return tuple(f.metadata["axis"] for f in fields(cls) if f.metadata["axis"] is not None)
+
+    @classmethod
+    def _field(cls, name):
+        for f in fields(cls):
+            if f.name == name:
+                return f
+        raise ValueError(f"unknown effect {name!r}; Effects fields: "
+                         f"{[f.name for f in fields(cls)]}")
 
     def replace(self, **changes) -> "Effects":
         """Return a copy with some fields changed (validated again).
@@ -309,7 +520,7 @@ class Effects:
         return replace(self, **changes)
 
 
-__all__ = ["Effects", "PAYLOAD_MASS_MAX", "FRICTION_MAX", "VALVE_OFFSET_MAX",
+__all__ = ["Effects", "EffectKind", "MagnitudeAxis", "JOINT_TORQUE_BIAS_MAX", "PAYLOAD_MASS_MAX", "FRICTION_MAX", "VALVE_OFFSET_MAX",
            "VALVE_GAIN_RANGE", "VALVE_TIME_CONSTANT_MIN", "VALVE_TIME_CONSTANT_MAX",
            "POLYTROPIC_RANGE", "HYSTERESIS_DELTA_RANGE", "HYSTERESIS_INITIAL_NAMES",
            "VALVE_DEAD_TIME_MAX"]

@@ -118,6 +118,12 @@ EFFECT_FIELDS = (
     Field("dead_time", 4, "-", "dead time d_i of valve i [control periods]", default=0.0),
     Field("dead_time_length", 1, "-", "ring length D = max(d_i) + 1 of the delay line of "
           "each valve in z", default=0.0),
+    # --- stateless effects the kernels read at every evaluation -----------------------------
+    Field("torque_bias_mode", 1, "code", "Switch: a constant joint torque (a disturbance the "
+          "model lacks: cable drag, a spring, an offset load) adds to the muscle torques",
+          default=0.0),
+    Field("torque_bias", 2, "N m", "the constant joint torques of torque_bias_mode",
+          default=0.0),
 )
 
 PLANT = Layout("plant parameters", GEOMETRY_FIELDS + (
@@ -197,18 +203,17 @@ NZ = PLANT.offset("effect_state_length")
                            "hysteresis_wfit", "hysteresis_initial", "hysteresis_stages",
                            "dead_time_mode", "dead_time", "dead_time_length")
 HYST_WFIT_SLOPE, HYST_WFIT_INTERCEPT = HYST_WFIT, HYST_WFIT + 1
+#: stateless effects read by the kernels: a constant joint torque
+TORQUE_BIAS_MODE, TORQUE_BIAS = PLANT.offsets("torque_bias_mode", "torque_bias")
 #: offsets in the effect state z (:data:`EFFECT_STATE`); the delay line starts at Z_DELAY
 Z_HYST, Z_HYST_W, Z_HYST_SLOPE, Z_HYST_DIR, Z_DELAY_COUNT = EFFECT_STATE.offsets(
     "hysteresis_memory", "hysteresis_output", "hysteresis_slope", "hysteresis_direction",
     "delay_count")
 Z_DELAY = EFFECT_STATE.size
-#: Effect fields applied when the row is packed (from ``ArmParameters.effects``); they
-#: cannot be changed on a packed row by :func:`ppamsafety.plant.packing.with_effects`.
-PACK_TIME_EFFECTS = ("payload_mode", "payload_mass", "friction_mode", "valve_offset_mode",
-                     "valve_gain_mode", "valve_lag_mode", "polytropic_mode",
-                     "hysteresis_mode", "hysteresis_delta", "hysteresis_eps_max",
-                     "hysteresis_wfit", "hysteresis_initial", "hysteresis_stages",
-                     "dead_time_mode", "dead_time", "dead_time_length")
+#: Effect fields applied when the row is packed (from ``ArmParameters.effects``): every field
+#: of the effect section but the state length; they cannot be changed on a packed row by
+#: :func:`ppamsafety.plant.packing.with_effects`.
+PACK_TIME_EFFECTS = tuple(f.name for f in EFFECT_FIELDS if f.name != "effect_state_length")
 NP = PLANT.size                        #: length of the row
 
 #: Contraction floor used by the force/volume kernels (eps <= 0 is undefined).

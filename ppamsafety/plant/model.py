@@ -35,6 +35,9 @@ bitwise those of the plant without the extension point
 
 How to add an effect
 ~~~~~~~~~~~~~~~~~~~~
+``docs/architecture.md`` ("Add an effect to the plant") lists the files each kind of effect
+touches (:class:`~ppamsafety.params.effects.EffectKind`); the kernel side, in detail:
+
 1. *Parameters.*  Add its fields to ``EFFECT_FIELDS`` in
    :mod:`ppamsafety.plant.layout` (name, length, unit, meaning with thesis
    reference), including an on/off (or mode) flag ``Field("<name>_mode", 1,
@@ -65,9 +68,13 @@ How to add an effect
    if zero is not the effect's rest state, set it there (from the row).
 5. *Tests.*  With the effect off, ``tests/test_golden.py`` must still pass
    bitwise; add a test of the effect itself, and a benchmark run
-   (``studies/bench_plant.py``) showing the cost of the check when off.
+   (``studies/bench/bench_plant.py``) showing the cost of the check when off.
 
-An effect that is a pure change of plant *parameters* needs none of steps
+A stateless effect that the kernels read (``EffectKind.KERNEL``, e.g. the joint
+torque bias: ``torque_bias_mode`` / ``torque_bias``, added to the joint torques in
+:func:`plant_rhs` and held by the static equilibria of
+:func:`~ppamsafety.plant.pneumatics.gravity_compensation_dp`) needs steps 1 and 3
+without state.  An effect that is a pure change of plant *parameters* needs none of steps
 2-4: it is folded into the plant-truth row by
 :func:`~ppamsafety.plant.packing.pack` from ``ArmParameters.effects``
 (:class:`~ppamsafety.params.effects.Effects`) and only flagged in the effect
@@ -111,7 +118,7 @@ change of eps_s (~1e-3), i.e. ~1e-7 in the force factor, far below the O(h)
 turning-point registration; ``Effects.hysteresis_exact_stages`` evaluates
 ``preisach_peek`` at every stage instead (4x the Everett evaluations; the
 test suite checks the two agree to 1e-3 of the hysteresis effect).  Cost
-(measured, closed loop of ``studies/bench_closed_loop.py``): 1.75x the
+(measured, closed loop of ``studies/bench/bench_closed_loop.py``): 1.75x the
 nominal run with the secant stages (3.8x with exact peeks).  The
 controllers' model rows carry no hysteresis (they do not know about it).
 
@@ -143,10 +150,10 @@ from . import packing
 from ._checks import (accelerations, angles, check_arm, check_pressures, checks_arm,  # noqa: F401
                       speeds, torques)
 from .dynamics import forward_dynamics_cs
-from .layout import (DEAD, DEAD_LEN, DEAD_MODE, HYST_DELTA, HYST_EPS_MAX, HYST_INIT,
-                     HYST_MODE, HYST_ROW, HYST_STAGES, HYST_WFIT_INTERCEPT, HYST_WFIT_SLOPE, NZ,
-                     Z_DELAY, Z_DELAY_COUNT, Z_HYST, Z_HYST_DIR, Z_HYST_SLOPE, Z_HYST_W,
-                     HysteresisStages, Switch)
+from .layout import (DEAD, DEAD_LEN, DEAD_MODE, HYST_DELTA, HYST_EPS_MAX, HYST_INIT, HYST_MODE,
+                     HYST_ROW, HYST_STAGES, HYST_WFIT_INTERCEPT, HYST_WFIT_SLOPE, NZ, Z_DELAY,
+                     Z_DELAY_COUNT, Z_HYST, Z_HYST_DIR, Z_HYST_SLOPE, Z_HYST_W, HysteresisStages,
+                     Switch, TORQUE_BIAS, TORQUE_BIAS_MODE)
 from .pneumatics import pressure_rates, static_pressures
 from .torque import group_contraction, group_terms, torque_kernel_cs
 
@@ -346,7 +353,8 @@ def plant_rhs(x, z, u, tau_ext, P, dx, work):
     ``z`` is the effect state (read-only here; see the module docstring).
     With the muscle hysteresis on, the force of group k in the joint
     torques is multiplied by the factor of (3.35) (not the volume
-    derivative m_tau in the pressure dynamics).
+    derivative m_tau in the pressure dynamics); with the torque bias on, its
+    constant joint torques add to the muscle torques.
 
     Parameters
     ----------
@@ -385,6 +393,9 @@ def plant_rhs(x, z, u, tau_ext, P, dx, work):
         torque_kernel_cs(c1, s1, c12, s12, P, mt, dmt, vol)
         tau1 = x[X_P] * mt[0] + x[X_P + 1] * mt[1] + tau_ext[0]
         tau2 = x[X_P + 2] * mt[2] + x[X_P + 3] * mt[3] + tau_ext[1]
+    if int(P[TORQUE_BIAS_MODE]) == Switch.ON:
+        tau1 += P[TORQUE_BIAS]
+        tau2 += P[TORQUE_BIAS + 1]
     a1, a2 = forward_dynamics_cs(c1, s1, c2, s2, c12, s12, x[X_QD], x[X_QD + 1], tau1, tau2, P)
     dx[X_Q] = x[X_QD]
     dx[X_Q + 1] = x[X_QD + 1]

@@ -136,6 +136,8 @@ def _apply_effects(values: dict, arm) -> None:
             values[flag] = Switch.ON
     if fx.polytropic_n is not None:
         values.update(n_poly=fx.polytropic_n, polytropic_mode=Switch.ON)
+    if fx.joint_torque_bias is not None:
+        values.update(torque_bias_mode=Switch.ON, torque_bias=fx.joint_torque_bias)
     nz = 0
     if fx.hysteresis_delta is not None:
         init = fx.hysteresis_initial

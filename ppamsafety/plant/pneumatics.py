@@ -26,7 +26,7 @@ from . import packing
 from ._checks import (PRESSURE_MAX, accelerations, angles, check_pressures,  # noqa: F401
                       checks_arm, speeds, torques)
 from .dynamics import gravity_torque
-from .layout import NPOLY, PATM, PM1, PM2, PMAX, TV, V1, V2
+from .layout import NPOLY, PATM, PM1, PM2, PMAX, TV, V1, V2, TORQUE_BIAS, TORQUE_BIAS_MODE, Switch
 from .torque import torque_kernel
 
 
@@ -159,7 +159,8 @@ def gravity_compensation_dp(q1, q2, Pc, mt, dmt, vol):
     Pc : ndarray of float64, shape (NP,)
         Packed parameter row (layout :data:`ppamsafety.plant.layout.PLANT`)
         the compensation believes in; reads the torque-function fields,
-        ``theta``, ``gravity`` and ``p_mean``.
+        ``theta``, ``gravity``, ``p_mean`` and, in a plant-truth row with the
+        torque bias on, the bias (the controllers' rows never carry it).
     mt, dmt, vol : ndarray of float64, shape (4,)
         Scratch, overwritten with the outputs of
         :func:`~ppamsafety.plant.torque.torque_kernel` at (q1, q2):
@@ -167,6 +168,9 @@ def gravity_compensation_dp(q1, q2, Pc, mt, dmt, vol):
     """
     torque_kernel(q1, q2, Pc, mt, dmt, vol)
     g1, g2 = gravity_torque(q1, q2, Pc)
+    if int(Pc[TORQUE_BIAS_MODE]) == Switch.ON:     # the muscles hold what the bias does not
+        g1 -= Pc[TORQUE_BIAS]
+        g2 -= Pc[TORQUE_BIAS + 1]
     dp1 = (g1 - Pc[PM1] * (mt[0] + mt[1])) / (mt[0] - mt[1])
     dp2 = (g2 - Pc[PM2] * (mt[2] + mt[3])) / (mt[2] - mt[3])
     return dp1, dp2

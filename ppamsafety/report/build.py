@@ -1,6 +1,6 @@
-"""Regenerate the report folder from scratch by running every registered study.
+"""Regenerate the report folder from scratch by running every registered section.
 
-Each study is computed, rendered and its artifacts written by
+Each section is computed, rendered and its artifacts written by
 :func:`ppamsafety.sections.run_section`.  Figures are pyplot-free
 :class:`matplotlib.figure.Figure` objects (see :mod:`ppamsafety.plots.figure`),
 so no matplotlib backend is selected here or anywhere in the package.
@@ -9,18 +9,18 @@ The folder is written through :class:`ppamsafety.output.OutputFolder`: a
 previous report is replaced only with ``overwrite=True`` and a folder holding
 files ppamsafety did not write is never used.
 
-**Parallel sections.**  Studies are independent (each computes, renders and
+**Parallel sections.**  Sections are independent (each computes, renders and
 writes its own artifacts), so with ``processes > 1`` they run in that many
 worker processes, longest first (the wall times of the previous report in the
-folder's ``metrics.json``, else :data:`TYPICAL_SECONDS`; sections never timed
-before go first), and the report is assembled in the order of the studies (``only``, or
+folder's ``metrics.json``, else each section's ``SECTION.typical_seconds``; sections never timed
+before go first), and the report is assembled in the order of the sections (``only``, or
 :data:`~ppamsafety.sections.REGISTRY`) whatever the completion order.  A new
 section needs nothing to benefit.  For the full report, before the sections
 start, the workers compile the large kernels between them
 (:mod:`ppamsafety.report.warmup`; a task starts once the tasks whose kernels it
 calls are done, and the sections once every task has started), so that a cold
 kernel cache is not filled by every worker at once.  Each worker runs one BLAS
-thread.  Studies that start their own worker processes (the safety scan, the
+thread.  Sections that start their own worker processes (the safety scan, the
 lambda sweep) still do; the operating system shares the cores.
 """
 
@@ -35,34 +35,34 @@ from pathlib import Path
 
 from .._validation import check_int
 from ..output import OutputFolder
-from ..sections import REGISTRY, run_section
+from ..sections import REGISTRY, run_section, section_infos
 from . import warmup
 from .html import report_page
 
 
-def _timed_study(name: str, stage, quick: bool):
-    """Run one study into ``stage``; (SectionResult, wall time [s]).  Top level: picklable."""
+def _timed_section(name: str, stage, quick: bool):
+    """Run one section into ``stage``; (SectionResult, wall time [s]).  Top level: picklable."""
     t0 = time.perf_counter()
     res = run_section(name, stage, quick=quick)      # compute -> render -> write
     return res, time.perf_counter() - t0
 
 
 def _run_in_pool(pool, processes: int, order, stage, quick: bool, warm: bool, report) -> None:
-    """Run the warm-up tasks (if ``warm``) and the studies ``order`` in ``pool``.
+    """Run the warm-up tasks (if ``warm``) and the sections ``order`` in ``pool``.
 
     At most ``processes`` jobs run at a time, so that every job submitted starts
     at once.  A free worker takes the first warm-up task of
     :data:`warmup.TASKS <ppamsafety.report.warmup.TASKS>` whose
     :attr:`~ppamsafety.report.warmup.Task.after` tasks have finished; once every
-    task has started, it takes the next study of ``order``.  A warm-up task is
+    task has started, it takes the next section of ``order``.  A warm-up task is
     only an optimisation: one that fails is reported as a warning and the
-    studies compile what they need themselves.  A study's error is raised here
-    (``report(name, result, seconds)`` is called for each study that finished).
+    sections compile what they need themselves.  A section's error is raised here
+    (``report(name, result, seconds)`` is called for each section that finished).
     """
     tasks = warmup.TASKS if warm else ()
     finished_tasks, started_tasks = set(), set()
     queue = list(order)
-    running = {}                 # future -> ("task", index) or ("study", name)
+    running = {}                 # future -> ("task", index) or ("section", name)
     while queue or running or len(started_tasks) < len(tasks):
         while len(running) < processes:
             ready = [i for i, t in enumerate(tasks) if t.name not in started_tasks
@@ -72,7 +72,7 @@ def _run_in_pool(pool, processes: int, order, stage, quick: bool, warm: bool, re
                 running[pool.submit(warmup.run_task, ready[0])] = ("task", ready[0])
             elif len(started_tasks) == len(tasks) and queue:
                 name = queue.pop(0)
-                running[pool.submit(_timed_study, name, stage, quick)] = ("study", name)
+                running[pool.submit(_timed_section, name, stage, quick)] = ("section", name)
             else:
                 break
         if not running:          # tasks waiting for tasks that never run: a bad TASKS table
@@ -82,8 +82,8 @@ def _run_in_pool(pool, processes: int, order, stage, quick: bool, warm: bool, re
         finished, _ = wait(running, return_when=FIRST_COMPLETED)
         for f in finished:
             kind, key = running.pop(f)
-            if kind == "study":
-                report(key, *f.result())                    # re-raises a study's error
+            if kind == "section":
+                report(key, *f.result())                    # re-raises a section's error
                 continue
             finished_tasks.add(tasks[key].name)
             exc = f.exception()
@@ -97,8 +97,8 @@ def _one_blas_thread() -> None:
     """Worker initializer: one BLAS thread per report worker (``threadpoolctl``).
 
     The workers already keep every core busy; a BLAS thread pool of their own
-    only spins on the small matrices of the studies and takes CPU time from
-    the other workers (the diagnosis study: 19.1 s of CPU for 16.9 s of wall
+    only spins on the small matrices of the sections and takes CPU time from
+    the other workers (the diagnosis section: 19.1 s of CPU for 16.9 s of wall
     time with OpenBLAS's default two threads, 16.6 s for 16.6 s with one).
     """
     try:
@@ -107,15 +107,6 @@ def _one_blas_thread() -> None:
         return
     threadpool_limits(limits=1)
 
-
-#: Wall times [s] of the studies in a full report on 2 cores with a cold kernel cache (measured
-#: 2026-11-23, issue 11).  Only a scheduling hint for a folder without a previous report: the
-#: longest studies start first, so that the last to finish is a short one (in the order of the
-#: registry, the longest study came last and the report took about 10 s longer).
-TYPICAL_SECONDS = {"diagnose_cases": 23.5, "effects": 14.0, "smc": 12.9, "tracking": 12.7,
-                   "worst_direction": 6.9, "safety": 7.4, "head_model": 6.5, "interaction": 4.2,
-                   "iso_15066": 4.9, "design": 2.8, "reaction": 3.6, "responses": 3.1,
-                   "lambda_sweep": 3.4, "diagnose_sawtooth": 3.4, "stiffness": 1.4}
 
 
 def _previous_times(out: Path) -> dict:
@@ -130,7 +121,7 @@ def _previous_times(out: Path) -> dict:
 
 def build_report(outdir="reports", *, quick: bool = False, only=None, progress: bool = True,
                  overwrite: bool = False, processes: int | None = None) -> Path:
-    """Run the studies and write ``outdir/index.md``, ``index.html``, figures and tables.
+    """Run the sections and write ``outdir/index.md``, ``index.html``, figures and tables.
 
     ``index.html`` is the same report as one page with section navigation
     (:func:`ppamsafety.report.html.report_page`).
@@ -144,15 +135,15 @@ def build_report(outdir="reports", *, quick: bool = False, only=None, progress: 
     quick : bool
         Coarser grids and shorter sweeps (for smoke tests).
     only : iterable of str, optional
-        Run only these study names (see :data:`ppamsafety.sections.REGISTRY`).
+        Run only these section names (see :data:`ppamsafety.sections.REGISTRY`).
     progress : bool
-        Print one line per study.
+        Print one line per section.
     overwrite : bool
         Replace a previous ppamsafety output in ``outdir`` (its toolkit-written
-        files only).  If a study fails, the previous report is left untouched.
+        files only).  If a section fails, the previous report is left untouched.
     processes : int, optional
         Studies run at the same time, each in its own worker process (default:
-        the CPU count, at most the number of studies); 1 runs them one after
+        the CPU count, at most the number of sections); 1 runs them one after
         the other in this process.  The report is the same either way.
 
     Returns
@@ -161,13 +152,13 @@ def build_report(outdir="reports", *, quick: bool = False, only=None, progress: 
         Path of the written ``index.md``.
     """
     if isinstance(only, str):
-        raise TypeError(f"only must be a list of study names, got the str {only!r}")
+        raise TypeError(f"only must be a list of section names, got the str {only!r}")
     names = list(REGISTRY if only is None else only)
     if not names:
-        raise ValueError(f"only = {only!r} names no study; choose from {REGISTRY}")
+        raise ValueError(f"only = {only!r} names no report section; choose from {REGISTRY}")
     unknown = [n for n in names if n not in REGISTRY]
     if unknown:
-        raise ValueError(f"unknown studies {unknown}; choose from {REGISTRY}")
+        raise ValueError(f"unknown report sections {unknown}; choose from {REGISTRY}")
     if processes is None:
         processes = os.cpu_count() or 1
     processes = min(check_int("processes", processes, 1, 1024), len(names))
@@ -183,11 +174,11 @@ def build_report(outdir="reports", *, quick: bool = False, only=None, progress: 
 
         if processes == 1:
             for name in names:
-                report(name, *_timed_study(name, stage, quick))
+                report(name, *_timed_section(name, stage, quick))
         else:
             # longest first (never timed: first), so the last to finish is a short one;
             # without a previous report, by the typical times
-            times = previous or TYPICAL_SECONDS
+            times = previous or {n: i.typical_seconds for n, i in section_infos().items()}
             order = sorted(names, key=lambda n: -times.get(n, float("inf")))
             pool = ProcessPoolExecutor(max_workers=processes, initializer=_one_blas_thread)
             try:

@@ -8,7 +8,7 @@ Every section module ``ppamsafety.sections.<name>`` defines
   formats no Markdown.  The result object has ``to_pandas()`` (its main table)
   and ``plot()`` (its figures, ``{file name: Figure}``, composed from the plot
   functions of :mod:`ppamsafety.plots`).
-* ``render(study) -> Section``: formatting only -- the Markdown text of the
+* ``render(result) -> Section``: formatting only -- the Markdown text of the
   report section and the artifacts (file name, Figure or DataFrame) it
   references.
 
@@ -33,6 +33,35 @@ from .._commandline import Parser, run_guarded
 from ..output import OutputFolder
 from ..params import ArmParameters, thesis_arm
 from ..plots.figure import save
+
+
+@dataclass(frozen=True)
+class SectionInfo:
+    """What the report says of a section before running it: every section module's ``SECTION``.
+
+    Attributes
+    ----------
+    summary : str
+        What the section shows (a row of the README's section table).
+    thesis : str
+        The parts of the thesis it reproduces, or ``"(new)"``.
+    typical_seconds : float
+        Its wall time [s] in a full report on 2 cores with a cold kernel cache; a
+        first report (no previous ``metrics.json``) starts the longest sections first.
+    """
+
+    summary: str
+    thesis: str
+    typical_seconds: float
+
+    def __post_init__(self):
+        for name in ("summary", "thesis"):
+            if not isinstance(getattr(self, name), str) or not getattr(self, name).strip():
+                raise ValueError(f"SectionInfo.{name} must be a non-empty string, "
+                                 f"got {getattr(self, name)!r}")
+        if not (isinstance(self.typical_seconds, (int, float)) and self.typical_seconds > 0):
+            raise ValueError(f"SectionInfo.typical_seconds = {self.typical_seconds!r} must be a "
+                             f"positive number [s]")
 
 
 @dataclass
@@ -84,6 +113,36 @@ class SectionResult:
 REGISTRY = ["design", "tracking", "responses", "smc", "head_model", "safety", "worst_direction",
             "stiffness", "lambda_sweep", "effects", "interaction", "iso_15066", "reaction",
             "diagnose_sawtooth", "diagnose_cases"]
+
+
+def section_infos() -> dict:
+    """Every registered section's :class:`SectionInfo`, in report order.
+
+    Imports every section module (as the report does).
+
+    Returns
+    -------
+    dict
+        Section name -> :class:`SectionInfo`.
+    """
+    return {name: section_module(name).SECTION for name in REGISTRY}
+
+
+def readme_table() -> str:
+    """The README's table of the report sections, generated from :func:`section_infos`.
+
+    ``tests/test_sections.py`` checks that README.md holds exactly this table; after adding
+    or changing a section, paste the output of ``python -m ppamsafety.sections``.
+
+    Returns
+    -------
+    str
+        A Markdown table: section name, what it shows, the thesis parts.
+    """
+    lines = ["| section | what it shows | thesis |", "|---|---|---|"]
+    lines += [f"| `{name}` | {info.summary} | {info.thesis} |"
+              for name, info in section_infos().items()]
+    return "\n".join(lines)
 
 
 def resolve_arm(arm):
@@ -138,7 +197,7 @@ def write_section(section: Section, outdir) -> SectionResult:
     Parameters
     ----------
     section : Section
-        Output of a study's ``render``.
+        Output of a section's ``render``.
     outdir : path-like
         Existing folder; the artifacts are written under their file names.
 
@@ -223,7 +282,7 @@ def main(name: str, argv=None) -> int:
                    help="replace files of a previous ppamsafety output in OUTDIR")
 
     def run(args):
-        with OutputFolder(args.outdir, kind="study", overwrite=args.overwrite,
+        with OutputFolder(args.outdir, kind="section", overwrite=args.overwrite,
                           clean=False) as stage:
             res = run_section(name, stage, quick=args.quick)
         print(f"# {res.title}\n\n{res.markdown}")

@@ -14,7 +14,14 @@ from ..plant import pneumatics as pn
 from ..plant.muscle import force_function, force_polynomial
 from ..plant.ppam_theory import theoretical_muscles
 from ..units import BAR, DEG, MM
-from . import Section, resolve_arm
+from . import Section, SectionInfo, resolve_arm
+
+#: This section in the report: what it shows (the README table), the thesis parts it
+#: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
+#: (2026-11-23, issue 11), the order a first report starts the sections in.
+SECTION = SectionInfo(
+    summary="Table A.1, torque functions, stiffness, maximum load",
+    thesis="ch. 2, App. A", typical_seconds=2.8)
 
 
 def _table_a1(arm) -> pd.DataFrame:

@@ -38,7 +38,15 @@ from ..diagnose.arm.summary_fit import (TableDesign, fit_pair, fit_summary, CONF
                                         PRINT_STD, RANK_TOL, REPRODUCIBILITY, axis)
 from ..markdown import markdown_table
 from ..plots.diagnose import plot_confusion, plot_gap
-from . import Section, resolve_arm
+from . import Section, SectionInfo, resolve_arm
+
+#: This section in the report: what it shows (the README table), the thesis parts it
+#: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
+#: (2026-11-23, issue 11), the order a first report starts the sections in.
+SECTION = SectionInfo(
+    summary=("discrepancy diagnosis: two hidden effects in a closed-loop record, Table 5.2 against"
+             " every library effect (fit and identifiability), a blind closed-loop battery"),
+    thesis="§5.3.5, Table 5.2 (issue 10)", typical_seconds=23.5)
 
 #: Case (c): hidden effects, experiment, controller, record length [s], seed.
 CASE_C = {"effects": {"friction_coulomb_factor": 3.0, "valve_dead_time": 0.02},

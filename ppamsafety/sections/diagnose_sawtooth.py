@@ -26,7 +26,15 @@ from ..diagnose.arm.static import static_record
 from ..hysteresis import DELTA_25_FIBRES
 from ..markdown import markdown_table
 from ..plots.diagnose import plot_sawtooth_diagnosis
-from . import Section, resolve_arm
+from . import Section, SectionInfo, resolve_arm
+
+#: This section in the report: what it shows (the README table), the thesis parts it
+#: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
+#: (2026-11-23, issue 11), the order a first report starts the sections in.
+SECTION = SectionInfo(
+    summary=("discrepancy diagnosis (a): the sawtooth with hysteresis hidden, localised in the "
+             "muscle forces, delta fitted"),
+    thesis="§3.5.1.6, figs. 3.1-3.2", typical_seconds=3.4)
 
 #: Hidden hysteresis scale delta of every muscle group [-] (thesis §3.6.5, 25-fibre muscles).
 HIDDEN_DELTA = DELTA_25_FIBRES

@@ -47,7 +47,15 @@ from ..plant.model import hysteresis_factors
 from ..plant.muscle import muscle_force
 from ..plots.effects import (plot_ratio_shift, plot_sawtooth_angles, plot_sawtooth_errors,
                              plot_sawtooth_forces)
-from . import Section, resolve_arm, responses, safety, tracking
+from . import Section, SectionInfo, resolve_arm, responses, safety, tracking
+
+#: This section in the report: what it shows (the README table), the thesis parts it
+#: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
+#: (2026-11-23, issue 11), the order a first report starts the sections in.
+SECTION = SectionInfo(
+    summary=("the gravity-compensation sawtooth with and without Preisach hysteresis, Tables 5.2 "
+             "and 6.1 regenerated with hysteresis"),
+    thesis="§3.5.1.6, §3.6, figs. 3.1-3.2", typical_seconds=14.0)
 
 #: Hysteresis scale delta per muscle group (25-fibre muscles, thesis §3.6.5) [-].
 HYSTERESIS_DELTA = DELTA_25_FIBRES

@@ -13,7 +13,14 @@ from ..impact.head import head_model, head_model_names
 from ..impact.instants import evaluate_experiment
 from ..markdown import markdown_table
 from ..plots.impact import plot_head_fit
-from . import Section, resolve_arm
+from . import Section, SectionInfo, resolve_arm
+
+#: This section in the report: what it shows (the README table), the thesis parts it
+#: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
+#: (2026-11-23, issue 11), the order a first report starts the sections in.
+SECTION = SectionInfo(
+    summary="head contact model: reconstruction and evidence",
+    thesis="§6.3.1", typical_seconds=6.5)
 
 
 @dataclass

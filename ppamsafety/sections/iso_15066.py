@@ -55,7 +55,15 @@ from ..params.iso_ts_15066 import FACE, SKULL_FOREHEAD, THESIS_ARM_MASS
 from ..plant.geometry import jacobian
 from ..plots import iso as f
 from ..units import BAR, DEG
-from . import Section, resolve_arm
+from . import Section, SectionInfo, resolve_arm
+
+#: This section in the report: what it shows (the README table), the thesis parts it
+#: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
+#: (2026-11-23, issue 11), the order a first report starts the sections in.
+SECTION = SectionInfo(
+    summary=("clamping and ISO/TS 15066: head pinned against a wall (transient, quasi-static), "
+             "Annex A limits, transfer energy, maximum speed and lambda per PSMC family"),
+    thesis="§6.3.5, ISO/TS 15066:2016 Annex A", typical_seconds=4.9)
 
 REGIONS = (SKULL_FOREHEAD, FACE)
 EXPERIMENTS = ("step", "switch")

@@ -23,7 +23,14 @@ from ..params import thesis_arm
 from ..plots.impact import plot_lambda_sweep
 from ..sweep import run_sweep
 from ..units import BAR
-from . import Section
+from . import Section, SectionInfo
+
+#: This section in the report: what it shows (the README table), the thesis parts it
+#: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
+#: (2026-11-23, issue 11), the order a first report starts the sections in.
+SECTION = SectionInfo(
+    summary="lambda x Ki safety-versus-tracking sweep",
+    thesis="(new)", typical_seconds=3.4)
 
 
 def lambda_case(lam: float, ki_bar: float, circle_duration: float) -> dict:

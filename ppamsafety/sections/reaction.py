@@ -51,7 +51,15 @@ from ..plant.pneumatics import joint_stiffness
 from ..plant.torque import torque_functions
 from ..plots.reaction import plot_collision, plot_reactions
 from ..units import BAR
-from . import Section, resolve_arm
+from . import Section, SectionInfo, resolve_arm
+
+#: This section in the report: what it shows (the README table), the thesis parts it
+#: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
+#: (2026-11-23, issue 11), the order a first report starts the sections in.
+SECTION = SectionInfo(
+    summary=("detection and reaction: the head coupled to the full closed loop, momentum-observer "
+             "detection, stop / retract / vent, the second impact"),
+    thesis="§5.4.2, §6.3 (new)", typical_seconds=3.6)
 
 #: Simulated time after the impact instant [s] (beyond the 50 ms of thesis §6.3.2).
 HORIZON = 0.3

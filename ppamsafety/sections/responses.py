@@ -18,7 +18,14 @@ from ..experiments.metrics import response_table
 from ..experiments.trajectories import CIRCLE_CENTER, CIRCLE_RADIUS
 from ..markdown import markdown_table
 from ..plots.control import plot_lambda_recovery, plot_step_comparison, plot_switch
-from . import Section, resolve_arm
+from . import Section, SectionInfo, resolve_arm
+
+#: This section in the report: what it shows (the README table), the thesis parts it
+#: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
+#: (2026-11-23, issue 11), the order a first report starts the sections in.
+SECTION = SectionInfo(
+    summary="step and trajectory-switch responses",
+    thesis="figs. 5.15-5.19", typical_seconds=3.1)
 
 TOL_ANGLE = np.radians(1.0)   #: band around the new q1 set angle for reach/settling [rad]
 TOL_TCP = 0.005               #: band around the new circle after the switch [m]

@@ -19,7 +19,14 @@ from ..params import thesis_arm
 from ..params.head import MAXILLA_FRACTURE_N
 from ..plots.impact import plot_fmax_over_time, plot_safety_table, plot_worst_histories
 from ..sweep import run_sweep
-from . import Section
+from . import Section, SectionInfo
+
+#: This section in the report: what it shows (the README table), the thesis parts it
+#: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
+#: (2026-11-23, issue 11), the order a first report starts the sections in.
+SECTION = SectionInfo(
+    summary="collision safety: Table 6.1 with ratios, every-instant scan",
+    thesis="§6.3.3", typical_seconds=7.4)
 
 EXPERIMENTS = ("step", "switch")
 #: Instants with a slower tool are skipped in the every-instant scan [m/s] (F < 1 N there).

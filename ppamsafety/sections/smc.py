@@ -41,7 +41,14 @@ from ..params import thesis_arm
 from ..params.valves import DEFAULT_TIME_CONSTANTS
 from ..plots.control import plot_smc_chattering, plot_smc_commands
 from ..units import BAR
-from . import Section, resolve_arm
+from . import Section, SectionInfo, resolve_arm
+
+#: This section in the report: what it shows (the README table), the thesis parts it
+#: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
+#: (2026-11-23, issue 11), the order a first report starts the sections in.
+SECTION = SectionInfo(
+    summary="sliding mode control: chattering against boundary layer and valve time constant",
+    thesis="ch. 4", typical_seconds=12.9)
 
 PERIOD = 5.0            #: circle period of §4.4.1 [s]
 WARMUP = 5.0            #: [s]

@@ -39,7 +39,15 @@ from ..markdown import markdown_table
 from ..plant import dynamics as dyn
 from ..plant import geometry as geo
 from ..plots.impact import plot_stiffness_conventions
-from . import Section, resolve_arm
+from . import Section, SectionInfo, resolve_arm
+
+#: This section in the report: what it shows (the README table), the thesis parts it
+#: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
+#: (2026-11-23, issue 11), the order a first report starts the sections in.
+SECTION = SectionInfo(
+    summary=("joint stiffness sweep: the motor-side conventions (frozen equilibrium, Spong "
+             "flexible joint, rigid limit) against fig. 6.3"),
+    thesis="§6.3.4, fig. 6.3", typical_seconds=1.4)
 
 #: Mass of one PPAM [kg]: "the low mass of the PPAMs (around 150 g)", thesis §2.3.1.3.
 PPAM_MASS = 0.150

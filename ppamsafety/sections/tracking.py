@@ -28,7 +28,15 @@ from ..experiments.trajectories import CIRCLE_CENTER
 from ..markdown import markdown_table
 from ..plots.control import plot_error_traces, plot_experiment, plot_tracking_comparison
 from ..units import BAR
-from . import Section, resolve_arm, responses
+from . import Section, SectionInfo, resolve_arm, responses
+
+#: This section in the report: what it shows (the README table), the thesis parts it
+#: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
+#: (2026-11-23, issue 11), the order a first report starts the sections in.
+SECTION = SectionInfo(
+    summary=("Table 5.2 with ratios, the qualitative conclusions, sensor and gravity-compensation "
+             "ablations"),
+    thesis="§5.3.4-5.3.5", typical_seconds=12.7)
 
 PERIODS = (5.0, 10.0, 20.0)
 

@@ -25,7 +25,15 @@ from ..impact.thesis_data import join_table_6_1
 from ..markdown import markdown_table
 from ..params.head import MAXILLA_FRACTURE_N
 from ..plots.impact import plot_direction_polar, plot_direction_ratios
-from . import Section, resolve_arm
+from . import Section, SectionInfo, resolve_arm
+
+#: This section in the report: what it shows (the README table), the thesis parts it
+#: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
+#: (2026-11-23, issue 11), the order a first report starts the sections in.
+SECTION = SectionInfo(
+    summary=("worst impact direction: every head placement around the tool at every instant, "
+             "against the thesis's choice"),
+    thesis="§6.3.2, §6.3.5 (new)", typical_seconds=6.9)
 
 EXPERIMENTS = ("step", "switch")
 #: Instants with a slower tool are not candidates [m/s] (as the safety study's scan).

@@ -64,6 +64,7 @@ from ...experiments.closed_loop import run_batch
 from ...experiments.metrics import tracking_stats
 from ...experiments.thesis_data import table_5_2
 from ...params import thesis_arm
+from ...params.effects import Effects, MagnitudeAxis
 from ...plots.diagnose import plot_summary_profiles
 from .synthesize import plant_with
 
@@ -77,59 +78,11 @@ RANK_TOL = 0.05
 CONFOUNDED_COS = 0.95
 
 
-@dataclass(frozen=True)
-class Axis:
-    """One effect's magnitude axis theta in [0, 1] (see the module docstring).
-
-    Attributes
-    ----------
-    name : str
-        Effect name (an ``Effects`` field, or its relative form).
-    unit : str
-        Unit of the physical magnitude.
-    nominal, full : float
-        Physical magnitude at theta = 0 and theta = 1.
-    reason : str
-        Why ``full`` is the largest plausible magnitude.
-    """
-
-    name: str
-    unit: str
-    nominal: float
-    full: float
-    reason: str
-
-    def value(self, theta: float) -> float:
-        """Physical magnitude at ``theta``.
-
-        Parameters
-        ----------
-        theta : float
-            Position on the axis, in [0, 1].
-        """
-        return self.nominal + theta * (self.full - self.nominal)
-
-
-#: The library's effects and their axes (every field of ``Effects`` except the options).
-AXES = (
-    Axis("payload_mass", "kg", 0.0, 1.0, "an object of up to 1 kg held at A_L (the arm holds "
-         "~2 kg, §2.3.3.5)"),
-    Axis("friction_coulomb_factor", "x nominal", 1.0, 10.0, "Coulomb friction up to 10x "
-         "Table 3.5 (a worn or over-tightened bearing)"),
-    Axis("friction_viscous_factor", "x nominal", 1.0, 4.0, "viscous friction up to 4x "
-         "Table 3.5"),
-    Axis("valve_offset_delta", "Pa", 0.0, 10000.0, "static valve offset +0.1 bar on every "
-         "valve, the deviations 'as high as 0.1 bar' of §3.5.1.2"),
-    Axis("valve_gain_factor", "x nominal", 1.0, 0.7, "static valve gain down to 0.7x "
-         "(inside the 0.5-1.5 range of Effects)"),
-    Axis("valve_time_constant_factor", "x nominal", 1.0, 3.0, "valve time constant up to 3x "
-         "(45/60 ms -> 135/180 ms: a long tube, a slow valve)"),
-    Axis("polytropic_n", "-", 1.4, 1.0, "isentropic -> isothermal (§3.3)"),
-    Axis("hysteresis_delta", "-", 0.0, 0.3, "muscle hysteresis up to the 40-fibre value "
-         "0.299 (§3.6.5; 25 fibres: 0.139)"),
-    Axis("valve_dead_time", "s", 0.0, 0.03, "transport delay up to 30 ms (three 10 ms "
-         "fieldbus frames, §4.2.4)"),
-)
+#: An effect's magnitude axis (declared with the effect, :class:`~ppamsafety.params.effects.Effects`).
+Axis = MagnitudeAxis
+#: The library's effects and their axes: every effect of ``Effects`` that declares one, in
+#: declaration order (derived: a new effect with an axis is fitted without an edit here).
+AXES = Effects.axes()
 
 
 def axis(name: str) -> Axis:

@@ -98,11 +98,12 @@ SAWTOOTH_RAMP_S, SAWTOOTH_SETTLE_S, SAWTOOTH_WINDOW_S = 1.0, 3.0, 1.0
 #: no force-sensor noise).
 FORCE_NOISE_STD = 2.0
 NOISES = ("table-3.2", "none")
-RELATIVE = {"friction_coulomb_factor": ("friction_coulomb", 2), "friction_viscous_factor":
-            ("friction_viscous", 2), "valve_gain_factor": ("valve_gain", 4),
-            "valve_time_constant_factor": ("valve_time_constant", 4)}
-_VECTOR_LEN = {"friction_coulomb": 2, "friction_viscous": 2, "valve_offset": 4, "valve_gain": 4,
-               "valve_time_constant": 4, "hysteresis_delta": 4}
+#: Relative effect forms: ``<field>_factor`` multiplies the nominal value of the field (the
+#: magnitude axes that declare one, ``Effects.axes()``).
+RELATIVE = {a.name: (a.name[:-len("_factor")], Effects.length(a.name[:-len("_factor")]))
+            for a in Effects.axes() if a.name.endswith("_factor")}
+#: Number of values of each vector effect (``Effects.length``).
+_VECTOR_LEN = {n: Effects.length(n) for n in Effects.names() if Effects.length(n) > 1}
 
 
 def _as_list(name, value, n):

@@ -1,8 +1,8 @@
 """Design figures of thesis chapter 2 (torque functions, stiffness, maximum load).
 
-Run alone:  python studies/design_figures.py [outdir] [--quick] [--overwrite]
+Regenerates the report section ``design`` (:mod:`ppamsafety.sections.design`) alone:
+    python studies/design.py [outdir] [--quick] [--overwrite]
 """
-
 from ppamsafety.sections import main
 
 if __name__ == "__main__":

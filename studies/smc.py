@@ -1,8 +1,8 @@
 """Sliding mode control: chattering against boundary layer and valve time constant.
 
-Run alone:  python studies/smc_chattering.py [outdir] [--quick] [--overwrite]
+Regenerates the report section ``smc`` (:mod:`ppamsafety.sections.smc`) alone:
+    python studies/smc.py [outdir] [--quick] [--overwrite]
 """
-
 from ppamsafety.sections import main
 
 if __name__ == "__main__":

@@ -21,7 +21,7 @@ A physics case (:func:`ppamsafety.sweep_cases.safety_case`, one 12 s
 closed-loop experiment and four impacts) takes about 0.05-0.1 s of compiled
 work on one core, so the engine's overhead matters only for trivial cases.
 
-Run:  python studies/bench_sweep.py [--cases 1000] [--processes 2]
+Run:  python studies/bench/bench_sweep.py [--cases 1000] [--processes 2]
 """
 
 from __future__ import annotations

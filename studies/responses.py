@@ -1,8 +1,8 @@
 """Step and trajectory-switch responses (figs. 5.15-5.19).
 
-Run alone:  python studies/step_and_switch.py [outdir] [--quick] [--overwrite]
+Regenerates the report section ``responses`` (:mod:`ppamsafety.sections.responses`) alone:
+    python studies/responses.py [outdir] [--quick] [--overwrite]
 """
-
 from ppamsafety.sections import main
 
 if __name__ == "__main__":

@@ -1,8 +1,8 @@
 """Table 5.2: circle tracking errors of the thesis' controller variants, with ratios.
 
-Run alone:  python studies/table_5_2.py [outdir] [--quick] [--overwrite]
+Regenerates the report section ``tracking`` (:mod:`ppamsafety.sections.tracking`) alone:
+    python studies/tracking.py [outdir] [--quick] [--overwrite]
 """
-
 from ppamsafety.sections import main
 
 if __name__ == "__main__":

@@ -1,8 +1,8 @@
 """Collision safety: Table 6.1 reproduction and the every-instant impact scan.
 
-Run alone:  python studies/table_6_1.py [outdir] [--quick] [--overwrite]
+Regenerates the report section ``safety`` (:mod:`ppamsafety.sections.safety`) alone:
+    python studies/safety.py [outdir] [--quick] [--overwrite]
 """
-
 from ppamsafety.sections import main
 
 if __name__ == "__main__":
