@@ -373,10 +373,12 @@ def _store(folder, entries: dict, keep: set) -> None:
 
 
 def _valid_chain(c) -> bool:
-    return (type(c) is list and len(c) >= 2 and c[0] in ("g", "s", "i")
-            and all(type(x) is str for x in c[1:]) if c and c[0] != "i" else
-            type(c) is list and len(c) >= 4 and type(c[1]) is int
-            and all(type(x) is str for x in c[2:]))
+    """Whether ``c`` is a chain (see :func:`_analyse_source`)."""
+    if type(c) is not list or len(c) < 2:
+        return False
+    if c[0] == "i":
+        return len(c) >= 4 and type(c[1]) is int and all(type(x) is str for x in c[2:])
+    return c[0] in ("g", "s") and all(type(x) is str for x in c[1:])
 
 
 def _valid_spec(s) -> bool:
@@ -975,8 +977,9 @@ class _Tree:
         """Values of ``module.name`` read from outside ``module``."""
         if not self.internal(module):
             return [("x", f"{module}.{name}")]
-        if module not in self.files:
-            return []
+        if module not in self.files:        # a folder without __init__: its submodules
+            sub = f"{module}.{name}"
+            return [("m", sub)] if sub in self.files else []
         key = (module, name)
         if key in self._attr_memo:
             return self._attr_memo[key]
@@ -1205,10 +1208,11 @@ def _needed(t: _Tree, roots: set, all_modules: list):
 
     def add_module(m):
         while m and m not in key:
-            key.add(m)
-            if not t.parsed[m]:
-                t.fallbacks.add(f"{m}: does not parse")
-            work.extend((m, i) for i, s in enumerate(t.stmts[m]) if s["kind"] == "side")
+            if m in t.files:                # not a folder without __init__
+                key.add(m)
+                if not t.parsed[m]:
+                    t.fallbacks.add(f"{m}: does not parse")
+                work.extend((m, i) for i, s in enumerate(t.stmts[m]) if s["kind"] == "side")
             m = m.rpartition(".")[0]
 
     def add_whole(m):

@@ -380,6 +380,16 @@ def test_the_analysis_follows_a_module_that_moves(tmp_path):
     assert "renamed.study" not in deps.modules
 
 
+def test_a_folder_without_init_is_followed(tmp_path):
+    """A constant read from a module of a namespace folder (no ``__init__.py``)."""
+    root = _small_package(tmp_path, extra={
+        "ns/values.py": "EXTRA = 1\n",
+        "consts.py": _SMALL["consts.py"].replace("OTHER = 7", "from .ns import values\n"
+                                                 "OTHER = 7\nOFFSET += values.EXTRA")})
+    deps = kernel_dependencies(root)
+    assert "small/ns/values.py" in deps.files and not deps.fallbacks
+
+
 def test_stored_analyses_give_the_same_key_and_bad_entries_are_redone(tree, tmp_path):
     fresh = kernel_source_hash(tree)
     store = tmp_path / "store"
