@@ -26,16 +26,18 @@ module constant it reads from there, such as a layout offset), so a stale
 cache could silently run old physics after an edit.  The cache therefore
 lives in a folder named after :func:`~ppamsafety._sourcehash.kernel_source_hash`
 (``~/.cache/ppamsafety/numba-<key>``, or ``$PPAMSAFETY_CACHE_DIR/numba-<key>``):
-a hash of every module compiled code can depend on (the modules defining
-kernels and, transitively, what they import at module level -- found from the
-source tree, see :mod:`ppamsafety._sourcehash`), of the Python, numba, llvmlite,
-numpy and other imported package versions, and of the numba settings that
-change machine code (``NUMBA_BOUNDSCHECK``, ``NUMBA_OPT`` ...).  An edit of
-anything a kernel can reach gives a fresh folder, and every kernel compiles
-again; an edit of a study, a figure module that no kernel module imports, the
-command line or the docs keeps the folder.  The analysis of the source tree is
-stored next to the folders (``kernel-deps``), so a process only parses the
-files edited since (a whole-tree lookup takes about 10 ms).
+a hash of every file holding something compiled code depends on (the compiled
+functions, what they call and read, what those values are computed with, the
+module-level statements of those modules and of their parent packages --
+found name by name from the source tree, see :mod:`ppamsafety._sourcehash`),
+of the Python, numba, llvmlite, numpy and other used package versions, and of
+the numba settings that change machine code (``NUMBA_BOUNDSCHECK``,
+``NUMBA_OPT`` ...).  An edit of any of those files gives a fresh folder, and
+every kernel compiles again; an edit of a plot (even one a kernel module
+imports for its ``.plot()`` methods), a report section, the report, the
+command line, the sweeps or the docs keeps the folder.  The analysis of the
+source tree is stored next to the folders (``kernel-deps``), so a process only
+parses the files edited since (a whole-tree lookup takes about 10 ms).
 
 Each process holds a shared lock on its folder (``.ppamsafety-in-use``) and
 touches it, and then deletes the folders of other keys beyond the

@@ -2,6 +2,8 @@
 
 The key tests edit a temporary copy of the package source, never the package itself: the key
 is computed from a source tree (``kernel_source_hash(root)``), nothing is imported from it.
+The rules of the analysis are checked on small made-up packages; two subprocess tests check
+it against the imported package (what the compiled functions actually read).
 """
 
 from __future__ import annotations
@@ -44,17 +46,30 @@ def _file(root: Path, module) -> Path:
     return root / Path(module.__file__).resolve().relative_to(PACKAGE)
 
 
+def _rel(root: Path, module) -> str:
+    """The key's name of the file of ``module`` (``ppamsafety/plant/layout.py``)."""
+    return _file(root, module).relative_to(root.parent).as_posix()
+
+
 def _insert_after(path: Path, lineno: int, text: str) -> None:
     lines = path.read_text().splitlines(keepends=True)
     lines.insert(lineno, text + "\n")
     path.write_text("".join(lines))
 
 
-def _edit_function(path: Path, name: str) -> None:
-    """Insert a statement before the last statement of the module-level function ``name``."""
-    fn = next(n for n in ast.parse(path.read_text()).body
-              if isinstance(n, ast.FunctionDef) and n.name == name)
-    last = fn.body[-1]
+def _definition(path: Path, name: str, cls: str | None = None):
+    """The module-level function or class ``name`` of ``path`` (a method of class ``cls``)."""
+    body = ast.parse(path.read_text()).body
+    if cls is not None:
+        body = next(n for n in body if isinstance(n, ast.ClassDef) and n.name == cls).body
+    return next(n for n in body if isinstance(n, (ast.FunctionDef, ast.ClassDef))
+                and n.name == name)
+
+
+def _edit_function(path: Path, name: str, cls: str | None = None) -> None:
+    """Insert a statement before the last statement of function ``name`` (a method of
+    ``cls``)."""
+    last = _definition(path, name, cls).body[-1]
     _insert_after(path, last.lineno - 1, " " * last.col_offset + "_edited = 1.0  # test edit")
 
 
@@ -68,39 +83,59 @@ def _shift_constant(path: Path, name: str) -> None:
     raise AssertionError(f"no module-level assignment of {name} in {path}")
 
 
-# --- (a), (b): edits the kernels can see change the key ----------------------------------
+def _replace(path: Path, old: str, new: str) -> None:
+    text = path.read_text()
+    assert text.count(old) == 1, (path, old)
+    path.write_text(text.replace(old, new))
+
+
+# --- (a) edits of what the kernels need change the key --------------------------------------
 
 
 def test_editing_a_callee_in_another_module_changes_the_key(tree, store):
-    """The controller step (control/dispatch.py) calls the PID step of control/pid.py."""
-    from ppamsafety.control import dispatch, pid
+    """The controller step (control/dispatch.py) calls the PID step of control/laws/pid.py."""
+    from ppamsafety.control import dispatch
+    from ppamsafety.control.laws import pid
 
     assert dispatch.pid_step is pid.pid_step and dispatch.__file__ != pid.__file__
     before = kernel_source_hash(tree, store)
     _edit_function(_file(tree, pid), "pid_step")
-    after = kernel_source_hash(tree, store)
-    assert after != before
-
-
-def test_editing_a_layout_offset_read_by_kernels_changes_the_key(tree, store):
-    """plant/layout.py defines no kernel: it holds the offsets of the plant row that the plant
-    kernels import at module level and numba freezes at compile time."""
-    from ppamsafety.plant import layout, muscle
-
-    deps = kernel_dependencies(tree, store)
-    assert layout.__name__ not in deps.kernel_modules       # reached through the imports only
-    assert muscle.__name__ in deps.kernel_modules and muscle.COEF == layout.COEF
-    before = kernel_source_hash(tree, store)
-    _shift_constant(_file(tree, layout), "COEF")
     assert kernel_source_hash(tree, store) != before
 
 
-@pytest.mark.parametrize("module", ["ppamsafety.layouts", "ppamsafety.params.valves",
-                                    "ppamsafety._jit", "ppamsafety.__init__"])
-def test_editing_what_the_kernel_modules_import_changes_the_key(tree, store, module):
-    """The layout machinery (offsets are computed by it), a parameter module two imports away
-    from any kernel module (params.valves <- params.arm <- control.base), the decorators, and
-    the package's ``__init__`` (run before every module)."""
+def test_editing_a_layout_offset_or_field_read_by_kernels_changes_the_key(tree, store):
+    """plant/layout.py defines no kernel: it holds the offsets of the plant row (made from its
+    Fields) that the plant kernels import and numba freezes at compile time."""
+    from ppamsafety.plant import layout, muscle
+
+    deps = kernel_dependencies(tree, store)
+    assert layout.__name__ not in deps.kernel_modules and _rel(tree, layout) in deps.files
+    assert muscle.__name__ in deps.kernel_modules and muscle.COEF == layout.COEF
+    before = kernel_source_hash(tree, store)
+    _shift_constant(_file(tree, layout), "COEF")
+    shifted = kernel_source_hash(tree, store)
+    assert shifted != before
+    _replace(_file(tree, layout), 'Field("X11", 1,', 'Field("X11", 2,')
+    assert kernel_source_hash(tree, store) not in (before, shifted)
+
+
+def test_editing_the_function_a_constant_is_computed_with_changes_the_key(tree, store):
+    """The offsets of every law's row are computed by ``Layout.offsets`` of layouts.py."""
+    from ppamsafety import layouts
+
+    before = kernel_source_hash(tree, store)
+    _edit_function(_file(tree, layouts), "offsets", cls="Layout")
+    assert kernel_source_hash(tree, store) != before
+
+
+@pytest.mark.parametrize("module", [
+    "ppamsafety.layouts", "ppamsafety._jit", "ppamsafety.__init__", "ppamsafety.units",
+    "ppamsafety.control.kinds", "ppamsafety.control.laws.__init__",
+    "ppamsafety.hysteresis.memory", "ppamsafety.experiments.__init__"])
+def test_editing_what_the_kernels_need_changes_the_key(tree, store, module):
+    """The layout machinery, the decorators, a constant a kernel reads from another module
+    (``units.G0``), the controller kinds (an IntEnum the dispatch compares with), the parent
+    packages' ``__init__`` (run before their modules), a kernel module."""
     import importlib
 
     before = kernel_source_hash(tree, store)
@@ -119,30 +154,56 @@ def test_numba_settings_change_the_key(tree, store, monkeypatch):
     assert kernel_source_hash(tree, store) != before
 
 
-# --- (c): edits no kernel can see keep it ----------------------------------------------------
+# --- (b) edits no kernel can see keep it ---------------------------------------------------
 
 
-def test_editing_studies_figures_and_the_cli_keeps_the_key(tree, store):
-    """Every module outside the closure edited at once: a study, a figure module no kernel
-    module imports, the command line, the sweeps ...; the sweep key still changes."""
-    from ppamsafety import cli
-    from ppamsafety.report import build, impact_figures
-    from ppamsafety.studies import stiffness
+def test_the_key_holds_the_kernels_needs_and_not_the_rest(tree, store):
+    """The expected members on the current tree; plots, sections, the report, the CLI, the
+    sweeps and the diagnosis are out, though kernel modules import plots at module level."""
+    deps = kernel_dependencies(tree, store)
+    files = set(deps.files)
+    for rel in ("ppamsafety/_jit.py", "ppamsafety/layouts.py", "ppamsafety/control/dispatch.py",
+                "ppamsafety/control/laws/pid.py", "ppamsafety/hysteresis/memory.py",
+                "ppamsafety/plant/layout.py", "ppamsafety/plant/model.py",
+                "ppamsafety/impact/engine.py", "ppamsafety/experiments/closed_loop.py"):
+        assert rel in files, rel
+    for prefix in ("ppamsafety/plots/", "ppamsafety/sections/", "ppamsafety/report/",
+                   "ppamsafety/diagnose/", "ppamsafety/studies/", "ppamsafety/cli.py",
+                   "ppamsafety/study_files.py", "ppamsafety/sweep_cases.py",
+                   "ppamsafety/sweep.py", "ppamsafety/impact/model.py"):
+        assert not [f for f in files if f.startswith(prefix)], prefix
+    assert "ppamsafety.plant.model:rk4_step" in deps.kernels
+    assert "ppamsafety.impact.engine:impact_rhs" in deps.kernels      # impact_rhs = kernel(f)
+    assert not deps.fallbacks, deps.fallbacks
+    assert len(files) <= 80, len(files)         # the module-level closure had 144
+
+
+def test_editing_plots_sections_the_cli_and_studies_keeps_the_key(tree, store):
+    """Every file outside the key edited at once: among them a plot module that a kernel
+    module imports at module level (experiments/closed_loop.py imports plots/control.py), a
+    report section, the command line, a module calling kernels; the sweep key still
+    changes."""
+    from ppamsafety import cli, study_files, sweep_cases
+    from ppamsafety.experiments import closed_loop
+    from ppamsafety.impact import model
+    from ppamsafety.plots import control as plots_control
+    from ppamsafety.plots import impact as plots_impact
+    from ppamsafety.report import build
+    from ppamsafety.sections import safety
 
     deps = kernel_dependencies(tree, store)
     outside = sorted({p.relative_to(tree.parent).as_posix() for p in tree.rglob("*.py")}
                      - set(deps.files))
-    for m in (cli, build, impact_figures, stiffness):
-        assert _file(tree, m).relative_to(tree.parent).as_posix() in outside, m.__name__
-    assert len(outside) >= 40, outside          # most of the package is plain Python
+    assert _rel(tree, closed_loop) in deps.files
+    assert closed_loop.plot_experiment is plots_control.plot_experiment
+    for m in (cli, build, safety, plots_control, plots_impact, model, study_files, sweep_cases):
+        assert _rel(tree, m) in outside, m.__name__
     before, sweep_before = kernel_source_hash(tree, store), source_hash(tree)
     for rel in outside:
         path = tree.parent / rel
         path.write_text(path.read_text() + "\n# test edit\n")
-    stiffness_file = _file(tree, stiffness)
-    _shift_constant(stiffness_file, next(n.targets[0].id for n in ast.parse(
-        stiffness_file.read_text()).body if isinstance(n, ast.Assign)
-        and isinstance(n.targets[0], ast.Name)))
+    _edit_function(_file(tree, plots_control), "plot_experiment")
+    _edit_function(_file(tree, model), "plot", cls="ImpactResults")   # a .plot() method
     assert kernel_source_hash(tree, store) == before
     assert source_hash(tree) != sweep_before
 
@@ -154,74 +215,179 @@ def test_the_key_ignores_files_that_are_not_python(tree, store):
     assert kernel_source_hash(tree, store) == before
 
 
-# --- how the closure is found -------------------------------------------------------------
+# --- (c) the rules, on small packages ---------------------------------------------------------
 
 
 _SMALL = {
     "__init__.py": "",
     "_jit.py": "import numba\nkernel = numba.njit(cache=True)\n",
-    "consts.py": "from .base import N\nOFFSET = N + 1\n",
-    "base.py": "N = 3\n",
+    "base.py": "N = 3\n\ndef unused():\n    return 1\n",
+    "helper.py": "def make(n):\n    return tuple(range(n))\n",
+    "consts.py": ("from .base import N\nfrom . import helper\nfrom .rows import Row\n"
+                  "ROW = Row(('a', 'b'))\nOFFSET = ROW.offset('b') + N\n"
+                  "TABLE = helper.make(N)\nOTHER = 7\nGROUP = (OTHER, [TABLE])\n"),
+    "rows.py": ("from .position import position\n\nclass Row:\n    def __init__(self, names):\n"
+                "        self.names = names\n\n    def offset(self, name):\n"
+                "        return position(self.names, name)\n"),
+    "position.py": "def position(names, name):\n    return names.index(name)\n",
+    "reexport.py": "from .core.callee import h\n",
+    "figures.py": "def draw(x):\n    return x\n",
+    "kinds.py": "from enum import IntEnum\n\nclass Kind(IntEnum):\n    A = 0\n    B = 1\n",
     "core/__init__.py": "",
-    "core/helper.py": "from .._jit import kernel\n@kernel\ndef h(x):\n    return x\n",
-    "core/k.py": ("from .._jit import kernel\nfrom ..consts import OFFSET\nfrom .helper import h\n"
-                  "@kernel\ndef f(x):\n    return h(x[OFFSET])\n"
-                  "def plot(x):\n    from ..figures import draw\n    draw(x)\n"),
-    "figures.py": "def draw(x):\n    from .study import run\n    return run\n",
-    "study.py": "from .core.k import f\nfrom . import figures\n\ndef run():\n    return f\n",
-    "lazy/__init__.py": ("import importlib\n\ndef __getattr__(name):\n"
-                         "    return importlib.import_module('.' + name, __name__)\n"),
-    "lazy/a.py": "A = 1\n",
-    "lazy/b.py": "B = 2\n",
-    "uses_lazy.py": "from .lazy import a\n",
-    "jitted.py": ("from numba import njit\nfrom .uses_lazy import a\n"
-                  "@njit\ndef g():\n    return 1\n"),
-    "broken.py": "def (:\n",
-    "deep/__init__.py": "SCALE = 2.0\n",
-    "deep/inner/__init__.py": "",
-    "deep/inner/solo.py": "import numba\nfrom ...lazier import L\n",
-    "lazier/__init__.py": ("def __getattr__(name):\n    from .impl import L\n    return L\n\n"
-                           "def unrelated():\n    from .other import O\n"),
-    "lazier/impl.py": "L = 1\n",
-    "lazier/other.py": "O = 1\n",
+    "core/callee.py": ("from .._jit import kernel\n\n@kernel\ndef h(x):\n    return x\n\n"
+                       "def python_only():\n    return 2\n"),
+    "core/k.py": ("from .._jit import kernel\nfrom .. import consts as c\n"
+                  "from ..figures import draw\nfrom ..kinds import Kind\n"
+                  "from ..reexport import h\n\n"
+                  "@kernel\ndef f(x):\n    return h(x[c.OFFSET]) + c.TABLE[0] + Kind.B\n\n"
+                  "class Result:\n    def plot(self):\n        return draw(self)\n"),
+    "study.py": "from .core.k import f, Result\n\ndef run():\n    return f\n",
 }
 
 
-def _small_package(tmp_path, files=_SMALL, name="small"):
+def _small_package(tmp_path, files=None, name="small", extra=None):
     root = tmp_path / name
-    for rel, text in files.items():
+    for rel, text in {**(_SMALL if files is None else files), **(extra or {})}.items():
         (root / rel).parent.mkdir(parents=True, exist_ok=True)
         (root / rel).write_text(text)
     return root
 
 
-def test_closure_rules_on_a_small_package(tmp_path):
-    deps = kernel_dependencies(_small_package(tmp_path))
-    assert deps.kernel_modules == ("small._jit", "small.broken", "small.core.helper",
-                                   "small.core.k", "small.deep.inner.solo", "small.jitted")
-    # module-level imports, transitively (consts -> base); parent packages (deep, deep.inner:
-    # their __init__ runs first); the function-level import of a kernel module (figures), but
-    # not figures' own function-level import (study); a package importing by computed name
-    # in full (lazy); the imports of a module-level __getattr__ (lazier.impl), not those of
-    # other functions (lazier.other)
-    assert deps.modules == ("small", "small._jit", "small.base", "small.broken", "small.consts",
-                            "small.core", "small.core.helper", "small.core.k", "small.deep",
-                            "small.deep.inner", "small.deep.inner.solo", "small.figures",
-                            "small.jitted", "small.lazier", "small.lazier.impl", "small.lazy",
-                            "small.lazy.a", "small.lazy.b", "small.uses_lazy")
-    assert deps.files[0] == "small/__init__.py" and "small/core/k.py" in deps.files
-    assert deps.packages == ("numba",)
+def _changes(root: Path, rel: str, text: str = "\n# edit\n") -> bool:
+    """Whether appending ``text`` to ``rel`` changes the key of the package at ``root``."""
+    before = kernel_source_hash(root)
+    path = root / rel
+    path.write_text(path.read_text() + text)
+    return kernel_source_hash(root) != before
 
 
-def test_the_closure_follows_a_module_that_moves(tmp_path):
-    """consts.py moved into core/ (and its importers updated): still in the closure, under its
+def test_name_level_rules_on_a_small_package(tmp_path):
+    root = _small_package(tmp_path)
+    deps = kernel_dependencies(root)
+    assert deps.kernels == ("small._jit:kernel", "small.core.callee:h", "small.core.k:f")
+    assert deps.kernel_modules == ("small._jit", "small.core.callee", "small.core.k")
+    # the callee's module and the module it is imported through, the constants and what
+    # they are made from (base.N, helper.make, the Row class and the function its method
+    # calls), the enum, the parent packages; not the figure module nor the study
+    assert deps.files == tuple(f"small/{f}" for f in (
+        "__init__.py", "_jit.py", "base.py", "consts.py", "core/__init__.py", "core/callee.py",
+        "core/k.py", "helper.py", "kinds.py", "position.py", "reexport.py", "rows.py"))
+    assert deps.packages == ("numba",) and not deps.fallbacks
+    assert _changes(root, "helper.py", "\ndef make(n):\n    return tuple(range(n + 1))\n")
+    assert not _changes(root, "figures.py") and not _changes(root, "study.py")
+
+
+def test_a_module_level_statement_of_a_needed_module_counts(tmp_path):
+    """A call, an ``if`` block binding a name, an ``assert``: counted, with what they read."""
+    root = _small_package(tmp_path, extra={
+        "consts.py": _SMALL["consts.py"] + ("from .registry import register\nregister(OFFSET)\n"
+                                            "from . import flags\nif flags.FAST:\n"
+                                            "    OTHER = 8\nfrom . import checks\n"
+                                            "assert checks.ok()\n"),
+        "registry.py": "SEEN = []\n\ndef register(x):\n    SEEN.append(x)\n",
+        "flags.py": "FAST = True\n",
+        "checks.py": "def ok():\n    return True\n"})
+    files = kernel_dependencies(root).files
+    assert {"small/registry.py", "small/flags.py", "small/checks.py"} <= set(files)
+    assert _changes(root, "flags.py")
+
+
+def test_a_write_on_import_into_what_kernels_read_counts(tmp_path):
+    """A module outside the compiled code that stores into a needed object when imported:
+    counted, whatever the type of the object (the analysis does not know types)."""
+    extra = {"figures.py": "from . import consts\nconsts.OTHER = 1\n\ndef draw(x):\n    return x\n"}
+    root = _small_package(tmp_path, extra=extra)
+    assert "small/figures.py" not in kernel_dependencies(root).files     # OTHER: not read
+    extra["figures.py"] = extra["figures.py"].replace("consts.OTHER = 1", "consts.OFFSET = 1")
+    root = _small_package(tmp_path, name="small2", extra=extra)
+    deps = kernel_dependencies(root)
+    assert "small2/figures.py" in deps.files
+    assert any("writes on import" in f for f in deps.fallbacks)
+    extra["figures.py"] = "from .consts import TABLE\nsetattr(TABLE, 'x', 1)\n"
+    root = _small_package(tmp_path, name="small3", extra=extra)
+    assert "small3/figures.py" in kernel_dependencies(root).files
+    # into a container whose definition holds a needed object (GROUP holds TABLE)
+    extra["figures.py"] = "from .consts import GROUP\nGROUP[1][0] = 1\n"
+    root = _small_package(tmp_path, name="small4", extra=extra)
+    assert "small4/figures.py" in kernel_dependencies(root).files
+
+
+def test_star_imports_dynamic_imports_and_unknown_names_fall_back_to_whole_modules(tmp_path):
+    # a star import: the whole source module, whatever the kernel reads
+    root = _small_package(tmp_path, extra={"core/k.py": _SMALL["core/k.py"].replace(
+        "from ..figures import draw\n", "from ..figures import *\n")})
+    deps = kernel_dependencies(root)
+    assert any("star import" in f for f in deps.fallbacks)
+    assert "small/figures.py" in deps.files
+    # a computed import in what a kernel needs: the whole package
+    root = _small_package(tmp_path, name="small2", extra={"helper.py": (
+        "import importlib\n\ndef make(n):\n"
+        "    return importlib.import_module('small2.base').N * (0,)\n")})
+    deps = kernel_dependencies(root)
+    assert any("computed import" in f for f in deps.fallbacks)
+    assert "small2/study.py" in deps.files and "small2/figures.py" in deps.files
+    # a name bound nowhere (made by globals()): the whole module
+    root = _small_package(tmp_path, name="small3", extra={"base.py": (
+        "globals()['N'] = 3\n\ndef unused():\n    from . import figures\n    return figures\n")})
+    deps = kernel_dependencies(root)
+    assert any("namespace as a dict" in f for f in deps.fallbacks)
+    assert "small3/figures.py" in deps.files        # whole base.py: unused() counts too
+    # a module attribute nobody binds: the whole module
+    root = _small_package(tmp_path, name="small4", extra={"core/k.py": _SMALL["core/k.py"].replace(
+        "c.TABLE[0]", "c.MISSING")})
+    deps = kernel_dependencies(root)
+    assert any("small4.consts.MISSING" in f for f in deps.fallbacks)
+    # a global a kernel reads that its module does not bind: the whole module, so even the
+    # figure module its .plot() method calls
+    root = _small_package(tmp_path, name="small5", extra={"core/k.py": _SMALL["core/k.py"].replace(
+        "c.TABLE[0]", "MAGIC")})
+    deps = kernel_dependencies(root)
+    assert any("global MAGIC bound nowhere" in f for f in deps.fallbacks)
+    assert "small5/figures.py" in deps.files
+
+
+def test_every_way_of_making_compiled_code_is_a_root(tmp_path):
+    """Aliases of the decorators through imports, assignments and wrappers; ``kernel(f)`` and
+    ``njit(...)(g)``; numba's other compilers.  A plain Python caller of a kernel is not one."""
+    root = _small_package(tmp_path, files={
+        "__init__.py": "from ._jit import kernel as exported\n",
+        "_jit.py": "from numba import njit\nkernel = njit(cache=True)\n",
+        "a.py": "from ._jit import kernel as k\n\n@k\ndef a1(x):\n    return x\n",
+        "b.py": ("from . import exported\nimport functools, numba as nb\n"
+                 "fast = nb.njit\nlater = functools.partial(nb.njit, cache=True)\n"
+                 "def wrap(f):\n    return nb.njit(f)\n\n@fast\ndef b1():\n    return 1\n\n"
+                 "@later()\ndef b2():\n    return 2\n\n@wrap\ndef b3():\n    return 3\n\n"
+                 "@exported\ndef b4():\n    return 4\n\ndef _py(x):\n    return x\n\n"
+                 "b5 = exported(_py)\nb6 = nb.njit('f8(f8)')(_py)\nb7 = nb.vectorize(_py)\n\n"
+                 "def caller():\n    return b1() + b5(1.0)\n"),
+        "c.py": "from numba import types\nSIG = types.float64\n\ndef uses():\n    return SIG\n",
+    })
+    deps = kernel_dependencies(root)
+    assert deps.kernels == ("small._jit:kernel", "small.a:a1", "small.b:b1", "small.b:b2",
+                            "small.b:b3", "small.b:b4", "small.b:b5", "small.b:b6",
+                            "small.b:b7", "small.b:fast", "small.b:later", "small.b:wrap")
+    assert "small/c.py" not in deps.files
+
+
+def test_the_analysis_follows_a_module_that_moves(tmp_path):
+    """consts.py moved into core/ (and its importers updated): still in the key, under its
     new name; a renamed top package too."""
     files = dict(_SMALL)
-    files["core/consts.py"] = files.pop("consts.py").replace("from .base", "from ..base")
-    files["core/k.py"] = files["core/k.py"].replace("from ..consts", "from .consts")
+    files["core/consts.py"] = files.pop("consts.py").replace("from .", "from ..")
+    files["core/k.py"] = files["core/k.py"].replace("from .. import consts", "from . import consts")
     deps = kernel_dependencies(_small_package(tmp_path, files, name="renamed"))
     assert "renamed.core.consts" in deps.modules and "renamed.base" in deps.modules
     assert "renamed.study" not in deps.modules
+
+
+def test_a_folder_without_init_is_followed(tmp_path):
+    """A constant read from a module of a namespace folder (no ``__init__.py``)."""
+    root = _small_package(tmp_path, extra={
+        "ns/values.py": "EXTRA = 1\n",
+        "consts.py": _SMALL["consts.py"].replace("OTHER = 7", "from .ns import values\n"
+                                                 "OTHER = 7\nOFFSET += values.EXTRA")})
+    deps = kernel_dependencies(root)
+    assert "small/ns/values.py" in deps.files and not deps.fallbacks
 
 
 def test_stored_analyses_give_the_same_key_and_bad_entries_are_redone(tree, tmp_path):
@@ -231,7 +397,7 @@ def test_stored_analyses_give_the_same_key_and_bad_entries_are_redone(tree, tmp_
     entries = sorted(store.glob("*.json"))
     assert len(entries) > 100                   # one per file, one for the tree
     for i, e in enumerate(entries):             # unreadable, or readable but wrong
-        e.write_text("{" if i % 2 else json.dumps({"imports": [[0]], "dynamic": True}))
+        e.write_text("{" if i % 2 else json.dumps({"parsed": True, "stmts": [{"line": 1}]}))
     assert kernel_source_hash(tree, store) == fresh
     assert kernel_dependencies(tree, store) == kernel_dependencies(tree)
 
@@ -241,44 +407,180 @@ def test_a_root_that_is_not_a_package_is_refused(tmp_path):
         kernel_source_hash(tmp_path)
 
 
-_IMPORT_PROBE = """
-import importlib, json, pkgutil, sys
-from ppamsafety._sourcehash import kernel_dependencies
-deps = kernel_dependencies()
-for m in deps.kernel_modules:
-    importlib.import_module(m)
-loaded = sorted(m for m in sys.modules if m.split(".")[0] == "ppamsafety")
-import numba.core.registry
-import ppamsafety
-for info in pkgutil.walk_packages(ppamsafety.__path__, "ppamsafety."):
-    try:
-        importlib.import_module(info.name)
-    except ImportError:           # an optional dependency (cvxpy, dask, pymunk) is missing
+# --- (d) the key against the imported package --------------------------------------------
+
+
+_PROBE = r"""
+import hashlib, importlib, importlib.abc, importlib.machinery, inspect, json, pkgutil, sys
+import types
+import numpy as np
+
+key = json.loads(sys.argv[1])
+modules, files, stub = set(key["modules"]), set(key["files"]), sys.argv[2] == "stub"
+
+if stub:
+    # every module of the package outside the key is replaced by a stub that answers
+    # everything: what the kernels read must not come from there
+    class _Meta(type):
+        def __getattr__(cls, name):
+            if name.startswith("__"):
+                raise AttributeError(name)
+            return Stub
+        def __call__(cls, *args, **kwargs):
+            return Stub
+        def __getitem__(cls, key):
+            return Stub
+        def __iter__(cls):
+            return iter(())
+
+    class Stub(metaclass=_Meta):
         pass
-compiled = sorted({(name, obj.py_func.__module__)
-                   for mod in list(sys.modules.values())
-                   if getattr(mod, "__name__", "").split(".")[0] == "ppamsafety"
-                   for name, obj in vars(mod).items()
-                   if isinstance(obj, numba.core.registry.CPUDispatcher)})
-print(json.dumps({"modules": deps.modules, "kernel_modules": deps.kernel_modules,
-                  "loaded": loaded, "compiled": compiled}))
+
+    class StubModule(types.ModuleType):
+        def __getattr__(self, name):
+            if name.startswith("__"):
+                raise AttributeError(name)
+            return Stub
+
+    class Finder(importlib.abc.MetaPathFinder, importlib.abc.Loader):
+        def find_spec(self, name, path, target=None):
+            if name.split(".")[0] == "ppamsafety" and name not in modules:
+                return importlib.machinery.ModuleSpec(name, self, is_package=True)
+            return None
+        def create_module(self, spec):
+            m = StubModule(spec.name)
+            m.__path__ = []
+            return m
+        def exec_module(self, module):
+            pass
+
+    sys.meta_path.insert(0, Finder())
+    for m in sorted(modules):
+        importlib.import_module(m)
+else:
+    import ppamsafety
+    for info in pkgutil.walk_packages(ppamsafety.__path__, "ppamsafety."):
+        try:
+            importlib.import_module(info.name)
+        except ImportError:       # an optional dependency (cvxpy, dask, pymunk) is missing
+            pass
+
+from numba.core.registry import CPUDispatcher
+
+
+def rel(path):
+    parts = path.replace("\\", "/").split("/")
+    return "/".join(parts[len(parts) - 1 - parts[::-1].index("ppamsafety"):]) \
+        if "ppamsafety" in parts else None
+
+
+def origin(v):
+    # the file of the package that defines v, or None (builtin, numpy, numba, a value)
+    if isinstance(v, CPUDispatcher):
+        return rel(v.py_func.__code__.co_filename)
+    if isinstance(v, types.ModuleType):
+        return rel(getattr(v, "__file__", None) or "")
+    if isinstance(v, types.FunctionType):
+        return rel(v.__code__.co_filename)
+    if isinstance(v, type) and v.__module__.split(".")[0] == "ppamsafety":
+        return rel(sys.modules[v.__module__].__file__)
+    if isinstance(type(v), type) and type(v).__module__.split(".")[0] == "ppamsafety" \
+            and not isinstance(v, int):
+        return rel(sys.modules[type(v).__module__].__file__)
+    return None
+
+
+def fingerprint(v, depth=0):
+    if isinstance(v, CPUDispatcher):
+        return ["dispatcher", v.py_func.__module__, v.py_func.__qualname__]
+    if isinstance(v, types.ModuleType):
+        return ["module", v.__name__]
+    if isinstance(v, types.FunctionType):
+        return ["function", v.__module__, v.__qualname__]
+    if isinstance(v, type):
+        return ["class", v.__module__, v.__qualname__]
+    if isinstance(v, np.ndarray):
+        return ["array", str(v.dtype), list(v.shape), hashlib.sha1(v.tobytes()).hexdigest()]
+    if isinstance(v, (tuple, list)) and depth < 3:
+        return [type(v).__name__] + [fingerprint(x, depth + 1) for x in v]
+    if isinstance(v, (bool, int, float, complex, str, bytes, type(None), np.generic)):
+        return [type(v).__name__, repr(v)]
+    return ["object", type(v).__module__, type(v).__qualname__]
+
+
+def code_names(code):
+    names = set(code.co_names)
+    for c in code.co_consts:
+        if isinstance(c, types.CodeType):
+            names |= code_names(c)
+    return names
+
+
+compiled = {}
+for mod in list(sys.modules.values()):
+    if (getattr(mod, "__name__", "").split(".")[0] != "ppamsafety"
+            or type(mod).__name__ == "StubModule"):
+        continue
+    for obj in list(vars(mod).values()):
+        if isinstance(obj, CPUDispatcher):
+            compiled[f"{obj.py_func.__module__}:{obj.py_func.__qualname__}"] = obj
+
+report = {"outside": [], "prints": {}}
+for name, d in sorted(compiled.items()):
+    f = d.py_func
+    if rel(f.__code__.co_filename) not in files:
+        report["outside"].append([name, "defined in", rel(f.__code__.co_filename)])
+    names = code_names(f.__code__)
+    read = {}
+    for n in sorted(names):
+        if n in f.__globals__:
+            v = f.__globals__[n]
+            read[n] = v
+            if isinstance(v, types.ModuleType):          # lay.L1: the attributes read
+                for a in sorted(names):
+                    if a in vars(v):
+                        read[f"{n}.{a}"] = vars(v)[a]
+    for i, cell in enumerate(f.__closure__ or ()):
+        read[f"<closure {i}>"] = cell.cell_contents
+    for n, v in read.items():
+        o = origin(v)
+        if o is not None and o not in files:
+            report["outside"].append([name, n, o])
+    report["prints"][name] = {n: fingerprint(v) for n, v in read.items()}
+print(json.dumps(report))
 """
 
 
-def test_the_static_closure_covers_what_importing_the_kernels_runs(tmp_path):
-    """Importing every kernel module imports only modules of the closure (so nothing else
-    runs when the kernels' constants are made), and every compiled function of the package
-    is defined in a kernel module."""
+def _probe(tmp_path, deps, mode):
     env = {**os.environ, "PPAMSAFETY_CACHE_DIR": str(tmp_path)}
     env.pop("NUMBA_CACHE_DIR", None)
     env["PYTHONPATH"] = str(PACKAGE.parent) + os.pathsep + env.get("PYTHONPATH", "")
-    out = subprocess.run([sys.executable, "-c", _IMPORT_PROBE], env=env, check=True,
-                         capture_output=True, text=True, timeout=600, cwd=tmp_path).stdout
-    r = json.loads(out.strip().splitlines()[-1])
-    assert set(r["loaded"]) <= set(r["modules"]), sorted(set(r["loaded"]) - set(r["modules"]))
-    assert len(r["compiled"]) >= 50, r["compiled"]
-    outside = sorted({m for _, m in r["compiled"]} - set(r["kernel_modules"]))
-    assert not outside, outside
+    out = subprocess.run([sys.executable, "-c", _PROBE,
+                          json.dumps({"modules": deps.modules, "files": deps.files}), mode],
+                         env=env, check=True, capture_output=True, text=True, timeout=600,
+                         cwd=tmp_path).stdout
+    return json.loads(out.strip().splitlines()[-1])
+
+
+def test_every_compiled_function_reads_only_what_the_key_holds(tmp_path):
+    """The whole package imported: every compiled function is defined in a file of the key,
+    and every global it reads (its bytecode's names, the attributes of a module it reads,
+    its closure) that is a function, class, module or object of the package comes from a
+    file of the key."""
+    r = _probe(tmp_path, kernel_dependencies(), "full")
+    assert len(r["prints"]) >= 100, sorted(r["prints"])
+    assert not r["outside"], r["outside"]
+
+
+def test_the_files_outside_the_key_do_not_change_what_kernels_read(tmp_path):
+    """Every module outside the key replaced by a stub that answers anything: the kernel
+    modules still import, and every global each compiled function reads has the same value
+    (numbers, arrays, tuples, enum members, functions by name) as with the real package."""
+    deps = kernel_dependencies()
+    full, stubbed = _probe(tmp_path, deps, "full"), _probe(tmp_path, deps, "stub")
+    assert sorted(stubbed["prints"]) == sorted(full["prints"])
+    for name, prints in full["prints"].items():
+        assert stubbed["prints"][name] == prints, name
 
 
 # --- (d) pruning -----------------------------------------------------------------------------
