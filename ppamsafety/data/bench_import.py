@@ -547,6 +547,13 @@ def _table(text: str, profile: BenchProfile, src: str) -> tuple:
                                 f"{lines[skip][:120]!r}")
     else:
         df.columns = names
+    short = np.flatnonzero(df.isna().to_numpy().any(axis=1))
+    if short.size:
+        k = int(short[0])
+        nf = int(df.iloc[k].notna().sum())
+        raise MeasuredDataError(f"{src}: line {first_line + k} has {nf} field(s), the profile "
+                                f"lists {len(names)} columns ({', '.join(names)}); "
+                                f"{short.size} such line(s) (a truncated or ragged line)")
     return df, first_line
 
 

@@ -521,7 +521,9 @@ def diagnose_campaign(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
     fs = [row for s_ in steps for row in s_.table if row["name"] == s_.chosen]
     for (unit, (var, c)), row in zip(chosen, fs):
         freq = (sum(unit in p_ for p_ in picks.values()) / len(picks)) if picks else 0.0
+        edge = _at_grid_edge(lib.index.get(unit.split("|")[0], []), var)
         ev = {"cv_gain": row["cv_gain"], "wald": row["wald"], "wald_df": row["lr_df"],
+              "at_grid_edge": edge,
               "p_value": row["p_value"], "stability_frequency": freq,
               "stability_subsets": len(picks), "setting": var.label,
               "subsystem_rho": {"force": rho_after}}
@@ -620,6 +622,15 @@ def diagnose_campaign(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
                           settings=settings, timings=timings, notes=tuple(notes), blocks={},
                           kind="actuator", confounded=confounded, records=records,
                           curves=curves)
+
+
+def _at_grid_edge(options, var) -> bool:
+    """The profiled scalar of ``var`` is the largest of its grid (x_d, v_s; not K)."""
+    if len(options) < 2 or not var.setting or "K" in var.setting:
+        return False
+    key = next(iter(var.setting))
+    vals = [v.setting[key] for v, _ in options]
+    return bool(var.setting[key] >= max(vals))
 
 
 def Path_name(src: str) -> str:

@@ -148,6 +148,10 @@ def actuator_record(data) -> tuple:
         raise ValueError(f"{data.source}: data.kind = {data.kind!r}; the test-bench diagnosis "
                          f"needs kind = 'actuator'")
 
+    if data.actuator_type == "cylinder":
+        raise ValueError(f"{data.source}: a cylinder record is diagnosed by "
+                         f"ppamsafety.diagnose.bench.campaign.diagnose_campaign (diagnose() "
+                         f"routes it there); this pipeline is for muscles")
     a0, b0, notes = longest_segment(data)
     n = b0 - a0
     if n < MIN_SAMPLES:
