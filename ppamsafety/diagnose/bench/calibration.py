@@ -15,7 +15,12 @@ gives the precision per claimed level.  The thresholds of the confidence rule
 :data:`~.campaign.GAIN_HIGH`) were set on seeds 0-99 (:data:`TUNING_SEEDS`);
 the report measures them on other seeds.
 
-Scoring: a named effect is *right* when the scenario hid it (any magnitude).
+Scoring: a named effect is *right* when the scenario hid it (any magnitude);
+``coulomb_pressure`` and ``coulomb_pressure2`` both claim "the Coulomb level
+grows with the pressure" and are right when either was hidden;
+``stroke_profile`` claims "the force depends on the rod position" and is right
+when either profile was hidden (``stroke_profile_pressure`` only when its own
+claim, a profile growing with the pressure, was hidden).
 A confounded group is scored apart: *right* when it holds a hidden member.
 """
 
@@ -39,6 +44,9 @@ TUNING_SEEDS = range(0, 100)
 MEASURE_SEEDS = range(1000, 2000)
 #: Required precision of "high".
 HIGH_PRECISION = 0.97
+#: The pressure law of the Coulomb level: naming either term is right when the friction
+#: grows with the pressure (c1 p or c2 p^2 hidden), the claim each makes.
+PRESSURE_FAMILY = ("coulomb_pressure", "coulomb_pressure2")
 
 
 def _logu(rng, lo, hi):
@@ -108,6 +116,10 @@ def score(scenario: dict, dg) -> list:
         ``seed``, ``kind`` ("named"/"confounded"), ``name``, ``level``, ``right``.
     """
     truth = {LIBRARY_NAME[k] for k in scenario["effects"] if k in LIBRARY_NAME}
+    if truth & set(PRESSURE_FAMILY):
+        truth |= set(PRESSURE_FAMILY)
+    if "stroke_profile_pressure" in truth:
+        truth.add("stroke_profile")
     rows = []
     for e in dg.effects:
         ev = e["evidence"]
@@ -198,4 +210,4 @@ def calibration_table(names: pd.DataFrame) -> pd.DataFrame:
 
 
 __all__ = ["random_scenario", "score", "run_calibration", "calibration_table", "TUNING_SEEDS",
-           "MEASURE_SEEDS", "HIGH_PRECISION"]
+           "MEASURE_SEEDS", "HIGH_PRECISION", "PRESSURE_FAMILY"]

@@ -45,8 +45,14 @@ reported as groups.
 5. **Confidence** (``confidence`` = stability frequency): the selection is
    rerun on each half of the cycles and, with >= 3 records, leaving out each
    record; ``"high"`` needs selection in every rerun
-   (:data:`STABILITY_HIGH`), a Wald p-value below :data:`P_HIGH` and a
-   held-out gain of at least :data:`GAIN_HIGH`; otherwise ``"low"``.  These
+   (:data:`STABILITY_HIGH`), a Wald p-value below :data:`P_HIGH`, a
+   held-out gain of at least :data:`GAIN_HIGH` and a profiled scalar (x_d,
+   v_s) inside its grid, not at its largest value (the shape is then not the
+   library's: a time-based transient looks like a long presliding) and,
+   for a stroke profile, a contribution of at least :data:`MID_PROFILE_HIGH`
+   repeatability levels in the middle half of the stroke (with fixed stroke
+   ends anything locked to the reversals is also a function of the position
+   near the ends); otherwise ``"low"``.  These
    thresholds are calibrated on synthetic campaigns
    (:mod:`.calibration`: "high" >= 97 % precision on seeds not tuned on).
 6. **Explained** when the final residual RMS over the repeatability is <=
@@ -83,6 +89,9 @@ MIN_GAIN = 0.2 ** 2
 STABILITY_HIGH = 1.0
 P_HIGH = 1e-6
 GAIN_HIGH = 0.1
+#: "high" for a stroke profile: its RMS over the middle half of the stroke, in repeatability
+#: levels, at least this.
+MID_PROFILE_HIGH = 0.3
 #: Two candidates whose columns' residual (relative norm) after projection on each other's
 #: span is below this are confounded.
 CONFOUND_TOL = 0.05
@@ -170,7 +179,7 @@ def _prepare(camp: Campaign):
         st = stroke_state(t, x, segs)
         fn = A * p
         r = F - fn
-        use = (st.stroke >= 0) & (st.s != 0)
+        use = (st.stroke >= 0) & (st.s != 0) & ~st.ambiguous
         sig_sensor = float(np.median([interpolation_sigma(t[a:b], r[a:b]) for a, b in segs
                                       if b - a >= 5]))
         sig_rep = repeatability(st.x, st.s, r, use, st.dx) if use.sum() > 50 else math.nan
@@ -545,8 +554,20 @@ def diagnose_campaign(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
         sl = slices[unit]
         params = fr.parameters(var, f.phi[sl], f.cov[sl, sl], ctx)
         ok = fr.admissible(unit, model, f.phi, f.cov, slices, ctx)
+        mid_ok = True
+        if unit in ("stroke_profile", "stroke_profile_pressure"):
+            # structure along the bore must show where no reversal transient reaches: the
+            # middle half of the stroke (at fixed stroke ends, anything locked to the
+            # reversals is also a function of the position near the ends)
+            lo, hi = ctx["x_range"]
+            xx = u["x"].to_numpy()
+            mid = (xx >= lo + 0.25 * (hi - lo)) & (xx <= hi - 0.25 * (hi - lo))
+            contrib = (var.columns @ f.phi[sl]) / u["sigma"].to_numpy()
+            ev["mid_stroke_rms"] = float(np.sqrt(np.mean(contrib[mid] ** 2))) if mid.any() \
+                else 0.0
+            mid_ok = ev["mid_stroke_rms"] >= MID_PROFILE_HIGH
         high = (stability and freq >= STABILITY_HIGH and row["p_value"] < P_HIGH
-                and row["cv_gain"] >= GAIN_HIGH and ok)
+                and row["cv_gain"] >= GAIN_HIGH and ok and not edge and mid_ok)
         effects.append({"name": unit, "subsystem": "force", "parameters": params,
                         "evidence": ev, "confidence": freq,
                         "confidence_level": "high" if high else "low",
@@ -604,7 +625,8 @@ def diagnose_campaign(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
                                     "same rod position and direction within a record "
                                     f"({REPEAT_BINS} bins); sensor noise reported beside it",
                 "confidence_rule": {"stability_high": STABILITY_HIGH, "p_high": P_HIGH,
-                                    "gain_high": GAIN_HIGH,
+                                    "gain_high": GAIN_HIGH, "mid_profile_high": MID_PROFILE_HIGH,
+                                    "profiled_scalar_inside_grid": True,
                                     "stability_subsets": [nm for nm, _ in subsets]},
                 "stability_picks": {k: sorted(v) for k, v in picks.items()},
                 "candidates": list(fr.VOCABULARY if candidates is None else candidates),
@@ -639,4 +661,4 @@ def Path_name(src: str) -> str:
 
 
 __all__ = ["diagnose_campaign", "repeatability", "MIN_GAIN", "STABILITY_HIGH", "P_HIGH",
-           "GAIN_HIGH", "CONFOUND_TOL"]
+           "GAIN_HIGH", "CONFOUND_TOL", "MID_PROFILE_HIGH"]

@@ -13,7 +13,8 @@ computes them from the measured position:
   spans about 40 position noise levels of travel;
 * the direction comes from a dead-band reversal detector on the smoothed
   position (:func:`~.pipeline.motion_direction`, dead band 12 noise levels),
-  switching exactly at the position extremum;
+  switching exactly at the position extremum; samples within 3 noise
+  levels of a turning point have an ambiguous direction and are flagged;
 * a stroke runs from one reversal to the next; a cycle is two strokes; the
   samples before the first reversal of a record (whose presliding state is
   unknown) are flagged.
@@ -33,6 +34,9 @@ from .pipeline import motion_direction
 REVERSAL_SIGMAS = 12.0
 #: Travel across the smoothing window, in position noise levels.
 WINDOW_SIGMAS = 40.0
+#: Samples within this many position noise levels of a turning point have an ambiguous
+#: direction of motion (left out of the statistics).
+AMBIGUOUS_SIGMAS = 3.0
 
 
 @dataclass(frozen=True, eq=False)
@@ -60,6 +64,9 @@ class StrokeState:
         Reversals detected.
     half_window : int
         Half-width of the smoothing window [samples].
+    ambiguous : numpy.ndarray of bool
+        Samples within :data:`AMBIGUOUS_SIGMAS` position noise levels of a
+        turning point (direction ambiguous).
     """
 
     x: np.ndarray
@@ -71,6 +78,7 @@ class StrokeState:
     sigma_x: float
     reversals: int
     half_window: int
+    ambiguous: np.ndarray = None
 
 
 def local_quadratic(t, x, h: int) -> tuple:
@@ -136,14 +144,23 @@ def stroke_state(t, x, segments) -> StrokeState:
     s = motion_direction(xs, thr, 0.5 * thr)
     turns = np.flatnonzero((s[1:] != s[:-1]) & (s[1:] != 0) & (s[:-1] != 0))
     dx = np.full(n, np.inf)
+    to_next = np.full(n, np.inf)
     stroke = np.full(n, -1)
+    prev = 0
     for i, k in enumerate(turns):                  # k: the extremum (last of the old direction)
         end = turns[i + 1] + 1 if i + 1 < turns.size else n
         dx[k + 1:end] = np.abs(xs[k + 1:end] - xs[k])
         stroke[k + 1:end] = i
+        to_next[prev:k + 1] = np.abs(xs[prev:k + 1] - xs[k])
+        prev = k + 1
     cycle = np.where(stroke >= 0, stroke // 2, -1)
+    # the direction of the samples within a few noise levels of a turning point is ambiguous
+    # (the extremum of the smoothed position is known to about its noise)
+    band = AMBIGUOUS_SIGMAS * sig
+    ambiguous = (dx < band) | (to_next < band)
     return StrokeState(x=xs, v=v, s=s, dx=dx, stroke=stroke, cycle=cycle, sigma_x=sig,
-                       reversals=int(turns.size), half_window=h)
+                       reversals=int(turns.size), half_window=h, ambiguous=ambiguous)
 
 
-__all__ = ["StrokeState", "stroke_state", "local_quadratic", "REVERSAL_SIGMAS", "WINDOW_SIGMAS"]
+__all__ = ["StrokeState", "stroke_state", "local_quadratic", "REVERSAL_SIGMAS", "WINDOW_SIGMAS",
+           "AMBIGUOUS_SIGMAS"]
