@@ -39,12 +39,17 @@ reported as groups.
    are significant in a **cluster-robust Wald test** (strokes as clusters)
    at alpha / K (Bonferroni), (c) its parameters are admissible
    (:func:`~.friction.admissible`).  The eligible candidate with the largest
-   held-out gain is added.  (A BIC with a known noise level would add every
+   held-out gain is added.  A backward pass at the end drops a term that is
+   no longer significant or no longer gains on held-out cycles once the later
+   terms are in (noted).  (A BIC with a known noise level would add every
    term on these long, correlated records; the held-out gain is the
    deciding criterion and the Wald test guards it.)
 5. **Confidence** (``confidence`` = stability frequency): the selection is
    rerun on each half of the cycles and, with >= 3 records, leaving out each
-   record; ``"high"`` needs selection in every rerun
+   record, and counts the reruns that support the name's claim
+   (:data:`CLAIM_FAMILY`: a rerun that models the pressure law with c2 p^2
+   instead of c1 p supports "the friction grows with the pressure");
+   ``"high"`` needs support in every rerun
    (:data:`STABILITY_HIGH`), a Wald p-value below :data:`P_HIGH`, a
    held-out gain of at least :data:`GAIN_HIGH` and a profiled scalar (x_d,
    v_s) inside its grid, not at its largest value (the shape is then not the
@@ -89,6 +94,14 @@ MIN_GAIN = 0.2 ** 2
 STABILITY_HIGH = 1.0
 P_HIGH = 1e-6
 GAIN_HIGH = 0.1
+#: What a name claims, for its stability: ``coulomb`` claims "a Coulomb friction" (any of its
+#: terms), ``coulomb_pressure``/``coulomb_pressure2`` "the Coulomb level grows with the
+#: pressure", ``stroke_profile`` "the force depends on the rod position".  A rerun that selects
+#: c2 p^2 instead of c1 p supports the claim of either.
+CLAIM_FAMILY = {"coulomb": {"coulomb", "coulomb_pressure", "coulomb_pressure2"},
+                "coulomb_pressure": {"coulomb_pressure", "coulomb_pressure2"},
+                "coulomb_pressure2": {"coulomb_pressure", "coulomb_pressure2"},
+                "stroke_profile": {"stroke_profile", "stroke_profile_pressure"}}
 #: "high" for a stroke profile: its RMS over the middle half of the stroke, in repeatability
 #: levels, at least this.
 MID_PROFILE_HIGH = 0.3
@@ -398,6 +411,28 @@ class _Selector:
                 break
             chosen.append((pick, cand[pick]))
             cur_cv = next(r["cv_mse"] for r in rows if r["name"] == pick)
+        # backward pass: a term added early can lose its support once later terms are in
+        # (c1 p after c2 p^2); drop the weakest term that is no longer significant or no
+        # longer gains on held-out cycles, refit, repeat
+        pruned = []
+        while chosen:
+            model, cols, slices = self._model(chosen)
+            f = fit(cg, clusters, cols, robust=True, Gsum=Gall)
+            base = cv_mse(cg, Gf, cols)
+            worst = None
+            for i, (u, _) in enumerate(chosen):
+                _, _, pv = wald(f.phi, f.cov, slices[u.split("|")[0]])
+                _, cols_r, _ = self._model(chosen[:i] + chosen[i + 1:])
+                loss = cv_mse(cg, Gf, cols_r) - base
+                if pv >= self.alpha / len(units) or loss < MIN_GAIN:
+                    if worst is None or loss < worst[0]:
+                        worst = (loss, i, pv)
+            if worst is None:
+                break
+            pruned.append({"name": chosen[worst[1]][0], "held_out_loss": worst[0],
+                           "p_value": worst[2]})
+            del chosen[worst[1]]
+        self.pruned = pruned
         return chosen, steps
 
 
@@ -477,7 +512,7 @@ def diagnose_campaign(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
     df, rec, levels, A, pnotes = _prepare(camp)
     notes += pnotes
     for d in camp.records:
-        notes += [f"{Path_name(d.source)}: {n}" for n in d.notes]
+        notes += [f"{_file_name(d.source)}: {n}" for n in d.notes]
     sig_rep = rec["sigma_repeat_N"].to_numpy()
     df["sigma"] = sig_rep[df["rec"].to_numpy()]
     df["label"] = np.asarray(rec["label"])[df["rec"].to_numpy()]
@@ -503,6 +538,7 @@ def diagnose_campaign(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
     sel = _Selector(cg, lib, ctx, cl_rec, cl_cycle, alpha)
     allc = np.arange(C)
     chosen, steps = sel.run(allc, record_steps=True)
+    main_pruned = sel.pruned
     # stability reruns
     subsets = []
     if stability:
@@ -527,9 +563,16 @@ def diagnose_campaign(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
     rho_before = float(np.sqrt(np.mean((u["r"] / u["sigma"]) ** 2)))
     unexplained = bool(rho_after > rho_max)
     effects, confounded = [], []
-    fs = [row for s_ in steps for row in s_.table if row["name"] == s_.chosen]
-    for (unit, (var, c)), row in zip(chosen, fs):
-        freq = (sum(unit in p_ for p_ in picks.values()) / len(picks)) if picks else 0.0
+    for pr in main_pruned:
+        notes.append(f"{pr['name']}: selected on the way, dropped at the end (held-out loss "
+                     f"without it {pr['held_out_loss']:.3g}, Wald p {pr['p_value']:.2g} in the "
+                     f"final model): later terms took its part")
+    rowof = {s_.chosen: next(r for r in s_.table if r["name"] == s_.chosen)
+             for s_ in steps if s_.chosen is not None}
+    for unit, (var, c) in chosen:
+        row = rowof[unit]
+        fam = CLAIM_FAMILY.get(unit, {unit})
+        freq = (sum(bool(fam & p_) for p_ in picks.values()) / len(picks)) if picks else 0.0
         edge = _at_grid_edge(lib.index.get(unit.split("|")[0], []), var)
         ev = {"cv_gain": row["cv_gain"], "wald": row["wald"], "wald_df": row["lr_df"],
               "at_grid_edge": edge,
@@ -629,6 +672,7 @@ def diagnose_campaign(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
                                     "profiled_scalar_inside_grid": True,
                                     "stability_subsets": [nm for nm, _ in subsets]},
                 "stability_picks": {k: sorted(v) for k, v in picks.items()},
+                "pruned": main_pruned,
                 "candidates": list(fr.VOCABULARY if candidates is None else candidates),
                 "candidates_applicable": list(variants), "confounded_groups": [list(g) for g in groups],
                 "area_m2": A, "stroke_speed_m_s": ctx["stroke_speed"],
@@ -655,10 +699,10 @@ def _at_grid_edge(options, var) -> bool:
     return bool(var.setting[key] >= max(vals))
 
 
-def Path_name(src: str) -> str:
+def _file_name(src: str) -> str:
     """The file name of a source string (for notes)."""
     return src.replace("\\", "/").rsplit("/", 1)[-1]
 
 
 __all__ = ["diagnose_campaign", "repeatability", "MIN_GAIN", "STABILITY_HIGH", "P_HIGH",
-           "GAIN_HIGH", "CONFOUND_TOL", "MID_PROFILE_HIGH"]
+           "GAIN_HIGH", "CONFOUND_TOL", "MID_PROFILE_HIGH", "CLAIM_FAMILY"]

@@ -24,6 +24,13 @@ class BenchDiagnosis(Diagnosis):
 
     Attributes
     ----------
+    source, effects, partial, unexplained, unexplained_channels, residual_rms : object
+        As :class:`~ppamsafety.diagnose.core.result.Diagnosis` (``source`` is the
+        campaign's name; ``partial`` is empty: a campaign names effects even when a
+        structure remains, ``unexplained`` says so).
+    where, steps, replay, settings, timings, notes, blocks, kind, subsystems : object
+        As :class:`~ppamsafety.diagnose.core.result.Diagnosis` (``replay`` and
+        ``blocks`` are empty: the figures read :attr:`curves`).
     confounded : list of dict
         Groups selected as one (their terms coincide on this campaign):
         ``members``, ``interpretations`` (member -> its parameters if it were
