@@ -181,3 +181,33 @@ def test_actuator_and_campaign_validation():
     b = synthesize_cylinder(None, seed=1, pressures=(2e5,), cycles=2, bore=0.02).records[0]
     with pytest.raises(ValueError, match="one nominal law"):
         Campaign((a, b))
+
+
+def test_cli_diagnoses_a_manifest_of_measured_files(tmp_path):
+    import json
+    import subprocess
+    import sys
+
+    camp = synthesize_cylinder({"coulomb": 4.0, "coulomb_pressure": 6e-6}, seed=5,
+                               pressures=(2e5, 5e5), cycles=4)
+    lines = ['name = "two records"', ""]
+    for i, r in enumerate(camp.records):
+        r.save(tmp_path / f"r{i}.csv")
+        lines += ["[[records]]", f'file = "r{i}.csv"', 'format = "measured"', ""]
+    (tmp_path / "c.toml").write_text("\n".join(lines))
+    out = tmp_path / "diag"
+    res = subprocess.run([sys.executable, "-m", "ppamsafety.cli", "diagnose",
+                          str(tmp_path / "c.toml"), "--out", str(out)],
+                         capture_output=True, text=True, timeout=600)
+    assert res.returncode == 0, res.stderr
+    assert "effect coulomb" in res.stdout
+    d = json.loads((out / "diagnosis.json").read_text())
+    assert {"confounded", "records"} <= set(d) and len(d["records"]) == 2
+    assert d["records"][1]["pressure_Pa"] == pytest.approx(5e5)
+    assert (out / "diagnosis_replay.png").is_file()
+    bad = tmp_path / "bad.toml"
+    bad.write_text('[[records]]\nfile = "r0.csv"\nformat = "measured"\nspeed = 3\n')
+    res = subprocess.run([sys.executable, "-m", "ppamsafety.cli", "diagnose", str(bad),
+                          "--out", str(tmp_path / "d2")], capture_output=True, text=True,
+                         timeout=600)
+    assert res.returncode == 2 and "unknown key(s) ['speed']" in res.stderr

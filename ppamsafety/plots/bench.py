@@ -19,6 +19,9 @@ def _check(dg):
 def campaign_loops_figure(dg, *, max_points: int = 4000):
     """Force minus p A against the rod position, per record: before (left) and after (right).
 
+    The residual after is drawn on the samples the diagnosis uses (NaN elsewhere: before a
+    record's first reversal and at turning points).
+
     Parameters
     ----------
     dg : BenchDiagnosis
@@ -46,7 +49,7 @@ def campaign_loops_figure(dg, *, max_points: int = 4000):
                 m = c["s"][sl] == sgn
                 ax.plot(x[m], c[key][sl][m], ".", ms=1.0, color=col, label=nm)
             ax.axhline(0.0, color="0.6", lw=0.5)
-            rms = float(np.sqrt(np.mean(c[key][c["used"]] ** 2)))
+            rms = float(np.sqrt(np.nanmean(c[key][c["used"]] ** 2)))
             ax.set_title(f"{lab}: {'F - p A (nominal law)' if key == 'before' else 'residual after'}"
                          f", RMS {rms:.3g} N", fontsize=7)
             ax.tick_params(labelsize=6)

@@ -629,10 +629,10 @@ def diagnose_campaign(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
     for i, row in rec.iterrows():
         m = (u["rec"] == i).to_numpy()
         dr = df[df["rec"] == i]
-        # the fitted force on every sample of the record (samples before the first
-        # reversal: outside the statistics, shown as measured - nominal)
-        after = dr["r"].to_numpy().copy()
+        # the residual after on the samples the statistics use; NaN on the others (before
+        # the first reversal, at a turning point: the friction state is not known there)
         used = dr["use"].to_numpy()
+        after = np.full(used.size, np.nan)
         after[used] = e_after[m]
         rrows.append({**{k: row[k] for k in ("label", "pressure_Pa", "samples", "used",
                                              "strokes", "sigma_sensor_N", "sigma_repeat_N")},
