@@ -9,7 +9,6 @@ issue 19's definition).
 
 import warnings
 
-import numpy as np
 import pytest
 
 from ppamsafety.data.measured import MeasuredDataWarning

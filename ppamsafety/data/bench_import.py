@@ -59,7 +59,7 @@ import lzma
 import math
 import numbers
 import tomllib
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np

@@ -29,7 +29,6 @@ describe the same actuator (type and nominal force law).
 
 from __future__ import annotations
 
-import math
 import tomllib
 import warnings
 from dataclasses import dataclass, field

@@ -71,16 +71,14 @@ from __future__ import annotations
 
 import math
 import time
-import warnings
 
 import numpy as np
 import pandas as pd
 from scipy import stats
 
 from ..._validation import check_range
-from ...data.bench_import import import_notes
 from ...data.campaign import Campaign
-from ...data.measured import MeasuredData, MeasuredDataWarning
+from ...data.measured import MeasuredData
 from ..core.criteria import Step
 from ..core.noise import interpolation_sigma
 from . import friction as fr
@@ -200,7 +198,6 @@ def _prepare(camp: Campaign):
         if st.reversals < 4:
             notes.append(f"{lab}: only {st.reversals} reversal(s) of the motion: friction is "
                          f"hard to tell from a drift on this record")
-        notes += [f"{lab}: {n}" for n in import_notes(d)[:0]]
         info.append({"label": lab, "pressure_Pa": float(levels[i]), "samples": int(t.size),
                      "used": int(use.sum()), "strokes": int(st.stroke.max() + 1),
                      "reversals": st.reversals, "sigma_sensor_N": sig_sensor,
@@ -324,7 +321,7 @@ def _confounded_groups(cg_all: np.ndarray, lib_index: dict) -> list:
     return [tuple(g) for g in groups.values() if len(g) > 1]
 
 
-def _folds_for(clusters, cl_rec, cl_cycle, halves_level: int):
+def _folds_for(clusters, cl_rec, cl_cycle):
     """CV fold (0/1) of each cluster: parity of its cycle's rank within its record."""
     f = np.zeros(clusters.size, int)
     for r_ in np.unique(cl_rec[clusters]):
@@ -357,7 +354,7 @@ class _Selector:
 
     def run(self, clusters, *, record_steps: bool = False):
         cg, lib = self.cg, self.lib
-        folds = _folds_for(clusters, self.cl_rec, self.cl_cycle, 0)
+        folds = _folds_for(clusters, self.cl_rec, self.cl_cycle)
         Gf = [(cg.G[clusters[folds == k]].sum(axis=0), float(cg.n[clusters[folds == k]].sum()))
               for k in (0, 1)]
         Gall = Gf[0][0] + Gf[1][0]
@@ -542,7 +539,7 @@ def diagnose_campaign(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
     # stability reruns
     subsets = []
     if stability:
-        fo = _folds_for(allc, cl_rec, cl_cycle, 0)
+        fo = _folds_for(allc, cl_rec, cl_cycle)
         subsets += [("cycles, half 1", allc[fo == 0]), ("cycles, half 2", allc[fo == 1])]
         if len(camp) >= 3:
             for i, lab in enumerate(rec["label"]):
