@@ -174,8 +174,11 @@ def fit(cg: ClusterGram, clusters, cols, *, robust: bool = False, Gsum=None) -> 
         An, d = fac
         inv = np.linalg.pinv(An) / np.outer(d, d)
         y = G.shape[0] - 1
-        Gc = cg.G[clusters]
-        u = Gc[:, cols, y] - np.einsum("cij,j->ci", Gc[:, cols][:, :, cols], phi)
+        cl = np.asarray(clusters)
+        # only the (cluster, J, J) and (cluster, J, y) blocks: copying every cluster's whole
+        # Gram (hundreds of columns) dominated the selection's time
+        u = cg.G[np.ix_(cl, cols, [y])][..., 0] - np.einsum(
+            "cij,j->ci", cg.G[np.ix_(cl, cols, cols)], phi)
         C = len(clusters)
         meat = u.T @ u * (C / max(C - 1, 1))
         cov = inv @ meat @ inv
