@@ -183,10 +183,10 @@ def test_actuator_and_campaign_validation():
         Campaign((a, b))
 
 
-def test_cli_diagnoses_a_manifest_of_measured_files(tmp_path):
+def test_cli_diagnoses_a_manifest_of_measured_files(tmp_path, capsys):
     import json
-    import subprocess
-    import sys
+
+    from ppamsafety.cli import main
 
     camp = synthesize_cylinder({"coulomb": 4.0, "coulomb_pressure": 6e-6}, seed=5,
                                pressures=(2e5, 5e5), cycles=4)
@@ -196,18 +196,14 @@ def test_cli_diagnoses_a_manifest_of_measured_files(tmp_path):
         lines += ["[[records]]", f'file = "r{i}.csv"', 'format = "measured"', ""]
     (tmp_path / "c.toml").write_text("\n".join(lines))
     out = tmp_path / "diag"
-    res = subprocess.run([sys.executable, "-m", "ppamsafety.cli", "diagnose",
-                          str(tmp_path / "c.toml"), "--out", str(out)],
-                         capture_output=True, text=True, timeout=600)
-    assert res.returncode == 0, res.stderr
-    assert "effect coulomb" in res.stdout
+    assert main(["diagnose", str(tmp_path / "c.toml"), "--out", str(out)]) == 0
+    assert "effect coulomb" in capsys.readouterr().out
     d = json.loads((out / "diagnosis.json").read_text())
     assert {"confounded", "records"} <= set(d) and len(d["records"]) == 2
     assert d["records"][1]["pressure_Pa"] == pytest.approx(5e5)
     assert (out / "diagnosis_replay.png").is_file()
     bad = tmp_path / "bad.toml"
     bad.write_text('[[records]]\nfile = "r0.csv"\nformat = "measured"\nspeed = 3\n')
-    res = subprocess.run([sys.executable, "-m", "ppamsafety.cli", "diagnose", str(bad),
-                          "--out", str(tmp_path / "d2")], capture_output=True, text=True,
-                         timeout=600)
-    assert res.returncode == 2 and "unknown key(s) ['speed']" in res.stderr
+    assert main(["diagnose", str(bad), "--out", str(tmp_path / "d2")]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("ppamsafety: error:") and "unknown key(s) ['speed']" in err
