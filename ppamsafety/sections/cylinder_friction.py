@@ -233,11 +233,13 @@ def render(study: BenchCaseStudy) -> Section:
         "**Noise.** The residual is judged against the *repeatability*: the scatter of F - p A "
         "about its own mean at the same rod position and direction within a record, what no "
         "model of the motion's state can remove.  The *sensor noise* (force and pressure "
-        "sensors, per sample) is 3-7 x smaller; against it nothing would ever be explained.",
+        "sensors, per sample) is 3-7 x smaller; against it nothing would ever be explained.  "
+        "`rho_left_out`: the campaign's model refitted without that record predicts it "
+        "(leave-one-record-out, the test of the pressure law).",
         "",
         markdown_table(study.records[["seal", "label", "samples", "strokes", "sigma_sensor_N",
                                       "sigma_repeat_N", "rms_before_N", "rms_after_N",
-                                      "rho_after"]]),
+                                      "rho_after", "rho_left_out"]]),
         "",
         "Named effects (confidence: high/low; stability = share of the reruns on half the "
         "cycles and without each record that select it; held-out gain in repeatability "

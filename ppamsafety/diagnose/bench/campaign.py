@@ -82,7 +82,7 @@ from ...data.measured import MeasuredData
 from ..core.criteria import Step
 from ..core.noise import interpolation_sigma
 from . import friction as fr
-from .gram import ClusterGram, cv_mse, fit, wald
+from .gram import ClusterGram, cv_mse, fit, sse_of, wald
 from .result import BenchDiagnosis
 from .strokes import stroke_state
 
@@ -639,6 +639,17 @@ def diagnose_campaign(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
         curves[row["label"]] = {"t": dr["t"].to_numpy(), "x": dr["x"].to_numpy(),
                                 "s": dr["s"].to_numpy(), "before": dr["r"].to_numpy(),
                                 "after": after, "used": used}
+    # leave-one-record-out: the final model refitted without record i predicts record i
+    # (the honest test of a pressure law; NaN for a single record)
+    for i, row in enumerate(rrows):
+        tr_, te_ = allc[cl_rec != i], allc[cl_rec == i]
+        if len(camp) < 2 or te_.size == 0 or tr_.size == 0:
+            row["rho_left_out"] = math.nan
+            continue
+        ft = fit(cg, tr_, cols)
+        Gte = cg.G[te_].sum(axis=0)
+        sse_te = sse_of(Gte, cols, ft.phi) if cols.size else float(Gte[-1, -1])
+        row["rho_left_out"] = math.sqrt(max(sse_te, 0.0) / float(cg.n[te_].sum()))
     records = pd.DataFrame(rrows)
     where = _where(u, e_all_norm, rho_max)
     if unexplained:

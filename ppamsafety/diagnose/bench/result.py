@@ -38,7 +38,9 @@ class BenchDiagnosis(Diagnosis):
     records : pandas.DataFrame
         One row per record: ``label``, ``pressure_Pa``, ``samples``,
         ``strokes``, ``sigma_sensor_N``, ``sigma_repeat_N``, ``rms_before_N``,
-        ``rms_after_N``, ``rho_after`` (residual over the repeatability).
+        ``rms_after_N``, ``rho_after`` (residual over the repeatability) and
+        ``rho_left_out`` (the same for the model refitted without this record:
+        leave-one-record-out, the test of the pressure law).
     curves : dict
         Per record (label -> dict of arrays ``x``, ``s``, ``t``, ``before``,
         ``after``, ``used``) for the figures.
