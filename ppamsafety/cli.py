@@ -171,14 +171,17 @@ def _cmd_sweep(args) -> int:
 
 def _cmd_diagnose(args) -> int:
 
-    from .data import MeasuredDataWarning, load_measured
+    from .data import MeasuredDataWarning, load_campaign, load_measured
     from .diagnose import diagnose
 
     inspect_output_folder(args.out, overwrite=args.overwrite)   # fail before computing
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", MeasuredDataWarning)    # kept in data.notes
-        data = load_measured(args.data, allow_gaps=args.allow_gaps,
-                             strict_units=not args.loose_units)
+        if str(args.data).lower().endswith(".toml"):            # a bench campaign manifest
+            data = load_campaign(args.data)
+        else:
+            data = load_measured(args.data, allow_gaps=args.allow_gaps,
+                                 strict_units=not args.loose_units)
     dg = diagnose(data, experiment=args.experiment, alpha=args.alpha, rho_max=args.rho_max,
                   block_seconds=args.block, seed=args.seed, bootstrap=args.bootstrap)
     dg.write(args.out, overwrite=args.overwrite)
@@ -359,7 +362,8 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
                                    "'unexplained' (docs/diagnose.md). Exit code 0 whenever the "
                                    "analysis ran.",
                        epilog=_EPILOG)
-    g.add_argument("data", metavar="DATA", help="measured data file (.csv or .parquet)")
+    g.add_argument("data", metavar="DATA", help="measured data file (.csv or .parquet), or a "
+                   "bench campaign manifest (.toml, docs/measured_data.md)")
     g.add_argument("--out", required=True, metavar="DIR",
                    help="output folder for diagnosis.json, diagnosis.md and figures")
     g.add_argument("--experiment", choices=("open-loop", "closed-loop", "static-sawtooth",

@@ -13,8 +13,14 @@ Columns (SI units only; the package converts nothing):
   pressures ``p1..p4`` [Pa], valve set values ``u1..u4`` [Pa], muscle forces
   ``F1..F4`` [N], closed-loop set angles ``q1_d, q2_d`` [rad];
 * single actuator on a tester (``kind = "actuator"``): ``force`` [N],
-  ``pressure`` [Pa gauge], ``contraction`` [-] or ``position`` [m] (the
-  actuator's length; eps = (l0 - position)/l0 with ``force_law.l0``).
+  ``pressure`` [Pa gauge], ``contraction`` [-] or ``position`` [m] (a muscle:
+  its length, eps = (l0 - position)/l0 with ``force_law.l0``; a cylinder,
+  ``[actuator] type = "cylinder"``: the rod position, growing as the
+  pressure extends the rod).
+
+Raw bench files (other units, signs, offsets, no header) are converted by
+:mod:`ppamsafety.data.bench_import`; several records of one actuator form a
+campaign (:mod:`ppamsafety.data.campaign`).
 
 Loading validates everything (see :class:`MeasuredData`); bad data raise
 :class:`MeasuredDataError` (a ``ValueError``) naming the file, the column and
@@ -73,7 +79,10 @@ DT_TOLERANCE = 0.05
 GAP_FACTOR = 1.5
 
 _META_KEYS = ("format_version", "kind", "experiment", "description", "source", "sample_rate",
-              "units", "controller", "reference", "force_law")
+              "units", "controller", "reference", "force_law", "actuator", "gap_factor",
+              "import", "record")
+#: Actuator types of ``[actuator] type`` (default "muscle").
+ACTUATOR_TYPES = ("muscle", "cylinder")
 #: Declared units that are not SI, with the factor to SI and the SI unit.
 _NON_SI = {"bar": (1e5, "Pa"), "mbar": (100.0, "Pa"), "kpa": (1e3, "Pa"), "mpa": (1e6, "Pa"),
            "psi": (6894.757, "Pa"), "deg": (math.pi / 180, "rad"),
@@ -197,6 +206,14 @@ def _check_meta(meta: dict, src: str, columns, warn) -> dict:
         r = _finite_number(f"{src}: metadata sample_rate [Hz]", meta["sample_rate"])
         if r <= 0:
             raise MeasuredDataError(f"{src}: metadata sample_rate = {r:g} Hz must be > 0")
+    if "gap_factor" in meta:
+        g = _finite_number(f"{src}: metadata gap_factor", meta["gap_factor"])
+        if not g > 1.0:
+            raise MeasuredDataError(f"{src}: metadata gap_factor = {g:g} must be > 1 (an "
+                                    f"interval longer than gap_factor x the median is a gap)")
+    for key in ("import", "record"):
+        if key in meta and not isinstance(meta[key], dict):
+            raise MeasuredDataError(f"{src}: metadata {key} must be a table, got {meta[key]!r}")
     if "units" in meta:
         _check_units(meta["units"], src, kind)
     # closed loop: controller and reference
@@ -225,10 +242,16 @@ def _check_meta(meta: dict, src: str, columns, warn) -> dict:
             if key in meta:
                 warn(f"{src}: metadata '{key}' is used only for closed-loop records (kept)")
     if kind == "actuator":
-        _check_force_law(meta.get("force_law"), src, "position" in columns)
+        atype = _check_actuator(meta.get("actuator"), src)
+        _check_force_law(meta.get("force_law"), src, "position" in columns and atype == "muscle")
         _stray(meta["force_law"], ("a", "l0", "name"), "force_law", src, warn)
-    elif "force_law" in meta:
-        warn(f"{src}: metadata 'force_law' is used only for kind = 'actuator' (kept)")
+        if atype == "cylinder":
+            _check_cylinder_law(meta, src, "contraction" in columns)
+            _stray(meta["actuator"], ("type", "bore", "name"), "actuator", src, warn)
+    else:
+        for key in ("force_law", "actuator"):
+            if key in meta:
+                warn(f"{src}: metadata '{key}' is used only for kind = 'actuator' (kept)")
     unknown = [k for k in meta if k not in _META_KEYS]
     if unknown:
         warn(f"{src}: unknown metadata key(s) {', '.join(map(repr, unknown))} (kept)")
@@ -291,6 +314,43 @@ def _check_controller(ctrl, src):
         vals = g if isinstance(g, list) else [g]
         for v in vals:
             _finite_number(f"{src}: controller.gains.{k}", v)
+
+
+def _check_actuator(act, src) -> str:
+    """The ``[actuator]`` table (optional; default a muscle); returns its type."""
+    if act is None:
+        return "muscle"
+    if not isinstance(act, dict):
+        raise MeasuredDataError(f"{src}: metadata actuator must be a table (type = "
+                                f"{' | '.join(map(repr, ACTUATOR_TYPES))}), got {act!r}")
+    atype = act.get("type", "muscle")
+    if atype not in ACTUATOR_TYPES:
+        raise MeasuredDataError(f"{src}: actuator.type = {atype!r} is not one of "
+                                f"{', '.join(map(repr, ACTUATOR_TYPES))}")
+    if "bore" in act:
+        b = _finite_number(f"{src}: actuator.bore [m]", act["bore"])
+        if not 0 < b <= 1.0:
+            raise MeasuredDataError(f"{src}: actuator.bore = {b:g} m is outside (0, 1] m"
+                                    f"{' (mm? give metres)' if b > 1 else ''}")
+    return atype
+
+
+def _check_cylinder_law(meta, src, has_contraction):
+    """A cylinder's force law is F = p A: a = [0, A, 0, 0, 0] with A > 0 (and the bore's area)."""
+    a = meta["force_law"]["a"]
+    if a[1] <= 0 or any(a[j] != 0 for j in (0, 2, 3, 4)):
+        raise MeasuredDataError(f"{src}: a cylinder's force law is F = p A: force_law.a must be "
+                                f"[0, A, 0, 0, 0] with A > 0 [m^2], got {a}")
+    bore = meta["actuator"].get("bore")
+    if bore is not None:
+        area = math.pi / 4 * float(bore) ** 2
+        if abs(a[1] - area) > 1e-6 * area:
+            raise MeasuredDataError(f"{src}: actuator.bore = {bore:g} m gives A = {area:.6g} m^2, "
+                                    f"but force_law.a[1] = {a[1]:.6g} m^2; give one or make them "
+                                    f"agree")
+    if has_contraction:
+        raise MeasuredDataError(f"{src}: a cylinder record gives its rod position in 'position' "
+                                f"[m], not a 'contraction'")
 
 
 def _check_force_law(law, src, has_position):
@@ -434,9 +494,21 @@ def _check_time(t: np.ndarray, meta: dict, exp: str, ctx: _Ctx, allow_gaps, orig
         return ((0, t.size),), (), math.nan
     med = float(np.median(d))
     uniform = exp in UNIFORM or "sample_rate" in meta
+    if "gap_factor" in meta and not uniform:
+        # declared: intervals longer than gap_factor x the median are known gaps of a
+        # jittered record (e.g. a software-timed logger); the record is split there
+        gap_idx = np.flatnonzero(d > float(meta["gap_factor"]) * med)
+        gaps = tuple((float(t[k]), float(t[k + 1])) for k in gap_idx)
+        if gaps:
+            listed = ", ".join(f"{a:.6g}..{b:.6g} s" for a, b in gaps[:5])
+            more = f" and {len(gaps) - 5} more" if len(gaps) > 5 else ""
+            warn(f"{ctx.src}: record split at {len(gaps)} gap(s) (intervals > gap_factor = "
+                 f"{float(meta['gap_factor']):g} x the median {med:.6g} s): {listed}{more}")
+        bounds = [0, *(int(k) + 1 for k in gap_idx), t.size]
+        return tuple((bounds[i], bounds[i + 1]) for i in range(len(bounds) - 1)), gaps, med
     if not uniform:
         return ((0, t.size),), (), med
-    gap_idx = np.flatnonzero(d > GAP_FACTOR * med)
+    gap_idx = np.flatnonzero(d > float(meta.get("gap_factor", GAP_FACTOR)) * med)
     regular = np.setdiff1d(np.arange(d.size), gap_idx)
     dev = np.abs(d[regular] - med) / med
     if dev.size and dev.max() > DT_TOLERANCE:
@@ -664,11 +736,21 @@ class MeasuredData:
         """The gap-free pieces as DataFrames (copies)."""
         return [self.frame.iloc[a:b].reset_index(drop=True) for a, b in self.segments]
 
+    @property
+    def actuator_type(self) -> str:
+        """``"muscle"`` or ``"cylinder"`` (``[actuator] type``) for an actuator record, else ``""``."""
+        if self.kind != "actuator":
+            return ""
+        return self.meta.get("actuator", {}).get("type", "muscle")
+
     def contraction(self) -> np.ndarray:
-        """Contraction of an actuator record [-]: the column, or (l0 - position)/l0."""
+        """Contraction of a muscle record [-]: the column, or (l0 - position)/l0."""
         if self.kind != "actuator":
             raise ValueError(f"{self.source}: contraction() is for actuator records, this is "
                              f"kind = {self.kind!r}")
+        if self.actuator_type == "cylinder":
+            raise ValueError(f"{self.source}: a cylinder has no contraction; its rod position "
+                             f"is the column 'position' [m]")
         if self.has("contraction"):
             return self.column("contraction")
         l0 = float(self.meta["force_law"]["l0"])
@@ -680,6 +762,8 @@ class MeasuredData:
             else None
         if a is None:
             raise ValueError(f"{self.source}: nominal_force() is for actuator records")
+        if self.actuator_type == "cylinder":
+            return self.column("pressure") * a[1]
         e = self.contraction()
         if a[0] != 0.0 and np.any(e <= 0):
             raise ValueError(f"{self.source}: the force law has an a0/eps term but a contraction "
@@ -879,7 +963,7 @@ def load_measured(path, *, allow_gaps: bool = False, strict_units: bool = True) 
                         source=str(p), first_line=first)
 
 
-__all__ = ["FORMAT_VERSION", "KINDS", "EXPERIMENTS", "ALLOWED", "ARM_CHANNELS",
+__all__ = ["FORMAT_VERSION", "KINDS", "EXPERIMENTS", "ALLOWED", "ARM_CHANNELS", "ACTUATOR_TYPES",
            "ACTUATOR_CHANNELS", "MIN_ROWS", "DT_TOLERANCE", "GAP_FACTOR", "MeasuredData",
            "MeasuredDataError", "MeasuredDataWarning", "load_measured", "read_metadata",
            "dumps_toml"]

@@ -4,16 +4,21 @@ It checks the record and hands it to the pipeline of its kind:
 
 * an arm record (open loop, closed loop, static sawtooth) to
   :func:`ppamsafety.diagnose.arm.pipeline.diagnose_arm`;
-* an actuator record (one muscle or cylinder on a test bench) to
-  :func:`ppamsafety.diagnose.bench.pipeline.diagnose_actuator`.
+* an actuator record of a muscle on a test bench to
+  :func:`ppamsafety.diagnose.bench.pipeline.diagnose_actuator`;
+* a pneumatic cylinder on a bench -- one record or a campaign of several
+  (:class:`~ppamsafety.data.campaign.Campaign`) -- to
+  :func:`ppamsafety.diagnose.bench.campaign.diagnose_campaign`.
 
 Both return a :class:`~ppamsafety.diagnose.core.result.Diagnosis`.
 """
 
 from __future__ import annotations
 
+from ..data.campaign import Campaign
 from ..data.measured import MeasuredData
 from .arm.pipeline import diagnose_arm
+from .bench.campaign import diagnose_campaign
 from .bench.pipeline import diagnose_actuator
 from .core.result import HIGH_CONFIDENCE, JSON_NAME, SCHEMA_VERSION, Diagnosis
 
@@ -25,8 +30,10 @@ def diagnose(data, *, arm=None, candidates=None, block_seconds: float = 0.05,
 
     Parameters
     ----------
-    data : MeasuredData
-        The record (:func:`ppamsafety.data.load_measured`).  Arm records: open
+    data : MeasuredData or Campaign
+        The record (:func:`ppamsafety.data.load_measured`), or a bench campaign
+        (:func:`ppamsafety.data.load_campaign`; a cylinder record alone is a
+        campaign of one).  Arm records: open
         or closed loop with q, qd, p, u; or a static sawtooth (§3.5.1.6) with
         q, p (u and F1..F4 optional), see :mod:`ppamsafety.diagnose.arm.static`.
         An actuator record (``data.kind == "actuator"``, a test bench) is
@@ -62,6 +69,9 @@ def diagnose(data, *, arm=None, candidates=None, block_seconds: float = 0.05,
     For an actuator record ``arm``, ``block_seconds``, ``seed`` and ``bootstrap``
     do not apply and its confidence is the BIC weight.
     """
+    if isinstance(data, Campaign) or (isinstance(data, MeasuredData)
+                                      and data.actuator_type == "cylinder"):
+        return diagnose_campaign(data, candidates=candidates, alpha=alpha, rho_max=rho_max)
     if isinstance(data, MeasuredData) and data.kind == "actuator":
         return diagnose_actuator(data, candidates=candidates, alpha=alpha, rho_max=rho_max,
                                  experiment=experiment)

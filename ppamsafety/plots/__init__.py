@@ -2,7 +2,7 @@
 
 One module per subject: :mod:`.figure` (a new Figure, saving it as PNG), :mod:`.design`,
 :mod:`.control`, :mod:`.identify`, :mod:`.impact`, :mod:`.iso`, :mod:`.reaction`,
-:mod:`.interaction`, :mod:`.effects`, :mod:`.diagnose`.
+:mod:`.interaction`, :mod:`.effects`, :mod:`.diagnose`, :mod:`.bench`.
 
 The layer rule (``docs/architecture.md``): these functions take result objects,
 DataFrames and arrays by duck typing and import nothing of the packages that

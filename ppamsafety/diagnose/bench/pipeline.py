@@ -148,6 +148,10 @@ def actuator_record(data) -> tuple:
         raise ValueError(f"{data.source}: data.kind = {data.kind!r}; the test-bench diagnosis "
                          f"needs kind = 'actuator'")
 
+    if data.actuator_type == "cylinder":
+        raise ValueError(f"{data.source}: a cylinder record is diagnosed by "
+                         f"ppamsafety.diagnose.bench.campaign.diagnose_campaign (diagnose() "
+                         f"routes it there); this pipeline is for muscles")
     a0, b0, notes = longest_segment(data)
     n = b0 - a0
     if n < MIN_SAMPLES:
@@ -615,6 +619,13 @@ def diagnose_actuator(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
                      f"{PRESSURE_LEVELS_RATIO}): a refitted force law cannot be told from a "
                      "force- or pressure-sensor offset, so force_law_refit is reported with low "
                      "confidence; record several pressures to separate them")
+    if "force_law_refit" in fit.names:
+        # issue 19 item 3: a force-sensor gain and a pressure-sensor gain scale the force the
+        # same way as a refitted law's level; the record cannot tell them apart
+        notes.append("force_law_refit: the part of the refit that scales the whole force "
+                     "function (p f(eps) times a constant) is confounded with a force-sensor "
+                     "gain and a pressure-sensor gain; to separate them: a dead-weight check of "
+                     "the load cell and a reference gauge on the pressure port")
     for e in effects:
         sl = fit.slices[e["name"]]
         moved = exts[e["name"]].moved(fit.phi[sl], fit.cov[sl, sl])
