@@ -9,7 +9,9 @@ Modules (one concept each):
   (fig. 3.12) and its least-squares line W_fit;
 * :mod:`.force` -- eps_s (3.34), the force factor of (3.35), delta constants;
 * :mod:`.tensile` -- a simulated tensile test (§3.6.1) and the least-squares
-  fit of delta.
+  fit of delta;
+* :mod:`.dahl` -- Dahl presliding friction along a sampled path (the friction
+  hysteresis of the synthetic cylinder campaigns).
 """
 
 from .everett import C_THESIS, D_THESIS, THESIS_WEIGHT, PreisachWeight, everett

@@ -14,7 +14,7 @@ together a :class:`~ppamsafety.data.campaign.Campaign`.
 
 Force on the load cell: ``F = p A_true - phi`` with ``phi`` the friction
 opposing the motion, integrated along the path by the Dahl recursion
-(:func:`._dahl.dahl_path`): after a reversal it moves from one side to the
+(:func:`ppamsafety.hysteresis.dahl.dahl_path`): after a reversal it moves from one side to the
 other over ``presliding`` metres of travel (1 um without the effect: an
 abrupt Coulomb step), toward the steady level
 
@@ -50,7 +50,7 @@ import pandas as pd
 from ..._validation import check_bool, check_choice, check_int, check_range, check_vector
 from ...data.campaign import Campaign
 from ...data.measured import MeasuredData, MeasuredDataWarning
-from ._dahl import dahl_path
+from ...hysteresis.dahl import dahl_path
 
 EFFECTS = ("coulomb", "coulomb_pressure", "coulomb_pressure2", "viscous", "stribeck",
            "stribeck_speed", "presliding", "stroke_profile", "stroke_profile_pressure",

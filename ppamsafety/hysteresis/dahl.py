@@ -1,8 +1,10 @@
-"""Compiled kernel of the cylinder generator: the Dahl friction recursion along a sampled path.
+"""Dahl presliding friction: the rate-independent friction hysteresis along a sampled path.
 
-Kept alone (numpy and ``_jit`` only) so that the compiled-kernel cache key
-(:mod:`ppamsafety._sourcehash`) depends on this file and not on the generator's
-other imports.
+The compiled recursion behind the synthetic cylinder campaigns
+(:mod:`ppamsafety.diagnose.bench.cylinder_synth`). It is physics, not statistics,
+so it lives here, below the diagnosis: the compiled-kernel cache key
+(:mod:`ppamsafety._sourcehash`) then depends on this file and not on the
+diagnosis package it serves.
 """
 
 from __future__ import annotations
@@ -11,7 +13,7 @@ import math
 
 import numpy as np
 
-from ..._jit import kernel
+from .._jit import kernel
 
 
 @kernel
