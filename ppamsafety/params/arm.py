@@ -12,6 +12,7 @@ pneumatics                §3.3 + calibrated mean pressures (§6.3.3)
 links (plant)             physically consistent reconciliation
 model (controllers)       identified Table 3.5 (dynamic, with friction)
 model_gravity             identified Table 3.1 (static gravity)
+sensors                   §2.4.5, Table 3.2 (encoders, timing board, noise)
 ========================  ==============================================
 
 The plant is what the simulator integrates; ``model`` and ``model_gravity``
@@ -21,18 +22,19 @@ sliding-mode controller's feedback linearisation).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from functools import lru_cache
 
 import numpy as np
 
-from .._validation import check_instance, check_range
+from .._validation import check_instance, check_range, check_str
 from .effects import Effects
 from .geometry import GROUP_FIELDS, ArmGeometry, group_length_range, thesis_geometry
 from .inertia import (BaseParameters, LinkInertia, derive_physical_links, identified_dynamic,
                       identified_static_gravity)
 from .muscles import MAX_CONTRACTION, MuscleSet, thesis_muscles
 from .pneumatics import PneumaticParams, thesis_pneumatics
+from .sensors import SensorHardware
 from .valves import ValveSet, thesis_valves
 
 
@@ -64,6 +66,17 @@ class ArmParameters:
         polytropic exponent), all off by default.  Read only by the plant
         truth row ``plant.packing.pack(arm)``, never by the controllers' views
         (see :mod:`ppamsafety.params.effects`).
+    sensors : SensorHardware
+        The joint sensors the arm carries (encoders, timing board, noise
+        variances; default the thesis hardware, §2.4.5, Table 3.2).  The
+        simulated measurement is ``SensorConfig.for_arm(arm)``.
+    name : str
+        A label (``"thesis arm"``; an arm file's ``[arm] name``).  Not compared:
+        two arms with the same physics are equal whatever their names.
+    sources : tuple of (str, str)
+        Provenance per part of the arm, ``(table, text)`` pairs such as
+        ``("muscles.group1", "Table B.1")`` (an arm file's ``source`` keys).
+        Not compared, like ``name``; read with :meth:`source`.
 
     Notes
     -----
@@ -85,6 +98,9 @@ class ArmParameters:
     gravity: float = 9.81
     friction_velocity: float = 0.01
     effects: Effects = Effects()
+    sensors: SensorHardware = SensorHardware()
+    name: str = field(default="", compare=False)
+    sources: tuple = field(default=(), compare=False)
 
     def __post_init__(self):
         for name, cls in (("geometry", ArmGeometry), ("muscles", MuscleSet), ("valves", ValveSet),
@@ -98,6 +114,9 @@ class ArmParameters:
         _check_muscles_fit(self.geometry, self.muscles)
         _check_plant_inertia(self.geometry, self.links)
         check_instance("ArmParameters.effects", self.effects, Effects)
+        check_instance("ArmParameters.sensors", self.sensors, SensorHardware)
+        check_str("ArmParameters.name", self.name)
+        object.__setattr__(self, "sources", _check_sources(self.sources))
 
     def replace(self, **changes) -> "ArmParameters":
         """Return a copy with some fields changed (validated again).
@@ -111,10 +130,53 @@ class ArmParameters:
         """
         return replace(self, **changes)
 
+    def source(self, part: str) -> str:
+        """The provenance of one part of the arm ("" if none is given).
+
+        Parameters
+        ----------
+        part : str
+            A table of the arm file, e.g. ``"geometry"``, ``"muscles.group1"``,
+            ``"links"``.
+        """
+        check_str("part", part)
+        return dict(self.sources).get(part, "")
+
     @property
     def plant_base(self) -> BaseParameters:
         """Base parameters (B.5) of the physical plant links."""
         return self.links.base_parameters(self.geometry.L1)
+
+
+#: The parts of an arm that carry a source (the tables of an arm file; "arm" is its top
+#: level), in the order ``ArmParameters.sources`` keeps them.
+SOURCE_PARTS = ("arm", "geometry", "muscles", *(f"muscles.group{k}" for k in range(1, 5)),
+                "valves", *(f"valves.valve{k}" for k in range(1, 5)), "pneumatics", "links",
+                "model", "model_gravity", "effects", "sensors")
+
+
+def _check_sources(sources) -> tuple:
+    """``ArmParameters.sources`` as (str, str) pairs of :data:`SOURCE_PARTS`, in that order."""
+    if isinstance(sources, dict):
+        sources = tuple(sources.items())
+    if isinstance(sources, (str, bytes)) or not isinstance(sources, (tuple, list)):
+        raise TypeError(f"ArmParameters.sources must be a tuple of (part, text) pairs, "
+                        f"got {sources!r:.80}")
+    out, seen = [], set()
+    for i, item in enumerate(sources):
+        if not (isinstance(item, (tuple, list)) and len(item) == 2
+                and all(isinstance(x, str) for x in item)):
+            raise TypeError(f"ArmParameters.sources[{i}] must be a (part, text) pair of "
+                            f"strings, got {item!r:.80}")
+        if item[0] not in SOURCE_PARTS:
+            raise ValueError(f"ArmParameters.sources[{i}]: unknown part {item[0]!r}; allowed: "
+                             f"{list(SOURCE_PARTS)}")
+        if item[0] in seen:
+            raise ValueError(f"ArmParameters.sources names the part {item[0]!r} twice")
+        seen.add(item[0])
+        if item[1]:
+            out.append((item[0], item[1]))
+    return tuple(sorted(out, key=lambda kv: SOURCE_PARTS.index(kv[0])))
 
 
 #: Smallest admissible relative determinant det H / (H11 H22) of the plant's inertia
@@ -185,6 +247,33 @@ def _check_plant_inertia(geometry: ArmGeometry, links: LinkInertia) -> None:
             f"{MIN_INERTIA_DET_RATIO:g}); check LinkInertia.IG1/IG2 (too small for the masses?)")
 
 
+#: Provenance of each part of the thesis arm (the ``source`` keys of its arm file).
+THESIS_SOURCES = (
+    ("arm", "M. Van Damme, Towards Safe Control of a Compliant Manipulator Powered by "
+            "Pneumatic Muscles (PhD thesis, VUB, 2009); gravity 9.81 m/s^2; smooth Coulomb "
+            "friction scale below the encoder dead band (§2.4.5.3)"),
+    ("geometry", "thesis Table 2.1 (attachment points), Table 2.2 (load point, link "
+                 "lengths), eqs. (2.6)-(2.7) (working area)"),
+    ("muscles", "thesis §2.3.2.4 (design contraction limits 5 % and 30 %)"),
+    ("muscles.group1", "thesis §2.3.3.1 (4 muscles, l0 = 6 cm, l0/R = 6), Table B.1"),
+    ("muscles.group2", "thesis §2.3.3.1 (3 muscles, l0 = 6 cm, l0/R = 6), Table B.1"),
+    ("muscles.group3", "thesis §2.3.3.1 (4 muscles, l0 = 6 cm, l0/R = 6), Table B.1"),
+    ("muscles.group4", "thesis §2.3.3.1 (3 muscles, l0 = 6 cm, l0/R = 6), Table B.1"),
+    ("valves", "thesis Table B.2 (static error (3.12)); time constants chosen from §3.5.2, "
+               "§4.2.5 (T = 0.06 s for 4 muscles, 0.045 s for 3)"),
+    ("pneumatics", "thesis §3.3 (n = 1.4, P_atm), §2.2.2 (3 bar); mean pressures calibrated "
+                   "to K = (43, 27) Nm/rad at q = (50, -80) deg (§6.3.3)"),
+    ("links", "physically consistent reconciliation of §6.3.3 masses, Table 2.2 CAD centres "
+              "of gravity and the identified Tables 3.1/3.5 (params.inertia); slender-bar "
+              "inertias; friction Table 3.5"),
+    ("model", "thesis Table 3.5 (dynamic identification with friction)"),
+    ("model_gravity", "thesis Table 3.1 (static gravity identification); inertias of "
+                      "Table 3.5"),
+    ("sensors", "thesis §2.4.5 (HEDM-6540 encoders x4, 2 MHz 16-bit timing board, 0.025 "
+                "rad/s dead band), Table 3.2 (noise variances)"),
+)
+
+
 @lru_cache(maxsize=1)
 def thesis_arm() -> ArmParameters:
     """The thesis arm with a physically consistent plant (see module doc)."""
@@ -193,7 +282,23 @@ def thesis_arm() -> ArmParameters:
         geometry=geometry, muscles=thesis_muscles(), valves=thesis_valves(),
         pneumatics=thesis_pneumatics(),
         links=derive_physical_links(L1=geometry.L1).links,
-        model=identified_dynamic(), model_gravity=identified_static_gravity())
+        model=identified_dynamic(), model_gravity=identified_static_gravity(),
+        name="thesis arm", sources=THESIS_SOURCES)
 
 
-__all__ = ["ArmParameters", "thesis_arm"]
+def is_thesis_arm(arm) -> bool:
+    """True if ``arm`` has the physics of :func:`thesis_arm` (names and sources aside).
+
+    The report quotes thesis values and ratios only for such an arm.
+
+    Parameters
+    ----------
+    arm : ArmParameters
+        Any arm.
+    """
+    check_instance("arm", arm, ArmParameters)
+    return arm == thesis_arm()
+
+
+__all__ = ["ArmParameters", "thesis_arm", "is_thesis_arm", "THESIS_SOURCES",
+           "SOURCE_PARTS"]
