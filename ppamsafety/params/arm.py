@@ -28,6 +28,7 @@ from functools import lru_cache
 import numpy as np
 
 from .._validation import check_instance, check_range, check_str
+from . import arm_file
 from .effects import Effects
 from .geometry import GROUP_FIELDS, ArmGeometry, group_length_range, thesis_geometry
 from .inertia import (BaseParameters, LinkInertia, derive_physical_links, identified_dynamic,
@@ -129,6 +130,70 @@ class ArmParameters:
             constructed object.
         """
         return replace(self, **changes)
+
+    def to_toml(self, *, comments: bool = True) -> str:
+        """The arm as the TOML text of an arm file (exact round trip; ``docs/arm_files.md``).
+
+        Parameters
+        ----------
+        comments : bool
+            Comment every key (what it is, its range) and list the effects that are
+            off as commented-out examples: a template to edit.
+
+        Returns
+        -------
+        str
+            ``ArmParameters.from_toml(arm.to_toml()) == arm``, names and sources included.
+        """
+        return arm_file.arm_to_toml(self, comments=comments)
+
+    @classmethod
+    def from_toml(cls, text: str, *, where: str = "") -> "ArmParameters":
+        """An arm from the TOML text of an arm file, validated.
+
+        Parameters
+        ----------
+        text : str
+            TOML text (``docs/arm_files.md``).
+        where : str
+            How to name the file in error messages (its path).
+
+        Returns
+        -------
+        ArmParameters
+
+        Raises
+        ------
+        ppamsafety.params.arm_file.ArmFileError
+            A ``ValueError`` naming the dotted key, its value and what is allowed
+            (``muscles.group3.l0 = -0.1 m: must be in (0, 1] m``).
+        """
+        return arm_file.arm_from_toml(text, cls=cls, where=where)
+
+    @classmethod
+    def from_file(cls, path) -> "ArmParameters":
+        """An arm from an arm file, validated (:func:`load_arm`).
+
+        Parameters
+        ----------
+        path : path-like
+            The ``.toml`` file.
+
+        Returns
+        -------
+        ArmParameters
+        """
+        return arm_file.read_arm_file(path, cls=cls)
+
+    def fingerprint(self) -> str:
+        """SHA-256 of the arm's canonical file text (:func:`~.arm_file.arm_fingerprint`).
+
+        Returns
+        -------
+        str
+            64 hex digits.
+        """
+        return arm_file.arm_fingerprint(self)
 
     def source(self, part: str) -> str:
         """The provenance of one part of the arm ("" if none is given).
@@ -286,6 +351,28 @@ def thesis_arm() -> ArmParameters:
         name="thesis arm", sources=THESIS_SOURCES)
 
 
+def load_arm(path) -> ArmParameters:
+    """Read and validate an arm file (``docs/arm_files.md``).
+
+    Parameters
+    ----------
+    path : path-like
+        The ``.toml`` file (``ppamsafety arm export`` writes a template).
+
+    Returns
+    -------
+    ArmParameters
+
+    Raises
+    ------
+    FileNotFoundError
+        If there is no such file.
+    ppamsafety.params.arm_file.ArmFileError
+        A ``ValueError``: ``"<path>: <dotted key> = <value>: <what is allowed>"``.
+    """
+    return ArmParameters.from_file(path)
+
+
 def is_thesis_arm(arm) -> bool:
     """True if ``arm`` has the physics of :func:`thesis_arm` (names and sources aside).
 
@@ -300,5 +387,5 @@ def is_thesis_arm(arm) -> bool:
     return arm == thesis_arm()
 
 
-__all__ = ["ArmParameters", "thesis_arm", "is_thesis_arm", "THESIS_SOURCES",
+__all__ = ["ArmParameters", "thesis_arm", "is_thesis_arm", "load_arm", "THESIS_SOURCES",
            "SOURCE_PARTS"]

@@ -33,8 +33,9 @@ Rules
   and what is allowed, e.g. ``muscles.group3.l0 = -0.1 m: must be in (0, 1] m``.
 * ``[effects]`` is optional and lists only the effects that are on (a missing key is
   off); ``[sensors]`` is optional (default: the thesis hardware).
-* :func:`arm_to_toml` writes floats with their shortest exact representation, so
-  ``arm_from_toml(arm_to_toml(arm)) == arm``, names and sources included.
+* :func:`arm_to_toml` (``ArmParameters.to_toml``) writes floats with their shortest exact
+  representation, so ``ArmParameters.from_toml(arm.to_toml()) == arm``, names and sources
+  included.  :func:`ppamsafety.params.load_arm` reads a file.
 
 The same keys address parameters in sweeps: :func:`apply_arm_changes` sets
 ``"pneumatics.mean_pressure"``, ``"muscles.group1.count"``, ``"links.m2"``,
@@ -46,6 +47,8 @@ arm (stiffness, maximum load) is computed by the physics that owns it
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 import hashlib
 import math
 import re
@@ -56,7 +59,6 @@ from pathlib import Path
 import tomli_w
 
 from ..units import si_factor
-from .arm import ArmParameters
 from .effects import EffectKind, Effects
 from .geometry import ArmGeometry
 from .inertia import BaseParameters, LinkInertia
@@ -490,13 +492,23 @@ def _keys_of(cls_name: str, path: str, keys) -> dict:
     return {(cls_name, k.attr): _dot(path, k.key) for k in keys}
 
 
-def arm_from_dict(data: dict) -> ArmParameters:
+def _check_arm(arm) -> None:
+    """TypeError unless ``arm`` is an ArmParameters (duck-typed: this module sits below
+    :mod:`ppamsafety.params.arm`, which imports it for ``ArmParameters.to_toml``)."""
+    if type(arm).__name__ != "ArmParameters" or not hasattr(arm, "geometry"):
+        raise TypeError(f"arm must be an ArmParameters, got {type(arm).__name__}")
+
+
+def arm_from_dict(data: dict, *, cls):
     """Build and validate an arm from the parsed TOML of an arm file.
 
     Parameters
     ----------
     data : dict
         ``tomllib.loads(text)`` of an arm file (see the module docstring).
+    cls : type
+        :class:`~ppamsafety.params.ArmParameters` (``ArmParameters.from_toml`` passes
+        itself).
 
     Returns
     -------
@@ -591,16 +603,18 @@ def arm_from_dict(data: dict) -> ArmParameters:
     kw = dict(geometry=geometry, muscles=muscles, valves=ValveSet(tuple(valves)),
               pneumatics=pneumatics, links=links, model=model, model_gravity=model_gravity,
               effects=effects, sensors=sensors, name=name, sources=tuple(sources), **top)
-    return _build(ArmParameters, kw, _keys_of("ArmParameters", "", ROOT_KEYS))
+    return _build(cls, kw, _keys_of("ArmParameters", "", ROOT_KEYS))
 
 
-def arm_from_toml(text: str, *, where: str = "") -> ArmParameters:
+def arm_from_toml(text: str, *, cls, where: str = ""):
     """Parse and validate the TOML text of an arm file.
 
     Parameters
     ----------
     text : str
         TOML text (see the module docstring).
+    cls : type
+        :class:`~ppamsafety.params.ArmParameters`.
     where : str
         How to name the file in error messages (its path).
 
@@ -620,18 +634,20 @@ def arm_from_toml(text: str, *, where: str = "") -> ArmParameters:
     except tomllib.TOMLDecodeError as exc:
         raise _err(where, f"not valid TOML ({exc})") from None
     try:
-        return arm_from_dict(data)
+        return arm_from_dict(data, cls=cls)
     except ArmFileError as exc:
         raise _err(where, str(exc)) from None
 
 
-def load_arm(path) -> ArmParameters:
-    """Read and validate an arm file.
+def read_arm_file(path, *, cls):
+    """Read and validate an arm file (:func:`ppamsafety.params.load_arm` is the front door).
 
     Parameters
     ----------
     path : path-like
         The ``.toml`` file.
+    cls : type
+        :class:`~ppamsafety.params.ArmParameters`.
 
     Returns
     -------
@@ -644,7 +660,7 @@ def load_arm(path) -> ArmParameters:
         text = p.read_text(encoding="utf-8")
     except UnicodeDecodeError as exc:
         raise _err(str(p), f"not UTF-8 text ({exc})") from None
-    return arm_from_toml(text, where=str(p))
+    return arm_from_toml(text, cls=cls, where=str(p))
 
 
 # ----------------------------------------------------------------------------- writing
@@ -672,10 +688,10 @@ def _line(key: Key, v, comments: bool, *, commented: bool = False) -> str:
     return text
 
 
-def arm_to_dict(arm: ArmParameters) -> dict:
+def arm_to_dict(arm) -> dict:
     """The arm as the nested dict of its arm file (SI values, ``{value, unit}`` tables).
 
-    ``arm_from_dict(arm_to_dict(arm)) == arm``.  Effects that are off are left out.
+    ``ArmParameters.from_dict(arm_to_dict(arm)) == arm``.  Effects that are off are left out.
 
     Parameters
     ----------
@@ -686,8 +702,7 @@ def arm_to_dict(arm: ArmParameters) -> dict:
     -------
     dict
     """
-    if not isinstance(arm, ArmParameters):
-        raise TypeError(f"arm must be an ArmParameters, got {type(arm).__name__}")
+    _check_arm(arm)
     src = dict(arm.sources)
 
     def table(path, obj, keys, *, skip_default=None):
@@ -728,11 +743,11 @@ def arm_to_dict(arm: ArmParameters) -> dict:
     return out
 
 
-def arm_to_toml(arm: ArmParameters, *, comments: bool = True) -> str:
+def arm_to_toml(arm, *, comments: bool = True) -> str:
     """The TOML text of an arm file describing ``arm`` (see the module docstring).
 
-    Floats are written exactly, so ``arm_from_toml(arm_to_toml(arm)) == arm`` with the
-    same name and sources.
+    Floats are written exactly, so ``ArmParameters.from_toml(arm_to_toml(arm)) == arm``
+    with the same name and sources.
 
     Parameters
     ----------
@@ -805,7 +820,7 @@ def arm_to_toml(arm: ArmParameters, *, comments: bool = True) -> str:
     return "\n".join(lines) + "\n"
 
 
-def arm_fingerprint(arm: ArmParameters) -> str:
+def arm_fingerprint(arm) -> str:
     """SHA-256 of the arm's canonical file text (no comments): which arm a record came from.
 
     Two arms with the same parameters, names and sources have the same fingerprint.
@@ -850,6 +865,25 @@ def _resolve(path: str):
     return table, match, idx
 
 
+def arm_key(path: str) -> Key:
+    """The declaration (unit, kind, length) of a dotted arm parameter.
+
+    Parameters
+    ----------
+    path : str
+        ``"links.m2"``, ``"arm.pneumatics.mean_pressure"`` (the ``arm.`` of a sweep is
+        accepted), ``"effects.payload_mass"``; an index selects one entry.
+
+    Returns
+    -------
+    Key
+        For an indexed path, the key of one entry (``length`` 0).
+    """
+    path = path[4:] if isinstance(path, str) and path.startswith("arm.") else path
+    _, key, idx = _resolve(path)
+    return key if idx is None else Key(key.key, key.attr, key.unit, key.kind, 0, key.doc)
+
+
 def arm_parameter_paths() -> list:
     """Every dotted key an arm change or a sweep can set (``arm.`` omitted).
 
@@ -863,8 +897,29 @@ def arm_parameter_paths() -> list:
     return out
 
 
-def apply_arm_changes(arm: ArmParameters, changes) -> ArmParameters:
+_CLASS_OF = {"": "ArmParameters", "geometry": "ArmGeometry", "muscles": "MuscleSet",
+             "pneumatics": "PneumaticParams", "links": "LinkInertia", "model": "BaseParameters",
+             "model_gravity": "BaseParameters", "effects": "Effects", "sensors": "SensorHardware",
+             **{f"muscles.{g}": "MuscleGroup" for g in GROUPS},
+             **{f"valves.{v}": "Valve" for v in VALVES}}
+
+
+def _part(arm, table: str):
+    """The parameter object holding the keys of ``table``."""
+    if table == "":
+        return arm
+    if table.startswith("muscles.group"):
+        return arm.muscles.groups[int(table[-1]) - 1]
+    if table.startswith("valves.valve"):
+        return arm.valves.valves[int(table[-1]) - 1]
+    return getattr(arm, table)
+
+
+def apply_arm_changes(arm, changes):
     """A copy of ``arm`` with parameters set by their dotted keys, validated like a file.
+
+    Only the parts that change are rebuilt (and validated, with the whole arm's
+    consistency checks), so a sweep pays a fraction of a millisecond per case.
 
     Parameters
     ----------
@@ -889,52 +944,113 @@ def apply_arm_changes(arm: ArmParameters, changes) -> ArmParameters:
         Naming the dotted key (``arm.<key>`` as a sweep writes it is accepted), its
         value and what is allowed.
     """
-    if not isinstance(arm, ArmParameters):
-        raise TypeError(f"arm must be an ArmParameters, got {type(arm).__name__}")
+    _check_arm(arm)
     if not hasattr(changes, "items"):
         raise TypeError(f"changes must be a dict of dotted key -> value, got {changes!r:.80}")
     if not changes:
         return arm
-    d = arm_to_dict(arm)
+    by_table = {}
     for path, value in changes.items():
         path = path[4:] if isinstance(path, str) and path.startswith("arm.") else path
         table, key, idx = _resolve(path)
         dotted = f"arm.{path}"
-        parent = d
-        for part in table.split(".") if table else ():
-            parent = parent.setdefault(part, {})
         v = value
         if key.unit is not None and not isinstance(value, dict):
             v = {"value": value, "unit": key.unit}        # plain numbers are SI
+        kw = by_table.setdefault(table, {})
         if idx is not None:
-            cur = parent.get(key.key)
-            if cur is None:          # an effect that is off: its vector starts from ...
+            cur = kw.get(key.attr, getattr(_part(arm, table), key.attr))
+            if cur is None:          # an effect that is off has no entries to index
                 raise ArmFileError(f"{dotted}: set the whole list first (the effect "
                                    f"{key.key} is off in this arm)")
-            full = list(cur["value"] if isinstance(cur, dict) else cur)
-            one = read_value(dotted, Key(key.key, key.attr, key.unit, key.kind, 0), v)
-            full[idx] = one
-            parent[key.key] = full if key.unit is None else {"value": full, "unit": key.unit}
-            continue
-        si = read_value(dotted, key, v, broadcast=True)
-        if key.kind == "memory" and not isinstance(si, str):
-            si = [list(h) if isinstance(h, tuple) else h for h in si]
-        elif isinstance(si, tuple):
-            si = list(si)
-        parent[key.key] = si if key.unit is None else {"value": si, "unit": key.unit}
+            full = list(cur)
+            full[idx] = read_value(dotted, Key(key.key, key.attr, key.unit, key.kind, 0), v)
+            kw[key.attr] = tuple(full)
+        else:
+            kw[key.attr] = read_value(dotted, key, v, broadcast=True)
     try:
-        return arm_from_dict(d)
+        return _rebuild(arm, by_table)
     except ArmFileError as exc:
         msg = str(exc)
-        for path in changes:
-            p = path[4:] if path.startswith("arm.") else path
-            base = p.split("[")[0]
-            if msg.startswith(base):
+        if not msg.startswith("arm."):
+            base = msg.split(" ", 1)[0].split("[", 1)[0].rstrip(":")
+            if base in arm_parameter_paths():
                 msg = "arm." + msg
-                break
+            else:      # a consistency check of the whole arm: name what was changed
+                what = ", ".join(f"arm.{k[4:] if k.startswith('arm.') else k} = {_fmt(v)}"
+                                 for k, v in changes.items())
+                msg = f"{what}: {msg}"
         raise ArmFileError(msg) from None
 
 
+def _rebuild(arm, by_table: dict):
+    """``arm`` with the fields ``by_table[table]`` (attr -> SI value) replaced, validated."""
+    new = {}
+    for table, kw in by_table.items():
+        if table == "":
+            continue
+        obj = _part(arm, table)
+        new[table] = _build(functools.partial(dataclasses.replace, obj), kw,
+                            _keys_of(_CLASS_OF[table], table, TABLES[table]))
+    top = dict(by_table.get("", {}))
+    groups = [new.get(f"muscles.{g}", grp) for g, grp in zip(GROUPS, arm.muscles.groups)]
+    muscles = new.get("muscles", arm.muscles)
+    if any(f"muscles.{g}" in new for g in GROUPS):
+        muscles = _build(functools.partial(dataclasses.replace, muscles),
+                         {"groups": tuple(groups)}, {})
+    if muscles is not arm.muscles:
+        top["muscles"] = muscles
+    if any(f"valves.{v}" in new for v in VALVES):
+        top["valves"] = ValveSet(tuple(new.get(f"valves.{v}", val)
+                                       for v, val in zip(VALVES, arm.valves.valves)))
+    for table in ("geometry", "pneumatics", "links", "model", "model_gravity", "effects",
+                  "sensors"):
+        if table in new:
+            top[table] = new[table]
+    return _build(arm.replace, top, _keys_of("ArmParameters", "", ROOT_KEYS))
+
+
+def effects_from_dict(effects, base: Effects | None = None) -> Effects:
+    """``base`` (default: all off) with some effects set, validated like ``[effects]``.
+
+    Parameters
+    ----------
+    effects : mapping of str to value
+        Effect name -> value: a plain number (SI unit of the effect), ``{"value": v,
+        "unit": u}``, a list for a vector effect, or one number for every entry of a
+        vector effect (``{"hysteresis_delta": 0.299}`` sets the four groups).
+    base : Effects, optional
+        The effects the changes apply to.
+
+    Returns
+    -------
+    Effects
+
+    Raises
+    ------
+    ArmFileError
+        Naming ``effects.<name>``, the value and what is allowed.
+    """
+    base = Effects() if base is None else base
+    if not isinstance(base, Effects):
+        raise TypeError(f"base must be an Effects, got {type(base).__name__}")
+    if not hasattr(effects, "items"):
+        raise ArmFileError(f"effects = {effects!r:.80}: must be a table of effect name -> value "
+                           f"(e.g. {{ payload_mass = 0.5 }})")
+    keys = {k.key: k for k in EFFECT_KEYS}
+    kw = {}
+    for name, v in effects.items():
+        if name not in keys:
+            raise ArmFileError(f"unknown effect effects.{name}; allowed: {list(keys)}")
+        key = keys[name]
+        if key.unit is not None and not isinstance(v, dict):
+            v = {"value": v, "unit": key.unit}           # plain numbers are SI
+        kw[key.attr] = read_value(f"effects.{name}", key, v, broadcast=True)
+    if not kw:
+        return base
+    return _build(base.replace, kw, _keys_of("Effects", "effects", EFFECT_KEYS))
+
+
 __all__ = ["ARM_FORMAT", "ArmFileError", "Key", "TABLES", "read_value", "arm_from_dict",
-           "arm_from_toml", "load_arm", "arm_to_dict", "arm_to_toml", "arm_fingerprint",
-           "apply_arm_changes", "arm_parameter_paths"]
+           "arm_from_toml", "read_arm_file", "arm_to_dict", "arm_to_toml", "arm_fingerprint",
+           "apply_arm_changes", "effects_from_dict", "arm_parameter_paths", "arm_key"]
