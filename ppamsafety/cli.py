@@ -371,6 +371,9 @@ def _cmd_arm_export(args) -> int:
     return EXIT_OK
 
 
+THESIS_TWIN = ", the thesis arm's parameters"
+
+
 def _cmd_arm_check(args) -> int:
     import numpy as np
 
@@ -383,7 +386,7 @@ def _cmd_arm_check(args) -> int:
     q = None if args.q is None else np.array(args.q, dtype=float) * DEG
     summary = arm_summary(arm, q=q)
     print(f"{args.file}: valid arm file ({arm.name or 'unnamed arm'}"
-          f"{', the thesis arm\'s parameters' if is_thesis_arm(arm) else ''}; sha256 "
+          f"{THESIS_TWIN if is_thesis_arm(arm) else ''}; sha256 "
           f"{arm_fingerprint(arm)[:16]})")
     print("\n".join(summary.lines()))
     if not summary.pose_holdable:
