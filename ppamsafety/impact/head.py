@@ -310,14 +310,14 @@ def _contact_unit(dotted, raw, symbolic, n, numeric):
 
 
 def _head_from_dict(data) -> "HeadContactModel":
-    allowed = ["format", "name", "source", "checks", *[k.key for k in HEAD_KEYS]]
-    for k in data:
-        if k not in allowed:
-            raise ArmFileError(f"unknown key {k!r} in a head file; allowed: {allowed}")
     fmt = data.get("format", HEAD_FORMAT)
     if fmt != HEAD_FORMAT:
         what = " (an arm file?)" if isinstance(fmt, str) and "arm" in fmt else ""
         raise ArmFileError(f"format = {fmt!r} is not {HEAD_FORMAT!r}{what}")
+    allowed = ["format", "name", "source", "checks", *[k.key for k in HEAD_KEYS]]
+    for k in data:
+        if k not in allowed:
+            raise ArmFileError(f"unknown key {k!r} in a head file; allowed: {allowed}")
     for k in ("name", *[k.key for k in HEAD_KEYS]):
         if k not in data:
             unit = next((f" [{x.unit}]" for x in HEAD_KEYS if x.key == k and x.unit), "")

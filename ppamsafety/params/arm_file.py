@@ -524,15 +524,15 @@ def arm_from_dict(data: dict, *, cls):
                            f"{type(data).__name__}")
     tables = ("geometry", "muscles", "valves", "pneumatics", "links", "model", "model_gravity",
               "effects", "sensors")
+    fmt = data.get("format", ARM_FORMAT)
+    if fmt != ARM_FORMAT:
+        what = " (a head file?)" if isinstance(fmt, str) and "head" in fmt else ""
+        raise ArmFileError(f"format = {fmt!r} is not {ARM_FORMAT!r}{what}")
     for k, v in data.items():
         if k not in tables and k not in [x.key for x in ROOT_KEYS] + list(_ROOT_EXTRA):
             raise ArmFileError(f"unknown key or table {k!r} at the top level; allowed: "
                                f"{[x.key for x in ROOT_KEYS] + list(_ROOT_EXTRA)} and the "
                                f"tables {list(tables)}")
-    fmt = data.get("format", ARM_FORMAT)
-    if fmt != ARM_FORMAT:
-        what = " (a head file?)" if isinstance(fmt, str) and "head" in fmt else ""
-        raise ArmFileError(f"format = {fmt!r} is not {ARM_FORMAT!r}{what}")
     name = data.get("name", "")
     if not isinstance(name, str):
         raise ArmFileError(f"name = {name!r}: must be a string")

@@ -43,6 +43,7 @@ from ..identify.dynamic import identify_dynamic
 from ..identify.excitation import design_excitation, simulate_excitation
 from ..impact.instants import evaluate_experiment
 from ..markdown import markdown_table
+from ..params.inertia import BaseParameters
 from ..plant import geometry as geo
 from ..plots.interaction import (plot_force_estimates, plot_interaction_path, plot_observer_step,
                                  plot_release)
@@ -81,14 +82,21 @@ def identify_model(plant_arm, *, quick: bool = False):
     Returns
     -------
     BaseParameters
-        LS estimate with friction (smooth Coulomb law of the plant).
+        LS estimate with friction (smooth Coulomb law of the plant).  A negative friction
+        estimate (an effect the rigid-body model lacks, such as muscle hysteresis, aliased
+        into friction) is set to 0: the estimators need a dissipative model.
     """
     d = design_excitation(plant_arm, n_random=4 if quick else 8, maxfev=4 if quick else 24,
                           seed=1)
     data = simulate_excitation(plant_arm, d.excitation, periods=2, with_qdd=False)
     res = identify_dynamic(data, plant_arm, friction=True,
                            sign_velocity=plant_arm.friction_velocity)
-    return res.to_base_parameters()
+    t = res.theta
+    if np.all(t[6:10] >= 0.0):
+        return res.to_base_parameters()
+    return BaseParameters(*[float(v) for v in t[:6]],
+                          coulomb=(max(float(t[6]), 0.0), max(float(t[7]), 0.0)),
+                          viscous=(max(float(t[8]), 0.0), max(float(t[9]), 0.0)))
 
 
 def _steady(res, name, k0, k1):
