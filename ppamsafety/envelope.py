@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import math
 import os
+import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -96,8 +97,8 @@ class SafetyEnvelope:
         The searched range.
     safe_value : float or None
         The safe end of the final bracket: the largest (``direction="largest"``) or
-        smallest safe value found; the low/high bound when the whole range is safe; None
-        when no evaluated value is safe.
+        smallest safe value found; when the whole range is safe, the bound where the result
+        is nearer the limit; None when no evaluated value is safe.
     unsafe_value : float or None
         The unsafe end of the final bracket (None when the whole range is safe).
     direction : str
@@ -242,8 +243,11 @@ def safety_envelope(parameter: str, bounds, *, limit: str = "F_max", case=None, 
 
     def evaluate(values, rnd):
         cases = [{**base, parameter: float(v)} for v in values]
-        df = run_sweep(func, cases, name=f"{name}-{parameter}-{limit}", processes=procs,
-                       progress=progress, on_error="record", cache_dir=cache_dir)
+        with warnings.catch_warnings():      # a failed case is reported by the envelope itself
+            warnings.filterwarnings("ignore", message=r"sweep .* cases? failed",
+                                    category=RuntimeWarning)
+            df = run_sweep(func, cases, name=f"{name}-{parameter}-{limit}", processes=procs,
+                           progress=progress, on_error="record", cache_dir=cache_dir)
         for v, (_, r) in zip(values, df.iterrows()):
             ok = r.get("status", "ok") == "ok"
             m = float(r[lim.metric]) if ok else math.nan
@@ -260,7 +264,8 @@ def safety_envelope(parameter: str, bounds, *, limit: str = "F_max", case=None, 
     s_lo, s_hi = ends[0]["safe"], ends[1]["safe"]
     if s_lo == s_hi:
         direction = "all safe" if s_lo else "none safe"
-        safe = (hi if ends[1][lim.metric] <= ends[0][lim.metric] else lo) if s_lo else None
+        # all safe: the end nearest the limit (the most aggressive safe value) is the envelope
+        safe = (hi if ends[1][lim.metric] >= ends[0][lim.metric] else lo) if s_lo else None
         unsafe = None
     else:
         direction = "largest" if s_lo else "smallest"

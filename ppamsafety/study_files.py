@@ -183,9 +183,18 @@ def _grid_values(where: str, key: str, v) -> list:
     if isinstance(v, dict) and "unit" in v and is_dotted(key):
         v = dict(v)
         unit = v.pop("unit")
-        vals = v.pop("values") if set(v) == {"values"} else _grid_values(where, key, v)
+        if len(v) == 1 and next(iter(v)) in GENERATORS:      # the ends in SI, then the grid
+            gen, args = next(iter(v.items()))
+            if isinstance(args, list) and len(args) == 3:
+                args = [_dotted_si(where, f"grid.{key}.{gen}[{i}]", key,
+                                   {"value": x, "unit": unit}) for i, x in enumerate(args[:2])
+                        ] + args[2:]
+            return _grid_values(where, key, {gen: args})
+        vals = v.pop("values") if set(v) == {"values"} else None
         if not isinstance(vals, list) or not vals:
-            raise _err(where, f"grid.{key}.values must be a non-empty list")
+            raise _err(where, f"grid.{key} = {v!r}: with a unit give {{values = [...], unit = "
+                              f"...}} (a non-empty list) or a generator {{linspace = [start, "
+                              f"stop, num], unit = ...}}")
         return [_dotted_si(where, f"grid.{key}[{i}]", key, {"value": x, "unit": unit})
                 for i, x in enumerate(vals)]
     if isinstance(v, dict):
@@ -564,7 +573,8 @@ def _write_histories(df: pd.DataFrame, folder: Path) -> list:
 
 def run_study_file(study, outdir, *, backend: str = "local", scheduler=None,
                    processes: int | None = None, resume: bool = False, overwrite: bool = False,
-                   max_cases: int | None = None, progress: bool = True) -> pd.DataFrame:
+                   max_cases: int | None = None, progress: bool = True, arm=None,
+                   head=None) -> pd.DataFrame:
     """Run a study and write its output folder.
 
     Parameters
@@ -591,13 +601,21 @@ def run_study_file(study, outdir, *, backend: str = "local", scheduler=None,
         Run only the first ``max_cases`` cases (a preview or a test).
     progress : bool
         Progress bar.
+    arm : ArmParameters, optional
+        Replaces the study file's ``[arm] file`` (a path ``study`` only).
+    head : HeadContactModel, optional
+        Replaces the study file's ``[head] file`` (a path ``study`` only).
 
     Returns
     -------
     pandas.DataFrame
-        The result table as written (without the histories).
+        The result table as written (without the histories); for an ``[envelope]``
+        study, its evaluations.
     """
-    st = study if isinstance(study, Study) else load_study(study)
+    if isinstance(study, Study) and (arm is not None or head is not None):
+        raise ValueError("arm and head apply to a study file path; a loaded Study has them "
+                         "(load_study(path, arm=..., head=...))")
+    st = study if isinstance(study, Study) else load_study(study, arm=arm, head=head)
     for nm, v in (("resume", resume), ("overwrite", overwrite), ("progress", progress)):
         if not isinstance(v, bool):
             raise TypeError(f"{nm} must be True or False, got {v!r}")
@@ -666,8 +684,8 @@ def _write_summary(st: Study, df: pd.DataFrame, stage: Path, envelope=None) -> N
     if envelope is not None:
         fig = envelope.plot(title=title)
         swept, what = [envelope.parameter], envelope.description
-    else:
-        swept = st.swept
+    else:       # what varies among the cases run (--max-cases may run fewer)
+        swept = [k for k in st.swept if k in df.columns and df[k].map(repr).nunique() > 1]
         fig = plot_sweep(df, swept, title=title)
         what = (f"{len(df)} cases, {int((df.get('status') == 'ok').sum())} ok"
                 if "status" in df.columns else f"{len(df)} cases")

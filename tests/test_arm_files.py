@@ -248,3 +248,10 @@ def test_head_file_units_and_errors(tmp_path):
     assert resolve_head(str(p)) == face and resolve_head(None) == head_model()
     with pytest.raises(ValueError, match="unknown head model"):
         resolve_head("nobody")
+
+
+def test_the_file_format_doc_lists_every_key():
+    doc = (ROOT / "docs" / "arm_files.md").read_text()
+    for path, keys in TABLES.items():
+        for k in keys:
+            assert f"| `{k.key}` |" in doc, f"{path}.{k.key} missing from docs/arm_files.md"

@@ -72,6 +72,10 @@ class DesignStudy:
         ``f4_raw`` [N/bar, before clipping to 0] (force functions there).
     metrics : dict
         Headline numbers.
+    thesis : bool
+        Thesis values (Table A.1, the design-time maps) apply: the thesis arm.
+    arm : ArmParameters or None
+        The arm (ArmParameters).
     """
 
     quick: bool

@@ -102,6 +102,8 @@ class DiagnoseCasesStudy:
     timings : dict
         Wall time of each part [s].
     metrics : dict
+    note : str
+        The other-arm note of the section ("" for the thesis arm).
     """
 
     case_c: object

@@ -69,6 +69,10 @@ class DiagnoseSawtoothStudy:
         Seconds (synthesis + diagnosis).
     metrics : dict
         Headline numbers.
+    thesis : bool
+        Thesis values apply: the thesis arm.
+    note : str
+        The other-arm note ("" for the thesis arm).
     """
 
     quick: bool

@@ -384,6 +384,12 @@ class EffectsStudy:
         Part -> wall time [s].
     metrics : dict
         Headline numbers.
+    thesis : bool
+        Thesis values and ratios apply: the thesis arm and head.
+    arm : ArmParameters or None
+        The hysteresis plant (the arm with its hysteresis).
+    head : HeadContactModel or None
+        The head model of Table 6.1.
     """
 
     quick: bool

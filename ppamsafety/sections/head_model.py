@@ -44,6 +44,14 @@ class HeadModelStudy:
         Worst PID step impact with each named head model.
     metrics : dict
         Headline numbers.
+    thesis : bool
+        The Table 6.1 reconstruction applies: the thesis arm and head.
+    arm : ArmParameters or None
+        The arm.
+    head : HeadContactModel or None
+        The head model.
+    checks : pandas.DataFrame or None
+        Its checks (``head_fit.head_checks``), another arm or head only.
     """
 
     fits: dict

@@ -128,6 +128,8 @@ class InteractionStudy:
         Observer step response of experiment 1: t [s], estimate and
         closed_form (1 - exp(-K_I t)), both normalised by the step.
     metrics : dict
+    note : str
+        The other-arm note ("" for the thesis arm and head).
     """
 
     clean: ExperimentResult

@@ -344,6 +344,12 @@ class IsoStudy:
         The lambda grid of the PSMC families [s].
     metrics : dict
         Headline numbers.
+    thesis : bool
+        Thesis values apply: the thesis arm and head.
+    arm : ArmParameters or None
+        The arm.
+    head : HeadContactModel or None
+        The Hunt-Crossley head beside the ISO heads.
     """
 
     limits: pd.DataFrame

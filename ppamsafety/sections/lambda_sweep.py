@@ -91,6 +91,10 @@ class LambdaSweepStudy:
         ``circle_err_max`` [m].
     metrics : dict
         Headline numbers.
+    head_name : str
+        Name of the head model of the impacts.
+    note : str
+        The other-arm note ("" for the thesis arm and head).
     """
 
     lambdas: tuple

@@ -111,6 +111,10 @@ class ReactionStudy:
         (experiment, controller) -> collision-free ExperimentResult.
     compute_seconds : float
     metrics : dict
+    note : str
+        The other-arm note ("" for the thesis arm and head).
+    head_name : str
+        Name of the head model.
     """
 
     quick: bool

@@ -60,6 +60,10 @@ class ResponsesStudy:
         1-5 s after the switch [Hz] (NaN if that variant was not run).
     metrics : dict
         Headline numbers.
+    thesis : bool
+        Thesis statements apply: the thesis arm.
+    arm : ArmParameters or None
+        The arm.
     """
 
     step: list

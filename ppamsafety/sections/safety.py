@@ -164,6 +164,10 @@ class SafetyStudy:
         Worker processes of the scan.
     metrics : dict
         Headline numbers (including the wall times of the table and the scan).
+    thesis : bool
+        Thesis values and ratios apply: the thesis arm and head.
+    arm : ArmParameters or None
+        The arm.
     """
 
     quick: bool

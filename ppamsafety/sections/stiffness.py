@@ -177,6 +177,12 @@ class StiffnessStudy:
         frozen springs [s].
     metrics : dict
         Headline numbers.
+    thesis : bool
+        Fig. 6.3's values apply: the thesis arm and head.
+    arm : ArmParameters or None
+        The arm.
+    head : HeadContactModel or None
+        The head model.
     """
 
     quick: bool

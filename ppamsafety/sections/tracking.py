@@ -336,6 +336,10 @@ class TrackingStudy:
         errors with ideal velocity, over lambda and periods [-].
     metrics : dict
         Headline numbers.
+    thesis : bool
+        Table 5.2 applies: the thesis arm.
+    arm : ArmParameters or None
+        The arm.
     """
 
     quick: bool

@@ -71,6 +71,10 @@ class WorstDirectionStudy:
         Per-experiment results (polar sweeps for :data:`POLAR_RUNS`).
     metrics : dict
         Headline numbers and wall times [s].
+    thesis : bool
+        Table 6.1 applies: the thesis arm and head.
+    arm : ArmParameters or None
+        The arm.
     """
 
     quick: bool
