@@ -180,3 +180,13 @@ pose = [50.0, -80.0]
     with pytest.raises(ValueError, match="speed' is one impact at a pose"):
         parse_study('[case]\ncontroller = "PID"\n[envelope]\nparameter = "speed"\n'
                     'range = [0.2, 3.0]\n')
+
+
+def test_a_mean_pressure_envelope_searches_the_arm_parameter():
+    pid = safety_envelope("arm.pneumatics.mean_pressure", (1.2e5, 2.0e5), limit="F_max",
+                          case={"controller": "PID", "instants": "max TCP speed"})
+    assert pid.direction == "none safe" and pid.safe_value is None      # PID: > 660 N always
+    assert set(pid.evaluations["value"]) == {1.2e5, 2.0e5}
+    assert (pid.evaluations["F_max"] > 660.0).all()
+    with pytest.raises(ValueError, match="case sets 'lam'"):
+        safety_envelope("lam", (0.1, 1.0), case={"lam": 0.4})

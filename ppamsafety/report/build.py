@@ -64,6 +64,7 @@ def _run_in_pool(pool, processes: int, order, stage, quick: bool, warm: bool, re
     (``report(name, result, seconds)`` is called for each section that finished).
     """
     tasks = warmup.TASKS if warm else ()
+    subject = () if arm is None and head is None else (arm, head)   # the thesis report: none
     finished_tasks, started_tasks = set(), set()
     queue = list(order)
     running = {}                 # future -> ("task", index) or ("section", name)
@@ -76,7 +77,7 @@ def _run_in_pool(pool, processes: int, order, stage, quick: bool, warm: bool, re
                 running[pool.submit(warmup.run_task, ready[0])] = ("task", ready[0])
             elif len(started_tasks) == len(tasks) and queue:
                 name = queue.pop(0)
-                running[pool.submit(_timed_section, name, stage, quick, arm, head)] = (
+                running[pool.submit(_timed_section, name, stage, quick, *subject)] = (
                     "section", name)
             else:
                 break
@@ -210,7 +211,8 @@ def build_report(outdir="reports", *, quick: bool = False, only=None, progress: 
 
         if processes == 1:
             for name in names:
-                report(name, *_timed_section(name, stage, quick, arm, head))
+                subject = () if arm is None and head is None else (arm, head)
+                report(name, *_timed_section(name, stage, quick, *subject))
         else:
             # longest first (never timed: first), so the last to finish is a short one;
             # without a previous report, by the typical times

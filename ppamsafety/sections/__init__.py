@@ -35,7 +35,8 @@ import pandas as pd
 
 from .._commandline import Parser, run_guarded
 from ..output import OutputFolder
-from ..impact.head import HeadContactModel, head_model, resolve_head
+# the impact.head module by its own name: ``head_model`` is a section module here
+from ..impact import head as _head
 from ..params import ArmParameters, is_thesis_arm, load_arm, thesis_arm
 from ..plots.figure import save
 
@@ -170,7 +171,7 @@ def resolve_arm(arm):
     return arm
 
 
-def resolve_head_model(head) -> HeadContactModel:
+def resolve_head_model(head) -> "_head.HeadContactModel":
     """The head a section crashes into: ``head``, or ``thesis-frontal`` when None.
 
     Parameters
@@ -182,7 +183,7 @@ def resolve_head_model(head) -> HeadContactModel:
     -------
     HeadContactModel
     """
-    return resolve_head(head)
+    return _head.resolve_head(head)
 
 
 def compares_to_thesis(arm, head=None) -> bool:
@@ -200,7 +201,7 @@ def compares_to_thesis(arm, head=None) -> bool:
     bool
     """
     arm_ok = arm is None or is_thesis_arm(resolve_arm(arm))
-    return arm_ok and (head is None or resolve_head(head) == head_model())
+    return arm_ok and (head is None or _head.resolve_head(head) == _head.head_model())
 
 
 def other_arm_note(arm, head=None) -> str:
@@ -220,7 +221,7 @@ def other_arm_note(arm, head=None) -> str:
     arm = resolve_arm(arm)
     what = f"arm `{arm.name or 'unnamed arm'}`"
     if head is not None:
-        what += f" and head model `{resolve_head(head).name}`"
+        what += f" and head model `{_head.resolve_head(head).name}`"
     return (f"*Computed for {what}: thesis values and ratios apply to the thesis arm and head "
             f"only and are not shown.*")
 
@@ -316,7 +317,7 @@ def run_section(name: str, outdir, *, quick: bool = False, arm=None,
     if arm is not None:
         kw["arm"] = resolve_arm(arm)
     if head is not None:
-        kw["head"] = resolve_head(head)
+        kw["head"] = _head.resolve_head(head)
     return write_section(mod.render(mod.compute(quick=quick, **kw)), outdir)
 
 
@@ -357,7 +358,7 @@ def main(name: str, argv=None) -> int:
 
     def run(args):
         arm = None if args.arm is None else load_arm(args.arm)
-        head = None if args.head is None else resolve_head(args.head)
+        head = None if args.head is None else _head.resolve_head(args.head)
         with OutputFolder(args.outdir, kind="section", overwrite=args.overwrite,
                           clean=False) as stage:
             res = run_section(name, stage, quick=args.quick, arm=arm, head=head)
