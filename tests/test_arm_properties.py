@@ -5,8 +5,8 @@ by their dotted keys (:func:`ppamsafety.params.arm_file.apply_arm_changes`, what
 files use).  Each draw is either refused with an error that names a changed key, or the arm
 
 * moves frictionless under its muscles at 1 bar with its kinetic plus potential energy
-  changing by the work of the muscle torques (1e-4 of the energy exchanged: the trapezoid
-  rule on 0.2 ms samples), and
+  changing by the work of the muscle torques (to 1e-4 of the energy exchanged: Simpson's
+  rule on the 0.2 ms RK4 steps), and
 * hits the head in the impact engine with finite F_max and HIC and its energy balance
   within the engine's own tolerance (``energy_ok``).
 
@@ -69,9 +69,13 @@ def _check(ch):
     q, qd, p = x[:, :2], x[:, 2:4], x[:, 4:]
     e = dynamics.kinetic_energy(q, qd, pend) + dynamics.potential_energy(q, pend)
     power = np.einsum("ij,ij->i", qd, joint_torques(q, p, pend))
-    work = np.concatenate([[0.0], np.cumsum(0.5 * (power[1:] + power[:-1]) * 2e-4)])
-    scale = float(np.max(np.abs(work)) + np.max(np.abs(e - e[0]))) + 1e-9
-    assert np.max(np.abs((e - e[0]) - work)) <= 1e-4 * scale, (ch, scale)
+    # composite Simpson rule over pairs of 0.2 ms steps: the work at every even sample
+    h = 2e-4
+    work = np.concatenate([[0.0], np.cumsum(h / 3 * (power[0:-2:2] + 4 * power[1:-1:2]
+                                                       + power[2::2]))])
+    de = e[::2] - e[0]
+    scale = float(np.max(np.abs(work)) + np.max(np.abs(de))) + 1e-9
+    assert np.max(np.abs(de - work)) <= 1e-4 * scale, (ch, np.max(np.abs(de - work)), scale)
     # an impact with the head: finite, energy balance within the engine's tolerance
     s = simulate_impacts(arm, q0, [0.8, -0.4], [40.0, 25.0]).summary.iloc[0]
     assert np.isfinite(s.F_max) and np.isfinite(s.HIC36) and s.F_max > 0, ch
@@ -97,3 +101,6 @@ def test_the_sampler_reaches_both_outcomes():
     assert _check({"arm.links.m2": 1.3, "arm.pneumatics.mean_pressure": 1.5e5}) == "simulated"
     assert _check({"arm.links.m2": -0.2}) == "refused"
     assert _check({"arm.geometry.L22": 0.0}) == "refused"
+    # all the forearm's mass at its joint (found by the full battery): refused by name
+    assert _check({"arm.links.LG2": 0.0, "arm.links.dG2": 0.0,
+                   "arm.links.IG2": 5.5e-98}) == "refused"

@@ -84,8 +84,9 @@ class ArmParameters:
     Besides the types and ranges of ``gravity`` ([0, 30] m/s^2) and
     ``friction_velocity`` ([1e-5, 1] rad/s), construction refuses sets that
     cannot be built: non-positive connection lengths or contractions outside
-    [0, 0.4] anywhere in the working area (e.g. ``L22 = 0``), and a plant
-    inertia matrix that is numerically singular.  The identified ``model``
+    [0, 0.4] anywhere in the working area (e.g. ``L22 = 0``), a plant
+    inertia matrix that is numerically singular, and a link whose inertia about
+    its joint is below m (0.05 L)^2 (:data:`MIN_GYRATION_FRACTION`).  The identified ``model``
     sets are not required to be positive definite (Table 3.5 is not).
     """
 
@@ -297,8 +298,17 @@ def _check_muscles_fit(geometry: ArmGeometry, muscles: MuscleSet) -> None:
                 f"MuscleGroup.n_muscles/l0 or MuscleSet.eps_min/eps_max")
 
 
+#: Smallest radius of gyration of a link about its joint, as a fraction of the link's length
+#: (L1, L2): I_joint >= m (0.05 L)^2.  A uniform bar has 0.58 about its end (0.29 about its
+#: centre; the thesis arm 0.55 and 0.86); 0.05 admits a link whose mass sits almost at its
+#: joint, and refuses one with all its mass *at* the joint and no inertia (e.g. L_G2 = d_G2 =
+#: 0, I_G2 = 1e-98 kg m^2), whose joint the integrators cannot resolve.
+MIN_GYRATION_FRACTION = 0.05
+
+
 def _check_plant_inertia(geometry: ArmGeometry, links: LinkInertia) -> None:
-    """Refuse a plant inertia matrix that is (numerically) singular in the working area."""
+    """Refuse a plant inertia matrix that is (numerically) singular in the working area, or a
+    link with (almost) no inertia about its joint."""
     b = links.base_parameters(geometry.L1)
     q2 = np.linspace(geometry.q2_min, geometry.q2_max, 181)
     a = geometry.L1 * (b.m2LG2 * np.cos(q2) + b.m2dG2 * np.sin(q2))
@@ -310,6 +320,18 @@ def _check_plant_inertia(geometry: ArmGeometry, links: LinkInertia) -> None:
             f"ArmParameters.links: the plant inertia matrix is (nearly) singular at q2 = "
             f"{np.degrees(q2[j]):.4g} deg (det H / (H11 H22) = {ratio[j]:.3g}, needs >= "
             f"{MIN_INERTIA_DET_RATIO:g}); check LinkInertia.IG1/IG2 (too small for the masses?)")
+    for k, (m, lg, dg, ig, length, ln) in enumerate((
+            (links.m1, links.LG1, links.dG1, links.IG1, geometry.L1, "L1"),
+            (links.m2, links.LG2, links.dG2, links.IG2, geometry.L2, "L2")), start=1):
+        i_joint = ig + m * (lg * lg + dg * dg)
+        i_min = m * (MIN_GYRATION_FRACTION * length) ** 2
+        if not i_joint >= i_min:
+            raise ValueError(
+                f"ArmParameters.links: link {k}'s inertia about its joint, I_G{k} + m{k} "
+                f"(L_G{k}^2 + d_G{k}^2) = {i_joint:.3g} kg m^2, is below m{k} "
+                f"({MIN_GYRATION_FRACTION:g} {ln})^2 = {i_min:.3g} kg m^2: all its mass at the "
+                f"joint, not a link the integrators can resolve; check LinkInertia.IG{k} "
+                f"(and LG{k}, dG{k})")
 
 
 #: Provenance of each part of the thesis arm (the ``source`` keys of its arm file).
