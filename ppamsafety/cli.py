@@ -1,4 +1,9 @@
-"""Command-line interface: ``ppamsafety report``, ``sweep``, ``impact``, ``info``.
+"""Command-line interface: ``ppamsafety report``, ``sweep``, ``impact``, ``arm``, ``info`` ...
+
+Every command takes ``--arm FILE`` (an arm file, ``docs/arm_files.md``; default the
+thesis arm) and ``--head NAME|FILE`` (a head model name or a head file; default
+``thesis-frontal``).  ``ppamsafety arm export`` writes the thesis arm as a template,
+``ppamsafety arm check FILE`` validates a file and prints the arm's key numbers.
 
 Exit status
 -----------
@@ -27,6 +32,7 @@ import argparse
 import math
 import sys
 import warnings
+from pathlib import Path
 
 from ._commandline import EXIT_OK
 from ._commandline import Parser as _Parser
@@ -104,11 +110,37 @@ def _section_names(text: str) -> list[str]:
     return names
 
 
+def _arm_of(args):
+    """The arm of ``--arm FILE`` (None: the thesis arm), loaded and validated."""
+    if getattr(args, "arm", None) is None:
+        return None
+    from .params import load_arm
+
+    return load_arm(args.arm)
+
+
+def _head_of(args):
+    """The head model of ``--head NAME|FILE`` (None: not given)."""
+    if getattr(args, "head", None) is None:
+        return None
+    from .impact.head import resolve_head
+
+    return resolve_head(args.head)
+
+
+def _head_unused(args, command: str) -> None:
+    """Validate a ``--head`` that ``command`` does not use, and say so."""
+    if _head_of(args) is not None:
+        print(f"ppamsafety: note: --head has no effect on {command} (it computes no impact)",
+              file=sys.stderr)
+
+
 def _cmd_report(args) -> int:
     from .report.build import build_report
 
     index = build_report(args.outdir, quick=args.quick, only=args.only,
-                         overwrite=args.overwrite, processes=args.processes)
+                         overwrite=args.overwrite, processes=args.processes,
+                         arm=_arm_of(args), head=_head_of(args))
     print(f"report written to {index}")
     return EXIT_OK
 
@@ -118,13 +150,15 @@ def _cmd_identify(args) -> int:
     from .data import MeasuredDataWarning, identify_measured, load_measured
 
     inspect_output_folder(args.out, overwrite=args.overwrite)   # fail before computing
+    arm = _arm_of(args)
+    _head_unused(args, "identify")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", MeasuredDataWarning)    # kept in data.notes
         data = load_measured(args.data, allow_gaps=args.allow_gaps,
                              strict_units=not args.loose_units)
     ident = identify_measured(data, args.kind, method=args.method, friction=not args.no_friction,
                               drop=args.drop, confidence=args.confidence,
-                              sign_velocity=args.sign_velocity)
+                              sign_velocity=args.sign_velocity, arm=arm)
     for note in ident.notes:
         print(f"ppamsafety: warning: {note}", file=sys.stderr)
     ident.write(args.out, overwrite=args.overwrite)
@@ -154,15 +188,18 @@ def _cmd_sweep(args) -> int:
 
     if args.scheduler is not None and args.backend != "dask":
         raise ValueError(f"--scheduler {args.scheduler} needs --backend dask")
-    study = load_study(args.study)            # checked before anything runs
+    study = load_study(args.study, arm=_arm_of(args), head=_head_of(args))   # checked first
     n = len(study.cases) if args.max_cases is None else min(args.max_cases, len(study.cases))
-    print(f"study {study.name!r}: {n} cases on {args.backend}"
+    what = (f"envelope of {study.envelope['parameter']} ({study.envelope['limit']})"
+            if study.envelope else f"{n} cases")
+    print(f"study {study.name!r}: {what} on {args.backend}"
           f"{' (' + args.scheduler + ')' if args.scheduler else ''} -> {args.out}", flush=True)
     df = run_study_file(study, args.out, backend=args.backend, scheduler=args.scheduler,
                         processes=args.processes, resume=args.resume, overwrite=args.overwrite,
                         max_cases=args.max_cases, progress=not args.no_progress)
     failed = int((df["status"] == "failed").sum()) if "status" in df.columns else 0
-    print(f"results written to {args.out}/{study.csv} ({len(df) - failed} ok, {failed} failed)")
+    print(f"results written to {args.out}/{study.csv} ({len(df) - failed} ok, {failed} failed); "
+          f"summary: {args.out}/summary.html")
     if failed:
         print(f"ppamsafety: {failed} case(s) failed; their rows have status='failed' and the "
               f"error", file=sys.stderr)
@@ -175,6 +212,8 @@ def _cmd_diagnose(args) -> int:
     from .diagnose import diagnose
 
     inspect_output_folder(args.out, overwrite=args.overwrite)   # fail before computing
+    arm = _arm_of(args)
+    _head_unused(args, "diagnose")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", MeasuredDataWarning)    # kept in data.notes
         if str(args.data).lower().endswith(".toml"):            # a bench campaign manifest
@@ -183,7 +222,10 @@ def _cmd_diagnose(args) -> int:
             data = load_measured(args.data, allow_gaps=args.allow_gaps,
                                  strict_units=not args.loose_units)
     dg = diagnose(data, experiment=args.experiment, alpha=args.alpha, rho_max=args.rho_max,
-                  block_seconds=args.block, seed=args.seed, bootstrap=args.bootstrap)
+                  block_seconds=args.block, seed=args.seed, bootstrap=args.bootstrap, arm=arm)
+    for note in dg.notes:
+        if note.startswith("arm: ") and "diagnosed against arm" in note:
+            print(f"ppamsafety: warning: {note[5:]}", file=sys.stderr)
     dg.write(args.out, overwrite=args.overwrite)
     for e in dg.effects:
         ps = ", ".join(f"{n} = {p['value']:.4g} [{p['ci_low']:.4g}, {p['ci_high']:.4g}] "
@@ -218,7 +260,12 @@ def _cmd_synthesize(args) -> int:
     effects = {}
     for name, value in args.effect or []:
         effects[name] = value if "," in value else _finite(value)
+    arm = _arm_of(args)
+    _head_unused(args, "synthesize")
     if args.kind == "actuator":
+        if arm is not None:
+            raise ValueError("--arm describes an arm; --kind actuator takes the muscle law with "
+                             "--force-law")
         if args.duration is not None:
             raise ValueError("--duration is an arm option; for --kind actuator use --cycles, "
                              "--period and --sample-rate")
@@ -237,7 +284,7 @@ def _cmd_synthesize(args) -> int:
             raise ValueError(f"{', '.join(extra)}: option(s) of --kind actuator only")
         data = synthesize(args.experiment, effects, noise=args.noise, seed=args.seed,
                           duration=args.duration, controller=args.controller,
-                          reference=args.reference)
+                          reference=args.reference, arm=arm)
     path = data.save(args.out, overwrite=args.overwrite)
     print(f"record written to {path} ({len(data)} rows)")
     return EXIT_OK
@@ -246,16 +293,19 @@ def _cmd_synthesize(args) -> int:
 def _cmd_impact(args) -> int:
     import numpy as np
 
+    from .impact.head import head_model
     from .impact.model import simulate_impacts
     from .params import thesis_arm
 
     if args.history is not None:        # fail before simulating, not after
         check_new_file(args.history, overwrite=args.overwrite, name="--history")
-    arm = thesis_arm()
+    arm = _arm_of(args) or thesis_arm()
+    head = _head_of(args) or head_model()
     q = np.array(args.q, dtype=float) * DEG
-    res = simulate_impacts(arm, q, args.qd, args.stiffness, head=args.head, dt=args.dt,
+    res = simulate_impacts(arm, q, args.qd, args.stiffness, head=head, dt=args.dt,
                            history=args.history is not None)
     s = res.summary.iloc[0]
+    print(f"arm             {arm.name or args.arm}")
     print(f"head model      {res.head.name}")
     print(f"tool speed      {s.tcp_speed:.4g} m/s")
     print(f"F_max           {s.F_max:.4g} N at {1e3 * s.t_Fmax:.3g} ms")
@@ -274,15 +324,91 @@ def _cmd_impact(args) -> int:
 def _cmd_info(args) -> int:
     import numpy as np
 
-    from .params import thesis_arm
+    from .impact.head import head_model
+    from .params import is_thesis_arm, thesis_arm
+    from .params.arm_file import arm_fingerprint
 
-    arm = thesis_arm()
+    arm = _arm_of(args) or thesis_arm()
     L = arm.links
-    print("thesis arm (plant):")
+    label = arm.name or "unnamed arm"
+    print(f"{label}{' (the thesis arm)' if is_thesis_arm(arm) else ''} (plant):")
     print(f"  link masses m1 = {L.m1:.3f} kg, m2 = {L.m2:.3f} kg")
     print(f"  mean pressures p_m = {np.array(arm.pneumatics.p_mean) / BAR} bar")
     print(f"  valve time constants = {[v.time_constant for v in arm.valves.valves]} s")
+    print(f"  muscles per group = {[g.n_muscles for g in arm.muscles.groups]}")
+    print(f"  effects on: {', '.join(arm.effects.enabled()) or 'none'}")
+    print(f"  fingerprint (sha256 of its arm file) {arm_fingerprint(arm)}")
+    for part, text in arm.sources:
+        print(f"  source [{part}]: {text}")
+    head = _head_of(args) or head_model()
+    print(f"head model {head.name!r}: m = {head.mass:g} kg, R = {head.radius:g} m, "
+          f"k = {head.stiffness:.4g} N/m^n, n = {head.exponent:g}, "
+          f"lambda = {head.damping:.4g} N s/m^(n+1)")
+    if head.source:
+        print(f"  source: {head.source}")
+    if args.head is not None:          # a head the user asked about: compute its checks
+        from .impact.head_fit import head_checks
+
+        for r in head_checks(head).itertuples(index=False):
+            claim = "" if r.claimed is None else (
+                f"; claimed {'met' if r.claimed else 'not met'}"
+                f"{'' if r.claim_holds else ' -- THE CLAIM IS WRONG'}")
+            print(f"  check {r.check}: {r.value} (target {r.target}): "
+                  f"{'met' if r.met else 'not met'}{claim}")
+    else:
+        for name, met, note in head.checks:
+            print(f"  check {name}: claimed {'met' if met else 'not met'} ({note})")
     return EXIT_OK
+
+
+def _cmd_arm_export(args) -> int:
+    from .params import thesis_arm
+    from .params.arm_file import arm_to_toml
+
+    arm = _arm_of(args) or thesis_arm()
+    text = arm_to_toml(arm, comments=True)
+    atomic_write(args.out, lambda tmp: Path(tmp).write_text(text, encoding="utf-8"),
+                 overwrite=args.overwrite, name="--out")
+    print(f"arm file written to {args.out} ({arm.name or 'unnamed arm'}); edit it, then run "
+          f"`ppamsafety arm check {args.out}`")
+    return EXIT_OK
+
+
+THESIS_TWIN = ", the thesis arm's parameters"
+
+
+def _cmd_arm_check(args) -> int:
+    import numpy as np
+
+    from .design import arm_summary
+    from .params import is_thesis_arm
+    from .params import load_arm
+    from .params.arm_file import arm_fingerprint
+
+    arm = load_arm(args.file)
+    q = None if args.q is None else np.array(args.q, dtype=float) * DEG
+    summary = arm_summary(arm, q=q)
+    print(f"{args.file}: valid arm file ({arm.name or 'unnamed arm'}"
+          f"{THESIS_TWIN if is_thesis_arm(arm) else ''}; sha256 "
+          f"{arm_fingerprint(arm)[:16]})")
+    print("\n".join(summary.lines()))
+    if not summary.pose_holdable:
+        print("ppamsafety: warning: the static pressures at the stiffness pose leave "
+              "[0, max_pressure]: the Delta-p approach cannot hold the arm there with these "
+              "mean pressures", file=sys.stderr)
+    return EXIT_OK
+
+
+def _add_arm_head(p, *, head_used: bool = True) -> None:
+    """The ``--arm FILE`` and ``--head NAME|FILE`` options every command takes."""
+    p.add_argument("--arm", default=None, metavar="FILE",
+                   help="arm file (TOML, docs/arm_files.md; default: the thesis arm; "
+                        "`ppamsafety arm export` writes a template)")
+    p.add_argument("--head", default=None, metavar="NAME|FILE",
+                   help="head model: a name (thesis-frontal, iso15066-forehead, iso15066-face, "
+                        "child-frontal) or a head file (TOML)"
+                        + ("" if head_used else "; this command computes no impact, so it is "
+                                                "only validated"))
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -303,6 +429,7 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--processes", type=_positive_int, default=None, metavar="N",
                    help="studies run at the same time in worker processes (default: every "
                         "core; 1: one after the other in this process)")
+    _add_arm_head(r)
     r.set_defaults(func=_cmd_report)
     d = sub.add_parser("identify", help="identify parameters from a measured data file",
                        description="Identify parameters from a measured record (format: "
@@ -331,6 +458,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="only warn when values look like bar, degrees or mm")
     d.add_argument("--overwrite", action="store_true",
                    help="replace a previous ppamsafety identification in DIR (never other files)")
+    _add_arm_head(d, head_used=False)
     d.set_defaults(func=_cmd_identify)
     w = sub.add_parser("sweep", help="run a study file (TOML): a safety sweep into a folder",
                        epilog=_EPILOG + """
@@ -353,6 +481,7 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
     w.add_argument("--max-cases", type=_processes, default=None, metavar="N",
                    help="run only the first N cases (a preview)")
     w.add_argument("--no-progress", action="store_true", help="no progress bar")
+    _add_arm_head(w)
     w.set_defaults(func=_cmd_sweep)
     g = sub.add_parser("diagnose", help="find and name the effect the model is missing",
                        description="Compare a measured arm record (q, qd, p and the valve set "
@@ -385,6 +514,7 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
                    help="only warn when values look like bar, degrees or mm")
     g.add_argument("--overwrite", action="store_true",
                    help="replace a previous ppamsafety diagnosis in DIR (never other files)")
+    _add_arm_head(g, head_used=False)
     g.set_defaults(func=_cmd_diagnose)
     y = sub.add_parser("synthesize", help="write a record with hidden effects (rehearsal data)",
                        description="Simulate an experiment on a plant with hidden effects and "
@@ -430,8 +560,9 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
                    help="actuator: relative jitter of the sampling intervals (non-uniform t)")
     y.add_argument("--out", required=True, metavar="DATA", help="new .csv (or .parquet) file")
     y.add_argument("--overwrite", action="store_true", help="allow replacing an existing file")
+    _add_arm_head(y, head_used=False)
     y.set_defaults(func=_cmd_synthesize)
-    m = sub.add_parser("impact", help="simulate one impact of the thesis arm with a head",
+    m = sub.add_parser("impact", help="simulate one impact of the arm with a head",
                        epilog=_EPILOG)
     m.add_argument("--q", nargs=2, type=_angle_deg, required=True, metavar=("Q1", "Q2"),
                    help="link angles at impact [deg], each in [-360, 360]")
@@ -439,15 +570,39 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
                    help="link angular velocities at impact [rad/s]")
     m.add_argument("--stiffness", nargs=2, type=_nonnegative, default=(43.0, 27.0),
                    metavar=("K1", "K2"), help="joint stiffnesses [Nm/rad], >= 0 (default 43 27)")
-    m.add_argument("--head", default="thesis-frontal", help="head model name")
     m.add_argument("--dt", type=_positive, default=2e-5, help="integration step [s], > 0")
     m.add_argument("--history", default=None, metavar="FILE",
                    help="write the time history to this new CSV file")
     m.add_argument("--overwrite", action="store_true",
                    help="allow --history to replace an existing file")
+    _add_arm_head(m)
     m.set_defaults(func=_cmd_impact)
-    i = sub.add_parser("info", help="print the thesis arm's key parameters")
+    i = sub.add_parser("info", help="print the arm's key parameters and the head model",
+                       epilog=_EPILOG)
+    _add_arm_head(i)
     i.set_defaults(func=_cmd_info)
+    a = sub.add_parser("arm", help="arm files: export a template, check a file",
+                       description="Arm files describe your own arm in TOML (docs/arm_files.md): "
+                                   "`ppamsafety arm export --out my_arm.toml` writes the thesis "
+                                   "arm as a commented template; `ppamsafety arm check "
+                                   "my_arm.toml` validates it and prints stiffness at a pose, "
+                                   "maximum load and working area.", epilog=_EPILOG)
+    asub = a.add_subparsers(dest="arm_command", required=True)
+    ae = asub.add_parser("export", help="write an arm file (default: the thesis arm) as a "
+                                        "commented template", epilog=_EPILOG)
+    ae.add_argument("--out", required=True, metavar="FILE", help="new .toml file")
+    ae.add_argument("--arm", default=None, metavar="FILE",
+                    help="re-export this arm file (canonical form, with comments)")
+    ae.add_argument("--head", default=None, metavar="NAME|FILE", help=argparse.SUPPRESS)
+    ae.add_argument("--overwrite", action="store_true", help="allow replacing an existing file")
+    ae.set_defaults(func=_cmd_arm_export)
+    ac = asub.add_parser("check", help="validate an arm file and print its key numbers",
+                         epilog=_EPILOG)
+    ac.add_argument("file", metavar="FILE", help="arm file (.toml)")
+    ac.add_argument("--q", nargs=2, type=_angle_deg, default=None, metavar=("Q1", "Q2"),
+                    help="pose of the stiffness numbers [deg] (default 50 -80, the thesis' "
+                         "step-response impact, or the centre of the working area)")
+    ac.set_defaults(func=_cmd_arm_check)
     return p
 
 

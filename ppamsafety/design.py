@@ -271,3 +271,136 @@ def max_load_map(arm, *, links: LinkInertia | None = None, p_max: float | None =
                        "M1_kg": M1, "M2_kg": M2, "carrying_2": np.where(use_b, 4, 3),
                        "M_max_kg": np.minimum(M1, M2)})
     return MaxLoadMap(df, p_max)
+
+
+#: Pose at which :func:`arm_summary` reports the stiffness when none is given: the
+#: step-response impact configuration of thesis §6.3.3, q = (50, -80) deg (if it lies in
+#: the arm's working area; else the centre of the working area).
+SUMMARY_POSE = (50.0 * DEG, -80.0 * DEG)
+
+
+@dataclass(frozen=True)
+class ArmSummary:
+    """What ``ppamsafety arm check`` prints: an arm's key design numbers.
+
+    Made by :func:`arm_summary`.
+
+    Attributes
+    ----------
+    name : str
+        The arm's name.
+    pose : tuple of 2 float
+        Configuration of the stiffness numbers (q1, q2) [rad].
+    pose_pressures : tuple of 4 float
+        Static Delta-p pressures that hold the arm there [Pa] (unclipped).
+    pose_holdable : bool
+        Those pressures lie in [0, p_max].
+    stiffness : tuple of 2 float
+        Joint stiffness (2.18) at the pose [N m/rad].
+    data : pandas.DataFrame
+        Every number: ``quantity``, ``value``, ``unit``.
+    """
+
+    name: str
+    pose: tuple
+    pose_pressures: tuple
+    pose_holdable: bool
+    stiffness: tuple
+    data: pd.DataFrame
+
+    def to_pandas(self) -> pd.DataFrame:
+        """The numbers: ``quantity``, ``value``, ``unit``."""
+        return self.data.copy()
+
+    def lines(self) -> list:
+        """The summary as text lines (what ``ppamsafety arm check`` prints).
+
+        Returns
+        -------
+        list of str
+        """
+        out = []
+        for r in self.data.itertuples(index=False):
+            v = r.value
+            text = f"{v:.4g}" if isinstance(v, float) else str(v)
+            out.append(f"  {r.quantity:<46} {text} {r.unit}".rstrip())
+        return out
+
+
+def arm_summary(arm, *, q=None, n: int = 61) -> ArmSummary:
+    """An arm's key design numbers: stiffness at a pose, maximum load, working area.
+
+    Parameters
+    ----------
+    arm : ArmParameters
+        Any valid arm.
+    q : sequence of 2 float, optional, keyword-only
+        Pose of the stiffness numbers [rad] (default :data:`SUMMARY_POSE` if in the
+        working area, else its centre); must lie in the working area.
+    n : int, keyword-only
+        Grid points per joint for the maps, in [5, 2000].
+
+    Returns
+    -------
+    ArmSummary
+    """
+    arm = _arm(arm)
+    n = check_int("n", n, 5, 2000)
+    g = arm.geometry
+    if q is None:
+        q = np.array(SUMMARY_POSE)
+        if not bool(geo.in_working_area(q, arm)):
+            q = np.array([0.5 * (g.q1_min + g.q1_max), 0.5 * (g.q2_min + g.q2_max)])
+    else:
+        q = np.array([check_range(f"q[{i}]", v, -np.pi, np.pi, unit="rad")
+                      for i, v in enumerate(np.asarray(q, dtype=float).ravel()[:2])])
+        if q.size != 2 or not bool(geo.in_working_area(q, arm)):
+            raise ValueError(f"q = {np.degrees(q).round(3).tolist()} deg is outside the working "
+                             f"area q1 in [{np.degrees(g.q1_min):.4g}, {np.degrees(g.q1_max):.4g}]"
+                             f", q2 in [{np.degrees(g.q2_min):.4g}, {np.degrees(g.q2_max):.4g}] deg")
+    p = pn.static_pressures(q, arm)
+    pmax = arm.pneumatics.p_max
+    holdable = bool(np.all((p >= 0) & (p <= pmax)))
+    K = pn.joint_stiffness(q, np.clip(p, 0.0, pmax), arm)
+    sm = stiffness_map(arm, n1=n, n2=n).data
+    ml = max_load_map(arm, n1=2 * n, n2=2 * n)
+    grid = _grid(arm, n, n)
+    tcp = geo.forward_kinematics(grid, arm)
+    r = np.hypot(tcp[:, 0], tcp[:, 1])
+    # TCP workspace area: the integral of |det J| over the joint ranges (one-to-one here)
+    dq = (g.q1_max - g.q1_min) * (g.q2_max - g.q2_min)
+    detj = np.abs(np.linalg.det(geo.jacobian(grid, arm)))
+    eps = geo.contractions(grid, arm)
+    L = arm.links
+    rows = [
+        ("stiffness pose q1, q2", f"{np.degrees(q[0]):.4g}, {np.degrees(q[1]):.4g}", "deg"),
+        ("static pressures p1..p4 at the pose",
+         ", ".join(f"{v / BAR:.3f}" for v in p) + ("" if holdable else "  (NOT holdable)"),
+         "bar"),
+        ("joint stiffness K1 at the pose (2.18)", float(K[0]), "N m/rad"),
+        ("joint stiffness K2 at the pose (2.18)", float(K[1]), "N m/rad"),
+        ("K1 over the working area", f"{sm.K1_Nm_per_rad.min():.4g} .. "
+                                     f"{sm.K1_Nm_per_rad.max():.4g}", "N m/rad"),
+        ("K2 over the working area", f"{sm.K2_Nm_per_rad.min():.4g} .. "
+                                     f"{sm.K2_Nm_per_rad.max():.4g}", "N m/rad"),
+        ("holdable share of the working area (Delta-p)", 100.0 * float(sm.holdable.mean()), "%"),
+        ("maximum load (min over the working area)", ml.minimum, "kg"),
+        ("  where (q1, q2)", ", ".join(f"{np.degrees(v):.4g}" for v in ml.argmin), "deg"),
+        ("maximum load, median over the working area", float(ml.data.M_max_kg.median()), "kg"),
+        ("joint 1 range", f"{np.degrees(g.q1_min):.4g} .. {np.degrees(g.q1_max):.4g}", "deg"),
+        ("joint 2 range", f"{np.degrees(g.q2_min):.4g} .. {np.degrees(g.q2_max):.4g}", "deg"),
+        ("TCP distance from joint 1", f"{r.min():.4g} .. {r.max():.4g}", "m"),
+        ("TCP x extent", f"{tcp[:, 0].min():.4g} .. {tcp[:, 0].max():.4g}", "m"),
+        ("TCP y extent", f"{tcp[:, 1].min():.4g} .. {tcp[:, 1].max():.4g}", "m"),
+        ("TCP workspace area", float(detj.mean() * dq), "m^2"),
+        ("link masses m1, m2 (plant)", f"{L.m1:.4g}, {L.m2:.4g}", "kg"),
+        ("mean pressures p_m", ", ".join(f"{v / BAR:.4g}" for v in arm.pneumatics.p_mean),
+         "bar"),
+        *[(f"contraction of group {k + 1} over the working area",
+           f"{eps[:, k].min():.3f} .. {eps[:, k].max():.3f}", "-") for k in range(4)],
+        ("effects on", ", ".join(arm.effects.enabled()) or "none", ""),
+    ]
+    df = pd.DataFrame(rows, columns=["quantity", "value", "unit"])
+    return ArmSummary(name=arm.name, pose=(float(q[0]), float(q[1])),
+                      pose_pressures=tuple(float(v) for v in p), pose_holdable=holdable,
+                      stiffness=(float(K[0]), float(K[1])), data=df)

@@ -29,6 +29,36 @@ outputs.  Example (``studies/lambda_ki.toml``)::
     csv = "results.csv"                # result table (one row per case)
     histories = false                  # full time histories per case (Parquet or CSV)
 
+Your arm, your head, effects and design parameters::
+
+    [arm]
+    file = "my_arm.toml"               # an arm file (relative to the study file)
+    [head]
+    file = "my_head.toml"              # a head file (instead of [impact] head)
+
+    [case]
+    effects = { hysteresis_delta = 0.299 }        # plant effects of every case
+    arm.links.m2 = 1.4                            # any key of the arm file [SI]
+
+    [grid]
+    arm.pneumatics.mean_pressure = { linspace = [1.2, 2.0, 5], unit = "bar" }
+    effects.payload_mass = [0.0, 0.5, 1.0]        # one effect per axis
+
+Dotted keys (``arm.<key of an arm file>``, ``effects.<name>``) are validated like the
+arm file; a plain number is in the key's SI unit, ``{value = ..., unit = "..."}`` or a
+generator with ``unit`` converts (:mod:`ppamsafety.params.arm_file`).  ``--arm`` and
+``--head`` on the command line replace ``[arm]`` and ``[head]``.
+
+A safety envelope instead of a grid (:func:`ppamsafety.envelope.safety_envelope`)::
+
+    [envelope]
+    parameter = "arm.pneumatics.mean_pressure"    # or "lam", "speed", any numeric key
+    range = [1.2e5, 2.0e5]
+    limit = "F_max"                    # "F_max" (660 N), "HIC36" (650), "iso_ts_15066"
+    tolerance = 0.01                   # relative width of the final bracket
+    # pose = [50.0, -80.0]             # "speed" only: pose [deg] and joint direction
+    # direction = [1.0, 0.0]
+
 The cases are every ``[[variants]]`` entry (or one empty entry) combined with
 every grid point, merged over ``[case]`` and ``[impact]``; a parameter may be
 set in only one of these places.  :func:`load_study` checks everything
@@ -42,11 +72,16 @@ when asked for, and the resume cache ``cache/`` (a work folder: each case is
 stored as soon as it finishes).  A folder that holds a previous sweep is
 reused with ``resume=True`` (``--resume``: finished cases are not
 recomputed) or replaced with ``overwrite=True`` (``--overwrite``: the
-previous cache is cleared and everything recomputed).
+previous cache is cleared and everything recomputed).  Beside the CSV the folder
+holds a figure of every result against every swept parameter with the 660 N maxilla
+line, the HIC 650 line and the ISO/TS 15066 forehead limit (``summary.png``), an HTML
+page (``summary.html``: what was run, on which arm and head, the figure and the
+table), and the arm and head used (``arm.toml``, ``head.toml``).
 """
 
 from __future__ import annotations
 
+import html
 import importlib.util
 import math
 import tomllib
@@ -56,9 +91,17 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from .envelope import LIMITS, safety_envelope
+from .impact.head import HeadContactModel, load_head
 from .output import OutputError, OutputFolder, read_marker
+from .params import ArmParameters
+from .params import load_arm
+from .params.arm_file import ArmFileError, arm_key, arm_to_toml, read_value
+from .plots.figure import save as save_figure
+from .plots.sweep import plot_sweep
 from .sweep import BACKENDS, grid_cases, run_sweep
-from .sweep_cases import PARAMETERS, check_case, safety_case
+from .sweep_cases import (IMPACT_POSE_DEG, PARAMETERS, case_arm, case_function, check_case,
+                          is_dotted)
 
 #: Allowed keys per table of a study file.
 SCHEMA = {
@@ -68,6 +111,9 @@ SCHEMA = {
     "grid": tuple(k for k in PARAMETERS if k != "histories"),
     "variants": tuple(k for k in PARAMETERS if k != "histories"),
     "output": ("csv", "histories"),
+    "arm": ("file",),
+    "head": ("file",),
+    "envelope": ("parameter", "range", "limit", "tolerance", "pose", "direction"),
 }
 #: Generators allowed as a grid value: ``{geomspace = [start, stop, num]}`` and ``linspace``.
 GENERATORS = ("geomspace", "linspace")
@@ -101,6 +147,12 @@ class Study:
         Where it was read from.
     origins : list of int
         Per case, the index of the ``[[variants]]`` entry it came from.
+    arm : ArmParameters or None
+        The arm of every case (``[arm] file`` or ``--arm``; None: the thesis arm).
+    head : HeadContactModel or None
+        The head of every case (``[head] file`` or ``--head``; None: the cases' own).
+    envelope : dict or None
+        The ``[envelope]`` search (parameter, bounds, limit, tolerance, case), if any.
     """
 
     name: str
@@ -111,6 +163,16 @@ class Study:
     source: str = ""
     path: Path | None = None
     origins: list = field(default_factory=list)
+    arm: ArmParameters | None = None
+    head: HeadContactModel | None = None
+    envelope: dict | None = None
+
+    @property
+    def swept(self) -> list:
+        """The case parameters that take more than one value (the grid, the variants)."""
+        keys = list(dict.fromkeys(k for c in self.cases for k in c if k != "histories"))
+        return [k for k in keys
+                if len({repr(c.get(k)) for c in self.cases}) > 1]
 
 
 def _err(where: str, msg: str) -> StudyFileError:
@@ -118,11 +180,30 @@ def _err(where: str, msg: str) -> StudyFileError:
 
 
 def _grid_values(where: str, key: str, v) -> list:
+    if isinstance(v, dict) and "unit" in v and is_dotted(key):
+        v = dict(v)
+        unit = v.pop("unit")
+        if len(v) == 1 and next(iter(v)) in GENERATORS:      # the ends in SI, then the grid
+            gen, args = next(iter(v.items()))
+            if isinstance(args, list) and len(args) == 3:
+                args = [_dotted_si(where, f"grid.{key}.{gen}[{i}]", key,
+                                   {"value": x, "unit": unit}) for i, x in enumerate(args[:2])
+                        ] + args[2:]
+            return _grid_values(where, key, {gen: args})
+        vals = v.pop("values") if set(v) == {"values"} else None
+        if not isinstance(vals, list) or not vals:
+            raise _err(where, f"grid.{key} = {v!r}: with a unit give {{values = [...], unit = "
+                              f"...}} (a non-empty list) or a generator {{linspace = [start, "
+                              f"stop, num], unit = ...}}")
+        return [_dotted_si(where, f"grid.{key}[{i}]", key, {"value": x, "unit": unit})
+                for i, x in enumerate(vals)]
     if isinstance(v, dict):
         if len(v) != 1 or next(iter(v)) not in GENERATORS:
             raise _err(where, f"grid.{key} = {v!r}: an inline table must be one of "
                               f"{{geomspace = [start, stop, num]}} or {{linspace = [start, stop, "
-                              f"num]}}")
+                              f"num]}}" + (" (with unit = \"...\" for a dotted arm key, or "
+                                           "{values = [...], unit = \"...\"})"
+                                           if is_dotted(key) else ""))
         gen, args = next(iter(v.items()))
         ok = (isinstance(args, list) and len(args) == 3
               and all(isinstance(a, (int, float)) and not isinstance(a, bool) for a in args)
@@ -142,11 +223,63 @@ def _grid_values(where: str, key: str, v) -> list:
     return v
 
 
-def _check_value(where: str, path: str, key: str, v) -> None:
+def _dotted_si(where: str, path: str, key: str, v):
+    """A dotted parameter's value in SI units (``{value, unit}`` converted; lists as lists)."""
+    if not isinstance(v, dict):
+        return v
     try:
-        PARAMETERS[key][0](v)
+        k = arm_key(key)
+        if k.unit is None and k.kind != "float":
+            raise ArmFileError(f"{key} is a plain {k.kind} (no unit)")
+        if not isinstance(v.get("value"), list):       # one number stays one number
+            k = type(k)(k.key, k.attr, k.unit, k.kind, 0, k.doc)
+        si = read_value(key, k, v)
+    except ArmFileError as exc:
+        raise _err(where, f"{path} = {v!r}: {exc}") from None
+    return list(si) if isinstance(si, tuple) else si
+
+
+def _check_value(where: str, path: str, key: str, v, arm=None) -> None:
+    try:
+        if is_dotted(key):
+            case_arm(arm, changes={key: v})
+        else:
+            PARAMETERS[key][0](v)
     except (TypeError, ValueError) as exc:
         raise _err(where, f"{path} = {v!r}: {exc}") from None
+
+
+#: Keys of a generator or a value with its unit: such an inline table is one value.
+_LEAF_KEYS = {"value", "unit", "values", *GENERATORS}
+
+
+def _flatten(where: str, table: str, d: dict) -> dict:
+    """``d`` with nested ``arm`` tables (and, in [grid], ``effects`` tables) as dotted keys.
+
+    TOML reads ``arm.links.m2 = 1.4`` as ``{"arm": {"links": {"m2": 1.4}}}``; the cases
+    name it ``"arm.links.m2"``.  In ``[grid]``, ``effects.payload_mass = [0, 0.5]`` is one
+    axis per effect; elsewhere ``effects`` stays one table of effects.
+    """
+    if not isinstance(d, dict):
+        return d
+    out = {}
+
+    def walk(prefix, v):
+        if isinstance(v, dict) and v and not set(v) <= _LEAF_KEYS:
+            for k, x in v.items():
+                walk(f"{prefix}.{k}", x)
+        else:
+            out[prefix] = v
+
+    for k, v in d.items():
+        if k == "arm" and isinstance(v, dict):
+            walk("arm", v)
+        elif k == "effects" and table == "grid" and isinstance(v, dict) and not (
+                set(v) <= _LEAF_KEYS):
+            walk("effects", v)
+        else:
+            out[k] = v
+    return out
 
 
 def _check_keys(where: str, table: str, d) -> None:
@@ -154,13 +287,103 @@ def _check_keys(where: str, table: str, d) -> None:
         raise _err(where, f"{table} must be a table ([{table}]), got {type(d).__name__} {d!r:.60}")
     allowed = SCHEMA[table.split("[")[0]]
     for k in d:
+        if is_dotted(k) and table.split("[")[0] in ("case", "grid", "variants"):
+            continue
         if k not in allowed:
             extra = (" ('histories' is set in [output])" if k == "histories" else "")
             raise _err(where, f"unknown key {table}.{k}; allowed keys of [{table.split('[')[0]}]: "
                               f"{list(allowed)}{extra}")
 
 
-def parse_study(text: str, *, where: str = "study file", default_name: str = "study") -> Study:
+def _arm_and_head(where: str, data: dict, base_dir, arm, head) -> tuple:
+    """The study's arm and head: ``--arm``/``--head`` or the ``[arm]``/``[head]`` files."""
+    out = []
+    for table, given, load, cls in (("arm", arm, load_arm, ArmParameters),
+                                    ("head", head, load_head, HeadContactModel)):
+        d = data.get(table, {})
+        _check_keys(where, table, d)
+        if given is not None:
+            if not isinstance(given, cls):
+                raise TypeError(f"{table} must be a {cls.__name__} or None, got "
+                                f"{type(given).__name__}")
+            out.append(given)
+            continue
+        if "file" not in d:
+            out.append(None)
+            continue
+        f = d["file"]
+        if not isinstance(f, str) or not f.strip():
+            raise _err(where, f"{table}.file = {f!r} must be the path of a {table} file")
+        path = Path(f) if base_dir is None or Path(f).is_absolute() else Path(base_dir) / f
+        try:
+            out.append(load(path))
+        except FileNotFoundError:
+            raise _err(where, f"{table}.file = {f!r}: {table} file '{path}' does not exist") \
+                from None
+        except ValueError as exc:
+            raise _err(where, f"{table}.file = {f!r}: {exc}") from None
+    return tuple(out)
+
+
+def _envelope(where: str, data: dict, base: dict, arm) -> dict | None:
+    """The checked ``[envelope]`` table: parameter, bounds, limit, tolerance and base case."""
+    env = data.get("envelope")
+    if env is None:
+        return None
+    _check_keys(where, "envelope", env)
+    if "grid" in data or "variants" in data:
+        raise _err(where, "an [envelope] study searches one parameter: remove [grid] and "
+                          "[[variants]] (the envelope evaluates its own cases)")
+    par = env.get("parameter")
+    if not isinstance(par, str):
+        raise _err(where, f"envelope.parameter = {par!r} must be a parameter name such as "
+                          f"'lam', 'speed' or 'arm.pneumatics.mean_pressure'")
+    rng = env.get("range")
+    if not (isinstance(rng, list) and len(rng) == 2 and all(
+            isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
+            for x in rng) and rng[0] < rng[1]):
+        raise _err(where, f"envelope.range = {rng!r} must be [low, high], finite, low < high "
+                          f"(SI units of {par})")
+    lim = env.get("limit", "F_max")
+    if lim not in LIMITS:
+        raise _err(where, f"envelope.limit = {lim!r} is not one of {list(LIMITS)}")
+    tol = env.get("tolerance", 0.01)
+    if isinstance(tol, bool) or not isinstance(tol, (int, float)) or not 1e-6 <= tol <= 0.5:
+        raise _err(where, f"envelope.tolerance = {tol!r} must be a number in [1e-6, 0.5]")
+    case = dict(base)
+    if par == "speed":
+        extra = [k for k in case if not (is_dotted(k) or k in ("stiffness", "head", "effects"))]
+        if extra:
+            raise _err(where, f"envelope.parameter = 'speed' is one impact at a pose: "
+                              f"{extra} do not apply (set envelope.pose, envelope.direction, "
+                              f"[impact] stiffness/head, effects and arm.<key>)")
+        pose = env.get("pose", list(IMPACT_POSE_DEG))
+        direction = env.get("direction", [1.0, 0.0])
+        for k, v in (("pose", pose), ("direction", direction)):
+            if not (isinstance(v, list) and len(v) == 2 and all(
+                    isinstance(x, (int, float)) and not isinstance(x, bool) for x in v)):
+                raise _err(where, f"envelope.{k} = {v!r} must be a pair of numbers")
+        case.update(q1_deg=float(pose[0]), q2_deg=float(pose[1]),
+                    direction=[float(x) for x in direction])
+    else:
+        for k in ("pose", "direction"):
+            if k in env:
+                raise _err(where, f"envelope.{k} applies only to parameter = 'speed'")
+        if par in case:
+            raise _err(where, f"envelope.parameter = {par!r} is also set in [case]/[impact]; "
+                              f"the envelope searches it")
+        try:
+            if is_dotted(par):
+                case_arm(arm, changes={par: float(rng[0])})
+            check_case(**case, **{par: float(rng[0])}, arm=arm)
+        except (TypeError, ValueError) as exc:
+            raise _err(where, f"envelope.parameter = {par!r}: {exc}") from None
+    return {"parameter": par, "bounds": (float(rng[0]), float(rng[1])), "limit": lim,
+            "tolerance": float(tol), "case": case}
+
+
+def parse_study(text: str, *, where: str = "study file", default_name: str = "study",
+                base_dir=None, arm=None, head=None) -> Study:
     """Parse and check the TOML text of a study file.
 
     Parameters
@@ -171,6 +394,13 @@ def parse_study(text: str, *, where: str = "study file", default_name: str = "st
         How the file is named in error messages.
     default_name : str
         Sweep name when ``[study] name`` is missing.
+    base_dir : path-like, optional
+        Folder the ``[arm]`` and ``[head]`` files are relative to (the study file's;
+        default the working directory).
+    arm : ArmParameters, optional
+        The arm (``--arm``): replaces ``[arm] file``.
+    head : HeadContactModel, optional
+        The head (``--head``): replaces ``[head] file``.
 
     Returns
     -------
@@ -189,6 +419,12 @@ def parse_study(text: str, *, where: str = "study file", default_name: str = "st
     for k in data:
         if k not in SCHEMA:
             raise _err(where, f"unknown table [{k}]; allowed: {list(SCHEMA)}")
+    arm, head = _arm_and_head(where, data, base_dir, arm, head)
+    for table in ("case", "grid"):
+        if table in data:
+            data[table] = _flatten(where, table, data[table])
+    if isinstance(data.get("variants"), list):
+        data["variants"] = [_flatten(where, "variants", v) for v in data["variants"]]
     study = data.get("study", {})
     _check_keys(where, "study", study)
     name = study.get("name", default_name)
@@ -205,17 +441,24 @@ def parse_study(text: str, *, where: str = "study file", default_name: str = "st
         for k, v in d.items():
             if k in origin:
                 raise _err(where, f"{table}.{k} is also set as {origin[k]}; set it in one place")
-            _check_value(where, f"{table}.{k}", k, v)
+            if k == "head" and head is not None:
+                raise _err(where, f"{table}.head = {v!r} and the [head] file (or --head) both "
+                                  f"set the head; set it in one place")
+            v = _dotted_si(where, f"{table}.{k}", k, v) if is_dotted(k) else v
+            _check_value(where, f"{table}.{k}", k, v, arm)
             origin[k], base[k] = f"{table}.{k}", v
+    envelope = _envelope(where, data, base, arm)
     grid = data.get("grid", {})
     _check_keys(where, "grid", grid)
     gvals = {}
     for k, v in grid.items():
         if k in origin:
             raise _err(where, f"grid.{k} is also set as {origin[k]}; set it in one place")
+        if k == "head" and head is not None:
+            raise _err(where, "grid.head and the [head] file (or --head) both set the head")
         vals = _grid_values(where, k, v)
         for i, x in enumerate(vals):
-            _check_value(where, f"grid.{k}[{i}]", k, x)
+            _check_value(where, f"grid.{k}[{i}]", k, x, arm)
         gvals[k] = vals
     variants = data.get("variants", [{}])
     if not isinstance(variants, list) or not variants:
@@ -227,7 +470,12 @@ def parse_study(text: str, *, where: str = "study file", default_name: str = "st
             if k in origin or k in gvals:
                 other = origin.get(k, f"grid.{k}")
                 raise _err(where, f"variants[{j}].{k} is also set as {other}; set it in one place")
-            _check_value(where, f"variants[{j}].{k}", k, v)
+            if k == "head" and head is not None:
+                raise _err(where, f"variants[{j}].head and the [head] file (or --head) both "
+                                  f"set the head")
+            v = _dotted_si(where, f"variants[{j}].{k}", k, v) if is_dotted(k) else v
+            var[k] = v
+            _check_value(where, f"variants[{j}].{k}", k, v, arm)
     out = data.get("output", {})
     _check_keys(where, "output", out)
     csv = out.get("csv", "results.csv")
@@ -238,6 +486,11 @@ def parse_study(text: str, *, where: str = "study file", default_name: str = "st
     hist = out.get("histories", False)
     if not isinstance(hist, bool):
         raise _err(where, f"output.histories = {hist!r} must be true or false")
+    if envelope is not None:
+        if hist:
+            raise _err(where, "output.histories does not apply to an [envelope] study")
+        return Study(name=name.strip(), description=desc, cases=[], csv=csv, histories=False,
+                     source=text, origins=[], arm=arm, head=head, envelope=envelope)
     cases, origins = [], []
     points = grid_cases(gvals) if gvals else [{}]
     for j, var in enumerate(variants):
@@ -246,7 +499,7 @@ def parse_study(text: str, *, where: str = "study file", default_name: str = "st
             if hist:
                 c["histories"] = True
             try:
-                check_case(**c)
+                check_case(**c, arm=arm)
             except (TypeError, ValueError) as exc:
                 src = (f"variants[{j}]" if len(variants) > 1 or var else "") + (
                     f" with grid point {g}" if g else "")
@@ -255,16 +508,20 @@ def parse_study(text: str, *, where: str = "study file", default_name: str = "st
             cases.append(c)
             origins.append(j)
     return Study(name=name.strip(), description=desc, cases=cases, csv=csv, histories=hist,
-                 source=text, origins=origins)
+                 source=text, origins=origins, arm=arm, head=head)
 
 
-def load_study(path) -> Study:
+def load_study(path, *, arm=None, head=None) -> Study:
     """Read and check a study file (see the module docstring).
 
     Parameters
     ----------
     path : path-like
         The ``.toml`` file.
+    arm : ArmParameters, optional, keyword-only
+        Replaces the study's ``[arm] file`` (``--arm``).
+    head : HeadContactModel, optional, keyword-only
+        Replaces the study's ``[head] file`` (``--head``).
 
     Returns
     -------
@@ -278,7 +535,8 @@ def load_study(path) -> Study:
         text = p.read_text(encoding="utf-8")
     except UnicodeDecodeError as exc:
         raise _err(str(p), f"not UTF-8 text ({exc})") from None
-    st = parse_study(text, where=str(p), default_name=p.stem)
+    st = parse_study(text, where=str(p), default_name=p.stem, base_dir=p.parent, arm=arm,
+                     head=head)
     st.path = p
     return st
 
@@ -315,7 +573,8 @@ def _write_histories(df: pd.DataFrame, folder: Path) -> list:
 
 def run_study_file(study, outdir, *, backend: str = "local", scheduler=None,
                    processes: int | None = None, resume: bool = False, overwrite: bool = False,
-                   max_cases: int | None = None, progress: bool = True) -> pd.DataFrame:
+                   max_cases: int | None = None, progress: bool = True, arm=None,
+                   head=None) -> pd.DataFrame:
     """Run a study and write its output folder.
 
     Parameters
@@ -342,13 +601,21 @@ def run_study_file(study, outdir, *, backend: str = "local", scheduler=None,
         Run only the first ``max_cases`` cases (a preview or a test).
     progress : bool
         Progress bar.
+    arm : ArmParameters, optional
+        Replaces the study file's ``[arm] file`` (a path ``study`` only).
+    head : HeadContactModel, optional
+        Replaces the study file's ``[head] file`` (a path ``study`` only).
 
     Returns
     -------
     pandas.DataFrame
-        The result table as written (without the histories).
+        The result table as written (without the histories); for an ``[envelope]``
+        study, its evaluations.
     """
-    st = study if isinstance(study, Study) else load_study(study)
+    if isinstance(study, Study) and (arm is not None or head is not None):
+        raise ValueError("arm and head apply to a study file path; a loaded Study has them "
+                         "(load_study(path, arm=..., head=...))")
+    st = study if isinstance(study, Study) else load_study(study, arm=arm, head=head)
     for nm, v in (("resume", resume), ("overwrite", overwrite), ("progress", progress)):
         if not isinstance(v, bool):
             raise TypeError(f"{nm} must be True or False, got {v!r}")
@@ -376,15 +643,103 @@ def run_study_file(study, outdir, *, backend: str = "local", scheduler=None,
     folder = OutputFolder(out, kind=KIND, overwrite=ow, clean=clean)
     with folder as stage:
         cache = folder.workdir("cache", fresh=not resume)
-        df = run_sweep(safety_case, cases, name=st.name, cache_dir=cache, processes=processes,
-                       progress=progress, on_error="record", backend=backend, scheduler=scheduler)
+        if st.envelope is not None:
+            env = _run_envelope(st, cache, processes, progress)
+            df = env.to_pandas()
+        else:
+            env = None
+            df = run_sweep(case_function(st.arm, st.head), cases, name=st.name, cache_dir=cache,
+                           processes=processes, progress=progress, on_error="record",
+                           backend=backend, scheduler=scheduler)
         if "histories" in df.columns:
             _write_histories(df, stage / "histories")
             df = df.drop(columns=["histories"])
         df.to_csv(stage / st.csv, index=False)
         (stage / "study.toml").write_text(st.source, encoding="utf-8")
+        _write_summary(st, df, stage, env)
     return df
 
 
+def _run_envelope(st: Study, cache, processes, progress):
+    """The ``[envelope]`` search of a study (:func:`ppamsafety.envelope.safety_envelope`)."""
+    e = st.envelope
+    return safety_envelope(e["parameter"], e["bounds"], limit=e["limit"], case=e["case"],
+                           arm=st.arm, head=st.head, tolerance=e["tolerance"],
+                           processes=processes, progress=progress, cache_dir=cache,
+                           name=st.name)
+
+
+#: Files of a sweep folder besides the result CSV and ``study.toml``.
+SUMMARY_FIGURE, SUMMARY_PAGE, ARM_COPY, HEAD_COPY = ("summary.png", "summary.html", "arm.toml",
+                                                     "head.toml")
+
+
+def _write_summary(st: Study, df: pd.DataFrame, stage: Path, envelope=None) -> None:
+    """The figure, the HTML page and the arm and head of a finished study."""
+    if st.arm is not None:
+        (stage / ARM_COPY).write_text(arm_to_toml(st.arm), encoding="utf-8")
+    if st.head is not None:
+        (stage / HEAD_COPY).write_text(st.head.to_toml(), encoding="utf-8")
+    title = f"{st.name}: {st.description}" if st.description else st.name
+    if envelope is not None:
+        fig = envelope.plot(title=title)
+        swept, what = [envelope.parameter], envelope.description
+    else:       # what varies among the cases run (--max-cases may run fewer)
+        swept = [k for k in st.swept if k in df.columns and df[k].map(repr).nunique() > 1]
+        fig = plot_sweep(df, swept, title=title)
+        what = (f"{len(df)} cases, {int((df.get('status') == 'ok').sum())} ok"
+                if "status" in df.columns else f"{len(df)} cases")
+    save_figure(fig, stage / SUMMARY_FIGURE)
+    (stage / SUMMARY_PAGE).write_text(summary_page(st, df, what, swept), encoding="utf-8")
+
+
+def summary_page(st: Study, df: pd.DataFrame, what: str, swept) -> str:
+    """The HTML summary of a sweep folder: what was run, on which arm, the figure, the table.
+
+    Parameters
+    ----------
+    st : Study
+        The study.
+    df : pandas.DataFrame
+        Its result table (or an envelope's evaluations).
+    what : str
+        One line: the cases run, or the envelope found.
+    swept : sequence of str
+        The parameters that vary.
+
+    Returns
+    -------
+    str
+        A self-contained page (the figure is ``summary.png`` beside it).
+    """
+    arm = (st.arm.name or "unnamed arm") if st.arm is not None else "the thesis arm"
+    head = st.head.name if st.head is not None else "per case (default thesis-frontal)"
+    limits = ("660 N maxilla fracture (Haddadin et al. 2007a, thesis §6.3.3); HIC36 650 (5 % "
+              "risk of AIS 3+, thesis §6.3.3); ISO/TS 15066 skull/forehead transient contact "
+              f"{LIMITS['iso_ts_15066'].value:g} N (Annex A)")
+    shown = df.drop(columns=[c for c in ("error",) if c in df.columns and not df[c].any()])
+    rows = [("study", st.name), ("description", st.description or "-"),
+            ("arm", arm + (" (arm.toml)" if st.arm is not None else "")),
+            ("head", head + (" (head.toml)" if st.head is not None else "")),
+            ("swept", ", ".join(swept) or "-"), ("result", what), ("limits drawn", limits)]
+    meta = "".join(f"<tr><th>{html.escape(k)}</th><td>{html.escape(str(v))}</td></tr>"
+                   for k, v in rows)
+    table = shown.to_html(index=False, na_rep="", float_format=lambda x: f"{x:.4g}",
+                          border=0, classes="results")
+    return f"""<!DOCTYPE html>
+<html lang="en"><head><meta charset="utf-8"><title>{html.escape(st.name)}: ppamsafety sweep</title>
+<style>body{{font-family:sans-serif;max-width:80em;margin:1em auto;padding:0 1em}}
+table{{border-collapse:collapse;font-size:0.85em}}td,th{{border:1px solid #ccc;padding:2px 6px}}
+th{{background:#f3f3f3;text-align:left}}img{{max-width:100%}}</style></head>
+<body><h1>{html.escape(st.name)}</h1>
+<table>{meta}</table>
+<p><img src="{SUMMARY_FIGURE}" alt="results against the swept parameters"></p>
+<p>Files: the table <a href="{html.escape(st.csv)}">{html.escape(st.csv)}</a>, the study
+<a href="study.toml">study.toml</a>.</p>
+{table}
+</body></html>
+"""
+
+
 __all__ = ["SCHEMA", "GENERATORS", "KIND", "Study", "StudyFileError", "parse_study",
-           "load_study", "history_format", "run_study_file"]
+           "load_study", "history_format", "run_study_file", "summary_page"]

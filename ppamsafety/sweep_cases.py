@@ -11,6 +11,14 @@ study files (:mod:`ppamsafety.study_files`) describe such sweeps in TOML.
 Each parameter is checked by :func:`check_case` before anything runs, with
 an error that names the parameter, its value and the allowed values.
 
+The arm is the thesis arm or any arm (``arm=``, e.g. from an arm file); a case changes
+it with plant effects (``effects={"hysteresis_delta": 0.299}``, or one effect per key:
+``"effects.payload_mass": 0.5``) and with any arm parameter by its dotted key
+(``"arm.pneumatics.mean_pressure": 2.0e5``, ``"arm.muscles.group1.count": 5``,
+``"arm.links.m2": 1.4``; the keys of an arm file, :mod:`ppamsafety.params.arm_file`),
+each value validated like the file.  The head is a named model or any
+:class:`~ppamsafety.impact.head.HeadContactModel` (``head=``).
+
 With the default parameters (``instants="heuristic"``, no stiffness
 override, no sensor noise) the case follows the code path of Table 6.1
 (:mod:`ppamsafety.sections.safety`): :func:`run_thesis_experiment` and
@@ -20,6 +28,7 @@ arguments, so it reproduces the table's numbers exactly.
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Mapping
 
@@ -30,10 +39,13 @@ from .control import PID, JointPSMC, TaskPSMC, SensorConfig
 from .experiments.catalog import (CIRCLE_PERIODS, CIRCLE_WARMUP, run_thesis_experiment,
                                   ControllerVariant)
 from .experiments.metrics import tracking_stats
-from .impact.head import head_model_names, head_model
+from .impact.head import HeadContactModel, head_model_names, head_model
 from .impact.instants import HEURISTICS, evaluate_experiment, heuristic_instants, impact_states
 from .impact.model import simulate_impacts
-from .params import thesis_arm
+from .params import ArmParameters, thesis_arm
+from .params.arm_file import ArmFileError, apply_arm_changes, effects_from_dict
+from .plant import geometry as geo
+from .plant import pneumatics as pn
 from .sweep import _check_cases, grid_cases, run_sweep
 from .units import BAR
 
@@ -90,18 +102,95 @@ def _check_stiffness(v):
 
 
 def _check_head(v):
+    if isinstance(v, HeadContactModel):
+        return v
     names = head_model_names()
     if not isinstance(v, str) or v not in names:
-        raise ValueError(f"head = {v!r} is not a head model name; allowed: {names}")
+        raise ValueError(f"head = {v!r} is not a head model name; allowed: {names} (a head "
+                         f"file: the study file's [head] file, or a HeadContactModel)")
     return v
 
 
 def _check_effects(v):
     if v is None or (isinstance(v, Mapping) and not v):
         return {}
-    raise ValueError(f"effects = {v!r} is not allowed yet: only {{}} (none). The plant effects "
-                     f"(ArmParameters.effects) are being added; once they exist, this key passes "
-                     f"them through to the arm")
+    if not isinstance(v, Mapping):
+        raise TypeError(f"effects = {v!r:.80} must be a table of plant effects, e.g. "
+                        f"{{hysteresis_delta = 0.299, payload_mass = 0.5}} (names: "
+                        f"ppamsafety.params.effects.Effects)")
+    try:
+        effects_from_dict(v)
+    except ArmFileError as exc:
+        raise ValueError(str(exc)) from None
+    return dict(v)
+
+
+#: Prefixes of the dotted case parameters: ``arm.<key of an arm file>`` and
+#: ``effects.<effect name>``.
+DOTTED = ("arm.", "effects.")
+
+
+def is_dotted(name) -> bool:
+    """True for a dotted case parameter (``arm.links.m2``, ``effects.payload_mass``).
+
+    Parameters
+    ----------
+    name : str
+        A case parameter name.
+    """
+    return isinstance(name, str) and name.startswith(DOTTED)
+
+
+def case_arm(arm=None, *, effects=None, changes=None) -> ArmParameters:
+    """The arm of one case: ``arm`` with the case's effects and dotted parameters.
+
+    Parameters
+    ----------
+    arm : ArmParameters, optional
+        The base arm (default the thesis arm).
+    effects : mapping, optional
+        Plant effects to switch on (``{"hysteresis_delta": 0.299}``), validated like an
+        arm file's ``[effects]``; the base arm's other effects are kept.
+    changes : mapping, optional
+        Dotted parameters: ``"arm.<key>"`` (any key of an arm file) and
+        ``"effects.<name>"`` -> value (a plain number in SI units, a list, or
+        ``{"value": v, "unit": u}``).
+
+    Returns
+    -------
+    ArmParameters
+        ``arm`` itself when nothing changes.
+
+    Raises
+    ------
+    ValueError
+        Naming the dotted key, its value and what is allowed.
+    """
+    base = thesis_arm() if arm is None else arm
+    if not isinstance(base, ArmParameters):
+        raise TypeError(f"arm must be an ArmParameters or None, got {type(base).__name__}")
+    ch = {}
+    for k, v in (effects or {}).items():
+        ch[f"effects.{k}"] = v
+    for k, v in (changes or {}).items():
+        if not is_dotted(k):
+            raise ValueError(f"{k!r} is not a dotted case parameter (arm.<key> or "
+                             f"effects.<name>)")
+        key = k[4:] if k.startswith("arm.") else k
+        if key in ch:
+            raise ValueError(f"{k} sets {key}, which effects = {effects!r} sets as well; set "
+                             f"it in one place")
+        ch[key] = v
+    if not ch:
+        return base
+    try:
+        return apply_arm_changes(base, ch)
+    except ArmFileError as exc:
+        msg = str(exc)
+        if msg.startswith("arm.effects.") and not any(k.startswith("arm.effects.")
+                                                      for k in (changes or {})):
+            msg = msg[4:]
+        raise ValueError(msg) from None
 
 
 def _check_choice(name, v, choices):
@@ -149,9 +238,11 @@ PARAMETERS = {
     "stiffness": (_check_stiffness,
                   "joint stiffness of the impacts [Nm/rad]: None = (2.18) from the pressures "
                   "at the instant, a number for both joints or a pair [K1, K2]"),
-    "head": (_check_head, "head contact model name (ppamsafety.impact.head.head_model_names)"),
-    "effects": (_check_effects, "plant effects; only {} for now (ArmParameters.effects will "
-                                "pass through)"),
+    "head": (_check_head, "head contact model name (ppamsafety.impact.head.head_model_names; a "
+                          "head file: the study file's [head] table)"),
+    "effects": (_check_effects, "plant effects {name = value} (ppamsafety.params.effects."
+                                "Effects; one number sets every entry of a vector effect); "
+                                "or one effect per key: effects.<name>"),
     "instants": (lambda v: _check_choice("instants", v, INSTANTS),
                  "impact instants: 'heuristic' (the thesis' four), 'all' (every `every`-th "
                  "ms) or one heuristic name"),
@@ -167,31 +258,21 @@ PARAMETERS = {
 }
 
 
-def check_case(**case) -> dict:
-    """Check the parameters of one :func:`safety_case`; return them completed with defaults.
-
-    Parameters
-    ----------
-    **case
-        Keyword arguments of :func:`safety_case`.
-
-    Returns
-    -------
-    dict
-        Every parameter of :func:`safety_case`, checked.
-
-    Raises
-    ------
-    TypeError, ValueError
-        Naming the parameter, its value and what is allowed (unknown names too).
-    """
-    unknown = [k for k in case if k not in PARAMETERS]
+def _checked(case: dict) -> tuple:
+    """(checked parameters, the case's arm): :func:`check_case` and the arm it validates."""
+    case = dict(case)
+    arm = case.pop("arm", None)
+    unknown = [k for k in case if k not in PARAMETERS and not is_dotted(k)]
     if unknown:
         raise ValueError(f"unknown safety_case parameter(s) {unknown}; allowed: "
-                         f"{list(PARAMETERS)}")
+                         f"{list(PARAMETERS)} and the dotted arm.<key of an arm file> (e.g. "
+                         f"arm.pneumatics.mean_pressure) and effects.<name>")
     full = {**DEFAULTS, **case}
     for k, v in full.items():
-        PARAMETERS[k][0](v)
+        if not is_dotted(k):
+            PARAMETERS[k][0](v)
+    dotted = {k: v for k, v in full.items() if is_dotted(k)}
+    the_arm = case_arm(arm, effects=full["effects"], changes=dotted)   # validated like the file
     ctrl = full["controller"]
     if ctrl == "PID" and full["lam"] is not None:
         raise ValueError(f"lam = {full['lam']!r} does not apply to controller = 'PID' (PSMC only)")
@@ -209,7 +290,30 @@ def check_case(**case) -> dict:
     if full["every"] is not None and full["instants"] != "all":
         raise ValueError(f"every = {full['every']} applies only to instants = 'all', not "
                          f"{full['instants']!r}")
-    return full
+    return full, the_arm
+
+
+def check_case(**case) -> dict:
+    """Check the parameters of one :func:`safety_case`; return them completed with defaults.
+
+    Parameters
+    ----------
+    **case
+        Keyword arguments of :func:`safety_case`, dotted ones (``arm.links.m2``,
+        ``effects.payload_mass``) included; ``arm`` (the base arm the dotted ones
+        change, checked with it) is used and not returned.
+
+    Returns
+    -------
+    dict
+        Every parameter of :func:`safety_case`, checked.
+
+    Raises
+    ------
+    TypeError, ValueError
+        Naming the parameter, its value and what is allowed (unknown names too).
+    """
+    return _checked(case)[0]
 
 
 DEFAULTS = {"experiment": "step", "controller": "PID", "lam": None, "kp_bar": None,
@@ -289,9 +393,9 @@ def _impacts(result, arm, instants, every, head, stiffness):
 
 def safety_case(experiment: str = "step", controller: str = "PID", *, lam=None, kp_bar=None,
                 ki_bar=None, kd_bar=None, task_kp=None, task_ki=None, task_kd=None,
-                stiffness=None, head: str = "thesis-frontal", effects=None,
+                stiffness=None, head="thesis-frontal", effects=None,
                 instants: str = "heuristic", every: int | None = None, noise_seed=None,
-                duration=None, histories: bool = False) -> dict:
+                duration=None, histories: bool = False, arm=None, **dotted) -> dict:
     """One experiment with one controller, crashed into a head: a compact result row.
 
     Parameters
@@ -310,12 +414,13 @@ def safety_case(experiment: str = "step", controller: str = "PID", *, lam=None, 
     stiffness : None, float or pair
         Joint stiffness used in the impacts [Nm/rad]: None = (2.18) from the
         pressures at each instant (thesis); a value overrides it (fig. 6.3).
-    head : str
-        Head contact model name (:func:`ppamsafety.impact.head.head_model`).
+    head : str or HeadContactModel
+        Head contact model: a name (:func:`ppamsafety.impact.head.head_model`) or a
+        model (e.g. from a head file, :func:`ppamsafety.impact.head.load_head`).
     effects : dict or None
-        Plant effects.  Only ``{}``/None for now: the effects
-        (``ArmParameters.effects``) are being added to the plant and will be
-        passed through to the arm by this key.
+        Plant effects ``{name: value}`` of :class:`ppamsafety.params.effects.Effects`
+        (SI units; ``{"value": v, "unit": u}`` accepted; one number sets every entry
+        of a vector effect: ``{"hysteresis_delta": 0.299}``), on top of the arm's own.
     instants : str
         ``"heuristic"``: the thesis' four instants (§6.3.3); ``"all"``: every
         ``every``-th ms (instants with the TCP slower than :data:`MIN_SPEED`
@@ -331,6 +436,14 @@ def safety_case(experiment: str = "step", controller: str = "PID", *, lam=None, 
         Also return the full time histories under the key ``"histories"``:
         ``{"closed_loop": DataFrame (1 kHz record), "impact": DataFrame (worst
         HIC36 impact)}``.  Off by default: results stay compact.
+    arm : ArmParameters, optional
+        The arm (default the thesis arm); a sweep passes it to every case.
+    **dotted
+        Dotted parameters (:func:`case_arm`): ``"arm.<key of an arm file>"``
+        (``"arm.pneumatics.mean_pressure"``: the mean pressure p_m of both joints,
+        the physical stiffness knob (2.18); ``"arm.muscles.group1.count"``;
+        ``"arm.links.m2"``) and ``"effects.<name>"``, each validated like the file.
+        Pass them as ``safety_case(**{"arm.links.m2": 1.4})``.
 
     Returns
     -------
@@ -343,21 +456,22 @@ def safety_case(experiment: str = "step", controller: str = "PID", *, lam=None, 
         [m] (task-space tracking error; circles after the 5 s warm-up, NaN if
         the run diverged) and ``diverged``.
     """
-    p = check_case(experiment=experiment, controller=controller, lam=lam, kp_bar=kp_bar,
-                   ki_bar=ki_bar, kd_bar=kd_bar, task_kp=task_kp, task_ki=task_ki,
-                   task_kd=task_kd, stiffness=stiffness, head=head, effects=effects,
-                   instants=instants, every=every, noise_seed=noise_seed, duration=duration,
-                   histories=histories)
-    arm = thesis_arm()
+    p, arm = _checked(dict(experiment=experiment, controller=controller, lam=lam,
+                           kp_bar=kp_bar, ki_bar=ki_bar, kd_bar=kd_bar, task_kp=task_kp,
+                           task_ki=task_ki, task_kd=task_kd, stiffness=stiffness, head=head,
+                           effects=effects, instants=instants, every=every,
+                           noise_seed=noise_seed, duration=duration, histories=histories,
+                           arm=arm, **dotted))
+    hm = p["head"] if isinstance(p["head"], HeadContactModel) else head_model(p["head"])
     ctrl = make_controller(p["controller"], lam=p["lam"], kp_bar=p["kp_bar"], ki_bar=p["ki_bar"],
                            kd_bar=p["kd_bar"], task_kp=p["task_kp"], task_ki=p["task_ki"],
                            task_kd=p["task_kd"])
     variant = ControllerVariant.of(ctrl)
-    sensors = None if p["noise_seed"] is None else SensorConfig(noise=True, seed=p["noise_seed"])
+    sensors = (None if p["noise_seed"] is None
+               else SensorConfig.for_arm(arm, noise=True, seed=p["noise_seed"]))
     res = run_thesis_experiment(arm, p["experiment"], [variant], sensors=sensors,
                                 duration=p["duration"])[0]
-    ev = _impacts(res, arm, p["instants"], p["every"] or 1, head_model(p["head"]),
-                  p["stiffness"])
+    ev = _impacts(res, arm, p["instants"], p["every"] or 1, hm, p["stiffness"])
     s = ev.summary
     if len(s) == 0:
         raise ValueError(f"no impact instant: the TCP never moves faster than {MIN_SPEED} m/s")
@@ -373,7 +487,7 @@ def safety_case(experiment: str = "step", controller: str = "PID", *, lam=None, 
            "track_rms": tr["rms"], "diverged": bool(res.diverged)}
     if histories:
         worst = int(s["HIC36"].idxmax())
-        ev_w = _impacts_one(res, arm, s.iloc[worst], head_model(p["head"]))
+        ev_w = _impacts_one(res, arm, s.iloc[worst], hm)
         out["histories"] = {"closed_loop": res.to_pandas(), "impact": ev_w}
     return out
 
@@ -388,9 +502,113 @@ def _impacts_one(result, arm, row, head) -> pd.DataFrame:
     return res.histories[0]
 
 
+#: Default pose of :func:`impact_case` [deg]: the step-response impact configuration
+#: q = (50, -80) deg of thesis §6.3.3.
+IMPACT_POSE_DEG = (50.0, -80.0)
+
+
+def impact_case(speed: float, *, q1_deg: float = IMPACT_POSE_DEG[0],
+                q2_deg: float = IMPACT_POSE_DEG[1], direction=(1.0, 0.0), stiffness=None,
+                head="thesis-frontal", effects=None, arm=None, **dotted) -> dict:
+    """One impact of the arm moving at a given tool speed (the ``speed`` of an envelope).
+
+    The arm is at rest-state pressures in pose ``q`` and moves along the joint-space
+    ``direction`` with its tool point at ``speed``; it hits the head along its tool
+    velocity (the worst case of fig. 6.2).
+
+    Parameters
+    ----------
+    speed : float
+        Tool (TCP) speed at impact [m/s], in (0, 10].
+    q1_deg, q2_deg : float, keyword-only
+        Pose at impact [deg] (default (50, -80), thesis §6.3.3); in the working area.
+    direction : pair of float, keyword-only
+        Joint-space velocity direction (qd1, qd2) (default (1, 0): the arm swinging
+        about joint 1); scaled so that the tool moves at ``speed``.
+    stiffness : None, float or pair, keyword-only
+        Joint stiffness [Nm/rad]: None = (2.18) with the static pressures of the pose.
+    head : str or HeadContactModel, keyword-only
+        Head model.
+    effects : dict, optional, keyword-only
+        Plant effects (as :func:`safety_case`).
+    arm : ArmParameters, optional, keyword-only
+        The arm (default the thesis arm).
+    **dotted
+        ``"arm.<key>"`` and ``"effects.<name>"`` parameters (as :func:`safety_case`).
+
+    Returns
+    -------
+    dict
+        ``F_max`` [N], ``HIC36``, ``HIC15``, ``tcp_speed`` [m/s], ``K1``, ``K2``
+        [Nm/rad].
+    """
+    v = _number("speed", speed, lo_open=True, unit="m/s")
+    if v > 10.0:
+        raise ValueError(f"speed = {v:g} m/s is outside (0, 10] m/s")
+    q = np.radians([_number("q1_deg", q1_deg, lo=-360.0, unit="deg"),
+                    _number("q2_deg", q2_deg, lo=-360.0, unit="deg")])
+    d = np.asarray([_number(f"direction[{i}]", x, lo=-math.inf) for i, x in
+                    enumerate(direction)] if isinstance(direction, (list, tuple)) and
+                   len(direction) == 2 else [], float)
+    if d.size != 2 or not np.any(d):
+        raise ValueError(f"direction = {direction!r} must be a non-zero pair (qd1, qd2)")
+    st = _check_stiffness(stiffness)
+    hm = _check_head(head)
+    hm = hm if isinstance(hm, HeadContactModel) else head_model(hm)
+    _check_effects(effects)
+    arm = case_arm(arm, effects=effects or {}, changes=dotted)
+    if not bool(geo.in_working_area(q, arm)):
+        raise ValueError(f"q = ({q1_deg:g}, {q2_deg:g}) deg is outside the arm's working area")
+    tcp = geo.jacobian(q, arm) @ d
+    qd = d * (v / float(np.hypot(*tcp)))
+    if st is None:
+        p = np.clip(pn.static_pressures(q, arm), 0.0, arm.pneumatics.p_max)
+        K = pn.joint_stiffness(q, p, arm)
+    else:
+        K = np.broadcast_to(np.asarray(st, float), (2,)).copy()
+    s = simulate_impacts(arm, q, qd, K, head=hm).summary.iloc[0]
+    return {"F_max": float(s.F_max), "HIC36": float(s.HIC36), "HIC15": float(s.HIC15),
+            "tcp_speed": float(s.tcp_speed), "K1": float(K[0]), "K2": float(K[1])}
+
+
+def case_function(arm=None, head=None, *, kind: str = "safety"):
+    """:func:`safety_case` bound to an arm and a head model (a sweep's case function).
+
+    Parameters
+    ----------
+    arm : ArmParameters, optional
+        The arm of every case (None: the thesis arm, :func:`safety_case` itself).
+    head : HeadContactModel, optional
+        The head of every case that does not name one (None: ``"thesis-frontal"``).
+    kind : {"safety", "impact"}, keyword-only
+        :func:`safety_case` (an experiment crashed into the head) or
+        :func:`impact_case` (one impact at a given tool speed).
+
+    Returns
+    -------
+    callable
+        :func:`safety_case` / :func:`impact_case`, or a :func:`functools.partial` of it.  The sweep cache
+        key hashes the partial's arguments, so another arm or head never reuses a
+        cached result.
+    """
+    if arm is not None and not isinstance(arm, ArmParameters):
+        raise TypeError(f"arm must be an ArmParameters or None, got {type(arm).__name__}")
+    if head is not None and not isinstance(head, HeadContactModel):
+        raise TypeError(f"head must be a HeadContactModel or None, got {type(head).__name__}")
+    if kind not in ("safety", "impact"):
+        raise ValueError(f"kind = {kind!r} is not one of 'safety', 'impact'")
+    func = safety_case if kind == "safety" else impact_case
+    kw = {}
+    if arm is not None:
+        kw["arm"] = arm
+    if head is not None:
+        kw["head"] = head
+    return functools.partial(func, **kw) if kw else func
+
+
 def safety_sweep(cases=None, *, grid=None, name: str = "safety", cache_dir=None,
                  processes: int | None = None, progress: bool = True, on_error: str = "record",
-                 backend: str = "local", scheduler=None) -> pd.DataFrame:
+                 backend: str = "local", scheduler=None, arm=None, head=None) -> pd.DataFrame:
     """Run :func:`safety_case` over a grid or a list of cases (all cores by default).
 
     Parameters
@@ -414,6 +632,11 @@ def safety_sweep(cases=None, *, grid=None, name: str = "safety", cache_dir=None,
         Where the cases run (see :func:`ppamsafety.sweep.run_sweep`).
     scheduler : None, str or dask.distributed.Client
         Dask scheduler (None: a LocalCluster for the sweep).
+    arm : ArmParameters, optional
+        The arm of every case (default the thesis arm); cases change it with
+        ``effects`` and dotted parameters (``"arm.links.m2"``).
+    head : HeadContactModel, optional
+        The head of every case that names none (default ``"thesis-frontal"``).
 
     Returns
     -------
@@ -425,14 +648,20 @@ def safety_sweep(cases=None, *, grid=None, name: str = "safety", cache_dir=None,
         all_cases = [{**c, **g} for c in all_cases for g in grid_cases(grid)]
     elif cases is None:
         raise TypeError("safety_sweep needs cases (a list of dicts) or grid (a dict of lists)")
+    func = case_function(arm, head)
     for i, c in enumerate(all_cases):
+        if "arm" in c:
+            raise ValueError(f"case {i}: the arm is an argument of the sweep (arm=...), not a "
+                             f"case parameter; a case changes it with arm.<key> parameters")
         try:
-            check_case(**c)
+            check_case(**c, arm=arm)
         except (TypeError, ValueError) as exc:
             raise type(exc)(f"case {i} {c!r}: {exc}") from None
-    return run_sweep(safety_case, all_cases, name=name, cache_dir=cache_dir, processes=processes,
+    return run_sweep(func, all_cases, name=name, cache_dir=cache_dir, processes=processes,
                      progress=progress, on_error=on_error, backend=backend, scheduler=scheduler)
 
 
 __all__ = ["EXPERIMENTS", "CONTROLLERS", "INSTANTS", "MIN_SPEED", "PARAMETERS", "DEFAULTS",
-           "RESULT_COLUMNS", "check_case", "make_controller", "safety_case", "safety_sweep"]
+           "DOTTED", "RESULT_COLUMNS", "check_case", "make_controller", "safety_case",
+           "safety_sweep", "case_arm", "case_function", "is_dotted", "impact_case",
+           "IMPACT_POSE_DEG"]

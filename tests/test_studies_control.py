@@ -70,9 +70,9 @@ def test_study_arguments_are_checked():
         section_module("nope")
     with pytest.raises(TypeError, match="arm must be an ArmParameters"):
         resolve_arm("thesis")
-    for mod in (safety, lambda_sweep):
-        with pytest.raises(ValueError, match="arm="):
-            mod.compute(quick=True, arm=resolve_arm(None))
+    for mod in (safety, lambda_sweep):           # any arm since issue 21; not a string
+        with pytest.raises(TypeError, match="arm must be an ArmParameters"):
+            mod.compute(quick=True, arm="thesis")
     with pytest.raises(TypeError, match="expected a matplotlib Figure or a pandas DataFrame"):
         write_artifact("text", "x.txt")
 

@@ -44,10 +44,8 @@ import numpy as np
 from .._jit import kernel
 from .._validation import check_bool, check_int, check_range, check_vector
 from ..layouts import Field, Layout, check_flag
+from ..params.sensors import SensorHardware, TABLE_3_2_VARIANCES  # noqa: F401 (re-exported)
 from ..units import BAR
-
-#: Table 3.2, first excitation signal: variances of q1, q2 [rad^2], qd1, qd2 [rad^2/s^2].
-TABLE_3_2_VARIANCES = (3.46e-6, 2.59e-6, 1.63e-4, 2.32e-5)
 
 
 class EncoderMode(IntEnum):
@@ -206,6 +204,34 @@ class SensorConfig:
         """True if a sensor fault is set (an offset != 0 or a gain != 1)."""
         return (any(v != 0.0 for v in self.encoder_offset + self.pressure_offset)
                 or any(v != 1.0 for v in self.pressure_gain))
+
+    @classmethod
+    def for_arm(cls, arm, **options) -> "SensorConfig":
+        """The sensor models of the hardware ``arm`` carries (``arm.sensors``).
+
+        Parameters
+        ----------
+        arm : ppamsafety.params.ArmParameters
+            Its :class:`~ppamsafety.params.sensors.SensorHardware` gives
+            ``resolution``, ``clock_hz``, ``counter_bits``, ``dead_band`` and
+            ``noise_variances`` (the thesis arm: the defaults of this class).
+        **options
+            Other fields of :class:`SensorConfig` (``encoder``, ``velocity``,
+            ``noise``, ``seed``, faults), or hardware fields to override.
+
+        Returns
+        -------
+        SensorConfig
+        """
+        hw = getattr(arm, "sensors", None)
+        if not isinstance(hw, SensorHardware):
+            raise TypeError(f"arm must be an ArmParameters (with .sensors), got "
+                            f"{type(arm).__name__}")
+        kw = dict(resolution=hw.encoder_resolution, clock_hz=hw.clock_hz,
+                  counter_bits=hw.counter_bits, dead_band=hw.dead_band,
+                  noise_variances=hw.noise_variances)
+        kw.update(options)
+        return cls(**kw)
 
     @classmethod
     def ideal(cls) -> "SensorConfig":

@@ -44,6 +44,7 @@ from ..identify.static import (identify_gravity, identify_muscle, identify_valve
 from ..output import OutputFolder
 from ..params import thesis_arm
 from ..params.arm import ArmParameters
+from ..params.arm_file import arm_fingerprint
 from ..plant.torque import joint_torques
 from .measured import F, P, Q, QD, U, MeasuredData
 
@@ -291,8 +292,9 @@ def identify_measured(data, kind: str, *, method: str = "LS", friction: bool = T
     friction = check_bool("friction", friction)
     drop = check_int("drop", drop, 0, 10 ** 7)
     confidence = check_range("confidence", confidence, 0.0, 1.0, lo_open=True, hi_open=True)
-    arm_label = "thesis_arm()" if arm is None else "user ArmParameters"
     arm = thesis_arm() if arm is None else check_instance("arm", arm, ArmParameters)
+    arm_label = ("thesis_arm()" if arm is thesis_arm() else
+                 f"{arm.name or 'unnamed arm'} (sha256 {arm_fingerprint(arm)[:16]})")
     notes = list(data.notes)
     if kind == "static":
         results, main, extra, settings = _static(data, arm, method, confidence, notes)

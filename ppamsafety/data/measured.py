@@ -80,7 +80,7 @@ GAP_FACTOR = 1.5
 
 _META_KEYS = ("format_version", "kind", "experiment", "description", "source", "sample_rate",
               "units", "controller", "reference", "force_law", "actuator", "gap_factor",
-              "import", "record")
+              "import", "record", "arm")
 #: Actuator types of ``[actuator] type`` (default "muscle").
 ACTUATOR_TYPES = ("muscle", "cylinder")
 #: Declared units that are not SI, with the factor to SI and the SI unit.
@@ -252,10 +252,31 @@ def _check_meta(meta: dict, src: str, columns, warn) -> dict:
         for key in ("force_law", "actuator"):
             if key in meta:
                 warn(f"{src}: metadata '{key}' is used only for kind = 'actuator' (kept)")
+    if "arm" in meta:
+        _check_arm_record(meta["arm"], src)
+        _stray(meta["arm"], ("name", "sha256"), "arm", src, warn)
+        if kind != "arm":
+            warn(f"{src}: metadata 'arm' is used only for kind = 'arm' records (kept)")
     unknown = [k for k in meta if k not in _META_KEYS]
     if unknown:
         warn(f"{src}: unknown metadata key(s) {', '.join(map(repr, unknown))} (kept)")
     return meta
+
+
+def _check_arm_record(arm, src):
+    """The ``[arm]`` table of a record: which arm file it came from (name, sha256)."""
+    if not isinstance(arm, dict):
+        raise MeasuredDataError(f"{src}: metadata arm must be a table (name = \"...\", "
+                                f"sha256 = \"...\"), got {arm!r:.60}")
+    if "sha256" not in arm:
+        raise MeasuredDataError(f"{src}: metadata arm needs sha256 (the fingerprint of the "
+                                f"arm file, ppamsafety.params.arm_file.arm_fingerprint)")
+    h = arm["sha256"]
+    if not (isinstance(h, str) and len(h) == 64 and all(c in "0123456789abcdef" for c in h)):
+        raise MeasuredDataError(f"{src}: metadata arm.sha256 = {h!r} must be 64 lower-case hex "
+                                f"digits")
+    if not isinstance(arm.get("name", ""), str):
+        raise MeasuredDataError(f"{src}: metadata arm.name = {arm['name']!r} must be a string")
 
 
 def _stray(table: dict, known, name, src, warn):

@@ -15,8 +15,12 @@ Both return a :class:`~ppamsafety.diagnose.core.result.Diagnosis`.
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 from ..data.campaign import Campaign
 from ..data.measured import MeasuredData
+from ..params import thesis_arm
+from ..params.arm_file import arm_fingerprint
 from .arm.pipeline import diagnose_arm
 from .bench.campaign import diagnose_campaign
 from .bench.pipeline import diagnose_actuator
@@ -63,6 +67,9 @@ def diagnose(data, *, arm=None, candidates=None, block_seconds: float = 0.05,
     Returns
     -------
     Diagnosis
+        When an arm record names the arm it came from (metadata ``[arm]``, written by
+        :func:`~ppamsafety.diagnose.synthesize`), ``settings["arm"]`` holds both
+        fingerprints and a note starting ``"arm: "`` says whether they agree.
 
     Notes
     -----
@@ -75,9 +82,23 @@ def diagnose(data, *, arm=None, candidates=None, block_seconds: float = 0.05,
     if isinstance(data, MeasuredData) and data.kind == "actuator":
         return diagnose_actuator(data, candidates=candidates, alpha=alpha, rho_max=rho_max,
                                  experiment=experiment)
-    return diagnose_arm(data, arm=arm, candidates=candidates, block_seconds=block_seconds,
-                        alpha=alpha, rho_max=rho_max, experiment=experiment, seed=seed,
-                        bootstrap=bootstrap)
+    dg = diagnose_arm(data, arm=arm, candidates=candidates, block_seconds=block_seconds,
+                      alpha=alpha, rho_max=rho_max, experiment=experiment, seed=seed,
+                      bootstrap=bootstrap)
+    made = data.meta.get("arm") if isinstance(data, MeasuredData) else None
+    if made is None:
+        return dg
+    used = thesis_arm() if arm is None else arm
+    fp = arm_fingerprint(used)
+    label = f"'{used.name or 'unnamed arm'}' (sha256 {fp[:12]})"
+    rec = f"'{made.get('name') or 'unnamed arm'}' (sha256 {made['sha256'][:12]})"
+    note = (f"arm: the record came from the arm it is diagnosed against, {label}"
+            if made["sha256"] == fp else
+            f"arm: the record came from arm {rec} but is diagnosed against arm {label}: a "
+            f"difference between the two arms is reported as a missing effect")
+    return replace(dg, notes=(*dg.notes, note),
+                   settings={**dg.settings, "arm": {"record": dict(made), "model": {
+                       "name": used.name, "sha256": fp}}})
 
 
 __all__ = ["Diagnosis", "diagnose", "SCHEMA_VERSION", "HIGH_CONFIDENCE", "JSON_NAME"]

@@ -8,8 +8,28 @@ by ``kind`` and checks that the options belong to it.
 from __future__ import annotations
 
 from .._validation import check_choice
+from ..data.measured import MeasuredData
+from ..params import thesis_arm
+from ..params.arm_file import arm_fingerprint
 from .arm.synthesize import DEFAULT_CONTROLLER, DEFAULT_REFERENCE, synthesize_arm
 from .bench.synthesize import synthesize_actuator
+
+
+def arm_record(arm) -> dict:
+    """The ``[arm]`` metadata of a record made with ``arm``: its name and fingerprint.
+
+    Parameters
+    ----------
+    arm : ArmParameters or None
+        The nominal arm (None: the thesis arm).
+
+    Returns
+    -------
+    dict
+        ``{"name": str, "sha256": str}`` (:func:`ppamsafety.params.arm_file.arm_fingerprint`).
+    """
+    arm = thesis_arm() if arm is None else arm
+    return {"name": arm.name, "sha256": arm_fingerprint(arm)}
 
 
 def synthesize(experiment: str | None = None, effects=None, *, noise: str | None = None,
@@ -70,6 +90,8 @@ def synthesize(experiment: str | None = None, effects=None, *, noise: str | None
     Returns
     -------
     MeasuredData
+        An arm record's metadata carries ``[arm]`` (:func:`arm_record`): which arm it
+        came from, so that a diagnosis against another arm can say so.
     """
     kind = check_choice("kind", kind, ("arm", "actuator"))
     if kind == "actuator":
@@ -90,10 +112,11 @@ def synthesize(experiment: str | None = None, effects=None, *, noise: str | None
     if tester:
         raise TypeError(f"synthesize() got option(s) {sorted(tester)} that exist only for "
                         f"kind = 'actuator'")
-    return synthesize_arm("open-loop" if experiment is None else experiment, effects,
+    data = synthesize_arm("open-loop" if experiment is None else experiment, effects,
                           noise="table-3.2" if noise is None else noise, seed=seed,
                           duration=duration, dt=dt, arm=arm, controller=controller,
                           reference=reference)
+    return MeasuredData({**data.meta, "arm": arm_record(arm)}, data.frame, source=data.source)
 
 
-__all__ = ["synthesize"]
+__all__ = ["synthesize", "arm_record"]

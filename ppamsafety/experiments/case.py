@@ -54,8 +54,9 @@ class ExperimentCase:
     reference : Reference
         The reference trajectory; its length sets the run's length.
     sensors : SensorConfig, optional
-        Encoder and velocity-sensor models (default ``SensorConfig()``:
-        realistic encoders and timing board).
+        Encoder and velocity-sensor models (default
+        ``SensorConfig.for_arm(arm)``: realistic encoders and timing board of
+        the arm's sensor hardware).
     x0 : array_like, shape (8,), optional
         Initial plant state (q1, q2 [rad], qd1, qd2 [rad/s], p1..p4 [Pa]);
         default None: at rest at the reference's first joint angles.
@@ -90,7 +91,7 @@ class ExperimentCase:
     arm: ArmParameters
     controller: Controller
     reference: Reference
-    sensors: SensorConfig = field(default_factory=SensorConfig)
+    sensors: SensorConfig | None = None
     x0: np.ndarray | None = None
     name: str | None = None
     meta: dict = field(default_factory=dict)
@@ -107,7 +108,7 @@ class ExperimentCase:
         if not isinstance(self.reference, Reference):
             raise _type_error("reference", self.reference, "a Reference")
         if self.sensors is None:
-            object.__setattr__(self, "sensors", SensorConfig())
+            object.__setattr__(self, "sensors", SensorConfig.for_arm(self.arm))
         elif not isinstance(self.sensors, SensorConfig):
             raise _type_error("sensors", self.sensors, "a SensorConfig")
         if self.x0 is not None:

@@ -378,7 +378,8 @@ def run_thesis_experiment(arm, name: str, variants=None, *, sensors: SensorConfi
         accepted too (fields read from the controller, see
         :meth:`ControllerVariant.of`).
     sensors : SensorConfig, optional
-        Sensor models (default: realistic encoders and timing board).
+        Sensor models (default: realistic encoders and timing board of the
+        arm's sensor hardware, ``SensorConfig.for_arm(arm)``).
     duration : float, optional
         Experiment length [s] (default :data:`DEFAULT_DURATIONS`).
     dt : float
@@ -406,8 +407,8 @@ def run_thesis_experiment(arm, name: str, variants=None, *, sensors: SensorConfi
     variants = thesis_variants() if variants is None else [as_variant(v) for v in variants]
     if not variants:
         raise ValueError("variants must not be empty")
-    sens = SensorConfig() if sensors is None else check_instance("sensors", sensors,
-                                                                 SensorConfig)
+    sens = SensorConfig.for_arm(arm) if sensors is None else check_instance(
+        "sensors", sensors, SensorConfig)
     ref = thesis_reference(arm, name, duration=duration, dt=dt)
     cases = [ExperimentCase(arm, v.controller, ref, sensors=sens, name=f"{name}: {v.label}",
                             meta={"label": v.label, "experiment": name, "family": v.group,

@@ -35,9 +35,11 @@ import pandas as pd
 
 from .._validation import (as_float_array, check_finite_result, check_instance, check_positive,
                            check_range, check_range_array, check_real)
-from ..params import ArmParameters
+from ..params import ArmParameters, thesis_arm
+from ..params.iso_ts_15066 import FACE, SKULL_FOREHEAD
 from ..plant import geometry as geo
 from ..units import DEG, G0
+from .head import resolve_head
 from .model import effective_mass
 from .thesis_data import table_6_1_pairs
 from .twobody import two_body_impact
@@ -266,3 +268,73 @@ def fit_thesis_head(arm, *, exponent: float = 1.5, arm_mass: float | None = None
     return HeadFit(k, n, b, ma, head_mass, out, float(np.sqrt(np.mean(res ** 2))),
                    hybrid3_drop_peak_g(k, n, b),
                    iso_effective_spring(k, n, ISO_TS_15066_FOREHEAD_FORCE))
+
+
+#: Largest RMS residual of the Table 6.1 pairs [standard deviations] for a head model to
+#: count as reproducing the thesis' head (the thesis-frontal fit reaches about 0.6).
+TABLE_6_1_MAX_RMS_SIGMA = 1.0
+#: Relative tolerance of the ISO/TS 15066 check: the energy-equivalent spring at the
+#: region's quasi-static force within 10 % of the region's effective spring constant.
+ISO_SPRING_TOLERANCE = 0.10
+
+
+def head_checks(head, *, arm=None) -> pd.DataFrame:
+    """The checks a head contact model is judged by, computed, beside what it claims.
+
+    * ``hybrid_iii_drop``: its contact (k, n, b) in the Hybrid III head drop (49 CFR
+      572.32: 4.54 kg head, 376 mm onto a rigid plate) must peak at 225-275 g;
+    * ``iso_ts_15066``: its energy-equivalent linear spring at the region's quasi-static
+      force must be within 10 % of the ISO/TS 15066 Annex A effective spring constant of
+      the skull/forehead (150 N/mm at 130 N) or of the face (75 N/mm at 65 N);
+    * ``table_6_1``: with its own head mass and the thesis arm's effective mass at the
+      step-response impact, its (F_max, HIC) curve must pass the 20 pairs of thesis
+      Table 6.1 within an RMS residual of 1 standard deviation (the fit's weighting).
+
+    Parameters
+    ----------
+    head : str, path-like or HeadContactModel
+        A model (see :func:`ppamsafety.impact.head.resolve_head`).
+    arm : ArmParameters, optional, keyword-only
+        Arm of the Table 6.1 check's effective mass (default the thesis arm: Table 6.1
+        was computed with it).
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per check: ``check``, ``value`` (what the model gives, with unit),
+        ``target``, ``met`` (computed), ``claimed`` (the model's claim: True, False or
+        None) and ``claim_holds`` (None without a claim).
+    """
+    hm = resolve_head(head)
+    arm = thesis_arm() if arm is None else _arm(arm)
+    k, n, b = hm.stiffness, hm.exponent, hm.damping
+    rows = []
+    g = hybrid3_drop_peak_g(k, n, b)
+    lo, hi = HYBRID3_PEAK_RANGE_G
+    rows.append({"check": "hybrid_iii_drop", "value": f"{g:.0f} g",
+                 "target": f"{lo:.0f}-{hi:.0f} g (49 CFR 572.32)", "met": bool(lo <= g <= hi)})
+    best = None
+    for region in (SKULL_FOREHEAD, FACE):
+        spring = iso_effective_spring(k, n, region.force_quasi_static)
+        rel = spring / region.spring_constant - 1.0
+        if best is None or abs(rel) < abs(best[2]):
+            best = (region, spring, rel)
+    region, spring, rel = best
+    rows.append({"check": "iso_ts_15066",
+                 "value": f"{spring / 1e3:.0f} N/mm at {region.force_quasi_static:g} N",
+                 "target": f"{region.spring_constant / 1e3:g} N/mm ({region.name}, ISO/TS 15066 "
+                           f"Annex A, +-{100 * ISO_SPRING_TOLERANCE:g} %)",
+                 "met": bool(abs(rel) <= ISO_SPRING_TOLERANCE)})
+    pairs = table_6_1_pairs()
+    H, F = pairs["HIC"].to_numpy(), pairs["F_max"].to_numpy()
+    sigma = np.maximum(0.15, 0.005 / H)
+    model = _model_hic_at(F, k, n, b, default_arm_mass(arm), hm.mass)
+    rms = float(np.sqrt(np.mean((np.log(model / H) / sigma) ** 2)))
+    rows.append({"check": "table_6_1", "value": f"RMS residual {rms:.2f} sd",
+                 "target": f"<= {TABLE_6_1_MAX_RMS_SIGMA:g} sd (20 pairs of thesis Table 6.1)",
+                 "met": bool(rms <= TABLE_6_1_MAX_RMS_SIGMA)})
+    claims = {c[0]: c[1] for c in hm.checks}
+    for r in rows:
+        r["claimed"] = claims.get(r["check"])
+        r["claim_holds"] = None if r["claimed"] is None else bool(r["claimed"] == r["met"])
+    return pd.DataFrame(rows)

@@ -144,7 +144,9 @@ def two_body_impact(speed, *, arm_mass, head_mass: float = 5.0, stiffness: float
     def span(x):
         if np.size(x) == 0:
             return "[]"
-        return f"{np.min(x):g}" if np.ptp(x) == 0 else f"{np.min(x):g}..{np.max(x):g}"
+        # min == max, not ptp: ptp of an infinite arm mass (a rigid plate) is inf - inf
+        return (f"{np.min(x):g}" if np.min(x) == np.max(x)
+                else f"{np.min(x):g}..{np.max(x):g}")
 
     # an overflow can come from any input (e.g. a tiny mass with a stiff, damped contact):
     # the message names them all

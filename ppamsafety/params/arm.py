@@ -12,6 +12,7 @@ pneumatics                §3.3 + calibrated mean pressures (§6.3.3)
 links (plant)             physically consistent reconciliation
 model (controllers)       identified Table 3.5 (dynamic, with friction)
 model_gravity             identified Table 3.1 (static gravity)
+sensors                   §2.4.5, Table 3.2 (encoders, timing board, noise)
 ========================  ==============================================
 
 The plant is what the simulator integrates; ``model`` and ``model_gravity``
@@ -21,18 +22,20 @@ sliding-mode controller's feedback linearisation).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from functools import lru_cache
 
 import numpy as np
 
-from .._validation import check_instance, check_range
+from .._validation import check_instance, check_range, check_str
+from . import arm_file
 from .effects import Effects
 from .geometry import GROUP_FIELDS, ArmGeometry, group_length_range, thesis_geometry
 from .inertia import (BaseParameters, LinkInertia, derive_physical_links, identified_dynamic,
                       identified_static_gravity)
 from .muscles import MAX_CONTRACTION, MuscleSet, thesis_muscles
 from .pneumatics import PneumaticParams, thesis_pneumatics
+from .sensors import SensorHardware
 from .valves import ValveSet, thesis_valves
 
 
@@ -64,14 +67,26 @@ class ArmParameters:
         polytropic exponent), all off by default.  Read only by the plant
         truth row ``plant.packing.pack(arm)``, never by the controllers' views
         (see :mod:`ppamsafety.params.effects`).
+    sensors : SensorHardware
+        The joint sensors the arm carries (encoders, timing board, noise
+        variances; default the thesis hardware, §2.4.5, Table 3.2).  The
+        simulated measurement is ``SensorConfig.for_arm(arm)``.
+    name : str
+        A label (``"thesis arm"``; an arm file's ``[arm] name``).  Not compared:
+        two arms with the same physics are equal whatever their names.
+    sources : tuple of (str, str)
+        Provenance per part of the arm, ``(table, text)`` pairs such as
+        ``("muscles.group1", "Table B.1")`` (an arm file's ``source`` keys).
+        Not compared, like ``name``; read with :meth:`source`.
 
     Notes
     -----
     Besides the types and ranges of ``gravity`` ([0, 30] m/s^2) and
     ``friction_velocity`` ([1e-5, 1] rad/s), construction refuses sets that
     cannot be built: non-positive connection lengths or contractions outside
-    [0, 0.4] anywhere in the working area (e.g. ``L22 = 0``), and a plant
-    inertia matrix that is numerically singular.  The identified ``model``
+    [0, 0.4] anywhere in the working area (e.g. ``L22 = 0``), a plant
+    inertia matrix that is numerically singular, and a link whose inertia about
+    its joint is below m (0.05 L)^2 (:data:`MIN_GYRATION_FRACTION`).  The identified ``model``
     sets are not required to be positive definite (Table 3.5 is not).
     """
 
@@ -85,6 +100,9 @@ class ArmParameters:
     gravity: float = 9.81
     friction_velocity: float = 0.01
     effects: Effects = Effects()
+    sensors: SensorHardware = SensorHardware()
+    name: str = field(default="", compare=False)
+    sources: tuple = field(default=(), compare=False)
 
     def __post_init__(self):
         for name, cls in (("geometry", ArmGeometry), ("muscles", MuscleSet), ("valves", ValveSet),
@@ -98,6 +116,9 @@ class ArmParameters:
         _check_muscles_fit(self.geometry, self.muscles)
         _check_plant_inertia(self.geometry, self.links)
         check_instance("ArmParameters.effects", self.effects, Effects)
+        check_instance("ArmParameters.sensors", self.sensors, SensorHardware)
+        check_str("ArmParameters.name", self.name)
+        object.__setattr__(self, "sources", _check_sources(self.sources))
 
     def replace(self, **changes) -> "ArmParameters":
         """Return a copy with some fields changed (validated again).
@@ -111,10 +132,117 @@ class ArmParameters:
         """
         return replace(self, **changes)
 
+    def to_toml(self, *, comments: bool = True) -> str:
+        """The arm as the TOML text of an arm file (exact round trip; ``docs/arm_files.md``).
+
+        Parameters
+        ----------
+        comments : bool
+            Comment every key (what it is, its range) and list the effects that are
+            off as commented-out examples: a template to edit.
+
+        Returns
+        -------
+        str
+            ``ArmParameters.from_toml(arm.to_toml()) == arm``, names and sources included.
+        """
+        return arm_file.arm_to_toml(self, comments=comments)
+
+    @classmethod
+    def from_toml(cls, text: str, *, where: str = "") -> "ArmParameters":
+        """An arm from the TOML text of an arm file, validated.
+
+        Parameters
+        ----------
+        text : str
+            TOML text (``docs/arm_files.md``).
+        where : str
+            How to name the file in error messages (its path).
+
+        Returns
+        -------
+        ArmParameters
+
+        Raises
+        ------
+        ppamsafety.params.arm_file.ArmFileError
+            A ``ValueError`` naming the dotted key, its value and what is allowed
+            (``muscles.group3.l0 = -0.1 m: must be in (0, 1] m``).
+        """
+        return arm_file.arm_from_toml(text, cls=cls, where=where)
+
+    @classmethod
+    def from_file(cls, path) -> "ArmParameters":
+        """An arm from an arm file, validated (:func:`load_arm`).
+
+        Parameters
+        ----------
+        path : path-like
+            The ``.toml`` file.
+
+        Returns
+        -------
+        ArmParameters
+        """
+        return arm_file.read_arm_file(path, cls=cls)
+
+    def fingerprint(self) -> str:
+        """SHA-256 of the arm's canonical file text (:func:`~.arm_file.arm_fingerprint`).
+
+        Returns
+        -------
+        str
+            64 hex digits.
+        """
+        return arm_file.arm_fingerprint(self)
+
+    def source(self, part: str) -> str:
+        """The provenance of one part of the arm ("" if none is given).
+
+        Parameters
+        ----------
+        part : str
+            A table of the arm file, e.g. ``"geometry"``, ``"muscles.group1"``,
+            ``"links"``.
+        """
+        check_str("part", part)
+        return dict(self.sources).get(part, "")
+
     @property
     def plant_base(self) -> BaseParameters:
         """Base parameters (B.5) of the physical plant links."""
         return self.links.base_parameters(self.geometry.L1)
+
+
+#: The parts of an arm that carry a source (the tables of an arm file; "arm" is its top
+#: level), in the order ``ArmParameters.sources`` keeps them.
+SOURCE_PARTS = ("arm", "geometry", "muscles", *(f"muscles.group{k}" for k in range(1, 5)),
+                "valves", *(f"valves.valve{k}" for k in range(1, 5)), "pneumatics", "links",
+                "model", "model_gravity", "effects", "sensors")
+
+
+def _check_sources(sources) -> tuple:
+    """``ArmParameters.sources`` as (str, str) pairs of :data:`SOURCE_PARTS`, in that order."""
+    if isinstance(sources, dict):
+        sources = tuple(sources.items())
+    if isinstance(sources, (str, bytes)) or not isinstance(sources, (tuple, list)):
+        raise TypeError(f"ArmParameters.sources must be a tuple of (part, text) pairs, "
+                        f"got {sources!r:.80}")
+    out, seen = [], set()
+    for i, item in enumerate(sources):
+        if not (isinstance(item, (tuple, list)) and len(item) == 2
+                and all(isinstance(x, str) for x in item)):
+            raise TypeError(f"ArmParameters.sources[{i}] must be a (part, text) pair of "
+                            f"strings, got {item!r:.80}")
+        if item[0] not in SOURCE_PARTS:
+            raise ValueError(f"ArmParameters.sources[{i}]: unknown part {item[0]!r}; allowed: "
+                             f"{list(SOURCE_PARTS)}")
+        if item[0] in seen:
+            raise ValueError(f"ArmParameters.sources names the part {item[0]!r} twice")
+        seen.add(item[0])
+        if item[1]:
+            out.append((item[0], item[1]))
+    return tuple(sorted(out, key=lambda kv: SOURCE_PARTS.index(kv[0])))
 
 
 #: Smallest admissible relative determinant det H / (H11 H22) of the plant's inertia
@@ -170,8 +298,17 @@ def _check_muscles_fit(geometry: ArmGeometry, muscles: MuscleSet) -> None:
                 f"MuscleGroup.n_muscles/l0 or MuscleSet.eps_min/eps_max")
 
 
+#: Smallest radius of gyration of a link about its joint, as a fraction of the link's length
+#: (L1, L2): I_joint >= m (0.05 L)^2.  A uniform bar has 0.58 about its end (0.29 about its
+#: centre; the thesis arm 0.55 and 0.86); 0.05 admits a link whose mass sits almost at its
+#: joint, and refuses one with all its mass *at* the joint and no inertia (e.g. L_G2 = d_G2 =
+#: 0, I_G2 = 1e-98 kg m^2), whose joint the integrators cannot resolve.
+MIN_GYRATION_FRACTION = 0.05
+
+
 def _check_plant_inertia(geometry: ArmGeometry, links: LinkInertia) -> None:
-    """Refuse a plant inertia matrix that is (numerically) singular in the working area."""
+    """Refuse a plant inertia matrix that is (numerically) singular in the working area, or a
+    link with (almost) no inertia about its joint."""
     b = links.base_parameters(geometry.L1)
     q2 = np.linspace(geometry.q2_min, geometry.q2_max, 181)
     a = geometry.L1 * (b.m2LG2 * np.cos(q2) + b.m2dG2 * np.sin(q2))
@@ -183,6 +320,45 @@ def _check_plant_inertia(geometry: ArmGeometry, links: LinkInertia) -> None:
             f"ArmParameters.links: the plant inertia matrix is (nearly) singular at q2 = "
             f"{np.degrees(q2[j]):.4g} deg (det H / (H11 H22) = {ratio[j]:.3g}, needs >= "
             f"{MIN_INERTIA_DET_RATIO:g}); check LinkInertia.IG1/IG2 (too small for the masses?)")
+    for k, (m, lg, dg, ig, length, ln) in enumerate((
+            (links.m1, links.LG1, links.dG1, links.IG1, geometry.L1, "L1"),
+            (links.m2, links.LG2, links.dG2, links.IG2, geometry.L2, "L2")), start=1):
+        i_joint = ig + m * (lg * lg + dg * dg)
+        i_min = m * (MIN_GYRATION_FRACTION * length) ** 2
+        if not i_joint >= i_min:
+            raise ValueError(
+                f"ArmParameters.links: link {k}'s inertia about its joint, I_G{k} + m{k} "
+                f"(L_G{k}^2 + d_G{k}^2) = {i_joint:.3g} kg m^2, is below m{k} "
+                f"({MIN_GYRATION_FRACTION:g} {ln})^2 = {i_min:.3g} kg m^2: all its mass at the "
+                f"joint, not a link the integrators can resolve; check LinkInertia.IG{k} "
+                f"(and LG{k}, dG{k})")
+
+
+#: Provenance of each part of the thesis arm (the ``source`` keys of its arm file).
+THESIS_SOURCES = (
+    ("arm", "M. Van Damme, Towards Safe Control of a Compliant Manipulator Powered by "
+            "Pneumatic Muscles (PhD thesis, VUB, 2009); gravity 9.81 m/s^2; smooth Coulomb "
+            "friction scale below the encoder dead band (§2.4.5.3)"),
+    ("geometry", "thesis Table 2.1 (attachment points), Table 2.2 (load point, link "
+                 "lengths), eqs. (2.6)-(2.7) (working area)"),
+    ("muscles", "thesis §2.3.2.4 (design contraction limits 5 % and 30 %)"),
+    ("muscles.group1", "thesis §2.3.3.1 (4 muscles, l0 = 6 cm, l0/R = 6), Table B.1"),
+    ("muscles.group2", "thesis §2.3.3.1 (3 muscles, l0 = 6 cm, l0/R = 6), Table B.1"),
+    ("muscles.group3", "thesis §2.3.3.1 (4 muscles, l0 = 6 cm, l0/R = 6), Table B.1"),
+    ("muscles.group4", "thesis §2.3.3.1 (3 muscles, l0 = 6 cm, l0/R = 6), Table B.1"),
+    ("valves", "thesis Table B.2 (static error (3.12)); time constants chosen from §3.5.2, "
+               "§4.2.5 (T = 0.06 s for 4 muscles, 0.045 s for 3)"),
+    ("pneumatics", "thesis §3.3 (n = 1.4, P_atm), §2.2.2 (3 bar); mean pressures calibrated "
+                   "to K = (43, 27) Nm/rad at q = (50, -80) deg (§6.3.3)"),
+    ("links", "physically consistent reconciliation of §6.3.3 masses, Table 2.2 CAD centres "
+              "of gravity and the identified Tables 3.1/3.5 (params.inertia); slender-bar "
+              "inertias; friction Table 3.5"),
+    ("model", "thesis Table 3.5 (dynamic identification with friction)"),
+    ("model_gravity", "thesis Table 3.1 (static gravity identification); inertias of "
+                      "Table 3.5"),
+    ("sensors", "thesis §2.4.5 (HEDM-6540 encoders x4, 2 MHz 16-bit timing board, 0.025 "
+                "rad/s dead band), Table 3.2 (noise variances)"),
+)
 
 
 @lru_cache(maxsize=1)
@@ -193,7 +369,45 @@ def thesis_arm() -> ArmParameters:
         geometry=geometry, muscles=thesis_muscles(), valves=thesis_valves(),
         pneumatics=thesis_pneumatics(),
         links=derive_physical_links(L1=geometry.L1).links,
-        model=identified_dynamic(), model_gravity=identified_static_gravity())
+        model=identified_dynamic(), model_gravity=identified_static_gravity(),
+        name="thesis arm", sources=THESIS_SOURCES)
 
 
-__all__ = ["ArmParameters", "thesis_arm"]
+def load_arm(path) -> ArmParameters:
+    """Read and validate an arm file (``docs/arm_files.md``).
+
+    Parameters
+    ----------
+    path : path-like
+        The ``.toml`` file (``ppamsafety arm export`` writes a template).
+
+    Returns
+    -------
+    ArmParameters
+
+    Raises
+    ------
+    FileNotFoundError
+        If there is no such file.
+    ppamsafety.params.arm_file.ArmFileError
+        A ``ValueError``: ``"<path>: <dotted key> = <value>: <what is allowed>"``.
+    """
+    return ArmParameters.from_file(path)
+
+
+def is_thesis_arm(arm) -> bool:
+    """True if ``arm`` has the physics of :func:`thesis_arm` (names and sources aside).
+
+    The report quotes thesis values and ratios only for such an arm.
+
+    Parameters
+    ----------
+    arm : ArmParameters
+        Any arm.
+    """
+    check_instance("arm", arm, ArmParameters)
+    return arm == thesis_arm()
+
+
+__all__ = ["ArmParameters", "thesis_arm", "is_thesis_arm", "load_arm", "THESIS_SOURCES",
+           "SOURCE_PARTS"]

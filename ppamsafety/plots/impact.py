@@ -94,7 +94,8 @@ def plot_safety_table(table, *, experiments=("step", "switch")):
     ----------
     table : pandas.DataFrame
         Columns ``label``, ``family``, ``experiment``, ``F_max`` [N],
-        ``HIC36``, ``Fmax_thesis``, ``HIC_thesis``.
+        ``HIC36``, ``Fmax_thesis``, ``HIC_thesis`` (the thesis columns are drawn when
+        present: the thesis arm).
     experiments : sequence of str
         Experiments to show, one column of panels each.
 
@@ -113,7 +114,8 @@ def plot_safety_table(table, *, experiments=("step", "switch")):
                                                   ("HIC36", "HIC_thesis", "HIC36"))):
             a = axes[i, j]
             a.bar(x, sub[col], color=colors, alpha=0.8, label="toolkit")
-            a.plot(x, sub[thcol], "k_", ms=18, mew=2, label="thesis Table 6.1")
+            if thcol in sub.columns:
+                a.plot(x, sub[thcol], "k_", ms=18, mew=2, label="thesis Table 6.1")
             if col == "F_max":
                 a.axhline(MAXILLA_FRACTURE_N, color="r", ls="--", lw=1.2, label="maxilla 660 N")
             else:

@@ -55,8 +55,10 @@ def plot_clamping_vs_limits(study):
     labels = list(dict.fromkeys(ct.label))
     fig, ax = new_figure(figsize=(9.0, 4.8))
     x = np.arange(len(labels))
+    hc = next((h for h in dict.fromkeys(ct["head_model"]) if h not in ("skull/forehead", "face")),
+              "thesis HC")      # the Hunt-Crossley head: "thesis HC", or the report's
     for k, (head, c) in enumerate((("skull/forehead", "tab:red"), ("face", "tab:orange"),
-                                   ("thesis HC", "tab:blue"))):
+                                   (hc, "tab:blue"))):
         s = ct[ct["head_model"] == head].set_index("label").loc[labels]
         ax.plot(x + (k - 1) * 0.2, s.F_clamped, "o", color=c, label=f"clamped, {head}")
         ax.plot(x + (k - 1) * 0.2, s.F_free, "x", color=c, ms=8, label=f"free, {head}")

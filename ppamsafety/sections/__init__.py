@@ -2,12 +2,16 @@
 
 Every section module ``ppamsafety.sections.<name>`` defines
 
-* ``compute(*, quick=False, arm=None, ...) -> <Name>Study``: runs the
-  simulations and returns a dataclass holding DataFrames, arrays, result
-  objects and a ``metrics`` dict.  It writes no file, makes no figure and
-  formats no Markdown.  The result object has ``to_pandas()`` (its main table)
-  and ``plot()`` (its figures, ``{file name: Figure}``, composed from the plot
-  functions of :mod:`ppamsafety.plots`).
+* ``compute(*, quick=False, arm=None, head=None, ...) -> <Name>Study``: runs
+  the simulations for ``arm`` (any valid arm; default the thesis arm) and
+  ``head`` (a head model; default ``thesis-frontal``) and returns a dataclass
+  holding DataFrames, arrays, result objects and a ``metrics`` dict.  It writes
+  no file, makes no figure and formats no Markdown.  The result object has
+  ``to_pandas()`` (its main table) and ``plot()`` (its figures, ``{file name:
+  Figure}``, composed from the plot functions of :mod:`ppamsafety.plots`).
+  Thesis values and ratios are joined only when :func:`compares_to_thesis` holds
+  (the thesis arm, and for impacts the thesis head): every other number is
+  computed for the arm given.
 * ``render(result) -> Section``: formatting only -- the Markdown text of the
   report section and the artifacts (file name, Figure or DataFrame) it
   references.
@@ -31,7 +35,9 @@ import pandas as pd
 
 from .._commandline import Parser, run_guarded
 from ..output import OutputFolder
-from ..params import ArmParameters, thesis_arm
+# the impact.head module by its own name: ``head_model`` is a section module here
+from ..impact import head as _head
+from ..params import ArmParameters, is_thesis_arm, load_arm, thesis_arm
 from ..plots.figure import save
 
 
@@ -165,6 +171,61 @@ def resolve_arm(arm):
     return arm
 
 
+def resolve_head_model(head) -> "_head.HeadContactModel":
+    """The head a section crashes into: ``head``, or ``thesis-frontal`` when None.
+
+    Parameters
+    ----------
+    head : HeadContactModel, str or None
+        A model, a name or a head file (:func:`ppamsafety.impact.head.resolve_head`).
+
+    Returns
+    -------
+    HeadContactModel
+    """
+    return _head.resolve_head(head)
+
+
+def compares_to_thesis(arm, head=None) -> bool:
+    """True if thesis values apply: the thesis arm (and the thesis head, if given).
+
+    Parameters
+    ----------
+    arm : ArmParameters or None
+        The section's arm (None: the thesis arm).
+    head : HeadContactModel, str or None
+        The section's head, for sections that crash into one (None: not compared).
+
+    Returns
+    -------
+    bool
+    """
+    arm_ok = arm is None or is_thesis_arm(resolve_arm(arm))
+    return arm_ok and (head is None or _head.resolve_head(head) == _head.head_model())
+
+
+def other_arm_note(arm, head=None) -> str:
+    """The line a section prints instead of its thesis comparison for another arm or head.
+
+    Parameters
+    ----------
+    arm : ArmParameters
+        The section's arm.
+    head : HeadContactModel, optional
+        The section's head.
+
+    Returns
+    -------
+    str
+    """
+    arm = resolve_arm(arm)
+    what = f"arm `{arm.name or 'unnamed arm'}`"
+    if head is not None:
+        what += f" and head model `{_head.resolve_head(head).name}`"
+    return (f"*Computed for {what}: thesis values and ratios apply to the thesis arm and head "
+            f"only and are not shown.*")
+
+
 def write_artifact(obj, path) -> str:
     """Write one artifact: a Figure as PNG (150 dpi), a DataFrame as CSV (no index).
 
@@ -229,8 +290,9 @@ def section_module(name: str):
     return importlib.import_module(f"{__name__}.{name}")
 
 
-def run_section(name: str, outdir, *, quick: bool = False) -> SectionResult:
-    """Compute, render and write one section: ``write_section(render(compute(quick)), outdir)``.
+def run_section(name: str, outdir, *, quick: bool = False, arm=None,
+                head=None) -> SectionResult:
+    """Compute, render and write one section: ``write_section(render(compute(...)), outdir)``.
 
     Parameters
     ----------
@@ -240,6 +302,10 @@ def run_section(name: str, outdir, *, quick: bool = False) -> SectionResult:
         Existing folder the artifacts are written to.
     quick : bool
         Coarser grids and shorter runs (smoke tests).
+    arm : ArmParameters, optional
+        The arm (default the thesis arm).
+    head : HeadContactModel, optional
+        The head model of the impacts (default ``thesis-frontal``).
 
     Returns
     -------
@@ -247,7 +313,12 @@ def run_section(name: str, outdir, *, quick: bool = False) -> SectionResult:
         Title, Markdown, written paths and metrics.
     """
     mod = section_module(name)
-    return write_section(mod.render(mod.compute(quick=quick)), outdir)
+    kw = {}
+    if arm is not None:
+        kw["arm"] = resolve_arm(arm)
+    if head is not None:
+        kw["head"] = _head.resolve_head(head)
+    return write_section(mod.render(mod.compute(quick=quick, **kw)), outdir)
 
 
 def main(name: str, argv=None) -> int:
@@ -280,11 +351,17 @@ def main(name: str, argv=None) -> int:
     p.add_argument("--quick", action="store_true", help="coarse grids and short sweeps")
     p.add_argument("--overwrite", action="store_true",
                    help="replace files of a previous ppamsafety output in OUTDIR")
+    p.add_argument("--arm", default=None, metavar="FILE",
+                   help="arm file (TOML; default: the thesis arm)")
+    p.add_argument("--head", default=None, metavar="NAME|FILE",
+                   help="head model name or head file (default: thesis-frontal)")
 
     def run(args):
+        arm = None if args.arm is None else load_arm(args.arm)
+        head = None if args.head is None else _head.resolve_head(args.head)
         with OutputFolder(args.outdir, kind="section", overwrite=args.overwrite,
                           clean=False) as stage:
-            res = run_section(name, stage, quick=args.quick)
+            res = run_section(name, stage, quick=args.quick, arm=arm, head=head)
         print(f"# {res.title}\n\n{res.markdown}")
         return 0
 

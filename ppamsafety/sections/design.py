@@ -14,7 +14,7 @@ from ..plant import pneumatics as pn
 from ..plant.muscle import force_function, force_polynomial
 from ..plant.ppam_theory import theoretical_muscles
 from ..units import BAR, DEG, MM
-from . import Section, SectionInfo, resolve_arm
+from . import Section, SectionInfo, compares_to_thesis, other_arm_note, resolve_arm
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -24,7 +24,7 @@ SECTION = SectionInfo(
     thesis="ch. 2, App. A", typical_seconds=2.8)
 
 
-def _table_a1(arm) -> pd.DataFrame:
+def _table_a1(arm, thesis: bool = True) -> pd.DataFrame:
     g = arm.geometry
     q1 = np.linspace(g.q1_min, g.q1_max, 4001)
     q2 = np.linspace(g.q2_min, g.q2_max, 4001)
@@ -32,8 +32,10 @@ def _table_a1(arm) -> pd.DataFrame:
     db = geo.muscle_lengths(np.stack([np.full_like(q2, 50 * DEG), q2], -1), arm)
     ours = np.concatenate([[da[:, 0].max(), da[:, 1].min(), db[:, 2].max(), db[:, 3].min()],
                            geo.connection_lengths(arm)]) / MM
-    thesis = np.array([345.0, 200.5, 322.3, 265.8, 117.0, 74.5, 94.3, 139.8])
     names = ["d1,max", "d2,min", "d3,max", "d4,min", "Lconn,1", "Lconn,2", "Lconn,3", "Lconn,4"]
+    if not thesis:
+        return pd.DataFrame({"quantity": names, "computed [mm]": ours.round(2)})
+    thesis = np.array([345.0, 200.5, 322.3, 265.8, 117.0, 74.5, 94.3, 139.8])
     return pd.DataFrame({"quantity": names, "thesis Table A.1 [mm]": thesis,
                          "computed [mm]": ours.round(2), "difference [mm]": (ours - thesis).round(2)})
 
@@ -55,8 +57,11 @@ class DesignStudy:
     max_load_theory : ppamsafety.design.MaxLoadMap
         Maximum load with the CAD links and the theoretical force function
         f_t0 (:func:`ppamsafety.plant.ppam_theory.theoretical_muscles`), as at design time.
+        ``max_load_cad`` and ``max_load_theory`` use the thesis arm's design-time data:
+        None for another arm.
     table_a1 : pandas.DataFrame
-        Table A.1 (muscle lengths) computed vs thesis [mm].
+        Table A.1 (muscle lengths) computed vs thesis [mm] (computed only for another
+        arm).
     K_step : numpy.ndarray
         Joint stiffness at the step-response impact configuration [Nm/rad].
     p_mean : numpy.ndarray
@@ -67,6 +72,10 @@ class DesignStudy:
         ``f4_raw`` [N/bar, before clipping to 0] (force functions there).
     metrics : dict
         Headline numbers.
+    thesis : bool
+        Thesis values (Table A.1, the design-time maps) apply: the thesis arm.
+    arm : ArmParameters or None
+        The arm (ArmParameters).
     """
 
     quick: bool
@@ -80,6 +89,8 @@ class DesignStudy:
     edge: dict
     max_load_theory: object = None
     metrics: dict = field(default_factory=dict)
+    thesis: bool = True
+    arm: object = None
 
     def to_pandas(self) -> pd.DataFrame:
         """Table A.1 (computed vs thesis muscle lengths [mm])."""
@@ -92,7 +103,7 @@ class DesignStudy:
                 "design_max_load.png": self.max_load.plot()}
 
 
-def compute(*, quick: bool = False, arm=None) -> DesignStudy:
+def compute(*, quick: bool = False, arm=None, head=None) -> DesignStudy:
     """Torque functions, stiffness and maximum-load maps, Table A.1.
 
     Parameters
@@ -101,6 +112,8 @@ def compute(*, quick: bool = False, arm=None) -> DesignStudy:
         Coarse grids (41 x 41 instead of 121 x 121 for the stiffness map).
     arm : ppamsafety.params.ArmParameters, optional
         Arm (default: the thesis arm).
+    head : HeadContactModel, optional
+        Unused (no impact in this section); accepted like every section's.
 
     Returns
     -------
@@ -108,16 +121,22 @@ def compute(*, quick: bool = False, arm=None) -> DesignStudy:
         Maps, tables and metrics.
     """
     arm = resolve_arm(arm)
+    thesis = compares_to_thesis(arm)
     n = 41 if quick else 121
     tf = design.torque_function_curves(arm)
     sm = design.stiffness_map(arm, n1=n, n2=n)
     q_step = np.array([50 * DEG, -80 * DEG])
     K_step = pn.joint_stiffness(q_step, pn.static_pressures(q_step, arm), arm)
     ml = design.max_load_map(arm, n1=2 * n, n2=2 * n)
-    ml_cad = design.max_load_map(arm, links=design.cad_links(), n1=2 * n, n2=2 * n)
-    g0 = arm.muscles.groups[0]
-    arm_theory = arm.replace(muscles=theoretical_muscles(slenderness=g0.slenderness, l0=g0.l0))
-    ml_theory = design.max_load_map(arm_theory, links=design.cad_links(), n1=2 * n, n2=2 * n)
+    if thesis:     # the thesis arm's design-time data: CAD links, theoretical force function
+        ml_cad = design.max_load_map(arm, links=design.cad_links(), n1=2 * n, n2=2 * n)
+        g0 = arm.muscles.groups[0]
+        arm_theory = arm.replace(muscles=theoretical_muscles(slenderness=g0.slenderness,
+                                                             l0=g0.l0))
+        ml_theory = design.max_load_map(arm_theory, links=design.cad_links(), n1=2 * n,
+                                        n2=2 * n)
+    else:
+        ml_cad = ml_theory = None
     d = ml.data
     g = arm.geometry
     inner = d[(d.q1_rad > g.q1_min + 5 * DEG) & (d.q1_rad < g.q1_max - 5 * DEG)
@@ -127,18 +146,23 @@ def compute(*, quick: bool = False, arm=None) -> DesignStudy:
     e1max, e4max = eps[:, 0].max(), eps[:, 3].max()
     f1_edge = float(force_function(1, e1max, arm)) * BAR
     f4_raw = float(force_polynomial(4, e4max, arm)) * BAR
-    ta1 = _table_a1(arm)
-    metrics = {"table_A1_max_abs_diff_mm": float(ta1["difference [mm]"].abs().max()),
-               "K_step": K_step.tolist(), "max_load_min_kg": ml.minimum,
-               "max_load_min_cad_kg": ml_cad.minimum,
-               "max_load_interior_min_kg": float(inner.M_max_kg.min()),
-               "max_load_min_theory_cad_kg": ml_theory.minimum}
+    ta1 = _table_a1(arm, thesis)
+    if thesis:
+        metrics = {"table_A1_max_abs_diff_mm": float(ta1["difference [mm]"].abs().max()),
+                   "K_step": K_step.tolist(), "max_load_min_kg": ml.minimum,
+                   "max_load_min_cad_kg": ml_cad.minimum,
+                   "max_load_interior_min_kg": float(inner.M_max_kg.min()),
+                   "max_load_min_theory_cad_kg": ml_theory.minimum}
+    else:
+        metrics = {"K_step": K_step.tolist(), "max_load_min_kg": ml.minimum,
+                   "max_load_interior_min_kg": float(inner.M_max_kg.min()
+                                                     if len(inner) else ml.minimum)}
     return DesignStudy(quick=quick, torque_functions=tf, stiffness=sm, max_load=ml,
                        max_load_cad=ml_cad, table_a1=ta1, K_step=K_step,
                        p_mean=np.array(arm.pneumatics.p_mean),
                        edge={"e1max": e1max, "e4max": e4max, "f1_edge": f1_edge,
                              "f4_raw": f4_raw},
-                       max_load_theory=ml_theory, metrics=metrics)
+                       max_load_theory=ml_theory, metrics=metrics, thesis=thesis, arm=arm)
 
 
 def render(study: DesignStudy) -> Section:
@@ -154,6 +178,8 @@ def render(study: DesignStudy) -> Section:
     Section
         Markdown and artifacts (figures, ``design_table_A1.csv``).
     """
+    if not study.thesis:
+        return _render_other(study)
     sm, ml, ml_cad, ta1 = study.stiffness, study.max_load, study.max_load_cad, study.table_a1
     K_step, quick = study.K_step, study.quick
     d = ml.data
@@ -209,6 +235,44 @@ q2 = -130 deg muscle 4 cannot even hold the forearm: negative maximum load). In 
 map agrees in magnitude with the thesis (median {d.M_max_kg.median():.1f} kg).
 Recomputed with the theoretical f_t0 (Daerden's N -> inf model, `ppamsafety.plant.ppam_theory`,
 fitted as (2.3)) and the CAD links, the minimum is {ml_th.minimum:.2f} kg, the thesis' "just over 2 kg".
+{'' if not quick else '(quick mode: coarse grids)'}
+
+![max load](design_max_load.png)
+"""
+    arts = [*study.plot().items(), ("design_table_A1.csv", ta1)]
+    return Section("Design of the arm (thesis chapter 2)", md, arts, dict(study.metrics))
+
+
+def _render_other(study: DesignStudy) -> Section:
+    """The design section for an arm other than the thesis arm: its own numbers only."""
+    sm, ml, ta1, K, quick = (study.stiffness, study.max_load, study.table_a1, study.K_step,
+                             study.quick)
+    d = ml.data
+    qmin = np.array(ml.argmin) / DEG
+    pm = study.p_mean / BAR
+    q = np.array([50.0, -80.0])
+    md = f"""{other_arm_note(study.arm)}
+
+**Muscle group lengths and connection lengths** (as Table A.1; connection lengths by the design
+rule (A.35)-(A.38)):
+
+{markdown_table(ta1, digits=2)}
+
+**Torque functions** (cf. fig. 2.11): ![torque functions](design_torque_functions.png)
+
+**Joint stiffness** (2.18) with static gravity-compensation pressures at the mean pressures
+p_m = ({pm[0]:.3f}, {pm[1]:.3f}) bar. At q = ({q[0]:.0f}, {q[1]:.0f}) deg: K = ({K[0]:.1f}, {K[1]:.1f})
+Nm/rad. Over the working area K1 ranges {sm.data.K1_Nm_per_rad.min():.1f}-{sm.data.K1_Nm_per_rad.max():.1f}
+and K2 {sm.data.K2_Nm_per_rad.min():.1f}-{sm.data.K2_Nm_per_rad.max():.1f} Nm/rad; the arm can hold
+itself statically in {100 * sm.data.holdable.mean():.0f} % of the working area (hatched: a pressure
+would leave [0, p_max]).
+
+![stiffness](design_stiffness_map.png)
+
+**Maximum load** (App. A.4), carrying muscle at p_max = {ml.p_max / BAR:g} bar, antagonist at 0:
+minimum over the working area {ml.minimum:.2f} kg at ({qmin[0]:.0f}, {qmin[1]:.0f}) deg; joint-1 limit
+(A.43) alone {d["M1_kg"].min():.2f} kg; 5 deg away from every edge
+{study.metrics["max_load_interior_min_kg"]:.2f} kg; median {d.M_max_kg.median():.1f} kg.
 {'' if not quick else '(quick mode: coarse grids)'}
 
 ![max load](design_max_load.png)

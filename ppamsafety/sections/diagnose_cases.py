@@ -38,7 +38,7 @@ from ..diagnose.arm.summary_fit import (TableDesign, fit_pair, fit_summary, CONF
                                         PRINT_STD, RANK_TOL, REPRODUCIBILITY, axis)
 from ..markdown import markdown_table
 from ..plots.diagnose import plot_confusion, plot_gap
-from . import Section, SectionInfo, resolve_arm
+from . import Section, SectionInfo, compares_to_thesis, other_arm_note, resolve_arm
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -102,6 +102,8 @@ class DiagnoseCasesStudy:
     timings : dict
         Wall time of each part [s].
     metrics : dict
+    note : str
+        The other-arm note of the section ("" for the thesis arm).
     """
 
     case_c: object
@@ -113,6 +115,7 @@ class DiagnoseCasesStudy:
     confusion: pd.DataFrame
     timings: dict = field(default_factory=dict)
     metrics: dict = field(default_factory=dict)
+    note: str = ""
 
     def to_pandas(self) -> pd.DataFrame:
         """Case (c)'s parameter table."""
@@ -120,12 +123,14 @@ class DiagnoseCasesStudy:
 
     def plot(self) -> dict:
         """Figures ``{file name: Figure}``."""
-        return {"diagnose_case_c_replay.png": self.case_c.plot(),
+        figs = {"diagnose_case_c_replay.png": self.case_c.plot(),
                 "diagnose_case_c_gap.png": plot_gap(
                     self.case_c.residual_rms,
-                    title="case (c): replay RMS error per channel / noise"),
-                "diagnose_table_5_2_profiles.png": self.summary.plot(),
-                "diagnose_confusion.png": plot_confusion(self.confusion)}
+                    title="case (c): replay RMS error per channel / noise")}
+        if self.summary is not None:
+            figs["diagnose_table_5_2_profiles.png"] = self.summary.plot()
+        figs["diagnose_confusion.png"] = plot_confusion(self.confusion)
+        return figs
 
 
 def _hidden_values(arm, effects: dict) -> dict:
@@ -177,7 +182,7 @@ def parameter_comparison(dg, hidden: dict) -> pd.DataFrame:
 
 
 def run_battery(battery: dict, *, reference: str, controller: str, duration: float,
-                seed: int) -> pd.DataFrame:
+                seed: int, arm=None) -> pd.DataFrame:
     """Diagnose one closed-loop record per battery case, blind.
 
     Parameters
@@ -192,6 +197,8 @@ def run_battery(battery: dict, *, reference: str, controller: str, duration: flo
         Record length [s].
     seed : int
         Seed of every record's noise.
+    arm : ArmParameters, optional
+        The nominal arm (default the thesis arm).
 
     Returns
     -------
@@ -204,7 +211,7 @@ def run_battery(battery: dict, *, reference: str, controller: str, duration: flo
     for case, (eff, expected) in battery.items():
         t0 = time.perf_counter()
         dg = diagnose(synthesize("closed-loop", eff, seed=seed, duration=duration,
-                                 reference=reference, controller=controller))
+                                 reference=reference, controller=controller, arm=arm), arm=arm)
         named = tuple(sorted(dg.names))
         rows.append({"case": case, "expected": "+".join(sorted(expected)) or "nothing",
                      "named": "+".join(named) or "nothing",
@@ -225,7 +232,7 @@ def confusion_matrix(battery: pd.DataFrame) -> pd.DataFrame:
         index=list(dict.fromkeys(battery["case"])), fill_value=0)
 
 
-def compute(*, quick: bool = False, arm=None) -> DiagnoseCasesStudy:
+def compute(*, quick: bool = False, arm=None, head=None) -> DiagnoseCasesStudy:
     """Run case (c), case (b) and the battery (module docstring).
 
     Parameters
@@ -233,12 +240,16 @@ def compute(*, quick: bool = False, arm=None) -> DiagnoseCasesStudy:
     quick : bool, keyword-only
         Short records, a two-effect Table 5.2 fit on one cell, three battery cases.
     arm : ArmParameters, optional, keyword-only
-        The nominal arm (default the thesis arm).
+        The nominal arm (default the thesis arm).  Case (b) fits the thesis' Table 5.2
+        (the thesis arm's measurements): for another arm it is left out.
+    head : HeadContactModel, optional, keyword-only
+        Unused (no impact in this section); accepted like every section's.
 
     Returns
     -------
     DiagnoseCasesStudy
     """
+    thesis = compares_to_thesis(arm)
     arm = resolve_arm(arm)
     timings = {}
     t0 = time.perf_counter()
@@ -255,18 +266,22 @@ def compute(*, quick: bool = False, arm=None) -> DiagnoseCasesStudy:
                         for ch, r in dg.residual_rms.items() if not ch.startswith("block_")])
     t1 = time.perf_counter()
     timings["case_c"] = t1 - t0
-    if quick:
+    if not thesis:
+        fit = pair = None
+    elif quick:
         fit = fit_summary(arm, effects=("valve_time_constant_factor", "friction_coulomb_factor"),
                           thetas=(0.0, 1.0), design=_quick_design(), fine=21)
     else:
         fit = fit_summary(arm, design=_report_design())
-    pair = fit_pair(fit, arm, fine=21 if quick else 41) if len(fit.stats) >= 2 else None
+    if fit is not None:
+        pair = fit_pair(fit, arm, fine=21 if quick else 41) if len(fit.stats) >= 2 else None
     t2 = time.perf_counter()
     timings["case_b"] = t2 - t1
     bat = {k: BATTERY[k] for k in (("nothing", "payload 0.4 kg") if quick else BATTERY)}
     br = dict(BATTERY_RECORD)
     battery = run_battery(bat, reference=br["reference"], controller=br["controller"],
-                          duration=3.0 if quick else br["duration"], seed=br["seed"])
+                          duration=3.0 if quick else br["duration"], seed=br["seed"],
+                          arm=None if thesis else arm)
     timings["battery"] = time.perf_counter() - t2
     timings["total"] = time.perf_counter() - t0
     named = set(dg.names)
@@ -279,7 +294,8 @@ def compute(*, quick: bool = False, arm=None) -> DiagnoseCasesStudy:
                                         / gap.set_index("channel").loc[["q1", "q2"], "before"])),
         "battery_correct": int(battery["correct"].sum()), "battery_cases": len(battery),
         "battery_record_s": 3.0 if quick else br["duration"],
-        "table_5_2": fit.metrics, "wall_times_s": {k: round(v, 2) for k, v in timings.items()},
+        **({"table_5_2": fit.metrics} if fit is not None else {}),
+        "wall_times_s": {k: round(v, 2) for k, v in timings.items()},
     }
     if pair is not None:
         metrics["table_5_2_pair"] = {"effects": list(pair.names),
@@ -287,7 +303,8 @@ def compute(*, quick: bool = False, arm=None) -> DiagnoseCasesStudy:
                                      "chi2_per_stat": pair.chi2_per_stat}
     return DiagnoseCasesStudy(case_c=dg, case_c_table=table, case_c_gap=gap, summary=fit,
                               pair=pair, battery=battery, confusion=confusion_matrix(battery),
-                              timings=timings, metrics=metrics)
+                              timings=timings, metrics=metrics,
+                              note="" if thesis else other_arm_note(arm))
 
 
 def _period_shape(cells: pd.DataFrame) -> dict:
@@ -316,7 +333,7 @@ def render(study: DiagnoseCasesStudy) -> Section:
     """
     dg, fit, s = study.case_c, study.summary, study
     figs = study.plot()
-    L = []
+    L = [study.note, ""] if study.note else []
     L.append("The discrepancy workflow (`ppamsafety diagnose`, `docs/diagnose.md`) on "
              "closed-loop records, on the thesis's own summary statistics, and on a blind "
              "battery. Records are synthesised by `ppamsafety synthesize --experiment "
@@ -355,95 +372,96 @@ def render(study: DiagnoseCasesStudy) -> Section:
     L.append("![case (c) gap per channel](diagnose_case_c_gap.png)")
     L.append("")
     # ---------------------------------------------------------------- case (b)
-    d = fit.design
-    L.append("### Case (b): which library effect closes the Table 5.2 gap?")
-    L.append("")
-    L.append(f"Simulated Table 5.2 cells: variants {', '.join(d.variants)}; circle periods "
-             f"{', '.join(f'{p:g}' for p in d.periods)} s; {d.warmup:g} s warm-up and a "
-             f"{d.window:g} s window (the thesis: 40 s; shortened to keep the report fast); "
-             f"mean and max of ||r_d - r||: {fit.m} statistics. Each effect is put into the "
-             f"plant truth at theta = {', '.join(f'{t:g}' for t in fit.thetas)} of its "
-             f"plausible range (one batched closed-loop run), the statistics are interpolated "
-             f"in theta and chi2 = sum (ln(sim/thesis)/s)^2 is profiled, with s = "
-             f"sqrt({REPRODUCIBILITY:g}^2 + ({PRINT_STD * 1e3:.3f} mm / thesis)^2): the "
-             f"printed rounding and an assumed {100 * REPRODUCIBILITY:g} % run-to-run "
-             f"reproducibility (the thesis gives no repeats). Nominal plant: chi2/statistic = "
-             f"{fit.nominal_chi2 / fit.m:.1f}, geometric-mean ratio sim/thesis = "
-             f"{fit.metrics['nominal_ratio_geo_mean']:.2f}.")
-    L.append("")
-    tab = fit.table.copy()
-    tab["range"] = [f"{axis(n).nominal:g} -> {axis(n).full:g}" for n in tab.effect]
-    L.append(markdown_table(tab[["effect", "unit", "range", "best_value", "interval_low",
-                                 "interval_high", "chi2_per_stat", "chi2_reduction",
-                                 "ratio_geo_mean", "at_edge"]], digits=3))
-    L.append("")
-    best = fit.table.iloc[0]
-    closes = best.chi2_per_stat <= 2.0
-    L.append(f"Best single effect: **{best.effect}** at {best.best_value:.3g} {best.unit} "
-             f"(chi2/statistic {best.chi2_per_stat:.1f}, {100 * best.chi2_reduction:.0f} % "
-             f"below the nominal plant{', at the edge of its plausible range' if best.at_edge else ''}). "
-             + ("It closes the gap to within the stated uncertainty." if closes else
-                "**No single effect closes the gap**: the best fit still leaves the statistics "
-                f"{np.sqrt(best.chi2_per_stat):.1f} standard uncertainties off on average (RMS)."))
-    L.append("")
-    pr = study.pair
-    if pr is not None:
-        a, b = axis(pr.names[0]), axis(pr.names[1])
-        L.append(f"The two best together ({pr.names[0]} and {pr.names[1]}, the interior of "
-                 f"their theta grid simulated with both on, bilinear in the log statistics): "
-                 f"best at {pr.names[0]} = {pr.best_value[0]:.3g} {a.unit}, "
-                 f"{pr.names[1]} = {pr.best_value[1]:.3g} {b.unit}, "
-                 f"chi2/statistic {pr.chi2_per_stat:.1f} (alone: "
-                 f"{pr.chi2_single / fit.m:.1f}). "
-                 + ("The pair closes the gap within the stated uncertainty."
-                    if pr.chi2_per_stat <= 2.0 else
-                    "Even the pair does not close the gap within the stated uncertainty."))
+    if fit is not None:
+        d = fit.design
+        L.append("### Case (b): which library effect closes the Table 5.2 gap?")
         L.append("")
-    cells = fit.cells()
-    cd = pd.DataFrame({
-        "variant": cells.variant, "P [s]": cells.period_s, "statistic": cells.statistic,
-        "thesis [mm]": 1e3 * cells.thesis_m,
-        "nominal [mm] (ratio)": [f"{1e3 * a:.2f} ({r:.2f})" for a, r in
-                                 zip(cells.nominal_m, cells.ratio_nominal)],
-        f"{best.effect} = {best.best_value:.3g} [mm] (ratio)": [
-            f"{1e3 * a:.2f} ({r:.2f})" for a, r in zip(cells.best_m, cells.ratio_best)]})
-    L.append(f"Per cell (Table 5.2 value beside ours, ratio ours/thesis; "
-             f"{d.window:g} s window):")
-    L.append("")
-    L.append(markdown_table(cd, digits=2))
-    L.append("")
-    shape = _period_shape(cells)
-    if shape:
-        L.append("Shape, not only level: mean error on the fastest circle divided by the "
-                 "mean error on the slowest one, per variant (thesis / nominal plant / best "
-                 "single effect): " + "; ".join(
-                     f"{v}: {t:.2f} / {n:.2f} / {b:.2f}" for v, (t, n, b) in shape.items())
-                 + ". Where the thesis ratio is the smaller, part of the real error does not "
-                   "grow with the speed of the circle (a static or slowly varying error), "
-                   "which no single speed-dependent effect of the library reproduces.")
+        L.append(f"Simulated Table 5.2 cells: variants {', '.join(d.variants)}; circle periods "
+                 f"{', '.join(f'{p:g}' for p in d.periods)} s; {d.warmup:g} s warm-up and a "
+                 f"{d.window:g} s window (the thesis: 40 s; shortened to keep the report fast); "
+                 f"mean and max of ||r_d - r||: {fit.m} statistics. Each effect is put into the "
+                 f"plant truth at theta = {', '.join(f'{t:g}' for t in fit.thetas)} of its "
+                 f"plausible range (one batched closed-loop run), the statistics are interpolated "
+                 f"in theta and chi2 = sum (ln(sim/thesis)/s)^2 is profiled, with s = "
+                 f"sqrt({REPRODUCIBILITY:g}^2 + ({PRINT_STD * 1e3:.3f} mm / thesis)^2): the "
+                 f"printed rounding and an assumed {100 * REPRODUCIBILITY:g} % run-to-run "
+                 f"reproducibility (the thesis gives no repeats). Nominal plant: chi2/statistic = "
+                 f"{fit.nominal_chi2 / fit.m:.1f}, geometric-mean ratio sim/thesis = "
+                 f"{fit.metrics['nominal_ratio_geo_mean']:.2f}.")
         L.append("")
-    conf = ", ".join(f"{a} ~ {b} ({c:.2f})" for a, b, c in fit.confounded) or "none"
-    cos = fit.cosines.to_numpy()
-    iu = np.triu_indices_from(cos, 1)
-    k = int(np.argmax(cos[iu]))
-    pair = (fit.cosines.index[iu[0][k]], fit.cosines.columns[iu[1][k]], cos[iu][k])
-    L.append(f"Identifiability from these statistics: the whitened sensitivity matrix "
-             f"({fit.m} statistics x {fit.sensitivity.shape[1]} effects, per unit theta at the "
-             f"first grid step) has numerical rank **{fit.rank}** (singular values above "
-             f"{RANK_TOL:g} of the largest; all: {', '.join(f'{v:.3g}' for v in fit.singular_values)}) "
-             f"and condition number {fit.condition:.3g}. Pairs confounded (|cos| >= "
-             f"{CONFOUNDED_COS:g} between their sensitivity columns): {conf}; the most "
-             f"similar pair is {pair[0]} / {pair[1]} (|cos| = {pair[2]:.2f}). "
-             + (f"With rank {fit.rank} < {fit.sensitivity.shape[1]}, at most {fit.rank} "
-                f"combinations of effect magnitudes are determined by the table. "
-                if fit.rank < fit.sensitivity.shape[1] else "")
-             + "A summary table can rank effects by how well they reproduce it, but "
-               "several effects move every statistic the same way (all of them make the "
-               "tracking worse), so it cannot *name* a cause the way a record does "
-               "(case (c)).")
-    L.append("")
-    L.append("![Table 5.2 profiles](diagnose_table_5_2_profiles.png)")
-    L.append("")
+        tab = fit.table.copy()
+        tab["range"] = [f"{axis(n).nominal:g} -> {axis(n).full:g}" for n in tab.effect]
+        L.append(markdown_table(tab[["effect", "unit", "range", "best_value", "interval_low",
+                                     "interval_high", "chi2_per_stat", "chi2_reduction",
+                                     "ratio_geo_mean", "at_edge"]], digits=3))
+        L.append("")
+        best = fit.table.iloc[0]
+        closes = best.chi2_per_stat <= 2.0
+        L.append(f"Best single effect: **{best.effect}** at {best.best_value:.3g} {best.unit} "
+                 f"(chi2/statistic {best.chi2_per_stat:.1f}, {100 * best.chi2_reduction:.0f} % "
+                 f"below the nominal plant{', at the edge of its plausible range' if best.at_edge else ''}). "
+                 + ("It closes the gap to within the stated uncertainty." if closes else
+                    "**No single effect closes the gap**: the best fit still leaves the statistics "
+                    f"{np.sqrt(best.chi2_per_stat):.1f} standard uncertainties off on average (RMS)."))
+        L.append("")
+        pr = study.pair
+        if pr is not None:
+            a, b = axis(pr.names[0]), axis(pr.names[1])
+            L.append(f"The two best together ({pr.names[0]} and {pr.names[1]}, the interior of "
+                     f"their theta grid simulated with both on, bilinear in the log statistics): "
+                     f"best at {pr.names[0]} = {pr.best_value[0]:.3g} {a.unit}, "
+                     f"{pr.names[1]} = {pr.best_value[1]:.3g} {b.unit}, "
+                     f"chi2/statistic {pr.chi2_per_stat:.1f} (alone: "
+                     f"{pr.chi2_single / fit.m:.1f}). "
+                     + ("The pair closes the gap within the stated uncertainty."
+                        if pr.chi2_per_stat <= 2.0 else
+                        "Even the pair does not close the gap within the stated uncertainty."))
+            L.append("")
+        cells = fit.cells()
+        cd = pd.DataFrame({
+            "variant": cells.variant, "P [s]": cells.period_s, "statistic": cells.statistic,
+            "thesis [mm]": 1e3 * cells.thesis_m,
+            "nominal [mm] (ratio)": [f"{1e3 * a:.2f} ({r:.2f})" for a, r in
+                                     zip(cells.nominal_m, cells.ratio_nominal)],
+            f"{best.effect} = {best.best_value:.3g} [mm] (ratio)": [
+                f"{1e3 * a:.2f} ({r:.2f})" for a, r in zip(cells.best_m, cells.ratio_best)]})
+        L.append(f"Per cell (Table 5.2 value beside ours, ratio ours/thesis; "
+                 f"{d.window:g} s window):")
+        L.append("")
+        L.append(markdown_table(cd, digits=2))
+        L.append("")
+        shape = _period_shape(cells)
+        if shape:
+            L.append("Shape, not only level: mean error on the fastest circle divided by the "
+                     "mean error on the slowest one, per variant (thesis / nominal plant / best "
+                     "single effect): " + "; ".join(
+                         f"{v}: {t:.2f} / {n:.2f} / {b:.2f}" for v, (t, n, b) in shape.items())
+                     + ". Where the thesis ratio is the smaller, part of the real error does not "
+                       "grow with the speed of the circle (a static or slowly varying error), "
+                       "which no single speed-dependent effect of the library reproduces.")
+            L.append("")
+        conf = ", ".join(f"{a} ~ {b} ({c:.2f})" for a, b, c in fit.confounded) or "none"
+        cos = fit.cosines.to_numpy()
+        iu = np.triu_indices_from(cos, 1)
+        k = int(np.argmax(cos[iu]))
+        pair = (fit.cosines.index[iu[0][k]], fit.cosines.columns[iu[1][k]], cos[iu][k])
+        L.append(f"Identifiability from these statistics: the whitened sensitivity matrix "
+                 f"({fit.m} statistics x {fit.sensitivity.shape[1]} effects, per unit theta at the "
+                 f"first grid step) has numerical rank **{fit.rank}** (singular values above "
+                 f"{RANK_TOL:g} of the largest; all: {', '.join(f'{v:.3g}' for v in fit.singular_values)}) "
+                 f"and condition number {fit.condition:.3g}. Pairs confounded (|cos| >= "
+                 f"{CONFOUNDED_COS:g} between their sensitivity columns): {conf}; the most "
+                 f"similar pair is {pair[0]} / {pair[1]} (|cos| = {pair[2]:.2f}). "
+                 + (f"With rank {fit.rank} < {fit.sensitivity.shape[1]}, at most {fit.rank} "
+                    f"combinations of effect magnitudes are determined by the table. "
+                    if fit.rank < fit.sensitivity.shape[1] else "")
+                 + "A summary table can rank effects by how well they reproduce it, but "
+                   "several effects move every statistic the same way (all of them make the "
+                   "tracking worse), so it cannot *name* a cause the way a record does "
+                   "(case (c)).")
+        L.append("")
+        L.append("![Table 5.2 profiles](diagnose_table_5_2_profiles.png)")
+        L.append("")
     # ---------------------------------------------------------------- battery
     br = BATTERY_RECORD
     L.append("### Blind battery (closed loop)")
@@ -467,12 +485,13 @@ def render(study: DiagnoseCasesStudy) -> Section:
              f"{tm['battery']:.1f} s, total {tm['total']:.1f} s.")
     arts = list(figs.items()) + [
         ("diagnose_case_c_parameters.csv", study.case_c_table),
-        ("diagnose_case_c_gap.csv", study.case_c_gap),
-        ("diagnose_table_5_2_fit.csv", fit.table),
-        ("diagnose_table_5_2_cells.csv", cells),
-        ("diagnose_table_5_2_cosines.csv", fit.cosines.reset_index().rename(
-            columns={"index": "effect"})),
-        ("diagnose_battery.csv", study.battery)]
+        ("diagnose_case_c_gap.csv", study.case_c_gap)]
+    if fit is not None:
+        arts += [("diagnose_table_5_2_fit.csv", fit.table),
+                 ("diagnose_table_5_2_cells.csv", cells),
+                 ("diagnose_table_5_2_cosines.csv", fit.cosines.reset_index().rename(
+                     columns={"index": "effect"}))]
+    arts += [("diagnose_battery.csv", study.battery)]
     return Section(title="Discrepancy diagnosis: closed-loop records, Table 5.2, blind battery "
                          "(issue 10)",
                    markdown="\n".join(L), artifacts=arts, metrics=dict(study.metrics))

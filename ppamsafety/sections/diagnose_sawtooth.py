@@ -15,7 +15,7 @@ are not), name hysteresis, fit delta, and shrink the angle error.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pandas as pd
@@ -26,7 +26,7 @@ from ..diagnose.arm.static import static_record
 from ..hysteresis import DELTA_25_FIBRES
 from ..markdown import markdown_table
 from ..plots.diagnose import plot_sawtooth_diagnosis
-from . import Section, SectionInfo, resolve_arm
+from . import Section, SectionInfo, compares_to_thesis, other_arm_note, resolve_arm
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -69,6 +69,10 @@ class DiagnoseSawtoothStudy:
         Seconds (synthesis + diagnosis).
     metrics : dict
         Headline numbers.
+    thesis : bool
+        Thesis values apply: the thesis arm.
+    note : str
+        The other-arm note ("" for the thesis arm).
     """
 
     quick: bool
@@ -78,6 +82,8 @@ class DiagnoseSawtoothStudy:
     localisation: pd.DataFrame
     wall_time: float
     metrics: dict = field(default_factory=dict)
+    thesis: bool = True
+    note: str = ""
 
     def to_pandas(self) -> pd.DataFrame:
         """The rest-point table."""
@@ -90,7 +96,7 @@ class DiagnoseSawtoothStudy:
 
 
 def compute(*, quick: bool = False, arm=None, delta: float = HIDDEN_DELTA,
-            seed: int = SEED) -> DiagnoseSawtoothStudy:
+            seed: int = SEED, head=None) -> DiagnoseSawtoothStudy:
     """Synthesize the sawtooth with hidden hysteresis and diagnose it.
 
     Parameters
@@ -103,12 +109,24 @@ def compute(*, quick: bool = False, arm=None, delta: float = HIDDEN_DELTA,
         Hidden hysteresis scale of every group [-], in (0, 1].
     seed : int, keyword-only
         Seed of the record's noise.
+    head : HeadContactModel, optional, keyword-only
+        Unused (no impact in this section); accepted like every section's.
 
     Returns
     -------
     DiagnoseSawtoothStudy
+
+    Notes
+    -----
+    An arm with muscle hysteresis of its own is diagnosed against itself without it, its
+    own delta hidden in the record (the largest of its groups).
     """
+    thesis = compares_to_thesis(arm)
     arm = resolve_arm(arm)
+    own = arm.effects.hysteresis_delta
+    if own is not None:
+        arm = arm.replace(effects=replace(arm.effects, hysteresis_delta=None))
+        delta = max(own)
     delta = check_range("delta", delta, 0.0, 1.0, lo_open=True)
     seed = check_int("seed", seed, 0)
     t0 = time.perf_counter()
@@ -161,8 +179,12 @@ def compute(*, quick: bool = False, arm=None, delta: float = HIDDEN_DELTA,
         s = loc[loc.subsystem == sub]
         m[f"rho_before_{sub.replace(' ', '_')}"] = float(s.rho_before.max())
         m[f"rho_after_{sub.replace(' ', '_')}"] = float(s.rho_after.max())
+    if not thesis:
+        for k in ("delta_thesis", "thesis_rms_q1_deg", "thesis_rms_q2_deg"):
+            m.pop(k)
     return DiagnoseSawtoothStudy(quick=quick, hidden_delta=delta, diagnosis=dg,
-                                 rest_points=rest, localisation=loc, wall_time=wall, metrics=m)
+                                 rest_points=rest, localisation=loc, wall_time=wall, metrics=m,
+                                 thesis=thesis, note="" if thesis else other_arm_note(arm))
 
 
 def render(study: DiagnoseSawtoothStudy) -> Section:
@@ -174,7 +196,7 @@ def render(study: DiagnoseSawtoothStudy) -> Section:
         Output of :func:`compute`.
     """
     m = study.metrics
-    summary = pd.DataFrame([
+    summary = _summary_other(m) if not study.thesis else pd.DataFrame([
         {"quantity": "delta (fit, 95 % CI)", "ours": f"{m['delta_fit']:.4f} "
          f"[{m['delta_ci_low']:.4f}, {m['delta_ci_high']:.4f}]", "hidden": f"{m['delta_hidden']:.3f}",
          "thesis": f"{m['delta_thesis']:.3f}",
@@ -189,7 +211,7 @@ def render(study: DiagnoseSawtoothStudy) -> Section:
          "hidden": "", "thesis": f"{m['thesis_rms_q2_deg']:.2f}",
          "ratio ours/thesis": f"{m['rms_q2_vs_set_deg'] / m['thesis_rms_q2_deg']:.2f}"},
     ])
-    md = [
+    md = ([study.note, ""] if study.note else []) + [
         "The static gravity-compensation sawtooth of §3.5.1.6 (figs. 3.1-3.2), synthesized "
         f"with the muscle-force hysteresis (3.35) hidden in the plant at delta = "
         f"{m['delta_hidden']:.3f} (§3.6.5), {m['rest_points']} rest points, Table 3.2 noise, "
@@ -220,6 +242,19 @@ def render(study: DiagnoseSawtoothStudy) -> Section:
                                           study.localisation)]
     return Section("Discrepancy workflow, case (a): hidden hysteresis in the static sawtooth "
                    "(§3.5.1.6)", "\n".join(md), arts, dict(m))
+
+
+def _summary_other(m: dict) -> pd.DataFrame:
+    """The fitted and hidden delta and the angle errors, without thesis values."""
+    return pd.DataFrame([
+        {"quantity": "delta (fit, 95 % CI)", "ours": f"{m['delta_fit']:.4f} "
+         f"[{m['delta_ci_low']:.4f}, {m['delta_ci_high']:.4f}]", "hidden": f"{m['delta_hidden']:.3f}"},
+        {"quantity": "delta from the forces alone", "ours": f"{m['delta_forces']:.4f}",
+         "hidden": f"{m['delta_hidden']:.3f}"},
+        {"quantity": "RMS q1 measured - set [deg]", "ours": f"{m['rms_q1_vs_set_deg']:.2f}",
+         "hidden": ""},
+        {"quantity": "RMS q2 measured - set [deg]", "ours": f"{m['rms_q2_vs_set_deg']:.2f}",
+         "hidden": ""}])
 
 
 __all__ = ["DiagnoseSawtoothStudy", "compute", "render", "HIDDEN_DELTA", "THESIS_DELTA",

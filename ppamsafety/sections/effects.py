@@ -39,7 +39,6 @@ from ..experiments.closed_loop import run_batch
 from ..experiments.conclusions import conclusions_table, evaluate_conclusions
 from ..experiments.trajectories import REFERENCE_ROW, Reference
 from ..hysteresis import DELTA_25_FIBRES
-from ..impact.head import head_model
 from ..markdown import markdown_table
 from ..params.effects import Effects
 from ..plant import geometry as geo
@@ -47,7 +46,8 @@ from ..plant.model import hysteresis_factors
 from ..plant.muscle import muscle_force
 from ..plots.effects import (plot_ratio_shift, plot_sawtooth_angles, plot_sawtooth_errors,
                              plot_sawtooth_forces)
-from . import Section, SectionInfo, resolve_arm, responses, safety, tracking
+from . import (Section, SectionInfo, compares_to_thesis, other_arm_note, resolve_arm,
+               resolve_head_model, responses, safety, tracking)
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -384,6 +384,12 @@ class EffectsStudy:
         Part -> wall time [s].
     metrics : dict
         Headline numbers.
+    thesis : bool
+        Thesis values and ratios apply: the thesis arm and head.
+    arm : ArmParameters or None
+        The hysteresis plant (the arm with its hysteresis).
+    head : HeadContactModel or None
+        The head model of Table 6.1.
     """
 
     quick: bool
@@ -403,6 +409,9 @@ class EffectsStudy:
     limit_cycle: pd.DataFrame
     wall_times: dict
     metrics: dict = field(default_factory=dict)
+    thesis: bool = True
+    arm: object = None
+    head: object = None
 
     def to_pandas(self) -> pd.DataFrame:
         """The sawtooth summary (RMS errors and pattern counts per plant)."""
@@ -426,13 +435,40 @@ def _figures(study) -> dict:
     dict
         File name -> Figure.
     """
-    return {"effects_sawtooth_angles.png": plot_sawtooth_angles(study.sawtooth),
+    figs = {"effects_sawtooth_angles.png": plot_sawtooth_angles(study.sawtooth),
             "effects_sawtooth_errors.png": plot_sawtooth_errors(study.sawtooth),
-            "effects_sawtooth_forces.png": plot_sawtooth_forces(study.sawtooth["hysteresis"]),
-            "effects_ratio_shift.png": plot_ratio_shift(study.comparison, study.table_6_1)}
+            "effects_sawtooth_forces.png": plot_sawtooth_forces(study.sawtooth["hysteresis"])}
+    if study.thesis:
+        figs["effects_ratio_shift.png"] = plot_ratio_shift(study.comparison, study.table_6_1)
+    return figs
 
 
-def compute(*, quick: bool = False, arm=None, delta: float = HYSTERESIS_DELTA) -> EffectsStudy:
+def plants(arm, delta: float = HYSTERESIS_DELTA) -> dict:
+    """The two plants of the section: ``{"nominal": ..., "hysteresis": ...}``.
+
+    The nominal plant is ``arm`` without muscle hysteresis; the hysteresis plant is ``arm``
+    with its own hysteresis, or, if it has none (the thesis arm), with ``delta`` in every
+    group.
+
+    Parameters
+    ----------
+    arm : ppamsafety.params.ArmParameters
+        The arm.
+    delta : float
+        Hysteresis scale of (3.35) for an arm without one [-].
+
+    Returns
+    -------
+    dict
+    """
+    if arm.effects.hysteresis_delta is None:
+        return {"nominal": arm, "hysteresis": hysteresis_arm(arm, delta)}
+    return {"nominal": arm.replace(effects=replace(arm.effects, hysteresis_delta=None)),
+            "hysteresis": arm}
+
+
+def compute(*, quick: bool = False, arm=None, delta: float = HYSTERESIS_DELTA,
+            head=None) -> EffectsStudy:
     """Sawtooth validation, Table 5.2, conclusions and Table 6.1 with and without hysteresis.
 
     Parameters
@@ -441,20 +477,27 @@ def compute(*, quick: bool = False, arm=None, delta: float = HYSTERESIS_DELTA) -
         One short sawtooth tooth and 1 s + 4 s circle windows instead of two
         teeth and the thesis' 5 s + 40 s.
     arm : ppamsafety.params.ArmParameters, optional
-        Nominal arm (default: the thesis arm); the hysteresis case adds
-        ``hysteresis_delta = delta`` to its effects.
+        The arm (default: the thesis arm): :func:`plants` makes the nominal plant (no
+        hysteresis) and the hysteresis plant (the arm's own, else ``delta``).
     delta : float
-        Hysteresis scale of (3.35) for every group [-] (thesis: 0.139).
+        Hysteresis scale of (3.35) for every group [-] (thesis: 0.139), for an arm
+        without hysteresis of its own.
+    head : HeadContactModel, optional
+        Head model of Table 6.1 (default ``thesis-frontal``).  Thesis ratios only for
+        the thesis arm and head.
 
     Returns
     -------
     EffectsStudy
         Tables, runs and metrics.
     """
+    thesis = compares_to_thesis(arm, head)
     arm = resolve_arm(arm)
     if not (isinstance(delta, (int, float)) and 0.0 < delta <= 1.0):
         raise ValueError(f"delta = {delta!r} must be a number in (0, 1]")
-    arms = {"nominal": arm, "hysteresis": hysteresis_arm(arm, delta)}
+    arms = plants(arm, delta)
+    hd = arms["hysteresis"].effects.hysteresis_delta
+    delta = float(delta) if len(set(hd)) > 1 or hd[0] == delta else float(hd[0])
     walls = {}
 
     t0 = time.perf_counter()
@@ -467,19 +510,22 @@ def compute(*, quick: bool = False, arm=None, delta: float = HYSTERESIS_DELTA) -
 
     warmup, evaluate = (1.0, 4.0) if quick else (catalog.CIRCLE_WARMUP, catalog.CIRCLE_EVAL)
     errs, cmps, concl, t61 = {}, {}, {}, {}
-    head = head_model()
+    head = resolve_head_model(head)
     for lab, a in arms.items():
         t0 = time.perf_counter()
         errs[lab], _ = tracking.circle_errors(a, catalog.thesis_variants(), warmup=warmup,
                                               evaluate=evaluate)
-        cmps[lab] = tracking.compare_with_thesis(errs[lab])
+        cmps[lab] = tracking.compare_with_thesis(errs[lab]) if thesis else errs[lab]
         walls[f"table_5_2 {lab}"] = time.perf_counter() - t0
         t0 = time.perf_counter()
         resp = responses.compute(arm=a)
         concl[lab] = evaluate_conclusions(errs[lab], resp.step_table, resp.switch_table)
         t61[lab], _, _ = safety._heuristic_table(
-            a, head, runs={"step": resp.step, "switch": resp.switch})
+            a, head, runs={"step": resp.step, "switch": resp.switch}, thesis=thesis)
         walls[f"responses + table_6_1 {lab}"] = time.perf_counter() - t0
+    if not thesis:
+        return _compute_other(quick, delta, arms, runs, windows, saw, summ, warmup, evaluate,
+                              errs, cmps, concl, t61, walls, head)
 
     rows = []
     for lab in arms:
@@ -528,6 +574,47 @@ def compute(*, quick: bool = False, arm=None, delta: float = HYSTERESIS_DELTA) -
                         wall_times=walls, metrics=metrics)
 
 
+def _compute_other(quick, delta, arms, runs, windows, saw, summ, warmup, evaluate, errs, cmps,
+                   concl, t61, walls, head) -> EffectsStudy:
+    """The rest of :func:`compute` for another arm or head: hysteresis / nominal, no thesis."""
+    n_err, h_err = errs["nominal"], errs["hysteresis"]
+    n_61, h_61 = t61["nominal"], t61["hysteresis"]
+    rows = []
+    for name, a, b in (("Table 5.2 mean", n_err.mean_m, h_err.mean_m),
+                       ("Table 5.2 max", n_err.max_m, h_err.max_m),
+                       ("Table 6.1 HIC36", n_61.HIC36, h_61.HIC36),
+                       ("Table 6.1 F_max", n_61.F_max, h_61.F_max)):
+        rr = np.asarray(b, dtype=float) / np.asarray(a, dtype=float)
+        rows.append({"table": name, "median hysteresis / nominal": float(np.nanmedian(rr)),
+                     "min": float(np.nanmin(rr)), "max": float(np.nanmax(rr)),
+                     "cells": int(np.isfinite(rr).sum())})
+    ratios = pd.DataFrame(rows)
+    lc = []
+    for lab in arms:
+        e = errs[lab]
+        g = e[(e.variant == LIMIT_CYCLE_VARIANT) & (e.period_s == 20.0)].iloc[0]
+        lc.append({"plant": lab, "variant": LIMIT_CYCLE_VARIANT, "period_s": 20.0,
+                   "mean_m": float(g.mean_m), "max_m": float(g.max_m)})
+    lc = pd.DataFrame(lc)
+    sm = summ.set_index("plant")
+    metrics = {
+        "delta": float(delta),
+        "sawtooth_rms_deg": {lab: [float(sm.loc[lab, "rms_q1_deg"]),
+                                   float(sm.loc[lab, "rms_q2_deg"])] for lab in arms},
+        "median_ratio_hysteresis_over_nominal": {r.table: r["median hysteresis / nominal"]
+                                                 for _, r in ratios.iterrows()},
+        "limit_cycle_max_mm": {r.plant: 1e3 * r.max_m for r in lc.itertuples()},
+        "conclusions": {lab: {c.key: bool(c.holds) for c in concl[lab]} for lab in arms},
+        "wall_times_s": {k: round(v, 2) for k, v in walls.items()},
+    }
+    return EffectsStudy(quick=quick, delta=float(delta), cases=tuple(arms), sawtooth_runs=runs,
+                        sawtooth_windows=windows, sawtooth=saw, sawtooth_summary=summ,
+                        warmup=warmup, evaluate=evaluate, circle_errors=errs, comparison=cmps,
+                        conclusions=concl, table_6_1=t61, ratios=ratios, limit_cycle=lc,
+                        wall_times=walls, metrics=metrics, thesis=False,
+                        arm=arms["hysteresis"], head=head)
+
+
 def _yes(b) -> str:
     return "holds" if b else "does not hold"
 
@@ -545,6 +632,8 @@ def render(study: EffectsStudy) -> Section:
     Section
         Markdown and artifacts (figures and CSV tables).
     """
+    if not study.thesis:
+        return _render_other(study)
     sm = study.sawtooth_summary.set_index("plant")
     # .at keeps each column's dtype (counts stay int)
     n, h = (SimpleNamespace(**{c: sm.at[lab, c] for c in sm.columns})
@@ -671,6 +760,82 @@ Wall time of this section: {sum(walls.values()):.1f} s ({', '.join(f'{k} {v:.1f}
                                                  study.comparison.items()], ignore_index=True)),
             ("effects_table_6_1.csv", pd.concat([t.assign(plant=lab) for lab, t in
                                                  study.table_6_1.items()], ignore_index=True)),
+            ("effects_conclusions.csv", ct),
+            *study.plot().items()]
+    return Section("Effects: the thesis revisited with muscle hysteresis (§3.5.1.6, §3.6)", md,
+                   arts, dict(study.metrics))
+
+
+def _render_other(study: EffectsStudy) -> Section:
+    """The effects section for another arm or head: with and without hysteresis, no thesis."""
+    sm = study.sawtooth_summary.set_index("plant")
+    hd = study.arm.effects.hysteresis_delta
+    saw_tab = pd.DataFrame({
+        "plant": list(sm.index),
+        "RMS q1 [deg]": [f"{v:.2f}" for v in sm.rms_q1_deg],
+        "RMS q2 [deg]": [f"{v:.2f}" for v in sm.rms_q2_deg],
+        "q1: rising below / falling above": [f"{a} of {b}" for a, b in
+                                             zip(sm.pattern_q1, sm.steps_q1)],
+        "q2: rising below / falling above": [f"{a} of {b}" for a, b in
+                                             zip(sm.pattern_q2, sm.steps_q2)],
+        "gap falling − rising [deg] (q1; q2)": [f"{a:.2f}; {b:.2f}" for a, b in
+                                                zip(sm.gap_q1_deg, sm.gap_q2_deg)]})
+    cn = {c.key: c for c in study.conclusions["nominal"]}
+    ch = {c.key: c for c in study.conclusions["hysteresis"]}
+    ct = pd.DataFrame({"": [f"({k})" for k in cn], "thesis claim": [c.claim for c in cn.values()],
+                       "nominal plant": [_yes(c.holds) for c in cn.values()],
+                       "with hysteresis": [_yes(ch[k].holds) for k in cn]})
+    lc = study.limit_cycle.set_index("plant")
+    t61 = pd.concat([t[["experiment", "label", "HIC36", "F_max"]].assign(plant=lab)
+                     for lab, t in study.table_6_1.items()], ignore_index=True)
+    t61w = t61.pivot_table(index=["experiment", "label"], columns="plant",
+                           values=["F_max", "HIC36"], sort=False)
+    t61w.columns = [f"{v} {p}" for v, p in t61w.columns]
+    t61w = t61w.reset_index()
+    md = f"""{other_arm_note(study.arm, study.head)}
+
+The plant truth with and without the muscle-force hysteresis of §3.6 ((3.35), Preisach weight
+(3.33), δ = {', '.join(f'{v:g}' for v in hd)} per muscle group); the controllers keep the nominal
+model. Every experiment runs on both plants.{' (quick mode)' if study.quick else ''}
+
+### Gravity-compensation sawtooth (§3.5.1.6)
+
+Static gravity compensation alone at the set angles; {RAMP_S:g} s ramps, {SETTLE_S:g} s pause,
+{WINDOW_S:g} s of data per level:
+
+{markdown_table(saw_tab)}
+
+![sawtooth angles](effects_sawtooth_angles.png)
+
+![sawtooth errors](effects_sawtooth_errors.png)
+
+![sawtooth forces](effects_sawtooth_forces.png)
+
+### Tracking and impacts with and without hysteresis
+
+Hysteresis / nominal over the cells of Table 5.2 (ten variants, three circles, {study.warmup:g} s
+warm-up + {study.evaluate:g} s) and Table 6.1 (worst of the four heuristic impacts):
+
+{markdown_table(study.ratios, digits=3)}
+
+Worst impacts per variant (the Table 6.1 setup) on both plants:
+
+{markdown_table(t61w, digits=4)}
+
+{LIMIT_CYCLE_VARIANT} at P = 20 s: max error {1e3 * lc.loc['nominal', 'max_m']:.2f} mm nominal,
+{1e3 * lc.loc['hysteresis', 'max_m']:.2f} mm with hysteresis.
+
+**The thesis' conclusions on this arm** (criteria of `ppamsafety/experiments/conclusions.py`):
+
+{markdown_table(ct)}
+"""
+    arts = [("effects_sawtooth.csv", pd.concat([w.assign(plant=lab) for lab, w in
+                                                study.sawtooth.items()], ignore_index=True)),
+            ("effects_summary.csv", study.sawtooth_summary),
+            ("effects_ratios.csv", study.ratios),
+            ("effects_table_5_2.csv", pd.concat([c.assign(plant=lab) for lab, c in
+                                                 study.comparison.items()], ignore_index=True)),
+            ("effects_table_6_1.csv", t61),
             ("effects_conclusions.csv", ct),
             *study.plot().items()]
     return Section("Effects: the thesis revisited with muscle hysteresis (§3.5.1.6, §3.6)", md,

@@ -13,7 +13,8 @@ from ..impact.head import head_model, head_model_names
 from ..impact.instants import evaluate_experiment
 from ..markdown import markdown_table
 from ..plots.impact import plot_head_fit
-from . import Section, SectionInfo, resolve_arm
+from . import (Section, SectionInfo, compares_to_thesis, other_arm_note, resolve_arm,
+               resolve_head_model)
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -43,6 +44,14 @@ class HeadModelStudy:
         Worst PID step impact with each named head model.
     metrics : dict
         Headline numbers.
+    thesis : bool
+        The Table 6.1 reconstruction applies: the thesis arm and head.
+    arm : ArmParameters or None
+        The arm.
+    head : HeadContactModel or None
+        The head model.
+    checks : pandas.DataFrame or None
+        Its checks (``head_fit.head_checks``), another arm or head only.
     """
 
     fits: dict
@@ -51,6 +60,10 @@ class HeadModelStudy:
     curve: pd.DataFrame
     sensitivity: pd.DataFrame
     metrics: dict = field(default_factory=dict)
+    thesis: bool = True
+    arm: object = None
+    head: object = None
+    checks: pd.DataFrame | None = None
 
     @property
     def fit(self):
@@ -62,11 +75,25 @@ class HeadModelStudy:
         return self.evidence.copy()
 
     def plot(self) -> dict:
-        """The study's figures, ``{file name: Figure}``."""
+        """The study's figures, ``{file name: Figure}`` (none for another arm or head)."""
+        if not self.fits:
+            return {}
         return {"head_model_fit.png": plot_head_fit(self.fit.pairs, self.curve)}
 
 
-def compute(*, quick: bool = False, arm=None) -> HeadModelStudy:
+def _sensitivity(arm, heads) -> pd.DataFrame:
+    """The worst PID step impact of ``arm`` with each head model of ``heads``."""
+    res = run_thesis_experiment(arm, "step", [("PID", PID())])[0]
+    sens = []
+    for hm in heads:
+        s = evaluate_experiment(res, arm, head=hm).summary
+        sens.append({"head model": hm.name, "mass [kg]": hm.mass, "k": f"{hm.stiffness:.3g}",
+                     "n": hm.exponent, "b": f"{hm.damping:.3g}",
+                     "F_max [N]": round(s.F_max.max(), 1), "HIC36": round(s.HIC36.max(), 3)})
+    return pd.DataFrame(sens)
+
+
+def compute(*, quick: bool = False, arm=None, head=None) -> HeadModelStudy:
     """Fit the head model to Table 6.1 and check it against the drop test and ISO/TS 15066.
 
     Parameters
@@ -75,6 +102,10 @@ def compute(*, quick: bool = False, arm=None) -> HeadModelStudy:
         Fit only the exponent n = 1.5 (not 1, 1.5 and 2).
     arm : ppamsafety.params.ArmParameters, optional
         Arm (default: the thesis arm).
+    head : HeadContactModel, optional
+        The report's head model (default ``thesis-frontal``).  With another arm or head
+        the Table 6.1 reconstruction (the thesis arm's impacts) is not refitted: the
+        section shows the head's checks and its impacts on this arm.
 
     Returns
     -------
@@ -82,6 +113,8 @@ def compute(*, quick: bool = False, arm=None) -> HeadModelStudy:
         Fits, tables and metrics.
     """
     arm = resolve_arm(arm)
+    if not compares_to_thesis(arm, head):
+        return _compute_other(arm, resolve_head_model(head))
     stored = head_model()
     fits = {n: hf.fit_thesis_head(arm, exponent=n) for n in ((1.5,) if quick else (1.0, 1.5, 2.0))}
     fit = fits[1.5]
@@ -112,6 +145,19 @@ def compute(*, quick: bool = False, arm=None) -> HeadModelStudy:
                           sensitivity=sens, metrics=metrics)
 
 
+def _compute_other(arm, head) -> HeadModelStudy:
+    """The head section for another arm or head: the head's checks and its impacts."""
+    checks = hf.head_checks(head)
+    names = head_model_names()
+    heads = [head] + [head_model(n) for n in names if head_model(n) != head]
+    sens = _sensitivity(arm, heads)
+    metrics = {"checks_met": {r.check: bool(r.met) for r in checks.itertuples()},
+               "F_max_N": float(sens["F_max [N]"].iloc[0]), "HIC36": float(sens.HIC36.iloc[0])}
+    return HeadModelStudy(fits={}, stored=head, evidence=checks, curve=pd.DataFrame(),
+                          sensitivity=sens, metrics=metrics, thesis=False, arm=arm, head=head,
+                          checks=checks)
+
+
 def render(study: HeadModelStudy) -> Section:
     """The report section of the head-model study (formatting only).
 
@@ -125,6 +171,8 @@ def render(study: HeadModelStudy) -> Section:
     Section
         Markdown and artifacts (figure, fits, pairs and sensitivity CSVs).
     """
+    if not study.thesis:
+        return _render_other(study)
     fit, stored, evidence, sens = study.fit, study.stored, study.evidence, study.sensitivity
     res_step = fit.pairs[fit.pairs.experiment == "step"].residual_sigma.mean()
     res_switch = fit.pairs[fit.pairs.experiment == "switch"].residual_sigma.mean()
@@ -168,4 +216,27 @@ Other head models are one argument away (`simulate_impacts(..., head="iso15066-f
 """
     arts = [("head_model_fits.csv", evidence), *study.plot().items(),
             ("head_model_pairs.csv", fit.pairs), ("head_model_sensitivity.csv", sens)]
+    return Section("Head contact model (thesis §6.3.1)", md, arts, dict(study.metrics))
+
+
+def _render_other(study: HeadModelStudy) -> Section:
+    """The head section for another arm or head: its provenance, its checks, its impacts."""
+    h, checks, sens = study.head, study.checks, study.sensitivity
+    show = checks[["check", "value", "target", "met", "claimed", "claim_holds"]]
+    md = f"""{other_arm_note(study.arm, h)}
+
+Head model `{h.name}`: m = {h.mass:g} kg, R = {h.radius:g} m, Hunt-Crossley k = {h.stiffness:.4g} N/m^n,
+n = {h.exponent:g}, λ = {h.damping:.4g} N s/m^(n+1). Source: {h.source or "(none given)"}.
+
+**Checks** (`ppamsafety.impact.head_fit.head_checks`: the Hybrid III head drop of 49 CFR 572.32,
+the ISO/TS 15066 Annex A effective spring constants of forehead and face, the (HIC, F_max) pairs of
+thesis Table 6.1 with the thesis arm's effective mass; `claimed` is what the model states):
+
+{markdown_table(show)}
+
+The worst PID step impact of this arm with this head and with every named head model:
+
+{markdown_table(sens)}
+"""
+    arts = [("head_model_fits.csv", show), ("head_model_sensitivity.csv", sens)]
     return Section("Head contact model (thesis §6.3.1)", md, arts, dict(study.metrics))

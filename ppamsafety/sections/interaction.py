@@ -27,7 +27,7 @@ Experiments (all at 1 kHz, the arm held at A = FK(50 deg, -80 deg)):
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pandas as pd
@@ -43,11 +43,12 @@ from ..identify.dynamic import identify_dynamic
 from ..identify.excitation import design_excitation, simulate_excitation
 from ..impact.instants import evaluate_experiment
 from ..markdown import markdown_table
-from ..params.effects import Effects
+from ..params.inertia import BaseParameters
 from ..plant import geometry as geo
 from ..plots.interaction import (plot_force_estimates, plot_interaction_path, plot_observer_step,
                                  plot_release)
-from . import Section, SectionInfo, resolve_arm
+from . import (Section, SectionInfo, compares_to_thesis, other_arm_note, resolve_arm,
+               resolve_head_model)
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -81,14 +82,21 @@ def identify_model(plant_arm, *, quick: bool = False):
     Returns
     -------
     BaseParameters
-        LS estimate with friction (smooth Coulomb law of the plant).
+        LS estimate with friction (smooth Coulomb law of the plant).  A negative friction
+        estimate (an effect the rigid-body model lacks, such as muscle hysteresis, aliased
+        into friction) is set to 0: the estimators need a dissipative model.
     """
     d = design_excitation(plant_arm, n_random=4 if quick else 8, maxfev=4 if quick else 24,
                           seed=1)
     data = simulate_excitation(plant_arm, d.excitation, periods=2, with_qdd=False)
     res = identify_dynamic(data, plant_arm, friction=True,
                            sign_velocity=plant_arm.friction_velocity)
-    return res.to_base_parameters()
+    t = res.theta
+    if np.all(t[6:10] >= 0.0):
+        return res.to_base_parameters()
+    return BaseParameters(*[float(v) for v in t[:6]],
+                          coulomb=(max(float(t[6]), 0.0), max(float(t[7]), 0.0)),
+                          viscous=(max(float(t[8]), 0.0), max(float(t[9]), 0.0)))
 
 
 def _steady(res, name, k0, k1):
@@ -120,6 +128,8 @@ class InteractionStudy:
         Observer step response of experiment 1: t [s], estimate and
         closed_form (1 - exp(-K_I t)), both normalised by the step.
     metrics : dict
+    note : str
+        The other-arm note ("" for the thesis arm and head).
     """
 
     clean: ExperimentResult
@@ -134,6 +144,7 @@ class InteractionStudy:
     t_release: float
     step_response: pd.DataFrame
     metrics: dict = field(default_factory=dict)
+    note: str = ""
 
     def to_pandas(self) -> pd.DataFrame:
         """The estimation table."""
@@ -156,7 +167,7 @@ class InteractionStudy:
         }
 
 
-def compute(*, quick: bool = False, arm=None) -> InteractionStudy:
+def compute(*, quick: bool = False, arm=None, head=None) -> InteractionStudy:
     """Run the five interaction experiments (see the module docstring).
 
     Parameters
@@ -164,9 +175,15 @@ def compute(*, quick: bool = False, arm=None) -> InteractionStudy:
     quick : bool, keyword-only
         Shorter runs and a cheaper excitation design.
     arm : ArmParameters, optional, keyword-only
-        Default the thesis arm.
+        Default the thesis arm.  Its identified model (``arm.model``, Table 3.5 for the
+        thesis arm) is one of the estimators' models.
+    head : HeadContactModel, optional, keyword-only
+        Head of the impacts after the release (default ``thesis-frontal``).
     """
+    thesis = compares_to_thesis(arm, head)
     arm = resolve_arm(arm)
+    head = resolve_head_model(head)
+    table = "Table 3.5" if thesis else "arm.model"
     dt = 1e-3
     # -- 1 and 2: a force step, clean and realistic -----------------------------------
     dur = 3.0 if quick else 4.0
@@ -176,7 +193,7 @@ def compute(*, quick: bool = False, arm=None) -> InteractionStudy:
     F = np.zeros((n, 2))
     F[k_step:] = F_STEP
     ident = identify_model(arm, quick=quick)
-    models = {"perfect": arm.plant_base, "Table 3.5": None, "identified": ident}
+    models = {"perfect": arm.plant_base, table: None, "identified": ident}
     cases = [ExperimentCase(arm, JointPSMC(), ref, sensors=SensorConfig.ideal(),
                             external_force=F, estimator=ForceEstimator(model=arm.plant_base),
                             name="clean")]
@@ -208,10 +225,10 @@ def compute(*, quick: bool = False, arm=None) -> InteractionStudy:
     step = pd.DataFrame({"t": tt, "estimate": fmo, "closed_form": closed})
     i63 = int(np.argmax(fmo >= 1.0 - np.exp(-1.0)))
     # -- 3: phantom force in free motion with a payload -----------------------------------
-    plant = arm.replace(effects=Effects(payload_mass=PAYLOAD))
+    plant = arm.replace(effects=replace(arm.effects, payload_mass=PAYLOAD))
     ident_p = identify_model(plant, quick=quick)
     sref = tr.step(arm, duration=6.0 if quick else 12.0)
-    pm = {"Table 3.5": None, "identified (payload plant)": ident_p}
+    pm = {table: None, "identified (payload plant)": ident_p}
     pruns = run_batch([ExperimentCase(plant, JointPSMC(), sref, estimator=ForceEstimator(model=m),
                                       name=f"phantom {k}") for k, m in pm.items()], dt=dt)
     phantom = dict(zip(pm, pruns))
@@ -253,7 +270,7 @@ def compute(*, quick: bool = False, arm=None) -> InteractionStudy:
     for k, r in release.items():
         after = ExperimentResult(r.name, r.controller, r.reference, r.log[krel:], r.diverged,
                                  dict(r.meta))
-        imp = evaluate_experiment(after, arm).summary
+        imp = evaluate_experiment(after, arm, head=head).summary
         d = np.hypot(r.signal("x") - r.signal("x_d"), r.signal("y") - r.signal("y_d"))
         rrows.append({"controller": k,
                       "displacement_at_release_mm": float(d[krel - 1] * 1e3),
@@ -280,7 +297,8 @@ def compute(*, quick: bool = False, arm=None) -> InteractionStudy:
         "release_HIC36_PSMC": float(rel_table.iloc[1]["HIC36"]),
     }
     return InteractionStudy(clean, realistic, phantom, adm, release, est_table, ph_table,
-                            rel_table, wp, t_rel, step, metrics)
+                            rel_table, wp, t_rel, step, metrics,
+                            note="" if thesis else other_arm_note(arm, head))
 
 
 def render(study: InteractionStudy) -> Section:
@@ -292,7 +310,7 @@ def render(study: InteractionStudy) -> Section:
         Output of :func:`compute`.
     """
     m = study.metrics
-    md = [
+    md = ([study.note, ""] if study.note else []) + [
         "Force estimation (§5.4.2): recursive least squares with forgetting mu = 0.99 on the "
         "filtered model (5.44)-(5.47) and the generalized-momentum observer with "
         "K_I = 10 pi rad/s (5.51)-(5.56), both in the compiled loop, from measured signals "

@@ -55,7 +55,8 @@ from ..params.iso_ts_15066 import FACE, SKULL_FOREHEAD, THESIS_ARM_MASS
 from ..plant.geometry import jacobian
 from ..plots import iso as f
 from ..units import BAR, DEG
-from . import Section, SectionInfo, resolve_arm
+from . import (Section, SectionInfo, compares_to_thesis, other_arm_note, resolve_arm,
+               resolve_head_model)
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -123,11 +124,15 @@ def _iso_head(region):
                f"{region.effective_mass:g} kg, linear undamped")
 
 
-def _free_impacts(arm, lams):
+#: Label of the Hunt-Crossley head beside the ISO heads: the thesis head, or the report's.
+HC_LABEL = "thesis HC"
+
+
+def _free_impacts(arm, lams, hc=None, hc_label=HC_LABEL):
     """Worst heuristic-instant impacts per variant, experiment and head; the step runs."""
     variants = _variants(lams)
     heads = {"skull/forehead": _iso_head(SKULL_FOREHEAD), "face": _iso_head(FACE),
-             "thesis HC": head_model("thesis-frontal")}
+             hc_label: head_model("thesis-frontal") if hc is None else hc}
     rows, step_runs = [], {}
     for exp in EXPERIMENTS:
         runs = run_thesis_experiment(arm, exp, variants)
@@ -179,14 +184,15 @@ def _lambda_min(lams, F, limit):
     return float(math.exp(l0 + (f0 - limit) / (f0 - f1) * (l1 - l0))), False, adm
 
 
-def _clamping_transient(arm, worst):
+def _clamping_transient(arm, worst, hc=None, hc_label=HC_LABEL):
     """Clamped vs free F_max at the worst free-impact state of each thesis variant."""
     rows = []
     thesis = {v.label for v in thesis_variants()}
     sub = worst[worst.label.isin(thesis)]
+    hc = head_model("thesis-frontal") if hc is None else hc
     setups = {"skull/forehead": (_iso_head(SKULL_FOREHEAD), _iso_head(SKULL_FOREHEAD)),
               "face": (_iso_head(FACE), _iso_head(SKULL_FOREHEAD)),
-              "thesis HC": (head_model("thesis-frontal"), head_model("thesis-frontal"))}
+              hc_label: (hc, hc)}
     hist = {}
     for hname, (hm, wall) in setups.items():
         s = sub[sub["head_model"] == hname]
@@ -272,11 +278,11 @@ def _quasi_static(arm, step_runs, duration):
     return pd.DataFrame(rows), hist
 
 
-def _hc_vs_linear(arm, worst, m_r_annex):
+def _hc_vs_linear(arm, worst, m_r_annex, hc=None, hc_label=HC_LABEL):
     """The standard's linear-spring estimate against the Hunt-Crossley head at equal speeds."""
     v = np.linspace(0.05, 2.0, 40)
     mh = SKULL_FOREHEAD.effective_mass
-    th = head_model("thesis-frontal")
+    th = head_model("thesis-frontal") if hc is None else hc
     hc = two_body_impact(v, arm_mass=m_r_annex, head_mass=mh, stiffness=th.stiffness,
                          exponent=th.exponent, damping=th.damping)["F_max"]
     mu = reduced_mass(mh, m_r_annex)
@@ -288,7 +294,7 @@ def _hc_vs_linear(arm, worst, m_r_annex):
     thesis = {x.label for x in thesis_variants()}
     for hname, region in (("skull/forehead", SKULL_FOREHEAD), ("face", FACE)):
         s = worst[(worst["head_model"] == hname) & worst.label.isin(thesis)]
-        hcs = worst[(worst["head_model"] == "thesis HC") & worst.label.isin(thesis)].set_index("label")
+        hcs = worst[(worst["head_model"] == hc_label) & worst.label.isin(thesis)].set_index("label")
         for _, r in s.iterrows():
             q = np.array([r.q1, r.q2])
             vt = jacobian(q, arm) @ np.array([r.qd1, r.qd2])
@@ -338,6 +344,12 @@ class IsoStudy:
         The lambda grid of the PSMC families [s].
     metrics : dict
         Headline numbers.
+    thesis : bool
+        Thesis values apply: the thesis arm and head.
+    arm : ArmParameters or None
+        The arm.
+    head : HeadContactModel or None
+        The Hunt-Crossley head beside the ISO heads.
     """
 
     limits: pd.DataFrame
@@ -354,6 +366,9 @@ class IsoStudy:
     verdict: pd.DataFrame
     lambdas: tuple = ()
     metrics: dict = field(default_factory=dict)
+    thesis: bool = True
+    arm: object = None
+    head: object = None
 
     def to_pandas(self) -> pd.DataFrame:
         """The verdict table (one row per thesis controller variant)."""
@@ -367,7 +382,7 @@ class IsoStudy:
                 "iso_hc_vs_linear.png": f.plot_hc_vs_linear(self)}
 
 
-def compute(*, quick: bool = False, arm=None) -> IsoStudy:
+def compute(*, quick: bool = False, arm=None, head=None) -> IsoStudy:
     """Clamping and ISO/TS 15066 power and force limiting for the head.
 
     Parameters
@@ -376,7 +391,10 @@ def compute(*, quick: bool = False, arm=None) -> IsoStudy:
         The thesis lambdas (0.4, 0.8, 1.5 s), a 9 x 9 x 24 static grid and a 7 s
         clamped run instead of 8 lambdas, 25 x 25 x 72 and 12 s.
     arm : ArmParameters, optional
-        Default the thesis arm.
+        Default the thesis arm.  Annex A's robot mass is the thesis' "around 2.5 kg" for
+        the thesis arm, the plant's link masses plus payload for another.
+    head : HeadContactModel, optional
+        The Hunt-Crossley head beside the ISO heads (default ``thesis-frontal``).
 
     Returns
     -------
@@ -384,10 +402,15 @@ def compute(*, quick: bool = False, arm=None) -> IsoStudy:
     """
     if not isinstance(quick, bool):
         raise TypeError(f"quick must be a bool, got {quick!r}")
+    thesis = compares_to_thesis(arm, head)
     arm = resolve_arm(arm)
+    hc = resolve_head_model(head)
+    hc_label = HC_LABEL if hc == head_model() else "head HC"
     lams = LAMBDAS_QUICK if quick else LAMBDAS_FULL
-    m_r = robot_effective_mass_annex_a(THESIS_ARM_MASS)
-    free, step_runs = _free_impacts(arm, lams)
+    mass = (THESIS_ARM_MASS if compares_to_thesis(arm) else
+            arm.links.m1 + arm.links.m2 + arm.effects.payload_mass)
+    m_r = robot_effective_mass_annex_a(mass)
+    free, step_runs = _free_impacts(arm, lams, hc, hc_label)
     worst = _worst_per_variant(free)
     # own effective mass at the PID worst state (the largest speed of all)
     lim_rows = []
@@ -411,10 +434,10 @@ def compute(*, quick: bool = False, arm=None) -> IsoStudy:
                               "v_max_annex": vmax, "lambda_min_speed": lam_v,
                               "F_at_lambda_0.4": float(np.interp(0.4, w["lambda"], w["F_max"]))})
     lambda_table = pd.DataFrame(lrows)
-    clamp_tr, clamp_hist = _clamping_transient(arm, worst)
+    clamp_tr, clamp_hist = _clamping_transient(arm, worst, hc, hc_label)
     static_tab, static_map = _static_bounds(arm, 9 if quick else 25, 24 if quick else 72)
     qs, qs_hist = _quasi_static(arm, step_runs, QS_DURATION_QUICK if quick else QS_DURATION)
-    hc_curve, hc_states = _hc_vs_linear(arm, worst, m_r)
+    hc_curve, hc_states = _hc_vs_linear(arm, worst, m_r, hc, hc_label)
     # verdict per thesis variant
     vrows = []
     for label in [v.label for v in thesis_variants()]:
@@ -423,7 +446,8 @@ def compute(*, quick: bool = False, arm=None) -> IsoStudy:
         vrows.append({"label": label,
                       "F_clamped_forehead": ct.loc["skull/forehead", "F_clamped"],
                       "F_clamped_face": ct.loc["face", "F_clamped"],
-                      "F_clamped_thesis_HC": ct.loc["thesis HC", "F_clamped"],
+                      ("F_clamped_thesis_HC" if hc_label == HC_LABEL else "F_clamped_head_HC"):
+                          ct.loc[hc_label, "F_clamped"],
                       "F_quasi_static": q.F_steady,
                       "transient_ok_forehead_2x": bool(ct.loc["skull/forehead", "F_clamped"] <= SKULL_FOREHEAD.force_transient),
                       "transient_ok_face_2x": bool(ct.loc["face", "F_clamped"] <= FACE.force_transient),
@@ -434,7 +458,7 @@ def compute(*, quick: bool = False, arm=None) -> IsoStudy:
     # thesis Table 6.1 (free impact, worst of step and switch) beside our clamped HC force;
     # TABLE_6_1 lists the variants in the order of thesis_variants()
     t61 = table_6_1()
-    if len(t61) == len(verdict):
+    if thesis and len(t61) == len(verdict):
         verdict.insert(4, "Fmax_thesis_free", np.maximum(t61["Fmax_step"].to_numpy(float),
                                                          t61["Fmax_switch"].to_numpy(float)))
         verdict.insert(5, "clamped_HC_over_thesis",
@@ -449,6 +473,7 @@ def compute(*, quick: bool = False, arm=None) -> IsoStudy:
     hw = static_tab.set_index("mode").loc["hardware"]
     psmc = verdict[verdict.label != "PID"]
     metrics = {
+        **({} if thesis else {"robot_mass_kg": mass}),
         "m_R_annex_kg": m_r,
         "v_max_forehead_2x": float(limits.iloc[0]["v_max"]),
         "v_max_face_2x": float(limits.iloc[2]["v_max"]),
@@ -479,7 +504,8 @@ def compute(*, quick: bool = False, arm=None) -> IsoStudy:
                     clamp_transient=clamp_tr, clamp_histories=clamp_hist,
                     static_bounds=static_tab, static_map=static_map, quasi_static=qs,
                     qs_histories=qs_hist, hc_curve=hc_curve, hc_states=hc_states,
-                    verdict=verdict, lambdas=tuple(lams), metrics=metrics)
+                    verdict=verdict, lambdas=tuple(lams), metrics=metrics, thesis=thesis,
+                    arm=arm, head=hc)
 
 
 def render(study: IsoStudy) -> Section:
@@ -494,6 +520,8 @@ def render(study: IsoStudy) -> Section:
     -------
     Section
     """
+    if not study.thesis:
+        return _render_other(study)
     m = study.metrics
     v = study.verdict
     lim = study.limits.drop(columns=["m_H"])
@@ -570,6 +598,47 @@ def render(study: IsoStudy) -> Section:
         f"{m['clamped_worst_psmc_face_N']:.0f} N. The 2.5 kg mass alone does not make the arm "
         "safe in transient head contact: its speed (set by the controller and lambda) decides.",
         "",
+        "![transient clamping](iso_clamping_transient.png)", "",
+        "![quasi-static clamping](iso_quasi_static.png)", "",
+        "![lambda limits](iso_lambda.png)", "",
+        "![linear vs Hunt-Crossley](iso_hc_vs_linear.png)", "",
+    ]
+    arts = list(study.plot().items()) + [
+        ("iso_limits.csv", study.limits), ("iso_clamping_transient.csv", study.clamp_transient),
+        ("iso_quasi_static.csv", study.quasi_static), ("iso_lambda.csv", study.lambda_table),
+        ("iso_free_impacts.csv", study.free), ("iso_hc_vs_linear.csv", study.hc_states),
+        ("iso_verdict.csv", study.verdict)]
+    return Section("Clamping and ISO/TS 15066 power and force limiting (head)", "\n".join(md),
+                   arts, dict(m))
+
+
+def _render_other(study: IsoStudy) -> Section:
+    """The ISO/TS 15066 section for another arm or head: its own numbers, no thesis values."""
+    m = study.metrics
+    md = [
+        other_arm_note(study.arm, study.head), "",
+        "ISO/TS 15066:2016 Annex A for the head, for this arm (robot mass "
+        f"{m['robot_mass_kg']:.3g} kg: link masses plus payload; m_R = M/2 = "
+        f"{m['m_R_annex_kg']:.3g} kg) and head model `{study.head.name}` beside the ISO heads.", "",
+        "**Assumptions**", "",
+        *[f"{i + 1}. {a}" for i, a in enumerate(ASSUMPTIONS)], "",
+        "**Limits, transfer energy and permissible relative speed:**", "",
+        markdown_table(study.limits.drop(columns=["m_H"]), digits=4), "",
+        "**Transient clamping** (worst free-impact state of each controller; F in N):", "",
+        markdown_table(study.clamp_transient.drop(columns=["family"]), digits=4), "",
+        "**Quasi-static clamping.** Static bound of the tool force:", "",
+        markdown_table(study.static_bounds, digits=4), "",
+        "Closed loop, head held from the instant of largest tool speed in the up-step:", "",
+        markdown_table(study.quasi_static.drop(columns=["family", "diverged"]), digits=4), "",
+        "**Smallest admissible lambda per PSMC family** (NaN: not reached on the grid "
+        f"{list(study.lambdas)} s):", "",
+        markdown_table(study.lambda_table, digits=4), "",
+        "**Linear spring (ISO) vs Hunt-Crossley** at the worst states:", "",
+        markdown_table(study.hc_states, digits=4), "",
+        "**Verdict per controller** (transient limits 2 x F_qs: forehead "
+        f"{SKULL_FOREHEAD.force_transient:g} N, face {FACE.force_transient:g} N; quasi-static "
+        f"{SKULL_FOREHEAD.force_quasi_static:g} / {FACE.force_quasi_static:g} N):", "",
+        markdown_table(study.verdict, digits=4), "",
         "![transient clamping](iso_clamping_transient.png)", "",
         "![quasi-static clamping](iso_quasi_static.png)", "",
         "![lambda limits](iso_lambda.png)", "",

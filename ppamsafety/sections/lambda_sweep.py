@@ -9,6 +9,7 @@ several processes).
 
 from __future__ import annotations
 
+import functools
 import os
 from dataclasses import dataclass, field
 
@@ -23,7 +24,8 @@ from ..params import thesis_arm
 from ..plots.impact import plot_lambda_sweep
 from ..sweep import run_sweep
 from ..units import BAR
-from . import Section, SectionInfo
+from . import (Section, SectionInfo, compares_to_thesis, other_arm_note, resolve_arm,
+               resolve_head_model)
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -33,7 +35,8 @@ SECTION = SectionInfo(
     thesis="(new)", typical_seconds=3.4)
 
 
-def lambda_case(lam: float, ki_bar: float, circle_duration: float) -> dict:
+def lambda_case(lam: float, ki_bar: float, circle_duration: float, *, arm=None,
+                head=None) -> dict:
     """Worst step impact and circle tracking error of one joint PSMC tuning (sweep case).
 
     Parameters
@@ -44,6 +47,10 @@ def lambda_case(lam: float, ki_bar: float, circle_duration: float) -> dict:
         Integral gain [bar/(rad s)].
     circle_duration : float
         Length of the circle run (P = 10 s) [s].
+    arm : ArmParameters, optional, keyword-only
+        The arm (default the thesis arm; bound with :func:`functools.partial`).
+    head : HeadContactModel, optional, keyword-only
+        The head (default ``thesis-frontal``).
 
     Returns
     -------
@@ -51,10 +58,10 @@ def lambda_case(lam: float, ki_bar: float, circle_duration: float) -> dict:
         ``F_max`` [N], ``HIC36``, ``tcp_speed`` [m/s] of the worst step
         impact, ``circle_err_mean`` and ``circle_err_max`` [m].
     """
-    arm = thesis_arm()
+    arm = thesis_arm() if arm is None else arm
     c = JointPSMC(lam=lam, ki=ki_bar * BAR)
     step = run_thesis_experiment(arm, "step", [("c", c)])[0]
-    ev = evaluate_experiment(step, arm).summary
+    ev = evaluate_experiment(step, arm, head=head).summary
     circ = run_thesis_experiment(arm, "circle10", [("c", JointPSMC(lam=lam, ki=ki_bar * BAR))],
                                  duration=circle_duration)[0]
     k0 = int(round(min(CIRCLE_WARMUP, circle_duration / 2) / 1e-3))
@@ -84,6 +91,10 @@ class LambdaSweepStudy:
         ``circle_err_max`` [m].
     metrics : dict
         Headline numbers.
+    head_name : str
+        Name of the head model of the impacts.
+    note : str
+        The other-arm note ("" for the thesis arm and head).
     """
 
     lambdas: tuple
@@ -92,6 +103,8 @@ class LambdaSweepStudy:
     processes: int
     table: pd.DataFrame
     metrics: dict = field(default_factory=dict)
+    head_name: str = "thesis-frontal"
+    note: str = ""
 
     def to_pandas(self) -> pd.DataFrame:
         """The sweep table."""
@@ -102,37 +115,41 @@ class LambdaSweepStudy:
         return {"lambda_sweep.png": plot_lambda_sweep(self.table, tracking="circle_err_mean")}
 
 
-def compute(*, quick: bool = False, arm=None, processes: int | None = None) -> LambdaSweepStudy:
+def compute(*, quick: bool = False, arm=None, processes: int | None = None,
+            head=None) -> LambdaSweepStudy:
     """Sweep lambda x Ki of joint PSMC: step-impact safety against circle tracking.
 
     Parameters
     ----------
     quick : bool
         3 x 2 cases with 10 s circles instead of 7 x 3 with 45 s.
-    arm : None
-        Must be None: :func:`lambda_case` rebuilds the thesis arm in worker
-        processes (sweep cases are JSON-serialisable).
+    arm : ppamsafety.params.ArmParameters, optional
+        Arm (default: the thesis arm); the workers receive it with the case function.
     processes : int, optional
         Worker processes (default: min(2, CPU count)).
+    head : HeadContactModel, optional
+        Head model (default ``thesis-frontal``).
 
     Returns
     -------
     LambdaSweepStudy
         The sweep table and metrics.
     """
-    if arm is not None:
-        raise ValueError(f"arm={arm!r} is not supported by the lambda sweep: its cases run the "
-                         "thesis arm in worker processes; pass arm=None")
+    note = "" if compares_to_thesis(arm, head) else other_arm_note(arm, head)
+    case = lambda_case if arm is None and head is None else functools.partial(
+        lambda_case, arm=resolve_arm(arm), head=resolve_head_model(head))
+    head_name = resolve_head_model(head).name
     lams = (0.1, 0.4, 1.5) if quick else (0.05, 0.1, 0.2, 0.4, 0.8, 1.5, 2.5)
     kis = (2.0, 12.0) if quick else (2.0, 6.0, 12.0)
     dur = 10.0 if quick else 45.0
     cases = [{"lam": lam, "ki_bar": ki, "circle_duration": dur} for ki in kis for lam in lams]
     procs = processes or min(2, os.cpu_count() or 1)
-    df = run_sweep(lambda_case, cases, name="lambda-sweep", processes=procs, progress=False,
+    df = run_sweep(case, cases, name="lambda-sweep", processes=procs, progress=False,
                    on_error="raise")
     df = df.rename(columns={"ki_bar": "Ki_bar"})
     return LambdaSweepStudy(lambdas=lams, kis=kis, circle_duration=dur, processes=procs,
-                            table=df, metrics={"cases": len(df)})
+                            table=df, metrics={"cases": len(df)}, head_name=head_name,
+                            note=note)
 
 
 def render(study: LambdaSweepStudy) -> Section:
@@ -153,8 +170,8 @@ def render(study: LambdaSweepStudy) -> Section:
     show = df.drop(columns=["circle_duration"])
     safe = df[df.F_max < 660.0]
     best = safe.loc[safe.circle_err_mean.idxmin()] if len(safe) else None
-    md = f"""Joint-space PSMC (Table 5.1 gains otherwise) for lambda in {list(lams)} s and Ki in {list(kis)}
-bar/(rad s): worst step-response impact (four instants, head `thesis-frontal`) and circle tracking
+    md = (study.note + "\n\n" if study.note else "") + f"""Joint-space PSMC (Table 5.1 gains otherwise) for lambda in {list(lams)} s and Ki in {list(kis)}
+bar/(rad s): worst step-response impact (four instants, head `{study.head_name}`) and circle tracking
 (P = 10 s, {dur - min(CIRCLE_WARMUP, dur / 2):.0f} s evaluated). {len(df)} cases via `ppamsafety.sweep.run_sweep`
 on {procs} processes.
 

@@ -43,7 +43,7 @@ from ..experiments.trajectories import Reference
 from ..impact.collision import (DETECTION_MARGIN, Reaction, calibrate_threshold,
                                 head_touching, simulate_collision)
 from ..impact.instants import heuristic_instants, impact_states
-from ..impact.model import resolve_head, simulate_impacts
+from ..impact.model import simulate_impacts
 from ..markdown import markdown_table
 from ..params.head import MAXILLA_FRACTURE_N
 from ..plant.geometry import jacobian
@@ -51,7 +51,8 @@ from ..plant.pneumatics import joint_stiffness
 from ..plant.torque import torque_functions
 from ..plots.reaction import plot_collision, plot_reactions
 from ..units import BAR
-from . import Section, SectionInfo, resolve_arm
+from . import (Section, SectionInfo, compares_to_thesis, other_arm_note, resolve_arm,
+               resolve_head_model)
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -110,6 +111,10 @@ class ReactionStudy:
         (experiment, controller) -> collision-free ExperimentResult.
     compute_seconds : float
     metrics : dict
+    note : str
+        The other-arm note ("" for the thesis arm and head).
+    head_name : str
+        Name of the head model.
     """
 
     quick: bool
@@ -120,6 +125,8 @@ class ReactionStudy:
     free: dict
     compute_seconds: float
     metrics: dict = field(default_factory=dict)
+    note: str = ""
+    head_name: str = "thesis-frontal"
 
     def to_pandas(self) -> pd.DataFrame:
         """The results table (one row per run)."""
@@ -156,7 +163,7 @@ def _row(exp, ctrl, margin, res):
             "energy_error": res.energy["contact_balance_error"]}
 
 
-def compute(*, quick: bool = False, arm=None) -> ReactionStudy:
+def compute(*, quick: bool = False, arm=None, head=None) -> ReactionStudy:
     """Run the collision-detection and reaction study (see the module docstring).
 
     Parameters
@@ -165,10 +172,13 @@ def compute(*, quick: bool = False, arm=None) -> ReactionStudy:
         Step experiment and two controllers only.
     arm : ArmParameters, optional, keyword-only
         Default the thesis arm.
+    head : HeadContactModel, optional, keyword-only
+        Head model (default ``thesis-frontal``).
     """
     t_start = time.perf_counter()
+    note = "" if compares_to_thesis(arm, head) else other_arm_note(arm, head)
     arm = resolve_arm(arm)
-    head = resolve_head(None)
+    head = resolve_head_model(head)
     ctrls = _controllers(quick)
     exps = ("step",) if quick else ("step", "switch")
     rows, trows, erows, runs, free = [], [], [], {}, {}
@@ -278,7 +288,8 @@ def compute(*, quick: bool = False, arm=None) -> ReactionStudy:
         "first_impact_Fmax_spread_max": float(timing["Fmax_1_spread_rel"].max()),
         "energy_error_max": float(table["energy_error"].abs().max()),
     }
-    return ReactionStudy(quick, table, timing, engine, runs, free, secs, metrics)
+    return ReactionStudy(quick, table, timing, engine, runs, free, secs, metrics, note=note,
+                         head_name=head.name)
 
 
 def render(study: ReactionStudy) -> Section:
@@ -293,10 +304,12 @@ def render(study: ReactionStudy) -> Section:
     cols = ["experiment", "controller", "margin", "reaction", "r1_th_Nm", "r2_th_Nm",
             "detect_delay_ms", "F_max_1_N", "HIC36_1", "duration_1_ms", "t_2_after_ms",
             "F_max_2_N", "HIC36_2", "F_max_later_N", "impacts"]
-    md = [
+    head_txt = ("the 5 kg head (thesis-frontal Hunt-Crossley contact" if study.head_name ==
+                "thesis-frontal" else f"the head `{study.head_name}` (Hunt-Crossley contact")
+    md = ([study.note, ""] if study.note else []) + [
         "The thesis rates only the first 50 ms of an impact on a frozen flexible-joint arm "
         "(§6.3.2) and notes (§6.3.5) that detection and reaction can reduce contact forces "
-        "afterwards.  Here the 5 kg head (thesis-frontal Hunt-Crossley contact, free, at rest, "
+        f"afterwards.  Here {head_txt}, free, at rest, "
         "touching the TCP at the instant of largest TCP speed along the TCP velocity, §6.3.2) "
         f"is coupled to the full closed loop (sensors, observer, controller, valves, "
         f"pressures, gravity) and simulated {HORIZON * 1e3:.0f} ms beyond the impact instant "

@@ -18,7 +18,7 @@ from ..experiments.metrics import response_table
 from ..experiments.trajectories import CIRCLE_CENTER, CIRCLE_RADIUS
 from ..markdown import markdown_table
 from ..plots.control import plot_lambda_recovery, plot_step_comparison, plot_switch
-from . import Section, SectionInfo, resolve_arm
+from . import Section, SectionInfo, compares_to_thesis, other_arm_note, resolve_arm
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -60,6 +60,10 @@ class ResponsesStudy:
         1-5 s after the switch [Hz] (NaN if that variant was not run).
     metrics : dict
         Headline numbers.
+    thesis : bool
+        Thesis statements apply: the thesis arm.
+    arm : ArmParameters or None
+        The arm.
     """
 
     step: list
@@ -68,6 +72,8 @@ class ResponsesStudy:
     switch_table: pd.DataFrame
     oscillation_hz: float = np.nan
     metrics: dict = field(default_factory=dict)
+    thesis: bool = True
+    arm: object = None
 
     def to_pandas(self) -> pd.DataFrame:
         """Step and switch response tables, stacked with an ``experiment`` column."""
@@ -134,7 +140,8 @@ def _figures(study) -> dict:
     return figs
 
 
-def compute(*, quick: bool = False, arm=None, variants=None, sensors=None) -> ResponsesStudy:
+def compute(*, quick: bool = False, arm=None, variants=None, sensors=None,
+            head=None) -> ResponsesStudy:
     """Run step and switch for the thesis variants and tabulate their responses.
 
     Parameters
@@ -148,6 +155,8 @@ def compute(*, quick: bool = False, arm=None, variants=None, sensors=None) -> Re
         Controller variants (default: the ten of Table 6.1).
     sensors : SensorConfig, optional
         Sensor model (default: realistic sensors).
+    head : HeadContactModel, optional
+        Unused (no impact in this section); accepted like every section's.
 
     Returns
     -------
@@ -173,7 +182,7 @@ def compute(*, quick: bool = False, arm=None, variants=None, sensors=None) -> Re
                        float(sw[sw.family == "PID"].peak_tcp_speed_m_s.iloc[0])}
     return ResponsesStudy(step=out["step"], switch=out["switch"], step_table=st,
                           switch_table=sw, oscillation_hz=_oscillation_frequency(out["switch"]),
-                          metrics=metrics)
+                          metrics=metrics, thesis=compares_to_thesis(arm), arm=arm)
 
 
 def _display(table: pd.DataFrame, experiment: str) -> pd.DataFrame:
@@ -226,7 +235,10 @@ def render(study: ResponsesStudy) -> Section:
     osc_settle = _settle(osc_label)
     v2 = sw.set_index("variant").t_settle_s["PSMC joint Ki=2 λ=0.4"]
     ki2_settle = "no settling" if np.isnan(v2) else f"{v2:.2f} s"
-    md = f"""All ten controller variants of Table 6.1 (Table 5.1 gains; joint PSMC with
+    thesis_txt = ("the \"slightly oscillatory\" response the thesis reports\nfor the high "
+                  "integral gain (§5.3.5, fig. 5.19)." if study.thesis else
+                  "the high integral gain's oscillatory response.")
+    md = f"""{'' if study.thesis else other_arm_note(study.arm) + chr(10) + chr(10)}All ten controller variants of Table 6.1 (Table 5.1 gains; joint PSMC with
 Ki = 2 and 12 bar/(rad s); λ = 0.4, 0.8, 1.5 s) with the realistic sensors (encoder
 quantisation, inter-pulse-timing velocity). Peaks are taken over the record from the first
 discontinuity on; overshoot, reach and settling times are for the upward q1 step
@@ -255,8 +267,7 @@ desired point jumps half a turn (20 cm) ahead:
 
 After the switch the Ki = 12 variants ring: the TCP error of {osc_label} oscillates at
 {osc_f:.1f} Hz (dominant frequency 1-5 s after the switch) and {osc_settle}, against
-{ki2_settle} for Ki = 2 at the same λ -- the "slightly oscillatory" response the thesis reports
-for the high integral gain (§5.3.5, fig. 5.19).
+{ki2_settle} for Ki = 2 at the same λ -- {thesis_txt}
 
 ![switch](responses_switch.png)
 

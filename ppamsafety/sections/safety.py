@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import os
 import time
 from dataclasses import dataclass, field
@@ -19,7 +20,8 @@ from ..params import thesis_arm
 from ..params.head import MAXILLA_FRACTURE_N
 from ..plots.impact import plot_fmax_over_time, plot_safety_table, plot_worst_histories
 from ..sweep import run_sweep
-from . import Section, SectionInfo
+from . import (Section, SectionInfo, compares_to_thesis, other_arm_note, resolve_arm,
+               resolve_head_model)
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -33,7 +35,8 @@ EXPERIMENTS = ("step", "switch")
 MIN_SPEED = 1e-3
 
 
-def every_instant_case(experiment: str, index: int, every: int) -> pd.DataFrame:
+def every_instant_case(experiment: str, index: int, every: int, *, arm=None,
+                       head=None) -> pd.DataFrame:
     """Impacts at every ``every``-th ms of one thesis experiment variant (sweep case).
 
     Parameters
@@ -44,6 +47,10 @@ def every_instant_case(experiment: str, index: int, every: int) -> pd.DataFrame:
         Variant index in :func:`~ppamsafety.experiments.catalog.thesis_variants`.
     every : int
         Impact instant stride [ms of the 1 ms record].
+    arm : ArmParameters, optional, keyword-only
+        The arm (default the thesis arm; a sweep binds it with :func:`functools.partial`).
+    head : HeadContactModel, optional, keyword-only
+        The head (default ``thesis-frontal``).
 
     Returns
     -------
@@ -54,19 +61,20 @@ def every_instant_case(experiment: str, index: int, every: int) -> pd.DataFrame:
         whose rigorous bounds lie below the worst simulated values are not
         simulated and have NaN F_max/HIC; the maxima are those of the full scan).
     """
-    arm = thesis_arm()
+    arm = thesis_arm() if arm is None else arm
     label, ctrl = thesis_variants()[index]
     res = run_thesis_experiment(arm, experiment, [(label, ctrl)])[0]
-    w = worst_instant(res, arm, every=every, min_speed=MIN_SPEED)
+    w = worst_instant(res, arm, every=every, min_speed=MIN_SPEED, head=head)
     return w.table[["t0", "tcp_speed", "F_bound", "HIC36_bound", "screened", "simulated",
                     "F_max", "HIC36", "HIC15"]].assign(label=label)
 
 
-def _heuristic_table(arm, head, runs=None):
+def _heuristic_table(arm, head, runs=None, *, thesis: bool = True):
     """Table 6.1: worst impacts of the thesis variants at the four heuristic instants.
 
     ``runs`` may hold already computed ``{experiment: list of ExperimentResult}``
     (the ten thesis variants of :func:`run_thesis_experiment` on ``arm``) to reuse.
+    ``thesis``: join the thesis values and ratios (the thesis arm and head only).
     """
     rows, states, worst = [], {}, {}
     for exp in EXPERIMENTS:
@@ -84,6 +92,8 @@ def _heuristic_table(arm, head, runs=None):
                          **r.meta["variant"].keys()})
             states[(exp, label)] = impact_states(r, arm)
             worst[(exp, label)] = res_ev.histories[int(ev["HIC36"].idxmax())]
+    if not thesis:
+        return pd.DataFrame(rows), states, worst
     df = join_table_6_1(pd.DataFrame(rows), complete=True)    # on the variant fields
     df["HIC_ratio"] = df["HIC36"] / df["HIC_thesis"]
     df["Fmax_ratio"] = df["F_max"] / df["Fmax_thesis"]
@@ -154,6 +164,10 @@ class SafetyStudy:
         Worker processes of the scan.
     metrics : dict
         Headline numbers (including the wall times of the table and the scan).
+    thesis : bool
+        Thesis values and ratios apply: the thesis arm and head.
+    arm : ArmParameters or None
+        The arm.
     """
 
     quick: bool
@@ -166,9 +180,14 @@ class SafetyStudy:
     miss: pd.DataFrame
     processes: int
     metrics: dict = field(default_factory=dict)
+    thesis: bool = True
+    arm: object = None
 
     def to_pandas(self) -> pd.DataFrame:
         """Table 6.1 reproduced (toolkit, thesis, ratios, impact instant and stiffness)."""
+        if not self.thesis:
+            return self.table[["experiment", "label", "HIC36", "F_max", "instant_HIC",
+                               "tcp_speed", "K1", "K2"]].copy()
         return self.table[["experiment", "label", "HIC36", "HIC_thesis", "HIC_ratio", "F_max",
                            "Fmax_thesis", "Fmax_ratio", "instant_HIC", "tcp_speed", "K1",
                            "K2"]].copy()
@@ -201,31 +220,35 @@ def _figures(study) -> dict:
             "safety_fmax_over_time.png": plot_fmax_over_time(plot_items)}
 
 
-def compute(*, quick: bool = False, arm=None, processes: int | None = None) -> SafetyStudy:
+def compute(*, quick: bool = False, arm=None, processes: int | None = None,
+            head=None) -> SafetyStudy:
     """Reproduce Table 6.1 and scan every impact instant of the step and switch experiments.
 
     Parameters
     ----------
     quick : bool
         Scan every 20th ms instead of every ms.
-    arm : None
-        Must be None: the scan's worker processes rebuild the thesis arm
-        (:func:`every_instant_case` takes JSON-serialisable cases only).
+    arm : ppamsafety.params.ArmParameters, optional
+        Arm (default: the thesis arm); the scan's workers receive it with the case
+        function.
     processes : int, optional
         Worker processes of the scan (default: min(2, CPU count)).
+    head : HeadContactModel, optional
+        Head model (default ``thesis-frontal``).  Thesis values and ratios are joined
+        only for the thesis arm and head.
 
     Returns
     -------
     SafetyStudy
         Tables, histories, scan and metrics.
     """
-    if arm is not None:
-        raise ValueError(f"arm={arm!r} is not supported by the safety study: its scan runs the "
-                         "thesis arm in worker processes; pass arm=None")
-    arm = thesis_arm()
-    head = head_model()
+    thesis = compares_to_thesis(arm, head)
+    case = every_instant_case if arm is None and head is None else functools.partial(
+        every_instant_case, arm=resolve_arm(arm), head=resolve_head_model(head))
+    arm = resolve_arm(arm)
+    head = resolve_head_model(head)
     t0 = time.perf_counter()
-    df, states, worst = _heuristic_table(arm, head)
+    df, states, worst = _heuristic_table(arm, head, thesis=thesis)
     t_table = time.perf_counter() - t0
     concl = _conclusions(df)
 
@@ -236,7 +259,7 @@ def compute(*, quick: bool = False, arm=None, processes: int | None = None) -> S
              for i in range(nvar)]
     procs = processes or min(2, os.cpu_count() or 1)
     t1 = time.perf_counter()
-    scan = run_sweep(every_instant_case, cases, name="safety-every-instant", processes=procs,
+    scan = run_sweep(case, cases, name="safety-every-instant", processes=procs,
                      progress=False, on_error="raise")
     t_scan = time.perf_counter() - t1
     n_impacts = int(len(scan))
@@ -264,7 +287,7 @@ def compute(*, quick: bool = False, arm=None, processes: int | None = None) -> S
                "pid_step_HIC": float(df[(df.experiment == "step") & (df.family == "PID")].HIC36.iloc[0])}
     return SafetyStudy(quick=quick, head=head, table=df, conclusions=concl, worst=worst,
                        heuristic_marks=marks, scan=scan, miss=miss, processes=procs,
-                       metrics=metrics)
+                       metrics=metrics, thesis=thesis, arm=arm)
 
 
 def render(study: SafetyStudy) -> Section:
@@ -284,11 +307,14 @@ def render(study: SafetyStudy) -> Section:
     show = study.to_pandas()
     n_impacts, t_scan = study.metrics["scan_impacts"], study.metrics["scan_wall_time_s"]
     procs, found = study.processes, study.metrics["heuristic_found"]
-    md = f"""Head model `{head.name}` (see the head-model section), flexible-joint arm with the stiffness
+    intro = "" if study.thesis else other_arm_note(study.arm, head) + "\n\n"
+    table_title = ("**Table 6.1 reproduced** (toolkit, thesis, ratio):" if study.thesis else
+                   "**Worst impacts as in Table 6.1** (this arm and head):")
+    md = intro + f"""Head model `{head.name}` (see the head-model section), flexible-joint arm with the stiffness
 (2.18) at the impact instant, 50 ms, RK4 at {20} us. Four impact instants per experiment as in the
 thesis (largest TCP speed, |qd1|, |qd2|, ||qd||); the worst is kept.
 
-**Table 6.1 reproduced** (toolkit, thesis, ratio):
+{table_title}
 
 {markdown_table(show.drop(columns=["K1", "K2"]), digits=3)}
 

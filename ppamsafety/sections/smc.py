@@ -38,10 +38,9 @@ from ..experiments.closed_loop import run_batch
 from ..experiments.metrics import chattering_index, command_increment_rms, tracking_stats
 from ..markdown import markdown_table
 from ..params import thesis_arm
-from ..params.valves import DEFAULT_TIME_CONSTANTS
 from ..plots.control import plot_smc_chattering, plot_smc_commands
 from ..units import BAR
-from . import Section, SectionInfo, resolve_arm
+from . import Section, SectionInfo, compares_to_thesis, other_arm_note, resolve_arm
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -63,6 +62,40 @@ GAMMAS = np.logspace(-1.0, 2.5, 15)     #: boundary layers 0.1-316 rad/s^2, 4 pe
 SENSOR_CASES = {"ideal (exact angle and velocity)": SensorConfig.ideal(),
                 "encoder, ideal velocity": SensorConfig(velocity="ideal"),
                 "encoder + timing board (realistic)": SensorConfig()}
+
+
+def sensor_cases(arm) -> dict:
+    """:data:`SENSOR_CASES` for the sensor hardware of ``arm`` (thesis arm: the same).
+
+    Parameters
+    ----------
+    arm : ppamsafety.params.ArmParameters
+        Arm.
+
+    Returns
+    -------
+    dict
+        Label -> SensorConfig.
+    """
+    return {"ideal (exact angle and velocity)": SensorConfig.ideal(),
+            "encoder, ideal velocity": SensorConfig.for_arm(arm, velocity="ideal"),
+            "encoder + timing board (realistic)": SensorConfig.for_arm(arm)}
+
+
+def valve_time_constants(arm) -> tuple:
+    """The plant's valve time constants T_1..T_4 [s] (the thesis arm: (0.06, 0.045, 0.06,
+    0.045), ``ppamsafety.params.valves.DEFAULT_TIME_CONSTANTS``).
+
+    Parameters
+    ----------
+    arm : ppamsafety.params.ArmParameters
+        Arm.
+
+    Returns
+    -------
+    tuple of 4 float
+    """
+    return tuple(v.time_constant for v in arm.valves.valves)
 
 
 def _heavy(arm):
@@ -117,7 +150,7 @@ def tune(arm=None, *, poles=TUNE_POLES, gain_ratios=TUNE_GAIN_RATIO, gammas=TUNE
     """
     arm = thesis_arm() if arm is None else arm
     ref = tr.circle(arm, period=PERIOD, duration=warmup + evaluate)
-    sens = SensorConfig() if sensors is None else sensors
+    sens = SensorConfig.for_arm(arm) if sensors is None else sensors
     grid = list(itertools.product(poles, gain_ratios, gammas))
     cases = []
     for p, kg, g in grid:
@@ -158,7 +191,8 @@ def sweep(arm=None, *, gammas=None, t_scales=T_SCALES, model_factor=MODEL_FACTOR
     gammas : sequence of float
         Boundary-layer widths [rad/s^2] (default :data:`GAMMAS`).
     t_scales : sequence of float
-        Plant valve time constants relative to (0.06, 0.045, 0.06, 0.045) s.
+        Plant valve time constants relative to the arm's (thesis: (0.06, 0.045, 0.06,
+        0.045) s).
     model_factor : float
         The second controller model uses model_factor x the plant's T.
     warmup : float
@@ -185,11 +219,11 @@ def sweep(arm=None, *, gammas=None, t_scales=T_SCALES, model_factor=MODEL_FACTOR
     gammas = GAMMAS if gammas is None else np.asarray(gammas, float)
     kw = dict(controller_kwargs or {})
     ref = tr.circle(arm, period=PERIOD, duration=warmup + evaluate)
-    sens = SensorConfig() if sensors is None else sensors
+    sens = SensorConfig.for_arm(arm) if sensors is None else sensors
     models = {"model T = plant T": 1.0, f"model T = {model_factor:g} x plant T": model_factor}
     cases, keys = [], []
     for sc in t_scales:
-        Tp = tuple(sc * t for t in DEFAULT_TIME_CONSTANTS)
+        Tp = tuple(sc * t for t in valve_time_constants(arm))
         plant = arm.replace(valves=arm.valves.with_time_constants(Tp))
         for mname, mf in models.items():
             for g in gammas:
@@ -270,6 +304,10 @@ class SmcStudy:
         setting (:data:`SENSOR_CASES`).
     metrics : dict
         Headline numbers.
+    thesis : bool
+        The thesis arm (the prose quotes its valve time constants).
+    arm : ArmParameters or None
+        The arm.
     """
 
     quick: bool
@@ -284,6 +322,8 @@ class SmcStudy:
     psmc: dict
     sensor_table: pd.DataFrame
     metrics: dict = field(default_factory=dict)
+    thesis: bool = True
+    arm: object = None
 
     def to_pandas(self) -> pd.DataFrame:
         """The chattering sweep (one row per run, SI units)."""
@@ -314,11 +354,13 @@ def _figures(study) -> dict:
         File name -> Figure.
     """
     ps, g_def = study.psmc, study.default.boundary_layer[0]
+    t1 = 1e3 * valve_time_constants(study.arm or thesis_arm())[0]
     figs = {"smc_chattering.png": plot_smc_chattering(
         study.sweep, default_gamma=g_def,
-        reference=(ps["chattering_Pa"], ps["mean_error_m"], "joint PSMC (Table 5.1), T = 60 ms"))}
+        reference=(ps["chattering_Pa"], ps["mean_error_m"],
+                   f"joint PSMC (Table 5.1), T = {t1:g} ms"))}
     panels = {f"SMC, Γ = {k[2]:.3g} rad/s²" + (" (default)" if np.isclose(k[2], g_def) else "")
-              + ", plant T = 60 ms, exact model": [("SMC", study.kept[k])]
+              + f", plant T = {t1:g} ms, exact model": [("SMC", study.kept[k])]
               for k in sorted(study.kept, key=lambda k: k[2])}
     panels["joint PSMC (Table 5.1), same circle"] = [("joint PSMC", ps["result"])]
     t1 = study.warmup + min(study.evaluate, 2.0)
@@ -328,7 +370,7 @@ def _figures(study) -> dict:
     return figs
 
 
-def compute(*, quick: bool = False, arm=None) -> SmcStudy:
+def compute(*, quick: bool = False, arm=None, head=None) -> SmcStudy:
     """SMC defaults (grid search), chattering vs boundary layer and valve time constant.
 
     Parameters
@@ -337,6 +379,8 @@ def compute(*, quick: bool = False, arm=None) -> SmcStudy:
         Three boundary layers, a 2-point tuning grid and 3 s runs.
     arm : ppamsafety.params.ArmParameters, optional
         Arm (default: the thesis arm).
+    head : HeadContactModel, optional
+        Unused (no impact in this section); accepted like every section's.
 
     Returns
     -------
@@ -369,8 +413,9 @@ def compute(*, quick: bool = False, arm=None) -> SmcStudy:
     ps = psmc_reference(arm, warmup=warmup, evaluate=evaluate)
     ref = tr.circle(arm, period=PERIOD, duration=warmup + evaluate)
     sens_ev = _evaluate(run_batch([ExperimentCase(arm, default, ref, sensors=sc)
-                                   for sc in SENSOR_CASES.values()]), warmup)
-    sens_tab = pd.DataFrame({"sensors (SMC defaults, T = 60 ms)": list(SENSOR_CASES),
+                                   for sc in sensor_cases(arm).values()]), warmup)
+    t1 = valve_time_constants(arm)[0]
+    sens_tab = pd.DataFrame({f"sensors (SMC defaults, T = {1e3 * t1:g} ms)": list(SENSOR_CASES),
                              "chattering [bar]": [e["chattering_Pa"] / BAR for e in sens_ev],
                              "mean error [mm]": [1e3 * e["mean_error_m"] for e in sens_ev]})
     _, ok = _nominal_ok(sw)
@@ -384,7 +429,8 @@ def compute(*, quick: bool = False, arm=None) -> SmcStudy:
                "diverged_runs": int(sw.diverged.sum())}
     return SmcStudy(quick=quick, warmup=warmup, evaluate=evaluate, default=default,
                     tuning=tuning, defaults_are_best=defaults_are_best, gammas=gammas,
-                    sweep=sw, kept=kept, psmc=ps, sensor_table=sens_tab, metrics=metrics)
+                    sweep=sw, kept=kept, psmc=ps, sensor_table=sens_tab, metrics=metrics,
+                    thesis=compares_to_thesis(arm), arm=arm)
 
 
 def render(study: SmcStudy) -> Section:
@@ -449,9 +495,12 @@ def render(study: SmcStudy) -> Section:
                      "mean error +20 % mass [mm]", "chattering nominal [bar]",
                      "chattering +20 % mass [bar]", "cost [m bar]"]
     gain_v = default.alpha0[0] + K_def / g_def * default.alpha1[0]
-    md = f"""Circle P = {PERIOD:g} s (§4.4.1), realistic sensors (encoder, inter-pulse-timing velocity),
+    T_ms = [1e3 * t for t in valve_time_constants(study.arm or thesis_arm())]
+    t_span = f"{min(T_ms):g}-{max(T_ms):g}" if min(T_ms) != max(T_ms) else f"{T_ms[0]:g}"
+    intro = "" if study.thesis else other_arm_note(study.arm) + "\n\n"
+    md = intro + f"""Circle P = {PERIOD:g} s (§4.4.1), realistic sensors (encoder, inter-pulse-timing velocity),
 SISO feedback linearisation per link as in the thesis, error after {warmup:g} s over {evaluate:g} s.
-**Chattering index**: RMS of the commanded Δp above 5 Hz, both joints (the valves, T = 45-60 ms,
+**Chattering index**: RMS of the commanded Δp above 5 Hz, both joints (the valves, T = {t_span} ms,
 cannot follow it; the circle has no content there). Data: `smc_tuning.csv`,
 `smc_chattering_sweep.csv`.{' **Quick mode: coarse grids, short runs.**' if quick else ''}
 
@@ -469,7 +518,7 @@ varies from {g_lo:.3g} to {g_hi:.3g} rad/s², so the gain inside the layer K/Γ 
 
 ![SMC chattering](smc_chattering.png)
 
-**The trade-off in numbers** (nominal valves T = 60/45 ms, exact valve model):
+**The trade-off in numbers** (nominal valves T = {T_ms[0]:g}/{T_ms[1]:g} ms, exact valve model):
 
 {markdown_table(trade, digits=3)}
 
@@ -487,7 +536,7 @@ valve model cannot show.
 
 **Valve time constant and model.** The commanded Δp scales with the valve time constant the
 controller assumes (u = v/a with a ∝ 1/T): at Γ = {g_def:g} the chattering is
-{', '.join(f'{c / BAR:.3f}' for c in ch_T)} bar for plant T = {', '.join(f'{1e3 * t * DEFAULT_TIME_CONSTANTS[0]:g}' for t in T_SCALES)} ms.
+{', '.join(f'{c / BAR:.3f}' for c in ch_T)} bar for plant T = {', '.join(f'{t * T_ms[0]:g}' for t in T_SCALES)} ms.
 A controller model {100 * (1 - MODEL_FACTOR):.0f} % faster than the plant (§4.4.2) lowers the chattering to a
 median {fast.min():.2f}-{fast.max():.2f} of the exact-model value, at the price of more tracking error where the
 layer is wide:

@@ -29,7 +29,6 @@ import pandas as pd
 from ..control import PID
 from ..experiments.catalog import run_thesis_experiment
 from ..impact import engine as eng
-from ..impact.head import head_model
 from ..impact.instants import heuristic_instants, impact_states
 from ..impact.model import (effective_mass, flexible_stiffness_limit, simulate_impacts,
                             stiffness_limit)
@@ -39,7 +38,8 @@ from ..markdown import markdown_table
 from ..plant import dynamics as dyn
 from ..plant import geometry as geo
 from ..plots.impact import plot_stiffness_conventions
-from . import Section, SectionInfo, resolve_arm
+from . import (Section, SectionInfo, compares_to_thesis, other_arm_note, resolve_arm,
+               resolve_head_model)
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -177,6 +177,12 @@ class StiffnessStudy:
         frozen springs [s].
     metrics : dict
         Headline numbers.
+    thesis : bool
+        Fig. 6.3's values apply: the thesis arm and head.
+    arm : ArmParameters or None
+        The arm.
+    head : HeadContactModel or None
+        The head model.
     """
 
     quick: bool
@@ -193,6 +199,9 @@ class StiffnessStudy:
     contact: float
     periods: dict
     metrics: dict = field(default_factory=dict)
+    thesis: bool = True
+    arm: object = None
+    head: object = None
 
     def to_pandas(self) -> pd.DataFrame:
         """The stiffness sweep (long table, one row per convention, B and k)."""
@@ -201,10 +210,11 @@ class StiffnessStudy:
     def plot(self) -> dict:
         """The study's figures, ``{file name: Figure}``."""
         return {"stiffness_sweep.png": plot_stiffness_conventions(
-            self.sweep, thesis=FIG_6_3, reference=tuple(self.instant[["K1", "K2"]]))}
+            self.sweep, thesis=FIG_6_3 if self.thesis else None,
+            reference=tuple(self.instant[["K1", "K2"]]))}
 
 
-def compute(*, quick: bool = False, arm=None) -> StiffnessStudy:
+def compute(*, quick: bool = False, arm=None, head=None) -> StiffnessStudy:
     """Sweep both joint stiffnesses for the step-response impact, for each motor-side convention.
 
     Parameters
@@ -215,14 +225,18 @@ def compute(*, quick: bool = False, arm=None) -> StiffnessStudy:
         stiffnesses and 1e7, 13 inertias in the fit).
     arm : ppamsafety.params.ArmParameters, optional
         Arm (default: the thesis arm).
+    head : HeadContactModel, optional
+        Head model (default ``thesis-frontal``).  Fig. 6.3's values (the ratio column,
+        the fit of B to its bound) apply to the thesis arm and head only.
 
     Returns
     -------
     StiffnessStudy
         Sweep tables, fit of B, rigid limits, effective masses and metrics.
     """
+    thesis = compares_to_thesis(arm, head)
     arm = resolve_arm(arm)
-    head = head_model()
+    head = resolve_head_model(head)
     res = run_thesis_experiment(arm, "step", [("PID", PID())])[0]
     st = impact_states(res, arm)
     row = st.iloc[heuristic_instants(st)["max TCP speed"]]
@@ -269,6 +283,8 @@ def compute(*, quick: bool = False, arm=None) -> StiffnessStudy:
     sweep["F/F_thesis"] = sweep.F_max / F_ref
     sweep = sweep[["convention", "B_label", "B", "k", "dt", "F_max", "dF vs k=1 [N]",
                    "F/F_thesis", "HIC36", "E_balance_error", "contact_time"]]
+    if not thesis:
+        sweep = sweep.drop(columns=["F/F_thesis"])
     rigid = pd.DataFrame(rig_rows)
 
     # wide table: k rows, one F_max column per convention; rigid limit as k = inf
@@ -339,9 +355,13 @@ def compute(*, quick: bool = False, arm=None) -> StiffnessStudy:
         "max_flex_kmax_rigid_rel": float(rigid["flex(k_max)/rigid - 1"].abs().max()),
         "m_eff": m_eff, "F_two_body": f_two, "contact_ms": 1e3 * contact,
     }
+    if not thesis:
+        for k in ("B_fit_kgm2", "fit_residual_N", "fit_residual_pct_points"):
+            metrics.pop(k)
     return StiffnessStudy(quick=quick, instant=row, tool_speed=speed, sweep=sweep, table=table,
                           fit=fit, B_ppam=B_ppam, rigid=rigid, m_eff=m_eff, m_link2=m_link2,
-                          f_two_body=f_two, contact=contact, periods=periods, metrics=metrics)
+                          f_two_body=f_two, contact=contact, periods=periods, metrics=metrics,
+                          thesis=thesis, arm=arm, head=head)
 
 
 def render(study: StiffnessStudy) -> Section:
@@ -358,6 +378,8 @@ def render(study: StiffnessStudy) -> Section:
         Markdown and artifacts (figure, ``stiffness_sweep.csv``,
         ``stiffness_table.csv``, ``stiffness_fit.csv``, ``stiffness_rigid.csv``).
     """
+    if not study.thesis:
+        return _render_other(study)
     row, m, per = study.instant, study.metrics, study.periods
     kmax, F_ref = FIG_6_3["k_max"], FIG_6_3["F_level_N"]
     tab = study.table.copy()
@@ -432,6 +454,48 @@ difference) and the flexible joint at the largest k:
   m_eff = 1/(u^T J H^-1 J^T u) = {study.m_eff:.3f} kg (forearm alone: {study.m_link2:.3f} kg); a two-body
   impact of that mass gives {study.f_two_body:.1f} N, against {m['F_k1_N']:.1f} N for the full model at
   k = 1 Nm/rad, and {m['F_k1_N'] / F_ref:.3f} of the thesis' {F_ref:.0f} N.
+
+![stiffness sweep](stiffness_sweep.png)
+"""
+    arts = [("stiffness_sweep.csv", study.sweep), ("stiffness_table.csv", study.table),
+            ("stiffness_fit.csv", study.fit), ("stiffness_rigid.csv", study.rigid),
+            *study.plot().items()]
+    return Section("Joint stiffness, motor-side conventions and the rigid limit (thesis §6.3.4)",
+                   md, arts, dict(m))
+
+
+def _render_other(study: StiffnessStudy) -> Section:
+    """The stiffness section for another arm or head: its own numbers, no fig. 6.3 values."""
+    row, m, per = study.instant, study.metrics, study.periods
+    tab = study.table.copy()
+    tab["k"] = [("inf (rigid)" if not np.isfinite(k) else f"{k:.4g}") for k in tab.k]
+    bp = study.B_ppam
+    md = f"""{other_arm_note(study.arm, study.head)}
+
+The PID step-response impact (instant of largest TCP speed, t0 = {row.t:.3f} s, tool speed
+{study.tool_speed:.2f} m/s) repeated with both joint stiffnesses set to k, for the frozen-equilibrium
+convention (pressures held: the PPAM's own physics) and the flexible joint with motor-side inertia B
+(`simulate_impacts(..., joint_model=, motor_inertia=)`; PPAM drive: B = 0, upper bound from the
+muscles' masses B = {bp[0]:.2e}, {bp[1]:.2e} kg m^2); k = inf is the rigid arm. Largest
+energy-balance error of the sweep: {m['max_abs_energy_error']:.1e}.
+
+F_max [N] against k (last column: largest |energy-balance error| of the row):
+
+{markdown_table(tab, digits=5)}
+
+* Frozen equilibrium: F_max changes by {m['dF_frozen_6000_N']:+.1f} N from 1 to 6000 Nm/rad and is
+  {m['F_frozen_1e6_N']:.0f} N at 1e6 Nm/rad (the spring clamps the link to q(t0)).
+* Flexible joint: F_max rises towards the rigid arm; with the PPAM bound by
+  {m['dF_flexible_Bppam_6000_N']:.2f} N up to 6000 Nm/rad; it saturates at {m['rise_saturation_N']:.2f} N
+  for a large motor-side inertia (90 % from B = {m['B_90_kgm2']:.2g} kg m^2).
+* The impact lasts {1e3 * study.contact:.1f} ms, against the arm's shortest vibration period on its
+  joint springs of {1e3 * per[43.0]:.0f} ms at 43 Nm/rad: the tool behaves like the links' effective
+  mass m_eff = {study.m_eff:.3f} kg (two-body impact {study.f_two_body:.1f} N, full model at k = 1 Nm/rad
+  {m['F_k1_N']:.1f} N).
+
+Rise of F_max from 1 to 6000 Nm/rad against B (flexible joint):
+
+{markdown_table(study.fit, digits=4)}
 
 ![stiffness sweep](stiffness_sweep.png)
 """

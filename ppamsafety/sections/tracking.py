@@ -28,7 +28,8 @@ from ..experiments.trajectories import CIRCLE_CENTER
 from ..markdown import markdown_table
 from ..plots.control import plot_error_traces, plot_experiment, plot_tracking_comparison
 from ..units import BAR
-from . import Section, SectionInfo, resolve_arm, responses
+from . import (Section, SectionInfo, compares_to_thesis, other_arm_note, resolve_arm,
+               responses)
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -42,6 +43,23 @@ PERIODS = (5.0, 10.0, 20.0)
 
 
 SENSORS = {"timing board": SensorConfig(), "ideal velocity": SensorConfig(velocity="ideal")}
+
+
+def sensor_settings(arm) -> dict:
+    """:data:`SENSORS` for the sensor hardware of ``arm`` (the thesis arm: :data:`SENSORS`).
+
+    Parameters
+    ----------
+    arm : ppamsafety.params.ArmParameters
+        Arm.
+
+    Returns
+    -------
+    dict
+        ``{"timing board": SensorConfig, "ideal velocity": SensorConfig}``.
+    """
+    return {"timing board": SensorConfig.for_arm(arm),
+            "ideal velocity": SensorConfig.for_arm(arm, velocity="ideal")}
 
 
 def thesis_table() -> pd.DataFrame:
@@ -197,7 +215,7 @@ def sensor_ablation(arm, *, periods=PERIODS, warmup=catalog.CIRCLE_WARMUP,
     keep = ("PID", "PSMC joint Ki=2 λ=0.4", "PSMC joint Ki=12 λ=0.4", "PSMC joint Ki=12 λ=0.8",
             "PSMC joint Ki=12 λ=1.5")
     parts = []
-    for sname, sens in SENSORS.items():
+    for sname, sens in sensor_settings(arm).items():
         if base is not None and sname in base:
             e = base[sname][base[sname].variant.isin(keep)].copy()
         else:
@@ -208,12 +226,13 @@ def sensor_ablation(arm, *, periods=PERIODS, warmup=catalog.CIRCLE_WARMUP,
     kp, kd = TABLE_5_1_PID["kp"][0], TABLE_5_1_PID["kd"][0]
     kd_eff = kd + kp * TABLE_5_1_JOINT["lambda"]
     diag = [("PSMC joint Ki=12 λ=0.4", JointPSMC(ki=12 * BAR),
-             SensorConfig(counter_bits=32, dead_band=0.0), "timing board, 32-bit, no dead band"),
-            (f"PID Ki=12 Kd={kd:g}", PID(ki=12 * BAR), SensorConfig(), "timing board"),
-            (f"PID Ki=12 Kd={kd_eff:g}", PID(ki=12 * BAR, kd=kd_eff * BAR), SensorConfig(),
-             "timing board"),
+             SensorConfig.for_arm(arm, counter_bits=32, dead_band=0.0),
+             "timing board, 32-bit, no dead band"),
+            (f"PID Ki=12 Kd={kd:g}", PID(ki=12 * BAR), SensorConfig.for_arm(arm), "timing board"),
             (f"PID Ki=12 Kd={kd_eff:g}", PID(ki=12 * BAR, kd=kd_eff * BAR),
-             SensorConfig(velocity="ideal"), "ideal velocity")]
+             SensorConfig.for_arm(arm), "timing board"),
+            (f"PID Ki=12 Kd={kd_eff:g}", PID(ki=12 * BAR, kd=kd_eff * BAR),
+             SensorConfig.for_arm(arm, velocity="ideal"), "ideal velocity")]
     for lab, c, sens, sname in diag:
         e, _ = circle_errors(arm, [(lab, c)], periods=periods, sensors=sens, warmup=warmup,
                              evaluate=evaluate)
@@ -302,7 +321,8 @@ class TrackingStudy:
     runs : dict
         Sensor setting -> {period [s]: list of ExperimentResult}.
     comparison, comparison_ideal : pandas.DataFrame
-        :func:`compare_with_thesis` of the timing-board / ideal-velocity errors.
+        :func:`compare_with_thesis` of the timing-board / ideal-velocity errors (for
+        another arm: the errors alone, no thesis columns).
     conclusions, conclusions_ideal : list of Conclusion
         Conclusions (a)-(f) (timing board) and (a)-(d) (ideal velocity).
     sensor_ablation : pandas.DataFrame
@@ -316,6 +336,10 @@ class TrackingStudy:
         errors with ideal velocity, over lambda and periods [-].
     metrics : dict
         Headline numbers.
+    thesis : bool
+        Table 5.2 applies: the thesis arm.
+    arm : ArmParameters or None
+        The arm.
     """
 
     quick: bool
@@ -333,6 +357,8 @@ class TrackingStudy:
     gc_ablation: pd.DataFrame
     pid_equivalence: float
     metrics: dict = field(default_factory=dict)
+    thesis: bool = True
+    arm: object = None
 
     def to_pandas(self) -> pd.DataFrame:
         """Table 5.2 comparison (toolkit vs thesis, long format, SI units)."""
@@ -357,7 +383,8 @@ def _figures(study) -> dict:
         File name -> Figure.
     """
     warmup, evaluate = study.warmup, study.evaluate
-    figs = {"tracking_table_5_2.png": plot_tracking_comparison(study.comparison)}
+    figs = ({"tracking_table_5_2.png": plot_tracking_comparison(study.comparison)}
+            if study.thesis else {})
     rb, ri = study.runs["timing board"], study.runs["ideal velocity"]
     lab = catalog.results_by_label(rb[10.0])
     t_win = (warmup, warmup + min(20.0, evaluate))
@@ -387,7 +414,7 @@ def _figures(study) -> dict:
     return figs
 
 
-def compute(*, quick: bool = False, arm=None) -> TrackingStudy:
+def compute(*, quick: bool = False, arm=None, head=None) -> TrackingStudy:
     """Table 5.2, conclusions (a)-(f), sensor and gravity-compensation ablations.
 
     Parameters
@@ -396,6 +423,8 @@ def compute(*, quick: bool = False, arm=None) -> TrackingStudy:
         1 s warm-up and 4 s windows instead of the thesis' 5 s and 40 s.
     arm : ppamsafety.params.ArmParameters, optional
         Arm (default: the thesis arm).
+    head : HeadContactModel, optional
+        Unused (no impact in this section); accepted like every section's.
 
     Returns
     -------
@@ -403,15 +432,19 @@ def compute(*, quick: bool = False, arm=None) -> TrackingStudy:
         Tables, runs, conclusions and metrics.
     """
     arm = resolve_arm(arm)
+    thesis = compares_to_thesis(arm)
     warmup, evaluate = (1.0, 4.0) if quick else (catalog.CIRCLE_WARMUP, catalog.CIRCLE_EVAL)
 
     variants = catalog.thesis_variants()
     errs, runs = {}, {}
-    for sname, sens in SENSORS.items():
+    for sname, sens in sensor_settings(arm).items():
         errs[sname], runs[sname] = circle_errors(arm, variants, sensors=sens, warmup=warmup,
                                                  evaluate=evaluate)
-    cmp = compare_with_thesis(errs["timing board"])
-    cmp_ideal = compare_with_thesis(errs["ideal velocity"])
+    if thesis:
+        cmp = compare_with_thesis(errs["timing board"])
+        cmp_ideal = compare_with_thesis(errs["ideal velocity"])
+    else:
+        cmp, cmp_ideal = errs["timing board"].copy(), errs["ideal velocity"].copy()
 
     # conclusions
     resp = responses.compute(arm=arm)
@@ -430,17 +463,19 @@ def compute(*, quick: bool = False, arm=None) -> TrackingStudy:
     j2i = e_id[e_id.family == "PSMC joint Ki=2"]
     eq_dev = float(max(abs(j2i[j2i.period_s == P].mean_m / pidr[P] - 1).max()
                        for P in PERIODS))
-    r_mean = cmp.ratio_mean
-    metrics = {"ratio_mean_min": float(r_mean.min()), "ratio_mean_max": float(r_mean.max()),
-               "conclusions": {c.key: bool(c.holds) for c in concl},
+    metrics = {"conclusions": {c.key: bool(c.holds) for c in concl},
                "conclusions_ideal_velocity": {c.key: bool(c.holds) for c in concl_ideal},
                "table": {f"{r.variant} P{r.period_s:g}": [r.mean_m, r.max_m]
                          for r in cmp.itertuples()}}
+    if thesis:
+        r_mean = cmp.ratio_mean
+        metrics = {"ratio_mean_min": float(r_mean.min()), "ratio_mean_max": float(r_mean.max()),
+                   **metrics}
     return TrackingStudy(quick=quick, warmup=warmup, evaluate=evaluate, periods=PERIODS,
                          errors=errs, runs=runs, comparison=cmp, comparison_ideal=cmp_ideal,
                          conclusions=concl, conclusions_ideal=concl_ideal,
                          sensor_ablation=sab, gc_periods=gcp, gc_ablation=gc,
-                         pid_equivalence=eq_dev, metrics=metrics)
+                         pid_equivalence=eq_dev, metrics=metrics, thesis=thesis, arm=arm)
 
 
 def render(study: TrackingStudy) -> Section:
@@ -456,6 +491,8 @@ def render(study: TrackingStudy) -> Section:
     Section
         Markdown and artifacts (figures and the CSV tables).
     """
+    if not study.thesis:
+        return _render_other(study)
     quick, warmup, evaluate = study.quick, study.warmup, study.evaluate
     cmp, sab, gc, gcp = study.comparison, study.sensor_ablation, study.gc_ablation, study.gc_periods
     ct = conclusions_table(study.conclusions)
@@ -583,6 +620,64 @@ muscle pair (see `ppamsafety/control/gravity.py`); task PSMC then tracks badly (
 {mm_gc('PSMC task λ=0.4', 'measured', 'P10_mean_m'):.2f} mm vs {mm_gc('PSMC task λ=0.4', 'proxy', 'P10_mean_m'):.2f} mm at the proxy). "Proxy" stays the PSMC default because it
 is the only point that reproduces both the tracking of Table 5.2 and the slow PSMC steps; the
 price is the stronger Ki = 12 limit cycle with the timing board.
+"""
+    arts = [("tracking_table_5_2.csv", cmp),
+            ("tracking_table_5_2_ideal_velocity.csv", study.comparison_ideal),
+            *study.plot().items(),
+            ("tracking_conclusions.csv", ct),
+            ("tracking_sensor_ablation.csv", sab),
+            ("tracking_gc_ablation.csv", gc)]
+    return Section("Circle tracking: Table 5.2 and the thesis' conclusions (§5.3.4-5.3.5)",
+                   md, arts, dict(study.metrics))
+
+
+def _errors_display(errors: pd.DataFrame) -> pd.DataFrame:
+    """Wide 'mean / max' [mm] per variant and period (another arm: no thesis cells)."""
+    return _ablation_pivot(errors.assign(sensors="timing board"), "sensors").drop(
+        columns=["sensors"])
+
+
+def _render_other(study: TrackingStudy) -> Section:
+    """The tracking section for an arm other than the thesis arm: its own numbers only."""
+    quick, warmup, evaluate = study.quick, study.warmup, study.evaluate
+    cmp, sab, gc, gcp = study.comparison, study.sensor_ablation, study.gc_ablation, study.gc_periods
+    ct = conclusions_table(study.conclusions)
+    md = f"""{other_arm_note(study.arm)}
+
+Circle of 20 cm diameter (centre ({CIRCLE_CENTER[0]:g}, {CIRCLE_CENTER[1]:g}) m), periods 5, 10 and 20 s,
+the ten controller variants of Table 6.1 with Table 5.1 gains and the arm's sensors (encoder
+quantisation, inter-pulse-timing velocity). Error ||r_d − r|| after a {warmup:g} s warm-up, over
+{evaluate:g} s.{' (quick mode: short windows)' if quick else ''}
+
+**Tracking errors** (mean / max [mm]; full precision: `tracking_table_5_2.csv`, ideal velocity:
+`tracking_table_5_2_ideal_velocity.csv`):
+
+{markdown_table(_errors_display(cmp))}
+
+With ideal velocity the joint-PSMC (Ki = 2) mean errors differ from PID's by at most
+{100 * study.pid_equivalence:.2f} % (on its sliding surface joint PSMC is PID; differences come from
+the velocity measurement).
+
+![joint angles](tracking_joint_angles.png)
+
+![errors](tracking_circle_errors.png)
+
+![errors Ki=12](tracking_circle_errors_ki12.png)
+
+**The thesis' conclusions, tested on this arm** (criteria of
+`ppamsafety/experiments/conclusions.py`; (e) and (f) use the step and switch runs):
+
+{markdown_table(ct)}
+
+**Velocity sensor ablation** (mean / max [mm]):
+
+{markdown_table(_ablation_pivot(sab, "sensors"))}
+
+![sensor ablation](tracking_sensor_ablation.png)
+
+**Where the gravity compensation is evaluated** (proxy, desired, measured angles):
+
+{markdown_table(_gc_display(gc, gcp))}
 """
     arts = [("tracking_table_5_2.csv", cmp),
             ("tracking_table_5_2_ideal_velocity.csv", study.comparison_ideal),

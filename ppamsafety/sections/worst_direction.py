@@ -25,7 +25,8 @@ from ..impact.thesis_data import join_table_6_1
 from ..markdown import markdown_table
 from ..params.head import MAXILLA_FRACTURE_N
 from ..plots.impact import plot_direction_polar, plot_direction_ratios
-from . import Section, SectionInfo, resolve_arm
+from . import (Section, SectionInfo, compares_to_thesis, other_arm_note, resolve_arm,
+               resolve_head_model)
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -64,11 +65,16 @@ class WorstDirectionStudy:
         ``phi_*_deg`` (base frame) [deg], instants ``t0_*`` [s], ratios
         ``ratio_*`` (worst / thesis placement) and ``ratio_*_same_instant``
         (placement only, at the thesis placement's worst instant); Table 6.1
-        values ``Fmax_table_6_1`` [N], ``HIC_table_6_1``; search counts.
+        values ``Fmax_table_6_1`` [N], ``HIC_table_6_1`` (the thesis arm only); search
+        counts.
     results : list of WorstDirection
         Per-experiment results (polar sweeps for :data:`POLAR_RUNS`).
     metrics : dict
         Headline numbers and wall times [s].
+    thesis : bool
+        Table 6.1 applies: the thesis arm and head.
+    arm : ArmParameters or None
+        The arm.
     """
 
     quick: bool
@@ -77,6 +83,8 @@ class WorstDirectionStudy:
     table: pd.DataFrame
     results: list
     metrics: dict = field(default_factory=dict)
+    thesis: bool = True
+    arm: object = None
 
     def to_pandas(self) -> pd.DataFrame:
         """The per-experiment table (a copy).
@@ -118,7 +126,7 @@ def _figures(study) -> dict:
     return figs
 
 
-def compute(*, quick: bool = False, arm=None) -> WorstDirectionStudy:
+def compute(*, quick: bool = False, arm=None, head=None) -> WorstDirectionStudy:
     """Worst head placement and instant for the experiments of Table 6.1.
 
     Parameters
@@ -127,6 +135,9 @@ def compute(*, quick: bool = False, arm=None) -> WorstDirectionStudy:
         Every 20th ms and two variants (PID, joint PSMC Ki = 2, lambda = 0.4 s).
     arm : ArmParameters, optional
         The arm (default the thesis arm).
+    head : HeadContactModel, optional
+        Head model (default ``thesis-frontal``); Table 6.1 is joined only for the thesis
+        arm and head.
 
     Returns
     -------
@@ -134,8 +145,9 @@ def compute(*, quick: bool = False, arm=None) -> WorstDirectionStudy:
     """
     if not isinstance(quick, (bool, np.bool_)):
         raise TypeError(f"quick must be a bool, got {type(quick).__name__}")
+    thesis = compares_to_thesis(arm, head)
     arm = resolve_arm(arm)
-    head = head_model()
+    head = resolve_head_model(head)
     every = 20 if quick else 1
     variants = thesis_variants()
     if quick:
@@ -156,8 +168,10 @@ def compute(*, quick: bool = False, arm=None) -> WorstDirectionStudy:
                          **{k: v for k, v in w.counts.items()}, "rho": w.rho,
                          **r.meta["variant"].keys()})
     t_search = time.perf_counter() - t1
-    df = join_table_6_1(pd.DataFrame(rows), complete=not quick)
-    df = df.rename(columns={"Fmax_thesis": "Fmax_table_6_1", "HIC_thesis": "HIC_table_6_1"})
+    df = pd.DataFrame(rows)
+    if thesis:
+        df = join_table_6_1(df, complete=not quick)
+        df = df.rename(columns={"Fmax_thesis": "Fmax_table_6_1", "HIC_thesis": "HIC_table_6_1"})
     psmc = df[df["label"] != "PID"]
     i_f, i_h = int(df["ratio_F_max"].idxmax()), int(df["ratio_HIC36"].idxmax())
     metrics = {
@@ -180,7 +194,8 @@ def compute(*, quick: bool = False, arm=None) -> WorstDirectionStudy:
         "rho_max": float(df["rho"].max()),
         "runs_wall_time_s": t_runs, "search_wall_time_s": t_search,
     }
-    return WorstDirectionStudy(quick, every, head, df.reset_index(drop=True), results, metrics)
+    return WorstDirectionStudy(quick, every, head, df.reset_index(drop=True), results, metrics,
+                               thesis=thesis, arm=arm)
 
 
 def render(study: WorstDirectionStudy) -> Section:
@@ -197,12 +212,15 @@ def render(study: WorstDirectionStudy) -> Section:
     """
     t = study.table
     m = study.metrics
-    show = t[["experiment", "label", "F_max_thesis", "F_max_worst", "ratio_F_max", "psi_F_max_deg",
-              "t0_F_max_worst", "ratio_F_max_same_instant", "HIC36_thesis", "HIC36_worst",
-              "ratio_HIC36", "psi_HIC36_deg", "ratio_HIC36_same_instant", "Fmax_table_6_1",
-              "HIC_table_6_1"]].copy()
-    show["Fmax_worst/table_6_1"] = show["F_max_worst"] / show["Fmax_table_6_1"]
-    show["HIC_worst/table_6_1"] = show["HIC36_worst"] / show["HIC_table_6_1"]
+    cols = ["experiment", "label", "F_max_thesis", "F_max_worst", "ratio_F_max", "psi_F_max_deg",
+            "t0_F_max_worst", "ratio_F_max_same_instant", "HIC36_thesis", "HIC36_worst",
+            "ratio_HIC36", "psi_HIC36_deg", "ratio_HIC36_same_instant"]
+    if study.thesis:
+        show = t[cols + ["Fmax_table_6_1", "HIC_table_6_1"]].copy()
+        show["Fmax_worst/table_6_1"] = show["F_max_worst"] / show["Fmax_table_6_1"]
+        show["HIC_worst/table_6_1"] = show["HIC36_worst"] / show["HIC_table_6_1"]
+    else:
+        show = t[cols].copy()
     mode = "every 20th ms, two variants (quick mode)" if study.quick else "every ms"
     psis = np.concatenate([t["psi_F_max_deg"].to_numpy(), t["psi_HIC36_deg"].to_numpy()])
     side = ("always counter-clockwise of it" if (psis > 0).all() else
@@ -210,7 +228,10 @@ def render(study: WorstDirectionStudy) -> Section:
     n = study.head.exponent
     aF, bF = n / (n + 1), 2 * n / (n + 1)
     aH, bH = (1 + 2.5 * n) / (n + 1), (2 + 5 * n) / (n + 1) - 1
-    md = f"""The thesis places the head centre along the TCP velocity at the impact instant (§6.3.2,
+    intro = "" if study.thesis else other_arm_note(study.arm, study.head) + "\n\n"
+    t61 = (" Table 6.1 values are the thesis' own (four instants, its placement)." if study.thesis
+           else "")
+    md = intro + f"""The thesis places the head centre along the TCP velocity at the impact instant (§6.3.2,
 fig. 6.2) "to obtain the highest possible HIC value". Here the head (`{study.head.name}`, at rest,
 as in the thesis) is placed all around the tool point, psi in (-89, 89) deg from the TCP velocity
 (counter-clockwise; the tool must move towards the head), and every instant ({mode}, tool faster
@@ -228,7 +249,7 @@ instants (in every placement); the rest are excluded by the predictor, which is 
 
 "thesis" columns: head along the TCP velocity, worst over every instant (not only the four
 instants of Table 6.1); "worst": worst placement and instant; "same instant": worst placement at the thesis
-placement's worst instant. Table 6.1 values are the thesis' own (four instants, its placement).
+placement's worst instant.{t61}
 
 {markdown_table(show, digits=4)}
 

@@ -21,7 +21,15 @@ A physics case (:func:`ppamsafety.sweep_cases.safety_case`, one 12 s
 closed-loop experiment and four impacts) takes about 0.05-0.1 s of compiled
 work on one core, so the engine's overhead matters only for trivial cases.
 
-Run:  python studies/bench/bench_sweep.py [--cases 1000] [--processes 2]
+Physics cases with an arm of their own (issue 21, ``--physics N``): the per-case cost of
+:func:`~ppamsafety.sweep_cases.safety_case` as today (the thesis arm) against the same cases
+with a plant effect and dotted-path arm parameters (``effects={"payload_mass": ...}``,
+``"arm.links.m2"``, ``"arm.pneumatics.mean_pressure"``), whose values differ per case by
+1e-12 relative so that every case builds, validates and packs a new arm (no cache hit), on the
+same physics.  Both run in this process through ``run_sweep``, interleaved in rounds (A, B,
+A, B ...) so that the load of a shared machine hits both alike; ratio = with / without.
+
+Run:  python studies/bench/bench_sweep.py [--cases 1000] [--processes 2] [--physics 40]
 """
 
 from __future__ import annotations
@@ -50,6 +58,8 @@ def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--cases", type=int, default=1000)
     p.add_argument("--processes", type=int, default=2)
+    p.add_argument("--physics", type=int, default=40,
+                   help="safety cases per variant and round of the arm comparison (0: skip)")
     a = p.parse_args(argv)
     n, procs = a.cases, a.processes
     cases = [{"x": i} for i in range(n)]
@@ -91,7 +101,55 @@ def main(argv=None) -> int:
     print(f"{'variant':40s} {'wall [s]':>9s} {'per case [ms]':>14s} {'vs plain pool':>14s}")
     for name, t in rows:
         print(f"{name:40s} {t:9.2f} {1e3 * t / n:14.3f} {t / base:13.1f}x")
+    if a.physics:
+        physics(a.physics)
     return 0
+
+
+def physics(n: int, rounds: int = 4) -> tuple:
+    """Per-case cost of safety cases on the thesis arm vs with effects and dotted parameters.
+
+    Parameters
+    ----------
+    n : int
+        Cases per variant and round.
+    rounds : int
+        Interleaved rounds.
+
+    Returns
+    -------
+    tuple of float
+        Seconds per case without and with, summed over the rounds.
+    """
+    from ppamsafety.params import thesis_arm
+    from ppamsafety.sweep import run_sweep
+    from ppamsafety.sweep_cases import safety_case
+
+    arm = thesis_arm()
+    m2, pm = arm.links.m2, arm.pneumatics.p_mean[0]
+    lams = [0.4 + 0.01 * i for i in range(n)]
+    plain = [{"controller": "PSMC joint", "lam": lam} for lam in lams]
+
+    def dotted(r):
+        return [{"controller": "PSMC joint", "lam": lam,
+                 "effects": {"payload_mass": 1e-9 * (1 + r)},
+                 "arm.links.m2": m2 * (1 + 1e-12 * (i + n * r)),
+                 "arm.pneumatics.mean_pressure": pm * (1 + 1e-12 * (i + n * r))}
+                for i, lam in enumerate(lams)]
+
+    run_sweep(safety_case, plain[:1] + dotted(-1)[:1], progress=False)     # compile, warm
+    t_a = t_b = 0.0
+    for r in range(rounds):
+        t_a += _timed(lambda: run_sweep(safety_case, plain, progress=False))
+        t_b += _timed(lambda: run_sweep(safety_case, dotted(r), progress=False))
+    k = n * rounds
+    print(f"\n{k} safety cases per variant (step, joint PSMC), in this process, "
+          f"{rounds} interleaved rounds")
+    print(f"{'variant':52s} {'per case [ms]':>14s}")
+    print(f"{'today: the thesis arm':52s} {1e3 * t_a / k:14.2f}")
+    print(f"{'effects + dotted arm parameters (a new arm per case)':52s} {1e3 * t_b / k:14.2f}")
+    print(f"ratio with / without: {t_b / t_a:.3f}")
+    return t_a / k, t_b / k
 
 
 if __name__ == "__main__":

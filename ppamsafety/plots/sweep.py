@@ -1,0 +1,140 @@
+"""Figures of a sweep's results and of a safety envelope (``ppamsafety sweep``).
+
+Each function takes the result table (a DataFrame) or a result object by duck typing
+and returns a pyplot-free Figure; the limit lines are data of :mod:`ppamsafety.params`.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from ..params.head import HIC_SERIOUS_5PCT, MAXILLA_FRACTURE_N
+from ..params.iso_ts_15066 import SKULL_FOREHEAD
+from .figure import new_figure
+
+#: Result columns a sweep figure draws, with their axis labels (the ones present are drawn).
+RESULTS = (("F_max", "F_max [N]"), ("HIC36", "HIC36"), ("HIC15", "HIC15"),
+           ("tcp_speed", "TCP speed at impact [m/s]"), ("track_rms", "tracking error RMS [m]"))
+#: Most lines per panel: beyond, the other swept parameters are drawn as points.
+MAX_LINES = 8
+
+
+def limit_lines(column: str) -> list:
+    """The limit lines drawn on a panel of ``column``: (value, label, colour, style).
+
+    Parameters
+    ----------
+    column : str
+        A result column (``F_max``, ``HIC36``, ``HIC15`` ...).
+
+    Returns
+    -------
+    list of tuple
+    """
+    if column == "F_max":
+        return [(MAXILLA_FRACTURE_N, f"maxilla fracture {MAXILLA_FRACTURE_N:g} N", "r", "--"),
+                (SKULL_FOREHEAD.force_transient,
+                 f"ISO/TS 15066 forehead, transient {SKULL_FOREHEAD.force_transient:g} N",
+                 "darkorange", ":")]
+    if column.startswith("HIC"):
+        return [(HIC_SERIOUS_5PCT, f"HIC {HIC_SERIOUS_5PCT:g} (5 % AIS 3+)", "r", "--")]
+    return []
+
+
+def _label(v) -> str:
+    return f"{v:g}" if isinstance(v, (int, float, np.integer, np.floating)) else str(v)
+
+
+def plot_sweep(df: pd.DataFrame, swept, *, title: str = ""):
+    """Each result of a sweep against each swept parameter, with the safety limits.
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        The sweep's result table (case parameters, ``status``, the results).
+    swept : sequence of str
+        The case parameters that vary (one column of panels each).
+    title : str
+        Figure title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        One row of panels per result of :data:`RESULTS` present, one column per swept
+        parameter; F_max panels carry the 660 N maxilla line and the ISO/TS 15066
+        transient forehead limit, HIC panels the HIC 650 line (log scale).
+    """
+    ok = df[df["status"] == "ok"] if "status" in df.columns else df
+    results = [(c, lab) for c, lab in RESULTS if c in ok.columns and ok[c].notna().any()]
+    swept = list(swept) or ["case"]
+    if swept == ["case"]:
+        ok = ok.assign(case=np.arange(len(ok)))
+    nr, nc = max(1, len(results)), len(swept)
+    fig, axes = new_figure(nr, nc, figsize=(4.2 * nc + 1.0, 3.0 * nr + 0.6), squeeze=False,
+                           layout="constrained")
+    for j, x in enumerate(swept):
+        others = [s for s in swept if s != x]
+        xs = ok[x].map(lambda v: str(v) if isinstance(v, (list, tuple, dict)) else v)
+        numeric = pd.api.types.is_numeric_dtype(xs)
+        cats = None if numeric else list(dict.fromkeys(xs))
+        xv = xs if numeric else xs.map({c: i for i, c in enumerate(cats)})
+        groups = (list(ok.assign(_x=xv).groupby([ok[o].map(str) for o in others], sort=False))
+                  if others else [("", ok.assign(_x=xv))])
+        for i, (col, lab) in enumerate(results):
+            ax = axes[i, j]
+            lines = len(groups) <= MAX_LINES
+            for key, g in groups:
+                g = g.sort_values("_x")
+                name = ", ".join(f"{o} = {k}" for o, k in zip(others, key if isinstance(
+                    key, tuple) else (key,))) if others else None
+                ax.plot(g["_x"], g[col], "o-" if lines else "o", ms=3, lw=1,
+                        label=name if lines else None)
+            for v, text, color, style in limit_lines(col):
+                ax.axhline(v, color=color, ls=style, lw=1, label=text)
+            if col.startswith("HIC") and (ok[col] > 0).all():
+                ax.set_yscale("log")
+            ax.set_ylabel(lab)
+            ax.set_xlabel(x)
+            if cats is not None:
+                ax.set_xticks(range(len(cats)), cats, rotation=20, fontsize=7)
+            ax.grid(alpha=0.3)
+            if i == 0 or col == "F_max":
+                ax.legend(fontsize=6)
+    if title:
+        fig.suptitle(title)
+    return fig
+
+
+def plot_envelope(envelope, *, title: str = ""):
+    """A safety envelope: the limited result against the parameter, and the boundary.
+
+    Parameters
+    ----------
+    envelope : SafetyEnvelope
+        Result of :func:`ppamsafety.envelope.safety_envelope` (``evaluations``,
+        ``parameter``, ``metric``, ``limit_value``, ``limit_label``, ``safe_value``).
+    title : str
+        Figure title (default: the envelope's description).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    ev = envelope.evaluations.sort_values("value")
+    fig, ax = new_figure(figsize=(6.5, 4.0), layout="constrained")
+    ok = ev[ev["status"] == "ok"]
+    ax.plot(ok["value"], ok[envelope.metric], "o-", ms=4, lw=1, label="evaluated")
+    ax.axhline(envelope.limit_value, color="r", ls="--", lw=1, label=envelope.limit_label)
+    if envelope.safe_value is not None:
+        ax.axvline(envelope.safe_value, color="g", lw=1.2,
+                   label=f"envelope: {envelope.parameter} = {envelope.safe_value:.4g}")
+    ax.set_xlabel(envelope.parameter)
+    ax.set_ylabel(envelope.metric)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    ax.set_title(title or envelope.description, fontsize=9)
+    return fig
+
+
+__all__ = ["plot_sweep", "plot_envelope", "limit_lines", "RESULTS"]
