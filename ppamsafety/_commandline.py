@@ -20,10 +20,12 @@ every layer use it (``docs/architecture.md``).
 from __future__ import annotations
 
 import argparse
+import logging
 import os
 import re
 import sys
 import traceback
+import warnings
 
 EXIT_OK, EXIT_FAILURE, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
 
@@ -62,7 +64,39 @@ def _split_multi_value(argv: list[str]) -> list[str]:
 
 
 def _error(msg: str) -> None:
-    print(f"ppamsafety: error: {msg}", file=sys.stderr)
+    print(f"ppamsafety: error: {_one_line(msg)}", file=sys.stderr)
+
+
+def _one_line(msg) -> str:
+    return " ".join(str(msg).split())
+
+
+class _LineHandler(logging.Handler):
+    """What the library logs (e.g. which previous output is replaced) as ``ppamsafety: ...``."""
+
+    def emit(self, record):
+        try:
+            print(f"ppamsafety: {_one_line(record.getMessage())}", file=sys.stderr)
+        except (OSError, ValueError):
+            pass
+
+
+class _Warnings:
+    """Show every warning of a command once, as ``ppamsafety: warning: ...`` (one line, no
+    source line), instead of Python's ``file.py:12: UserWarning: ...`` and the code line."""
+
+    def __init__(self):
+        self.seen = set()
+
+    def show(self, message, category, filename, lineno, file=None, line=None):
+        text = _one_line(message)
+        if text in self.seen:
+            return
+        self.seen.add(text)
+        try:
+            print(f"ppamsafety: warning: {text}", file=sys.stderr if file is None else file)
+        except (OSError, ValueError):         # stderr closed: nothing to tell
+            pass
 
 
 def run_guarded(parser: argparse.ArgumentParser, func, argv=None) -> int:
@@ -71,8 +105,11 @@ def run_guarded(parser: argparse.ArgumentParser, func, argv=None) -> int:
     Usage errors print argparse's message and give 2 (``--help`` gives 0); a
     ``ValueError``, ``TypeError`` or ``OSError`` (bad input, including
     :class:`ppamsafety.output.OutputError`) prints ``ppamsafety: error: ...``
-    and gives 2; any other exception prints one line asking to report it and
+    and gives 2, and so does a ``MemoryError`` (a request too large for the machine:
+    the library refuses the sizes it can estimate before allocating, this is the net); any other exception prints one line asking to report it and
     gives 1.  No traceback unless the environment sets ``PPAMSAFETY_DEBUG=1``.
+    Every warning raised while ``func`` runs is printed once as one line
+    ``ppamsafety: warning: ...`` (no Python source line).
 
     Parameters
     ----------
@@ -96,8 +133,16 @@ def run_guarded(parser: argparse.ArgumentParser, func, argv=None) -> int:
         args = parser.parse_args(_split_multi_value([str(a) for a in argv]))
     except SystemExit as exc:          # argparse: --help (0) or a usage error (2)
         return exc.code if isinstance(exc.code, int) else EXIT_USAGE
+    shown = _Warnings()
+    log = logging.getLogger("ppamsafety")
+    handler = _LineHandler()
+    old_level = log.level
+    log.addHandler(handler)
+    log.setLevel(logging.INFO)
     try:
-        return func(args)
+        with warnings.catch_warnings():
+            warnings.showwarning = shown.show
+            return func(args)
     except BrokenPipeError:            # e.g. `ppamsafety impact ... | head`: the reader left
         try:                           # early; nothing is wrong with the command or its input
             devnull = os.open(os.devnull, os.O_WRONLY)
@@ -108,7 +153,14 @@ def run_guarded(parser: argparse.ArgumentParser, func, argv=None) -> int:
     except KeyboardInterrupt:
         print("ppamsafety: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
-    except (ValueError, TypeError, OSError) as exc:
+    except MemoryError:
+        if debug:
+            traceback.print_exc()
+        _error("the request needs more memory than this machine can give (MemoryError); "
+               "ask for less: a shorter duration, fewer cases or samples")
+        return EXIT_USAGE
+    except (ValueError, TypeError, OSError, argparse.ArgumentError,
+            argparse.ArgumentTypeError) as exc:
         if debug:
             traceback.print_exc()
         _error(str(exc) or type(exc).__name__)
@@ -119,6 +171,9 @@ def run_guarded(parser: argparse.ArgumentParser, func, argv=None) -> int:
         _error(f"internal failure ({type(exc).__name__}: {exc}); please report this with the "
                f"command line used (PPAMSAFETY_DEBUG=1 shows the traceback)")
         return EXIT_FAILURE
+    finally:
+        log.removeHandler(handler)
+        log.setLevel(old_level)
 
 
 __all__ = ["EXIT_OK", "EXIT_FAILURE", "EXIT_USAGE", "EXIT_INTERRUPTED", "Parser", "run_guarded"]

@@ -48,10 +48,44 @@ Conventions
   out of range, wrong shape or length, inconsistent with another argument.
 * Python ints, floats, ``fractions.Fraction``, ``decimal.Decimal`` and numpy
   real scalars (or 0-d real arrays) are accepted as real numbers.
+
+Policy on loose types, choices and magnitudes (issue 22)
+---------------------------------------------------------
+One rule per kind of looseness, the same in every public function, parameter
+set, study file and command-line option:
+
+* **0-d arrays** (``np.array(0.4)``) are real numbers: accepted wherever a
+  float or an int is, and converted (:func:`check_real`, :func:`check_int`),
+  because NumPy produces them from reductions.  A 1-element *1-D* array or
+  list is not a number (``TypeError``): it is a vector of the wrong length.
+* **Masked arrays** are refused where an array of numbers is expected when any
+  entry is masked (``ValueError`` naming the argument and the count): NumPy
+  would silently compute with the hidden values.  Fill them
+  (``a.filled(...)``) or pass the valid part.  An unmasked masked array is
+  its data.
+* **Choices** (controller families, head models, experiments, noise levels,
+  sub-command choices) are exact, case-sensitive strings: a mis-cased or
+  padded name is refused with the allowed names and the closest one
+  (``did you mean 'thesis-frontal'?``), never silently matched, so that one
+  name has one spelling in files, caches and reports.  Enum flags of the
+  controllers (:func:`ppamsafety.layouts.check_flag`) accept their documented
+  lower-case name or the enum member's upper-case name, with ``-``, ``_`` or
+  a space between words; no other case (``"Mimo"`` is refused).
+* **Magnitudes**: a finite number is not enough.  Every physical quantity
+  has a range where the model is valid (a pressure limit of 1e300 Pa is
+  refused: gauge pressures and pressure limits stay within
+  [-1 atm, :data:`PRESSURE_MAX`]); counts and sizes are bounded so that a
+  request is refused with a size estimate *before* memory is allocated
+  (:func:`check_size`), never by a ``MemoryError``.
+* **Seeds** are integers in [0, 2^63 - 1] (:func:`check_seed`).
+* **Numbers as text** (``NAME=VALUE`` on a command line): one number or
+  comma-separated numbers (:func:`check_numbers`); ``inf``, ``nan`` and empty
+  parts are refused naming the value's owner.
 """
 
 from __future__ import annotations
 
+import difflib
 import math
 import numbers
 import operator
@@ -59,10 +93,23 @@ from typing import Iterable
 
 import numpy as np
 
-__all__ = ["InvalidTypeError", "describe", "check_real", "check_finite", "check_range",
+__all__ = ["InvalidTypeError", "PRESSURE_MAX", "SEED_MAX", "MAX_BYTES", "describe", "check_real",
+           "check_finite", "check_range",
            "check_positive", "check_nonnegative", "check_int", "check_bool", "check_str",
-           "check_choice", "check_instance", "check_vector", "as_float_array", "check_shape",
+           "check_choice", "check_instance", "check_vector", "check_numbers", "check_seed",
+           "check_size", "did_you_mean", "as_float_array", "check_shape",
            "check_same_rows", "check_increasing", "check_range_array", "check_finite_result"]
+
+
+#: Largest gauge pressure or pressure limit accepted anywhere [Pa]: 100 bar, ten times the
+#: industrial compressed-air supply; no pneumatic muscle or valve comes near it.
+PRESSURE_MAX = 1.0e7
+#: Largest seed of a random stream (numpy accepts more; 2^63 - 1 keeps seeds in int64 columns
+#: of sweep tables and in TOML files).
+SEED_MAX = 2 ** 63 - 1
+#: Largest memory one request may allocate for its results [bytes] (2 GB): a larger request is
+#: refused with its size estimate before anything is allocated (:func:`check_size`).
+MAX_BYTES = 2 * 10 ** 9
 
 
 class InvalidTypeError(TypeError, ValueError):
@@ -96,6 +143,9 @@ def check_real(name: str, value, *, unit: str = "") -> float:
     """
     if isinstance(value, (bool, np.bool_)):
         raise InvalidTypeError(f"{name} must be a real number, got a bool ({value!r})")
+    if value is np.ma.masked:
+        raise ValueError(f"{name} is a masked value (numpy.ma.masked), not a number")
+    value = _unmasked(name, value)
     if isinstance(value, np.ndarray) and value.ndim == 0 and value.dtype.kind in "iuf":
         return float(value)
     if isinstance(value, numbers.Real) and not isinstance(value, np.ndarray):
@@ -170,6 +220,31 @@ def check_int(name: str, value, lo: int | None = None, hi: int | None = None) ->
     return int(v)
 
 
+def check_seed(name: str, value) -> int:
+    """A seed of a random stream: an integer in [0, :data:`SEED_MAX`]; return it as int."""
+    return check_int(name, value, 0, SEED_MAX)
+
+
+def check_size(what: str, nbytes: float, *, limit: float = MAX_BYTES, remedy: str = "") -> None:
+    """Refuse a request whose arrays would need more than ``limit`` bytes, before allocating.
+
+    Parameters
+    ----------
+    what : str
+        What is being sized, with the numbers it comes from (e.g. ``"duration = 1e+05 s at
+        dt = 0.001 s: 1e+08 samples"``).
+    nbytes : float
+        Estimated memory [bytes].
+    limit : float
+        Largest memory allowed [bytes] (default :data:`MAX_BYTES`).
+    remedy : str
+        How to go on (e.g. ``"use a shorter duration"``).
+    """
+    if not nbytes <= limit:
+        raise ValueError(f"{what} would need about {nbytes / 1e9:.3g} GB of memory (limit "
+                         f"{limit / 1e9:.3g} GB){'; ' + remedy if remedy else ''}")
+
+
 def check_bool(name: str, value) -> bool:
     """Check that ``value`` is a bool (Python or numpy); ints 0/1 and strings are refused."""
     if isinstance(value, (bool, np.bool_)):
@@ -189,7 +264,9 @@ def check_str(name: str, value, *, allow_empty: bool = True) -> str:
 def check_choice(name: str, value, choices: Iterable[str]) -> str:
     """Check that ``value`` is one of ``choices``; return it.
 
-    A value of another type than the (string) choices raises :class:`InvalidTypeError`.
+    Choices are exact (case-sensitive); a value that differs only in case or surrounding
+    blanks is refused with the right spelling (module docstring).  A value of another type
+    than the (string) choices raises :class:`InvalidTypeError`.
     """
     choices = tuple(choices)
     allowed = ", ".join(map(repr, choices))
@@ -200,8 +277,27 @@ def check_choice(name: str, value, choices: Iterable[str]) -> str:
     except TypeError:   # unhashable / incomparable
         ok = False
     if not ok:
-        raise ValueError(f"{name} = {value!r} is not one of {allowed}")
+        raise ValueError(f"{name} = {value!r} is not one of {allowed}"
+                         f"{did_you_mean(value, choices)}")
     return value
+
+
+def did_you_mean(value, choices) -> str:
+    """``"; did you mean 'x'?"`` for a name that differs from a choice only in case, blanks,
+    ``-``/``_``, or by a typo or two; ``""`` otherwise."""
+    if not isinstance(value, str):
+        return ""
+
+    def norm(x):
+        return " ".join(str(x).replace("_", " ").replace("-", " ").split()).lower()
+
+    v = norm(value)
+    same = [c for c in choices if isinstance(c, str) and norm(c) == v]
+    if same:
+        return f"; did you mean {same[0]!r}? (names are case-sensitive)"
+    close = difflib.get_close_matches(value, [c for c in choices if isinstance(c, str)], n=1,
+                                      cutoff=0.75)
+    return f"; did you mean {close[0]!r}?" if close else ""
 
 
 def check_instance(name: str, value, cls):
@@ -241,6 +337,69 @@ def check_vector(name: str, value, length: int | None = None, lo: float = -math.
                              unit=unit) for i, x in enumerate(items))
 
 
+def check_numbers(name: str, value, lengths: Iterable[int] | None = None, *,
+                  unit: str = "") -> tuple:
+    """One number, a sequence of numbers or their text (``"0.4"``, ``"1,2,3"``) as a tuple.
+
+    The form of a value given on a command line or in a file (``NAME=VALUE``):
+    a comma-separated text is split, each part must be a finite number.
+
+    Parameters
+    ----------
+    name : str
+        Name used in messages (e.g. ``"effect payload_mass"``).
+    value : number, str or sequence of numbers
+        The value.
+    lengths : iterable of int, optional
+        Allowed numbers of values (e.g. ``(1, 4)``: one for all, or one each).
+    unit : str
+        Unit named in messages.
+
+    Returns
+    -------
+    tuple of float
+    """
+    if isinstance(value, str):
+        text = value.strip()
+        if not text:
+            raise ValueError(f"{name} = {value!r} is empty: give a number"
+                             f"{' or comma-separated numbers' if lengths != (1,) else ''}")
+        parts = [p.strip() for p in text.split(",")]
+        items = []
+        for i, p in enumerate(parts):
+            where = f"{name}[{i}]" if len(parts) > 1 else name
+            try:
+                items.append(float(p))
+            except ValueError:
+                raise ValueError(f"{where} = {p!r} is not a number"
+                                 f"{f' (in {value!r})' if len(parts) > 1 else ''}") from None
+        vals = tuple(check_finite(f"{name}[{i}]" if len(items) > 1 else name, v, unit=unit)
+                     for i, v in enumerate(items))
+    elif isinstance(value, (np.ndarray, list, tuple)) and np.ndim(value) != 0:
+        vals = check_vector(name, value, None, unit=unit)
+    else:
+        vals = (check_finite(name, value, unit=unit),)
+    if lengths is not None:
+        allowed = tuple(lengths)
+        if len(vals) not in allowed:
+            want = " or ".join(map(str, allowed))
+            raise ValueError(f"{name} takes {want} value{'s' if allowed != (1,) else ''}, got "
+                             f"{len(vals)}: {value!r}")
+    return vals
+
+
+def _unmasked(name: str, value):
+    """The data of a masked array without masked entries; refuse one with masked entries."""
+    if isinstance(value, np.ma.MaskedArray):
+        n = int(np.ma.count_masked(value))
+        if n:
+            raise ValueError(f"{name} is a masked array with {n} masked entr"
+                             f"{'y' if n == 1 else 'ies'}: their hidden values would be used; "
+                             f"fill them (a.filled(...)) or pass only the valid entries")
+        return np.ma.getdata(value)
+    return value
+
+
 def as_float_array(name: str, value, *, shape_tail: tuple[int, ...] | None = None,
                    ndim: int | tuple[int, ...] | None = None, min_len: int | None = None,
                    allow_nonfinite: bool = False) -> np.ndarray:
@@ -270,6 +429,7 @@ def as_float_array(name: str, value, *, shape_tail: tuple[int, ...] | None = Non
     """
     if value is None or isinstance(value, (str, bytes, dict, set, frozenset)):
         raise InvalidTypeError(f"{name} must be an array of real numbers, got {describe(value)}")
+    value = _unmasked(name, value)
     if isinstance(value, np.ndarray):
         raw = value
     else:

@@ -29,14 +29,17 @@ Negative numbers, also in scientific notation, are accepted as option values
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
+import re
 import sys
 import warnings
 from pathlib import Path
 
-from ._commandline import EXIT_OK
+from ._commandline import EXIT_FAILURE, EXIT_OK, EXIT_USAGE
 from ._commandline import Parser as _Parser
 from ._commandline import _split_multi_value, run_guarded  # noqa: F401  (tests use both)
+from ._validation import SEED_MAX, did_you_mean
 from .output import atomic_write, check_new_file, inspect_output_folder
 from .units import BAR, DEG
 
@@ -56,6 +59,10 @@ output: a folder is created if missing; a non-empty folder is used only if it is
 ppamsafety output (marker file .ppamsafety-output) holding nothing but files ppamsafety wrote,
 and is replaced only with --overwrite. An existing file is never overwritten without --overwrite.
 """
+
+#: Defaults of ``synthesize --controller / --reference`` (as diagnose.arm.synthesize).
+_SYN_CONTROLLER, _SYN_REFERENCE = "PSMC joint Ki=2 λ=0.4", "circle10"
+
 
 def _finite(text: str) -> float:
     try:
@@ -99,6 +106,60 @@ def _nonnegative(text: str) -> float:
     return v
 
 
+def _seed(text: str) -> int:
+    try:
+        v = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer (a seed is an integer in "
+                                         f"[0, 2^63 - 1])") from None
+    if not 0 <= v <= SEED_MAX:
+        raise argparse.ArgumentTypeError(f"{v} is outside [0, 2^63 - 1] (a seed is a "
+                                         f"non-negative integer)")
+    return v
+
+
+def _count(lo: int, hi: int):
+    """An argparse type: an integer in [lo, hi]."""
+    def parse(text: str) -> int:
+        try:
+            v = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{text!r} is not an integer (allowed: {lo} to "
+                                             f"{hi})") from None
+        if not lo <= v <= hi:
+            raise argparse.ArgumentTypeError(f"{v} is outside [{lo}, {hi}]")
+        return v
+    return parse
+
+
+def _path(text: str) -> str:
+    if not text.strip():
+        raise argparse.ArgumentTypeError(f"{text!r} is an empty path")
+    if "\0" in text:
+        raise argparse.ArgumentTypeError(f"{text!r} holds a NUL character")
+    return text
+
+
+@contextlib.contextmanager
+def _options(**names):
+    """Errors of the library name its arguments; on the command line they name the options.
+
+    ``with _options(block_seconds="--block"):`` rewrites ``block_seconds`` (as a whole word)
+    into ``--block`` in a ``ValueError``/``TypeError`` raised inside the block.
+    """
+    try:
+        yield
+    except (ValueError, TypeError) as exc:
+        msg = str(exc)
+        new = msg
+        for lib, opt in names.items():
+            new = re.sub(rf"(?<![\w.\[-]){re.escape(lib)}(?![\w-])", opt, new)
+        if new == msg:
+            raise
+        raise type(exc)(new) if type(exc) in (ValueError, TypeError) else ValueError(new) \
+            from None
+
+
 def _section_names(text: str) -> list[str]:
     from .sections import REGISTRY
 
@@ -107,6 +168,11 @@ def _section_names(text: str) -> list[str]:
         raise argparse.ArgumentTypeError(
             f"{text!r} names no report section; give comma-separated names from "
             f"{', '.join(REGISTRY)} (omit --only to run them all)")
+    unknown = [n for n in names if n not in REGISTRY]
+    if unknown:
+        raise argparse.ArgumentTypeError(
+            f"unknown report section(s) {', '.join(map(repr, unknown))}"
+            f"{did_you_mean(unknown[0], list(REGISTRY))}; choose from {', '.join(REGISTRY)}")
     return names
 
 
@@ -138,9 +204,12 @@ def _head_unused(args, command: str) -> None:
 def _cmd_report(args) -> int:
     from .report.build import build_report
 
-    index = build_report(args.outdir, quick=args.quick, only=args.only,
-                         overwrite=args.overwrite, processes=args.processes,
-                         arm=_arm_of(args), head=_head_of(args))
+    with _options(outdir="--outdir", processes="--processes",
+                  replace_kind="--replace-other-kind"):
+        index = build_report(args.outdir, quick=args.quick, only=args.only,
+                             overwrite=args.overwrite, processes=args.processes,
+                             replace_kind=args.replace_other_kind, arm=_arm_of(args),
+                             head=_head_of(args))
     print(f"report written to {index}")
     return EXIT_OK
 
@@ -149,19 +218,25 @@ def _cmd_identify(args) -> int:
 
     from .data import MeasuredDataWarning, identify_measured, load_measured
 
-    inspect_output_folder(args.out, overwrite=args.overwrite)   # fail before computing
+    with _options(outdir="--out"):
+        inspect_output_folder(args.out, overwrite=args.overwrite, kind="identify",
+                              replace_kind=args.replace_other_kind)   # fail before computing
     arm = _arm_of(args)
     _head_unused(args, "identify")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", MeasuredDataWarning)    # kept in data.notes
         data = load_measured(args.data, allow_gaps=args.allow_gaps,
                              strict_units=not args.loose_units)
-    ident = identify_measured(data, args.kind, method=args.method, friction=not args.no_friction,
-                              drop=args.drop, confidence=args.confidence,
-                              sign_velocity=args.sign_velocity, arm=arm)
+    with _options(kind="--kind", method="--method", drop="--drop", confidence="--confidence",
+                  sign_velocity="--sign-velocity"):
+        ident = identify_measured(data, args.kind, method=args.method,
+                                  friction=not args.no_friction, drop=args.drop,
+                                  confidence=args.confidence, sign_velocity=args.sign_velocity,
+                                  arm=arm)
     for note in ident.notes:
         print(f"ppamsafety: warning: {note}", file=sys.stderr)
-    ident.write(args.out, overwrite=args.overwrite)
+    with _options(outdir="--out"):
+        ident.write(args.out, overwrite=args.overwrite, replace_kind=args.replace_other_kind)
     for name in ident.results:
         r = ident.results[name]
         r = getattr(r, "lsq", r)
@@ -184,25 +259,48 @@ def _processes(text: str) -> int:
 
 
 def _cmd_sweep(args) -> int:
-    from .study_files import load_study, run_study_file
+    from .study_files import (check_run_size, describe_estimate, load_study,
+                              run_study_file)
 
     if args.scheduler is not None and args.backend != "dask":
         raise ValueError(f"--scheduler {args.scheduler} needs --backend dask")
+    if args.resume and args.overwrite:
+        raise ValueError("--resume and --overwrite exclude each other: --resume continues the "
+                         "sweep in --out, --overwrite recomputes it from scratch")
     study = load_study(args.study, arm=_arm_of(args), head=_head_of(args))   # checked first
     n = len(study.cases) if args.max_cases is None else min(args.max_cases, len(study.cases))
+    est = study.estimate(processes=args.processes, max_cases=n)
+    with _options(max_cases="--max-cases", confirm="--yes"):           # refused before it runs
+        check_run_size(study, est, confirm=args.yes or args.scheduler is not None)
     what = (f"envelope of {study.envelope['parameter']} ({study.envelope['limit']})"
-            if study.envelope else f"{n} cases")
-    print(f"study {study.name!r}: {what} on {args.backend}"
-          f"{' (' + args.scheduler + ')' if args.scheduler else ''} -> {args.out}", flush=True)
-    df = run_study_file(study, args.out, backend=args.backend, scheduler=args.scheduler,
-                        processes=args.processes, resume=args.resume, overwrite=args.overwrite,
-                        max_cases=args.max_cases, progress=not args.no_progress)
+            if study.envelope else describe_estimate(est))
+    print(f"study {study.name!r}: {what}"
+          f"{f' (first {n:,} of {len(study.cases):,})' if n < len(study.cases) else ''} on "
+          f"{args.backend}{' (' + args.scheduler + ')' if args.scheduler else ''} -> {args.out}",
+          flush=True)
+    with _options(outdir="--out", max_cases="--max-cases", processes="--processes",
+                  scheduler="--scheduler", confirm="--yes", replace_kind="--replace-other-kind"):
+        df = run_study_file(study, args.out, backend=args.backend, scheduler=args.scheduler,
+                            processes=args.processes, resume=args.resume,
+                            overwrite=args.overwrite, max_cases=args.max_cases,
+                            progress=not args.no_progress, confirm=args.yes,
+                            replace_kind=args.replace_other_kind)
     failed = int((df["status"] == "failed").sum()) if "status" in df.columns else 0
     print(f"results written to {args.out}/{study.csv} ({len(df) - failed} ok, {failed} failed); "
           f"summary: {args.out}/summary.html")
+    if failed and failed == len(df):
+        errors = df["error"].astype(str).value_counts()
+        top = "; ".join(f"{c} x {e}" for e, c in errors.head(3).items())
+        more = f" (and {len(errors) - 3} other errors)" if len(errors) > 3 else ""
+        print(f"ppamsafety: error: every case of the sweep failed ({failed} of {len(df)}): "
+              f"{' '.join(top.split())}{more}; see the 'error' column of {args.out}/{study.csv}",
+              file=sys.stderr)
+        user = all(e.split(":", 1)[0] in ("ValueError", "TypeError", "StudyFileError",
+                                          "OutputError") for e in errors.index)
+        return EXIT_USAGE if user else EXIT_FAILURE
     if failed:
-        print(f"ppamsafety: {failed} case(s) failed; their rows have status='failed' and the "
-              f"error", file=sys.stderr)
+        print(f"ppamsafety: warning: {failed} of {len(df)} case(s) failed; their rows have "
+              f"status='failed' and the error", file=sys.stderr)
     return EXIT_OK
 
 
@@ -211,22 +309,30 @@ def _cmd_diagnose(args) -> int:
     from .data import MeasuredDataWarning, load_campaign, load_measured
     from .diagnose import diagnose
 
-    inspect_output_folder(args.out, overwrite=args.overwrite)   # fail before computing
+    with _options(outdir="--out"):
+        inspect_output_folder(args.out, overwrite=args.overwrite, kind="diagnose",
+                              replace_kind=args.replace_other_kind)   # fail before computing
     arm = _arm_of(args)
     _head_unused(args, "diagnose")
     with warnings.catch_warnings():
-        warnings.simplefilter("ignore", MeasuredDataWarning)    # kept in data.notes
+        warnings.simplefilter("ignore", MeasuredDataWarning)    # printed below, one line each
         if str(args.data).lower().endswith(".toml"):            # a bench campaign manifest
             data = load_campaign(args.data)
         else:
             data = load_measured(args.data, allow_gaps=args.allow_gaps,
                                  strict_units=not args.loose_units)
-    dg = diagnose(data, experiment=args.experiment, alpha=args.alpha, rho_max=args.rho_max,
-                  block_seconds=args.block, seed=args.seed, bootstrap=args.bootstrap, arm=arm)
+    for note in getattr(data, "notes", ()):
+        print(f"ppamsafety: warning: {note}", file=sys.stderr)
+    with _options(experiment="--experiment", alpha="--alpha", rho_max="--rho-max",
+                  block_seconds="--block", seed="--seed", bootstrap="--bootstrap", arm="--arm"):
+        dg = diagnose(data, experiment=args.experiment, alpha=args.alpha, rho_max=args.rho_max,
+                      block_seconds=args.block, seed=args.seed, bootstrap=args.bootstrap,
+                      arm=arm)
     for note in dg.notes:
         if note.startswith("arm: ") and "diagnosed against arm" in note:
             print(f"ppamsafety: warning: {note[5:]}", file=sys.stderr)
-    dg.write(args.out, overwrite=args.overwrite)
+    with _options(outdir="--out"):
+        dg.write(args.out, overwrite=args.overwrite, replace_kind=args.replace_other_kind)
     for e in dg.effects:
         ps = ", ".join(f"{n} = {p['value']:.4g} [{p['ci_low']:.4g}, {p['ci_high']:.4g}] "
                        f"{p['unit']}" for n, p in e["parameters"].items())
@@ -249,17 +355,33 @@ def _float_list(text: str):
 
 def _effect_arg(text: str):
     if "=" not in text:
-        raise argparse.ArgumentTypeError(f"--effect {text!r}: expected NAME=VALUE")
-    name, value = text.split("=", 1)
-    return name.strip(), value.strip()
+        raise argparse.ArgumentTypeError(f"{text!r}: expected NAME=VALUE (e.g. "
+                                         f"payload_mass=0.4, valve_gain_factor=0.8,0.8,1,1)")
+    name, value = (x.strip() for x in text.split("=", 1))
+    if not name:
+        raise argparse.ArgumentTypeError(f"{text!r}: the effect NAME before '=' is empty")
+    if not value:
+        raise argparse.ArgumentTypeError(f"{text!r}: effect {name} has no VALUE after '=' "
+                                         f"(a number, or comma-separated numbers)")
+    return name, value
 
 
 def _cmd_synthesize(args) -> int:
+    from .data.measured import check_save_path
     from .diagnose import synthesize
 
+    with _options(path="--out", **{"measured data file": "--out"}):
+        check_save_path(args.out, overwrite=args.overwrite)      # fail before simulating
     effects = {}
-    for name, value in args.effect or []:
-        effects[name] = value if "," in value else _finite(value)
+    for name, value in args.effect or []:       # values are parsed (and named) by synthesize
+        if name in effects:
+            raise ValueError(f"--effect {name} is given twice ({name}={effects[name]} and "
+                             f"{name}={value}); give each effect once")
+        effects[name] = value
+    tester = ("protocol", "pressures", "cycles", "period", "sample_rate", "force_law", "jitter")
+    names = {"experiment": "--experiment", "noise": "--noise", "seed": "--seed",
+             "duration": "--duration", "controller": "--controller", "reference": "--reference",
+             **{k: f"--{k.replace('_', '-')}" for k in tester}}
     arm = _arm_of(args)
     _head_unused(args, "synthesize")
     if args.kind == "actuator":
@@ -269,23 +391,29 @@ def _cmd_synthesize(args) -> int:
         if args.duration is not None:
             raise ValueError("--duration is an arm option; for --kind actuator use --cycles, "
                              "--period and --sample-rate")
-        opts = {k: getattr(args, k) for k in ("protocol", "pressures", "cycles", "period",
-                                              "sample_rate", "force_law", "jitter")
-                if getattr(args, k) is not None}
-        data = synthesize(args.experiment, effects, noise=args.noise, seed=args.seed,
-                          kind="actuator", position=args.position, **opts)
+        opts = {k: getattr(args, k) for k in tester if getattr(args, k) is not None}
+        with _options(**names):
+            data = synthesize(args.experiment, effects, noise=args.noise, seed=args.seed,
+                              kind="actuator", position=args.position, **opts)
     else:
-        extra = [f"--{k.replace('_', '-')}" for k in ("protocol", "pressures", "cycles",
-                                                       "period", "sample_rate", "force_law",
-                                                       "jitter") if getattr(args, k) is not None]
+        extra = [f"--{k.replace('_', '-')}" for k in tester if getattr(args, k) is not None]
         if args.position:
             extra.append("--position")
         if extra:
             raise ValueError(f"{', '.join(extra)}: option(s) of --kind actuator only")
-        data = synthesize(args.experiment, effects, noise=args.noise, seed=args.seed,
-                          duration=args.duration, controller=args.controller,
-                          reference=args.reference, arm=arm)
-    path = data.save(args.out, overwrite=args.overwrite)
+        if (args.experiment or "open-loop") != "closed-loop":
+            given = [o for o, v, d in (("--controller", args.controller, _SYN_CONTROLLER),
+                                       ("--reference", args.reference, _SYN_REFERENCE))
+                     if v != d]
+            if given:
+                raise ValueError(f"{', '.join(given)}: option(s) of --experiment closed-loop "
+                                 f"only, not of {args.experiment or 'open-loop'}")
+        with _options(**names):
+            data = synthesize(args.experiment, effects, noise=args.noise, seed=args.seed,
+                              duration=args.duration, controller=args.controller,
+                              reference=args.reference, arm=arm)
+    with _options(**{"measured data file": "--out"}):
+        path = data.save(args.out, overwrite=args.overwrite)
     print(f"record written to {path} ({len(data)} rows)")
     return EXIT_OK
 
@@ -302,9 +430,15 @@ def _cmd_impact(args) -> int:
     arm = _arm_of(args) or thesis_arm()
     head = _head_of(args) or head_model()
     q = np.array(args.q, dtype=float) * DEG
-    res = simulate_impacts(arm, q, args.qd, args.stiffness, head=head, dt=args.dt,
-                           history=args.history is not None)
+    with _options(q="--q", qd="--qd", stiffness="--stiffness", head="--head", dt="--dt"):
+        res = simulate_impacts(arm, q, args.qd, args.stiffness, head=head, dt=args.dt,
+                               history=args.history is not None)
     s = res.summary.iloc[0]
+    if not s.tcp_speed >= 1e-3:
+        raise ValueError(f"--qd {args.qd[0]:g} {args.qd[1]:g} rad/s at --q {args.q[0]:g} "
+                         f"{args.q[1]:g} deg gives a tool speed of {s.tcp_speed:.3g} m/s: the "
+                         f"arm does not move, so nothing hits the head; give joint speeds "
+                         f"(e.g. --qd 1 0)")
     print(f"arm             {arm.name or args.arm}")
     print(f"head model      {res.head.name}")
     print(f"tool speed      {s.tcp_speed:.4g} m/s")
@@ -420,12 +554,15 @@ def build_parser() -> argparse.ArgumentParser:
         epilog=_EPILOG)
     sub = p.add_subparsers(dest="command", required=True)
     r = sub.add_parser("report", help="regenerate the report folder from scratch", epilog=_EPILOG)
-    r.add_argument("--outdir", default="reports", help="output folder (default: reports)")
+    r.add_argument("--outdir", type=_path, default="reports",
+                   help="output folder (default: reports)")
     r.add_argument("--quick", action="store_true", help="coarse grids and short sweeps")
     r.add_argument("--only", type=_section_names, default=None, metavar="NAMES",
                    help="comma-separated report section names to run (default: all)")
     r.add_argument("--overwrite", action="store_true",
                    help="replace a previous ppamsafety report in OUTDIR (never other files)")
+    r.add_argument("--replace-other-kind", action="store_true",
+                   help="with --overwrite: also replace a ppamsafety output of another kind")
     r.add_argument("--processes", type=_positive_int, default=None, metavar="N",
                    help="studies run at the same time in worker processes (default: every "
                         "core; 1: one after the other in this process)")
@@ -437,16 +574,17 @@ def build_parser() -> argparse.ArgumentParser:
                                    "equilibria, valve models, or an actuator's muscle law; "
                                    "dynamic: base parameters from an open/closed-loop record.",
                        epilog=_EPILOG)
-    d.add_argument("data", metavar="DATA", help="measured data file (.csv or .parquet)")
+    d.add_argument("data", type=_path, metavar="DATA",
+                   help="measured data file (.csv or .parquet)")
     d.add_argument("--kind", choices=("static", "dynamic"), required=True,
                    help="static or dynamic identification")
-    d.add_argument("--out", required=True, metavar="DIR",
+    d.add_argument("--out", type=_path, required=True, metavar="DIR",
                    help="output folder for identification.json/.csv/.png")
     d.add_argument("--method", choices=("LS", "WLS"), default="LS",
                    help="ordinary or two-step per-joint weighted least squares (default LS)")
     d.add_argument("--no-friction", action="store_true",
                    help="dynamic: model without Coulomb and viscous friction (6 parameters)")
-    d.add_argument("--drop", type=int, default=300, metavar="R",
+    d.add_argument("--drop", type=_count(0, 10 ** 7), default=300, metavar="R",
                    help="dynamic: filtered samples dropped per segment (default 300, thesis B.7)")
     d.add_argument("--sign-velocity", type=_positive, default=None, metavar="V",
                    help="dynamic: Coulomb columns tanh(qd/V) [rad/s] instead of sgn(qd)")
@@ -459,14 +597,17 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--overwrite", action="store_true",
                    help="replace a previous ppamsafety identification in DIR (never other files)")
     _add_arm_head(d, head_used=False)
+    d.add_argument("--replace-other-kind", action="store_true",
+                   help="with --overwrite: also replace a ppamsafety output of another kind")
     d.set_defaults(func=_cmd_identify)
     w = sub.add_parser("sweep", help="run a study file (TOML): a safety sweep into a folder",
                        epilog=_EPILOG + """
 sweep folder: --resume reuses the finished cases of an interrupted sweep in OUT (allowed
 without --overwrite when OUT holds a previous sweep); --overwrite recomputes everything.
 """)
-    w.add_argument("study", metavar="STUDY.toml", help="study file (see studies/*.toml)")
-    w.add_argument("--out", required=True, metavar="DIR", help="output folder")
+    w.add_argument("study", type=_path, metavar="STUDY.toml",
+                   help="study file (see studies/*.toml)")
+    w.add_argument("--out", type=_path, required=True, metavar="DIR", help="output folder")
     w.add_argument("--backend", choices=("local", "dask"), default="local",
                    help="local processes (default) or a dask.distributed cluster")
     w.add_argument("--scheduler", default=None, metavar="ADDRESS",
@@ -480,6 +621,12 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
                    help="replace a previous ppamsafety output in DIR, recomputing every case")
     w.add_argument("--max-cases", type=_processes, default=None, metavar="N",
                    help="run only the first N cases (a preview)")
+    w.add_argument("--yes", action="store_true",
+                   help="start even if the estimate exceeds 1 h of wall time (a long run, "
+                        "confirmed); runs whose results exceed 2 GB are refused anyway")
+    w.add_argument("--replace-other-kind", action="store_true",
+                   help="with --overwrite: also replace a ppamsafety output of another kind "
+                        "(a diagnosis, a report ...)")
     w.add_argument("--no-progress", action="store_true", help="no progress bar")
     _add_arm_head(w)
     w.set_defaults(func=_cmd_sweep)
@@ -491,9 +638,10 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
                                    "'unexplained' (docs/diagnose.md). Exit code 0 whenever the "
                                    "analysis ran.",
                        epilog=_EPILOG)
-    g.add_argument("data", metavar="DATA", help="measured data file (.csv or .parquet), or a "
-                   "bench campaign manifest (.toml, docs/measured_data.md)")
-    g.add_argument("--out", required=True, metavar="DIR",
+    g.add_argument("data", type=_path, metavar="DATA",
+                   help="measured data file (.csv or .parquet), or a bench campaign manifest "
+                   "(.toml, docs/measured_data.md)")
+    g.add_argument("--out", type=_path, required=True, metavar="DIR",
                    help="output folder for diagnosis.json, diagnosis.md and figures")
     g.add_argument("--experiment", choices=("open-loop", "closed-loop", "static-sawtooth",
                                             "tensile"), default=None,
@@ -504,9 +652,9 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
                    help="largest residual/noise RMS ratio counted as explained (default 1.5)")
     g.add_argument("--block", type=_positive, default=0.05, metavar="SECONDS",
                    help="block length of the subsystem residuals [s] (default 0.05)")
-    g.add_argument("--seed", type=int, default=0,
+    g.add_argument("--seed", type=_seed, default=0,
                    help="seed of the noise propagation and of the bootstrap")
-    g.add_argument("--bootstrap", type=int, default=None, metavar="B",
+    g.add_argument("--bootstrap", type=_count(0, 10000), default=None, metavar="B",
                    help="moving-block bootstrap replicates of the selection (default 40, 0: off)")
     g.add_argument("--allow-gaps", action="store_true",
                    help="drop rows with missing values; the longest gap-free segment is used")
@@ -515,6 +663,8 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
     g.add_argument("--overwrite", action="store_true",
                    help="replace a previous ppamsafety diagnosis in DIR (never other files)")
     _add_arm_head(g, head_used=False)
+    g.add_argument("--replace-other-kind", action="store_true",
+                   help="with --overwrite: also replace a ppamsafety output of another kind")
     g.set_defaults(func=_cmd_diagnose)
     y = sub.add_parser("synthesize", help="write a record with hidden effects (rehearsal data)",
                        description="Simulate an experiment on a plant with hidden effects and "
@@ -529,10 +679,10 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
                         "experiment (--controller, --reference) or the static "
                         "gravity-compensation sawtooth of thesis 3.5.1.6 (rest points only); "
                         "actuator: tensile (default)")
-    y.add_argument("--controller", default="PSMC joint Ki=2 λ=0.4", metavar="VARIANT",
+    y.add_argument("--controller", default=_SYN_CONTROLLER, metavar="VARIANT",
                    help="closed loop: thesis controller variant label (default "
                         "'PSMC joint Ki=2 λ=0.4'; e.g. 'PID', 'PSMC task λ=0.8')")
-    y.add_argument("--reference", default="circle10",
+    y.add_argument("--reference", default=_SYN_REFERENCE,
                    choices=("step", "switch", "circle5", "circle10", "circle20"),
                    help="closed loop: thesis experiment (default circle10)")
     y.add_argument("--effect", type=_effect_arg, action="append", metavar="NAME=VALUE",
@@ -540,14 +690,15 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
                         "valve_time_constant_factor=1.5, valve_dead_time=0.02)")
     y.add_argument("--noise", choices=("table-3.2", "tester", "none"), default=None,
                    help="table-3.2 (arm default), tester (actuator default) or none")
-    y.add_argument("--seed", type=int, default=0, help="seed of the excitation and the noise")
+    y.add_argument("--seed", type=_seed, default=0, help="seed of the excitation and the noise")
     y.add_argument("--duration", type=_positive, default=None,
                    help="record length [s] (arm; default 10 s, the whole sawtooth)")
     y.add_argument("--protocol", choices=("sawtooth", "pressure-sweep"), default=None,
                    help="actuator: contraction sawtooth (default) or pressure sweep")
     y.add_argument("--pressures", type=_float_list, default=None, metavar="PA,PA,...",
                    help="actuator: gauge pressures [Pa] (default 1e5,1.5e5,2.5e5)")
-    y.add_argument("--cycles", type=int, default=None, help="actuator: cycles per pressure")
+    y.add_argument("--cycles", type=_count(1, 100), default=None,
+                   help="actuator: cycles per pressure")
     y.add_argument("--period", type=_positive, default=None, help="actuator: cycle period [s]")
     y.add_argument("--sample-rate", type=_positive, default=None, metavar="HZ",
                    help="actuator: sampling rate [Hz] (default 50)")
@@ -558,7 +709,8 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
                    help="actuator: write the length 'position' [m] instead of 'contraction'")
     y.add_argument("--jitter", type=_nonnegative, default=None,
                    help="actuator: relative jitter of the sampling intervals (non-uniform t)")
-    y.add_argument("--out", required=True, metavar="DATA", help="new .csv (or .parquet) file")
+    y.add_argument("--out", type=_path, required=True, metavar="DATA",
+                   help="new .csv (or .parquet) file")
     y.add_argument("--overwrite", action="store_true", help="allow replacing an existing file")
     _add_arm_head(y, head_used=False)
     y.set_defaults(func=_cmd_synthesize)
@@ -571,7 +723,7 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
     m.add_argument("--stiffness", nargs=2, type=_nonnegative, default=(43.0, 27.0),
                    metavar=("K1", "K2"), help="joint stiffnesses [Nm/rad], >= 0 (default 43 27)")
     m.add_argument("--dt", type=_positive, default=2e-5, help="integration step [s], > 0")
-    m.add_argument("--history", default=None, metavar="FILE",
+    m.add_argument("--history", type=_path, default=None, metavar="FILE",
                    help="write the time history to this new CSV file")
     m.add_argument("--overwrite", action="store_true",
                    help="allow --history to replace an existing file")

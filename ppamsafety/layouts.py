@@ -44,6 +44,8 @@ from typing import Iterable, Mapping, Sequence
 import numpy as np
 import pandas as pd
 
+from ._validation import did_you_mean
+
 #: Every layout declared so far, by name (filled as modules are imported).
 REGISTRY: dict = {}
 
@@ -397,17 +399,20 @@ def check_flag(enum_cls, value, name: str) -> int:
     if isinstance(value, enum_cls):
         return int(value)
     if isinstance(value, str):
-        key = value.strip().upper().replace("-", "_").replace(" ", "_")
-        if key in enum_cls.__members__:
-            return int(enum_cls.__members__[key])
+        # the documented lower-case name or the member's own upper-case name, words joined by
+        # "_", "-" or " "; no other case (the policy of ppamsafety._validation)
+        key = value.replace("-", "_").replace(" ", "_")
+        if key in (key.lower(), key.upper()) and key.upper() in enum_cls.__members__:
+            return int(enum_cls.__members__[key.upper()])
     elif isinstance(value, (int, np.integer)) and not isinstance(value, bool):
         if int(value) in {int(m) for m in enum_cls}:
             return int(value)
     elif isinstance(value, float) and math.isfinite(value) and value.is_integer():
         if int(value) in {int(m) for m in enum_cls}:
             return int(value)
-    allowed = ", ".join(repr(m.name.lower()) for m in enum_cls)
-    raise ValueError(f"{name} = {value!r} is not one of {allowed}")
+    names = [m.name.lower() for m in enum_cls]
+    allowed = ", ".join(map(repr, names))
+    raise ValueError(f"{name} = {value!r} is not one of {allowed}{did_you_mean(value, names)}")
 
 
 __all__ = ["Field", "Layout", "REGISTRY", "check_flag"]

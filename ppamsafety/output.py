@@ -38,6 +38,7 @@ Single files (:func:`atomic_write`)
 from __future__ import annotations
 
 import json
+import logging
 import os
 import secrets
 import shutil
@@ -51,6 +52,7 @@ MARKER = ".ppamsafety-output"
 """Name of the marker file of a ppamsafety output folder."""
 
 _STAGING_PREFIX = ".ppamsafety-staging-"
+_LOG = logging.getLogger("ppamsafety.output")
 _FLAG = "--overwrite (overwrite=True in Python)"
 
 
@@ -131,7 +133,9 @@ def _entries(folder: Path, exclude: str | None = None) -> list[str]:
     return sorted(out)
 
 
-def inspect_output_folder(folder, *, overwrite: bool = False, _exclude: str | None = None) -> dict:
+def inspect_output_folder(folder, *, overwrite: bool = False, kind: str | None = None,
+                          kinds=None, replace_kind: bool = False,
+                          _exclude: str | None = None) -> dict:
     """Check that ``folder`` may receive toolkit output; raise :class:`OutputError` if not.
 
     Parameters
@@ -140,6 +144,14 @@ def inspect_output_folder(folder, *, overwrite: bool = False, _exclude: str | No
         Output folder (need not exist).
     overwrite : bool
         Whether the user asked to replace a previous ppamsafety output.
+    kind : str, optional
+        The kind of output about to be written (``"sweep"``, ``"diagnose"`` ...).  A previous
+        output of another kind is refused, even with ``overwrite``, unless ``replace_kind``
+        (a diagnosis is not replaced by a sweep by accident).  None: any kind.
+    kinds : iterable of str, optional
+        The kinds of previous output this one may replace (default: ``kind`` alone).
+    replace_kind : bool
+        Allow replacing a previous output of another kind (``--replace-other-kind``).
     _exclude : str, optional
         Internal: name of a top-level sub-folder that is ignored when listing
         the folder's contents (:class:`OutputFolder` passes its own staging
@@ -189,6 +201,14 @@ def inspect_output_folder(folder, *, overwrite: bool = False, _exclude: str | No
     present = listed & set(entries)
     if entries == [MARKER] and not present:
         return {"files": set(), "kind": marker["kind"], "dirs": dirs}   # nothing but a marker
+    allowed = set(kinds) if kinds is not None else ({kind} if kind is not None else None)
+    if allowed is not None and marker["kind"] not in allowed and not replace_kind:
+        raise OutputError(
+            f"output folder '{p}' holds a previous ppamsafety {marker['kind']} output "
+            f"({len(present)} files: {_few(sorted(present), 4)}), not a {kind}; "
+            f"{'--overwrite' if overwrite else _FLAG} replaces only a previous {kind}: choose "
+            f"another folder, or pass --replace-other-kind (replace_kind=True) to replace the "
+            f"{marker['kind']}")
     if not overwrite:
         raise OutputError(
             f"output folder '{p}' holds a previous ppamsafety {marker['kind']} "
@@ -229,25 +249,45 @@ class OutputFolder:
         True: the new output replaces the previous one (previous toolkit files
         not written again are removed).  False: the new files are added to the
         previous output, replacing only files of the same name.
+    kinds : iterable of str, optional
+        Kinds of previous output this one may replace or update (default: ``kind``
+        alone); a previous output of another kind is refused even with ``overwrite``.
+    replace_kind : bool
+        Allow replacing a previous output of any kind (``--replace-other-kind``).
+
+    What is replaced is logged (logger ``ppamsafety.output``, level INFO; the command line
+    prints it) before anything is written.
     """
 
-    def __init__(self, outdir, *, kind: str, overwrite: bool = False, clean: bool = True):
+    def __init__(self, outdir, *, kind: str, overwrite: bool = False, clean: bool = True,
+                 kinds=None, replace_kind: bool = False):
         self.path = _as_path("outdir", outdir)
         if not isinstance(kind, str) or not kind:
             raise ValueError(f"kind must be a non-empty str, got {kind!r}")
-        for nm, v in (("overwrite", overwrite), ("clean", clean)):
+        for nm, v in (("overwrite", overwrite), ("clean", clean), ("replace_kind", replace_kind)):
             if not isinstance(v, bool):
                 raise TypeError(f"{nm} must be True or False, got {type(v).__name__} {v!r}")
         self.kind, self.overwrite, self.clean = kind, overwrite, clean
+        self.kinds = None if kinds is None else tuple(kinds)
+        self.replace_kind = replace_kind
         self.staging: Path | None = None
         self.written: list[str] = []
         self._dirs: set[str] = set()
 
     def __enter__(self) -> Path:
-        self._prev = inspect_output_folder(self.path, overwrite=self.overwrite)
+        self._prev = inspect_output_folder(self.path, overwrite=self.overwrite, kind=self.kind,
+                                           kinds=self.kinds, replace_kind=self.replace_kind)
+        if self._prev["files"]:
+            verb = "replacing" if self.clean else "updating"
+            _LOG.info(f"{verb} the previous ppamsafety {self._prev['kind']} output in "
+                      f"'{self.path}' ({len(self._prev['files'])} files: "
+                      f"{_few(sorted(self._prev['files']), 6)})")
         self._created = not self.path.exists()
-        self.path.mkdir(parents=True, exist_ok=True)
-        self.staging = Path(tempfile.mkdtemp(prefix=_STAGING_PREFIX, dir=self.path))
+        try:
+            self.path.mkdir(parents=True, exist_ok=True)
+            self.staging = Path(tempfile.mkdtemp(prefix=_STAGING_PREFIX, dir=self.path))
+        except PermissionError as exc:
+            raise OutputError(_not_writable("output folder", self.path, exc)) from None
         return self.staging
 
     def workdir(self, name: str, *, fresh: bool = False) -> Path:
@@ -331,6 +371,16 @@ class OutputFolder:
         self.written = sorted(final)
 
 
+def _not_writable(what: str, path: Path, exc: OSError) -> str:
+    """Message for a target that cannot be written: the user's path, never a temporary file."""
+    folder = path if what == "output folder" else (path.parent if str(path.parent) else Path("."))
+    while not folder.exists() and folder != folder.parent:
+        folder = folder.parent
+    return (f"{what} '{path}' cannot be written: folder '{folder}' is read-only or not "
+            f"writable by this user ({exc.strerror or exc}); choose another folder or change "
+            f"its permissions")
+
+
 def _remove_listed(folder: Path, rel: str) -> None:
     """Remove one toolkit-written file, then its parent folders if they became empty."""
     p = folder / rel
@@ -376,9 +426,20 @@ def check_new_file(path, *, overwrite: bool = False, name: str = "output file") 
         raise TypeError(f"overwrite must be True or False, got {overwrite!r}")
     parent = p.parent if str(p.parent) else Path(".")
     if not parent.is_dir():
-        raise OutputError(f"{name} '{p}': folder '{parent}' does not exist")
+        up = next((a for a in [parent, *parent.parents] if a.exists()), None)
+        why = (f"'{up}' is a file, not a folder" if up is not None and not up.is_dir()
+               else f"folder '{parent}' does not exist")
+        raise OutputError(f"{name} '{p}': {why}")
     if p.is_dir():
         raise OutputError(f"{name} '{p}' is a folder")
+    if p.exists() and not p.is_file():
+        raise OutputError(f"{name} '{p}' exists and is not a regular file (a device, a pipe or "
+                          f"a socket); it is never replaced, not even with --overwrite")
+    marker = read_marker(parent) if p.name != MARKER else None
+    if marker is not None:
+        raise OutputError(f"{name} '{p}': folder '{parent}' is a ppamsafety "
+                          f"{marker['kind']} output folder; a file written there would become "
+                          f"a foreign file of that output: choose another folder")
     if (p.exists() or p.is_symlink()) and not overwrite:
         raise OutputError(f"{name} '{p}' already exists; ppamsafety does not overwrite files "
                           f"unless asked: pass {_FLAG} or choose another name")
@@ -407,7 +468,10 @@ def atomic_write(path, write, *, overwrite: bool = False, name: str = "output fi
     """
     p = check_new_file(path, overwrite=overwrite, name=name)
     tmp = p.with_name(f".{p.name}.{secrets.token_hex(4)}.tmp")
-    open(tmp, "x").close()                # new file with the user's umask, never clobbers
+    try:
+        open(tmp, "x").close()            # new file with the user's umask, never clobbers
+    except PermissionError as exc:
+        raise OutputError(_not_writable(name, p, exc)) from None
     try:
         write(tmp)
         if overwrite:

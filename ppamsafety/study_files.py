@@ -64,6 +64,17 @@ every grid point, merged over ``[case]`` and ``[impact]``; a parameter may be
 set in only one of these places.  :func:`load_study` checks everything
 before anything runs; an error names the key by its dotted path (for
 example ``grid.lam[2]``) and the allowed values, unknown keys included.
+What would fail at run time is refused at load time too: gains beyond the
+controllers' limits (the controller of every case is built), stiffnesses the
+impact model cannot resolve, durations shorter than the experiment's events,
+and an empty study.
+
+The cases are a :class:`CaseGrid`: generated one by one when read, never a
+list, so a study of 10^9 grid points loads at once and is costed by
+:func:`estimate_cases` (cases, time, memory) before anything runs.  A run
+estimated above :data:`CONFIRM_HOURS` needs ``confirm=True`` (``--yes``) or a
+preview (``max_cases``, ``--max-cases``); one whose results would exceed
+:data:`ppamsafety._validation.MAX_BYTES` is refused (:func:`check_run_size`).
 
 :func:`run_study_file` writes the output folder through
 :class:`ppamsafety.output.OutputFolder` (kind ``"sweep"``): the result CSV,
@@ -83,15 +94,20 @@ from __future__ import annotations
 
 import html
 import importlib.util
+import itertools
 import math
+import os
 import tomllib
-from dataclasses import dataclass, field
+from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
+from ._validation import MAX_BYTES
 from .envelope import LIMITS, safety_envelope
+from .experiments.catalog import DEFAULT_DURATIONS
 from .impact.head import HeadContactModel, load_head
 from .output import OutputError, OutputFolder, read_marker
 from .params import ArmParameters
@@ -99,9 +115,9 @@ from .params import load_arm
 from .params.arm_file import ArmFileError, arm_key, arm_to_toml, read_value
 from .plots.figure import save as save_figure
 from .plots.sweep import plot_sweep
-from .sweep import BACKENDS, grid_cases, run_sweep
-from .sweep_cases import (IMPACT_POSE_DEG, PARAMETERS, case_arm, case_function, check_case,
-                          is_dotted)
+from .sweep import BACKENDS, run_sweep
+from .sweep_cases import (DEFAULTS, IMPACT_POSE_DEG, PARAMETERS, case_arm, case_function,
+                          check_case, is_dotted)
 
 #: Allowed keys per table of a study file.
 SCHEMA = {
@@ -119,10 +135,181 @@ SCHEMA = {
 GENERATORS = ("geomspace", "linspace")
 #: Kind recorded in the marker of a sweep output folder.
 KIND = "sweep"
+#: A generated grid axis of at most this many values is NumPy's array; longer ones are
+#: computed value by value when read (:class:`Axis`).
+MATERIALISE = 10 ** 6
+#: Studies of at most this many cases have each case checked when loaded; larger ones have
+#: the representative cases checked (:func:`_check_combinations`).
+CHECK_ALL = 10 ** 4
 
 
 class StudyFileError(ValueError):
     """A study file is not valid; the message names the file and the dotted key."""
+
+
+class Axis(Sequence):
+    """The values of one grid key: a TOML list, or a generator computed on demand.
+
+    ``{geomspace = [start, stop, num]}`` and ``{linspace = ...}`` with up to
+    :data:`MATERIALISE` values are NumPy's arrays; a longer one is never
+    materialised: its i-th value is computed from the formula (equal to NumPy's up to
+    rounding), so a grid of 10^9 points costs nothing until it runs.
+
+    Parameters
+    ----------
+    values : list, optional
+        The values of a TOML list.
+    gen : {"geomspace", "linspace"}, optional, keyword-only
+        A generator instead of ``values``.
+    start, stop : float, keyword-only
+        Its first and last values.
+    num : int, keyword-only
+        Its number of values.
+    """
+
+    def __init__(self, values=None, *, gen: str | None = None, start=0.0, stop=0.0, num=0):
+        self.gen, self.start, self.stop, self.num = gen, start, stop, num
+        self._values = None if values is None else list(values)
+        self._reps = None
+        if gen is not None and num <= MATERIALISE:
+            f = np.geomspace if gen == "geomspace" else np.linspace
+            self._values = [float(x) for x in f(start, stop, num)]
+
+    def __len__(self) -> int:
+        return len(self._values) if self._values is not None else self.num
+
+    def __getitem__(self, i):
+        if isinstance(i, slice):
+            return [self[k] for k in range(*i.indices(len(self)))]
+        if self._values is not None:
+            return self._values[i]
+        n = self.num
+        i = range(n)[i]
+        if i == n - 1:
+            return float(self.stop)
+        if self.gen == "linspace":
+            return float(self.start + (self.stop - self.start) * i / (n - 1))
+        a, b = math.log10(self.start), math.log10(self.stop)
+        return float(10.0 ** (a + (b - a) * i / (n - 1)))
+
+    def representatives(self) -> list:
+        """Indices that stand for every value in the checks: all values of a list of
+        non-numbers (or of a short list), else the first, the smallest, the largest and any
+        zero (a generator is monotonic: its ends, and a zero it passes through)."""
+        if self._reps is not None:
+            return self._reps
+        n = len(self)
+        if n <= 16:
+            reps = list(range(n))
+        elif self.gen is not None:
+            reps = [0, n - 1]
+            if self.gen == "linspace" and self.start * self.stop < 0:
+                k = round(-self.start / (self.stop - self.start) * (n - 1))
+                reps += [i for i in (k - 1, k, k + 1) if 0 <= i < n and self[i] == 0]
+        else:
+            vals = self._values
+            if all(type(v) in (int, float) for v in vals):
+                a = np.asarray(vals, dtype=float)
+                reps = sorted({0, int(np.argmin(a)), int(np.argmax(a)),
+                               *np.flatnonzero(a == 0)[:1].tolist()})
+            else:
+                reps = list(range(n))
+        self._reps = sorted(set(reps))
+        return self._reps
+
+
+class CaseGrid(Sequence):
+    """The cases of a study, generated on demand (never a list of a million dicts).
+
+    Case ``i`` is ``{**base, **variants[j], **point}`` with ``j = i // P`` and the grid
+    point ``i % P`` (``P`` points, the first grid key varying slowest), plus
+    ``histories=True`` when the study asks for histories: the order of
+    :func:`ppamsafety.sweep.grid_cases` within each ``[[variants]]`` entry.
+
+    Parameters
+    ----------
+    base : dict
+        Parameters of ``[case]`` and ``[impact]``.
+    variants : list of dict
+        The ``[[variants]]`` entries (one empty entry if none).
+    axes : dict of str to Axis
+        The grid keys and their values, the first varying slowest.
+    histories : bool
+        Add ``histories=True`` to every case.
+    limit : int, optional
+        Only the first ``limit`` cases (a preview); default all.
+    """
+
+    def __init__(self, base: dict, variants: list, axes: dict, histories: bool,
+                 limit: int | None = None):
+        self.base, self.variants, self.axes, self.histories = base, variants, axes, histories
+        self.points = math.prod(len(a) for a in axes.values())
+        self.total = len(variants) * self.points
+        self.limit = self.total if limit is None else min(limit, self.total)
+
+    def __len__(self) -> int:
+        return self.limit
+
+    def index(self, j: int, point: dict) -> int:
+        """Position of variant ``j`` at the grid point given by axis indices ``point``.
+
+        Parameters
+        ----------
+        j : int
+            Index of the ``[[variants]]`` entry.
+        point : dict of str to int
+            Index into each axis.
+        """
+        k = 0
+        for key, a in self.axes.items():
+            k = k * len(a) + point[key]
+        return j * self.points + k
+
+    def case(self, j: int, point: dict) -> dict:
+        """The case of variant ``j`` at the grid point given by axis indices ``point``.
+
+        Parameters
+        ----------
+        j : int
+            Index of the ``[[variants]]`` entry.
+        point : dict of str to int
+            Index into each axis.
+        """
+        c = {**self.base, **self.variants[j],
+             **{key: self.axes[key][point[key]] for key in self.axes}}
+        if self.histories:
+            c["histories"] = True
+        return c
+
+    def origin(self, i: int) -> int:
+        """Index of the ``[[variants]]`` entry case ``i`` comes from.
+
+        Parameters
+        ----------
+        i : int
+            Case index.
+        """
+        return range(self.limit)[i] // self.points
+
+    def __getitem__(self, i):
+        if isinstance(i, slice):
+            return [self[k] for k in range(*i.indices(len(self)))]
+        i = range(self.limit)[i]
+        j, k = divmod(i, self.points)
+        point = {}
+        for key in reversed(list(self.axes)):
+            k, point[key] = divmod(k, len(self.axes[key]))
+        return self.case(j, point)
+
+    def head(self, n: int) -> "CaseGrid":
+        """The first ``n`` cases (a view).
+
+        Parameters
+        ----------
+        n : int
+            Number of cases.
+        """
+        return CaseGrid(self.base, self.variants, self.axes, self.histories, limit=n)
 
 
 @dataclass
@@ -146,23 +333,25 @@ class Study:
     path : pathlib.Path or None
         Where it was read from.
     origins : list of int
-        Per case, the index of the ``[[variants]]`` entry it came from.
+        Per case, the index of the ``[[variants]]`` entry it came from (computed).
     arm : ArmParameters or None
         The arm of every case (``[arm] file`` or ``--arm``; None: the thesis arm).
     head : HeadContactModel or None
         The head of every case (``[head] file`` or ``--head``; None: the cases' own).
     envelope : dict or None
         The ``[envelope]`` search (parameter, bounds, limit, tolerance, case), if any.
+
+    ``cases`` is a :class:`CaseGrid`: the cases are generated when they are read, so a
+    study of any size loads at once; :meth:`estimate` says what running it costs.
     """
 
     name: str
     description: str
-    cases: list
+    cases: Sequence
     csv: str = "results.csv"
     histories: bool = False
     source: str = ""
     path: Path | None = None
-    origins: list = field(default_factory=list)
     arm: ArmParameters | None = None
     head: HeadContactModel | None = None
     envelope: dict | None = None
@@ -170,16 +359,43 @@ class Study:
     @property
     def swept(self) -> list:
         """The case parameters that take more than one value (the grid, the variants)."""
-        keys = list(dict.fromkeys(k for c in self.cases for k in c if k != "histories"))
-        return [k for k in keys
-                if len({repr(c.get(k)) for c in self.cases}) > 1]
+        c = self.cases
+        if isinstance(c, CaseGrid):      # never generates the cases: axes and variants only
+            keys = list(dict.fromkeys([*c.base, *(k for v in c.variants for k in v), *c.axes]))
+            keys = [k for k in keys if k != "histories"]
+            return [k for k in keys
+                    if (len(c.axes[k]) > 1 if k in c.axes else
+                        len({repr({**c.base, **v}.get(k)) for v in c.variants}) > 1)]
+        keys = list(dict.fromkeys(k for case in c for k in case if k != "histories"))
+        return [k for k in keys if len({repr(case.get(k)) for case in c}) > 1]
+
+    @property
+    def origins(self) -> list:
+        """Per case, the index of the ``[[variants]]`` entry it came from."""
+        c = self.cases
+        return [c.origin(i) for i in range(len(c))] if isinstance(c, CaseGrid) else \
+            [0] * len(c)
+
+    def estimate(self, *, processes: int | None = None, max_cases: int | None = None) -> dict:
+        """What running the study would cost: :func:`estimate_cases` of its cases.
+
+        Parameters
+        ----------
+        processes : int, optional, keyword-only
+            Worker processes (default every available core).
+        max_cases : int, optional, keyword-only
+            Cost only the first ``max_cases`` cases.
+        """
+        n = len(self.cases) if max_cases is None else min(max_cases, len(self.cases))
+        cases = self.cases.head(n) if isinstance(self.cases, CaseGrid) else self.cases[:n]
+        return estimate_cases(cases, processes=processes, histories=self.histories)
 
 
 def _err(where: str, msg: str) -> StudyFileError:
     return StudyFileError(f"{where}: {msg}")
 
 
-def _grid_values(where: str, key: str, v) -> list:
+def _grid_values(where: str, key: str, v) -> Axis:
     if isinstance(v, dict) and "unit" in v and is_dotted(key):
         v = dict(v)
         unit = v.pop("unit")
@@ -195,8 +411,8 @@ def _grid_values(where: str, key: str, v) -> list:
             raise _err(where, f"grid.{key} = {v!r}: with a unit give {{values = [...], unit = "
                               f"...}} (a non-empty list) or a generator {{linspace = [start, "
                               f"stop, num], unit = ...}}")
-        return [_dotted_si(where, f"grid.{key}[{i}]", key, {"value": x, "unit": unit})
-                for i, x in enumerate(vals)]
+        return Axis([_dotted_si(where, f"grid.{key}[{i}]", key, {"value": x, "unit": unit})
+                     for i, x in enumerate(vals)])
     if isinstance(v, dict):
         if len(v) != 1 or next(iter(v)) not in GENERATORS:
             raise _err(where, f"grid.{key} = {v!r}: an inline table must be one of "
@@ -213,14 +429,13 @@ def _grid_values(where: str, key: str, v) -> list:
             raise _err(where, f"grid.{key}.{gen} = {args!r} must be [start, stop, num] with "
                               f"finite numbers and an int num >= 1"
                               f"{' (start, stop > 0)' if gen == 'geomspace' else ''}")
-        f = np.geomspace if gen == "geomspace" else np.linspace
-        return [float(x) for x in f(args[0], args[1], args[2])]
+        return Axis(gen=gen, start=float(args[0]), stop=float(args[1]), num=int(args[2]))
     if not isinstance(v, list):
         raise _err(where, f"grid.{key} = {v!r} must be a list of values (or {{geomspace = "
                           f"[start, stop, num]}})")
     if not v:
         raise _err(where, f"grid.{key} is an empty list; give at least one value")
-    return v
+    return Axis(v)
 
 
 def _dotted_si(where: str, path: str, key: str, v):
@@ -456,10 +671,11 @@ def parse_study(text: str, *, where: str = "study file", default_name: str = "st
             raise _err(where, f"grid.{k} is also set as {origin[k]}; set it in one place")
         if k == "head" and head is not None:
             raise _err(where, "grid.head and the [head] file (or --head) both set the head")
-        vals = _grid_values(where, k, v)
-        for i, x in enumerate(vals):
-            _check_value(where, f"grid.{k}[{i}]", k, x, arm)
-        gvals[k] = vals
+        axis = _grid_values(where, k, v)
+        idx = range(len(axis)) if axis.gen is None else axis.representatives()
+        for i in idx:
+            _check_value(where, f"grid.{k}[{i}]", k, axis[i], arm)
+        gvals[k] = axis
     variants = data.get("variants", [{}])
     if not isinstance(variants, list) or not variants:
         raise _err(where, "variants must be an array of tables ([[variants]] entries), "
@@ -476,6 +692,10 @@ def parse_study(text: str, *, where: str = "study file", default_name: str = "st
             v = _dotted_si(where, f"variants[{j}].{k}", k, v) if is_dotted(k) else v
             var[k] = v
             _check_value(where, f"variants[{j}].{k}", k, v, arm)
+    if not any(t in data for t in ("case", "impact", "grid", "variants", "envelope")):
+        raise _err(where, "the study defines no case: give a [case] table, a [grid], "
+                          "[[variants]] entries or an [envelope] (see studies/*.toml); an "
+                          "empty study file is refused rather than run as the default case")
     out = data.get("output", {})
     _check_keys(where, "output", out)
     csv = out.get("csv", "results.csv")
@@ -490,25 +710,168 @@ def parse_study(text: str, *, where: str = "study file", default_name: str = "st
         if hist:
             raise _err(where, "output.histories does not apply to an [envelope] study")
         return Study(name=name.strip(), description=desc, cases=[], csv=csv, histories=False,
-                     source=text, origins=[], arm=arm, head=head, envelope=envelope)
-    cases, origins = [], []
-    points = grid_cases(gvals) if gvals else [{}]
-    for j, var in enumerate(variants):
-        for g in points:
-            c = {**base, **var, **g}
-            if hist:
-                c["histories"] = True
+                     source=text, arm=arm, head=head, envelope=envelope)
+    cases = CaseGrid(base, variants, gvals, hist)
+    _check_combinations(where, cases, arm)
+    return Study(name=name.strip(), description=desc, cases=cases, csv=csv, histories=hist,
+                 source=text, arm=arm, head=head)
+
+
+def _check_combinations(where: str, cases: CaseGrid, arm=None) -> None:
+    """:func:`~ppamsafety.sweep_cases.check_case` on every case, or on the representatives.
+
+    The rules between parameters (controller and gains, instants and every, experiment and
+    duration, the controller's own limits) are thresholds and zero tests, so the cases
+    built from every value of the lists of names and the smallest, largest and zero values
+    of the numeric axes (:meth:`Axis.representatives`) meet every rule any case meets.
+    A study of up to :data:`CHECK_ALL` cases has each case checked.
+    """
+    keys = list(cases.axes)
+    if cases.total <= CHECK_ALL:
+        reps = {k: range(len(a)) for k, a in cases.axes.items()}
+    else:
+        reps = {k: a.representatives() for k, a in cases.axes.items()}
+    for j, var in enumerate(cases.variants):
+        for combo in itertools.product(*(reps[k] for k in keys)):
+            point = dict(zip(keys, combo))
+            c = cases.case(j, point)
             try:
                 check_case(**c, arm=arm)
             except (TypeError, ValueError) as exc:
-                src = (f"variants[{j}]" if len(variants) > 1 or var else "") + (
+                g = {k: cases.axes[k][point[k]] for k in keys}
+                src = (f"variants[{j}]" if len(cases.variants) > 1 or var else "") + (
                     f" with grid point {g}" if g else "")
-                raise _err(where, f"case {len(cases)}{' (' + src.strip() + ')' if src else ''}: "
-                                  f"{exc}") from None
-            cases.append(c)
-            origins.append(j)
-    return Study(name=name.strip(), description=desc, cases=cases, csv=csv, histories=hist,
-                 source=text, origins=origins, arm=arm, head=head)
+                raise _err(where, f"case {cases.index(j, point)}"
+                                  f"{' (' + src.strip() + ')' if src else ''}: {exc}") from None
+
+
+#: Rough cost model of one :func:`~ppamsafety.sweep_cases.safety_case` on one core
+#: (``studies/bench/bench_case_cost.py``; measured on the shared 2-core machine under load,
+#: the model is 0.8-1.7 times the measured time): a fixed part [s] (plus the circle
+#: references' inverse kinematics), the closed loop per simulated second [s/s], one impact
+#: [s]; result row and closed-loop history per second of record [bytes].
+COST = {"fixed": 0.05, "fixed_circle": 0.6, "per_second": 0.012, "impact": 0.004,
+        "row_bytes": 4000, "history_bytes_per_second": 400_000,
+        "impact_history_bytes": 400_000}
+#: A run estimated to take longer than this [h] of wall time needs ``confirm=True``
+#: (``--yes``) or ``max_cases``.
+CONFIRM_HOURS = 1.0
+
+
+def _case_cost(c: dict) -> tuple:
+    """(seconds, bytes) of one case by :data:`COST`."""
+    dur = c.get("duration") or DEFAULT_DURATIONS[c.get("experiment") or DEFAULTS["experiment"]]
+    inst = c.get("instants", "heuristic")
+    n_imp = (4 if inst == "heuristic" else
+             max(1, int(dur * 1000 / (c.get("every") or 1))) if inst == "all" else 1)
+    exp = c.get("experiment") or DEFAULTS["experiment"]
+    sec = (COST["fixed"] + (COST["fixed_circle"] if exp.startswith("circle") else 0.0)
+           + COST["per_second"] * dur + COST["impact"] * n_imp)
+    nbytes = COST["row_bytes"]
+    if c.get("histories"):
+        nbytes += COST["history_bytes_per_second"] * dur + COST["impact_history_bytes"]
+    return sec, nbytes
+
+
+def estimate_cases(cases, *, processes: int | None = None, histories: bool = False) -> dict:
+    """Count the cases and estimate the time and memory of running them, before anything runs.
+
+    Parameters
+    ----------
+    cases : sequence of dict
+        The cases (a :class:`CaseGrid` is costed without generating a million dicts: every
+        distinct (experiment, duration, instants, every) of its representatives is costed
+        and the total scaled).
+    processes : int, optional
+        Worker processes (default every available core; at most the available cores count:
+        more workers than cores run no faster).
+    histories : bool
+        Whether the histories are kept.
+
+    Returns
+    -------
+    dict
+        ``cases``; ``cpu_seconds`` and ``wall_seconds`` (on ``processes`` workers);
+        ``bytes`` (results held in memory until the table is written).
+    """
+    n = len(cases)
+    procs = min(processes or _cores(), _cores())     # more workers than cores run no faster
+    if isinstance(cases, CaseGrid) and n > CHECK_ALL:
+        reps = {k: a.representatives() for k, a in cases.axes.items()}
+        costs = [_case_cost(cases.case(j, dict(zip(reps, combo))))
+                 for j in range(len(cases.variants))
+                 for combo in itertools.product(*reps.values())]
+        sec = max(c[0] for c in costs) * n                    # an upper estimate
+        nbytes = max(c[1] for c in costs) * n
+    else:
+        sec = nbytes = 0.0
+        for c in cases:
+            a, b = _case_cost(c)
+            sec += a
+            nbytes += b
+    return {"cases": n, "cpu_seconds": sec, "wall_seconds": sec / max(1, min(procs, max(n, 1))),
+            "bytes": nbytes, "processes": procs}
+
+
+def _cores() -> int:
+    try:
+        return len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        return os.cpu_count() or 1
+
+
+def _duration_text(seconds: float) -> str:
+    if seconds < 120:
+        return f"{seconds:.0f} s"
+    if seconds < 7200:
+        return f"{seconds / 60:.0f} min"
+    if seconds < 86400 * 3:
+        return f"{seconds / 3600:.1f} h"
+    return f"{seconds / 86400:.3g} days"
+
+
+def describe_estimate(est: dict) -> str:
+    """One line: cases, time and memory of an :func:`estimate_cases` result.
+
+    Parameters
+    ----------
+    est : dict
+        The result of :func:`estimate_cases`.
+    """
+    return (f"{est['cases']:,} cases, about {_duration_text(est['wall_seconds'])} on "
+            f"{est['processes']} process{'es' if est['processes'] > 1 else ''} "
+            f"({_duration_text(est['cpu_seconds'])} of CPU), "
+            f"{est['bytes'] / 1e6:.3g} MB of results in memory")
+
+
+def check_run_size(study, est: dict, *, confirm: bool = False) -> None:
+    """Refuse a run too large for this machine, with the numbers and the way to go on.
+
+    Parameters
+    ----------
+    study : Study
+        The study (named in the message).
+    est : dict
+        Its :func:`estimate_cases` for the cases about to run.
+    confirm : bool
+        The user confirmed a long run (``--yes``): only the memory limit applies.
+    """
+    what = f"study '{study.path or study.name}'"
+    total = len(study.cases)
+    if est["bytes"] > MAX_BYTES:
+        fit = int(est["cases"] * MAX_BYTES / est["bytes"])
+        raise StudyFileError(
+            f"{what}: {describe_estimate(est)}: more than the {MAX_BYTES / 1e9:g} GB one run "
+            f"may hold; run at most {fit:,} cases at a time (--max-cases {fit}, max_cases="
+            f"{fit}; with --yes if that takes more than {CONFIRM_HOURS:g} h), split the grid "
+            f"into several studies{', or leave out the histories' if study.histories else ''}")
+    if est["wall_seconds"] > CONFIRM_HOURS * 3600 and not confirm:
+        raise StudyFileError(
+            f"{what}: {describe_estimate(est)}"
+            f"{' (of ' + format(total, ',') + ')' if total != est['cases'] else ''}; "
+            f"runs longer than {CONFIRM_HOURS:g} h are not started without confirmation: "
+            f"preview the first cases with --max-cases N (max_cases=N), confirm with --yes "
+            f"(confirm=True), or run it on a cluster (--backend dask --scheduler ADDRESS)")
 
 
 def load_study(path, *, arm=None, head=None) -> Study:
@@ -558,7 +921,7 @@ def _write_histories(df: pd.DataFrame, folder: Path) -> list:
     fmt = history_format()
     folder.mkdir(parents=True, exist_ok=True)
     files = []
-    for i, h in zip(df.index, df["histories"]):
+    for i, h in zip(df.index, df["time_histories"]):
         if not isinstance(h, dict):
             continue                                  # failed case
         for kind, frame in h.items():
@@ -573,8 +936,8 @@ def _write_histories(df: pd.DataFrame, folder: Path) -> list:
 
 def run_study_file(study, outdir, *, backend: str = "local", scheduler=None,
                    processes: int | None = None, resume: bool = False, overwrite: bool = False,
-                   max_cases: int | None = None, progress: bool = True, arm=None,
-                   head=None) -> pd.DataFrame:
+                   max_cases: int | None = None, progress: bool = True, confirm: bool = False,
+                   replace_kind: bool = False, arm=None, head=None) -> pd.DataFrame:
     """Run a study and write its output folder.
 
     Parameters
@@ -601,6 +964,14 @@ def run_study_file(study, outdir, *, backend: str = "local", scheduler=None,
         Run only the first ``max_cases`` cases (a preview or a test).
     progress : bool
         Progress bar.
+    confirm : bool
+        Run even if the estimate (:meth:`Study.estimate`) exceeds :data:`CONFIRM_HOURS` of
+        wall time on this machine (``--yes``); not needed on a dask cluster given by its
+        ``scheduler``.  A run whose results would not fit in
+        :data:`ppamsafety._validation.MAX_BYTES` is refused either way.
+    replace_kind : bool
+        With ``overwrite``: allow replacing a previous ppamsafety output of another kind
+        (``--replace-other-kind``).
     arm : ArmParameters, optional
         Replaces the study file's ``[arm] file`` (a path ``study`` only).
     head : HeadContactModel, optional
@@ -616,16 +987,20 @@ def run_study_file(study, outdir, *, backend: str = "local", scheduler=None,
         raise ValueError("arm and head apply to a study file path; a loaded Study has them "
                          "(load_study(path, arm=..., head=...))")
     st = study if isinstance(study, Study) else load_study(study, arm=arm, head=head)
-    for nm, v in (("resume", resume), ("overwrite", overwrite), ("progress", progress)):
+    for nm, v in (("resume", resume), ("overwrite", overwrite), ("progress", progress),
+                  ("confirm", confirm), ("replace_kind", replace_kind)):
         if not isinstance(v, bool):
             raise TypeError(f"{nm} must be True or False, got {v!r}")
     if backend not in BACKENDS:
         raise ValueError(f"backend = {backend!r} is not one of {list(BACKENDS)}")
-    cases = st.cases
     if max_cases is not None:
         if isinstance(max_cases, bool) or not isinstance(max_cases, int) or max_cases < 1:
             raise ValueError(f"max_cases = {max_cases!r} must be a positive int or None")
-        cases = cases[:max_cases]
+    n = len(st.cases) if max_cases is None else min(max_cases, len(st.cases))
+    cases = st.cases.head(n) if isinstance(st.cases, CaseGrid) else st.cases[:n]
+    # on a cluster (a scheduler address or client) the time is the cluster's: not limited here
+    check_run_size(st, estimate_cases(cases, processes=processes, histories=st.histories),
+                   confirm=confirm or (backend == "dask" and scheduler is not None))
     out = Path(outdir)
     ow, clean = overwrite, True
     if resume:
@@ -640,7 +1015,7 @@ def run_study_file(study, outdir, *, backend: str = "local", scheduler=None,
         raise OutputError(f"output folder '{out}' holds a previous sweep; pass --resume "
                           f"(resume=True) to continue it without recomputing its finished cases, "
                           f"or --overwrite (overwrite=True) to recompute everything")
-    folder = OutputFolder(out, kind=KIND, overwrite=ow, clean=clean)
+    folder = OutputFolder(out, kind=KIND, overwrite=ow, clean=clean, replace_kind=replace_kind)
     with folder as stage:
         cache = folder.workdir("cache", fresh=not resume)
         if st.envelope is not None:
@@ -651,9 +1026,10 @@ def run_study_file(study, outdir, *, backend: str = "local", scheduler=None,
             df = run_sweep(case_function(st.arm, st.head), cases, name=st.name, cache_dir=cache,
                            processes=processes, progress=progress, on_error="record",
                            backend=backend, scheduler=scheduler)
-        if "histories" in df.columns:
+        if "time_histories" in df.columns:
             _write_histories(df, stage / "histories")
-            df = df.drop(columns=["histories"])
+            # the frames are in histories/; the flag is [output], not a parameter of the cases
+            df = df.drop(columns=[c for c in ("time_histories", "histories") if c in df.columns])
         df.to_csv(stage / st.csv, index=False)
         (stage / "study.toml").write_text(st.source, encoding="utf-8")
         _write_summary(st, df, stage, env)
@@ -741,5 +1117,7 @@ th{{background:#f3f3f3;text-align:left}}img{{max-width:100%}}</style></head>
 """
 
 
-__all__ = ["SCHEMA", "GENERATORS", "KIND", "Study", "StudyFileError", "parse_study",
-           "load_study", "history_format", "run_study_file", "summary_page"]
+__all__ = ["SCHEMA", "GENERATORS", "KIND", "MATERIALISE", "CHECK_ALL", "COST", "CONFIRM_HOURS",
+           "Axis", "CaseGrid", "Study", "StudyFileError", "parse_study", "load_study",
+           "estimate_cases", "describe_estimate", "check_run_size", "history_format",
+           "run_study_file", "summary_page"]

@@ -43,6 +43,7 @@ import pickle
 import secrets
 import sys
 import itertools
+import math
 import warnings
 from collections.abc import Iterable, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -53,6 +54,10 @@ import pandas as pd
 from ._sourcehash import source_hash
 
 _STATUS_COLUMNS = ("status", "error")
+#: Default largest number of cases of one :func:`run_sweep` call.
+MAX_CASES = 10 ** 6
+#: Memory one case holds until the table is assembled (key, result row) [bytes], estimated.
+BYTES_PER_CASE = 4000
 #: Execution back ends of :func:`run_sweep`.
 BACKENDS = ("local", "dask")
 
@@ -183,6 +188,12 @@ def _as_result(case: dict, out):
     Rows are kept as dicts (cheaper than one-row DataFrames) and assembled
     into one DataFrame at the end of the sweep.
     """
+    clash = sorted(k for k in (out.columns if isinstance(out, pd.DataFrame) else
+                               out if isinstance(out, Mapping) else ()) if k in case)
+    if clash:
+        raise ResultColumnError(f"the result column(s) {clash} have the name of a case "
+                                f"parameter, whose value they would replace in the table; "
+                                f"rename them in the sweep function")
     if isinstance(out, Mapping) and not isinstance(out, pd.DataFrame):
         row = dict(case)
         row.update(out)
@@ -220,7 +231,7 @@ def _error_text(exc: BaseException) -> str:
     return f"{type(exc).__name__}: {exc}"
 
 
-def grid_cases(grid: Mapping, base: Mapping | None = None) -> list[dict]:
+def grid_cases(grid: Mapping, base: Mapping | None = None, *, _check_only: bool = False):
     """Every combination of the values of a grid, as a list of cases.
 
     Parameters
@@ -230,6 +241,9 @@ def grid_cases(grid: Mapping, base: Mapping | None = None) -> list[dict]:
         The first key varies slowest.
     base : mapping, optional
         Parameters common to every case (a grid key of the same name wins).
+    _check_only : bool, keyword-only
+        Internal: only check the grid and return None (:func:`run_sweep` generates the
+        points on demand instead of building this list).
 
     Returns
     -------
@@ -258,13 +272,17 @@ def grid_cases(grid: Mapping, base: Mapping | None = None) -> list[dict]:
         if len(v) == 0:
             raise ValueError(f"grid[{k!r}] is an empty list: give at least one value")
         values.append(list(v))
+    if _check_only:
+        return None
     return [{**(base or {}), **dict(zip(keys, point))} for point in itertools.product(*values)]
 
 
-def _check_cases(cases) -> list[dict]:
+def _check_cases(cases) -> Sequence:
+    """The cases, checked; a sequence is kept as it is (a lazy grid is not materialised)."""
     if isinstance(cases, (str, bytes, Mapping)) or not isinstance(cases, Iterable):
         raise TypeError(f"cases must be a sequence of dicts (keyword arguments of func, one dict "
                         f"per case), got {type(cases).__name__} {cases!r:.80}")
+    lazy = isinstance(cases, Sequence) and not isinstance(cases, (list, tuple))
     out = []
     for i, c in enumerate(cases):
         if not isinstance(c, Mapping):
@@ -274,8 +292,35 @@ def _check_cases(cases) -> list[dict]:
         if bad:
             raise TypeError(f"cases[{i}] has keys that are not str: {bad!r}; keys are the "
                             f"keyword-argument names of func")
-        out.append(dict(c))
-    return out
+        if not lazy:
+            out.append(dict(c))
+    return cases if lazy else out
+
+
+class _Combined(Sequence):
+    """Every case combined with every point of a grid, generated on demand."""
+
+    def __init__(self, cases: Sequence, grid: Mapping):
+        self.cases, self.keys = cases, list(grid)
+        self.values = [list(grid[k]) for k in self.keys]
+        self.points = math.prod(len(v) for v in self.values)
+
+    def __len__(self) -> int:
+        return len(self.cases) * self.points
+
+    def __getitem__(self, i):
+        if isinstance(i, slice):
+            return [self[k] for k in range(*i.indices(len(self)))]
+        j, k = divmod(range(len(self))[i], self.points)
+        point = {}
+        for key, vals in zip(reversed(self.keys), reversed(self.values)):
+            k, m = divmod(k, len(vals))
+            point[key] = vals[m]
+        return {**self.cases[j], **{key: point[key] for key in self.keys}}
+
+
+class ResultColumnError(ValueError):
+    """A case function returned a column named like a case parameter (it would replace it)."""
 
 
 def _check_processes(processes) -> int:
@@ -386,7 +431,7 @@ def _run_pool(func, cases, todo, nproc, finish, on_error) -> None:
 def run_sweep(func, cases=None, *, name: str | None = None, cache_dir=None,
               processes: int | None = 1, progress: bool = True, on_error: str = "record",
               grid: Mapping | None = None, backend: str = "local",
-              scheduler=None) -> pd.DataFrame:
+              scheduler=None, limit: int = MAX_CASES) -> pd.DataFrame:
     """Evaluate ``func(**case)`` for every case and concatenate the results.
 
     Parameters
@@ -405,7 +450,7 @@ def run_sweep(func, cases=None, *, name: str | None = None, cache_dir=None,
         the source of ``func`` and the package source are unchanged
         (:func:`case_key`, :func:`function_hash`).  An unreadable cache file is
         named in a warning and recomputed.  Failed cases are not cached.
-        None: no cache.
+        None: no cache (an empty path ``""`` is refused: it would mean the current folder).
     processes : int or None
         Worker processes (1 = run in this process; None = every available
         core).  More than the available cores gives a warning and is capped at
@@ -441,13 +486,25 @@ def run_sweep(func, cases=None, *, name: str | None = None, cache_dir=None,
         ``"tcp://10.0.0.5:8786"`` (e.g. of a dask-jobqueue ``SLURMCluster``):
         a client is connected and closed afterwards, the cluster is left
         running.  A ``Client``: used as it is and left open.
+    limit : int
+        Largest number of cases accepted (default :data:`MAX_CASES`): the keys and result
+        rows of every case are held in memory until the table is assembled (about
+        :data:`BYTES_PER_CASE` each), so a larger sweep is refused with its size before
+        anything runs.  Raise it if this machine holds it, or split the sweep.
 
     Returns
     -------
     pandas.DataFrame
         Case parameters followed by the result columns, in case order.  With
         ``on_error="record"``, the columns ``status`` ("ok"/"failed") and ``error``
-        ("" when ok) follow the case parameters.
+        ("" when ok) follow the case parameters.  A result column with the name of a case
+        parameter raises :class:`ResultColumnError` (it would replace the parameter).
+
+    Notes
+    -----
+    ``cases`` may be a lazy sequence (e.g. a study's
+    :class:`~ppamsafety.study_files.CaseGrid`) and a ``grid`` is combined on demand: the
+    cases are generated as they run, never stored as one list.
     """
     from tqdm.auto import tqdm
 
@@ -455,10 +512,29 @@ def run_sweep(func, cases=None, *, name: str | None = None, cache_dir=None,
         raise TypeError(f"func must be callable, got {type(func).__name__} {func!r:.80}")
     if cases is None and grid is None:
         raise TypeError("run_sweep needs cases (a list of dicts) or grid (a dict of lists)")
+    if isinstance(limit, bool) or not isinstance(limit, int) or limit < 1:
+        raise TypeError(f"limit must be a positive int, got {limit!r}")
+    if grid is not None:
+        grid_cases(grid, _check_only=True)
+    n_base = len(cases) if isinstance(cases, Sequence) and not isinstance(cases, (str, bytes)) \
+        else (1 if cases is None else None)
+    if n_base is not None:                 # counted before a single case is generated
+        shape = [n_base] + ([len(v) for v in grid.values()] if grid is not None else [])
+        n = math.prod(shape)
+        if n > limit:
+            raise ValueError(
+                f"run_sweep: {n:,} cases ({' x '.join(map(str, shape))} = cases x grid) "
+                f"would hold about {n * BYTES_PER_CASE / 1e9:.3g} GB of keys and result rows "
+                f"in memory; at most limit = {limit:,} cases are run at once: split the sweep "
+                f"(a part of the grid per call), or pass a larger limit")
     cases = _check_cases([{}] if cases is None else cases)
     if grid is not None:
-        points = grid_cases(grid)
-        cases = [{**c, **g} for c in cases for g in points]
+        cases = _Combined(cases, grid)
+    if len(cases) > limit:
+        raise ValueError(f"run_sweep: {len(cases):,} cases would hold about "
+                         f"{len(cases) * BYTES_PER_CASE / 1e9:.3g} GB of keys and result rows in "
+                         f"memory; at most limit = {limit:,} cases are run at once: split the "
+                         f"sweep, or pass a larger limit")
     if backend not in BACKENDS:
         raise ValueError(f"backend = {backend!r} is not one of {', '.join(map(repr, BACKENDS))}")
     if scheduler is not None and backend != "dask":
@@ -472,6 +548,10 @@ def run_sweep(func, cases=None, *, name: str | None = None, cache_dir=None,
                                   or not isinstance(cache_dir, (str, os.PathLike))):
         raise TypeError(f"cache_dir must be a path (str or os.PathLike) or None, got "
                         f"{type(cache_dir).__name__} {cache_dir!r}")
+    if cache_dir is not None and not str(os.fspath(cache_dir)).strip():
+        raise ValueError(f"cache_dir = {cache_dir!r} is an empty path (it would fill the "
+                         f"current folder with cache files); give a folder, or None for no "
+                         f"cache")
     processes = _check_processes(processes)
     name = name or getattr(func, "__qualname__", None) or "sweep"
     cache = None if cache_dir is None else Path(cache_dir)
@@ -560,6 +640,10 @@ def run_sweep(func, cases=None, *, name: str | None = None, cache_dir=None,
     finally:
         bar.close()
 
+    clash = sorted(i for i, e in failures.items() if isinstance(e, ResultColumnError))
+    if clash:                          # the function's contract, not a case failure
+        i = clash[0]
+        raise ResultColumnError(f"sweep {name!r}: case {i} {cases[i]!r}: {failures[i]}")
     if failures and on_error == "raise":
         i = min(failures)
         err = _error_text(failures[i])

@@ -29,6 +29,7 @@ arguments, so it reproduces the table's numbers exactly.
 from __future__ import annotations
 
 import functools
+import inspect
 import math
 from collections.abc import Mapping
 
@@ -36,12 +37,15 @@ import numpy as np
 import pandas as pd
 
 from .control import PID, JointPSMC, TaskPSMC, SensorConfig
-from .experiments.catalog import (CIRCLE_PERIODS, CIRCLE_WARMUP, run_thesis_experiment,
-                                  ControllerVariant)
+from .control.pid import GAIN_MAX
+from .control.psmc import LAMBDA_MAX, TASK_GAIN_MAX
+from .experiments.catalog import (CIRCLE_PERIODS, CIRCLE_WARMUP, DEFAULT_DURATIONS, STEP_TIMES,
+                                  SWITCH_TIME, run_thesis_experiment, ControllerVariant)
 from .experiments.metrics import tracking_stats
 from .impact.head import HeadContactModel, head_model_names, head_model
 from .impact.instants import HEURISTICS, evaluate_experiment, heuristic_instants, impact_states
-from .impact.model import simulate_impacts
+from .impact.engine import FREE_STRIDE
+from .impact.model import simulate_impacts, stiffness_limit
 from .params import ArmParameters, thesis_arm
 from .params.arm_file import ArmFileError, apply_arm_changes, effects_from_dict
 from .plant import geometry as geo
@@ -57,48 +61,103 @@ CONTROLLERS = ("PID", "PSMC joint", "PSMC task")
 INSTANTS = ("heuristic", "all", *HEURISTICS)
 #: TCP speed below which an instant of ``instants="all"`` is skipped [m/s] (as the safety study).
 MIN_SPEED = 1e-3
-#: Result columns of :func:`safety_case` (``histories`` is added when asked for).
+#: Result columns of :func:`safety_case` (``time_histories`` is added when asked for).
 RESULT_COLUMNS = ("label", "F_max", "HIC36", "HIC15", "t0_F_max", "t0_HIC36", "instant_HIC36",
                   "tcp_speed", "K1", "K2", "n_impacts", "track_mean", "track_max", "track_rms",
                   "diverged")
+
+#: The first event of each experiment that needs a reference [s]: a shorter duration would
+#: never see it (the step's up-step, the switch between circles).
+EVENTS = {"step": (STEP_TIMES[0], "up-step"), "switch": (SWITCH_TIME, "switch of circles")}
+#: Shortest experiment of a case [s]: a record in which the pneumatic arm can move (its
+#: valves take about 0.1 s to respond) and the impact instants of §6.3.3 exist.
+MIN_DURATION = 1.0
+#: Longest experiment of a case [s]: 1800 s at the 1 kHz control period keeps the reference
+#: and the closed-loop log of one case below 2 GB (ppamsafety._validation.MAX_BYTES).
+MAX_DURATION = 1800.0
+#: Default impact step of :func:`ppamsafety.impact.model.simulate_impacts` [s].
+IMPACT_DT = inspect.signature(simulate_impacts).parameters["dt"].default
 
 _JOINT_GAINS = ("kp_bar", "ki_bar", "kd_bar")
 _TASK_GAINS = ("task_kp", "task_ki", "task_kd")
 
 
 def _is_number(v) -> bool:
+    if isinstance(v, np.ndarray) and v.ndim == 0:        # 0-d arrays are numbers (_validation)
+        v = v[()]
     return isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool)
 
 
-def _number(name, v, lo=0.0, lo_open=False, unit=""):
+def _number(name, v, lo=0.0, lo_open=False, unit="", hi=math.inf, why=""):
     if not _is_number(v) or not math.isfinite(float(v)):
         raise TypeError(f"{name} = {v!r} must be a finite number{' [' + unit + ']' if unit else ''}")
     v = float(v)
     if v < lo or (lo_open and v == lo):
         raise ValueError(f"{name} = {v:g} is not allowed: it must be {'>' if lo_open else '>='} "
                          f"{lo:g}{' ' + unit if unit else ''}")
+    if v > hi:
+        raise ValueError(f"{name} = {v:g}{' ' + unit if unit else ''} is beyond the physical "
+                         f"limit {hi:g}{' ' + unit if unit else ''}"
+                         f"{' (' + why + ')' if why else ''}")
     return v
 
 
+#: Upper bounds of the case parameters [their units]: the limits the controllers and the
+#: impact model enforce at run time, checked when a study file is loaded.
+LIMITS = {"lam": (LAMBDA_MAX, "the JointPSMC/TaskPSMC limit"),
+          "kp_bar": (GAIN_MAX / BAR, "the PID/PSMC gain limit 1e9 Pa/rad"),
+          "ki_bar": (GAIN_MAX / BAR, "the PID/PSMC gain limit 1e9 Pa/(rad s)"),
+          "kd_bar": (GAIN_MAX / BAR, "the PID/PSMC gain limit 1e9 Pa s/rad"),
+          "task_kp": (TASK_GAIN_MAX, "the TaskPSMC gain limit"),
+          "task_ki": (TASK_GAIN_MAX, "the TaskPSMC gain limit"),
+          "task_kd": (TASK_GAIN_MAX, "the TaskPSMC gain limit")}
+
+
 def _gain(name, v, unit):
-    """A gain: one number or a pair [joint 1, joint 2], each >= 0."""
+    """A gain: one number or a pair [joint 1, joint 2], each in [0, its limit]."""
+    hi, why = LIMITS.get(name, (math.inf, ""))
     if isinstance(v, (list, tuple)):
         if len(v) != 2:
             raise ValueError(f"{name} = {v!r} must be one number or a pair [joint 1, joint 2] "
                              f"[{unit}]")
-        return [_number(f"{name}[{i}]", x, unit=unit) for i, x in enumerate(v)]
-    return _number(name, v, unit=unit)
+        return [_number(f"{name}[{i}]", x, unit=unit, hi=hi, why=why) for i, x in enumerate(v)]
+    return _number(name, v, unit=unit, hi=hi, why=why)
+
+
+@functools.lru_cache(maxsize=1)
+def stiffness_max() -> float:
+    """Largest joint stiffness an impact of a case can resolve anywhere [N m/rad].
+
+    The impact engine's limit (:func:`ppamsafety.impact.model.stiffness_limit` at its
+    default step) at the most favourable configuration of the working area (a 23 x 21
+    grid); a larger override fails every impact, so a study asking for it is refused when
+    it is loaded.
+    """
+    arm = thesis_arm()
+    g = arm.geometry
+    q1, q2 = np.meshgrid(np.linspace(g.q1_min, g.q1_max, 23), np.linspace(g.q2_min, g.q2_max, 21))
+    q = np.stack([q1.ravel(), q2.ravel()], axis=-1)
+    return float(stiffness_limit(q, arm, FREE_STRIDE * IMPACT_DT).max())
 
 
 def _check_stiffness(v):
     if v is None:
         return None
+    hi, why = stiffness_max(), "the largest the impact model resolves at its step of 20 us"
     if isinstance(v, (list, tuple)):
         if len(v) != 2:
             raise ValueError(f"stiffness = {v!r} must be None, one number or a pair "
                              f"[K1, K2] [Nm/rad]")
-        return [_number(f"stiffness[{i}]", x, unit="Nm/rad") for i, x in enumerate(v)]
-    return _number("stiffness", v, unit="Nm/rad")
+        return [_number(f"stiffness[{i}]", x, unit="Nm/rad", hi=hi, why=why)
+                for i, x in enumerate(v)]
+    return _number("stiffness", v, unit="Nm/rad", hi=hi, why=why)
+
+
+def _check_duration(v):
+    if v is None:
+        return None
+    return _number("duration", v, lo_open=True, unit="s", hi=MAX_DURATION,
+                   why="the longest record one case holds in memory at 1 kHz")
 
 
 def _check_head(v):
@@ -202,6 +261,8 @@ def _check_choice(name, v, choices):
 def _check_optional_int(name, v, lo, hi):
     if v is None:
         return None
+    if isinstance(v, np.ndarray) and v.ndim == 0:        # 0-d arrays are numbers (_validation)
+        v = v[()]
     if isinstance(v, bool) or not isinstance(v, (int, np.integer)):
         raise TypeError(f"{name} = {v!r} must be an int in [{lo}, {hi}] or None")
     if not lo <= int(v) <= hi:
@@ -251,8 +312,9 @@ PARAMETERS = {
     "noise_seed": (lambda v: _check_optional_int("noise_seed", v, 0, 2 ** 63 - 1),
                    "None: no sensor noise (thesis tables); an int: Table 3.2 sensor noise "
                    "with this seed"),
-    "duration": (lambda v: None if v is None else _number("duration", v, lo_open=True, unit="s"),
-                 "experiment length [s] (default: the catalog's)"),
+    "duration": (_check_duration,
+                 "experiment length [s] (default: the catalog's), in [1, 1800] s and longer "
+                 "than the experiment's events (step: 2 s, switch: 7.5 s)"),
     "histories": (lambda v: _check_bool("histories", v),
                   "return the full time histories (closed loop and worst impact)"),
 }
@@ -290,6 +352,26 @@ def _checked(case: dict) -> tuple:
     if full["every"] is not None and full["instants"] != "all":
         raise ValueError(f"every = {full['every']} applies only to instants = 'all', not "
                          f"{full['instants']!r}")
+    if full["duration"] is not None:
+        first = EVENTS.get(full["experiment"])
+        if full["duration"] < MIN_DURATION:
+            raise ValueError(f"duration = {full['duration']:g} s is too short for an experiment "
+                             f"of the arm: at least {MIN_DURATION:g} s (the valves alone take "
+                             f"about 0.1 s to respond; default "
+                             f"{DEFAULT_DURATIONS[full['experiment']]:g} s)")
+        if first is not None and full["duration"] <= first[0]:
+            raise ValueError(f"duration = {full['duration']:g} s is shorter than the "
+                             f"{full['experiment']} experiment's {first[1]} at {first[0]:g} s; "
+                             f"give a duration > {first[0]:g} s (default "
+                             f"{DEFAULT_DURATIONS[full['experiment']]:g} s)")
+    try:                                  # what the controller itself refuses at run time
+        make_controller(ctrl, lam=full["lam"], kp_bar=full["kp_bar"], ki_bar=full["ki_bar"],
+                        kd_bar=full["kd_bar"], task_kp=full["task_kp"], task_ki=full["task_ki"],
+                        task_kd=full["task_kd"])
+    except (TypeError, ValueError) as exc:
+        given = {k: full[k] for k in ("lam", *_JOINT_GAINS, *_TASK_GAINS) if full[k] is not None}
+        raise ValueError(f"controller = {ctrl!r} with {given or 'the Table 5.1 gains'}: "
+                         f"{exc}") from None
     return full, the_arm
 
 
@@ -433,7 +515,8 @@ def safety_case(experiment: str = "step", controller: str = "PID", *, lam=None, 
     duration : float, optional
         Experiment length [s] (default: the catalog's, e.g. 12 s for the step).
     histories : bool
-        Also return the full time histories under the key ``"histories"``:
+        Also return the full time histories under the key ``"time_histories"`` (a result
+        may not take a parameter's name, :func:`ppamsafety.sweep.run_sweep`):
         ``{"closed_loop": DataFrame (1 kHz record), "impact": DataFrame (worst
         HIC36 impact)}``.  Off by default: results stay compact.
     arm : ArmParameters, optional
@@ -488,7 +571,7 @@ def safety_case(experiment: str = "step", controller: str = "PID", *, lam=None, 
     if histories:
         worst = int(s["HIC36"].idxmax())
         ev_w = _impacts_one(res, arm, s.iloc[worst], hm)
-        out["histories"] = {"closed_loop": res.to_pandas(), "impact": ev_w}
+        out["time_histories"] = {"closed_loop": res.to_pandas(), "impact": ev_w}
     return out
 
 

@@ -207,3 +207,19 @@ def test_cli_diagnoses_a_manifest_of_measured_files(tmp_path, capsys):
     assert main(["diagnose", str(bad), "--out", str(tmp_path / "d2")]) == 2
     err = capsys.readouterr().err
     assert err.startswith("ppamsafety: error:") and "unknown key(s) ['speed']" in err
+
+
+def test_a_cylinder_rod_position_may_be_negative_but_not_metres_for_millimetres(tmp_path):
+    """A cylinder's ``position`` is a rod position with any zero (docs/measured_data.md), not
+    a length: negative values load; 20 m (millimetres written as metres) is refused naming
+    the column."""
+    from ppamsafety.data import MeasuredData, load_measured
+
+    rec = synthesize_cylinder(None, seed=2, pressures=(2e5,), cycles=2).records[0]
+    frame = rec.frame.copy()
+    frame["position"] = frame["position"] - frame["position"].max() - 1e-3    # all < 0
+    MeasuredData(rec.meta, frame).save(tmp_path / "neg.csv")
+    assert (load_measured(tmp_path / "neg.csv").column("position") < 0).all()
+    frame["position"] = frame["position"] * 0 + 20.0
+    with pytest.raises(MeasuredDataError, match="'position'.*10 m"):
+        MeasuredData(rec.meta, frame)

@@ -20,7 +20,7 @@ def test_help_exits_cleanly():
 
 def test_unknown_section_is_a_clear_error(tmp_path, capsys):
     assert main(["report", "--outdir", str(tmp_path / "r"), "--only", "nonsense"]) == 2
-    assert "unknown report sections" in capsys.readouterr().err
+    assert "unknown report section(s) 'nonsense'" in capsys.readouterr().err
 
 
 def test_report_regenerates_from_scratch(tmp_path):

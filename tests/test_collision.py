@@ -15,7 +15,7 @@ from ppamsafety.impact.collision import (COLLISION_LOG, Reaction, calibrate_thre
                                          check_reaction, contact_episodes, head_touching,
                                          simulate_collision)
 from ppamsafety.impact.instants import heuristic_instants, impact_states
-from ppamsafety.impact.model import resolve_head, simulate_impacts
+from ppamsafety.impact.model import simulate_impacts
 from ppamsafety.params import thesis_arm
 from ppamsafety.plant.pneumatics import joint_stiffness
 from ppamsafety.units import BAR

@@ -1,5 +1,7 @@
 """Controllers: PSMC/PID equivalence, limits, the discrete PSMC equations, SMC cancellation."""
 
+import math
+
 import numpy as np
 import pytest
 
@@ -38,7 +40,7 @@ def test_psmc_with_zero_lambda_and_infinite_limit_is_discrete_pid(arm):
     """§5.2.6.4 (Kikuuwe & Fujimoto 2006): lambda = 0, F -> inf gives discrete PID
     (backward-Euler integral, backward-difference derivative), step for step."""
     q, qd, p, ref = _random_inputs()
-    psmc = JointPSMC(lam=0.0, dp_limit=1e15)
+    psmc = JointPSMC(lam=0.0, dp_limit=math.inf)
     pid = PID(derivative="difference")
     for k in range(q.shape[0]):
         a = psmc.step(arm, q[k], qd[k], p[k], ref[k])
@@ -49,7 +51,8 @@ def test_psmc_with_zero_lambda_and_infinite_limit_is_discrete_pid(arm):
 def test_psmc_zero_lambda_closed_loop_equals_pid(arm):
     ref = tr.step(arm, duration=4.0)
     runs = cl.run_batch([ExperimentCase(arm, c, ref, sensors=SensorConfig.ideal())
-                         for c in (JointPSMC(lam=0.0, dp_limit=1e15), PID(derivative="difference"))])
+                         for c in (JointPSMC(lam=0.0, dp_limit=math.inf),
+                                   PID(derivative="difference"))])
     state = ("q1", "q2", "qd1", "qd2", "p1", "p2", "p3", "p4")
     np.testing.assert_allclose(runs[0].signals(*state), runs[1].signals(*state), rtol=1e-7,
                                atol=1e-7)

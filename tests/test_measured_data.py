@@ -298,7 +298,6 @@ def test_duplicate_columns(tmp_path):
 
 @pytest.mark.parametrize("col, factor, words", [
     ("p1", 1e-5, ["'p1'", "bar", "1e5"]),
-    ("q1", 180 / math.pi, ["'q1'", "degrees", "pi/180"]),
     ("qd1", 180 / math.pi * 10, ["'qd1'", "deg/s"]),
 ])
 def test_unit_hints_arm(col, factor, words):
@@ -308,6 +307,17 @@ def test_unit_hints_arm(col, factor, words):
     with pytest.warns(MeasuredDataWarning, match=words[1]):
         d = MeasuredData(meta, df, strict_units=False)
     assert d.column(col)[0] == pytest.approx(df[col].iloc[0])   # warned, not converted
+
+
+def test_angles_beyond_a_turn_are_impossible_whatever_the_units_flag():
+    """Issue 22: |q| > 2 pi is no joint angle of this arm (degrees): refused even with
+    strict_units=False, with the conversion."""
+    meta, df = open_loop()
+    df["q1"] = df["q1"] * 180 / math.pi
+    for strict in (True, False):
+        msg = refuse(meta, df, "'q1'", "physically impossible", "degrees", "pi/180",
+                     strict_units=strict)
+        assert "strict_units=False" not in msg
 
 
 def test_degree_hint_on_typical_thesis_angles():

@@ -131,7 +131,10 @@ def test_file_added_during_the_run_is_kept_and_blocks_the_commit(tmp_path):
 
 def test_study_mode_adds_to_a_previous_output(tmp_path):
     _marked(tmp_path, ["index.md", "a.csv"])
-    with OutputFolder(tmp_path, kind="study", overwrite=True, clean=False) as stage:
+    with pytest.raises(OutputError, match="not a study"):     # only the kinds it may update
+        OutputFolder(tmp_path, kind="study", overwrite=True, clean=False).__enter__()
+    with OutputFolder(tmp_path, kind="study", overwrite=True, clean=False,
+                      kinds=("study", "report")) as stage:
         _write(stage, **{"a.csv": "new", "b.csv": "b"})
     assert (tmp_path / "index.md").exists() and (tmp_path / "a.csv").read_text() == "new"
     m = read_marker(tmp_path)

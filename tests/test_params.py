@@ -3,7 +3,6 @@
 import dataclasses
 import math
 
-import numpy as np
 import pytest
 
 from ppamsafety.params import (ArmGeometry, LinkInertia, MuscleGroup, PneumaticParams, Valve,

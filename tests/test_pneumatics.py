@@ -6,7 +6,7 @@ import pytest
 from ppamsafety.params.pneumatics import CALIBRATED_P_MEAN
 from ppamsafety.plant import pneumatics as pn
 from ppamsafety.plant import torque
-from ppamsafety.units import BAR, DEG
+from ppamsafety.units import BAR
 
 
 def _closed_valve_torque(q, q0, p0, arm):

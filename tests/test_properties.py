@@ -23,7 +23,7 @@ from property_support import Recorder, anything, bad_types, numbers, special  # 
 from ppamsafety import design
 from ppamsafety.impact import head_fit as hf
 from ppamsafety.impact.hic import hic, hic_bruteforce, hic_half_sine, hic_rectangular
-from ppamsafety.params import (BaseParameters, LinkInertia, MuscleGroup, PneumaticParams, Valve,
+from ppamsafety.params import (MuscleGroup, PneumaticParams, Valve,
                                identified_dynamic, thesis_arm, thesis_geometry, thesis_muscles,
                                thesis_valves)
 from ppamsafety.params.geometry import group_length_range

@@ -2,7 +2,7 @@
 
 import pytest
 
-from ppamsafety.sections import (head_model, lambda_sweep, run_section, safety, stiffness,
+from ppamsafety.sections import (head_model, lambda_sweep, run_section, stiffness,
                                 write_section)
 
 

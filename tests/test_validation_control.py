@@ -47,7 +47,9 @@ def test_joint_steps_change_times(arm):
 
 
 def test_step_outside_the_record_is_refused(arm):
-    with pytest.raises(ValueError, match=r"t_up = 2 s is outside \(0, 1\) s"):
+    # the short duration is what is wrong, so the message names it (issue 22 item 8)
+    with pytest.raises(ValueError, match=r"^duration = 1 s is too short: the up-step comes at "
+                                         r"t_up = 2 s"):
         tr.step(arm, duration=1.0)
     with pytest.raises(ValueError, match=r"low = high"):
         tr.step(arm, low=0.6, high=0.6)
@@ -139,7 +141,9 @@ def test_valid_gains_unchanged():
     c = JointPSMC(lam=0.8, ki=12 * BAR)
     assert c.ki == (12 * BAR, 12 * BAR) and type(c.ki[0]) is float
     assert PID(kp=(1.0, 2.0)).kp == (1.0, 2.0)
-    assert JointPSMC(lam=0.0, dp_limit=1e15).dp_limit == (1e15, 1e15)   # the PID limit
+    assert JointPSMC(lam=0.0, dp_limit=math.inf).dp_limit == (math.inf, math.inf)   # the PID limit
+    with pytest.raises(ValueError, match=r"JointPSMC.dp_limit = 1e\+300 Pa is outside"):
+        JointPSMC(dp_limit=1e300)                     # a limit beyond any pressure
 
 
 def test_controller_step_input(arm):

@@ -206,8 +206,10 @@ def test_hic_refuses_overflow_instead_of_returning_inf():
 def test_hic_window_far_longer_than_the_record_is_fine():
     r = hic(np.ones(11), 1e-3, window=1e300)
     assert r.value == pytest.approx(0.01)
-    r = hic(np.ones(11), 1e-300, window=1.0)      # window / dt overflows: capped
+    r = hic(np.ones(11), 1e-9, window=1e300)      # window / dt overflows: capped
     assert math.isfinite(r.value)
+    with pytest.raises(ValueError, match=r"dt = 1e-300 s is outside \[1e-09, 1000\] s"):
+        hic(np.ones(11), 1e-300, window=1.0)      # a unit mistake, not a sample step (issue 22)
 
 
 @pytest.mark.parametrize("call, exc, match", [

@@ -22,10 +22,11 @@ when |f*| <= limit (then s = 0).
 
 from __future__ import annotations
 
+import math
 
 import numpy as np
 
-from .._validation import check_range
+from .._validation import PRESSURE_MAX, check_range
 from ..units import BAR
 from .base import Controller, pair
 from .dispatch import DECLARED
@@ -41,6 +42,20 @@ LAMBDA_MAX = 100.0
 #: Largest task-space virtual-coupling gain accepted [N/m, N/(m s), N s/m] (Table 5.1 (b):
 #: 10-200).
 TASK_GAIN_MAX = 1.0e7
+
+
+def _limit_pair(name: str, value) -> tuple:
+    """A per-joint pressure limit: each in (0, PRESSURE_MAX] Pa, or ``math.inf`` (no limit)."""
+    if isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool) \
+            and math.isinf(value) and value > 0:
+        return (math.inf, math.inf)
+    if isinstance(value, (list, tuple, np.ndarray)) and np.ndim(value) == 1 and len(value) == 2:
+        return tuple(math.inf if (isinstance(v, (int, float, np.integer, np.floating))
+                                  and not isinstance(v, bool) and math.isinf(v) and v > 0)
+                     else pair(f"{name}[{j}]", v, lo=0.0, hi=PRESSURE_MAX, lo_open=True,
+                               unit="Pa")[0]
+                     for j, v in enumerate(value))
+    return pair(name, value, lo=0.0, hi=PRESSURE_MAX, lo_open=True, unit="Pa")
 
 
 def check_proxy_gains(owner: str, kp: float, ki: float, kd: float, lam: float,
@@ -101,8 +116,9 @@ class JointPSMC(Controller):
         update divides by zero, see :func:`check_proxy_gains`), Kp = Kd =
         lambda = 0 (undamped integrator).
     dp_limit : float or pair
-        Delta p_lm [Pa] (Table 5.1: 0.2 bar), positive (any finite size:
-        a huge limit turns PSMC into a discrete PID).
+        Delta p_lm [Pa] (Table 5.1: 0.2 bar), in (0, :data:`PRESSURE_MAX`] = (0, 100 bar],
+        or ``math.inf``: no limit, which with lambda = 0 turns PSMC into a discrete PID
+        (§5.2.6.4).  A finite limit beyond any pressure (1e300) is refused.
     gravity_compensation : {"proxy", "desired", "measured", "off"}
         Where (3.18)-(3.19) is evaluated; default the proxy position (see
         :mod:`ppamsafety.control.gravity`).
@@ -123,7 +139,7 @@ class JointPSMC(Controller):
                        hi=GAIN_MAX, unit="Pa/(rad s)")
         self.kd = pair("JointPSMC.kd", np.asarray(g["kd"]) * BAR if kd is None else kd,
                        hi=GAIN_MAX, unit="Pa s/rad")
-        self.dp_limit = pair("JointPSMC.dp_limit", dp_limit, lo=0.0, lo_open=True, unit="Pa")
+        self.dp_limit = _limit_pair("JointPSMC.dp_limit", dp_limit)
         for j in range(2):
             check_proxy_gains("JointPSMC", self.kp[j], self.ki[j], self.kd[j], self.lam[j],
                               f"[{j}]")

@@ -146,7 +146,7 @@ class Identification:
             out[fname] = fig
         return out
 
-    def write(self, outdir, *, overwrite: bool = False) -> list:
+    def write(self, outdir, *, overwrite: bool = False, replace_kind: bool = False) -> list:
         """Write ``identification.json``, ``.csv`` and the PNGs into ``outdir``.
 
         Through :class:`ppamsafety.output.OutputFolder` (kind ``"identify"``):
@@ -158,7 +158,10 @@ class Identification:
         outdir : path-like
             Output folder (created if missing).
         overwrite : bool, keyword-only
-            Replace a previous ppamsafety output in ``outdir``.
+            Replace a previous ppamsafety identification in ``outdir``.
+        replace_kind : bool, keyword-only
+            Allow replacing a previous ppamsafety output of another kind (refused by
+            default, even with ``overwrite``).
 
         Returns
         -------
@@ -166,10 +169,12 @@ class Identification:
             The files written.
         """
         check_bool("overwrite", overwrite)
+        check_bool("replace_kind", replace_kind)
         text = json.dumps(self.to_dict(), indent=1, allow_nan=False, ensure_ascii=False) + "\n"
         table = self.to_pandas()
         figs = self.figures()
-        folder = OutputFolder(outdir, kind="identify", overwrite=overwrite)
+        folder = OutputFolder(outdir, kind="identify", overwrite=overwrite,
+                              replace_kind=replace_kind)
         with folder as st:
             (st / JSON_NAME).write_text(text, encoding="utf-8")
             table.to_csv(st / CSV_NAME, index=False)

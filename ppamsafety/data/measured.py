@@ -46,6 +46,7 @@ import pandas as pd
 from ..experiments.catalog import (THESIS_KI_BAR, THESIS_LAMBDAS, label_of, EXPERIMENTS as NAMED,
                                    Family)
 from ..output import atomic_write, check_new_file
+from ..params.geometry import thesis_geometry
 
 #: Version of the format written by :meth:`MeasuredData.save` (``format_version`` key).
 FORMAT_VERSION = 1
@@ -90,6 +91,8 @@ _NON_SI = {"bar": (1e5, "Pa"), "mbar": (100.0, "Pa"), "kpa": (1e3, "Pa"), "mpa":
            "deg/s": (math.pi / 180, "rad/s"), "mm": (1e-3, "m"), "cm": (1e-2, "m"),
            "ms": (1e-3, "s"), "kn": (1e3, "N"), "%": (0.01, "-")}
 _DIMENSIONLESS = ("-", "1", "")
+#: Standard atmosphere [Pa]: a gauge pressure cannot be below -P_ATM_STD.
+P_ATM_STD = 101325.0
 
 
 class MeasuredDataError(ValueError):
@@ -388,6 +391,9 @@ def _check_force_law(law, src, has_position):
     if a[0] < 0:
         raise MeasuredDataError(f"{src}: force_law.a[0] = {a[0]:g} N/Pa must be >= 0 (the 1/eps "
                                 f"term pulls)")
+    if not any(a):
+        raise MeasuredDataError(f"{src}: force_law.a = {a}: every coefficient is 0, a law of "
+                                f"no force; give the actuator's nominal law (3.9) in N/Pa")
     if max(abs(x) for x in a) > 1.0:
         raise MeasuredDataError(f"{src}: force_law.a = {a} looks like N/bar or N/kPa (a |a_i| "
                                 f"> 1 N/Pa = 1 m^2); give N/Pa (N/bar * 1e-5)")
@@ -441,8 +447,15 @@ def _check_columns(df: pd.DataFrame, kind: str, exp: str, ctx: _Ctx, warn) -> pd
     df = df.copy()
     df.columns = cols
     if "t" not in cols:
+        sep = next((f"{name} ({c!r})" for c, name in ((";", "semicolons"), ("\t", "tabs"),
+                                                      ("|", "bars"), (" ", "spaces"))
+                    if any(c in x for x in cols)), None)
+        hint = (f"; the header holds {sep} between the names: the format is CSV with ',' "
+                f"between the values and '.' as the decimal point (a spreadsheet's "
+                f"'CSV (semicolon)' export with decimal commas is not), re-export it"
+                if sep else "")
         raise MeasuredDataError(f"{ctx.src}: no time column 't' [s] (columns: "
-                                f"{', '.join(cols) or 'none'})")
+                                f"{', '.join(repr(c) for c in cols[:12]) or 'none'}){hint}")
     for group in _required(kind, exp):
         if not any(all(c in cols for c in alt) for alt in group):
             alts = " or ".join("(" + ", ".join(a) + ")" for a in group)
@@ -558,19 +571,121 @@ def _check_time(t: np.ndarray, meta: dict, exp: str, ctx: _Ctx, allow_gaps, orig
     return segments, gaps, med
 
 
-def _unit_hints(df, meta, ctx, strict, warn, orig_rows):
-    """Values that look like bar, degrees, deg/s, mm or percent (rows named as in the file)."""
+#: Physical plausibility per column (issue 22): values outside ``impossible`` are refused
+#: whatever ``strict_units`` says; values outside ``plausible`` give a one-line warning.
+#: Ranges [SI], per kind: ``(impossible_lo, impossible_hi, plausible_lo, plausible_hi)``.
+#: Gauge pressures cannot be below -1 atm (vacuum); a pneumatic muscle works below 8 bar
+#: (the thesis PPAMs at up to 3 bar, 4 bar tolerated, §2.2.2; commercial fluidic muscles
+#: 6-8 bar), so an arm pressure above 10 bar is impossible and one above 5 bar suspicious;
+#: an actuator on a tester may be a cylinder (pneumatic cylinders are rated to 10-16 bar).
+#: Joint angles of this arm lie within one turn (else: degrees); forces of a muscle of this
+#: size stay far below 10^5 N (the thesis PPAMs pull up to about 5 kN at 3 bar).
+PLAUSIBILITY = {
+    "arm": {**{c: (-P_ATM_STD, 1.0e6, -2.0e4, 5.0e5) for c in P + U},
+            **{c: (-2 * math.pi, 2 * math.pi, None, None) for c in Q + Q_D},
+            **{c: (-1.0e3, 1.0e3, -50.0, 50.0) for c in QD},
+            **{c: (-200.0, 1.0e5, -50.0, 2.0e4) for c in F}},
+    "actuator": {"pressure": (-P_ATM_STD, 2.0e6, -2.0e4, 1.0e6),
+                 "force": (-1.0e5, 1.0e5, -100.0, 5.0e4),
+                 "contraction": (-1.0, 1.0, -0.1, 0.6),
+                 "position": (0.0, math.inf, None, None)},
+}
+#: A cylinder's ``position`` is its rod position [m] with any zero (not a length): it may be
+#: negative, but no bench cylinder travels 10 m (millimetres read as metres do).
+CYLINDER_POSITION = (-10.0, 10.0, None, None)
+#: Margin [rad] beyond the thesis arm's working area (2.6)-(2.7) at which a recorded angle
+#: is called suspicious.
+AREA_MARGIN = math.radians(10.0)
+#: Why a value is impossible, per column group (for the messages).
+_WHY = {"pressure": "a gauge pressure is at least -1 atm (vacuum) and no pneumatic muscle or "
+                    "valve of this kind reaches {hi:g} Pa ({hib:g} bar)",
+        "angle": "a joint angle of this arm lies within one turn (|q| <= 2 pi rad); degrees? "
+                 "multiply by pi/180",
+        "velocity": "a joint speed beyond 1000 rad/s (10^4 rpm) is no robot arm's",
+        "force": "a muscle only pulls: a force below -200 N is a sign convention, not noise, "
+                 "and no muscle of this size pulls 10^5 N",
+        "actuator_force": "no actuator of this size pulls or pushes 10^5 N",
+        "contraction": "a contraction eps = (l0 - l)/l0 lies in (-1, 1): at 1 the actuator "
+                       "would have no length (percent? divide by 100)",
+        "position": "the actuator's length must be positive",
+        "rod_position": "no bench cylinder's rod travels 10 m (millimetres? divide by 1000)"}
+
+
+def _plausible(kind: str, meta: dict) -> dict:
+    """The :data:`PLAUSIBILITY` table of a record: a cylinder's position is not a length."""
+    table = PLAUSIBILITY[kind]
+    act = meta.get("actuator")
+    if kind == "actuator" and isinstance(act, dict) and act.get("type") == "cylinder":
+        table = {**table, "position": CYLINDER_POSITION}
+    return table
+
+
+def _group(c: str) -> str:
+    if c in P + U or c == "pressure":
+        return "pressure"
+    if c in Q + Q_D:
+        return "angle"
+    if c in QD:
+        return "velocity"
+    if c in F:
+        return "force"
+    if c == "force":
+        return "actuator_force"
+    return c
+
+
+def _plausibility(df, meta, ctx, strict, warn, orig_rows):
+    """Refuse impossible values, hint at wrong units, warn about suspicious values.
+
+    Three tiers per column (rows named as in the file):
+
+    * impossible (:data:`PLAUSIBILITY`): refused whatever ``strict`` says;
+    * looks like another unit (bar, degrees, deg/s, mm, percent): refused with
+      ``strict``, else a warning (the historical unit hints);
+    * suspicious (outside the plausible range, or the arm's working area): a warning.
+    """
     kind = meta["kind"]
+    if len(df) == 0:
+        return
+    cylinder = kind == "actuator" and _plausible(kind, meta)["position"] is CYLINDER_POSITION
+    for c, (lo, hi, plo, phi) in _plausible(kind, meta).items():
+        if c not in df.columns:
+            continue
+        x = df[c].to_numpy()
+        # open bounds: a length > 0 (not a cylinder's rod position)
+        openb = c == "contraction" or (c == "position" and not cylinder)
+        bad = np.flatnonzero((x <= lo) | (x >= hi) if openb else (x < lo) | (x > hi))
+        if bad.size:
+            k = int(bad[np.argmax(np.abs(x[bad]))])
+            group = "rod_position" if c == "position" and cylinder else _group(c)
+            why = _WHY[group].format(hi=hi, hib=hi / 1e5)
+            raise MeasuredDataError(
+                f"{ctx.src}: column {c!r}, {ctx.row(orig_rows[k])}: {x[k]:.6g} is physically "
+                f"impossible ({why}; allowed {'(' if openb else '['}{lo:.6g}, {hi:.6g}"
+                f"{')' if openb else ']'} {CHANNELS[kind][c]}); {bad.size} such value(s)")
+    if kind == "actuator" and "position" in df.columns and "l0" in meta.get("force_law", {}):
+        l0 = float(meta["force_law"]["l0"])
+        eps = (l0 - df["position"].to_numpy()) / l0
+        bad = np.flatnonzero((eps <= -1.0) | (eps >= 1.0))
+        if bad.size:
+            k = int(bad[0])
+            raise MeasuredDataError(
+                f"{ctx.src}: column 'position', {ctx.row(orig_rows[k])}: "
+                f"{df['position'].iloc[k]:.6g} m with force_law.l0 = {l0:g} m gives the "
+                f"contraction {eps[k]:.4g}, physically impossible (allowed (-1, 1): the length "
+                f"is between 0 and 2 l0); check l0 and the unit of 'position' [m]"
+                f"{' (mm? multiply by 1e-3)' if np.max(df['position'].to_numpy()) > 1.0 else ''}"
+                f" ({bad.size} such value(s))")
+    # the historical unit hints (strict: refused; loose: warned)
     checks = []
     if kind == "arm":
         checks += [(c, "pressure") for c in P + U]
-        checks += [(c, "angle") for c in Q + Q_D]
         checks += [(c, "velocity") for c in QD]
     else:
-        checks += [("pressure", "pressure"), ("position", "position"),
-                   ("contraction", "contraction")]
+        checks += [("pressure", "pressure"), ("position", "position")]
+    hinted = set()
     for c, what in checks:
-        if c not in df.columns or len(df) == 0:
+        if c not in df.columns:
             continue
         x = np.abs(df[c].to_numpy())
         k = int(np.argmax(x))
@@ -580,23 +695,61 @@ def _unit_hints(df, meta, ctx, strict, warn, orig_rows):
         if what == "pressure" and 0.0 < m < 10.0:
             msg = (f"column {c!r} peaks at {m:.4g}, which looks like bar: the format wants Pa "
                    f"(gauge); multiply by 1e5")
-        elif what == "angle" and m > 2 * math.pi:
-            msg = (f"column {c!r} reaches {df[c].iloc[k]:.4g} ({row}), which looks like "
-                   f"degrees (|angle| > 2 pi): the format wants rad; multiply by pi/180")
         elif what == "velocity" and m > 50.0:
             msg = (f"column {c!r} reaches {df[c].iloc[k]:.4g} ({row}), which looks like "
                    f"deg/s (> 50 rad/s): the format wants rad/s; multiply by pi/180")
         elif what == "position" and m > 1.0:
             msg = (f"column {c!r} reaches {df[c].iloc[k]:.4g} ({row}), which looks like mm "
                    f"(> 1 m for an actuator): the format wants m; multiply by 1e-3")
-        elif what == "contraction" and m > 1.0:
-            msg = (f"column {c!r} reaches {df[c].iloc[k]:.4g} ({row}), which looks like "
-                   f"percent (a contraction is < 1): the format wants a fraction; divide by 100")
+        if msg is None and what == "pressure" and 10.0 <= m < 1.0e4 and all(
+                10.0 <= np.max(np.abs(df[o].to_numpy())) < 1.0e4
+                for o, w in checks if w == "pressure" and o in df.columns and o[0] == c[0]):
+            # every pressure (or set value) column peaks below 0.1 bar: no arm or actuator
+            # under load works so (one vented muscle is fine: the others are not)
+            msg = (f"column {c!r} peaks at {m:.4g} Pa ({m / 1e5:.3g} bar), like every "
+                   f"{'pressure' if c[0] != 'u' else 'set value'} column: kPa (multiply by "
+                   f"1e3) or mbar/hPa (multiply by 100)? the format wants Pa (gauge)")
         if msg is not None:
+            hinted.add(c)
             if strict:
                 raise MeasuredDataError(f"{ctx.src}: {msg} (or load with strict_units=False if "
                                         f"the values are right)")
             warn(f"{ctx.src}: {msg}")
+    # suspicious: one warning per column
+    for c, (lo, hi, plo, phi) in _plausible(kind, meta).items():
+        if c not in df.columns or c in hinted:
+            continue
+        x = df[c].to_numpy()
+        if _group(c) == "pressure":
+            m = float(np.max(np.abs(x)))
+            if 10.0 <= m < 1.0e4:
+                warn(f"{ctx.src}: column {c!r} peaks at {m:.4g} Pa ({m / 1e5:.3g} bar), too "
+                     f"low for a pressurised muscle: kPa (x 1e3) or mbar/hPa (x 100)?")
+                continue
+        if plo is None:
+            continue
+        out = np.flatnonzero((x < plo) | (x > phi))
+        if out.size:
+            k = int(out[np.argmax(np.abs(x[out]))])
+            warn(f"{ctx.src}: column {c!r} reaches {x[k]:.6g} {CHANNELS[kind][c]} "
+                 f"({ctx.row(orig_rows[k])}), outside the plausible [{plo:g}, {phi:g}] "
+                 f"{CHANNELS[kind][c]} ({out.size} value(s)); check the units and the sign")
+    if kind == "arm":
+        g = thesis_geometry()
+        area = {"q1": (g.q1_min, g.q1_max), "q2": (g.q2_min, g.q2_max),
+                "q1_d": (g.q1_min, g.q1_max), "q2_d": (g.q2_min, g.q2_max)}
+        for c, (a, b) in area.items():
+            if c not in df.columns:
+                continue
+            x = df[c].to_numpy()
+            out = np.flatnonzero((x < a - AREA_MARGIN) | (x > b + AREA_MARGIN))
+            if out.size:
+                k = int(out[0])
+                warn(f"{ctx.src}: column {c!r} reaches {x[k]:.4g} rad = "
+                     f"{math.degrees(x[k]):.4g} deg ({ctx.row(orig_rows[k])}), outside the "
+                     f"thesis arm's working area [{math.degrees(a):.4g}, {math.degrees(b):.4g}] "
+                     f"deg by more than {math.degrees(AREA_MARGIN):g} deg ({out.size} "
+                     f"value(s)): another arm, an offset, or degrees scaled?")
 
 
 # --------------------------------------------------------------------------- the record
@@ -689,7 +842,7 @@ class MeasuredData:
                                     f"{extra}, a {exp} record needs at least {n_min}")
         segments, gaps, _ = _check_time(df["t"].to_numpy(), meta, exp, ctx, self.allow_gaps,
                                         orig_rows, warn)
-        _unit_hints(df, meta, ctx, self.strict_units, warn, orig_rows)
+        _plausibility(df, meta, ctx, self.strict_units, warn, orig_rows)
         object.__setattr__(self, "meta", meta)
         object.__setattr__(self, "frame", df)
         object.__setattr__(self, "segments", segments)
@@ -821,19 +974,11 @@ class MeasuredData:
         pathlib.Path
             ``path``.
         """
-        if not isinstance(sidecar, bool):
-            raise TypeError(f"sidecar must be True or False, got {sidecar!r}")
-        p = check_new_file(path, overwrite=overwrite, name="measured data file")
-        fmt = _format_of(p)
+        p, fmt, sidecar = _save_target(path, overwrite, sidecar)
         meta = {"format_version": FORMAT_VERSION, **self.meta}
         text = dumps_toml(meta)
         df = self.frame
-        if fmt == "parquet":
-            _need_pyarrow("write")
-            sidecar = True
         side = p.with_suffix(".toml")
-        if sidecar:
-            check_new_file(side, overwrite=overwrite, name="metadata file")
         if fmt == "parquet":
             atomic_write(p, lambda tmp: df.to_parquet(tmp, index=False), overwrite=overwrite,
                          name="measured data file")
@@ -851,6 +996,39 @@ class MeasuredData:
             atomic_write(side, lambda tmp: Path(tmp).write_text(text, encoding="utf-8"),
                          overwrite=overwrite, name="metadata file")
         return p
+
+
+def _save_target(path, overwrite, sidecar):
+    """(path, format, sidecar) of :meth:`MeasuredData.save`, checked before writing."""
+    if not isinstance(sidecar, bool):
+        raise TypeError(f"sidecar must be True or False, got {sidecar!r}")
+    p = check_new_file(path, overwrite=overwrite, name="measured data file")
+    fmt = _format_of(p)
+    if fmt == "parquet":
+        _need_pyarrow("write")
+        sidecar = True
+    if sidecar:
+        check_new_file(p.with_suffix(".toml"), overwrite=overwrite, name="metadata file")
+    return p, fmt, sidecar
+
+
+def check_save_path(path, *, overwrite: bool = False, sidecar: bool = False) -> Path:
+    """Check, before computing a record, that :meth:`MeasuredData.save` could write ``path``.
+
+    Parameters
+    ----------
+    path : path-like
+        ``.csv`` or ``.parquet`` file; its folder must exist.
+    overwrite : bool, keyword-only
+        Replace existing files.
+    sidecar : bool, keyword-only
+        CSV with a sidecar metadata file.
+
+    Returns
+    -------
+    pathlib.Path
+    """
+    return _save_target(path, overwrite, sidecar)[0]
 
 
 # --------------------------------------------------------------------------- loading
@@ -909,7 +1087,7 @@ def _read_meta(p: Path, fmt: str):
     side = p.with_suffix(".toml")
     head_meta, n_head = {}, 0
     if fmt == "csv":
-        with open(p, "r", encoding="utf-8") as fh:
+        with open(p, "r", encoding="utf-8-sig") as fh:        # a byte-order mark is allowed
             lines = []
             for line in fh:
                 if line.strip() and not line.lstrip().startswith("#"):
@@ -918,7 +1096,8 @@ def _read_meta(p: Path, fmt: str):
         block, n_head = _split_header("".join(lines))
         if block.strip():
             head_meta = _parse_toml(block, f"{p} (header block, line numbers are file lines)")
-    side_meta = _parse_toml(side.read_text(encoding="utf-8"), str(side)) if side.is_file() else {}
+    side_meta = _parse_toml(side.read_text(encoding="utf-8-sig"), str(side)) \
+        if side.is_file() else {}
     if head_meta and side_meta:
         raise MeasuredDataError(f"{p}: metadata given twice (header block and {side.name}); "
                                 f"keep one")
@@ -967,15 +1146,23 @@ def load_measured(path, *, allow_gaps: bool = False, strict_units: bool = True) 
     fmt = _format_of(p)
     if fmt == "parquet":
         _need_pyarrow("read")
-    meta, n_head = _read_meta(p, fmt)
+    try:
+        meta, n_head = _read_meta(p, fmt)
+        if fmt == "csv":
+            df = pd.read_csv(p, skiprows=n_head, skipinitialspace=True, encoding="utf-8-sig")
+    except UnicodeDecodeError as exc:
+        where = exc.object[max(0, exc.start - 20):exc.start] if isinstance(exc.object, bytes) \
+            else b""
+        raise MeasuredDataError(
+            f"{p}: not a UTF-8 text file (byte 0x{exc.object[exc.start]:02x} at offset "
+            f"{exc.start}, after {where!r}): a data file is CSV text in UTF-8 (or a Parquet "
+            f"file named .parquet); re-save it as UTF-8") from None
+    except pd.errors.EmptyDataError:
+        raise MeasuredDataError(f"{p}: no column header and no data after the metadata") \
+            from None
+    except pd.errors.ParserError as exc:
+        raise MeasuredDataError(f"{p}: not a valid CSV table: {exc}") from None
     if fmt == "csv":
-        try:
-            df = pd.read_csv(p, skiprows=n_head, skipinitialspace=True)
-        except pd.errors.EmptyDataError:
-            raise MeasuredDataError(f"{p}: no column header and no data after the metadata") \
-                from None
-        except pd.errors.ParserError as exc:
-            raise MeasuredDataError(f"{p}: not a valid CSV table: {exc}") from None
         first = n_head + 2
     else:
         df = pd.read_parquet(p)
@@ -984,7 +1171,8 @@ def load_measured(path, *, allow_gaps: bool = False, strict_units: bool = True) 
                         source=str(p), first_line=first)
 
 
-__all__ = ["FORMAT_VERSION", "KINDS", "EXPERIMENTS", "ALLOWED", "ARM_CHANNELS", "ACTUATOR_TYPES",
+__all__ = ["check_save_path", "FORMAT_VERSION", "KINDS", "EXPERIMENTS", "ALLOWED", "ARM_CHANNELS",
+           "ACTUATOR_TYPES",
            "ACTUATOR_CHANNELS", "MIN_ROWS", "DT_TOLERANCE", "GAP_FACTOR", "MeasuredData",
            "MeasuredDataError", "MeasuredDataWarning", "load_measured", "read_metadata",
            "dumps_toml"]

@@ -18,6 +18,7 @@ from __future__ import annotations
 from dataclasses import replace
 
 from ..data.campaign import Campaign
+from .._validation import check_instance, check_int, check_seed
 from ..data.measured import MeasuredData
 from ..params import thesis_arm
 from ..params.arm_file import arm_fingerprint
@@ -76,10 +77,13 @@ def diagnose(data, *, arm=None, candidates=None, block_seconds: float = 0.05,
     For an actuator record ``arm``, ``block_seconds``, ``seed`` and ``bootstrap``
     do not apply and its confidence is the BIC weight.
     """
-    if isinstance(data, Campaign) or (isinstance(data, MeasuredData)
-                                      and data.actuator_type == "cylinder"):
+    check_instance("data", data, (MeasuredData, Campaign))
+    seed = check_seed("seed", seed)
+    if bootstrap is not None:
+        check_int("bootstrap", bootstrap, 0, 10000)
+    if isinstance(data, Campaign) or data.actuator_type == "cylinder":
         return diagnose_campaign(data, candidates=candidates, alpha=alpha, rho_max=rho_max)
-    if isinstance(data, MeasuredData) and data.kind == "actuator":
+    if data.kind == "actuator":
         return diagnose_actuator(data, candidates=candidates, alpha=alpha, rho_max=rho_max,
                                  experiment=experiment)
     dg = diagnose_arm(data, arm=arm, candidates=candidates, block_seconds=block_seconds,

@@ -8,7 +8,7 @@ by ``kind`` and checks that the options belong to it.
 from __future__ import annotations
 
 from .._validation import check_choice
-from ..data.measured import MeasuredData
+from ..data.measured import MeasuredData, MeasuredDataError
 from ..params import thesis_arm
 from ..params.arm_file import arm_fingerprint
 from .arm.synthesize import DEFAULT_CONTROLLER, DEFAULT_REFERENCE, synthesize_arm
@@ -94,6 +94,20 @@ def synthesize(experiment: str | None = None, effects=None, *, noise: str | None
         came from, so that a diagnosis against another arm can say so.
     """
     kind = check_choice("kind", kind, ("arm", "actuator"))
+    try:
+        return _synthesize(experiment, effects, noise=noise, seed=seed, duration=duration, dt=dt,
+                           arm=arm, controller=controller, reference=reference, kind=kind,
+                           **tester)
+    except MeasuredDataError as exc:
+        given = [f"effects {effects!r}"] if effects else []
+        given += [f"{k} = {v!r}" for k, v in tester.items()]
+        given += [f"duration = {duration!r}"] if duration is not None else []
+        raise ValueError(f"synthesize: {', '.join(given) or 'these options'} give a record that "
+                         f"is not physically possible: {exc}") from None
+
+
+def _synthesize(experiment, effects, *, noise, seed, duration, dt, arm, controller, reference,
+                kind, **tester):
     if kind == "actuator":
         if experiment is not None and experiment != "tensile":
             raise ValueError(f"experiment = {experiment!r} is not available for kind = "

@@ -20,7 +20,7 @@ import numpy as np
 import pandas as pd
 
 from .._jit import kernel
-from .._validation import check_int, check_range
+from .._validation import check_int, check_range, check_size
 from ..control import CONTROLLER_CLASSES
 from ..control.dispatch import NINT, NSCRATCH, NSTATE, controller_step
 from ..control.estimation import (ESTIMATOR_INTERNALS, ESTIMATOR_PARAMS, ESTIMATOR_SCRATCH,
@@ -429,6 +429,10 @@ def run_batch(cases, *, dt: float = 1e-3, substeps: int = 1) -> list:
     if not cases:
         return []
     n = cases[0].reference.n_steps
+    check_size(f"run_batch: {len(cases)} case(s) of {n} samples (reference "
+               f"{cases[0].reference.name!r}, dt = {dt:g} s)",
+               8.0 * n * (len(cases) * (NLOG + NILOG) + SENSOR_NOISE.size * (len(cases) + 1)),
+               remedy="run fewer cases at once or shorten the reference")
     refs, ref_ids, noises, noise_ids = [], [], [], []
     X0, PP, PM, KIND, CPs, CSIZE, SC = [], [], [], [], [], [], []
     exts, ext_ids, EPs, PEs, est_on = [], [], [], [], []
@@ -455,7 +459,15 @@ def run_batch(cases, *, dt: float = 1e-3, substeps: int = 1) -> list:
         arm = c.arm
         x0 = c.x0
         if x0 is None:
-            x0 = rest_state(ref.field("q_d")[0], arm)[0]
+            try:
+                x0 = rest_state(ref.field("q_d")[0], arm)[0]
+            except ValueError as exc:
+                q0 = np.degrees(ref.field("q_d")[0])
+                raise ValueError(
+                    f"run_batch: case {c.name!r}: the reference {ref.name!r} starts at q_d = "
+                    f"({q0[0]:.4g}, {q0[1]:.4g}) deg, where the arm cannot be at rest (the "
+                    f"default initial state): {exc}; start the reference where the arm can "
+                    f"hold itself, or give the case an initial state x0") from None
         X0.append(np.asarray(x0, dtype=float))
         PP.append(packing.pack(arm))
         _check_valves(PP[-1], dt, substeps, c.name)

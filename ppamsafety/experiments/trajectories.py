@@ -24,13 +24,15 @@ Choices the thesis leaves open (documented here, used by the experiments):
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
 
-from .._validation import (as_float_array, check_finite, check_increasing, check_instance,
-                           check_int, check_range, check_shape, check_str, check_vector)
+from .._validation import (MAX_BYTES, as_float_array, check_finite, check_increasing,
+                           check_instance, check_range, check_shape, check_size,
+                           check_str, check_vector)
 from ..control.reference import (NREF, R_Q_D, R_QD_D, R_QDD_D, R_QDDD_D,  # noqa: F401
                                  R_R_D, R_RD_D, REF_COLUMNS, REFERENCE_ROW)
 from ..params.arm import ArmParameters
@@ -144,12 +146,43 @@ def _derivatives(q, h):
     return d1, d2, d3
 
 
+#: Bytes per reference sample of a smooth path, counting the oversampled working arrays of
+#: :func:`_segment` (8 sub-samples of time, path, speed, angles and three derivatives).
+_SEGMENT_BYTES = 8 * (NREF + 8 * 14)
+
+
+def check_reference_size(duration: float, dt: float, per_sample: float = _SEGMENT_BYTES) -> int:
+    """Number of samples ``round(duration / dt)``; refuse a reference too large to build.
+
+    Parameters
+    ----------
+    duration : float
+        Length [s].
+    dt : float
+        Sample period [s].
+    per_sample : float
+        Memory per sample while it is built [bytes].
+
+    Returns
+    -------
+    int
+        The number of samples.
+    """
+    n = duration / dt
+    check_size(f"duration = {duration:g} s at dt = {dt:g} s ({n:.3g} samples) for the "
+               f"reference", n * per_sample,
+               remedy=f"use a duration of at most {MAX_BYTES / per_sample * dt:.4g} s at this dt "
+                      f"or a larger dt")
+    return int(round(n))
+
+
 def _segment(arm, path, t0, t1, dt, oversample=8):
     """Reference rows for samples k*dt in [t0, t1) of a smooth task-space ``path``."""
     k0 = int(np.ceil(t0 / dt - 1e-9))
     k1 = int(np.ceil(t1 / dt - 1e-9))
     if k1 <= k0:
         return np.empty((0, NREF))
+    check_reference_size(t1 - t0, dt, 8 * (NREF + oversample * 14))
     h = dt / oversample
     tf = np.arange(k0 * dt - 3 * h, (k1 - 1) * dt + 3.5 * h, h)
     r, rd = path(tf)
@@ -349,8 +382,11 @@ def trajectory_switch(arm, *, period_before: float = 10.0 / 3.0, period_after: f
     period_after = check_range("period_after", period_after, 0.0, 1e4, lo_open=True, unit="s")
     duration = check_range("duration", duration, 0.0, 1e5, lo_open=True, unit="s")
     dt = _dt(dt)
-    t_switch = check_range("t_switch", t_switch, 0.0, duration, lo_open=True, hi_open=True,
-                           unit="s")
+    t_switch = check_range("t_switch", t_switch, 0.0, math.inf, lo_open=True, unit="s")
+    if duration <= t_switch:
+        raise ValueError(f"duration = {duration:g} s is too short: the switch comes at t_switch = "
+                         f"{t_switch:g} s, so the record must be longer than {t_switch:g} s")
+    check_reference_size(duration, dt)
     a = _circle_segment(arm, 0.0, t_switch, dt, "trajectory_switch (before)",
                         period=period_before)
     b = _circle_segment(arm, t_switch, duration, dt, "trajectory_switch (after)",
@@ -402,7 +438,9 @@ def joint_steps(arm, *, q_levels, t_changes, duration: float, dt: float = 1e-3,
         raise ValueError(f"t_changes[{i}] = {tc[i]:g} s is outside (0, duration) = "
                          f"(0, {duration:g}) s: the change would never take effect")
     check_in_working_area("q_levels", lv, arm)
-    n = check_int("number of samples round(duration/dt)", int(round(duration / dt)), 1, 10 ** 9)
+    n = check_reference_size(duration, dt, 8 * (NREF + 4))
+    if n < 1:
+        raise ValueError(f"duration = {duration:g} s is shorter than one sample dt = {dt:g} s")
     t = np.arange(n) * dt
     seg = np.searchsorted(tc, t, side="right")
     q = lv[seg]
@@ -456,7 +494,10 @@ def step(arm, *, low=30 * DEG, high=70 * DEG, q2=-80 * DEG, t_up: float = 2.0,
     if t_down <= t_up:
         raise ValueError(f"t_down = {t_down:g} s must come after t_up = {t_up:g} s (steps in "
                          f"the wrong order give no step at all)")
-    t_up = check_range("t_up", t_up, 0.0, duration, lo_open=True, hi_open=True, unit="s")
+    t_up = check_range("t_up", t_up, 0.0, math.inf, lo_open=True, unit="s")
+    if duration <= t_up:
+        raise ValueError(f"duration = {duration:g} s is too short: the up-step comes at t_up = "
+                         f"{t_up:g} s, so the record must be longer than {t_up:g} s")
     if low == high:
         raise ValueError(f"low = high = {low:g} rad: the reference would not step")
     for nm, v in (("low", low), ("high", high), ("q2", q2)):

@@ -124,14 +124,14 @@ class HeadContactModel:
         check_str("HeadContactModel.source", self.source)
         object.__setattr__(self, "checks", _check_claims(self.checks))
         model = f" (model {self.name!r})"
-        for field, lo, hi, lo_open, unit in (
+        for attr, lo, hi, lo_open, unit in (
                 ("mass", 0.0, 100.0, True, "kg"),
                 ("radius", MIN_RADIUS, 1.0, False, "m"),
                 ("stiffness", 0.0, 1e20, True, "N/m^n"),
                 ("exponent", 1.0, 3.0, False, ""),
                 ("damping", 0.0, 1e20, False, "N s/m^(n+1)")):
-            object.__setattr__(self, field, check_range(
-                f"HeadContactModel.{field}{model}", getattr(self, field), lo, hi, lo_open=lo_open,
+            object.__setattr__(self, attr, check_range(
+                f"HeadContactModel.{attr}{model}", getattr(self, attr), lo, hi, lo_open=lo_open,
                 unit=unit))
         d = hunt_crossley_max_penetration(self.mass, CHECK_SPEED, self.stiffness, self.exponent,
                                           self.damping)

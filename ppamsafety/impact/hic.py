@@ -43,11 +43,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._jit import kernel
-from .._validation import as_float_array, check_finite_result, check_nonnegative, check_positive
+from .._validation import as_float_array, check_finite_result, check_nonnegative, check_range
 
 _SLACK = 1.0 + 1e-12  # bounds are inflated by this factor against their own rounding
 _LEAF = 64  # blocks with at most this many index pairs are evaluated exactly
 _STACK = 256  # depth-first stack; it holds <= 2 log2(N) + 2 < 130 blocks for any int64 N
+#: Allowed sample spacing of :func:`hic` [s]: 1 ns (a 1 GHz accelerometer; crash measurements
+#: sample at 10-20 kHz, SAE J211) to 1000 s (longer than any impact by five orders of
+#: magnitude).  A spacing of 1e-300 s would only be a unit mistake.  Windows and pulse
+#: durations are at least DT_MIN too (a window longer than the record is fine).
+DT_MIN, DT_MAX = 1e-9, 1e3
 
 
 @kernel
@@ -436,16 +441,19 @@ _LOG_MAX = math.log(np.finfo(float).max)
 
 
 def _evaluate(single, batch, a, dt, window) -> HICResult:
-    arr = as_float_array("a", a)
+    arr = as_float_array("a", a)                # refuses masked arrays with masked entries
     if arr.ndim not in (1, 2) or arr.shape[-1] < 2:
         raise ValueError(f"a must be 1-D or 2-D (records along the last axis) with at least "
                          f"2 samples per record, got shape {arr.shape}")
+    if arr.ndim == 2 and arr.shape[0] == 0:
+        raise ValueError(f"a holds no record (shape {arr.shape}): give at least one record of "
+                         f"shape (N,) or (R, N) with R >= 1")
     if np.any(arr < 0.0):
         k = tuple(int(x) for x in np.argwhere(arr < 0.0)[0])
         raise ValueError(f"a must be non-negative (acceleration magnitudes in g), "
                          f"a[{', '.join(map(str, k))}] = {arr[k]:g}")
-    dt = check_positive("dt", dt, unit="s")
-    window = check_positive("window", window, unit="s")
+    dt = check_range("dt", dt, DT_MIN, DT_MAX, unit="s")
+    window = check_range("window", window, DT_MIN, math.inf, unit="s")
     n = arr.shape[-1]
     ratio = window / dt * (1.0 + 1e-9)   # whole sample intervals; 1e-9 absorbs rounding
     if ratio < 1.0:
@@ -488,10 +496,11 @@ def hic(a, dt, *, window=0.036) -> HICResult:
         Head acceleration magnitude [g], non-negative, finite, N >= 2; records along the
         last axis.
     dt : float
-        Sample spacing [s].
+        Sample spacing [s], in [:data:`DT_MIN`, :data:`DT_MAX`] = [1e-9, 1e3].
     window : float, keyword-only
-        Window limit W [s]: 0.036 for HIC36 (default), 0.015 for HIC15.  Rounded down to a
-        whole number of sample intervals (1e-9 relative tolerance).
+        Window limit W [s]: 0.036 for HIC36 (default), 0.015 for HIC15; >= 1e-9 (a window
+        longer than the record covers the record).  Rounded down to a whole number of
+        sample intervals (1e-9 relative tolerance).
 
     Raises
     ------
@@ -499,9 +508,10 @@ def hic(a, dt, *, window=0.036) -> HICResult:
         ``a`` not an array of real numbers (strings, bools, complex, None ...), ``dt`` or
         ``window`` not a real number.
     ValueError
-        ``a`` with NaN/inf, negative entries, fewer than 2 samples or more than 2
-        dimensions; ``dt``/``window`` not positive and finite; ``window < dt``; a record
-        whose HIC would overflow float64.
+        ``a`` with NaN/inf, negative entries, masked entries (a masked array), fewer than
+        2 samples, no record (shape (0, N)) or more than 2 dimensions; ``dt``/``window``
+        below 1e-9 s, ``dt`` above 1e3 s; ``window < dt``; a record whose HIC would
+        overflow float64.
 
     Returns
     -------
@@ -523,9 +533,9 @@ def hic_bruteforce(a, dt, *, window=0.036) -> HICResult:
         Head acceleration magnitude [g], non-negative, finite, N >= 2; records
         along the last axis.
     dt : float
-        Sample spacing [s].
+        Sample spacing [s], in [1e-9, 1e3].
     window : float, keyword-only
-        Window limit W [s]: 0.036 for HIC36 (default), 0.015 for HIC15.
+        Window limit W [s]: 0.036 for HIC36 (default), 0.015 for HIC15; >= 1e-9.
 
     Returns
     -------
@@ -577,9 +587,9 @@ def hic_half_sine(amplitude, duration, *, window=0.036) -> float:
     amplitude : float
         Peak acceleration A [g], >= 0.
     duration : float
-        Pulse duration T [s], > 0.
+        Pulse duration T [s], >= 1e-9.
     window : float, keyword-only
-        Window limit W [s].
+        Window limit W [s], >= 1e-9.
 
     Returns
     -------
@@ -587,8 +597,8 @@ def hic_half_sine(amplitude, duration, *, window=0.036) -> float:
         HIC [-].
     """
     A = check_nonnegative("amplitude", amplitude, unit="g")
-    T = check_positive("duration", duration, unit="s")
-    W = check_positive("window", window, unit="s")
+    T = check_range("duration", duration, DT_MIN, math.inf, unit="s")
+    W = check_range("window", window, DT_MIN, math.inf, unit="s")
     beta, g = _half_sine_optimum()
     if beta * T <= W:
         return _closed_form(lambda: g * A ** 2.5 * T, A, T, W)
@@ -609,9 +619,9 @@ def hic_rectangular(amplitude, duration, *, window=0.036) -> float:
     amplitude : float
         Pulse acceleration A [g], >= 0.
     duration : float
-        Pulse duration T [s], > 0.
+        Pulse duration T [s], >= 1e-9.
     window : float, keyword-only
-        Window limit W [s], > 0 (default 0.036, HIC36).
+        Window limit W [s], >= 1e-9 (default 0.036, HIC36).
 
     Returns
     -------
@@ -619,6 +629,6 @@ def hic_rectangular(amplitude, duration, *, window=0.036) -> float:
         HIC [-].
     """
     A = check_nonnegative("amplitude", amplitude, unit="g")
-    T = check_positive("duration", duration, unit="s")
-    W = check_positive("window", window, unit="s")
+    T = check_range("duration", duration, DT_MIN, math.inf, unit="s")
+    W = check_range("window", window, DT_MIN, math.inf, unit="s")
     return _closed_form(lambda: A ** 2.5 * min(T, W), A, T, W)

@@ -44,6 +44,12 @@ MAX_JOINT_SPEED = 1.0e3
 PLAUSIBLE_SPEED = 10.0
 #: Head speeds beyond this magnitude [m/s] are refused.
 MAX_HEAD_SPEED = 1.0e3
+#: Tool or head speeds above this [m/s] are refused as physically impossible for this arm:
+#: three times :data:`PLAUSIBLE_SPEED`, 15 times the fastest impacts of Table 6.1 (below
+#: 2 m/s) and above the tool speed of the fastest industrial robots (about 10 m/s).  Such a
+#: speed is a unit mistake (deg/s given as rad/s: 90 deg/s is 1.57 rad/s) or a typo, and the
+#: head models are not valid there (fitted to impacts of a few m/s).
+MAX_SPEED = 30.0
 #: The joint spring's period 2 pi / omega, omega^2 = max(K) / lambda_min(H(q)) (an upper
 #: bound of the arm's highest natural frequency on its joint springs), must span at least
 #: this many of the largest RK4 steps the engine takes (FREE_STRIDE x dt in free flight).
@@ -927,7 +933,19 @@ def _prepare_impacts(arm, q, qd, stiffness, *, head, direction, head_velocity, f
         u = np.where(nrm[:, None] > 0, rel / np.where(nrm > 0, nrm, 1.0)[:, None], [1.0, 0.0])
     else:
         u = _rows("direction", _unit(d, "direction"), n, ref)
-    fast = np.nonzero((speed > PLAUSIBLE_SPEED) | (np.linalg.norm(vh, axis=1) > PLAUSIBLE_SPEED))[0]
+    hspeed = np.linalg.norm(vh, axis=1)
+    for nm, sp, what in (("qd", speed, "tool speed"), ("head_velocity", hspeed, "head speed")):
+        bad = np.nonzero(sp > MAX_SPEED)[0]
+        if bad.size:
+            i = int(bad[0])
+            src = (f"qd[{i}] = {np.round(qd[i], 4).tolist()} rad/s at q = "
+                   f"{np.round(np.degrees(q[i]), 2).tolist()} deg" if nm == "qd" else
+                   f"head_velocity[{i}] = {np.round(vh[i], 4).tolist()} m/s")
+            raise ValueError(f"{nm}: case(s) {_fmt_cases(bad)}: {src} gives a {what} of "
+                             f"{sp[i]:.4g} m/s, physically impossible for this arm (allowed: at "
+                             f"most {MAX_SPEED:g} m/s; plausible: below {PLAUSIBLE_SPEED:g} m/s)"
+                             f"{'; qd is in rad/s (deg/s x pi/180)' if nm == 'qd' else ''}")
+    fast = np.nonzero((speed > PLAUSIBLE_SPEED) | (hspeed > PLAUSIBLE_SPEED))[0]
     if fast.size:
         warnings.warn(f"case(s) {_fmt_cases(fast)}: tool speed {speed[fast[0]]:.3g} m/s or head "
                       f"speed above the plausible maximum {PLAUSIBLE_SPEED:g} m/s for this arm "

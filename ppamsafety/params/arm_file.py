@@ -59,7 +59,7 @@ from pathlib import Path
 import tomli_w
 
 from ..units import si_factor
-from .effects import EffectKind, Effects
+from .effects import Effects
 from .geometry import ArmGeometry
 from .inertia import BaseParameters, LinkInertia
 from .muscles import MuscleGroup, MuscleSet

@@ -147,7 +147,7 @@ def _subject_header(quick: bool, arm, head) -> str:
 
 def build_report(outdir="reports", *, quick: bool = False, only=None, progress: bool = True,
                  overwrite: bool = False, processes: int | None = None, arm=None,
-                 head=None) -> Path:
+                 head=None, replace_kind: bool = False) -> Path:
     """Run the sections and write ``outdir/index.md``, ``index.html``, figures and tables.
 
     ``index.html`` is the same report as one page with section navigation
@@ -179,6 +179,9 @@ def build_report(outdir="reports", *, quick: bool = False, only=None, progress: 
     head : HeadContactModel, str or path-like, optional
         The head model of the impacts (default ``thesis-frontal``): a model, a name or
         a head file.
+    replace_kind : bool
+        Allow replacing a previous ppamsafety output of another kind than a report or a
+        section (e.g. a sweep folder); refused by default, even with ``overwrite``.
 
     Returns
     -------
@@ -201,7 +204,8 @@ def build_report(outdir="reports", *, quick: bool = False, only=None, progress: 
     head = None if head is None else resolve_head(head)
     out = Path(outdir)
     previous = _previous_times(out)
-    with OutputFolder(outdir, kind="report", overwrite=overwrite) as stage:
+    with OutputFolder(outdir, kind="report", overwrite=overwrite, kinds=("report", "section"),
+                      replace_kind=replace_kind) as stage:
         done = {}
 
         def report(name, res, dt):

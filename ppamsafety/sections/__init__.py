@@ -360,7 +360,7 @@ def main(name: str, argv=None) -> int:
         arm = None if args.arm is None else load_arm(args.arm)
         head = None if args.head is None else _head.resolve_head(args.head)
         with OutputFolder(args.outdir, kind="section", overwrite=args.overwrite,
-                          clean=False) as stage:
+                          clean=False, kinds=("section", "report")) as stage:
             res = run_section(name, stage, quick=args.quick, arm=arm, head=head)
         print(f"# {res.title}\n\n{res.markdown}")
         return 0

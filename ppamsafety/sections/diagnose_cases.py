@@ -331,7 +331,7 @@ def render(study: DiagnoseCasesStudy) -> Section:
     study : DiagnoseCasesStudy
         Output of :func:`compute`.
     """
-    dg, fit, s = study.case_c, study.summary, study
+    dg, fit = study.case_c, study.summary
     figs = study.plot()
     L = [study.note, ""] if study.note else []
     L.append("The discrepancy workflow (`ppamsafety diagnose`, `docs/diagnose.md`) on "

@@ -525,7 +525,6 @@ def render(study: IsoStudy) -> Section:
     m = study.metrics
     v = study.verdict
     lim = study.limits.drop(columns=["m_H"])
-    psmc = v[v.label != "PID"]
     pid = v[v.label == "PID"].iloc[0]
     md = [
         "Thesis §6.3.5: \"the pneumatic manipulator is expected to be on the safe side [in "

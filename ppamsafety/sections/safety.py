@@ -11,7 +11,6 @@ import numpy as np
 import pandas as pd
 
 from ..experiments.catalog import run_thesis_experiment, thesis_variants, variant_family
-from ..impact.head import head_model
 from ..impact.instants import (HEURISTICS, evaluate_experiment, heuristic_instants, impact_states,
                                worst_instant)
 from ..impact.thesis_data import join_table_6_1

@@ -381,7 +381,7 @@ def render(study: StiffnessStudy) -> Section:
     if not study.thesis:
         return _render_other(study)
     row, m, per = study.instant, study.metrics, study.periods
-    kmax, F_ref = FIG_6_3["k_max"], FIG_6_3["F_level_N"]
+    F_ref = FIG_6_3["F_level_N"]
     tab = study.table.copy()
     tab["k"] = [("inf (rigid)" if not np.isfinite(k) else f"{k:.4g}") for k in tab.k]
     frozen_ratio = tab["frozen"] / F_ref

@@ -20,7 +20,6 @@ import pandas as pd
 
 from ..experiments.catalog import run_thesis_experiment, thesis_variants
 from ..impact.directions import two_body_predictor, worst_direction
-from ..impact.head import head_model
 from ..impact.thesis_data import join_table_6_1
 from ..markdown import markdown_table
 from ..params.head import MAXILLA_FRACTURE_N

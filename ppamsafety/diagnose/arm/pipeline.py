@@ -18,7 +18,7 @@ from dataclasses import replace
 import numpy as np
 import pandas as pd
 
-from ..._validation import check_int, check_range
+from ..._validation import check_int, check_range, check_seed
 from ...params import thesis_arm
 from ...params.arm import ArmParameters
 from ...plant import packing
@@ -159,6 +159,7 @@ def diagnose_arm(data, *, arm=None, candidates=None, block_seconds: float = 0.05
         raise TypeError(f"arm must be an ArmParameters, got {type(arm).__name__}")
     check_range("alpha", alpha, 0.0, 0.5, lo_open=True)
     check_range("rho_max", rho_max, 1.0, 100.0)
+    seed = check_seed("seed", seed)
     if experiment is not None and experiment != data.experiment:
         raise ValueError(f"experiment = {experiment!r} does not match the record's metadata "
                          f"experiment = {data.experiment!r}")

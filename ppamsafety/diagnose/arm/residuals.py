@@ -379,6 +379,10 @@ def block_system(rec: ArmRecord, arm, *, block_seconds: float = BLOCK_SECONDS,
     block_seconds = check_range("block_seconds", block_seconds, 0.0, 10.0, lo_open=True,
                                 unit="s")
     dt = rec.dt
+    if block_seconds < 3 * dt * (1 - 1e-9):
+        raise ValueError(f"block_seconds = {block_seconds:g} s is shorter than 3 samples of the "
+                         f"record (dt = {dt:g} s): a block needs at least 3 samples, "
+                         f"block_seconds >= {3 * dt:g} s (default 0.05 s)")
     L = max(int(round(block_seconds / dt)), 3)
     n = len(rec)
     starts = np.arange(0, n - L + 1, L)

@@ -24,7 +24,7 @@ is used for every joint/valve):
 * effects outside the diagnosis library, to test that it refuses to name
   them: ``geometry.<field>`` (e.g. ``geometry.L1`` [m], a wrong link
   length in the model), ``pressure_sensor_offset`` [Pa] (added to the
-  recorded p, every muscle or a vector of 4).
+  recorded p, every muscle or a vector of 4; at most 1 bar in magnitude).
 
 Noise ``"table-3.2"``: white Gaussian noise with the Table 3.2 variances on
 q (3.46e-6, 2.59e-6 rad^2) and qd (1.63e-4, 2.32e-5 rad^2/s^2) and 500 Pa
@@ -64,7 +64,8 @@ import math
 import numpy as np
 import pandas as pd
 
-from ..._validation import check_choice, check_int, check_range
+from ..._validation import (InvalidTypeError, check_bool, check_choice, check_int,
+                            check_numbers, check_range, check_size)
 from ...control.sensors import SensorConfig
 from ...data.measured import MeasuredData
 from ...data.synthetic import VELOCITY_NOISE_VARIANCES, _arm, default_excitation
@@ -73,7 +74,7 @@ from ...experiments.catalog import EXPERIMENTS as NAMED, thesis_reference, thesi
 from ...experiments.closed_loop import run_batch
 from ...identify.excitation import equilibrium_for
 from ...identify.static import ANGLE_NOISE_VARIANCES, PRESSURE_NOISE_STD
-from ...params.effects import Effects
+from ...params.effects import EffectKind, Effects
 from ...plant.geometry import contractions
 from ...plant.model import hysteresis_factors, rest_state, simulate
 from ...plant.muscle import muscle_force
@@ -102,21 +103,32 @@ NOISES = ("table-3.2", "none")
 #: magnitude axes that declare one, ``Effects.axes()``).
 RELATIVE = {a.name: (a.name[:-len("_factor")], Effects.length(a.name[:-len("_factor")]))
             for a in Effects.axes() if a.name.endswith("_factor")}
+#: Memory per simulated sample while a record is built (states, set values, the plant's
+#: log and the record's columns) [bytes], an upper estimate.
+SAMPLE_BYTES = 500
+#: Length of the whole default sawtooth [s] (an upper bound, for the size check).
+SAWTOOTH_SECONDS_MAX = 200.0
+#: Largest |pressure_sensor_offset| [Pa]: one bar is no calibration error but a broken sensor.
+PRESSURE_OFFSET_MAX = 1.0e5
 #: Number of values of each vector effect (``Effects.length``).
 _VECTOR_LEN = {n: Effects.length(n) for n in Effects.names() if Effects.length(n) > 1}
 
 
 def _as_list(name, value, n):
-    if isinstance(value, str):
-        value = [float(v) for v in value.split(",")]
-    if np.isscalar(value):
-        value = [float(value)] * n
-    value = [float(v) for v in value]
-    if len(value) == 1:
-        value = value * n
-    if len(value) != n:
-        raise ValueError(f"effect {name} needs 1 or {n} values, got {len(value)}: {value}")
-    return tuple(value)
+    """``value`` (a number, a comma-separated text or a sequence) as ``n`` floats; a single
+    value is used for every joint/valve.  Errors name the effect."""
+    vals = check_numbers(f"effect {name}", value, (1, n) if n > 1 else (1,))
+    return tuple(vals * n) if len(vals) == 1 else tuple(vals)
+
+
+def _option(name, value):
+    """An option field of :class:`Effects` (``hysteresis_initial``, ``..._exact_stages``)."""
+    default = Effects.__dataclass_fields__[name].default
+    if isinstance(default, bool):
+        if isinstance(value, str) and value.strip().lower() in ("true", "false"):
+            return value.strip().lower() == "true"
+        return check_bool(f"effect {name}", value)
+    return value
 
 
 def _nominal_vector(arm, field):
@@ -152,7 +164,10 @@ def plant_with(arm, effects: dict):
     fx, geo = {}, {}
     dead, offset = 0.0, np.zeros(4)
     fields = Effects.__dataclass_fields__
+    geo_fields = tuple(arm.geometry.__dataclass_fields__)
     for name, value in effects.items():
+        if not isinstance(name, str):
+            raise InvalidTypeError(f"effects: an effect name must be a str, got {name!r}")
         if name in RELATIVE:
             f, n = RELATIVE[name]
             fx[f] = tuple(_nominal_vector(arm, f) * np.array(_as_list(name, value, n)))
@@ -160,23 +175,36 @@ def plant_with(arm, effects: dict):
             fx["valve_offset"] = tuple(_nominal_vector(arm, "valve_offset")
                                        + np.array(_as_list(name, value, 4)))
         elif name == "valve_dead_time":
-            dead = check_range("effect valve_dead_time", float(value), 0.0, 1.0, unit="s")
+            dead = check_range("effect valve_dead_time", _as_list(name, value, 1)[0], 0.0, 1.0,
+                               unit="s")
         elif name == "pressure_sensor_offset":
-            offset = np.array(_as_list(name, value, 4))
+            offset = np.array([check_range(f"effect pressure_sensor_offset[{i}]", v,
+                                           -PRESSURE_OFFSET_MAX, PRESSURE_OFFSET_MAX, unit="Pa")
+                               for i, v in enumerate(_as_list(name, value, 4))])
         elif name.startswith("geometry."):
-            geo[name.split(".", 1)[1]] = float(value)
+            g = name.split(".", 1)[1]
+            if g not in geo_fields:
+                raise ValueError(f"unknown effect {name!r}: {g!r} is not a field of the arm "
+                                 f"geometry; allowed: geometry.<{'|'.join(geo_fields)}>")
+            geo[g] = _as_list(name, value, 1)[0]
+        elif name in fields and Effects.kind(name) is EffectKind.OPTION:
+            fx[name] = _option(name, value)
         elif name in fields:
             fx[name] = _as_list(name, value, _VECTOR_LEN[name]) if name in _VECTOR_LEN else (
-                float(value) if not isinstance(value, (list, tuple)) else tuple(value))
+                _as_list(name, value, 1)[0])
         else:
             raise ValueError(f"unknown effect {name!r}; allowed: Effects fields "
                              f"{sorted(fields)}, {sorted(RELATIVE)}, valve_offset_delta, "
                              f"valve_dead_time, pressure_sensor_offset, geometry.<field>")
     plant = arm
-    if geo:
-        plant = plant.replace(geometry=plant.geometry.replace(**geo))
-    if fx:
-        plant = plant.replace(effects=Effects(**fx))
+    try:
+        if geo:
+            plant = plant.replace(geometry=plant.geometry.replace(**geo))
+        if fx:
+            plant = plant.replace(effects=Effects(**fx))
+    except (TypeError, ValueError) as exc:   # the parameter sets' own ranges: name the effect
+        given = ", ".join(f"{k}={v!r}" for k, v in effects.items())
+        raise type(exc)(f"effect(s) {given}: {exc}") from None
     return plant, dead, offset
 
 
@@ -346,6 +374,11 @@ def synthesize_arm(experiment: str = "open-loop", effects=None, *, noise: str = 
     if duration is not None:
         duration = check_range("duration", duration, 0.5, 3600.0, unit="s")
     dt = check_range("dt", dt, 1e-4, 0.01, unit="s")
+    n = (SAWTOOTH_SECONDS_MAX if duration is None and experiment == "static-sawtooth" else
+         10.0 if duration is None else duration) / dt
+    check_size(f"duration = {duration if duration is not None else 'default'} s at dt = "
+               f"{dt:g} s ({n:.3g} samples)", n * SAMPLE_BYTES,
+               remedy="use a shorter duration or a larger dt")
     arm = _arm(arm)
     plant, dead, offset = plant_with(arm, {} if effects is None else effects)
     if experiment == "static-sawtooth":

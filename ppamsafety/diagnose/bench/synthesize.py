@@ -58,8 +58,8 @@ import math
 import numpy as np
 import pandas as pd
 
-from ..._validation import (as_float_array, check_bool, check_choice, check_int, check_range,
-                            check_vector)
+from ..._validation import (as_float_array, check_bool, check_choice, check_int,
+                            check_numbers, check_range, check_size, check_vector)
 from ...data.measured import MeasuredData
 from ...hysteresis import EPS_MAX, preisach_response, scaled_input, w_fit
 from ...hysteresis.tensile import DEFAULT_FORCE_LAW
@@ -91,12 +91,11 @@ def _check_effects(effects) -> dict:
             raise ValueError(f"unknown effect {name!r} for kind='actuator'; allowed: "
                              f"{', '.join(EFFECTS)}")
         if name == "force_law_delta":
-            if isinstance(value, str):
-                value = [float(v) for v in value.split(",")]
-            out[name] = np.array(check_vector(f"effect {name}", value, 5, -1.0, 1.0,
-                                              unit="N/Pa"))
+            out[name] = np.array(check_vector(
+                f"effect {name}", check_numbers(f"effect {name}", value, (5,)), 5, -1.0, 1.0,
+                unit="N/Pa"))
             continue
-        v = float(value)
+        v = check_numbers(f"effect {name}", value, (1,))[0]
         lim = {"hysteresis_delta": (0.0, 0.5, "-"), "friction_coulomb": (0.0, 1e5, "N"),
                "friction_viscous": (0.0, 1e7, "N s/m"), "force_law_scale": (-0.5, 0.5, "-"),
                "force_sensor_offset": (-1e5, 1e5, "N"),
@@ -203,9 +202,9 @@ def synthesize_actuator(effects=None, *, noise: str = "tester", seed: int = 0,
     rate = check_range("sample_rate", sample_rate, 1.0, 1e4, unit="Hz")
     a = np.asarray(DEFAULT_FORCE_LAW if force_law is None else
                    as_float_array("force_law", force_law), float)
-    if a.shape != (5,) or a[0] < 0 or np.max(np.abs(a)) > 1.0:
+    if a.shape != (5,) or a[0] < 0 or np.max(np.abs(a)) > 1.0 or not a.any():
         raise ValueError(f"force_law = {a.tolist()} must be 5 coefficients a0..a4 in N/Pa with "
-                         f"a0 >= 0 and |a_i| <= 1")
+                         f"a0 >= 0, |a_i| <= 1 and not all 0")
     l0 = check_range("l0", l0, 0.0, 1.0, lo_open=True, unit="m")
     position = check_bool("position", position)
     jitter = check_range("jitter", jitter, 0.0, 0.9)
@@ -213,6 +212,10 @@ def synthesize_actuator(effects=None, *, noise: str = "tester", seed: int = 0,
 
     T, E, P = _knots(protocol, pressures, cycles, period, eps_range)
     dt = 1.0 / rate
+    check_size(f"cycles = {cycles}, period = {period:g} s, {len(pressures)} pressure(s) at "
+               f"sample_rate = {rate:g} Hz ({T[-1]:.4g} s, {T[-1] * rate:.3g} samples)",
+               T[-1] * rate * 8 * 30, remedy="use fewer cycles, a shorter period or a lower "
+                                             "sample_rate")
     n_est = int(T[-1] * rate) + 1
     if jitter > 0:
         steps = dt * (1.0 + jitter * rng.uniform(-1.0, 1.0, n_est + 10))

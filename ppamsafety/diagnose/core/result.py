@@ -224,7 +224,7 @@ class Diagnosis:
             L += ["", "## Notes", ""] + [f"* {n}" for n in self.notes]
         return "\n".join(L) + "\n"
 
-    def write(self, outdir, *, overwrite: bool = False) -> list:
+    def write(self, outdir, *, overwrite: bool = False, replace_kind: bool = False) -> list:
         """Write ``diagnosis.json``, ``diagnosis.md`` and the figures into ``outdir``.
 
         Through :class:`ppamsafety.output.OutputFolder` (kind ``"diagnose"``).
@@ -235,16 +235,21 @@ class Diagnosis:
             Output folder (created if missing).
         overwrite : bool, keyword-only
             Replace a previous ppamsafety diagnosis in ``outdir``.
+        replace_kind : bool, keyword-only
+            Allow replacing a previous ppamsafety output of another kind (refused by
+            default, even with ``overwrite``).
 
         Returns
         -------
         list of pathlib.Path
         """
         check_bool("overwrite", overwrite)
+        check_bool("replace_kind", replace_kind)
         text = json.dumps(self.to_dict(), indent=1, allow_nan=False, ensure_ascii=False) + "\n"
         md = self.report_markdown()
         figs = {FIG_REPLAY: self.plot(), FIG_BLOCKS: self.plot_blocks()}
-        folder = OutputFolder(outdir, kind="diagnose", overwrite=overwrite)
+        folder = OutputFolder(outdir, kind="diagnose", overwrite=overwrite,
+                              replace_kind=replace_kind)
         with folder as st:
             (st / JSON_NAME).write_text(text, encoding="utf-8")
             (st / MD_NAME).write_text(md, encoding="utf-8")
