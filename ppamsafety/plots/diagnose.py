@@ -337,7 +337,7 @@ def plot_as_built(cells, effects, *, sources):
         ``sigma_log`` (standard uncertainty of ln ratio).
     effects : pandas.DataFrame
         One row per candidate (``AsBuiltFit.effects``): ``candidate``, ``fitted``,
-        ``theta``, ``theta_sd``.
+        ``theta`` and its 95 % interval ``theta_low``, ``theta_high``.
     sources : sequence of str, keyword-only
         Sources in display order (``as_built.SOURCES``).
 
@@ -346,7 +346,7 @@ def plot_as_built(cells, effects, *, sources):
     matplotlib.figure.Figure
         Left: ln(simulated / printed) per number, grouped by source, nominal (grey) and
         as-built (colour), the +-2 sigma band of each number as a bar.  Right: the fitted
-        thetas with +-1.96 sd (0 = nominal arm, 1 = largest plausible magnitude).
+        thetas with their 95 % intervals (0 = nominal arm, 1 = largest plausible magnitude).
     """
     fig, (a, b) = new_figure(1, 2, figsize=(12, 4.4), gridspec_kw={"width_ratios": [3, 1]})
     x0, ticks, labels = 0, [], []
@@ -371,8 +371,10 @@ def plot_as_built(cells, effects, *, sources):
     a.grid(alpha=0.3)
     fe = effects[effects.fitted]
     y = np.arange(len(effects))
-    b.errorbar(fe.theta, [list(effects.candidate).index(n) for n in fe.candidate],
-               xerr=1.96 * fe.theta_sd.to_numpy(float), fmt="o", capsize=3)
+    th = fe.theta.to_numpy(float)
+    b.errorbar(th, [list(effects.candidate).index(n) for n in fe.candidate],
+               xerr=[th - fe.theta_low.to_numpy(float), fe.theta_high.to_numpy(float) - th],
+               fmt="o", capsize=3)
     nf = effects[~effects.fitted]
     b.plot(np.zeros(len(nf)), [list(effects.candidate).index(n) for n in nf.candidate], "x",
            color="0.5", label="not fitted (nominal)")
@@ -380,7 +382,7 @@ def plot_as_built(cells, effects, *, sources):
     b.set_yticklabels(effects.candidate, fontsize=7)
     b.axvline(0.0, color="k", lw=0.8)
     b.set_xlim(-1.05, 1.05)
-    b.set_xlabel("theta (0: nominal, ±1: largest plausible)")
+    b.set_xlabel("theta (0 nominal, ±1 largest plausible)", fontsize=8)
     b.set_title("fitted effects, 95 % intervals", fontsize=9)
     b.legend(fontsize=7)
     b.grid(alpha=0.3)

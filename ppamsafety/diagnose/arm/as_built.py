@@ -951,8 +951,10 @@ class AsBuiltFit:
     identifiability : Identifiability
         Of the sensitivities at the nominal arm.
     effects : pandas.DataFrame
-        One row per candidate: fitted (bool), theta, value, unit, interval (value units),
-        theta interval, nominal value, reason of the axis, why not fitted.
+        One row per candidate: fitted (bool), theta, value, unit, nominal value, 95 %
+        interval in value units (``interval_low``, ``interval_high``) and in theta
+        (``theta_low``, ``theta_high``, clipped to the axis), ``theta_sd``, the column norm of
+        the sensitivity, why not fitted, the reason of the axis.
     correlation : pandas.DataFrame
         Correlation of the fitted thetas.
     path : FitPath
@@ -1203,6 +1205,8 @@ def fit_as_built(arm=None, *, candidates=CANDIDATES, design: Design | None = Non
                      "interval_low": ax.value(float(lo[i])) if fitted else np.nan,
                      "interval_high": ax.value(float(hi[i])) if fitted else np.nan,
                      "theta_sd": float(sd[i]) if fitted else np.nan,
+                     "theta_low": float(lo[i]) if fitted else np.nan,
+                     "theta_high": float(hi[i]) if fitted else np.nan,
                      "column_norm": float(ident.column_norm[k]),
                      "why_not_fitted": why, "axis_reason": ax.reason})
     effects = pd.DataFrame(rows)
