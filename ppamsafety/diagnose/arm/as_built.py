@@ -645,7 +645,8 @@ def check_measurements(measurements) -> pd.DataFrame:
     if not isinstance(measurements, pd.DataFrame):
         raise TypeError(f"measurements must be a pandas DataFrame (thesis_measurements "
                         f"format), got {type(measurements).__name__}")
-    need = ["key", "source", "value", "sigma_log"]
+    need = ["key", "source", "experiment", "variant", "statistic", "unit", "value",
+            "sigma_log"]
     missing = [c for c in need if c not in measurements.columns]
     if missing:
         raise ValueError(f"measurements lacks the column(s) {missing}; needs {need}")
@@ -1162,6 +1163,10 @@ def fit_as_built(arm=None, *, candidates=CANDIDATES, design: Design | None = Non
     ident_cos = CONFOUNDED_COS
     Jz = np.where(np.isfinite(J), J, 0.0)
     sel = ident.selected
+    if not sel:
+        raise ValueError(f"no candidate of {names} is identifiable from these measurements "
+                         f"(numerical rank {ident.rank}, column norms "
+                         f"{[round(float(v), 3) for v in ident.column_norm]})")
     si = [names.index(n) for n in sel]
     lower = np.array([theta_bounds(n)[0] for n in sel])
     upper = np.array([theta_bounds(n)[1] for n in sel])
