@@ -26,6 +26,12 @@ with the verdict:
     TCP speed in the step is at least 2x that of every PSMC variant, PID
     overshoots by more than 10 % of the step, every PSMC variant by less
     than 5 %.
+(g) Ki = 12 pays with a slightly oscillatory step response (§5.3.5, fig. 5.19:
+    "The price to pay is a slightly oscillatory step response") -- the joint
+    PSMC with Ki = 12 overshoots the upward step more than with Ki = 2 at the
+    same lambda, for lambda = 0.4 s (the lambda of Table 5.1), and by more than
+    0.1 % of the step.  Not part of :func:`evaluate_conclusions` (a)-(f); the
+    as-built arm (:mod:`ppamsafety.diagnose.arm.as_built`) tests it.
 
 Table formats (all SI): ``errors`` has one row per (variant, period) with
 columns ``variant``, ``family``, ``lambda_s``, ``period_s``, ``mean_m``,
@@ -371,6 +377,53 @@ def pid_violent_psmc_smooth(step: pd.DataFrame, *, speed_ratio: float = VIOLENT_
                       "of the step", ok, ev, nums)
 
 
+#: Smallest overshoot of the Ki = 12 step for "oscillatory" (g) [% of the step].
+OSCILLATORY_MIN_PCT = 0.1
+
+
+def ki12_step_oscillatory(step: pd.DataFrame, *, lambda_s: float = 0.4,
+                          min_pct: float = OSCILLATORY_MIN_PCT) -> Conclusion:
+    """(g) Ki = 12 pays with a slightly oscillatory step response (§5.3.5, fig. 5.19).
+
+    Parameters
+    ----------
+    step : pandas.DataFrame
+        Step response table with ``family``, ``lambda_s`` [s] and ``overshoot_pct``
+        [% of the step] (module docstring); needs the joint PSMC Ki = 2 and Ki = 12 rows
+        at ``lambda_s``.
+    lambda_s : float, keyword-only
+        The lambda at which Ki = 12 and Ki = 2 are compared [s] (default 0.4, Table 5.1).
+    min_pct : float, keyword-only
+        Ki = 12 must overshoot by more than this [% of the step] (default
+        :data:`OSCILLATORY_MIN_PCT`).
+
+    Returns
+    -------
+    Conclusion
+        Verdict (g) with its criterion and evidence.
+
+    Raises
+    ------
+    ValueError
+        If the table lacks a column or the two rows.
+    """
+    _need(step, ["family", "lambda_s", "overshoot_pct"], "step")
+    rows = {}
+    for fam in ("PSMC joint Ki=2", "PSMC joint Ki=12"):
+        g = step[(step.family == fam) & np.isclose(step.lambda_s.astype(float), lambda_s)]
+        if len(g) != 1:
+            raise ValueError(f"step table has no single {fam} row at lambda_s = {lambda_s:g} s")
+        rows[fam] = float(g.overshoot_pct.iloc[0])
+    o2, o12 = rows["PSMC joint Ki=2"], rows["PSMC joint Ki=12"]
+    ok = bool(o12 > o2 and o12 > min_pct)
+    return Conclusion("g", "Ki = 12 pays with a slightly oscillatory step response",
+                      f"joint PSMC step overshoot with Ki = 12 above that with Ki = 2 at "
+                      f"λ = {lambda_s:g} s, and above {min_pct:g} % of the step", ok,
+                      f"overshoot at λ = {lambda_s:g} s: Ki = 12 {o12:.2f} %, Ki = 2 "
+                      f"{o2:.2f} % of the step.", {"overshoot_ki12_pct": o12,
+                                                   "overshoot_ki2_pct": o2})
+
+
 def evaluate_conclusions(errors: pd.DataFrame, step: pd.DataFrame,
                          switch: pd.DataFrame) -> list:
     """All six conclusions (a)-(f), in order, with the default criteria.
@@ -410,4 +463,5 @@ def conclusions_table(conclusions) -> pd.DataFrame:
 
 __all__ = ["Conclusion", "task_space_worst", "joint_psmc_equals_pid", "high_integral_gain_helps",
            "lambda_hardly_matters", "lambda_slows_recovery", "pid_violent_psmc_smooth",
+           "ki12_step_oscillatory", "OSCILLATORY_MIN_PCT",
            "evaluate_conclusions", "conclusions_table"]

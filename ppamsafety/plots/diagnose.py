@@ -8,7 +8,8 @@ Each function takes computed data and returns a Figure; nothing here simulates.
 * the report section :mod:`ppamsafety.sections.diagnose_cases`:
   :func:`plot_summary_profiles`, :func:`plot_gap`, :func:`plot_confusion`;
 * case study (a), :mod:`ppamsafety.sections.diagnose_sawtooth`:
-  :func:`plot_sawtooth_diagnosis`.
+  :func:`plot_sawtooth_diagnosis`;
+* the as-built arm, :mod:`ppamsafety.sections.as_built`: :func:`plot_as_built`.
 """
 
 from __future__ import annotations
@@ -325,5 +326,69 @@ def plot_sawtooth_diagnosis(rest, metrics):
     return fig
 
 
+def plot_as_built(cells, effects, *, sources):
+    """The as-built arm: every printed number against the nominal and the as-built simulation.
+
+    Parameters
+    ----------
+    cells : pandas.DataFrame
+        One row per printed number (``ppamsafety.diagnose.arm.as_built.AsBuiltFit.cells``):
+        ``source``, ``ratio_nominal``, ``ratio_as_built`` (simulated / printed) and
+        ``sigma_log`` (standard uncertainty of ln ratio).
+    effects : pandas.DataFrame
+        One row per candidate (``AsBuiltFit.effects``): ``candidate``, ``fitted``,
+        ``theta`` and its 95 % interval ``theta_low``, ``theta_high``.
+    sources : sequence of str, keyword-only
+        Sources in display order (``as_built.SOURCES``).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Left: ln(simulated / printed) per number, grouped by source, nominal (grey) and
+        as-built (colour), the +-2 sigma band of each number as a bar.  Right: the fitted
+        thetas with their 95 % intervals (0 = nominal arm, 1 = largest plausible magnitude).
+    """
+    fig, (a, b) = new_figure(1, 2, figsize=(12, 4.4), gridspec_kw={"width_ratios": [3, 1]})
+    x0, ticks, labels = 0, [], []
+    for k, src in enumerate(s for s in sources if (cells.source == s).any()):
+        c = cells[cells.source == src]
+        x = x0 + np.arange(len(c))
+        sig = c.sigma_log.to_numpy(float)
+        a.fill_between(x, -2 * sig, 2 * sig, color="0.9", step="mid")
+        a.plot(x, np.log(c.ratio_nominal.to_numpy(float)), "o", ms=3, color="0.55",
+               label="nominal" if k == 0 else None)
+        a.plot(x, np.log(c.ratio_as_built.to_numpy(float)), "o", ms=3.5, color=f"C{k}",
+               label=src)
+        ticks.append(x0 + (len(c) - 1) / 2)
+        labels.append(src.replace("Table ", "T").replace(" RMS", ""))
+        x0 += len(c) + 3
+    a.axhline(0.0, color="k", lw=0.8)
+    a.set_xticks(ticks)
+    a.set_xticklabels(labels, fontsize=8)
+    a.set_ylabel("ln(simulated / printed)")
+    a.set_title("every printed number: nominal (grey) and as-built; band: ±2σ", fontsize=9)
+    a.legend(fontsize=7, ncol=2)
+    a.grid(alpha=0.3)
+    fe = effects[effects.fitted]
+    y = np.arange(len(effects))
+    th = fe.theta.to_numpy(float)
+    b.errorbar(th, [list(effects.candidate).index(n) for n in fe.candidate],
+               xerr=[th - fe.theta_low.to_numpy(float), fe.theta_high.to_numpy(float) - th],
+               fmt="o", capsize=3)
+    nf = effects[~effects.fitted]
+    b.plot(np.zeros(len(nf)), [list(effects.candidate).index(n) for n in nf.candidate], "x",
+           color="0.5", label="not fitted (nominal)")
+    b.set_yticks(y)
+    b.set_yticklabels(effects.candidate, fontsize=7)
+    b.axvline(0.0, color="k", lw=0.8)
+    b.set_xlim(-1.05, 1.05)
+    b.set_xlabel("theta (0 nominal, ±1 largest plausible)", fontsize=8)
+    b.set_title("fitted effects, 95 % intervals", fontsize=9)
+    b.legend(fontsize=7)
+    b.grid(alpha=0.3)
+    fig.tight_layout()
+    return fig
+
+
 __all__ = ["actuator_force_figure", "actuator_residual_figure", "plot_summary_profiles", "plot_gap",
-           "plot_confusion", "plot_sawtooth_diagnosis"]
+           "plot_confusion", "plot_sawtooth_diagnosis", "plot_as_built"]
