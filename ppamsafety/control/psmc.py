@@ -49,7 +49,9 @@ def _limit_pair(name: str, value) -> tuple:
     if isinstance(value, (int, float, np.integer, np.floating)) and not isinstance(value, bool) \
             and math.isinf(value) and value > 0:
         return (math.inf, math.inf)
-    if isinstance(value, (list, tuple, np.ndarray)) and np.ndim(value) == 1 and len(value) == 2:
+    seq = (isinstance(value, (list, tuple)) and len(value) == 2) or (
+        isinstance(value, np.ndarray) and value.ndim == 1 and value.size == 2)
+    if seq:                 # each entry checked on its own (a ragged list names its entry)
         return tuple(math.inf if (isinstance(v, (int, float, np.integer, np.floating))
                                   and not isinstance(v, bool) and math.isinf(v) and v > 0)
                      else pair(f"{name}[{j}]", v, lo=0.0, hi=PRESSURE_MAX, lo_open=True,
