@@ -21,10 +21,23 @@ is used for every joint/valve):
   ``valve_offset_delta`` [Pa] (+ nominal);
 * ``valve_dead_time`` [s]: the set values act this much later (realised as
   a delayed input, exact for an open-loop record);
+* sensor faults (in the diagnosis library, :mod:`.candidates`):
+  ``pressure_sensor_offset`` [Pa] and ``pressure_sensor_gain`` [-] (the
+  recorded ``p_m = (1 + g) p + o``, every muscle or a vector of 4; offsets at
+  most 1 bar), ``encoder_offset`` [rad] (``q_m = q + o``, per joint);
 * effects outside the diagnosis library, to test that it refuses to name
   them: ``geometry.<field>`` (e.g. ``geometry.L1`` [m], a wrong link
-  length in the model), ``pressure_sensor_offset`` [Pa] (added to the
-  recorded p, every muscle or a vector of 4; at most 1 bar in magnitude).
+  length in the model), ``link.<field>`` (a field of
+  :class:`~ppamsafety.params.inertia.LinkInertia`: a link mass, centre of
+  gravity or inertia the model has wrong), ``encoder_gain`` [-] (``q_m = (1 +
+  g) q``), ``velocity_sensor_gain`` [-] (``qd_m = (1 + g) qd``),
+  ``encoder_backlash`` [rad] (play between joint and encoder: the reading
+  follows the joint only once the play is taken up), ``valve_nonlinearity``
+  [-] (the valves respond to ``u + k (u - 1.5 bar)^2 / 3 bar`` instead of the
+  logged ``u``), ``noise_correlation_time`` [s] (the measurement noise is
+  coloured: first-order autoregressive with this correlation time and the
+  same variance), ``outlier_rate`` [-] (that fraction of samples of one
+  channel each carry a spike of 10-50 noise levels).
 
 Noise ``"table-3.2"``: white Gaussian noise with the Table 3.2 variances on
 q (3.46e-6, 2.59e-6 rad^2) and qd (1.63e-4, 2.32e-5 rad^2/s^2) and 500 Pa
@@ -60,9 +73,11 @@ Experiments
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass, replace
 
 import numpy as np
 import pandas as pd
+from scipy.signal import lfilter
 
 from ..._validation import (InvalidTypeError, check_bool, check_choice, check_int,
                             check_numbers, check_range, check_size)
@@ -141,6 +156,184 @@ def _nominal_vector(arm, field):
                      "valve_time_constant": [v.time_constant for v in vs]}[field])
 
 
+#: Names of the measurement-side effects (sensor faults and recording imperfections) and the
+#: number of values each takes.
+MEASUREMENT_EFFECTS = {"pressure_sensor_offset": 4, "pressure_sensor_gain": 4,
+                       "encoder_offset": 2, "encoder_gain": 2, "velocity_sensor_gain": 2,
+                       "encoder_backlash": 2, "valve_nonlinearity": 1,
+                       "noise_correlation_time": 1, "outlier_rate": 1}
+#: Bounds of the measurement-side effects (what a sensor can plausibly do and still be a
+#: sensor), name -> (lo, hi, unit).
+MEASUREMENT_BOUNDS = {"pressure_sensor_offset": (-PRESSURE_OFFSET_MAX, PRESSURE_OFFSET_MAX, "Pa"),
+                      "pressure_sensor_gain": (-0.5, 0.5, "-"),
+                      "encoder_offset": (-0.5, 0.5, "rad"),
+                      "encoder_gain": (-0.2, 0.2, "-"),
+                      "velocity_sensor_gain": (-0.5, 0.5, "-"),
+                      "encoder_backlash": (0.0, 0.05, "rad"),
+                      "valve_nonlinearity": (-0.5, 0.5, "-"),
+                      "noise_correlation_time": (0.0, 1.0, "s"),
+                      "outlier_rate": (0.0, 0.05, "-")}
+#: Set value about which :data:`MEASUREMENT_EFFECTS` ``valve_nonlinearity`` bends the valve
+#: response, and its scale [Pa].
+VALVE_NONLINEARITY_CENTRE, VALVE_NONLINEARITY_SCALE = 1.5e5, 3.0e5
+
+
+@dataclass(frozen=True)
+class Measurement:
+    """How the recorded signals differ from the plant's (sensor faults, recording imperfections).
+
+    Attributes
+    ----------
+    pressure_sensor_offset : tuple of 4 float
+        [Pa]: ``p_m = (1 + g) p + o``.
+    pressure_sensor_gain : tuple of 4 float
+        g [-].
+    encoder_offset : tuple of 2 float
+        [rad]: ``q_m = (1 + g_q) q + o_q``.
+    encoder_gain : tuple of 2 float
+        g_q [-].
+    velocity_sensor_gain : tuple of 2 float
+        [-]: ``qd_m = (1 + g_v) qd``.
+    encoder_backlash : tuple of 2 float
+        Play between joint and encoder [rad].
+    valve_nonlinearity : float
+        k [-]: the valves receive ``u + k (u - 1.5 bar)^2 / 3 bar``.
+    noise_correlation_time : float
+        Correlation time of the AR(1) measurement noise [s] (0: white).
+    outlier_rate : float
+        Fraction of samples with a spike of 10-50 noise levels [-].
+    """
+
+    pressure_sensor_offset: tuple = (0.0,) * 4
+    pressure_sensor_gain: tuple = (0.0,) * 4
+    encoder_offset: tuple = (0.0,) * 2
+    encoder_gain: tuple = (0.0,) * 2
+    velocity_sensor_gain: tuple = (0.0,) * 2
+    encoder_backlash: tuple = (0.0,) * 2
+    valve_nonlinearity: float = 0.0
+    noise_correlation_time: float = 0.0
+    outlier_rate: float = 0.0
+
+    def sensors(self, q, qd, p):
+        """Sensor faults applied to true angles, velocities, pressures (copies returned).
+
+        Parameters
+        ----------
+        q, qd : array_like, shape (N, 2)
+            True angles [rad] and velocities [rad/s] (in time order: backlash has memory).
+        p : array_like, shape (N, 4)
+            True gauge pressures [Pa].
+        """
+        q = _backlash(np.asarray(q, float), np.asarray(self.encoder_backlash))
+        q = q * (1.0 + np.asarray(self.encoder_gain)) + np.asarray(self.encoder_offset)
+        qd = np.asarray(qd, float) * (1.0 + np.asarray(self.velocity_sensor_gain))
+        p = (np.asarray(p, float) * (1.0 + np.asarray(self.pressure_sensor_gain))
+             + np.asarray(self.pressure_sensor_offset))
+        return q, qd, p
+
+    def valve_input(self, u) -> np.ndarray:
+        """What the valves receive when ``u`` is logged (the valve nonlinearity).
+
+        Parameters
+        ----------
+        u : numpy.ndarray
+            Logged set values [Pa].
+        """
+        if self.valve_nonlinearity == 0.0:
+            return u
+        return u + self.valve_nonlinearity * (u - VALVE_NONLINEARITY_CENTRE) ** 2 \
+            / VALVE_NONLINEARITY_SCALE
+
+    def noise(self, shape, std, dt, rng) -> np.ndarray:
+        """Measurement noise of standard deviation ``std`` (white, or AR(1) coloured).
+
+        Parameters
+        ----------
+        shape : tuple
+            (samples, channels).
+        std : array_like
+            Standard deviation per channel.
+        dt : float
+            Sample time [s].
+        rng : numpy.random.Generator
+        """
+        w = rng.normal(size=shape) * np.asarray(std)
+        tau = self.noise_correlation_time
+        if tau <= 0.0 or w.shape[0] < 2:
+            return w
+        a = math.exp(-dt / tau)
+        return lfilter([math.sqrt(1.0 - a * a)], [1.0, -a], w, axis=0)
+
+    def outliers(self, x, std, rng) -> np.ndarray:
+        """``x`` with spikes of 10-50 noise levels on ``outlier_rate`` of the samples.
+
+        Parameters
+        ----------
+        x : array_like, shape (N, k)
+        std : array_like, shape (k,)
+            Noise level per channel.
+        rng : numpy.random.Generator
+        """
+        if self.outlier_rate <= 0.0:
+            return x
+        x = np.array(x, dtype=float)
+        n, k = x.shape
+        m = rng.random(n) < self.outlier_rate
+        ch = rng.integers(0, k, size=n)
+        amp = rng.uniform(10.0, 50.0, size=n) * rng.choice([-1.0, 1.0], size=n)
+        idx = np.nonzero(m)[0]
+        x[idx, ch[idx]] += amp[idx] * np.asarray(std)[ch[idx]]
+        return x
+
+
+def _backlash(q, play):
+    """Encoder readings of a joint with play ``play`` [rad] per joint (a dead band of that width
+    around the reading: the reading moves only when the joint pushes it)."""
+    if not np.any(play > 0):
+        return q
+    out = np.empty_like(q)
+    r = q[0].copy()
+    half = 0.5 * play
+    for k in range(q.shape[0]):
+        r = np.where(q[k] > r + half, q[k] - half, np.where(q[k] < r - half, q[k] + half, r))
+        out[k] = r
+    return out
+
+
+def hidden_effects(arm, effects: dict) -> tuple:
+    """The plant, the valve dead time and the :class:`Measurement` of ``effects``.
+
+    Parameters
+    ----------
+    arm : ArmParameters
+        Nominal arm.
+    effects : dict
+        ``{name: value}`` (see the module docstring).
+
+    Returns
+    -------
+    plant : ArmParameters
+    dead_time : float
+        [s]
+    measurement : Measurement
+    """
+    if not isinstance(effects, dict):
+        raise TypeError(f"effects must be a dict {{name: value}}, got {type(effects).__name__}")
+    plant_fx, meas = {}, {}
+    for name, value in effects.items():
+        if isinstance(name, str) and name in MEASUREMENT_EFFECTS:
+            lo, hi, unit = MEASUREMENT_BOUNDS[name]
+            n = MEASUREMENT_EFFECTS[name]
+            vals = _as_list(name, value, n)
+            vals = tuple(check_range(f"effect {name}" + (f"[{i}]" if n > 1 else ""), v, lo, hi,
+                                     unit=unit) for i, v in enumerate(vals))
+            meas[name] = vals if n > 1 else vals[0]
+        else:
+            plant_fx[name] = value
+    plant, dead, _ = plant_with(arm, plant_fx)
+    return plant, dead, Measurement(**meas)
+
+
 def plant_with(arm, effects: dict):
     """The plant (ArmParameters) and the extra hidden quantities for ``effects``.
 
@@ -161,10 +354,11 @@ def plant_with(arm, effects: dict):
     """
     if not isinstance(effects, dict):
         raise TypeError(f"effects must be a dict {{name: value}}, got {type(effects).__name__}")
-    fx, geo = {}, {}
+    fx, geo, links = {}, {}, {}
     dead, offset = 0.0, np.zeros(4)
     fields = Effects.__dataclass_fields__
     geo_fields = tuple(arm.geometry.__dataclass_fields__)
+    link_fields = tuple(arm.links.__dataclass_fields__)
     for name, value in effects.items():
         if not isinstance(name, str):
             raise InvalidTypeError(f"effects: an effect name must be a str, got {name!r}")
@@ -187,6 +381,13 @@ def plant_with(arm, effects: dict):
                 raise ValueError(f"unknown effect {name!r}: {g!r} is not a field of the arm "
                                  f"geometry; allowed: geometry.<{'|'.join(geo_fields)}>")
             geo[g] = _as_list(name, value, 1)[0]
+        elif name.startswith("link."):
+            g = name.split(".", 1)[1]
+            if g not in link_fields:
+                raise ValueError(f"unknown effect {name!r}: {g!r} is not a field of the link "
+                                 f"inertias; allowed: link.<{'|'.join(link_fields)}>")
+            vals = _as_list(name, value, 2 if g in ("coulomb", "viscous") else 1)
+            links[g] = vals if g in ("coulomb", "viscous") else vals[0]
         elif name in fields and Effects.kind(name) is EffectKind.OPTION:
             fx[name] = _option(name, value)
         elif name in fields:
@@ -195,11 +396,14 @@ def plant_with(arm, effects: dict):
         else:
             raise ValueError(f"unknown effect {name!r}; allowed: Effects fields "
                              f"{sorted(fields)}, {sorted(RELATIVE)}, valve_offset_delta, "
-                             f"valve_dead_time, pressure_sensor_offset, geometry.<field>")
+                             f"valve_dead_time, {', '.join(MEASUREMENT_EFFECTS)}, "
+                             f"geometry.<field>, link.<field>")
     plant = arm
     try:
         if geo:
             plant = plant.replace(geometry=plant.geometry.replace(**geo))
+        if links:
+            plant = plant.replace(links=replace(plant.links, **links))
         if fx:
             plant = plant.replace(effects=Effects(**fx))
     except (TypeError, ValueError) as exc:   # the parameter sets' own ranges: name the effect
@@ -286,7 +490,21 @@ def gravity_compensation_set_values(q_d, arm) -> np.ndarray:
     return valve_set_values(delta_p_pressures(dp, arm), arm)
 
 
-def _sawtooth(plant, arm, noise, seed, duration, dt, dead, offset):
+def _logged_for(meas, u):
+    """The set values to log so that the valves, receiving ``u``, see
+    ``meas.valve_input(logged)`` = u (inverse of the quadratic distortion)."""
+    k = meas.valve_nonlinearity
+    if k == 0.0:
+        return u
+    c, s = VALVE_NONLINEARITY_CENTRE, VALVE_NONLINEARITY_SCALE
+    # solve x + k (x - c)^2 / s = u for the root near u
+    a = k / s
+    d = u - c
+    y = (-1.0 + np.sqrt(np.maximum(1.0 + 4.0 * a * d, 0.0))) / (2.0 * a)
+    return c + y
+
+
+def _sawtooth(plant, arm, noise, seed, duration, dt, dead, meas):
     """Samples of the data windows of the static sawtooth (see :func:`synthesize`)."""
     t, qd_set, windows = sawtooth_set_angles(dt=dt)
     if duration is not None:
@@ -302,20 +520,28 @@ def _sawtooth(plant, arm, noise, seed, duration, dt, dead, offset):
     shift = int(round(dead / dt))
     substeps = max(2, int(math.ceil(dt / min(1e-3, 0.5 * min(
         v.time_constant for v in arm.valves.valves)))))
-    X = simulate(plant, x0, delayed(u, shift), dt=dt, substeps=substeps)[:t.size]
+    X = simulate(plant, x0, delayed(meas.valve_input(u), shift), dt=dt,
+                 substeps=substeps)[:t.size]
     if plant.effects.hysteresis_delta is not None:
         eps, fac = hysteresis_factors(X, plant)
     else:
         eps, fac = contractions(X[:, :2], arm), np.ones((t.size, 4))
     F = np.stack([muscle_force(k + 1, eps[:, k], X[:, 4 + k], arm) for k in range(4)], 1) * fac
     idx = np.concatenate([np.arange(a, b) for a, b in windows])
-    q, qd, p, F = X[idx, :2].copy(), X[idx, 2:4].copy(), X[idx, 4:8] + offset, F[idx]
+    # sensor faults (backlash needs the whole history) on every sample, then the windows
+    qa, qda, pa = meas.sensors(X[:, :2], X[:, 2:4], X[:, 4:8])
+    q, qd, p, F = qa[idx].copy(), qda[idx].copy(), pa[idx].copy(), F[idx]
     if noise == "table-3.2":
         rng = np.random.default_rng(seed)
-        q += rng.normal(size=q.shape) * np.sqrt(ANGLE_NOISE_VARIANCES)
-        qd += rng.normal(size=qd.shape) * np.sqrt(VELOCITY_NOISE_VARIANCES)
-        p += rng.normal(size=p.shape) * PRESSURE_NOISE_STD
+        q += meas.noise(q.shape, np.sqrt(ANGLE_NOISE_VARIANCES), dt, rng)
+        qd += meas.noise(qd.shape, np.sqrt(VELOCITY_NOISE_VARIANCES), dt, rng)
+        p += meas.noise(p.shape, PRESSURE_NOISE_STD, dt, rng)
         F += rng.normal(size=F.shape) * FORCE_NOISE_STD
+        if meas.outlier_rate > 0.0:
+            x = meas.outliers(np.concatenate([q, qd, p], axis=1), np.concatenate([
+                np.sqrt(ANGLE_NOISE_VARIANCES), np.sqrt(VELOCITY_NOISE_VARIANCES),
+                np.full(4, PRESSURE_NOISE_STD)]), np.random.default_rng([seed, 7]))
+            q, qd, p = x[:, :2], x[:, 2:4], x[:, 4:8]
     cols = {"t": t[idx], "q1": q[:, 0], "q2": q[:, 1], "qd1": qd[:, 0], "qd2": qd[:, 1]}
     for name, arr in (("p", p), ("u", u[idx]), ("F", F)):
         for i in range(4):
@@ -380,20 +606,38 @@ def synthesize_arm(experiment: str = "open-loop", effects=None, *, noise: str = 
                f"{dt:g} s ({n:.3g} samples)", n * SAMPLE_BYTES,
                remedy="use a shorter duration or a larger dt")
     arm = _arm(arm)
-    plant, dead, offset = plant_with(arm, {} if effects is None else effects)
+    plant, dead, meas = hidden_effects(arm, {} if effects is None else effects)
     if experiment == "static-sawtooth":
-        meta, frame = _sawtooth(plant, arm, noise, seed, duration, dt, dead, offset)
+        meta, frame = _sawtooth(plant, arm, noise, seed, duration, dt, dead, meas)
         return MeasuredData(meta, frame, source="synthesize")
     duration = 10.0 if duration is None else duration
     if experiment == "closed-loop":
-        return _closed_loop(arm, plant, dead, offset, noise=noise, seed=seed,
+        return _closed_loop(arm, plant, dead, meas, noise=noise, seed=seed,
                             duration=duration, dt=dt, controller=controller,
                             reference=reference, p_std=PRESSURE_NOISE_STD)
-    return _open_loop(arm, plant, dead, offset, noise=noise, seed=seed, duration=duration,
+    return _open_loop(arm, plant, dead, meas, noise=noise, seed=seed, duration=duration,
                       dt=dt, p_std=PRESSURE_NOISE_STD)
 
 
-def _open_loop(arm, plant, dead, offset, *, noise, seed, duration, dt, p_std):
+def _recorded(meas, q, qd, p, *, noise, seed, dt, p_std, qnoise=True):
+    """The recorded q, qd, p: sensor faults, then measurement noise, then outliers."""
+    q, qd, p = meas.sensors(q, qd, p)
+    if noise == "table-3.2":
+        rng = np.random.default_rng(seed)
+        sq, sqd = np.sqrt(ANGLE_NOISE_VARIANCES), np.sqrt(VELOCITY_NOISE_VARIANCES)
+        if qnoise:
+            q = q + meas.noise(q.shape, sq, dt, rng)
+            qd = qd + meas.noise(qd.shape, sqd, dt, rng)
+        p = p + meas.noise(p.shape, p_std, dt, rng)
+        if meas.outlier_rate > 0.0:
+            x = meas.outliers(np.concatenate([q, qd, p], axis=1),
+                              np.concatenate([sq, sqd, np.full(4, p_std)]),
+                              np.random.default_rng([seed, 7]))
+            q, qd, p = x[:, :2], x[:, 2:4], x[:, 4:8]
+    return q, qd, p
+
+
+def _open_loop(arm, plant, dead, meas, *, noise, seed, duration, dt, p_std):
     """The open-loop Fourier-excitation record (see :func:`synthesize`)."""
     exc = default_excitation(arm, seed=seed)
     q0 = equilibrium_for(exc.delta_p([0.0])[0], arm)
@@ -404,13 +648,9 @@ def _open_loop(arm, plant, dead, offset, *, noise, seed, duration, dt, p_std):
     shift = int(round(dead / dt))
     substeps = max(2, int(math.ceil(dt / min(1e-3, 0.5 * min(
         v.time_constant for v in arm.valves.valves)))))
-    X = simulate(plant, x0, delayed(u, shift), dt=dt, substeps=substeps)[:n]
-    q, qd, p = X[:, :2].copy(), X[:, 2:4].copy(), X[:, 4:8].copy() + offset
-    if noise == "table-3.2":
-        rng = np.random.default_rng(seed)
-        q += rng.normal(size=q.shape) * np.sqrt(ANGLE_NOISE_VARIANCES)
-        qd += rng.normal(size=qd.shape) * np.sqrt(VELOCITY_NOISE_VARIANCES)
-        p += rng.normal(size=p.shape) * p_std
+    X = simulate(plant, x0, delayed(meas.valve_input(u), shift), dt=dt, substeps=substeps)[:n]
+    q, qd, p = _recorded(meas, X[:, :2], X[:, 2:4], X[:, 4:8], noise=noise, seed=seed, dt=dt,
+                         p_std=p_std)
     meta = {"kind": "arm", "experiment": "open-loop", "sample_rate": 1.0 / dt,
             "description": "synthetic open-loop Fourier excitation record",
             "source": f"ppamsafety synthesize (seed {seed}, noise {noise})"}
@@ -471,9 +711,16 @@ def closed_loop_case(arm, plant, *, controller: str = DEFAULT_CONTROLLER,
                           name=f"{reference}: {controller}")
 
 
-def _closed_loop(arm, plant, dead, offset, *, noise, seed, duration, dt, controller,
+def _closed_loop(arm, plant, dead, meas, *, noise, seed, duration, dt, controller,
                  reference, p_std):
-    """The closed-loop record (see :func:`synthesize`)."""
+    """The closed-loop record (see :func:`synthesize`).
+
+    The controller sees the plant's angles and velocities with the Table 3.2 noise (fed
+    back); the recorded ones also carry the measurement effects (sensor faults, coloured
+    noise, outliers), added afterwards: the diagnosis replays the logged set values, so
+    what the controller saw does not enter it.  A valve nonlinearity is realised on the
+    log (the set values written are those whose distorted value the valves received).
+    """
     case = closed_loop_case(arm, plant, controller=controller, reference=reference,
                             duration=duration, dt=dt, noise=noise == "table-3.2", seed=seed,
                             dead_time=dead)
@@ -485,11 +732,17 @@ def _closed_loop(arm, plant, dead, offset, *, noise, seed, duration, dt, control
     sig = res.signals
     q = sig("q1_meas", "q2_meas")[:n].copy()
     qd = sig("qd1_meas", "qd2_meas")[:n].copy()
-    p = sig("p1", "p2", "p3", "p4")[:n].copy() + offset
+    p = sig("p1", "p2", "p3", "p4")[:n].copy()
     u = sig("u1", "u2", "u3", "u4")[:n].copy()
+    u = _logged_for(meas, u)
     t = np.arange(q.shape[0]) * dt
-    if noise == "table-3.2":
-        p += np.random.default_rng([seed, 1]).normal(size=p.shape) * p_std
+    if meas == Measurement():
+        if noise == "table-3.2":
+            p += np.random.default_rng([seed, 1]).normal(size=p.shape) * p_std
+    else:
+        # the controller's noise is already in q, qd; add the coloured part and the faults
+        q, qd, p = _recorded(meas, q, qd, p, noise=noise, seed=seed + 1, dt=dt, p_std=p_std,
+                             qnoise=meas.noise_correlation_time > 0.0)
     meta = {"kind": "arm", "experiment": "closed-loop", "sample_rate": 1.0 / dt,
             "description": f"synthetic closed-loop record: {reference}, {controller}",
             "source": f"ppamsafety synthesize (seed {seed}, noise {noise})",
@@ -497,6 +750,7 @@ def _closed_loop(arm, plant, dead, offset, *, noise, seed, duration, dt, control
     return _record(meta, t, q, qd, p, u)
 
 
-__all__ = ["synthesize_arm", "plant_with", "closed_loop_case", "sawtooth_set_angles",
+__all__ = ["synthesize_arm", "plant_with", "hidden_effects", "Measurement", "MEASUREMENT_EFFECTS",
+           "closed_loop_case", "sawtooth_set_angles",
            "gravity_compensation_set_values", "EXPERIMENTS", "NOISES", "FORCE_NOISE_STD",
            "DEFAULT_CONTROLLER", "DEFAULT_REFERENCE"]
