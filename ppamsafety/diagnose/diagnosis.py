@@ -30,7 +30,8 @@ from .core.result import HIGH_CONFIDENCE, JSON_NAME, SCHEMA_VERSION, Diagnosis
 
 def diagnose(data, *, arm=None, candidates=None, block_seconds: float = 0.05,
              alpha: float = 0.01, rho_max: float = 1.5, experiment: str | None = None,
-             seed: int = 0, bootstrap: int | None = None) -> Diagnosis:
+             seed: int = 0, bootstrap: int | None = None,
+             stability: int | None = None) -> Diagnosis:
     """Diagnose a measured record against the model: which effect is missing, and where.
 
     Parameters
@@ -64,6 +65,12 @@ def diagnose(data, *, arm=None, candidates=None, block_seconds: float = 0.05,
         :data:`~ppamsafety.diagnose.arm.selection.BOOTSTRAP_REPLICATES`, 0: none
         (arm records).  Each named effect's evidence then carries
         ``bootstrap_frequency``.
+    stability : int, optional, keyword-only
+        Complementary pairs of the stability selection (arm records; default
+        :data:`~ppamsafety.diagnose.arm.selection.STABILITY_PAIRS`, 0: none -- then no
+        effect reaches "high").  Each named effect's evidence carries
+        ``stability_frequency``; ``diagnosis.json`` key ``stability`` holds the bound on
+        the expected number of false selections.
 
     Returns
     -------
@@ -74,13 +81,15 @@ def diagnose(data, *, arm=None, candidates=None, block_seconds: float = 0.05,
 
     Notes
     -----
-    For an actuator record ``arm``, ``block_seconds``, ``seed`` and ``bootstrap``
-    do not apply and its confidence is the BIC weight.
+    For an actuator record ``arm``, ``block_seconds``, ``seed``, ``bootstrap`` and
+    ``stability`` do not apply and its confidence is the BIC weight.
     """
     check_instance("data", data, (MeasuredData, Campaign))
     seed = check_seed("seed", seed)
     if bootstrap is not None:
         check_int("bootstrap", bootstrap, 0, 10000)
+    if stability is not None:
+        check_int("stability", stability, 0, 10000)
     if isinstance(data, Campaign) or data.actuator_type == "cylinder":
         return diagnose_campaign(data, candidates=candidates, alpha=alpha, rho_max=rho_max)
     if data.kind == "actuator":
@@ -88,7 +97,7 @@ def diagnose(data, *, arm=None, candidates=None, block_seconds: float = 0.05,
                                  experiment=experiment)
     dg = diagnose_arm(data, arm=arm, candidates=candidates, block_seconds=block_seconds,
                       alpha=alpha, rho_max=rho_max, experiment=experiment, seed=seed,
-                      bootstrap=bootstrap)
+                      bootstrap=bootstrap, stability=stability)
     made = data.meta.get("arm") if isinstance(data, MeasuredData) else None
     if made is None:
         return dg

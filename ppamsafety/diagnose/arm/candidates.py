@@ -28,8 +28,25 @@ valve_dead_time        pressure    d [s], common to the four valves
 polytropic_exponent    pressure    n [-]  (3.3)
 joint_friction         torque      c1, c2 [N m], b1, b2 [N m s/rad]  (3.30)
 payload                torque      M [kg] at the load point A_L (2.19), (A.21)
-hysteresis             torque      delta [-] (3.35), shared by the 4 groups     
+hysteresis             torque      delta [-] (3.35), shared by the 4 groups
+joint_torque_bias      torque      b1, b2 [N m]: a constant torque per joint
+pressure_sensor_offset both        o_1..o_4 [Pa]: p_m = (1 + g) p + o, per channel
+pressure_sensor_gain   both        g_1..g_4 [-]
+encoder_offset         both        o_q1, o_q2 [rad]: q_m = q + o, per joint
 =====================  ==========  =================================================
+
+Sensor faults (the last three) are the first thing an experimenter checks.  They are
+columns of their own (:func:`ppamsafety.diagnose.arm.residuals.sensor_columns`,
+:func:`~ppamsafety.diagnose.arm.residuals.encoder_columns`) and show in *both*
+subsystems, which is what tells them from a plant effect: a pressure-sensor offset looks
+like a valve offset in the pressure residual, but also gives a torque error proportional
+to the muscle's lever arm; a valve offset gives none.  Where a record cannot tell a fault
+from a plant effect, the selection reports them as confounded
+(:mod:`ppamsafety.diagnose.arm.selection`) with the experiment that separates them
+(:data:`SEPARATING_EXPERIMENTS`).
+
+Every parameter has a plausible range (the naming rule's bounds) and a physical range
+(``Parameter.phys_lo``/``phys_hi``: a fit outside it is a symptom, not an effect).
 
 Names on a tester (actuator records) have their own vocabulary and library:
 :mod:`ppamsafety.diagnose.bench.candidates`.
@@ -46,12 +63,16 @@ from ...params import thesis_arm
 from ...params.effects import Effects
 from ...plant.packing import payload_theta
 from ..core.parameter import Parameter
-from .residuals import (HYSTERESIS_COLUMNS, MU_A, MU_B, MU_COUL, MU_K, MU_N, MU_THETA, MU_VISC,
-                        NMU)
+from .residuals import (ENCODER_OFFSET_COLUMNS, HYSTERESIS_COLUMNS, MU_A, MU_B, MU_COUL, MU_K,
+                        MU_N, MU_THETA, MU_VISC, NMU, PRESSURE_GAIN_COLUMNS,
+                        PRESSURE_OFFSET_COLUMNS, TORQUE_BIAS_COLUMNS)
 
 #: Fixed vocabulary of effect names on an arm (the ``name`` field of ``diagnosis.json``).
 VOCABULARY = ("hysteresis", "joint_friction", "valve_offset_gain", "valve_lag",
-              "valve_dead_time", "payload", "polytropic_exponent")
+              "valve_dead_time", "payload", "polytropic_exponent", "joint_torque_bias",
+              "pressure_sensor_offset", "pressure_sensor_gain", "encoder_offset")
+#: The sensor faults of the library: not plant effects but errors of the measurement.
+SENSOR_FAULTS = ("pressure_sensor_offset", "pressure_sensor_gain", "encoder_offset")
 #: Largest valve dead time searched [s] (the grid is every sample up to it).
 DEAD_TIME_MAX = 0.06
 
@@ -88,6 +109,14 @@ class Candidate:
         direction of mu (hysteresis: a torque proportional to the Preisach
         output of the measured contraction history).  ``directions`` must
         then be None; the k coefficients are this candidate's phi.
+    sensor_effect : callable or None
+        ``sensor_effect(values) -> SensorFault``: a sensor fault (the measurement, not the
+        plant, is wrong), applied to the simulated measurements of the "after" rollout.
+    at_rest : bool
+        The effect shows at rest (a static-sawtooth record can reveal it: no friction,
+        lag, dead time or volume term).
+    default : bool
+        In the default library (:func:`default_candidates`); False: opt in by name.
     """
 
     name: str
@@ -99,11 +128,34 @@ class Candidate:
     grid: bool = False
     plant_effect: object = field(default=None, repr=False)
     columns: str | None = None
+    sensor_effect: object = field(default=None, repr=False)
+    at_rest: bool = False
+    default: bool = True
+
+    @property
+    def is_sensor_fault(self) -> bool:
+        """True for an error of the measurement rather than of the plant."""
+        return self.sensor_effect is not None
 
     @property
     def n_params(self) -> int:
         """Number of fitted parameters (the count charged by the criterion)."""
         return len(self.parameters)
+
+
+def identity_values(mu, phi, shift):
+    """``Candidate.physical`` of a candidate whose reported values are its coefficients.
+
+    Parameters
+    ----------
+    mu : numpy.ndarray
+        Model vector (unused).
+    phi : numpy.ndarray
+        The candidate's coefficients.
+    shift : float
+        Dead time [s] (unused).
+    """
+    return np.asarray(phi, dtype=float)
 
 
 REGISTRY: dict = {}
@@ -123,11 +175,29 @@ def register(candidate: Candidate) -> Candidate:
                          f"{VOCABULARY}")
     if candidate.name in REGISTRY:
         raise ValueError(f"candidate {candidate.name!r} is already registered")
-    if candidate.subsystem not in ("pressure", "torque"):
+    if candidate.subsystem not in ("pressure", "torque", "both"):
         raise ValueError(f"candidate {candidate.name!r}: subsystem {candidate.subsystem!r} is "
-                         f"not 'pressure' or 'torque'")
+                         f"not 'pressure', 'torque' or 'both'")
     REGISTRY[candidate.name] = candidate
     return candidate
+
+
+def default_candidates(*, static: bool = False) -> tuple:
+    """Names of the default library (registry order): every candidate with ``default``; for
+    a static record only those that show at rest (``at_rest``).
+
+    ``joint_torque_bias`` is opt-in (``candidates=[..., "joint_torque_bias"]``): on the
+    excitations of an arm record its constant torque is nearly a combination of a payload
+    and an encoder offset (a pose-independent torque against gravity's cosine and its
+    slope), and in the library by default it absorbed what those and several
+    out-of-library errors left (measured on the scenario battery).
+
+    Parameters
+    ----------
+    static : bool, keyword-only
+        A static-sawtooth record.
+    """
+    return tuple(n for n, c in REGISTRY.items() if c.default and (c.at_rest or not static))
 
 
 def library(names=None) -> tuple:
@@ -200,19 +270,22 @@ BAR = 1e5
 
 register(Candidate(
     "valve_offset_gain", "pressure",
-    tuple(Parameter(f"v1_{i}", "Pa", -0.5 * BAR, 0.5 * BAR, f"static offset of valve {i} (3.12)")
+    tuple(Parameter(f"v1_{i}", "Pa", -0.5 * BAR, 0.5 * BAR, f"static offset of valve {i} (3.12)",
+                    phys_lo=-3 * BAR, phys_hi=3 * BAR)
           for i in range(1, 5)) +
-    tuple(Parameter(f"v2_{i}", "-", 0.5, 1.5, f"static gain of valve {i} (3.12)")
+    tuple(Parameter(f"v2_{i}", "-", 0.5, 1.5, f"static gain of valve {i} (3.12)", phys_lo=0.0)
           for i in range(1, 5)),
     "pressure residual of the valve(s) concerned; a bias that follows the set value "
     "(offset: constant drift rate; gain: proportional to u), independent of the motion",
     _phys_offset_gain, _dirs_offset_gain,
-    plant_effect=lambda v, arm: {"valve_offset": tuple(v[:4]), "valve_gain": tuple(v[4:])}))
+    plant_effect=lambda v, arm: {"valve_offset": tuple(v[:4]), "valve_gain": tuple(v[4:])},
+    at_rest=True))
 
 register(Candidate(
     "valve_lag", "pressure",
     tuple(Parameter(f"T_{i}", "s", 5e-3, 1.0, f"time constant of valve {i} (3.2); "
-                    f"plausible range of a proportional pressure valve (thesis 45-60 ms)")
+                    f"plausible range of a proportional pressure valve (thesis 45-60 ms)",
+                    phys_lo=0.0)
           for i in range(1, 5)),
     "pressure residual proportional to the valve error v1 + v2 u - p: largest when the set "
     "value moves fast (phase lag), zero in steady state",
@@ -221,7 +294,7 @@ register(Candidate(
 
 register(Candidate(
     "valve_dead_time", "pressure",
-    (Parameter("d", "s", 0.0, DEAD_TIME_MAX, "pure delay of all four valves"),),
+    (Parameter("d", "s", 0.0, DEAD_TIME_MAX, "pure delay of all four valves", phys_lo=0.0),),
     "pressure residual like a lag but with the shape of the set value's derivative "
     "delayed: the set value acts d later on all valves",
     lambda mu, phi, shift: np.array([shift]), None, grid=True,
@@ -229,7 +302,8 @@ register(Candidate(
 
 register(Candidate(
     "polytropic_exponent", "pressure",
-    (Parameter("n", "-", 1.0, 1.4, "polytropic exponent (3.3)"),),
+    (Parameter("n", "-", 1.0, 1.4, "polytropic exponent (3.3): isothermal 1 to isentropic 1.4",
+               phys_lo=1.0, phys_hi=1.4),),
     "pressure residual proportional to the volume-change term (P_atm + p) m_tau qd / V: "
     "changes sign with the velocity of the joint, zero at rest",
     lambda mu, phi, shift: np.array([mu[MU_N]]), _dirs_poly,
@@ -237,10 +311,12 @@ register(Candidate(
 
 register(Candidate(
     "joint_friction", "torque",
-    (Parameter("c1", "N m", 0.0, 10.0, "Coulomb friction of joint 1 (3.30)"),
-     Parameter("c2", "N m", 0.0, 10.0, "Coulomb friction of joint 2 (3.30)"),
-     Parameter("b1", "N m s/rad", 0.0, 10.0, "viscous friction of joint 1 (3.30)"),
-     Parameter("b2", "N m s/rad", 0.0, 10.0, "viscous friction of joint 2 (3.30)")),
+    (Parameter("c1", "N m", 0.0, 10.0, "Coulomb friction of joint 1 (3.30)", phys_lo=0.0),
+     Parameter("c2", "N m", 0.0, 10.0, "Coulomb friction of joint 2 (3.30)", phys_lo=0.0),
+     Parameter("b1", "N m s/rad", 0.0, 10.0, "viscous friction of joint 1 (3.30)",
+               phys_lo=0.0),
+     Parameter("b2", "N m s/rad", 0.0, 10.0, "viscous friction of joint 2 (3.30)",
+               phys_lo=0.0)),
     "torque residual that opposes the motion: its sign follows the velocity sign "
     "(Coulomb) and its size the speed (viscous); no configuration dependence",
     lambda mu, phi, shift: np.array([mu[MU_COUL], mu[MU_COUL + 1], mu[MU_VISC],
@@ -253,11 +329,12 @@ register(Candidate(
 def _payload_candidate():
     return Candidate(
         "payload", "torque",
-        (Parameter("M", "kg", 0.0, 5.0, "point mass at the load point A_L (2.19)"),),
+        (Parameter("M", "kg", 0.0, 5.0, "point mass at the load point A_L (2.19)",
+                   phys_lo=0.0),),
         "torque residual of both joints with the gravity shape (cos of the link angles, "
         "largest with the forearm horizontal) plus inertia; independent of the velocity sign",
-        lambda mu, phi, shift: np.array([phi[0]]), _dirs_payload,
-        plant_effect=lambda v, arm: {"payload_mass": float(v[0])})
+        identity_values, _dirs_payload,
+        plant_effect=lambda v, arm: {"payload_mass": float(v[0])}, at_rest=True)
 
 
 register(_payload_candidate())
@@ -292,17 +369,151 @@ def _maybe_register_hysteresis():
         "hysteresis", "torque",
         (Parameter("delta", "-", 0.0, 1.0, "hysteresis scale delta of (3.35), one value for "
                    "the four muscle groups (thesis §3.6.5: 0.139 for the arm's 25-fibre "
-                   "muscles)"),),
+                   "muscles)", phys_lo=0.0, phys_hi=1.0),),
         "torque (and muscle-force) residual that depends on the direction of the last "
         "contraction change: force below the model while a muscle contracts, above while it "
         "extends (§3.5.1.6, fig. 3.2); rising angles settle low, falling ones high",
-        lambda mu, phi, shift: np.array([phi[0]]), None, columns=HYSTERESIS_COLUMNS,
+        identity_values, None, columns=HYSTERESIS_COLUMNS,
         plant_effect=lambda v, arm: {"hysteresis_delta": (float(min(max(v[0], 0.0), 1.0)),)
-                                     * 4}))
+                                     * 4}, at_rest=True))
 
 
 _maybe_register_hysteresis()
 
-__all__ = ["Candidate", "Parameter", "REGISTRY", "register", "library", "VOCABULARY",
-           "DEAD_TIME_MAX", "HYSTERESIS_COLUMNS"]
-_ = math
+
+@dataclass(frozen=True)
+class SensorFault:
+    """Errors of the measurement: ``p_m = (1 + gain) p + offset``, ``q_m = q + q_offset``.
+
+    Attributes
+    ----------
+    p_offset : tuple of 4 float
+        Pressure-sensor offsets [Pa].
+    p_gain : tuple of 4 float
+        Pressure-sensor gain errors [-].
+    q_offset : tuple of 2 float
+        Encoder offsets [rad].
+    """
+
+    p_offset: tuple = (0.0,) * 4
+    p_gain: tuple = (0.0,) * 4
+    q_offset: tuple = (0.0,) * 2
+
+    def __add__(self, other: "SensorFault") -> "SensorFault":
+        return SensorFault(tuple(np.add(self.p_offset, other.p_offset)),
+                           tuple(np.add(self.p_gain, other.p_gain)),
+                           tuple(np.add(self.q_offset, other.q_offset)))
+
+    def measure(self, x) -> np.ndarray:
+        """Measured [q, qd, p] (..., 8) of true states ``x`` (..., 8).
+
+        Parameters
+        ----------
+        x : array_like, shape (..., 8)
+            True states [q, qd, p] (rad, rad/s, Pa gauge).
+        """
+        x = np.array(x, dtype=float)
+        x[..., :2] += np.asarray(self.q_offset)
+        x[..., 4:8] = x[..., 4:8] * (1.0 + np.asarray(self.p_gain)) + np.asarray(self.p_offset)
+        return x
+
+    def true_state(self, x) -> np.ndarray:
+        """True states of measured ones (the inverse of :meth:`measure`).
+
+        Parameters
+        ----------
+        x : array_like, shape (..., 8)
+            Measured [q, qd, p] (rad, rad/s, Pa gauge).
+        """
+        x = np.array(x, dtype=float)
+        x[..., :2] -= np.asarray(self.q_offset)
+        x[..., 4:8] = (x[..., 4:8] - np.asarray(self.p_offset)) / (1.0 + np.asarray(self.p_gain))
+        return x
+
+
+#: The experiment that separates a sensor fault from the plant effect it can look like on a
+#: record, keyed by the (sorted) pair of candidate names; the default for any other pair.
+SEPARATING_EXPERIMENTS = {
+    ("pressure_sensor_offset", "valve_offset_gain"):
+        "vent the muscles (valves closed to atmosphere) and read the pressure sensors: a "
+        "sensor offset reads non-zero at 0 bar gauge; or check against a reference gauge",
+    ("pressure_sensor_gain", "valve_offset_gain"):
+        "compare the pressure sensors with a reference gauge at two or more pressures",
+    ("pressure_sensor_gain", "pressure_sensor_offset"):
+        "calibrate the pressure sensors against a reference gauge at two or more pressures",
+    ("encoder_offset", "payload"):
+        "hold the arm at a known reference pose (a mechanical stop or a level) and read the "
+        "encoders; weigh the load",
+    ("encoder_offset", "joint_torque_bias"):
+        "read the encoders at a known reference pose (a mechanical stop or a level)",
+    ("joint_torque_bias", "payload"):
+        "repeat the record with the load removed (or weighed): a payload changes with it, a "
+        "bias does not",
+    ("hysteresis", "joint_friction"):
+        "a quasi-static sawtooth (§3.5.1.6): hysteresis keeps its loop at rest, friction "
+        "needs motion",
+}
+#: Separating experiment of a pair without an entry above.
+DEFAULT_SEPARATION = ("an experiment that moves the two apart: excite the arm where their "
+                      "signatures differ (other poses, speeds, pressures), or measure one of "
+                      "them directly")
+
+
+def separating_experiment(a: str, b: str) -> str:
+    """The experiment that tells candidates ``a`` and ``b`` apart (:data:`SEPARATING_EXPERIMENTS`).
+
+    Parameters
+    ----------
+    a, b : str
+        Candidate names.
+    """
+    return SEPARATING_EXPERIMENTS.get(tuple(sorted((a, b))), DEFAULT_SEPARATION)
+
+
+register(Candidate(
+    "joint_torque_bias", "torque",
+    (Parameter("b1", "N m", -20.0, 20.0, "constant torque at joint 1 the model lacks "
+               "(Effects.joint_torque_bias): a cable, a spring, a miscalibrated gravity term"),
+     Parameter("b2", "N m", -20.0, 20.0, "constant torque at joint 2")),
+    "torque residual of one or both joints that is constant: independent of the pose, the "
+    "velocity and the pressures",
+    identity_values, None, columns=TORQUE_BIAS_COLUMNS,
+    plant_effect=lambda v, arm: {"joint_torque_bias": (float(v[0]), float(v[1]))},
+    at_rest=True, default=False))
+
+register(Candidate(
+    "pressure_sensor_offset", "both",
+    tuple(Parameter(f"o_{i}", "Pa", -0.5 * BAR, 0.5 * BAR,
+                    f"offset of pressure sensor {i}: p_m = p + o (at 0 bar gauge it reads o)",
+                    phys_lo=-1.0 * BAR, phys_hi=1.0 * BAR) for i in range(1, 5)),
+    "pressure residual like a valve offset (a constant drift rate kappa o) *and* a torque "
+    "residual o m_tau(q) of the muscle's joint, following its lever arm",
+    identity_values, None, columns=PRESSURE_OFFSET_COLUMNS,
+    sensor_effect=lambda v: SensorFault(p_offset=tuple(float(x) for x in v)), at_rest=True))
+
+register(Candidate(
+    "pressure_sensor_gain", "both",
+    tuple(Parameter(f"g_{i}", "-", -0.3, 0.3,
+                    f"gain error of pressure sensor {i}: p_m = (1 + g) p", phys_lo=-0.9)
+          for i in range(1, 5)),
+    "pressure residual proportional to the valve's drive (a + b u) and a torque residual "
+    "g p m_tau(q): like a stronger or weaker muscle in the torques, but not in the valves",
+    identity_values, None, columns=PRESSURE_GAIN_COLUMNS,
+    sensor_effect=lambda v: SensorFault(p_gain=tuple(float(x) for x in v)), at_rest=True))
+
+register(Candidate(
+    "encoder_offset", "both",
+    (Parameter("o_q1", "rad", -0.1745, 0.1745, "offset of the joint 1 encoder: q_m = q + o "
+               "(plausible +-10 deg)", phys_lo=-math.pi, phys_hi=math.pi),
+     Parameter("o_q2", "rad", -0.1745, 0.1745, "offset of the joint 2 encoder",
+               phys_lo=-math.pi, phys_hi=math.pi)),
+    "torque residual that follows the slope of gravity and of the lever arms with the pose "
+    "(the model evaluated at the wrong angle), and a small pressure residual through the "
+    "muscle volumes",
+    identity_values, None, columns=ENCODER_OFFSET_COLUMNS,
+    sensor_effect=lambda v: SensorFault(q_offset=tuple(float(x) for x in v)), at_rest=True))
+
+__all__ = ["Candidate", "Parameter", "REGISTRY", "register", "library", "default_candidates",
+           "VOCABULARY",
+           "DEAD_TIME_MAX", "HYSTERESIS_COLUMNS", "SENSOR_FAULTS", "SensorFault",
+           "SEPARATING_EXPERIMENTS", "separating_experiment", "identity_values"]

@@ -22,13 +22,20 @@ from ..._validation import check_int, check_range, check_seed
 from ...params import thesis_arm
 from ...params.arm import ArmParameters
 from ...plant import packing
-from ..core.result import HIGH_CONFIDENCE, Diagnosis
-from .candidates import REGISTRY
-from .residuals import (CHANNELS, row_from_mu, CHANNEL_UNITS, SUBSYSTEM, arm_record, block_system,
-                        channel_noise, model_vector, noise_draws, replay)
-from .selection import (bootstrap_frequency, fit_model, forward_selection, make_problem,
-                        parameter_table, BOOTSTRAP_REPLICATES)
-from .static import (STATIC_CANDIDATES, force_residuals, static_equilibria, static_floor,
+from ..core.result import Diagnosis
+from .candidates import REGISTRY, SensorFault, default_candidates, separating_experiment
+from .detection import detection_limits
+from .gates import GATES, HIGH_WEIGHT, RHO_HIGH, gates, level
+from .residuals import (CHANNELS, CHANNEL_UNITS, PRESSURE_GAIN_COLUMNS, SUBSYSTEM, ArmRecord,
+                        Columns, arm_record, block_system, channel_noise, coulomb_velocity,
+                        model_vector, noise_draws, replay, row_from_mu)
+from .selection import (BOOTSTRAP_REPLICATES, CONSTANCY_ALPHA, STABILITY_PAIRS,
+                        STABILITY_THRESHOLD, at_model, bootstrap_frequency, fit_model,
+                        forward_selection,
+                        hac_covariance, in_bounds, make_problem, parameter_table,
+                        profiled_shift, refit, region_consistency, stability_selection)
+from .subsets import MAX_SIZE, search
+from .static import (force_residuals, static_equilibria, static_floor,
                      static_noise, static_noise_draws, static_record, static_system)
 
 #: Replay channels (full simulation vs measured).
@@ -80,13 +87,14 @@ def _segments(t, n=8):
 
 
 def after_row(arm, fit, params) -> np.ndarray:
-    """The plant row of the model with every fitted effect (for the "after" rollout).
+    """The plant row of the model with every fitted plant effect (for the "after" rollout).
 
     Effects that are directions of the model vector are written back with
     :func:`~ppamsafety.diagnose.residuals.row_from_mu`; effects with their
-    own regression columns (hysteresis) through their ``plant_effect``
+    own regression columns (hysteresis, a torque bias) through their ``plant_effect``
     (:class:`~ppamsafety.params.effects.Effects` overrides, e.g. the fitted
-    delta, clipped to the plant's range [0, 1]).
+    delta, clipped to the plant's range [0, 1]).  Sensor faults are not plant
+    effects: :func:`sensor_fault` applies them to the simulated measurements.
 
     Parameters
     ----------
@@ -110,13 +118,100 @@ def after_row(arm, fit, params) -> np.ndarray:
             over.update(c.plant_effect(vals, arm))
     if "hysteresis_delta" in over and over["hysteresis_delta"][0] <= 0.0:
         over.pop("hysteresis_delta")
+    if "joint_torque_bias" in over:
+        over["joint_torque_bias"] = tuple(float(np.clip(b, -20.0, 20.0))
+                                          for b in over["joint_torque_bias"])
     base = arm.replace(effects=replace(arm.effects, **over)) if over else arm
     return row_from_mu(packing.pack(base), fit.mu)
 
 
+def sensor_fault(fit, params) -> SensorFault:
+    """The fitted sensor faults of ``fit`` (zero when none was fitted).
+
+    Parameters
+    ----------
+    fit : ppamsafety.diagnose.selection.Fit
+    params : dict
+        :func:`~ppamsafety.diagnose.selection.parameter_table` of ``fit``.
+    """
+    out = SensorFault()
+    for n in fit.names:
+        c = REGISTRY[n]
+        if c.sensor_effect is not None:
+            out = out + c.sensor_effect(np.array([p["value"] for p in params[n].values()]))
+    return out
+
+
+def _entry(name, params, rho, sub, bootstrap, freq):
+    """The report entry of a named (or partial) effect and the largest residual ratio of its
+    subsystem."""
+    subsystem = REGISTRY[name].subsystem
+    sub_rho = {CHANNELS[c]: float(rho[c]) for c in SUBSYSTEM[subsystem]}
+    ev = dict(sub.evidence.get(name, {}))
+    ev["inclusion_probability"] = sub.inclusion.get(name, 0.0)
+    ev["subsystem_rho"] = sub_rho
+    if freq is not None:
+        ev["stability_frequency"] = freq.get(name, 0.0)
+    if bootstrap is not None:
+        ev["bootstrap_frequency"] = bootstrap.get(name, 0.0)
+    return {"name": name, "subsystem": subsystem, "parameters": params[name], "evidence": ev,
+            "confidence": sub.inclusion.get(name, 0.0)}, max(sub_rho.values())
+
+
+def _confounded_group(fprob, fit, name, members, params, rho, sub, freq):
+    """The ``confounded`` entry of a member of the final model that look-alikes can replace."""
+    others = [n for n in fit.names if n != name]
+    interp = {name: params[name]}
+    for m in members[1:]:
+        try:
+            f = fit_model(fprob, others + [m])
+            interp[m] = parameter_table(fprob, f)[m]
+        except (ValueError, np.linalg.LinAlgError) as exc:   # pragma: no cover - reported
+            interp[m] = {"error": str(exc)}
+    seps = []
+    for i, a in enumerate(members):
+        for b in members[i + 1:]:
+            e = separating_experiment(a, b)
+            if e not in seps:
+                seps.append(e)
+    dbic = dict(sub.lookalikes.get(name, []))
+    return {"members": list(members), "interpretations": interp,
+            "evidence": {m: {"inclusion_probability": sub.inclusion.get(m, 0.0),
+                             "delta_bic_vs_best": dbic.get(m, 0.0),
+                             **({"stability_frequency": freq.get(m, 0.0)}
+                                if freq is not None else {})}
+                         for m in members},
+            "separating_experiment": "; ".join(seps),
+            "subsystem_rho": {CHANNELS[c]: float(rho[c]) for c in range(len(CHANNELS))}}
+
+
+#: Encoder offset above which the encoder columns are re-linearised at the estimate [rad]
+#: (the first-order error of the columns is about the offset squared over a radian).
+ENCODER_REFINE = 2e-3
+
+
+def _system(rec, arm, static, block_seconds, noise, *, q_offset):
+    """The block (or rest-point) system of ``rec`` with the angles corrected by ``q_offset``."""
+    if static:
+        return static_system(replace(rec, q=rec.q - q_offset), arm)
+    r = ArmRecord(rec.t, rec.q - q_offset, rec.qd, rec.p, rec.u, rec.dt, rec.source, rec.rows)
+    return block_system(r, arm, block_seconds=block_seconds, velocity_noise=noise["qd"])
+
+
+def _rescaled_gain(prob, bs, g):
+    """``prob`` with the torque columns of the pressure gains divided by (1 + g): the
+    coefficient of the torque columns is g / (1 + g), so at the estimate the column per unit
+    g is the original over (1 + g) (the pressure columns are exact in g already)."""
+    col = bs.extra[PRESSURE_GAIN_COLUMNS]
+    scaled = Columns(col.Y / (1.0 + np.asarray(g))[None, None, :], col.X)
+    nbs = replace(prob.bs, extra={**prob.bs.extra, PRESSURE_GAIN_COLUMNS: scaled})
+    return replace(prob, bs=nbs, _memo={}, _xcache=prob._xcache)
+
+
 def diagnose_arm(data, *, arm=None, candidates=None, block_seconds: float = 0.05,
-             alpha: float = 0.01, rho_max: float = 1.5, experiment: str | None = None,
-             seed: int = 0, bootstrap: int | None = None) -> Diagnosis:
+                 alpha: float = 0.01, rho_max: float = 1.5, experiment: str | None = None,
+                 seed: int = 0, bootstrap: int | None = None, stability: int | None = None,
+                 detection: bool = True) -> Diagnosis:
     """Diagnose a measured arm record against the model (module docstring).
 
     The front door :func:`ppamsafety.diagnose.diagnose` validates its arguments and calls
@@ -141,12 +236,20 @@ def diagnose_arm(data, *, arm=None, candidates=None, block_seconds: float = 0.05
     experiment : str, optional, keyword-only
         Hint for records whose metadata lacks it (must agree when both given).
     seed : int, keyword-only
-        Seed of the Monte Carlo noise propagation and of the bootstrap.
+        Seed of the Monte Carlo noise propagation, the stability selection and the
+        bootstrap.
     bootstrap : int, optional, keyword-only
         Replicates of the moving-block bootstrap of the selection
-        (:func:`~ppamsafety.diagnose.selection.bootstrap_frequency`); default
-        :data:`~ppamsafety.diagnose.selection.BOOTSTRAP_REPLICATES`, 0: none.
+        (:func:`~ppamsafety.diagnose.arm.selection.bootstrap_frequency`); default
+        :data:`~ppamsafety.diagnose.arm.selection.BOOTSTRAP_REPLICATES` (0: none).
         Each named effect's evidence then carries ``bootstrap_frequency``.
+    stability : int, optional, keyword-only
+        Complementary pairs of the stability selection
+        (:func:`~ppamsafety.diagnose.arm.selection.stability_selection`); default
+        :data:`~ppamsafety.diagnose.arm.selection.STABILITY_PAIRS`; 0: none (then no
+        effect can be "high": the stability gate fails).
+    detection : bool, keyword-only
+        Compute the detection limits of the record (:mod:`.detection`).
 
     Returns
     -------
@@ -166,6 +269,8 @@ def diagnose_arm(data, *, arm=None, candidates=None, block_seconds: float = 0.05
 
     bootstrap = BOOTSTRAP_REPLICATES if bootstrap is None else check_int("bootstrap", bootstrap,
                                                                          0, 10000)
+    stability = STABILITY_PAIRS if stability is None else check_int("stability", stability,
+                                                                     0, 10000)
     static = data.experiment == "static-sawtooth"
     row0 = packing.pack(arm)
     mu0 = model_vector(row0)
@@ -173,48 +278,130 @@ def diagnose_arm(data, *, arm=None, candidates=None, block_seconds: float = 0.05
         rec, notes = static_record(data)
         noise = static_noise(rec)
         bs = static_system(rec, arm)
-        prob = make_problem(bs, mu0, static_noise_draws(rec, arm, noise, seed=seed), arm,
-                            floor=static_floor(rec, arm))
+        draws = static_noise_draws(rec, arm, noise, seed=seed)
+        prob = make_problem(bs, mu0, draws, arm, floor=static_floor(rec, arm))
         if candidates is None:
-            candidates = [c for c in STATIC_CANDIDATES if c in REGISTRY
-                          and (c != "valve_offset_gain" or rec.u is not None)]
+            candidates = list(default_candidates(static=True))
+            if rec.u is None:
+                candidates = [c for c in candidates if c != "valve_offset_gain"]
     else:
         rec, notes = arm_record(data)
         noise = channel_noise(rec)
-        bs = block_system(rec, arm, block_seconds=block_seconds)
-        prob = make_problem(bs, mu0, noise_draws(rec, arm, noise, block_seconds=block_seconds,
-                                                 seed=seed), arm)
+        bs = block_system(rec, arm, block_seconds=block_seconds, velocity_noise=noise["qd"])
+        draws = noise_draws(rec, arm, noise, block_seconds=block_seconds, seed=seed,
+                            velocity_noise=True)
+        prob = make_problem(bs, mu0, draws, arm)
+        if candidates is None:
+            candidates = list(default_candidates())
+    candidates = list(candidates)
     notes = list(data.notes) + notes
     t1 = time.perf_counter()
     nominal = fit_model(prob, [])
-    fit, steps, fprob = forward_selection(prob, candidates, alpha=alpha)
+    gfit, steps, gprob = forward_selection(prob, candidates, alpha=alpha)
+    # every small subset of the library, from the Gram matrices: the forward path is greedy
+    grid_names = [c for c in candidates if REGISTRY[c].grid]
+    if grid_names and grid_names[0] not in gfit.names:
+        shift = profiled_shift(prob, grid_names) or 0
+    else:
+        shift = int(gfit.shift)
+    sub = search(gprob, candidates, greedy=gfit.names, shift=shift, alpha=alpha)
+    if set(sub.names) != set(gfit.names):
+        notes.append(f"the search over every subset of up to {MAX_SIZE} effects found a better "
+                     f"model than the forward path: {' + '.join(sub.names) or 'nominal'} (BIC "
+                     f"{sub.bic:.1f}) instead of {' + '.join(gfit.names) or 'nominal'} (BIC "
+                     f"{sub.greedy_bic:.1f})")
+        fit, fprob = refit(prob, sub.names, prob=gprob,
+                           shift=shift if any(REGISTRY[n].grid for n in sub.names) else None)
+    else:
+        fit, fprob = gfit, gprob
+    # first-order sensor faults to their fixed point (Gauss-Newton): the encoder offset's
+    # columns are the derivative at the measured angles, a pressure gain's torque columns are
+    # exact in g / (1 + g); re-linearise at the estimate
+    enc_shift, gain = np.zeros(2), None
+    for _ in range(3):
+        changed = False
+        if "pressure_sensor_gain" in fit.names:
+            g = fit.phi[fit.slices["pressure_sensor_gain"]].copy()
+            if gain is None or np.max(np.abs(g - gain)) > 1e-4:
+                gain, changed = g, True
+        if "encoder_offset" in fit.names:
+            o = fit.phi[fit.slices["encoder_offset"]]
+            if np.max(np.abs(o)) > ENCODER_REFINE:
+                enc_shift = enc_shift + o
+                bs = _system(rec, arm, static, block_seconds, noise, q_offset=enc_shift)
+                changed = True
+        if not changed:
+            break
+        base = make_problem(bs, mu0, draws, arm, floor=prob.floor)
+        if gain is not None:
+            base = _rescaled_gain(base, bs, gain)
+        fit, fprob = refit(base, fit.names, prob=at_model(base, fit.mu),
+                           shift=fit.shift if any(REGISTRY[n].grid for n in fit.names) else None)
     t2 = time.perf_counter()
-    freq, boot_info = ({}, {})
+    freq, boot_info = (None, {})
     if bootstrap:
         freq, boot_info = bootstrap_frequency(prob, candidates, replicates=bootstrap, seed=seed,
                                               alpha=alpha)
+    stab = None
+    if stability:
+        stab = stability_selection(prob, candidates, pairs=stability, seed=seed, alpha=alpha,
+                                   reference=fit.mu)
     tb = time.perf_counter()
     rho = fit.rho()
-    params = parameter_table(fprob, fit) if fit.names else {}
-    effects, partial = [], []
-    for s in steps:
-        if s.chosen is None:
-            continue
-        r = next(x for x in s.table if x["name"] == s.chosen)
-        sub = REGISTRY[s.chosen].subsystem
-        sub_rho = {CHANNELS[c]: float(rho[c]) for c in SUBSYSTEM[sub]}
-        ev = {k: r[k] for k in ("delta_bic", "lr_stat", "lr_df", "p_value", "cv_gain")}
-        ev["evidence_ratio_log10"] = r.get("evidence_ratio_log10")
-        ev["subsystem_rho"] = sub_rho
-        if bootstrap:
-            ev["bootstrap_frequency"] = freq.get(s.chosen, 0.0)
-        entry = {"name": s.chosen, "subsystem": sub, "parameters": params[s.chosen],
-                 "evidence": ev, "confidence": r["bic_weight"]}
-        (effects if max(sub_rho.values()) <= rho_max else partial).append(entry)
+    hac = hac_covariance(fprob, fit) if fit.names else None
+    params = parameter_table(fprob, fit, cov=hac) if fit.names else {}
+    if "encoder_offset" in params and np.any(enc_shift):
+        for j, d in enumerate(params["encoder_offset"].values()):
+            for k in ("value", "ci_low", "ci_high", "ci_low_raw", "ci_high_raw"):
+                if k in d:
+                    d[k] += float(enc_shift[j])
+    sfreq = None if stab is None else stab.frequency
+    effects, partial, confounded = [], [], []
     if static and rec.u is None:
         rho[:4] = 0.0                       # no valve equations without set values
     bad = [CHANNELS[c] for c in range(6) if rho[c] > rho_max]
+    unexplained = bool(bad)
+    chosen = [s.chosen for s in steps if s.chosen is not None]
+    for n in chosen:
+        if n not in fit.names:
+            notes.append(f"{n}: chosen by the forward path but not in the final model "
+                         f"(redundant once the other effects were in)")
+    order = [n for n in chosen if n in fit.names] + [n for n in fit.names if n not in chosen]
+    grouped = set()
+    for n in order:
+        if n in grouped:
+            continue
+        alts = [a for a, _ in sub.lookalikes.get(n, [])]
+        if alts:
+            members = [n] + alts
+            grouped.update(members)
+            confounded.append(_confounded_group(fprob, fit, n, members, params, rho, sub, sfreq))
+            continue
+        entry, sub_max = _entry(n, params, rho, sub, freq, sfreq)
+        if not in_bounds(fprob, fit, n):
+            # admissible in its subset, but the final fit moved it out of the plausible
+            # range: it stands in for something else
+            notes.append(f"{n}: its parameters left the plausible range in the final fit; "
+                         f"reported as partial, not named")
+            partial.append(entry)
+            continue
+        (effects if sub_max <= rho_max else partial).append(entry)
+    for e in effects:
+        cons = region_consistency(fprob, fit, e["name"]) if not static else {}
+        e["evidence"]["region_consistency_p"] = cons
+        g = gates(e["name"], e["parameters"], weight=e["confidence"],
+                  stability=None if sfreq is None else sfreq.get(e["name"], 0.0),
+                  stability_threshold=STABILITY_THRESHOLD if stab is None else stab.threshold,
+                  rho=rho, unexplained=unexplained, confounded=False,
+                  consistency=min(cons.values(), default=1.0),
+                  consistency_alpha=CONSTANCY_ALPHA, blocks=bs.nb)
+        e["gates"] = g
+        e["confidence_level"] = level(g)
+    for e in partial:
+        e["confidence_level"] = "low"
+        e["gates"] = {}
     row_after = after_row(arm, fit, params)
+    fault = sensor_fault(fit, params)
     rr = {}
     forces = None
     if static:
@@ -222,7 +409,9 @@ def diagnose_arm(data, *, arm=None, candidates=None, block_seconds: float = 0.05
         qm, pm = rec.means(rec.q), rec.means(rec.p)
         meas = np.concatenate([qm, np.zeros_like(qm), pm], axis=1)
         before = np.concatenate([Q[0], np.zeros_like(qm), Pm[0]], axis=1)
-        after = np.concatenate([Q[1], np.zeros_like(qm), Pm[1]], axis=1)
+        after = fault.measure(np.concatenate([Q[1] - np.asarray(fault.q_offset), np.zeros_like(qm),
+                                              Pm[1]], axis=1))
+        after[:, :2] = Q[1]
         t_rep = bs.features["t"]
         sig_replay = np.concatenate([noise["q"], np.zeros(2), noise["p"]])
         delta = params.get("hysteresis", {}).get("delta", {}).get("value", 0.0)
@@ -234,8 +423,10 @@ def diagnose_arm(data, *, arm=None, candidates=None, block_seconds: float = 0.05
                         forces["residual_after"][:, k] ** 2))), "noise": float(forces["sigma"][k])}
     else:
         try:
-            X = replay(rec, np.array([row0, row_after]), shifts=[0, fit.shift])
-            before, after = X[0], X[1]
+            x0_after = fault.true_state(rec.x0())
+            X0 = replay(rec, np.array([row0]), shifts=[0])
+            X1 = replay(rec, np.array([row_after]), shifts=[fit.shift], x0=x0_after)
+            before, after = X0[0], fault.measure(X1[0])
         except ValueError as exc:
             # a model with every fitted effect (partial ones too: e.g. a negative payload
             # absorbing an error outside the library) may leave the model's valid range
@@ -261,17 +452,6 @@ def diagnose_arm(data, *, arm=None, candidates=None, block_seconds: float = 0.05
             continue
         rr[f"block_{ch}"] = {"unit": f"{units[c]} / noise (block residual ratio)",
                              "before": float(nrho[c]), "after": float(rho[c]), "noise": 1.0}
-    unexplained = bool(bad)
-    for e in effects:
-        # "high" needs a decisive weight, a record explained everywhere (an unexplained
-        # error elsewhere may leak into this subsystem) and a parameter interval that
-        # excludes the nominal value
-        moved = any(not (p["ci_low"] <= p["nominal"] <= p["ci_high"])
-                    for p in e["parameters"].values()) or e["name"] == "valve_dead_time"
-        named_ok = e["confidence"] >= HIGH_CONFIDENCE and not unexplained and moved
-        e["confidence_level"] = "high" if named_ok else "low"
-    for e in partial:
-        e["confidence_level"] = "low"
     where = _where(fprob, fit.e, bs.features, rho_max)
     if static:
         where["region"] = where["region"].replace({"velocity sign": "direction of approach"})
@@ -280,12 +460,28 @@ def diagnose_arm(data, *, arm=None, candidates=None, block_seconds: float = 0.05
     if unexplained:
         notes.append(f"residual above {rho_max} x the noise on {', '.join(bad)}: no effect of "
                      f"the library explains it (see 'where')")
+    for g in confounded:
+        notes.append(f"{' and '.join(g['members'])} explain the same part of the residual on "
+                     f"this record: none is named; to separate them: "
+                     f"{g['separating_experiment']}")
+    limits = {}
+    if detection:
+        limits = detection_limits(fprob, fit, candidates, alpha=alpha)
+    t4 = time.perf_counter()
     settings = {"block_seconds": None if static else block_seconds, "alpha": alpha,
                 "rho_max": rho_max,
-                "criterion": "BIC (known noise level), LR test p < alpha/K, 2-fold CV gain, "
-                             "parameters inside widened bounds",
-                "high_confidence": HIGH_CONFIDENCE, "candidates": list(
-                    REGISTRY if candidates is None else candidates),
+                "criterion": "forward selection then the best of every subset of up to "
+                             f"{MAX_SIZE} effects by BIC (known noise level) whose members are "
+                             "each significant (LR test p < alpha/K), predictive (2-fold CV "
+                             "gain) and admissible (intervals inside widened plausible bounds, "
+                             "not significantly outside the physical range); look-alikes "
+                             "within BIC 6 reported as confounded, not named",
+                "subsets": {"evaluated": sub.evaluated, "best": list(sub.names),
+                            "forward_path": list(gfit.names), "top": sub.ranking},
+                "high_confidence": {"inclusion_probability": HIGH_WEIGHT, "rho_high": RHO_HIGH,
+                                    "stability_threshold": STABILITY_THRESHOLD if stab is None
+                                    else stab.threshold, "gates": list(GATES)},
+                "candidates": list(candidates),
                 "blocks": int(bs.nb), "samples": int(len(rec.t)),
                 "dt_s": None if static else rec.dt,
                 "rows": None if static else list(rec.rows), "seed": seed,
@@ -293,6 +489,10 @@ def diagnose_arm(data, *, arm=None, candidates=None, block_seconds: float = 0.05
                                    if v is not None},
                 "noise_method": "robust second difference: 1.4826 MAD(x[k+1]-2x[k]+x[k-1])/sqrt(6)",
                 "block_noise": {ch: float(s) for ch, s in zip(CHANNELS, fprob.sigma)},
+                "coulomb_velocity": None if static else [
+                    float(v) for v in coulomb_velocity(arm, noise["qd"])],
+                "intervals": "95 %, delta method on the HAC (Newey-West) covariance of the "
+                             "block scores; cut at the physical range (raw interval kept)",
                 "bootstrap": boot_info,
                 "data": {"kind": data.kind, "experiment": data.experiment,
                          "description": data.meta.get("description", "")}}
@@ -301,8 +501,9 @@ def diagnose_arm(data, *, arm=None, candidates=None, block_seconds: float = 0.05
         settings["residuals"] = ("rest points (window means): torque balance tau(p, q) = G(q) "
                                  "[N m], static valve 0 = a + b u - kappa p [Pa/s]; angles: "
                                  "quasi-static equilibria of the model")
-    timings = {"residuals_and_noise": t1 - t0, "selection": t2 - t1, "bootstrap": tb - t2,
-               "rollout": t3 - tb, "total": time.perf_counter() - t0}
+    timings = {"residuals_and_noise": t1 - t0, "selection": t2 - t1,
+               "stability_and_bootstrap": tb - t2, "rollout": t3 - tb,
+               "detection_limits": t4 - t3, "total": time.perf_counter() - t0}
     extra = {}
     if forces is not None:
         extra["forces"] = forces
@@ -315,7 +516,9 @@ def diagnose_arm(data, *, arm=None, candidates=None, block_seconds: float = 0.05
                      settings=settings, timings=timings, notes=tuple(notes),
                      blocks={"t": bs.features["t"], "before": nominal.e, "after": fit.e,
                              "channels": CHANNELS},
-                     subsystems=extra)
+                     subsystems=extra, confounded=confounded,
+                     stability={} if stab is None else stab.to_dict(),
+                     detection_limits=limits)
 
 
-__all__ = ["diagnose_arm", "after_row", "REPLAY_CHANNELS", "REPLAY_UNITS"]
+__all__ = ["diagnose_arm", "after_row", "sensor_fault", "REPLAY_CHANNELS", "REPLAY_UNITS"]

@@ -45,6 +45,7 @@ that space, which is why they can be fitted by linear regression.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -78,10 +79,19 @@ MU_VISC = MU_NAMES.index("b1")
 #: Residual channels of the block system, their units and subsystems.
 CHANNELS = ("p1", "p2", "p3", "p4", "tau1", "tau2")
 CHANNEL_UNITS = ("Pa", "Pa", "Pa", "Pa", "N m s", "N m s")
-SUBSYSTEM = {"pressure": (0, 1, 2, 3), "torque": (4, 5)}
+SUBSYSTEM = {"pressure": (0, 1, 2, 3), "torque": (4, 5), "both": (0, 1, 2, 3, 4, 5)}
 #: Name of the hysteresis regression columns in ``BlockSystem.extra`` (the candidate of the
 #: same name in :mod:`.candidates` reads them).
 HYSTERESIS_COLUMNS = "hysteresis"
+#: Names of the sensor-fault and torque-bias regression columns in ``BlockSystem.extra``
+#: (:func:`sensor_columns`; candidates of the same names in :mod:`.candidates`).
+PRESSURE_OFFSET_COLUMNS = "pressure_sensor_offset"
+PRESSURE_GAIN_COLUMNS = "pressure_sensor_gain"
+ENCODER_OFFSET_COLUMNS = "encoder_offset"
+TORQUE_BIAS_COLUMNS = "joint_torque_bias"
+#: Step of the finite difference of the residual in the measured angles [rad] (the encoder
+#: offset columns): small against the offsets of interest (0.1-5 deg), large against rounding.
+ENCODER_STEP = 1e-3
 #: Default block length [s]: long against the sample time (endpoint noise averages
 #: against the integrated model error), short against the 10 s excitation period.
 BLOCK_SECONDS = 0.05
@@ -257,6 +267,53 @@ def delayed(u, shift: int) -> np.ndarray:
 
 
 @dataclass(frozen=True, eq=False)
+class Columns:
+    """Regression columns of a candidate that is not a direction of mu: ``E(mu) = Y + X mu``.
+
+    A sensor fault changes the *measured* signals the equations are built from, so its
+    columns depend on the model they are evaluated with (a pressure-sensor offset o changes
+    the valve term -kappa Int p by kappa o span: with the valve's fitted kappa, not the
+    nominal one).  Both parts are linear in the fault; X (the change of the design) makes
+    the columns follow the model as the selection refits it.
+
+    Attributes
+    ----------
+    Y : numpy.ndarray, shape (nb, nch, k)
+        Model-independent part (the change of the measured side y, negated).
+    X : numpy.ndarray or None, shape (nb, nch, NMU, k)
+        Change of the design per unit fault (None: the columns do not depend on mu).
+    """
+
+    Y: np.ndarray
+    X: np.ndarray | None = None
+
+    @property
+    def k(self) -> int:
+        """Number of coefficients."""
+        return self.Y.shape[2]
+
+    def at(self, mu) -> np.ndarray:
+        """The columns at model vector ``mu`` -> (nb, nch, k).
+
+        Parameters
+        ----------
+        mu : numpy.ndarray, shape (NMU,)
+        """
+        if self.X is None:
+            return self.Y
+        return self.Y + np.einsum("bcmk,m->bck", self.X, mu, optimize=True)
+
+    def take(self, idx) -> "Columns":
+        """The rows ``idx`` (blocks) of both parts.
+
+        Parameters
+        ----------
+        idx : numpy.ndarray of int
+        """
+        return Columns(self.Y[idx], None if self.X is None else self.X[idx])
+
+
+@dataclass(frozen=True, eq=False)
 class BlockSystem:
     """The block-integral equations of a record: ``y`` (nb, 6) and ``X`` (nb, 6, NMU).
 
@@ -276,8 +333,9 @@ class BlockSystem:
         Per-block operating-region descriptors (mean q, qd, p, time).
     extra : dict
         Regression columns of candidates that are not directions of mu,
-        name -> (nb, 6, k), added to the prediction (``Candidate.columns``;
-        ``"hysteresis"``: see :func:`hysteresis_signature`).
+        name -> :class:`Columns`, added to the prediction (``Candidate.columns``;
+        ``"hysteresis"``: see :func:`hysteresis_signature`; the sensor faults:
+        :func:`sensor_columns`, :func:`encoder_columns`).
     """
 
     y: np.ndarray
@@ -356,47 +414,108 @@ def hysteresis_signature(q, p, arm, *, initial="negative") -> tuple:
     return h, np.stack([ph[:, 0] + ph[:, 1], ph[:, 2] + ph[:, 3]], axis=1), eps
 
 
-def block_system(rec: ArmRecord, arm, *, block_seconds: float = BLOCK_SECONDS,
-                 extra: bool = True) -> BlockSystem:
-    """Build the block-integral equations of ``rec`` for the geometry/muscles of ``arm``.
+#: Length of the centred moving average that smooths the measured velocity of the Coulomb
+#: columns and the measured angles of the hysteresis signature [s]: long against the
+#: sample time (white noise / sqrt(n)), short against the arm's motion (a linear signal
+#: passes unchanged; the curvature error is qdd dt^2 n^2 / 24, micro-radians per second).
+SMOOTH_SECONDS = 0.01
+
+
+def smooth(x, n: int) -> np.ndarray:
+    """Centred moving average of ``n`` samples along axis 0 (shorter windows at the ends).
 
     Parameters
     ----------
-    rec : ArmRecord
-    arm : ArmParameters
-        Known geometry, muscle force law and friction smoothing (the model).
-    block_seconds : float, keyword-only
-        Block length [s]; blocks have distinct end samples and do not overlap.
-    extra : bool, keyword-only
-        Also build the regression columns of the non-mu candidates
-        (:attr:`BlockSystem.extra`; the hysteresis torque, one column shared
-        by the four groups).
+    x : numpy.ndarray, shape (N, k)
+    n : int
+        Window length (odd, >= 1).
+    """
+    x = np.asarray(x, dtype=float)
+    h = max(int(n), 1) // 2
+    if h == 0 or x.shape[0] < 3:
+        return x
+    c = np.concatenate([np.zeros((1,) + x.shape[1:]), np.cumsum(x, axis=0)])
+    i = np.arange(x.shape[0])
+    lo = np.maximum(i - h, 0)
+    hi = np.minimum(i + h + 1, x.shape[0])
+    return (c[hi] - c[lo]) / (hi - lo)[:, None]
 
-    Returns
-    -------
-    BlockSystem
+
+def smoothing_samples(dt: float) -> int:
+    """Odd window length of :data:`SMOOTH_SECONDS` at sample time ``dt`` (at least 1).
+
+    Parameters
+    ----------
+    dt : float
+        Sample time [s].
+    """
+    n = int(round(SMOOTH_SECONDS / dt))
+    return max(1, n + (1 - n % 2))
+
+
+def coulomb_velocity(arm, velocity_noise=None) -> np.ndarray:
+    """Smoothing velocity of the Coulomb columns, corrected for the velocity noise [rad/s] (2,).
+
+    The plant's Coulomb friction is ``c tanh(qd / v_s)`` (``arm.friction_velocity``).  The
+    regressor can only use the *measured* velocity ``qd_m = qd + n``, n ~ N(0, s^2); with
+    ``tanh(qd_m / v_s)`` the fitted c is biased low (errors in variables: near a reversal the
+    noisy sign is often wrong).  Regression calibration replaces the regressor by its
+    expectation given the measurement, ``E[tanh((qd_m - n)/v_s)]``, which with the probit
+    approximation tanh(z) ~ erf(sqrt(pi) z / 2) is ``tanh(qd_m / sqrt(v_s^2 + pi s^2 / 2))``:
+    the same law with a wider smoothing velocity.
+
+    Parameters
+    ----------
+    arm : ArmParameters
+    velocity_noise : array_like, shape (2,), optional
+        Standard deviation of the measured velocities [rad/s]; None: no correction.
+    """
+    vs = float(arm.friction_velocity)
+    if velocity_noise is None:
+        return np.array([vs, vs])
+    s = np.asarray(velocity_noise, dtype=float)
+    return np.sqrt(vs ** 2 + 0.5 * math.pi * s ** 2)
+
+
+def block_bounds(n: int, dt: float, block_seconds: float, source: str = "<data>") -> tuple:
+    """First and last sample of every block (non-overlapping, distinct end samples).
+
+    Parameters
+    ----------
+    n : int
+        Samples of the record.
+    dt : float
+        Sample time [s].
+    block_seconds : float
+        Block length [s].
+    source : str
+        Named in errors.
     """
     block_seconds = check_range("block_seconds", block_seconds, 0.0, 10.0, lo_open=True,
                                 unit="s")
-    dt = rec.dt
     if block_seconds < 3 * dt * (1 - 1e-9):
         raise ValueError(f"block_seconds = {block_seconds:g} s is shorter than 3 samples of the "
                          f"record (dt = {dt:g} s): a block needs at least 3 samples, "
                          f"block_seconds >= {3 * dt:g} s (default 0.05 s)")
     L = max(int(round(block_seconds / dt)), 3)
-    n = len(rec)
     starts = np.arange(0, n - L + 1, L)
     stops = starts + L - 1
     if starts.size < 8:
-        raise ValueError(f"{rec.source}: {n} samples give only {starts.size} blocks of "
+        raise ValueError(f"{source}: {n} samples give only {starts.size} blocks of "
                          f"{L} samples; need at least 8 (shorter block_seconds or a longer record)")
+    return starts, stops
+
+
+def _blocks(rec: ArmRecord, arm, starts, stops, velocity_noise=None) -> tuple:
+    """y (nb, 6), X (nb, 6, NMU) of the block equations and the running integrals they use."""
+    dt = rec.dt
     mt = torque_functions(rec.q, arm)
     vol = group_volumes(rec.q, arm)
     patm = arm.pneumatics.p_atm
     w = np.repeat(rec.qd, 2, axis=1)                   # qd_j of each group (1, 1, 2, 2)
-    h = (patm + rec.p) * mt * w / vol
+    g = mt * w / vol
     c_p = _cumtrapz(rec.p, dt)
-    c_h = _cumtrapz(h, dt)
+    c_h = _cumtrapz((patm + rec.p) * g, dt)
     c_u = _cumzoh(rec.u, dt)
     nb = starts.size
     X = np.zeros((nb, 6, NMU))
@@ -410,30 +529,181 @@ def block_system(rec: ArmRecord, arm, *, block_seconds: float = BLOCK_SECONDS,
         y[:, i] = rec.p[stops, i] - rec.p[starts, i]
     W1, W2, W3 = w_matrices(rec.q, rec.qd, arm, friction=True,
                             sign_velocity=arm.friction_velocity)
+    if velocity_noise is not None:
+        # errors in variables: the sign of a noisy velocity is often wrong near a reversal
+        # or at rest; the regressor is the expected sign given a smoothed velocity (its
+        # noise is the velocity noise over sqrt(n))
+        n = smoothing_samples(dt)
+        qs = smooth(rec.qd, n)
+        vc = coulomb_velocity(arm, np.asarray(velocity_noise, float) / math.sqrt(n))
+        W3[:, 0, 6] = np.tanh(qs[:, 0] / vc[0])
+        W3[:, 1, 7] = np.tanh(qs[:, 1] / vc[1])
     c_w = _cumtrapz(W3 - W2, dt)
     tau = np.stack([rec.p[:, 0] * mt[:, 0] + rec.p[:, 1] * mt[:, 1],
                     rec.p[:, 2] * mt[:, 2] + rec.p[:, 3] * mt[:, 3]], axis=1)
     c_tau = _cumtrapz(tau, dt)
     X[:, 4:6, MU_THETA:] = (W1[stops] - W1[starts]) + (c_w[stops] - c_w[starts])
     y[:, 4:6] = c_tau[stops] - c_tau[starts]
+    return y, X, {"mt": mt, "g": g, "c_u": c_u, "span": span}
 
-    def bmean(x):
+
+def block_system(rec: ArmRecord, arm, *, block_seconds: float = BLOCK_SECONDS,
+                 extra: bool = True, velocity_noise=None) -> BlockSystem:
+    """Build the block-integral equations of ``rec`` for the geometry/muscles of ``arm``.
+
+    Parameters
+    ----------
+    rec : ArmRecord
+    arm : ArmParameters
+        Known geometry, muscle force law and friction smoothing (the model).
+    block_seconds : float, keyword-only
+        Block length [s]; blocks have distinct end samples and do not overlap.
+    extra : bool, keyword-only
+        Also build the regression columns of the non-mu candidates
+        (:attr:`BlockSystem.extra`): the hysteresis torque (one column shared by the four
+        groups), the pressure-sensor offsets and gains and the joint torque bias
+        (:func:`sensor_columns`) and the encoder offsets (a finite difference in q).
+    velocity_noise : array_like, shape (2,), optional, keyword-only
+        Noise of the measured velocities [rad/s]: the Coulomb columns use the expected
+        sign given the measurement (:func:`coulomb_velocity`); None: the plain law.
+
+    Returns
+    -------
+    BlockSystem
+    """
+    dt = rec.dt
+    starts, stops = block_bounds(len(rec), dt, block_seconds, rec.source)
+    y, X, parts = _blocks(rec, arm, starts, stops, velocity_noise)
+    span = parts["span"]
+    nb = starts.size
+
+    def bint(x):
         c = _cumtrapz(x, dt)
-        return (c[stops] - c[starts]) / span[:, None]
+        return c[stops] - c[starts]
 
-    feats = {"t": 0.5 * (rec.t[starts] + rec.t[stops]), "q": bmean(rec.q), "qd": bmean(rec.qd),
-             "p": bmean(rec.p)}
+    feats = {"t": 0.5 * (rec.t[starts] + rec.t[stops]), "q": bint(rec.q) / span[:, None],
+             "qd": bint(rec.qd) / span[:, None], "p": bint(rec.p) / span[:, None]}
     ext = {}
     if extra:
-        _, h_tau, _ = hysteresis_signature(rec.q, rec.p, arm)
+        # the Preisach memory of the *measured* angles would see a reversal in every noise
+        # wiggle: the signature uses the smoothed angles
+        _, h_tau, _ = hysteresis_signature(smooth(rec.q, smoothing_samples(dt)), rec.p, arm)
         c_h = _cumtrapz(h_tau, dt)
         E = np.zeros((nb, 6, 1))
         # the measured torque is tau(p) + delta h_tau = X theta, so the block residual
         # y - X mu = -delta Int h_tau: the prediction gains -Int h_tau per unit delta
         E[:, 4:6, 0] = -(c_h[stops] - c_h[starts])
-        ext[HYSTERESIS_COLUMNS] = E
+        ext[HYSTERESIS_COLUMNS] = Columns(E)
+        mt, g, c_u = parts["mt"], parts["g"], parts["c_u"]
+        ext.update(sensor_columns(
+            span=span, int_u=c_u[stops] - c_u[starts], int_g=bint(g), int_mt=bint(mt),
+            int_pmt=bint(rec.p * mt), patm=arm.pneumatics.p_atm))
+
+        def residual_of(q):
+            r = ArmRecord(rec.t, q, rec.qd, rec.p, rec.u, dt, rec.source, rec.rows)
+            yq, Xq, _ = _blocks(r, arm, starts, stops, velocity_noise)
+            return yq, Xq
+
+        ext[ENCODER_OFFSET_COLUMNS] = encoder_columns(residual_of, rec.q, y, X)
     return BlockSystem(y=y, X=X, starts=starts, stops=stops, u=rec.u, dt=dt, features=feats,
                        extra=ext)
+
+
+def sensor_columns(*, span, int_u, int_g, int_mt, int_pmt, patm) -> dict:
+    """Regression columns of pressure-sensor faults and a joint torque bias (block or rest point).
+
+    A pressure sensor with offset o_i and gain g_i reads ``p_m = (1 + g_i) p + o_i``; the
+    equations hold for the true pressure ``p = (p_m - o_i) / (1 + g_i)``, so the residual of
+    the measured record is the true residual plus ``E(mu) phi`` (prediction = X mu + E phi,
+    phi = the sensor faults), :class:`Columns` with, for valve i of joint j,
+
+    * offset, pressure channel i: ``kappa_i span + n Int g_i`` (the -kappa Int p and the
+      volume term -n Int (P_atm + p) g_i see the offset), with the kappa_i and n of the
+      model the columns are evaluated at; torque channel j: ``Int m_tau,i`` (the torque of
+      the measured pressure is too large by o_i m_tau,i);
+    * gain, pressure channel i: ``a_i span + b_i Int u_i - n P_atm Int g_i`` (the valve's
+      drive: a sensor reading (1 + g) p sees every pressure change (1 + g) times; the
+      model's prediction, not the measured change, whose noise would bias g);
+      torque channel j: ``Int p_i m_tau,i``;
+
+    exact in o; for the gain the pressure columns are exact in g and the torque columns
+    are exact in ``g / (1 + g)``, so a gain is fitted to first order (an error of g^2, 0.04
+    % of the torque at g = 2 %); an offset and a gain of the same sensor together carry a
+    product term of second order, which is left out.  A torque bias b_j (a constant torque
+    the model lacks, e.g. a cable or a spring, ``Effects.joint_torque_bias``) adds to the
+    muscle torques: the torque channel j gains ``-span`` per unit b_j.  Rest points use the
+    same formulas with ``span = 1``, window means for the integrals and ``g = 0`` (no
+    motion).
+
+    Parameters
+    ----------
+    span : numpy.ndarray, shape (nb,)
+        Block lengths [s] (1 for rest points).
+    int_u : numpy.ndarray, shape (nb, 4), or None
+        Block integrals of the set values (None: no valve equations, as for rest points
+        without set values).
+    int_g, int_mt, int_pmt : numpy.ndarray, shape (nb, 4)
+        Block integrals of g = m_tau qd / V, m_tau, p m_tau (window means at rest).
+    patm : float
+        Atmospheric pressure [Pa].
+
+    Returns
+    -------
+    dict
+        :data:`PRESSURE_OFFSET_COLUMNS`, :data:`PRESSURE_GAIN_COLUMNS`,
+        :data:`TORQUE_BIAS_COLUMNS` -> :class:`Columns`.
+    """
+    nb = span.size
+    oY, oX = np.zeros((nb, 6, 4)), np.zeros((nb, 6, NMU, 4))
+    gY, gX = np.zeros((nb, 6, 4)), np.zeros((nb, 6, NMU, 4))
+    bias = np.zeros((nb, 6, 2))
+    for i in range(4):
+        j = 4 + i // 2
+        if int_u is not None:
+            oX[:, i, MU_K + 3 * i, i] = span
+            oX[:, i, MU_N, i] = int_g[:, i]
+            gX[:, i, MU_A + 3 * i, i] = span
+            gX[:, i, MU_B + 3 * i, i] = int_u[:, i]
+            gX[:, i, MU_N, i] = -patm * int_g[:, i]
+        oY[:, j, i] = int_mt[:, i]
+        gY[:, j, i] = int_pmt[:, i]
+    bias[:, 4, 0] = -span
+    bias[:, 5, 1] = -span
+    return {PRESSURE_OFFSET_COLUMNS: Columns(oY, oX), PRESSURE_GAIN_COLUMNS: Columns(gY, gX),
+            TORQUE_BIAS_COLUMNS: Columns(bias)}
+
+
+def encoder_columns(residual_of, q, y, X) -> Columns:
+    """Regression columns of an encoder offset per joint (finite difference in the angles).
+
+    An encoder with offset o_j reads ``q_m = q + o_j``: the residual of the true angles is
+    ``r(q_m - o) ~ r(q_m) - o dr/dq_j`` with ``r = y - X mu``, so the prediction gains
+    ``dr/dq_j = dy/dq_j - dX/dq_j mu`` per unit o_j (central differences with
+    :data:`ENCODER_STEP`), a :class:`Columns` that follows the model.
+
+    Parameters
+    ----------
+    residual_of : callable
+        ``q -> (y, X)`` of the equations with the measured angles replaced by ``q``.
+    q : numpy.ndarray, shape (N, 2)
+        Measured angles [rad].
+    y, X : numpy.ndarray
+        The equations at the measured angles (shapes (nb, nch), (nb, nch, NMU)).
+
+    Returns
+    -------
+    Columns
+        k = 2 (joints 1, 2).
+    """
+    Ys, Xs = [], []
+    for j in range(2):
+        dq = np.zeros(2)
+        dq[j] = ENCODER_STEP
+        yp, Xp = residual_of(q + dq)
+        ym, Xm = residual_of(q - dq)
+        Ys.append((yp - ym) / (2 * ENCODER_STEP))
+        Xs.append(-(Xp - Xm) / (2 * ENCODER_STEP))
+    return Columns(np.stack(Ys, axis=2), np.stack(Xs, axis=3))
 
 
 def channel_noise(rec: ArmRecord) -> dict:
@@ -457,7 +727,7 @@ def channel_noise(rec: ArmRecord) -> dict:
 
 
 def noise_draws(rec: ArmRecord, arm, noise: dict, *, block_seconds: float = BLOCK_SECONDS,
-                draws: int = 4, seed: int = 0) -> tuple:
+                draws: int = 4, seed: int = 0, velocity_noise: bool = False) -> tuple:
     """Changes of the block system caused by extra measurement noise (Monte Carlo).
 
     White noise of the estimated standard deviations (``noise``) is added to
@@ -474,6 +744,9 @@ def noise_draws(rec: ArmRecord, arm, noise: dict, *, block_seconds: float = BLOC
     block_seconds : float, keyword-only
     draws : int, keyword-only
     seed : int, keyword-only
+    velocity_noise : bool, keyword-only
+        Build the systems with the noise-corrected Coulomb columns
+        (``block_system(..., velocity_noise=noise["qd"])``), as the diagnosis does.
 
     Returns
     -------
@@ -481,12 +754,13 @@ def noise_draws(rec: ArmRecord, arm, noise: dict, *, block_seconds: float = BLOC
     dX : numpy.ndarray, shape (draws, nb, 6, NMU)
     """
     draws = check_int("draws", draws, 1, 1000)
-    base = block_system(rec, arm, block_seconds=block_seconds, extra=False)
+    vn = noise["qd"] if velocity_noise else None
+    base = block_system(rec, arm, block_seconds=block_seconds, extra=False, velocity_noise=vn)
     rng = np.random.default_rng(seed)
     dY, dX = [], []
     for _ in range(draws):
         s = block_system(rec.perturbed(noise["q"], noise["qd"], noise["p"], rng), arm,
-                         block_seconds=block_seconds, extra=False)
+                         block_seconds=block_seconds, extra=False, velocity_noise=vn)
         dY.append(s.y - base.y)
         dX.append(s.X - base.X)
     return np.array(dY), np.array(dX)
@@ -520,7 +794,7 @@ def block_noise(dY, dX, mu, scale=None) -> np.ndarray:
     return noise_floor(sig, scale)
 
 
-def replay(rec: ArmRecord, rows, *, shifts=None, substeps: int = 1) -> np.ndarray:
+def replay(rec: ArmRecord, rows, *, shifts=None, substeps: int = 1, x0=None) -> np.ndarray:
     """Simulate the record with the measured set values for every plant row (one batched call).
 
     Parameters
@@ -533,6 +807,8 @@ def replay(rec: ArmRecord, rows, *, shifts=None, substeps: int = 1) -> np.ndarra
     substeps : int, keyword-only
         RK4 steps per sample (1 is enough at 1 kHz for valve time constants
         >= 2 ms: h/T <= 0.5).
+    x0 : array_like, shape (8,) or (B, 8), optional, keyword-only
+        Initial state(s) (default the measured first state).
 
     Returns
     -------
@@ -545,10 +821,14 @@ def replay(rec: ArmRecord, rows, *, shifts=None, substeps: int = 1) -> np.ndarra
     for b in range(B):
         s = 0 if shifts is None else int(shifts[b])
         U[b] = delayed(rec.u, s)[:-1]
-    return simulate(None, rec.x0(), U, dt=rec.dt, substeps=substeps, params=rows)
+    return simulate(None, rec.x0() if x0 is None else np.asarray(x0, dtype=float), U, dt=rec.dt,
+                    substeps=substeps, params=rows)
 
 
-__all__ = ["ArmRecord", "arm_record", "BlockSystem", "block_system",
+__all__ = ["ArmRecord", "arm_record", "Columns", "BlockSystem", "smooth", "smoothing_samples",
+           "SMOOTH_SECONDS", "block_system", "block_bounds",
+           "coulomb_velocity", "sensor_columns", "encoder_columns", "PRESSURE_OFFSET_COLUMNS",
+           "PRESSURE_GAIN_COLUMNS", "ENCODER_OFFSET_COLUMNS", "TORQUE_BIAS_COLUMNS",
            "block_noise", "channel_noise", "noise_draws", "replay", "hysteresis_signature",
            "model_vector", "row_from_mu", "delayed", "MU_NAMES",
            "MU_UNITS", "NMU", "CHANNELS", "CHANNEL_UNITS", "SUBSYSTEM", "BLOCK_SECONDS"]

@@ -44,8 +44,23 @@ the runner-up is exp((BIC_2 - BIC_1)/2).
    time segments (fit on half of the segments, chi2 on the other half, and
    the reverse) lowers the held-out chi2.
 
+Admissibility (rule 3) also needs the fitted *value* inside the physical
+range of every parameter (``Parameter.phys_lo``/``phys_hi``: a mass >= 0, a
+friction >= 0, 1 <= n <= 1.4): a fit outside it is a symptom of something
+else, not an effect.
+
+*Confounded* (:func:`confounded_with`): when another candidate that passes
+the rule alone explains the same part of the residual -- neither adds
+significantly (LR test at alpha/K) to a model holding the other -- the record
+cannot tell them apart.  The chosen one enters the model (the fit moves on)
+but the step reports the group, and the pipeline names none of them.
+
 Forward selection repeats this with every earlier effect refitted together
-with each new candidate, until no candidate passes.  Finally the residual
+with each new candidate, until no candidate passes.  The fits run on
+per-chunk Gram matrices (:mod:`.gram`): every candidate is linear in its
+coefficients at a fixed dead time, so a fit is a k x k solve; the dead-time
+candidate is profiled on the full design (:func:`fit_model`), and once
+chosen its shift fixes the design of the later steps.  Finally the residual
 ratio rho_c = RMS(e_c) of every channel is compared with ``rho_max`` (1.5:
 under a correct model rho is 1 within a few per cent for a few hundred
 blocks, so 1.5 leaves room for a noise estimate that is somewhat off but
@@ -66,11 +81,14 @@ from scipy import stats
 from ..._validation import check_int
 from ..core.criteria import (ALPHA, CV_SEGMENTS, RHO_MAX, Step, _chi2_sf, _normal_quantile, aicc,
                              bic, rank_step)
-from .candidates import DEAD_TIME_MAX, library, REGISTRY
+from .candidates import DEAD_TIME_MAX, REGISTRY, identity_values, library
+from .gram import GramSet, chi2_at, chunk_layout, covariance, solve
 from .residuals import SUBSYSTEM, BlockSystem, block_noise
 
 #: 95 % quantile of chi2 with one degree of freedom (the dead-time profile interval).
 _CHI2_95_1 = float(stats.chi2.ppf(0.95, 1))
+#: The two disjoint subsystems (a parameter's variance is scaled by its own subsystem's).
+_SUBSYSTEMS = (SUBSYSTEM["pressure"], SUBSYSTEM["torque"])
 
 
 @dataclass(frozen=True, eq=False)
@@ -86,7 +104,7 @@ class Problem:
         Noise level of each block channel (at the model it was evaluated at).
     arm : ArmParameters
     fold : numpy.ndarray of int
-        Cross-validation fold (0/1) of every block.
+        Cross-validation fold (0/1) of every block (that of its chunk).
     max_shift : int
         Largest dead time searched [samples].
     noise : tuple
@@ -95,13 +113,21 @@ class Problem:
         Lower bound of the noise level per channel (rest-point records:
         :data:`ppamsafety.diagnose.static.RESOLUTION`), None for none.
     shift_grid : tuple of int or None
-        Dead-time shifts profiled (None: 1 .. ``max_shift``; the bootstrap
-        fixes the full record's best shift).
+        Dead-time shifts profiled (None: 1 .. ``max_shift``; the resampling
+        schemes fix the full record's best shift).
+    chunk : numpy.ndarray of int
+        Chunk (run of consecutive blocks, :func:`~.gram.chunk_layout`) of every block.
+    chunk_fold : numpy.ndarray of int
+        Cross-validation fold of every chunk.
+    mu_ref : numpy.ndarray or None
+        Model vector at which the model-dependent columns of the sensor faults are
+        evaluated (:class:`~.residuals.Columns`; None: ``mu0``).  The selection moves it
+        to the current model after every step (:func:`at_model`).
     _xcache : dict
         Designs per dead-time shift (internal cache, shared with :func:`at_model`'s copies).
     _memo : dict
-        Candidate directions and whitened nominal residuals of this problem (internal
-        cache; the forward selection fits every candidate three times per step).
+        Candidate directions, Gram sets and whitened nominal residuals of this problem
+        (internal cache).
     """
 
     bs: BlockSystem
@@ -113,6 +139,9 @@ class Problem:
     noise: tuple = ()
     floor: np.ndarray | None = None
     shift_grid: tuple | None = None
+    chunk: np.ndarray | None = None
+    chunk_fold: np.ndarray | None = None
+    mu_ref: np.ndarray | None = None
     _xcache: dict = field(default_factory=dict, repr=False)
     _memo: dict = field(default_factory=dict, repr=False)
 
@@ -127,13 +156,23 @@ class Problem:
             self._xcache[shift] = self.bs.with_dead_time(shift)
         return self._xcache[shift]
 
+    @property
+    def nchunk(self) -> int:
+        """Number of chunks."""
+        return int(self.chunk_fold.size)
+
+    @property
+    def mu_columns(self) -> np.ndarray:
+        """The model vector the model-dependent columns are evaluated at."""
+        return self.mu0 if self.mu_ref is None else self.mu_ref
+
 
 def _floored(sig, floor):
     return sig if floor is None else np.maximum(sig, floor)
 
 
 def make_problem(bs: BlockSystem, mu0, noise, arm, *, floor=None) -> Problem:
-    """Bundle a block system for selection (folds: :data:`CV_SEGMENTS` alternating segments).
+    """Bundle a block system for selection (chunks and folds: :func:`~.gram.chunk_layout`).
 
     Parameters
     ----------
@@ -147,25 +186,31 @@ def make_problem(bs: BlockSystem, mu0, noise, arm, *, floor=None) -> Problem:
     floor : array_like, shape (6,), optional, keyword-only
         Lower bound of the noise level per channel (see :class:`Problem`).
     """
-    seg = np.minimum((np.arange(bs.nb) * CV_SEGMENTS) // bs.nb, CV_SEGMENTS - 1)
+    chunk, cfold = chunk_layout(bs.nb)
     max_shift = max(1, int(round(DEAD_TIME_MAX / bs.dt)))
     mu0 = np.asarray(mu0, float)
     floor = None if floor is None else np.asarray(floor, dtype=float)
     return Problem(bs=bs, mu0=mu0, sigma=_floored(block_noise(*noise, mu0), floor), arm=arm,
-                   fold=seg % 2, max_shift=max_shift, noise=tuple(noise), floor=floor)
+                   fold=cfold[chunk], max_shift=max_shift, noise=tuple(noise), floor=floor,
+                   chunk=chunk, chunk_fold=cfold)
 
 
 def at_model(prob: Problem, mu) -> Problem:
-    """``prob`` with the noise levels re-evaluated at a model vector (same cache).
+    """``prob`` at a model vector: noise levels re-evaluated there, model-dependent columns
+    moved there (same design caches).
 
     Parameters
     ----------
     prob : Problem
     mu : numpy.ndarray, shape (NMU,)
     """
-
+    mu = np.asarray(mu, dtype=float)
+    moves = any(c.X is not None for c in prob.bs.extra.values()) and not np.array_equal(
+        mu, prob.mu_columns)
+    keep = () if moves else ("directions", "gram")
+    memo = {k: v for k, v in prob._memo.items() if k[0] in keep}
     return replace(prob, sigma=_floored(block_noise(*prob.noise, mu), prob.floor),
-                   _xcache=prob._xcache, _memo={})
+                   mu_ref=mu if moves else prob.mu_ref, _xcache=prob._xcache, _memo=memo)
 
 
 @dataclass(frozen=True, eq=False)
@@ -184,7 +229,7 @@ class Fit:
     phi : numpy.ndarray
         Linear coefficients, candidate blocks in the order of ``names``.
     cov : numpy.ndarray
-        Covariance of phi (scaled by the residual variance).
+        Covariance of phi (scaled by the residual variance of each parameter's subsystem).
     slices : dict
         Candidate name -> slice of phi.
     shift : int
@@ -193,8 +238,11 @@ class Fit:
         Profile interval of the shift.
     mu : numpy.ndarray
         Fitted model vector.
-    e : numpy.ndarray, shape (nb, 6)
-        Whitened residuals of every block under this fit.
+    e : numpy.ndarray or None, shape (nb, 6)
+        Whitened residuals of every block under this fit (None for a fit from Gram
+        matrices, which never forms them).
+    chi2_channel : numpy.ndarray or None, shape (6,)
+        chi2 per channel over the equations used.
     """
 
     names: tuple
@@ -207,7 +255,8 @@ class Fit:
     shift: int
     shift_ci: tuple
     mu: np.ndarray
-    e: np.ndarray
+    e: np.ndarray | None
+    chi2_channel: np.ndarray | None = None
 
     @property
     def bic(self) -> float:
@@ -240,7 +289,7 @@ def _directions_of(prob: Problem, names):
     nb = prob.bs.nb
     for c in cands:
         if c.columns is not None:
-            E = prob.bs.extra[c.columns]
+            E = prob.bs.extra[c.columns].at(prob.mu_columns)
             D = np.zeros((prob.mu0.size, E.shape[2]))
         elif c.directions is None:
             slices[c.name] = slice(j, j)
@@ -304,8 +353,31 @@ def _solve(prob, D, shift, mask, E=None):
     return phi, float(r @ r), A, base, Z
 
 
+def _scaled_cov(A_normal, chi2_channel, Zdiag_channels, m_per_channel):
+    """Covariance of phi: A^-1 scaled per column by the residual variance of its subsystem.
+
+    An unexplained torque residual must not inflate the intervals of a valve parameter,
+    nor hide behind them; a column acting in both subsystems (a sensor fault) takes the
+    variance of both.
+    """
+    k = A_normal.shape[0]
+    if k == 0:
+        return np.zeros((0, 0))
+    acts = Zdiag_channels > 0                               # (nch, k)
+    chi2_of = acts.T.astype(float) @ chi2_channel           # (k,)
+    nch_of = acts.sum(axis=0)                               # (k,)
+    # columns sharing a channel set with column j (the parameters charged to its variance)
+    ksub = (acts.T.astype(int) @ acts.astype(int) > 0).sum(axis=1)
+    dof = np.maximum(m_per_channel * nch_of - ksub, 1)
+    sd = np.where(nch_of > 0, np.sqrt(chi2_of / dof), 1.0)
+    return sd[:, None] * covariance(A_normal) * sd[None, :]
+
+
 def fit_model(prob: Problem, names, mask=None) -> Fit:
-    """Fit the nominal model extended by the candidates ``names`` (see the module docstring).
+    """Fit the nominal model extended by the candidates ``names`` on the full design.
+
+    The dead time (if among ``names``) is profiled over every shift of the
+    grid; every whitened block residual is formed (``Fit.e``).
 
     Parameters
     ----------
@@ -335,35 +407,26 @@ def fit_model(prob: Problem, names, mask=None) -> Fit:
     m = A.shape[0]
     k = D.shape[1] + (1 if grid else 0)
     s2 = chi2 / max(m - k, 1)
+    e = base - Z @ phi
+    chi2_c = np.sum(e[mask] ** 2, axis=0)
     if D.shape[1]:
-        # scale each parameter by the residual variance of *its* subsystem (the subsystems'
-        # columns do not overlap, so A^T A is block diagonal across them): an unexplained
-        # torque residual must not inflate the intervals of a valve parameter, nor hide
-        # behind them
-        e_all = (base - Z @ phi)[mask]
-        sd = np.ones(D.shape[1])
-        for chans in SUBSYSTEM.values():
-            cols = np.nonzero(np.any(Z[:, list(chans), :] != 0, axis=(0, 1)))[0]
-            if cols.size:
-                msub = e_all[:, list(chans)].size
-                sd[cols] = math.sqrt(float(np.sum(e_all[:, list(chans)] ** 2))
-                                     / max(msub - cols.size, 1))
-        cov = sd[:, None] * np.linalg.pinv(A.T @ A) * sd[None, :]
+        zd = np.sum(Z[mask] ** 2, axis=0)                     # (6, k)
+        cov = _scaled_cov(A.T @ A, chi2_c, zd, int(mask.sum()))
     else:
         cov = np.zeros((0, 0))
     if grid:
         prof = np.array(prof)
-        ok = np.nonzero(prof - prof.min() <= s2 * _CHI2_95_1)[0] + 1
-        shift_ci = (int(ok.min()), int(ok.max()))
+        ok = np.nonzero(prof - prof.min() <= s2 * _CHI2_95_1)[0]
+        grid_shifts = np.asarray(list(shifts))
+        shift_ci = (int(grid_shifts[ok].min()), int(grid_shifts[ok].max()))
     else:
         shift_ci = (0, 0)
-    e = base - Z @ phi
     return Fit(names=names, k=k, m=m, chi2=chi2, phi=phi, cov=cov, slices=slices, shift=shift,
-               shift_ci=shift_ci, mu=prob.mu0 + D @ phi, e=e)
+               shift_ci=shift_ci, mu=prob.mu0 + D @ phi, e=e, chi2_channel=chi2_c)
 
 
 def cv_chi2(prob: Problem, names) -> float:
-    """Held-out chi2 of 2-fold cross-validation over alternating time segments.
+    """Held-out chi2 of 2-fold cross-validation over alternating time segments (full design).
 
     Parameters
     ----------
@@ -378,12 +441,119 @@ def cv_chi2(prob: Problem, names) -> float:
     return total
 
 
+# ----------------------------------------------------------------------------- Gram path
+
+def _grid_name(names) -> str | None:
+    return next((c.name for c in library(names) if c.grid), None)
+
+
+def _gram_set(prob: Problem, names, shift: int) -> GramSet:
+    """The Gram set of every linear candidate of ``names`` at dead time ``shift`` (cached)."""
+    lin = tuple(n for n in names if not REGISTRY[n].grid)
+    key = ("gram", lin, int(shift))
+    if key not in prob._memo:
+        D, slices, _, E = _directions(prob, lin)
+        X = prob.X(shift)
+        nb, nc, nm = X.shape
+        Xf = X.reshape(nb * nc, nm)
+        P = (Xf @ D).reshape(nb, nc, D.shape[1])
+        if E is not None:
+            P = P + E
+        base = prob.bs.y - (Xf @ prob.mu0).reshape(nb, nc)
+        prob._memo[key] = (GramSet.build(P, base, prob.chunk, slices, shift), D)
+    return prob._memo[key]
+
+
+def gram_fit(prob: Problem, names, *, universe, shift: int = 0, chunks=None,
+             cov: bool = True) -> Fit:
+    """Fit ``names`` from the Gram matrices (no block residuals formed).
+
+    Parameters
+    ----------
+    prob : Problem
+    names : sequence of str
+        Candidates of the model; the dead-time candidate among them is held at ``shift``
+        (counted as one fitted parameter).
+    universe : sequence of str
+        The candidates the Gram set is built for (a superset of ``names``).
+    shift : int, keyword-only
+        Dead time [samples] of the design (0 unless the model holds the dead time).
+    chunks : numpy.ndarray of bool, shape (nchunk,), optional, keyword-only
+        Chunks to fit on (default all).
+    cov : bool, keyword-only
+        Also the covariance and the chi2 per channel (else ``cov`` is empty and
+        ``chi2_channel`` None: enough to rank).
+
+    Returns
+    -------
+    Fit
+        With ``e = None``.
+    """
+    names = tuple(names)
+    grid = any(REGISTRY[n].grid for n in names)
+    gs, D_all = _gram_set(prob, universe, shift if grid else 0)
+    lin = [n for n in names if not REGISTRY[n].grid]
+    cols = gs.columns(lin)
+    Gs, Aw = gs.weighted(chunks, prob.sigma)
+    gf = solve(Gs, cols, prob.sigma, Aw, per_channel=cov)
+    nblocks = int(prob.bs.nb if chunks is None else np.asarray(chunks, bool)[prob.chunk].sum())
+    m = nblocks * prob.bs.y.shape[1]
+    k = cols.size + (1 if grid else 0)
+    if cov:
+        w = 1.0 / prob.sigma ** 2
+        zd = (Gs[:, cols, cols] * w[:, None]) if cols.size else np.zeros((Gs.shape[0], 0))
+        cmat = _scaled_cov(gf.A, gf.chi2_channel, zd, nblocks)
+    else:
+        cmat = np.zeros((0, 0))
+    slices, j = {}, 0
+    for n in names:
+        c = REGISTRY[n]
+        width = 0 if c.grid else gs.slices[n].stop - gs.slices[n].start
+        slices[n] = slice(j, j + width)
+        j += width
+    mu = prob.mu0 + D_all[:, cols] @ gf.phi
+    return Fit(names=names, k=k, m=m, chi2=gf.chi2, phi=gf.phi, cov=cmat, slices=slices,
+               shift=shift if grid else 0, shift_ci=(shift, shift) if grid else (0, 0), mu=mu,
+               e=None, chi2_channel=gf.chi2_channel)
+
+
+def gram_cv(prob: Problem, names, *, universe, shift: int = 0, chunks=None) -> float:
+    """Held-out chi2 of 2-fold cross-validation from the Gram matrices (see :func:`cv_chi2`).
+
+    Parameters
+    ----------
+    prob : Problem
+    names : sequence of str
+    universe : sequence of str
+    shift : int, keyword-only
+    chunks : numpy.ndarray of bool, optional, keyword-only
+        Restrict both folds to these chunks.
+    """
+    names = tuple(names)
+    grid = any(REGISTRY[n].grid for n in names)
+    gs, _ = _gram_set(prob, universe, shift if grid else 0)
+    cols = gs.columns([n for n in names if not REGISTRY[n].grid])
+    use = np.ones(prob.nchunk, bool) if chunks is None else np.asarray(chunks, bool)
+    total = 0.0
+    for f in (0, 1):
+        train = use & (prob.chunk_fold != f)
+        test = use & (prob.chunk_fold == f)
+        Gtr, Atr = gs.weighted(train, prob.sigma)
+        gf = solve(Gtr, cols, prob.sigma, Atr)
+        total += chi2_at(None, cols, gf.phi, prob.sigma, gs.weighted(test, prob.sigma)[1])
+    return total
+
+
 def forward_selection(prob: Problem, candidates=None, *, alpha: float = ALPHA,
-                      max_effects: int = 4) -> tuple:
+                      max_effects: int = 5, chunks=None, fixed_shift: int | None = None,
+                      confounding: bool = True, move_columns: bool = True) -> tuple:
     """Forward selection with refit (module docstring).
 
-    Returns the final Fit, the list of Step and the Problem with the noise
-    levels of the final model.
+    Returns the final Fit (full design, every block residual formed; on the
+    chunks selected), the list of Step and the Problem with the noise levels
+    of the final model.  A backward pass at the end drops an effect that the
+    later ones made redundant (no longer significant, or no longer lowering
+    the BIC); the final fit's names are then a subset of the steps' choices.
 
     Parameters
     ----------
@@ -393,49 +563,222 @@ def forward_selection(prob: Problem, candidates=None, *, alpha: float = ALPHA,
     alpha : float, keyword-only
         Level of the likelihood-ratio test before the Bonferroni division.
     max_effects : int, keyword-only
-        Largest number of effects named.
+        Largest number of effects selected.
+    chunks : numpy.ndarray of bool, shape (nchunk,), optional, keyword-only
+        Run on these chunks only (a half of the record: stability selection).
+    fixed_shift : int, optional, keyword-only
+        Hold the dead time at this shift instead of profiling it (resampling schemes).
+    confounding : bool, keyword-only
+        Check the chosen candidate for confounded alternatives (:func:`confounded_with`).
+    move_columns : bool, keyword-only
+        Move the model-dependent columns to every new model (False: keep them where
+        ``prob`` has them; the resampling schemes start from the full record's final model
+        and save rebuilding the Gram matrices at every step of every half).
     """
-    names = [c.name for c in library(candidates)]
+    universe = tuple(c.name for c in library(candidates))
+    grid_name = _grid_name(universe)
     selected: list = []
     prob0 = prob
-    current = fit_model(prob, selected)
-    cur_cv = cv_chi2(prob, selected)
+    shift = 0
+    current = gram_fit(prob, selected, universe=universe, chunks=chunks, cov=False)
+    cur_cv = gram_cv(prob, selected, universe=universe, chunks=chunks)
     steps = []
     while len(selected) < max_effects:
-        rest = [n for n in names if n not in selected]
+        rest = [n for n in universe if n not in selected]
         if not rest:
             break
         rows, fits = [], {}
         for n in rest:
-            f = fit_model(prob, selected + [n])
+            if n == grid_name and fixed_shift is None:
+                mask = None if chunks is None else np.asarray(chunks, bool)[prob.chunk]
+                f = fit_model(prob, selected + [n], mask=mask)
+                cv = _cv_direct(prob, selected + [n], chunks)
+            else:
+                sh = (fixed_shift if n == grid_name else shift)
+                f = gram_fit(prob, selected + [n], universe=universe, shift=sh, chunks=chunks,
+                             cov=False)
+                cv = gram_cv(prob, selected + [n], universe=universe, shift=sh, chunks=chunks)
             fits[n] = f
             d = current.chi2 - f.chi2
             df = max(f.k - current.k, 1)
-            cv = cv_chi2(prob, selected + [n])
             rows.append({"name": n, "k": f.k - current.k, "chi2": f.chi2, "bic": f.bic,
                          "aicc": f.aicc, "delta_bic": f.bic - current.bic, "lr_stat": d,
                          "lr_df": df, "p_value": _chi2_sf(max(d, 0.0), df),
                          "cv_chi2": cv, "cv_gain": cur_cv - cv})
         for r in rows:
-            r["in_bounds"] = in_bounds(prob, fits[r["name"]], r["name"])
+            # admissibility matters only for a candidate that improves the criterion (it may
+            # be named, and it enters the BIC weights); the others count as admissible, which
+            # can only lower the winner's weight
+            n = r["name"]
+            if r["delta_bic"] < 0 and fits[n].e is None and fits[n].chi2_channel is None:
+                fits[n] = gram_fit(prob, selected + [n], universe=universe,
+                                   shift=fits[n].shift if n == grid_name else shift,
+                                   chunks=chunks)
+            r["in_bounds"] = in_bounds(prob, fits[n], n) if r["delta_bic"] < 0 else True
         chosen, w0 = rank_step(rows, current.bic, alpha=alpha, n_candidates=len(rest))
-        steps.append(Step(tuple(selected), rows, chosen, current.bic, cur_cv, w0))
+        group = ()
+        if chosen is not None and confounding:
+            group = confounded_with(prob, chosen, rows, fits, selected, universe=universe,
+                                    shift=shift, alpha=alpha, n_candidates=len(rest),
+                                    chunks=chunks, fixed_shift=fixed_shift)
+        steps.append(Step(tuple(selected), rows, chosen, current.bic, cur_cv, w0, group))
         if chosen is None:
             break
         selected.append(chosen)
+        if chosen == grid_name:
+            shift = fits[chosen].shift
         # the noise level depends on the model (velocity noise enters through H qd):
         # re-evaluate it at the new model, refit, and compare the next step on that footing
-        prob = at_model(prob0, fits[chosen].mu)
-        current = fit_model(prob, selected)
-        cur_cv = cv_chi2(prob, selected)
-    return current, steps, prob
+        prob = _at(prob0, fits[chosen].mu, move_columns)
+        current = gram_fit(prob, selected, universe=universe, shift=shift, chunks=chunks,
+                           cov=False)
+        cur_cv = gram_cv(prob, selected, universe=universe, shift=shift, chunks=chunks)
+    # backward pass: an effect chosen early may be redundant once later ones are in (a
+    # valve offset absorbing the valve part of a pressure-sensor gain before the gain
+    # itself was chosen); drop the least significant one while any is not significant
+    # (LR p >= alpha/K) or does not lower the BIC, then refit
+    n_all = len(universe)
+    while len(selected) > 1:
+        worst, worst_p = None, -1.0
+        for c in selected:
+            rest = [n for n in selected if n != c]
+            sh = shift if grid_name in rest else 0
+            fw = gram_fit(prob, rest, universe=universe, shift=sh, chunks=chunks, cov=False)
+            d = max(fw.chi2 - current.chi2, 0.0)
+            p = _chi2_sf(d, max(current.k - fw.k, 1))
+            if (p >= alpha / n_all or fw.bic <= current.bic) and p > worst_p:
+                worst, worst_p = c, p
+        if worst is None:
+            break
+        selected.remove(worst)
+        if worst == grid_name:
+            shift = 0
+        mu = gram_fit(prob, selected, universe=universe, shift=shift, chunks=chunks,
+                      cov=False).mu
+        prob = _at(prob0, mu, move_columns)
+        current = gram_fit(prob, selected, universe=universe, shift=shift, chunks=chunks,
+                           cov=False)
+    if chunks is None:
+        final, prob = refit(prob0, selected, prob=prob,
+                            shift=shift if fixed_shift is not None else None)
+    else:
+        final = current
+    return final, steps, prob
 
+
+def _at(prob0, mu, move_columns):
+    if move_columns:
+        return at_model(prob0, mu)
+    return replace(prob0, sigma=_floored(block_noise(*prob0.noise, mu), prob0.floor),
+                   _xcache=prob0._xcache, _memo=prob0._memo)
+
+
+def refit(prob0: Problem, names, *, prob: Problem | None = None, shift: int | None = None):
+    """The full-design fit of ``names`` at its own model (fixed point of the noise levels and
+    of the model-dependent columns).
+
+    Parameters
+    ----------
+    prob0 : Problem
+        At the nominal model.
+    names : sequence of str
+    prob : Problem, optional, keyword-only
+        A starting point nearer the answer (default ``prob0``).
+    shift : int, optional, keyword-only
+        Hold the dead time at this shift (default: profile it).
+
+    Returns
+    -------
+    (Fit, Problem)
+    """
+    names = list(names)
+    prob = prob0 if prob is None else prob
+    grid = any(REGISTRY[n].grid for n in names)
+    for _ in range(3):
+        final = fit_model(replace(prob, shift_grid=(shift,)) if shift is not None and grid
+                          else prob, names)
+        nxt = at_model(prob0, final.mu)
+        if nxt.mu_ref is prob.mu_ref or not names:
+            break
+        prob = nxt
+    return final, prob
+
+
+def _cv_direct(prob, names, chunks):
+    total = 0.0
+    use = np.ones(prob.nchunk, bool) if chunks is None else np.asarray(chunks, bool)
+    for f in (0, 1):
+        train = (use & (prob.chunk_fold != f))[prob.chunk]
+        test = (use & (prob.chunk_fold == f))[prob.chunk]
+        fit = fit_model(prob, names, mask=train)
+        total += float(np.sum(fit.e[test] ** 2))
+    return total
+
+
+def confounded_with(prob: Problem, chosen: str, rows, fits, selected, *, universe, shift: int,
+                    alpha: float, n_candidates: int, chunks=None,
+                    fixed_shift: int | None = None) -> tuple:
+    """Candidates the record cannot tell from ``chosen`` at this step.
+
+    A candidate c is confounded with the chosen one when it passes the
+    naming rule's evidence tests on its own (delta BIC < 0, LR p < alpha/K,
+    admissible) and neither adds significantly to a model that holds the
+    other: the LR test of ``selected + {chosen, c}`` against ``selected +
+    {chosen}`` *and* against ``selected + {c}`` gives p >= alpha/K.  Both then
+    explain the same part of the residual.
+
+    Parameters
+    ----------
+    prob : Problem
+    chosen : str
+    rows : list of dict
+        The step's ranking rows (with ``delta_bic``, ``p_value``, ``in_bounds``).
+    fits : dict
+        Candidate -> Fit of ``selected + [candidate]``.
+    selected : list of str
+        Effects already in the model.
+    universe : sequence of str, keyword-only
+    shift : int, keyword-only
+        Dead time of the current design [samples].
+    alpha : float, keyword-only
+    n_candidates : int, keyword-only
+        Bonferroni divisor.
+    chunks : numpy.ndarray of bool, optional, keyword-only
+    fixed_shift : int, optional, keyword-only
+
+    Returns
+    -------
+    tuple of str
+        The confounded candidates (without ``chosen``), by BIC.
+    """
+    grid_name = _grid_name(universe)
+    level = alpha / n_candidates
+    out = []
+    fc = fits[chosen]
+    for r in sorted(rows, key=lambda r: r["bic"]):
+        c = r["name"]
+        if c == chosen or not (r["delta_bic"] < 0 and r["p_value"] < level and r["in_bounds"]):
+            continue
+        both = selected + [chosen, c]
+        has_grid = grid_name in both
+        sh = (fixed_shift if fixed_shift is not None else
+              (fits[grid_name].shift if grid_name in (chosen, c) else shift)) if has_grid else 0
+        fb = gram_fit(prob, both, universe=universe, shift=sh, chunks=chunks, cov=False)
+        fo = fits[c]
+        p1 = _chi2_sf(max(fc.chi2 - fb.chi2, 0.0), max(fb.k - fc.k, 1))
+        p2 = _chi2_sf(max(fo.chi2 - fb.chi2, 0.0), max(fb.k - fo.k, 1))
+        if p1 >= level and p2 >= level:
+            out.append(c)
+    return tuple(out)
+
+
+# ----------------------------------------------------------------------------- resampling
 
 def resample(prob: Problem, idx, *, shift_grid=None) -> Problem:
     """``prob`` restricted to the blocks ``idx`` (in that order, repeats allowed).
 
-    The noise levels stay those of ``prob``; the cross-validation folds are
-    re-assigned by position in the new order.
+    The noise levels stay those of ``prob``; the chunks and cross-validation
+    folds are re-assigned by position in the new order.
 
     Parameters
     ----------
@@ -449,27 +792,48 @@ def resample(prob: Problem, idx, *, shift_grid=None) -> Problem:
     bs = prob.bs
     nbs = replace(bs, y=bs.y[idx], X=bs.X[idx], starts=bs.starts[idx], stops=bs.stops[idx],
                   features={k: v[idx] for k, v in bs.features.items()},
-                  extra={k: v[idx] for k, v in bs.extra.items()})
+                  extra={k: v.take(idx) for k, v in bs.extra.items()})
     n = idx.size
-    seg = np.minimum((np.arange(n) * CV_SEGMENTS) // n, CV_SEGMENTS - 1)
+    chunk, cfold = chunk_layout(n)
     noise = tuple(a[:, idx] for a in prob.noise) if prob.noise else ()
     # the dead-time designs of the blocks are rows of the parent's: take them from its cache
     # (rebuilding one integrates the whole delayed input again)
     keep = prob._xcache.keys() if shift_grid is None else set(shift_grid) | {0}
     cache = {s: X[idx] for s, X in prob._xcache.items() if s in keep}
-    return Problem(bs=nbs, mu0=prob.mu0, sigma=prob.sigma, arm=prob.arm, fold=seg % 2,
+    return Problem(bs=nbs, mu0=prob.mu0, sigma=prob.sigma, arm=prob.arm, fold=cfold[chunk],
                    max_shift=prob.max_shift, noise=noise, floor=prob.floor,
-                   shift_grid=shift_grid, _xcache=cache)
+                   shift_grid=shift_grid, chunk=chunk, chunk_fold=cfold, mu_ref=prob.mu_ref,
+                   _xcache=cache)
 
 
-#: Default number of bootstrap replicates of :func:`bootstrap_frequency` (a frequency to
-#: +-0.07 at p = 0.5, +-0.03 near 0.95; 60 s of 1 kHz data: about 25 s on one core).
-BOOTSTRAP_REPLICATES = 40
+#: Default number of bootstrap replicates of :func:`bootstrap_frequency` (0: the pipeline's
+#: confidence uses the stability selection instead).
+BOOTSTRAP_REPLICATES = 0
+#: Default number of complementary pairs of :func:`stability_selection` (50 halves).
+STABILITY_PAIRS = 25
+#: Selection frequency at or above which a name counts as stable (the threshold pi_thr of
+#: the error bound of :func:`stability_selection`).
+STABILITY_THRESHOLD = 0.8
 
 
-def bootstrap_frequency(prob: Problem, candidates=None, *, replicates: int = BOOTSTRAP_REPLICATES,
+def profiled_shift(prob: Problem, candidates) -> int | None:
+    """The dead time of the full record (profiled once), or None without the candidate.
+
+    Parameters
+    ----------
+    prob : Problem
+    candidates : sequence of str or None
+        The library (the dead-time candidate among them is profiled alone).
+    """
+    lib = library(candidates)
+    if not any(c.grid for c in lib):
+        return None
+    return int(fit_model(prob, [c.name for c in lib if c.grid]).shift)
+
+
+def bootstrap_frequency(prob: Problem, candidates=None, *, replicates: int = 40,
                         seed: int = 0, block_length: int | None = None, alpha: float = ALPHA,
-                        max_effects: int = 4) -> tuple:
+                        max_effects: int = 5) -> tuple:
     """How often the forward selection picks each effect on moving-block bootstrap resamples.
 
     The blocks (time-ordered rows of the block system) are resampled with
@@ -478,10 +842,9 @@ def bootstrap_frequency(prob: Problem, candidates=None, *, replicates: int = BOO
     to the original length, so a model error correlated over neighbouring
     blocks stays together.  Every replicate re-runs
     :func:`forward_selection` on its regressions (no re-simulation; the
-    noise levels are those of the full record).  A selection frequency near
-    1 says the choice does not hinge on a few stretches of the record.
-    The valve dead time is profiled once on the whole record and held at
-    that shift in the replicates (its linear parameters are refitted).
+    noise levels are those of the full record).  The valve dead time is
+    profiled once on the whole record and held at that shift in the
+    replicates (its linear parameters are refitted).
 
     Parameters
     ----------
@@ -515,30 +878,205 @@ def bootstrap_frequency(prob: Problem, candidates=None, *, replicates: int = BOO
     names = [c.name for c in library(candidates)]
     counts = dict.fromkeys(names, 0)
     runs = int(math.ceil(nb / L))
-    grid = None
-    if any(c.grid for c in library(candidates)):
-        # the dead time is profiled once on the whole record; the replicates refit the
-        # linear parameters at that shift (profiling 60 shifts per fit would cost 60x)
-        grid = (fit_model(prob, [c.name for c in library(candidates) if c.grid]).shift,)
+    s = profiled_shift(prob, candidates)
+    grid = None if s is None else (s,)
+    if grid:
         prob.X(grid[0])
     prob.X(0)
     for _ in range(replicates):
         st = rng.integers(0, nb - L + 1, size=runs)
         idx = (st[:, None] + np.arange(L)[None, :]).ravel()[:nb]
         _, steps, _ = forward_selection(resample(prob, idx, shift_grid=grid), candidates,
-                                        alpha=alpha,
-                                        max_effects=max_effects)
-        for s in steps:
-            if s.chosen is not None:
-                counts[s.chosen] += 1
+                                        alpha=alpha, max_effects=max_effects,
+                                        fixed_shift=s, confounding=False)
+        for st_ in steps:
+            if st_.chosen is not None:
+                counts[st_.chosen] += 1
     return ({n: counts[n] / replicates for n in names},
             {"replicates": replicates, "block_length": L, "seed": seed,
              "method": "moving-block bootstrap over the time-ordered blocks; forward selection "
                        "re-run on each replicate"})
 
 
+@dataclass(frozen=True)
+class Stability:
+    """Complementary-pairs stability selection of the forward selection (Shah & Samworth 2013).
+
+    Attributes
+    ----------
+    frequency : dict
+        Candidate -> fraction of the 2B halves that selected it.
+    pairs : int
+        B, the number of complementary pairs.
+    threshold : float
+        pi_thr: a name is *stable* when its frequency reaches it.
+    q : float
+        Mean number of candidates selected per half.
+    p : int
+        Number of candidates.
+    expected_false_bound : float or None
+        Upper bound on the expected number of stable names that are false selections,
+        q^2 / ((2 pi_thr - 1) p) (Meinshausen & Buehlmann 2010, Theorem 1; Shah & Samworth
+        2013 show it holds for complementary pairs under the same exchangeability
+        assumption); None when pi_thr <= 0.5.
+    seed : int
+    chunk_blocks : float
+        Mean blocks per chunk (the unit the record is halved by).
+    """
+
+    frequency: dict
+    pairs: int
+    threshold: float
+    q: float
+    p: int
+    expected_false_bound: float | None
+    seed: int
+    chunk_blocks: float
+
+    def to_dict(self) -> dict:
+        """JSON-ready form (``diagnosis.json`` key ``stability``)."""
+        return {"method": "complementary-pairs stability selection (Shah & Samworth 2013): the "
+                          "forward selection re-run on both halves of B random splits of the "
+                          "record's chunks (runs of consecutive blocks)",
+                "pairs": self.pairs, "halves": 2 * self.pairs, "threshold": self.threshold,
+                "mean_selected_per_half": self.q, "candidates": self.p,
+                "expected_false_selections_bound": self.expected_false_bound,
+                "bound": "E[V] <= q^2 / ((2 pi_thr - 1) p) (Meinshausen & Buehlmann 2010, "
+                         "Theorem 1)",
+                "seed": self.seed, "chunk_blocks": self.chunk_blocks,
+                "frequency": dict(self.frequency)}
+
+
+def stability_selection(prob: Problem, candidates=None, *, pairs: int = STABILITY_PAIRS,
+                        seed: int = 0, alpha: float = ALPHA, max_effects: int = 5,
+                        threshold: float = STABILITY_THRESHOLD,
+                        reference=None) -> Stability:
+    """Selection frequencies over complementary halves of the record.
+
+    B times, the chunks (runs of consecutive blocks, :func:`~.gram.chunk_layout`) are split
+    at random into two halves of equal size, and :func:`forward_selection` (same rule,
+    Gram fits, confounding not checked) runs on each half.  A name's frequency is the
+    fraction of the 2B halves that select it.  With a threshold pi_thr > 1/2 the expected
+    number of false selections among the names with frequency >= pi_thr is bounded by
+    q^2 / ((2 pi_thr - 1) p) (q the mean number selected per half, p the number of
+    candidates): the error control of Meinshausen & Buehlmann (2010), which Shah &
+    Samworth (2013) show holds for complementary pairs.  The dead time is profiled once
+    on the whole record and held at that shift in the halves.
+
+    Parameters
+    ----------
+    prob : Problem
+    candidates : sequence of str, optional
+    pairs : int, keyword-only
+        B (>= 1).
+    seed : int, keyword-only
+        Seed of the splits.
+    alpha : float, keyword-only
+    max_effects : int, keyword-only
+    threshold : float, keyword-only
+        pi_thr in (0.5, 1].
+    reference : numpy.ndarray, shape (NMU,), optional, keyword-only
+        Model vector at which the model-dependent columns (sensor faults) are held in the
+        halves (default: where ``prob`` has them); the pipeline passes the full record's
+        final model.
+
+    Returns
+    -------
+    Stability
+    """
+    pairs = check_int("pairs", pairs, 1, 10000)
+    seed = check_int("seed", seed, 0)
+    names = [c.name for c in library(candidates)]
+    counts = dict.fromkeys(names, 0)
+    s = profiled_shift(prob, candidates)
+    if reference is not None:
+        prob = at_model(prob, reference)
+        prob = replace(prob, sigma=_floored(block_noise(*prob.noise, prob.mu0), prob.floor))
+    rng = np.random.default_rng(seed)
+    C = prob.nchunk
+    total = 0
+    for _ in range(pairs):
+        perm = rng.permutation(C)
+        half = np.zeros(C, bool)
+        half[perm[:C // 2]] = True
+        for h in (half, ~half):
+            _, steps, _ = forward_selection(prob, candidates, alpha=alpha,
+                                            max_effects=max_effects, chunks=h,
+                                            fixed_shift=s, confounding=False,
+                                            move_columns=False)
+            for st in steps:
+                if st.chosen is not None:
+                    counts[st.chosen] += 1
+                    total += 1
+    halves = 2 * pairs
+    q = total / halves
+    p = len(names)
+    bound = q * q / ((2 * threshold - 1) * p) if threshold > 0.5 else None
+    return Stability(frequency={n: counts[n] / halves for n in names}, pairs=pairs,
+                     threshold=threshold, q=q, p=p, expected_false_bound=bound, seed=seed,
+                     chunk_blocks=prob.bs.nb / max(C, 1))
+
+
+# ----------------------------------------------------------------------------- consistency
+
+#: Significance level of the parameter-constancy test across operating regions.
+CONSTANCY_ALPHA = 1e-3
+
+
+def region_consistency(prob: Problem, fit: Fit, name: str) -> dict:
+    """Are the parameters of effect ``name`` the same in different parts of the arm's motion?
+
+    A real effect has one value wherever the arm moves; an effect that is standing in for
+    something else (an encoder gain taken for an offset, a heavier link taken for a
+    payload, a nonlinearity taken for a gain) fits different values in different regions.
+    For each joint, the final model is refitted on the blocks of the lowest and of the
+    highest third of that joint's angle (disjoint, so independent), and the Wald statistic
+    ``(phi_lo - phi_hi)^T (C_lo + C_hi)^+ (phi_lo - phi_hi)`` of the effect's coefficients
+    is referred to chi2 with k degrees of freedom (a Chow test).
+
+    Parameters
+    ----------
+    prob : Problem
+        At the final model.
+    fit : Fit
+        The final fit (full design).
+    name : str
+        One of ``fit.names``.
+
+    Returns
+    -------
+    dict
+        ``{"q1": p_value, "q2": p_value}`` (1.0 where a region is too small to fit).
+    """
+    q = prob.bs.features["q"]
+    fixed = replace(prob, shift_grid=(fit.shift,)) if REGISTRY.get(name) is not None and any(
+        REGISTRY[n].grid for n in fit.names) else prob
+    out = {}
+    D, slices, _, _ = _directions(prob, fit.names)
+    sl = slices[name]
+    if sl.stop == sl.start:                       # the dead time: no linear coefficients
+        return {"q1": 1.0, "q2": 1.0}
+    for j in range(2):
+        lo_t, hi_t = np.quantile(q[:, j], [1 / 3, 2 / 3])
+        masks = (q[:, j] <= lo_t, q[:, j] >= hi_t)
+        if min(int(m.sum()) for m in masks) < 3 * max(len(fit.phi), 1):
+            out[f"q{j + 1}"] = 1.0
+            continue
+        fa, fb = (fit_model(fixed, fit.names, mask=m) for m in masks)
+        d = fa.phi[sl] - fb.phi[sl]
+        C = fa.cov[sl, sl] + fb.cov[sl, sl]
+        T = float(d @ np.linalg.pinv(C, rcond=1e-12) @ d)
+        out[f"q{j + 1}"] = _chi2_sf(max(T, 0.0), sl.stop - sl.start)
+    return out
+
+
+# ----------------------------------------------------------------------------- parameters
+
 def in_bounds(prob: Problem, fit: Fit, name: str) -> bool:
-    """True if every parameter interval of effect ``name`` lies in its widened bounds.
+    """True if effect ``name`` of ``fit`` is admissible: no parameter significantly outside its
+    physical range (its 95 % interval reaches into the range: a negative mass of -0.3 +- 0.05
+    kg is a symptom, a viscous friction of -0.002 +- 0.01 N m s/rad is a zero) and every
+    interval inside the plausible bounds widened by half their width.
 
     Parameters
     ----------
@@ -547,13 +1085,60 @@ def in_bounds(prob: Problem, fit: Fit, name: str) -> bool:
     name : str
         One of ``fit.names``.
     """
-    tab = parameter_table(prob, fit)[name]
-    return all(tab[p.name]["ci_low"] >= p.lo - 0.5 * (p.hi - p.lo)
+    tab = parameter_table(prob, fit, truncate=False)[name]
+    return all(tab[p.name]["ci_high"] >= p.phys_lo and tab[p.name]["ci_low"] <= p.phys_hi
+               and tab[p.name]["ci_low"] >= p.lo - 0.5 * (p.hi - p.lo)
                and tab[p.name]["ci_high"] <= p.hi + 0.5 * (p.hi - p.lo)
                for p in REGISTRY[name].parameters)
 
 
-def parameter_table(prob: Problem, fit: Fit, confidence: float = 0.95) -> dict:
+def hac_covariance(prob: Problem, fit: Fit, *, lags: int | None = None) -> np.ndarray:
+    """Heteroskedasticity- and autocorrelation-consistent covariance of ``fit.phi``.
+
+    The sandwich ``B^-1 M B^-1`` with ``B = Z^T Z`` (whitened columns) and the
+    Newey-West meat ``M = sum_|l|<=L w_l sum_b s_b s_(b-l)^T``, Bartlett
+    weights ``w_l = 1 - |l|/(L+1)``, block scores ``s_b = Z_b^T e_b`` (the six
+    channels of a block together, so correlated channels are accounted for),
+    times nb/(nb - k).  Residuals correlated over neighbouring blocks (a model
+    error, coloured noise) widen the intervals; white residuals at the noise
+    level give the ordinary covariance.
+
+    Parameters
+    ----------
+    prob : Problem
+    fit : Fit
+        A full-design fit (``fit.e`` formed).
+    lags : int, optional, keyword-only
+        L; default the chunk length (ceil(nb^(1/3))).
+
+    Returns
+    -------
+    numpy.ndarray, shape (k, k)
+    """
+    D, _, _, E = _directions(prob, fit.names)
+    k = D.shape[1]
+    if k == 0:
+        return np.zeros((0, 0))
+    X = prob.X(fit.shift)
+    nb, nc, nm = X.shape
+    P = (X.reshape(nb * nc, nm) @ D).reshape(nb, nc, k)
+    if E is not None:
+        P = P + E
+    Z = P / prob.sigma[None, :, None]
+    S = np.einsum("bck,bc->bk", Z, fit.e)
+    B = np.einsum("bci,bcj->ij", Z, Z)
+    L = int(math.ceil(nb ** (1.0 / 3.0))) if lags is None else int(lags)
+    M = S.T @ S
+    for lag in range(1, min(L, nb - 1) + 1):
+        w = 1.0 - lag / (L + 1.0)
+        G = S[lag:].T @ S[:-lag]
+        M += w * (G + G.T)
+    Bi = covariance(B)
+    return Bi @ M @ Bi * nb / max(nb - k, 1)
+
+
+def parameter_table(prob: Problem, fit: Fit, confidence: float = 0.95, *,
+                    cov: np.ndarray | None = None, truncate: bool = True) -> dict:
     """Reported parameters of every effect of ``fit`` with delta-method intervals.
 
     Parameters
@@ -562,6 +1147,13 @@ def parameter_table(prob: Problem, fit: Fit, confidence: float = 0.95) -> dict:
     fit : Fit
     confidence : float
         Level of the intervals.
+    cov : numpy.ndarray, optional, keyword-only
+        Covariance of ``fit.phi`` (default ``fit.cov``; the pipeline passes
+        :func:`hac_covariance`).
+    truncate : bool, keyword-only
+        Intersect every interval with the parameter's physical range (the
+        physical range is prior knowledge); the raw interval is kept as
+        ``ci_low_raw``/``ci_high_raw``.
 
     Returns
     -------
@@ -571,6 +1163,7 @@ def parameter_table(prob: Problem, fit: Fit, confidence: float = 0.95) -> dict:
     D, slices, _, _ = _directions(prob, fit.names)
     z = _normal_quantile(0.5 + confidence / 2)
     dt = prob.bs.dt
+    cov = fit.cov if cov is None else cov
     nominal_fit_phi = np.zeros_like(fit.phi)
     out = {}
     for n in fit.names:
@@ -584,23 +1177,38 @@ def parameter_table(prob: Problem, fit: Fit, confidence: float = 0.95) -> dict:
         v = val(fit.phi)
         v_nom = val(nominal_fit_phi)
         if c.grid:
-            lo = np.array([fit.shift_ci[0] * dt])
-            hi = np.array([fit.shift_ci[1] * dt])
+            # the profile interval on the one-sample grid, widened by half a sample on each
+            # side: a true delay between two grid points is profiled to the nearer one
+            lo = np.array([max(fit.shift_ci[0] - 0.5, 0.0) * dt])
+            hi = np.array([(fit.shift_ci[1] + 0.5) * dt])
             se = (hi - lo) / (2 * z)
+        elif c.physical is identity_values:
+            # the values are the coefficients themselves
+            J = np.zeros((v.size, fit.phi.size))
+            J[np.arange(v.size), np.arange(sl.start, sl.stop)] = 1.0
+            se = np.sqrt(np.maximum(np.diag(J @ cov @ J.T), 0.0))
+            lo, hi = v - z * se, v + z * se
         else:
             J = np.zeros((v.size, fit.phi.size))
-            sd = np.sqrt(np.maximum(np.diag(fit.cov), 0.0))
+            sd = np.sqrt(np.maximum(np.diag(cov), 0.0))
             for j in range(fit.phi.size):
                 h = sd[j] * 1e-3 if sd[j] > 0 else 1e-9 * max(abs(fit.phi[j]), 1.0)
                 p1 = fit.phi.copy()
                 p1[j] += h
                 J[:, j] = (val(p1) - v) / h
-            se = np.sqrt(np.maximum(np.diag(J @ fit.cov @ J.T), 0.0))
+            se = np.sqrt(np.maximum(np.diag(J @ cov @ J.T), 0.0))
             lo, hi = v - z * se, v + z * se
-        out[n] = {p.name: {"value": float(v[i]), "unit": p.unit, "ci_low": float(lo[i]),
-                           "ci_high": float(hi[i]), "std_error": float(se[i]),
-                           "nominal": float(v_nom[i]) if not c.grid else 0.0}
-                  for i, p in enumerate(c.parameters)}
+        entry = {}
+        for i, p in enumerate(c.parameters):
+            d = {"value": float(v[i]), "unit": p.unit, "ci_low": float(lo[i]),
+                 "ci_high": float(hi[i]), "std_error": float(se[i]),
+                 "nominal": float(v_nom[i]) if not c.grid else 0.0}
+            if truncate and (lo[i] < p.phys_lo or hi[i] > p.phys_hi):
+                d["ci_low_raw"], d["ci_high_raw"] = d["ci_low"], d["ci_high"]
+                d["ci_low"] = float(min(max(lo[i], p.phys_lo), p.phys_hi))
+                d["ci_high"] = float(max(min(hi[i], p.phys_hi), p.phys_lo))
+            entry[p.name] = d
+        out[n] = entry
     return out
 
 
@@ -616,6 +1224,9 @@ def subsystem_channels(name: str) -> tuple:
 
 
 __all__ = ["Problem", "make_problem", "at_model", "resample", "bootstrap_frequency",
-           "BOOTSTRAP_REPLICATES", "Fit", "fit_model", "cv_chi2", "Step",
-           "forward_selection", "rank_step", "bic", "aicc", "parameter_table", "in_bounds",
+           "BOOTSTRAP_REPLICATES", "Fit", "fit_model", "cv_chi2", "gram_fit", "gram_cv", "Step",
+           "forward_selection", "refit", "confounded_with", "rank_step", "bic", "aicc",
+           "parameter_table", "in_bounds", "hac_covariance", "Stability",
+           "stability_selection", "STABILITY_PAIRS", "STABILITY_THRESHOLD",
+           "region_consistency", "CONSTANCY_ALPHA", "profiled_shift",
            "subsystem_channels", "ALPHA", "RHO_MAX", "CV_SEGMENTS"]

@@ -49,13 +49,16 @@ from ...plant.model import initial_effect_state
 from ...plant.muscle import muscle_force
 from ...plant.torque import torque_functions, group_contraction, torque_kernel
 from ..core.noise import noise_floor, second_difference_sigma
-from .residuals import (MU_A, MU_B, MU_K, MU_THETA, NMU, BlockSystem, HYSTERESIS_COLUMNS,
-                        hysteresis_signature)
+from .candidates import default_candidates
+from .residuals import (ENCODER_OFFSET_COLUMNS, HYSTERESIS_COLUMNS, MU_A, MU_B, MU_K,
+                        MU_THETA, NMU, BlockSystem, Columns, encoder_columns,
+                        hysteresis_signature, sensor_columns)
 
 #: An interval of ``t`` longer than this many median intervals separates two rest points.
 WINDOW_GAP_FACTOR = 1.5
-#: Candidates that a static record can show (no motion: no friction, lag, dead time, n).
-STATIC_CANDIDATES = ("valve_offset_gain", "payload", "hysteresis")
+#: The default candidates of a static record (those that show at rest: no friction, lag,
+#: dead time or volume term), derived from the registry (``Candidate.at_rest``).
+STATIC_CANDIDATES = default_candidates(static=True)
 #: Relative resolution of a rest point: lower bound of the noise level of the torque and
 #: force balances as a fraction of the RMS muscle torque / force.  A rest-point record has no
 #: samples of the transitions, whose overshoot leaves minor Preisach loops the model cannot
@@ -237,11 +240,20 @@ def static_system(rec: StaticRecord, arm) -> BlockSystem:
     _, h_tau, _ = hysteresis_signature(rec.q, rec.p, arm)
     E = np.zeros((rec.m, 6, 1))
     E[:, 4:6, 0] = -rec.means(h_tau)
+    E = Columns(E)
     approach = np.diff(qm, axis=0, prepend=qm[:1])
     feats = {"t": rec.means(rec.t[:, None])[:, 0], "q": qm, "qd": approach, "p": pm}
+    # sensor faults and a torque bias at rest (span 1, no motion); without set values there
+    # are no valve equations, so the pressure channels get no columns either
+    mt = torque_functions(qm, arm)
+    extra = sensor_columns(span=np.ones(rec.m), int_u=um, int_g=np.zeros_like(pm), int_mt=mt,
+                           int_pmt=pm * mt, patm=arm.pneumatics.p_atm)
+    extra[HYSTERESIS_COLUMNS] = E
+    extra[ENCODER_OFFSET_COLUMNS] = encoder_columns(
+        lambda q: _equations(rec.means(q), pm, um, arm), rec.q, y, X)
     return BlockSystem(y=y, X=X, starts=rec.windows[:, 0], stops=rec.windows[:, 1] - 1,
                        u=np.zeros((rec.m, 4)) if um is None else um, dt=1.0, features=feats,
-                       extra={HYSTERESIS_COLUMNS: E})
+                       extra=extra)
 
 
 def static_floor(rec: StaticRecord, arm) -> np.ndarray:

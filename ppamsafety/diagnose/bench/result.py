@@ -31,10 +31,12 @@ class BenchDiagnosis(Diagnosis):
     where, steps, replay, settings, timings, notes, blocks, kind, subsystems : object
         As :class:`~ppamsafety.diagnose.core.result.Diagnosis` (``replay`` and
         ``blocks`` are empty: the figures read :attr:`curves`).
+    stability, detection_limits : dict
+        As :class:`~ppamsafety.diagnose.core.result.Diagnosis` (a campaign reports its
+        stability reruns in ``settings``; empty here).
     confounded : list of dict
-        Groups selected as one (their terms coincide on this campaign):
-        ``members``, ``interpretations`` (member -> its parameters if it were
-        the cause), ``evidence``, ``separating_experiment``.  Never named.
+        As :class:`~ppamsafety.diagnose.core.result.Diagnosis`: groups selected as one
+        (their terms coincide on this campaign).  Never named.
     records : pandas.DataFrame
         One row per record: ``label``, ``pressure_Pa``, ``samples``,
         ``strokes``, ``sigma_sensor_N``, ``sigma_repeat_N``, ``rms_before_N``,
@@ -46,14 +48,12 @@ class BenchDiagnosis(Diagnosis):
         ``after``, ``used``) for the figures.
     """
 
-    confounded: list = field(default_factory=list)
     records: pd.DataFrame = field(default_factory=pd.DataFrame, repr=False)
     curves: dict = field(default_factory=dict, repr=False)
 
     def to_dict(self) -> dict:
         """``diagnosis.json``: the Diagnosis keys plus ``confounded`` and ``records``."""
         d = super().to_dict()
-        d["confounded"] = _clean(self.confounded)
         d["records"] = _clean(self.records.to_dict(orient="records"))
         return d
 

@@ -96,6 +96,10 @@ class Step:
         BIC and held-out chi2 of the current model.
     current_weight : float
         BIC weight of keeping the current model.
+    confounded : tuple of str
+        Candidates the record cannot tell from ``chosen`` (each explains the
+        same part of the residual: neither adds significantly to the other);
+        empty when the choice is clear.
     """
 
     current: tuple
@@ -104,6 +108,7 @@ class Step:
     current_bic: float
     current_cv: float
     current_weight: float
+    confounded: tuple = ()
 
 
 def rank_step(rows: list, current_bic: float, *, alpha: float, n_candidates: int,

@@ -1,4 +1,4 @@
-"""One parameter of a candidate effect: name, SI unit, plausible bounds, meaning.
+"""One parameter of a candidate effect: name, SI unit, plausible and physical bounds, meaning.
 
 Shared by the arm library (:mod:`ppamsafety.diagnose.arm.candidates`) and the
 test-bench library (:mod:`ppamsafety.diagnose.bench.candidates`).
@@ -6,6 +6,7 @@ test-bench library (:mod:`ppamsafety.diagnose.bench.candidates`).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 
@@ -24,6 +25,12 @@ class Parameter:
         :mod:`ppamsafety.diagnose.arm.selection` and :mod:`.linear_selection`).
     doc : str
         Meaning, with the thesis reference.
+    phys_lo, phys_hi : float
+        Physical range: values outside it are impossible (a negative mass, a
+        polytropic exponent above the isentropic 1.4, a negative friction).  A fit
+        outside it is a symptom of something else, not an effect (the admissibility gate
+        of :mod:`ppamsafety.diagnose.arm.gates`); reported intervals are intersected with
+        it.  Default: unbounded.
     """
 
     name: str
@@ -31,6 +38,13 @@ class Parameter:
     lo: float
     hi: float
     doc: str = ""
+    phys_lo: float = -math.inf
+    phys_hi: float = math.inf
+
+    def __post_init__(self):
+        if not (self.phys_lo <= self.lo < self.hi <= self.phys_hi):
+            raise ValueError(f"parameter {self.name!r}: need phys_lo <= lo < hi <= phys_hi, "
+                             f"got {self.phys_lo}, {self.lo}, {self.hi}, {self.phys_hi}")
 
 
 __all__ = ["Parameter"]

@@ -92,6 +92,17 @@ class Diagnosis:
     subsystems : dict
         Extra subsystem checks: ``"forces"`` (static records with F1..F4,
         :func:`ppamsafety.diagnose.arm.static.force_residuals`).
+    confounded : list of dict
+        Groups of candidates the record cannot tell apart (each explains the same part of
+        the residual): ``members``, ``interpretations`` (member -> its parameters if it
+        were the cause), ``evidence``, ``separating_experiment``.  Never named.
+    stability : dict
+        The stability selection (``diagnosis.json`` key ``stability``: pairs, threshold,
+        frequencies and the bound on the expected number of false selections); empty
+        when it was not run.
+    detection_limits : dict
+        Per candidate and parameter, the smallest change this record would detect
+        (:mod:`ppamsafety.diagnose.arm.detection`); empty when not computed.
     """
 
     source: str
@@ -109,6 +120,9 @@ class Diagnosis:
     blocks: dict = field(default_factory=dict, repr=False)
     kind: str = "arm"
     subsystems: dict = field(default_factory=dict, repr=False)
+    confounded: list = field(default_factory=list)
+    stability: dict = field(default_factory=dict, repr=False)
+    detection_limits: dict = field(default_factory=dict, repr=False)
 
     @property
     def names(self) -> tuple:
@@ -140,7 +154,7 @@ class Diagnosis:
         """The ``diagnosis.json`` content (schema in ``docs/diagnose.md``)."""
         def eff(e):
             return {k: e[k] for k in ("name", "parameters", "evidence", "confidence",
-                                      "confidence_level", "subsystem")}
+                                      "confidence_level", "subsystem", "gates") if k in e}
 
         return _clean({
             "schema_version": SCHEMA_VERSION, "tool": "ppamsafety", "version": __version__,
@@ -153,6 +167,9 @@ class Diagnosis:
             "where": self.where.to_dict(orient="records"),
             "ranking": self.ranking().to_dict(orient="records"),
             "forces": self._forces_dict(),
+            "confounded": self.confounded,
+            "stability": self.stability or None,
+            "detection_limits": self.detection_limits or None,
             "settings": self.settings, "timings_s": self.timings, "notes": list(self.notes)})
 
     def _forces_dict(self):
@@ -201,6 +218,16 @@ class Diagnosis:
         if self.partial:
             L += ["", "Significant but not named (their subsystem stays above the noise):"]
             L += [f"* {e['name']}" for e in self.partial]
+        if self.confounded:
+            L += ["", "Confounded (not named: this record cannot tell them apart):", ""]
+            for g in self.confounded:
+                L.append(f"* {' / '.join(g['members'])}: {g['separating_experiment']}")
+        if self.detection_limits and not self.effects:
+            L += ["", "Nothing is named.  Smallest changes this record would have detected "
+                      "(90 % power):", ""]
+            for n, ps in self.detection_limits.items():
+                L.append(f"* {n}: " + "; ".join(f"{k} {v['limit']:.3g} {v['unit']}"
+                                                 for k, v in ps.items()))
         L += ["", f"**Unexplained:** {'yes' if self.unexplained else 'no'}"
               + (f" (channels {', '.join(self.unexplained_channels)})"
                  if self.unexplained else ""), ""]

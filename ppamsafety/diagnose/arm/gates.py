@@ -1,0 +1,170 @@
+"""The gates before "high" confidence: what a named effect must pass to be reported as certain.
+
+A name reaches ``confidence_level = "high"`` only through every gate below;
+otherwise it is ``"low"`` (a hint, not a finding).  The gates and their
+thresholds were set on the randomized scenario battery
+(:mod:`ppamsafety.diagnose.calibration`, seeds 0-299) and the claim they make
+-- of all effects named "high", at least 97 % are right -- is measured on
+unseen seeds (``docs/diagnose.md``, the report section
+``diagnose_calibration``).
+
+==================  ==============================================================
+gate                passes when
+==================  ==============================================================
+weight              its inclusion probability (the BIC weights of the subsets of
+                    the library that hold it, :mod:`.subsets`) is >=
+                    :data:`HIGH_WEIGHT`: decisive against every other small model
+stable              the complementary-pairs stability selection picked it in >=
+                    ``Stability.threshold`` of the halves of the record (the
+                    name does not hinge on a part of the record)
+admissible          every parameter the effect moved (interval excluding the
+                    nominal value) has its raw 95 % interval inside the physical
+                    range, and no other parameter lies significantly outside it
+                    (a negative mass, a friction < 0, n > 1.4 are symptoms of
+                    something else; a viscous friction of -0.002 +- 0.01 is a zero)
+moved               some parameter's interval excludes its nominal value (the
+                    dead time: a delay of at least one sample)
+residual_at_noise   every block channel's final residual/noise RMS ratio is
+                    <= :data:`RHO_HIGH` x the 99.9 % point of the ratio under
+                    the noise alone (sqrt(chi2_m(0.999) / m) for m blocks: 1.06
+                    for 1200 blocks, 1.49 for the 21 rest points of a sawtooth),
+                    and nothing is unexplained (an unexplained error elsewhere
+                    may leak into this subsystem)
+consistent          the effect's parameters are the same in the low and the high
+                    third of each joint's range (a Chow test at
+                    ``selection.CONSTANCY_ALPHA``): an effect standing in for
+                    something else (an encoder gain taken for an offset, a heavier
+                    link for a payload) fits different values in different poses
+not_confounded      no other candidate explains the same part of the residual
+                    (confounded groups are never named at all)
+==================
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy import stats
+
+from .candidates import REGISTRY
+
+#: Inclusion probability at or above which a name counts as decisive.
+HIGH_WEIGHT = 0.95
+#: Largest final residual/noise RMS ratio of every block channel for "high" (under a
+#: correct model the ratio is 1 within a few per cent; 1.2 leaves room for a noise estimate
+#: that is somewhat off, not for a model error of half the noise).
+RHO_HIGH = 1.2
+#: The gates, in the order they are reported.
+GATES = ("weight", "stable", "admissible", "moved", "residual_at_noise", "consistent",
+         "not_confounded")
+
+
+def moved_parameters(name: str, table: dict) -> tuple:
+    """Parameters of effect ``name`` whose 95 % interval excludes the nominal value.
+
+    Parameters
+    ----------
+    name : str
+        Candidate name.
+    table : dict
+        Its parameter table ({parameter: {value, ci_low, ci_high, nominal, ...}}).
+    """
+    if REGISTRY[name].grid:
+        return tuple(p for p, d in table.items() if d["ci_low"] > 0.0)
+    return tuple(p for p, d in table.items() if not d["ci_low"] <= d["nominal"] <= d["ci_high"])
+
+
+def physically_admissible(name: str, table: dict) -> bool:
+    """The raw interval of every moved parameter inside its physical range; every other
+    parameter's interval reaching into it.
+
+    Parameters
+    ----------
+    name : str
+        Candidate name.
+    table : dict
+        Its parameter table (raw intervals under ``ci_low_raw``/``ci_high_raw`` when the
+        reported ones were cut at the physical range).
+    """
+    moved = set(moved_parameters(name, table))
+    for p in REGISTRY[name].parameters:
+        d = table[p.name]
+        lo = d.get("ci_low_raw", d["ci_low"])
+        hi = d.get("ci_high_raw", d["ci_high"])
+        if p.name in moved:
+            if not (p.phys_lo <= lo and hi <= p.phys_hi):
+                return False
+        elif hi < p.phys_lo or lo > p.phys_hi:
+            return False
+    return True
+
+
+def rho_high(blocks: int) -> float:
+    """The largest residual/noise ratio of a channel with ``blocks`` blocks for "high".
+
+    Parameters
+    ----------
+    blocks : int
+    """
+    m = max(int(blocks), 1)
+    return RHO_HIGH * math.sqrt(float(stats.chi2.ppf(0.999, m)) / m)
+
+
+def gates(name: str, table: dict, *, weight: float, stability: float | None,
+          stability_threshold: float, rho, unexplained: bool, confounded: bool,
+          consistency: float = 1.0, consistency_alpha: float = 1e-3,
+          blocks: int = 10 ** 6) -> dict:
+    """Every gate of the module docstring for one named effect.
+
+    Parameters
+    ----------
+    name : str
+        Candidate name.
+    table : dict
+        Its parameter table.
+    weight : float, keyword-only
+        Inclusion probability of the effect.
+    stability : float or None, keyword-only
+        Its stability-selection frequency (None: not run, the gate fails).
+    stability_threshold : float, keyword-only
+    rho : array_like, keyword-only
+        Final residual/noise RMS ratio of every block channel.
+    unexplained : bool, keyword-only
+    confounded : bool, keyword-only
+    consistency : float, keyword-only
+        Smallest p-value of the region-constancy test
+        (:func:`~.selection.region_consistency`).
+    consistency_alpha : float, keyword-only
+        Its level.
+    blocks : int, keyword-only
+        Blocks per channel (:func:`rho_high`).
+
+    Returns
+    -------
+    dict
+        Gate -> bool, in the order of :data:`GATES`.
+    """
+    rho = np.asarray(rho, dtype=float)
+    return {"weight": bool(weight >= HIGH_WEIGHT),
+            "stable": bool(stability is not None and stability >= stability_threshold),
+            "admissible": physically_admissible(name, table),
+            "moved": bool(moved_parameters(name, table)),
+            "residual_at_noise": bool(not unexplained and np.all(rho <= rho_high(blocks))),
+            "consistent": bool(consistency >= consistency_alpha),
+            "not_confounded": not confounded}
+
+
+def level(g: dict) -> str:
+    """``"high"`` when every gate passes, else ``"low"``.
+
+    Parameters
+    ----------
+    g : dict
+        :func:`gates`.
+    """
+    return "high" if all(g.values()) else "low"
+
+
+__all__ = ["GATES", "HIGH_WEIGHT", "RHO_HIGH", "rho_high", "gates", "level", "moved_parameters",
+           "physically_admissible"]
