@@ -81,6 +81,7 @@ from scipy import stats
 from ..._validation import check_int
 from ..core.criteria import (ALPHA, CV_SEGMENTS, RHO_MAX, Step, _chi2_sf, _normal_quantile, aicc,
                              bic, rank_step)
+from ...lstsq import step_scores
 from .candidates import DEAD_TIME_MAX, REGISTRY, identity_values, library
 from .gram import GramSet, chi2_at, chunk_layout, covariance, solve
 from .residuals import SUBSYSTEM, BlockSystem, block_noise
@@ -588,16 +589,21 @@ def forward_selection(prob: Problem, candidates=None, *, alpha: float = ALPHA,
         if not rest:
             break
         rows, fits = [], {}
+        lin_rest = [n for n in rest if not REGISTRY[n].grid]
+        fast = _step_scores(prob, selected, lin_rest, universe=universe, shift=shift,
+                            chunks=chunks, m=current.m)
         for n in rest:
             if n == grid_name and fixed_shift is None:
                 mask = None if chunks is None else np.asarray(chunks, bool)[prob.chunk]
                 f = fit_model(prob, selected + [n], mask=mask)
                 cv = _cv_direct(prob, selected + [n], chunks)
+            elif n == grid_name:
+                f = gram_fit(prob, selected + [n], universe=universe, shift=fixed_shift,
+                             chunks=chunks, cov=False)
+                cv = gram_cv(prob, selected + [n], universe=universe, shift=fixed_shift,
+                             chunks=chunks)
             else:
-                sh = (fixed_shift if n == grid_name else shift)
-                f = gram_fit(prob, selected + [n], universe=universe, shift=sh, chunks=chunks,
-                             cov=False)
-                cv = gram_cv(prob, selected + [n], universe=universe, shift=sh, chunks=chunks)
+                f, cv = fast[n]
             fits[n] = f
             d = current.chi2 - f.chi2
             df = max(f.k - current.k, 1)
@@ -605,16 +611,25 @@ def forward_selection(prob: Problem, candidates=None, *, alpha: float = ALPHA,
                          "aicc": f.aicc, "delta_bic": f.bic - current.bic, "lr_stat": d,
                          "lr_df": df, "p_value": _chi2_sf(max(d, 0.0), df),
                          "cv_chi2": cv, "cv_gain": cur_cv - cv})
-        for r in rows:
-            # admissibility matters only for a candidate that improves the criterion (it may
-            # be named, and it enters the BIC weights); the others count as admissible, which
-            # can only lower the winner's weight
+        # admissibility (a parameter table) is checked lazily, in order of BIC, only for
+        # candidates that pass the other tests, until one is eligible: only those can be
+        # chosen; the rest count as admissible, which can only lower the winner's weight
+        level = alpha / len(rest)
+        for r in sorted(rows, key=lambda r: r["bic"]):
+            r["in_bounds"] = True
+        for r in sorted(rows, key=lambda r: r["bic"]):
+            if not (r["delta_bic"] < 0 and r["p_value"] < level and r["cv_gain"] > 0):
+                continue
             n = r["name"]
-            if r["delta_bic"] < 0 and fits[n].e is None and fits[n].chi2_channel is None:
+            has_cov = isinstance(fits[n], Fit) and (fits[n].e is not None
+                                                    or fits[n].chi2_channel is not None)
+            if not has_cov:
                 fits[n] = gram_fit(prob, selected + [n], universe=universe,
                                    shift=fits[n].shift if n == grid_name else shift,
                                    chunks=chunks)
-            r["in_bounds"] = in_bounds(prob, fits[n], n) if r["delta_bic"] < 0 else True
+            r["in_bounds"] = in_bounds(prob, fits[n], n)
+            if r["in_bounds"]:
+                break
         chosen, w0 = rank_step(rows, current.bic, alpha=alpha, n_candidates=len(rest))
         group = ()
         if chosen is not None and confounding:
@@ -629,6 +644,9 @@ def forward_selection(prob: Problem, candidates=None, *, alpha: float = ALPHA,
             shift = fits[chosen].shift
         # the noise level depends on the model (velocity noise enters through H qd):
         # re-evaluate it at the new model, refit, and compare the next step on that footing
+        if not isinstance(fits[chosen], Fit):
+            fits[chosen] = gram_fit(prob, selected, universe=universe, shift=shift,
+                                    chunks=chunks, cov=False)
         prob = _at(prob0, fits[chosen].mu, move_columns)
         current = gram_fit(prob, selected, universe=universe, shift=shift, chunks=chunks,
                            cov=False)
@@ -702,6 +720,46 @@ def refit(prob0: Problem, names, *, prob: Problem | None = None, shift: int | No
             break
         prob = nxt
     return final, prob
+
+
+@dataclass(frozen=True)
+class _Score:
+    """chi2 and size of a candidate model scored by :func:`_step_scores` (no coefficients)."""
+
+    k: int
+    m: int
+    chi2: float
+    shift: int = 0
+
+    @property
+    def bic(self) -> float:
+        return bic(self.chi2, self.k, self.m)
+
+    @property
+    def aicc(self) -> float:
+        return aicc(self.chi2, self.k, self.m)
+
+
+def _step_scores(prob, selected, rest, *, universe, shift, chunks, m):
+    """chi2 and 2-fold held-out chi2 of ``selected`` + each linear candidate of ``rest`` (one
+    compiled call, :func:`ppamsafety.lstsq.step_scores`)."""
+    if not rest:
+        return {}
+    grid = any(REGISTRY[n].grid for n in selected)
+    gs, _ = _gram_set(prob, universe, shift if grid else 0)
+    use = np.ones(prob.nchunk, bool) if chunks is None else np.asarray(chunks, bool)
+    A = gs.weighted(None if chunks is None else use, prob.sigma)[1]
+    A_tr = np.stack([gs.weighted(use & (prob.chunk_fold != f), prob.sigma)[1] for f in (0, 1)])
+    A_te = np.stack([gs.weighted(use & (prob.chunk_fold == f), prob.sigma)[1] for f in (0, 1)])
+    cur = gs.columns([n for n in selected if not REGISTRY[n].grid]).astype(np.int64)
+    cols = [gs.columns([n]).astype(np.int64) for n in rest]
+    ptr = np.concatenate([[0], np.cumsum([c.size for c in cols])]).astype(np.int64)
+    chi2 = np.empty(len(rest))
+    cv = np.empty(len(rest))
+    step_scores(A, A_tr, A_te, cur, np.concatenate(cols), ptr, chi2, cv)
+    k0 = cur.size + (1 if grid else 0)
+    return {n: (_Score(k=k0 + c.size, m=m, chi2=float(x), shift=shift if grid else 0), float(v))
+            for n, c, x, v in zip(rest, cols, chi2, cv)}
 
 
 def _cv_direct(prob, names, chunks):

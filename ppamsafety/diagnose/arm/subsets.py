@@ -39,7 +39,9 @@ import numpy as np
 
 from ..core.criteria import _chi2_sf
 from .candidates import REGISTRY
-from .selection import Problem, gram_cv, gram_fit, in_bounds
+from ...lstsq import many_chi2
+from ..core.criteria import bic
+from .selection import Problem, _gram_set, gram_cv, gram_fit, in_bounds
 
 #: Largest subset size searched exhaustively.
 MAX_SIZE = 4
@@ -124,7 +126,7 @@ def search(prob: Problem, universe, *, greedy, shift: int, alpha: float,
         subsets += list(itertools.combinations(universe, k))
     if tuple(sorted(greedy, key=universe.index)) not in subsets:
         subsets.append(tuple(sorted(greedy, key=universe.index)))
-    bics = {s: fit(s).bic for s in subsets}
+    bics, ks, chis = _bics(prob, universe, subsets, shift)
     order = sorted(subsets, key=lambda s: bics[s])
     best_bic = bics[order[0]]
     level = alpha / max(len(universe), 1)
@@ -150,16 +152,16 @@ def search(prob: Problem, universe, *, greedy, shift: int, alpha: float,
         return good
 
     g = tuple(sorted(greedy, key=universe.index))
-    kmax = fits[g].k if g in fits else fit(g).k
-    small = [s for s in order if fits[s].k <= kmax]
+    kmax = ks[g]
+    small = [s for s in order if ks[s] <= kmax]
     best = ()
     for s in small:
         if ok(s):
             best = s
             break
     # BIC weights over the admissible subsets near the top (the rest weigh nothing)
-    kbest = fits[best].k
-    near = [s for s in small if fits[s].k <= max(kbest, 1) + _largest_k(universe)
+    kbest = ks[best]
+    near = [s for s in small if ks[s] <= max(kbest, 1) + _largest_k(universe)
             and bics[s] - bics[best] <= CHECK_BIC and ok(s)]
     if best not in near:
         near.insert(0, best)
@@ -190,11 +192,34 @@ def search(prob: Problem, universe, *, greedy, shift: int, alpha: float,
                            "delta_bic": full.bic - fr.bic,
                            "cv_gain": gram_cv(prob, rest, universe=universe, shift=shift)
                            - cv_full}
-    ranking = [{"subset": "+".join(s) or "nominal", "k": int(fits[s].k), "chi2": fits[s].chi2,
+    ranking = [{"subset": "+".join(s) or "nominal", "k": int(ks[s]), "chi2": chis[s],
                 "bic": bics[s], "admissible": admissible.get(s)} for s in order[:20]]
     return SubsetResult(names=best, bic=float(bics[best]), inclusion=inclusion, lookalikes=look,
-                        evidence=evidence, evaluated=len(fits), greedy_bic=float(bics[g]),
+                        evidence=evidence, evaluated=len(bics), greedy_bic=float(bics[g]),
                         ranking=ranking)
+
+
+def _bics(prob, universe, subsets, shift):
+    """BIC, number of parameters and chi2 of every subset from the Gram matrices (one compiled
+    call per dead-time design)."""
+    out, ks, chis = {}, {}, {}
+    m = prob.bs.nb * prob.bs.y.shape[1]
+    for grid in (False, True):
+        group = [s for s in subsets if any(REGISTRY[n].grid for n in s) == grid]
+        if not group:
+            continue
+        gs, _ = _gram_set(prob, tuple(universe), shift if grid else 0)
+        A = gs.weighted(None, prob.sigma)[1]
+        cols = [gs.columns([n for n in s if not REGISTRY[n].grid]).astype(np.int64)
+                for s in group]
+        ptr = np.concatenate([[0], np.cumsum([c.size for c in cols])]).astype(np.int64)
+        chi2 = np.empty(len(group))
+        many_chi2(A, np.concatenate(cols) if cols else np.zeros(0, np.int64), ptr, chi2)
+        for s, c, x in zip(group, cols, chi2):
+            ks[s] = c.size + (1 if grid else 0)
+            chis[s] = float(x)
+            out[s] = bic(float(x), ks[s], m)
+    return out, ks, chis
 
 
 def _largest_k(universe) -> int:
