@@ -324,10 +324,11 @@ def _cmd_diagnose(args) -> int:
     for note in getattr(data, "notes", ()):
         print(f"ppamsafety: warning: {note}", file=sys.stderr)
     with _options(experiment="--experiment", alpha="--alpha", rho_max="--rho-max",
-                  block_seconds="--block", seed="--seed", bootstrap="--bootstrap", arm="--arm"):
+                  block_seconds="--block", seed="--seed", bootstrap="--bootstrap",
+                  stability="--stability", arm="--arm"):
         dg = diagnose(data, experiment=args.experiment, alpha=args.alpha, rho_max=args.rho_max,
                       block_seconds=args.block, seed=args.seed, bootstrap=args.bootstrap,
-                      arm=arm)
+                      stability=args.stability, arm=arm)
     for note in dg.notes:
         if note.startswith("arm: ") and "diagnosed against arm" in note:
             print(f"ppamsafety: warning: {note[5:]}", file=sys.stderr)
@@ -653,9 +654,14 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
     g.add_argument("--block", type=_positive, default=0.05, metavar="SECONDS",
                    help="block length of the subsystem residuals [s] (default 0.05)")
     g.add_argument("--seed", type=_seed, default=0,
-                   help="seed of the noise propagation and of the bootstrap")
+                   help="seed of the noise propagation, the stability selection and the "
+                        "bootstrap")
+    g.add_argument("--stability", type=_count(0, 10000), default=None, metavar="B",
+                   help="complementary pairs of the stability selection behind 'high' "
+                        "confidence (default 25; 0: off, then nothing is 'high')")
     g.add_argument("--bootstrap", type=_count(0, 10000), default=None, metavar="B",
-                   help="moving-block bootstrap replicates of the selection (default 40, 0: off)")
+                   help="moving-block bootstrap replicates of the selection, reported as "
+                        "bootstrap_frequency (default 0: off)")
     g.add_argument("--allow-gaps", action="store_true",
                    help="drop rows with missing values; the longest gap-free segment is used")
     g.add_argument("--loose-units", action="store_true",

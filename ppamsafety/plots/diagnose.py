@@ -9,7 +9,9 @@ Each function takes computed data and returns a Figure; nothing here simulates.
   :func:`plot_summary_profiles`, :func:`plot_gap`, :func:`plot_confusion`;
 * case study (a), :mod:`ppamsafety.sections.diagnose_sawtooth`:
   :func:`plot_sawtooth_diagnosis`;
-* the as-built arm, :mod:`ppamsafety.sections.as_built`: :func:`plot_as_built`.
+* the as-built arm, :mod:`ppamsafety.sections.as_built`: :func:`plot_as_built`;
+* trust in the diagnosis, :mod:`ppamsafety.sections.diagnose_trust`:
+  :func:`plot_calibration`, :func:`plot_detection_curve`.
 """
 
 from __future__ import annotations
@@ -392,3 +394,72 @@ def plot_as_built(cells, effects, *, sources):
 
 __all__ = ["actuator_force_figure", "actuator_residual_figure", "plot_summary_profiles", "plot_gap",
            "plot_confusion", "plot_sawtooth_diagnosis", "plot_as_built"]
+
+
+def plot_calibration(table, *, required: float):
+    """Precision of every claimed confidence level with its 95 % Wilson lower bound.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        :func:`ppamsafety.diagnose.scenarios.calibration_table` (``claimed``, ``names``,
+        ``right``, ``precision``, ``wilson_low``).
+    required : float, keyword-only
+        The promised precision of "high" (drawn as a line).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    fig, ax = new_figure(1, 1, figsize=(6.5, 3.6))
+    x = np.arange(len(table))
+    prec = table["precision"].to_numpy(dtype=float)
+    low = table["wilson_low"].to_numpy(dtype=float)
+    ax.bar(x, prec, color=["tab:green", "tab:orange", "tab:gray"][:len(x)], alpha=0.8)
+    ax.errorbar(x, prec, yerr=[np.nan_to_num(prec - low), np.zeros_like(prec)], fmt="none",
+                ecolor="k", capsize=4, lw=1)
+    ax.axhline(required, color="tab:red", ls="--", lw=1, label=f"promised for 'high': "
+               f"{required:.0%}")
+    labels = [f"{c}\n{int(n)} names" for c, n in zip(table["claimed"], table["names"])]
+    ax.set_xticks(x, [lab.replace(" (group holds a hidden member)", "") for lab in labels],
+                  fontsize=8)
+    ax.set_ylim(0, 1.05)
+    ax.set_ylabel("names that were right")
+    ax.set_title("Calibration on unseen scenarios (bars: precision, whiskers down to the "
+                 "95 % Wilson bound)", fontsize=8)
+    ax.legend(fontsize=8, loc="lower left")
+    ax.grid(alpha=0.3, axis="y")
+    return fig
+
+
+def plot_detection_curve(curve, *, power: float):
+    """Named and "high" rate of hidden effects against their magnitude over the record's limit.
+
+    Parameters
+    ----------
+    curve : pandas.DataFrame
+        :func:`ppamsafety.diagnose.scenarios.detection_curve`.
+    power : float, keyword-only
+        The rate promised at the limit (drawn at ratio 1).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    fig, ax = new_figure(1, 1, figsize=(6.5, 3.6))
+    hi = curve["ratio_to"].to_numpy(dtype=float)
+    lo = curve["ratio_from"].to_numpy(dtype=float)
+    mid = np.where(np.isfinite(hi), np.sqrt(np.maximum(lo, 0.05) * hi), lo * 2)
+    ax.semilogx(mid, curve["named_rate"], "o-", label="named (any confidence)")
+    ax.semilogx(mid, curve["high_rate"], "s--", label="named with high confidence")
+    ax.axvline(1.0, color="0.5", ls=":", lw=1)
+    ax.axhline(power, color="tab:red", ls="--", lw=1, label=f"{power:.0%} promised at the limit")
+    for x, n in zip(mid, curve["effects"]):
+        ax.annotate(str(int(n)), (x, 0.02), ha="center", fontsize=7, color="0.4")
+    ax.set_ylim(0, 1.05)
+    ax.set_xlabel("hidden magnitude / the record's naming limit")
+    ax.set_ylabel("fraction of hidden effects")
+    ax.set_title("Detection limits kept (numbers: hidden effects per bin)", fontsize=8)
+    ax.legend(fontsize=8, loc="center right")
+    ax.grid(alpha=0.3)
+    return fig

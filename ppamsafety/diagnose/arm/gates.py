@@ -24,6 +24,9 @@ admissible          every parameter the effect moved (interval excluding the
                     something else; a viscous friction of -0.002 +- 0.01 is a zero)
 moved               some parameter's interval excludes its nominal value (the
                     dead time: a delay of at least one sample)
+clear               some parameter moved by >= :data:`CLEAR_RATIO` x its detection
+                    limit on the record (:mod:`.detection`): close to the limit a
+                    small error the library does not hold can pose as the effect
 residual_at_noise   every block channel's final residual/noise RMS ratio is
                     <= :data:`RHO_HIGH` x the 99.9 % point of the ratio under
                     the noise alone (sqrt(chi2_m(0.999) / m) for m blocks: 1.06
@@ -34,7 +37,14 @@ consistent          the effect's parameters are the same in the low and the high
                     third of each joint's range (a Chow test at
                     ``selection.CONSTANCY_ALPHA``): an effect standing in for
                     something else (an encoder gain taken for an offset, a heavier
-                    link for a payload) fits different values in different poses
+                    link for a payload) fits different values in different poses;
+                    and so are those of every other named effect sharing a
+                    subsystem with it (one inconsistent effect means the model of
+                    that subsystem is wrong, and its partners absorb the rest)
+not_compensating    it does not cancel another named effect in some channel
+                    (``selection.compensating``): a sensor offset whose pressure
+                    signature a valve offset cancels is a torque error the library
+                    does not hold
 not_confounded      no other candidate explains the same part of the residual
                     (confounded groups are never named at all)
 ==================
@@ -56,8 +66,10 @@ HIGH_WEIGHT = 0.95
 #: that is somewhat off, not for a model error of half the noise).
 RHO_HIGH = 1.2
 #: The gates, in the order they are reported.
-GATES = ("weight", "stable", "admissible", "moved", "residual_at_noise", "consistent",
-         "not_confounded")
+GATES = ("weight", "stable", "admissible", "moved", "clear", "residual_at_noise", "consistent",
+         "not_compensating", "not_confounded")
+#: Smallest magnitude over the detection limit of a "high" name.
+CLEAR_RATIO = 5.0
 
 
 def moved_parameters(name: str, table: dict) -> tuple:
@@ -114,7 +126,8 @@ def rho_high(blocks: int) -> float:
 def gates(name: str, table: dict, *, weight: float, stability: float | None,
           stability_threshold: float, rho, unexplained: bool, confounded: bool,
           consistency: float = 1.0, consistency_alpha: float = 1e-3,
-          blocks: int = 10 ** 6) -> dict:
+          blocks: int = 10 ** 6, clear: float = math.inf,
+          compensating: bool = False) -> dict:
     """Every gate of the module docstring for one named effect.
 
     Parameters
@@ -139,6 +152,10 @@ def gates(name: str, table: dict, *, weight: float, stability: float | None,
         Its level.
     blocks : int, keyword-only
         Blocks per channel (:func:`rho_high`).
+    clear : float, keyword-only
+        Largest change of a parameter over its detection limit.
+    compensating : bool, keyword-only
+        It cancels another named effect in some channel.
 
     Returns
     -------
@@ -150,8 +167,10 @@ def gates(name: str, table: dict, *, weight: float, stability: float | None,
             "stable": bool(stability is not None and stability >= stability_threshold),
             "admissible": physically_admissible(name, table),
             "moved": bool(moved_parameters(name, table)),
+            "clear": bool(clear >= CLEAR_RATIO),
             "residual_at_noise": bool(not unexplained and np.all(rho <= rho_high(blocks))),
             "consistent": bool(consistency >= consistency_alpha),
+            "not_compensating": not compensating,
             "not_confounded": not confounded}
 
 
@@ -166,5 +185,5 @@ def level(g: dict) -> str:
     return "high" if all(g.values()) else "low"
 
 
-__all__ = ["GATES", "HIGH_WEIGHT", "RHO_HIGH", "rho_high", "gates", "level", "moved_parameters",
+__all__ = ["GATES", "HIGH_WEIGHT", "RHO_HIGH", "CLEAR_RATIO", "rho_high", "gates", "level", "moved_parameters",
            "physically_admissible"]

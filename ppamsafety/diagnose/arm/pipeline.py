@@ -33,7 +33,8 @@ from .selection import (BOOTSTRAP_REPLICATES, CONSTANCY_ALPHA, STABILITY_PAIRS,
                         STABILITY_THRESHOLD, at_model, bootstrap_frequency, fit_model,
                         forward_selection,
                         hac_covariance, in_bounds, make_problem, parameter_table,
-                        profiled_shift, refit, region_consistency, stability_selection)
+                        compensating, profiled_shift, refit, region_consistency,
+                        stability_selection)
 from .subsets import MAX_SIZE, search
 from .static import (force_residuals, static_equilibria, static_floor,
                      static_noise, static_noise_draws, static_record, static_system)
@@ -140,6 +141,17 @@ def sensor_fault(fit, params) -> SensorFault:
         if c.sensor_effect is not None:
             out = out + c.sensor_effect(np.array([p["value"] for p in params[n].values()]))
     return out
+
+
+def _limit_ratio(e, limits) -> float:
+    """The largest change of a parameter of named effect ``e`` over its detection limit."""
+    lim = limits.get(e["name"], {})
+    best = 0.0
+    for p, d in e["parameters"].items():
+        L = lim.get(p, {}).get("limit", math.inf)
+        if L > 0 and math.isfinite(L):
+            best = max(best, abs(d["value"] - d["nominal"]) / L)
+    return best
 
 
 def _entry(name, params, rho, sub, bootstrap, freq):
@@ -386,15 +398,27 @@ def diagnose_arm(data, *, arm=None, candidates=None, block_seconds: float = 0.05
             partial.append(entry)
             continue
         (effects if sub_max <= rho_max else partial).append(entry)
+    limits = detection_limits(fprob, fit, candidates, alpha=alpha) if detection else {}
+    comp = compensating(fprob, fit)
+    cons = {e["name"]: region_consistency(fprob, fit, e["name"]) for e in effects}
+    bad_subsystems = {ch for n, c in cons.items() if min(c.values(), default=1.0)
+                      < CONSTANCY_ALPHA for ch in SUBSYSTEM[REGISTRY[n].subsystem]}
     for e in effects:
-        cons = region_consistency(fprob, fit, e["name"]) if not static else {}
-        e["evidence"]["region_consistency_p"] = cons
+        c = cons[e["name"]]
+        e["evidence"]["region_consistency_p"] = c
+        own = min(c.values(), default=1.0)
+        if bad_subsystems & set(SUBSYSTEM[REGISTRY[e["name"]].subsystem]):
+            own = min(own, 0.0)
+        e["evidence"]["limit_ratio"] = _limit_ratio(e, limits)
+        if e["name"] in comp:
+            e["evidence"]["compensates"] = list(comp[e["name"]])
         g = gates(e["name"], e["parameters"], weight=e["confidence"],
                   stability=None if sfreq is None else sfreq.get(e["name"], 0.0),
                   stability_threshold=STABILITY_THRESHOLD if stab is None else stab.threshold,
                   rho=rho, unexplained=unexplained, confounded=False,
-                  consistency=min(cons.values(), default=1.0),
-                  consistency_alpha=CONSTANCY_ALPHA, blocks=bs.nb)
+                  consistency=own, consistency_alpha=CONSTANCY_ALPHA, blocks=bs.nb,
+                  clear=e["evidence"]["limit_ratio"] if detection else math.inf,
+                  compensating=e["name"] in comp)
         e["gates"] = g
         e["confidence_level"] = level(g)
     for e in partial:
@@ -464,9 +488,6 @@ def diagnose_arm(data, *, arm=None, candidates=None, block_seconds: float = 0.05
         notes.append(f"{' and '.join(g['members'])} explain the same part of the residual on "
                      f"this record: none is named; to separate them: "
                      f"{g['separating_experiment']}")
-    limits = {}
-    if detection:
-        limits = detection_limits(fprob, fit, candidates, alpha=alpha)
     t4 = time.perf_counter()
     settings = {"block_seconds": None if static else block_seconds, "alpha": alpha,
                 "rho_max": rho_max,
@@ -502,8 +523,8 @@ def diagnose_arm(data, *, arm=None, candidates=None, block_seconds: float = 0.05
                                  "[N m], static valve 0 = a + b u - kappa p [Pa/s]; angles: "
                                  "quasi-static equilibria of the model")
     timings = {"residuals_and_noise": t1 - t0, "selection": t2 - t1,
-               "stability_and_bootstrap": tb - t2, "rollout": t3 - tb,
-               "detection_limits": t4 - t3, "total": time.perf_counter() - t0}
+               "stability_and_bootstrap": tb - t2, "gates_and_rollout": t4 - tb,
+               "total": time.perf_counter() - t0}
     extra = {}
     if forces is not None:
         extra["forces"] = forces

@@ -370,7 +370,9 @@ def _scaled_cov(A_normal, chi2_channel, Zdiag_channels, m_per_channel):
     # columns sharing a channel set with column j (the parameters charged to its variance)
     ksub = (acts.T.astype(int) @ acts.astype(int) > 0).sum(axis=1)
     dof = np.maximum(m_per_channel * nch_of - ksub, 1)
-    sd = np.where(nch_of > 0, np.sqrt(chi2_of / dof), 1.0)
+    # never below the noise model: a residual under the stated noise (the resolution floor of
+    # rest points) does not make a parameter better known than the noise allows
+    sd = np.where(nch_of > 0, np.sqrt(np.maximum(chi2_of / dof, 1.0)), 1.0)
     return sd[:, None] * covariance(A_normal) * sd[None, :]
 
 
@@ -1128,6 +1130,59 @@ def region_consistency(prob: Problem, fit: Fit, name: str) -> dict:
     return out
 
 
+def compensating(prob: Problem, fit: Fit, *, ratio: float = None) -> dict:
+    """Pairs of effects of ``fit`` that cancel each other in some channel.
+
+    A model that explains a residual by two large contributions of opposite sign (a
+    pressure-sensor offset whose pressure signature a valve offset cancels, leaving a torque
+    error proportional to one muscle's lever arm) is fitting something neither effect is:
+    here a muscle's geometry or force law, outside the library.  For every pair (a, b) and
+    every block channel c, with a's and b's whitened contributions v_a, v_b on c: they
+    compensate when the cosine of the two is <= :data:`COMPENSATION_COS` (they point
+    against each other) and both have an RMS of at least one noise level.
+
+    Parameters
+    ----------
+    prob : Problem
+    fit : Fit
+        The final fit.
+    ratio : float, optional, keyword-only
+        The cosine threshold (default :data:`COMPENSATION_COS`).
+
+    Returns
+    -------
+    dict
+        Effect name -> tuple of the effects it compensates with.
+    """
+    ratio = COMPENSATION_COS if ratio is None else ratio
+    names = [n for n in fit.names if not REGISTRY[n].grid]
+    if len(names) < 2:
+        return {}
+    D, slices, _, E = _directions(prob, fit.names)
+    X = prob.X(fit.shift)
+    nb, nc, nm = X.shape
+    P = (X.reshape(nb * nc, nm) @ D).reshape(nb, nc, D.shape[1])
+    if E is not None:
+        P = P + E
+    Z = P / prob.sigma[None, :, None]
+    v = {n: Z[:, :, slices[n]] @ fit.phi[slices[n]] for n in names}     # (nb, nc) each
+    floor = math.sqrt(nb)
+    out = {n: [] for n in names}
+    for i, a in enumerate(names):
+        for b in names[i + 1:]:
+            na = np.linalg.norm(v[a], axis=0)
+            nbb = np.linalg.norm(v[b], axis=0)
+            cos = np.sum(v[a] * v[b], axis=0) / np.maximum(na * nbb, 1e-300)
+            if np.any((cos <= ratio) & (na > floor) & (nbb > floor)):
+                out[a].append(b)
+                out[b].append(a)
+    return {n: tuple(o) for n, o in out.items() if o}
+
+
+#: Two contributions compensate in a channel when their cosine is at most this.
+COMPENSATION_COS = -0.8
+
+
 # ----------------------------------------------------------------------------- parameters
 
 def in_bounds(prob: Problem, fit: Fit, name: str) -> bool:
@@ -1159,7 +1214,8 @@ def hac_covariance(prob: Problem, fit: Fit, *, lags: int | None = None) -> np.nd
     channels of a block together, so correlated channels are accounted for),
     times nb/(nb - k).  Residuals correlated over neighbouring blocks (a model
     error, coloured noise) widen the intervals; white residuals at the noise
-    level give the ordinary covariance.
+    level give the ordinary covariance, and no variance is taken below it (per
+    parameter, at least the noise model's ``B^-1``).
 
     Parameters
     ----------
@@ -1192,7 +1248,11 @@ def hac_covariance(prob: Problem, fit: Fit, *, lags: int | None = None) -> np.nd
         G = S[lag:].T @ S[:-lag]
         M += w * (G + G.T)
     Bi = covariance(B)
-    return Bi @ M @ Bi * nb / max(nb - k, 1)
+    hac = Bi @ M @ Bi * nb / max(nb - k, 1)
+    # never below the covariance of the noise model itself (Bi): residuals under the stated
+    # noise (the resolution floor of rest points) do not make a parameter better known
+    d = np.sqrt(np.maximum(np.diag(Bi) / np.maximum(np.diag(hac), 1e-300), 1.0))
+    return d[:, None] * hac * d[None, :]
 
 
 def parameter_table(prob: Problem, fit: Fit, confidence: float = 0.95, *,
@@ -1286,5 +1346,6 @@ __all__ = ["Problem", "make_problem", "at_model", "resample", "bootstrap_frequen
            "forward_selection", "refit", "confounded_with", "rank_step", "bic", "aicc",
            "parameter_table", "in_bounds", "hac_covariance", "Stability",
            "stability_selection", "STABILITY_PAIRS", "STABILITY_THRESHOLD",
-           "region_consistency", "CONSTANCY_ALPHA", "profiled_shift",
+           "region_consistency", "CONSTANCY_ALPHA", "profiled_shift", "compensating",
+           "COMPENSATION_COS",
            "subsystem_channels", "ALPHA", "RHO_MAX", "CV_SEGMENTS"]

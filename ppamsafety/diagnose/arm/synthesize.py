@@ -619,8 +619,13 @@ def synthesize_arm(experiment: str = "open-loop", effects=None, *, noise: str = 
                       dt=dt, p_std=PRESSURE_NOISE_STD)
 
 
-def _recorded(meas, q, qd, p, *, noise, seed, dt, p_std, qnoise=True):
-    """The recorded q, qd, p: sensor faults, then measurement noise, then outliers."""
+def _recorded(meas, q, qd, p, *, noise, seed, dt, p_std, qnoise=True, rng_p=None):
+    """The recorded q, qd, p: sensor faults, then measurement noise, then outliers.
+
+    The noise streams do not depend on the measurement effects (a record and its twin
+    without them carry the same noise): q, qd and p from ``default_rng(seed)`` in that order,
+    or p from ``rng_p`` when given; outliers from their own stream.
+    """
     q, qd, p = meas.sensors(q, qd, p)
     if noise == "table-3.2":
         rng = np.random.default_rng(seed)
@@ -628,7 +633,7 @@ def _recorded(meas, q, qd, p, *, noise, seed, dt, p_std, qnoise=True):
         if qnoise:
             q = q + meas.noise(q.shape, sq, dt, rng)
             qd = qd + meas.noise(qd.shape, sqd, dt, rng)
-        p = p + meas.noise(p.shape, p_std, dt, rng)
+        p = p + meas.noise(p.shape, p_std, dt, rng if rng_p is None else rng_p)
         if meas.outlier_rate > 0.0:
             x = meas.outliers(np.concatenate([q, qd, p], axis=1),
                               np.concatenate([sq, sqd, np.full(4, p_std)]),
@@ -736,13 +741,12 @@ def _closed_loop(arm, plant, dead, meas, *, noise, seed, duration, dt, controlle
     u = sig("u1", "u2", "u3", "u4")[:n].copy()
     u = _logged_for(meas, u)
     t = np.arange(q.shape[0]) * dt
-    if meas == Measurement():
-        if noise == "table-3.2":
-            p += np.random.default_rng([seed, 1]).normal(size=p.shape) * p_std
-    else:
-        # the controller's noise is already in q, qd; add the coloured part and the faults
-        q, qd, p = _recorded(meas, q, qd, p, noise=noise, seed=seed + 1, dt=dt, p_std=p_std,
-                             qnoise=meas.noise_correlation_time > 0.0)
+    # the controller's noise is already in q, qd (white, fed back); add the faults, the
+    # pressure noise (its own stream, the same whatever the measurement effects) and, for
+    # coloured noise, a coloured part on q, qd
+    q, qd, p = _recorded(meas, q, qd, p, noise=noise, seed=seed + 1, dt=dt, p_std=p_std,
+                         qnoise=meas.noise_correlation_time > 0.0,
+                         rng_p=np.random.default_rng([seed, 1]))
     meta = {"kind": "arm", "experiment": "closed-loop", "sample_rate": 1.0 / dt,
             "description": f"synthetic closed-loop record: {reference}, {controller}",
             "source": f"ppamsafety synthesize (seed {seed}, noise {noise})",

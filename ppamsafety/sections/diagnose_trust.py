@@ -1,0 +1,276 @@
+"""Trust in the diagnosis (issue 19): does "high" mean what it says, on data it never saw?
+
+Three things a user needs before trusting a name the discrepancy workflow
+prints:
+
+* **The calibration of "high"**: of all effects named with high confidence on
+  the randomized scenario battery (:mod:`ppamsafety.diagnose.scenarios`:
+  open loop, closed loop under every reference and controller family, the
+  static sawtooth; 0-3 library effects with log-uniform magnitudes, sensor
+  faults, out-of-library perturbations), how many were right -- measured on
+  seeds never used to set the gates (:data:`~ppamsafety.diagnose.scenarios.MEASURE_SEEDS`),
+  with the battery's other targets.  The full battery (>= 1000 scenarios,
+  ``python -m ppamsafety.diagnose.scenarios``, about 25 min on 2 cores) is too long
+  for the report: its per-scenario rows are shipped
+  (:data:`~ppamsafety.diagnose.scenarios.RESULTS_FILE`) and every number below
+  is computed from them by the same code; the section also re-runs the first
+  seeds live and says how many rows it reproduced exactly.
+* **Detection limits of the standard records**: the smallest change of each
+  library parameter that the default records of ``ppamsafety synthesize``
+  (open loop and closed loop, 10 s; the full sawtooth) reveal at their
+  noise, and the smallest at which it is also told apart from the effect that
+  looks most like it (:mod:`ppamsafety.diagnose.arm.detection`).  "Nothing
+  named" on such a record means "nothing above these".
+* **Whether the limits hold**: named rate of the battery's hidden effects
+  against their magnitude over their record's own limit.
+
+For another arm than the thesis arm the shipped battery does not apply: the
+section shows the live runs and the detection limits of that arm only.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import pandas as pd
+
+from .._validation import check_int
+from ..diagnose import diagnose, synthesize
+from ..diagnose.arm.detection import POWER
+from ..diagnose.scenarios import (HIGH_PRECISION, MEASURE_SEEDS, by_effect, calibration_table,
+                                  detection_curve, load_results, run_battery, scores)
+from ..markdown import markdown_table
+from ..plots.diagnose import plot_calibration, plot_detection_curve
+from . import Section, SectionInfo, compares_to_thesis, other_arm_note, resolve_arm
+
+#: This section in the report: what it shows, the thesis parts, its wall time [s] in a full
+#: report on 2 cores with a cold kernel cache.
+SECTION = SectionInfo(
+    summary=("trust in the diagnosis: the calibration of 'high' and the battery's scores on "
+             "unseen scenarios, detection limits of the standard records"),
+    thesis="(new)", typical_seconds=45.0)
+
+#: Live scenarios re-run by the report (full / quick): the first seeds of the measurement.
+LIVE_RUNS, LIVE_RUNS_QUICK = 8, 2
+#: The standard records whose detection limits are tabulated: experiment, options.
+STANDARD_RECORDS = (("open-loop", {}, "open loop, Fourier excitation, 10 s, 1 kHz"),
+                    ("closed-loop", {"reference": "circle10"},
+                     "closed loop, circle 10 s, joint PSMC Ki=2 lambda=0.4, 1 kHz"),
+                    ("static-sawtooth", {}, "static sawtooth of §3.5.1.6, 21 rest points"))
+#: Seed of the standard records.
+SEED = 3
+
+
+@dataclass
+class DiagnoseTrustStudy:
+    """Result of :func:`compute`.
+
+    Attributes
+    ----------
+    scores : pandas.DataFrame
+        The battery's measures against the targets (:func:`~ppamsafety.diagnose.scenarios.scores`).
+    calibration : pandas.DataFrame
+        Claimed level -> precision (:func:`~ppamsafety.diagnose.scenarios.calibration_table`).
+    by_effect : pandas.DataFrame
+        Per library effect: hidden, above its limit, named, "high".
+    curve : pandas.DataFrame
+        Named rate against magnitude / limit (:func:`~ppamsafety.diagnose.scenarios.detection_curve`).
+    limits : pandas.DataFrame
+        Detection limits of the standard records: ``record``, ``effect``, ``parameter``,
+        ``unit``, ``limit``, ``limit_named``, ``closest``.
+    live : pandas.DataFrame
+        The live rows (:func:`~ppamsafety.diagnose.scenarios.run_battery`).
+    stored : bool
+        The scores come from the shipped battery (the thesis arm); False: from the live
+        rows only.
+    metrics : dict
+        Headline numbers.
+    note : str
+        The other-arm note ("" for the thesis arm).
+    """
+
+    scores: pd.DataFrame
+    calibration: pd.DataFrame
+    by_effect: pd.DataFrame
+    curve: pd.DataFrame
+    limits: pd.DataFrame
+    live: pd.DataFrame
+    stored: bool
+    metrics: dict = field(default_factory=dict)
+    note: str = ""
+
+    def to_pandas(self) -> pd.DataFrame:
+        """The scores table."""
+        return self.scores.copy()
+
+    def plot(self) -> dict:
+        """The section's figures, ``{file name: Figure}``."""
+        return {"diagnose_trust_calibration.png": plot_calibration(
+                    self.calibration, required=HIGH_PRECISION),
+                "diagnose_trust_detection.png": plot_detection_curve(self.curve, power=POWER)}
+
+
+def standard_limits(*, arm=None, quick: bool = False) -> pd.DataFrame:
+    """Detection limits of the standard records (nothing hidden, Table 3.2 noise).
+
+    Parameters
+    ----------
+    arm : ArmParameters, optional, keyword-only
+    quick : bool, keyword-only
+        A shorter sawtooth (the first 7 rest points).
+
+    Returns
+    -------
+    pandas.DataFrame
+    """
+    rows = []
+    for exp, opts, label in STANDARD_RECORDS:
+        kw = dict(opts)
+        if exp == "static-sawtooth" and quick:
+            kw["duration"] = 36.0
+        dg = diagnose(synthesize(experiment=exp, seed=SEED, arm=arm, **kw), seed=SEED, arm=arm)
+        for name, ps in dg.detection_limits.items():
+            for p, d in ps.items():
+                rows.append({"record": label, "effect": name, "parameter": p, "unit": d["unit"],
+                             "limit": d["limit"], "limit_named": d["limit_named"],
+                             "closest": d["closest"] or ""})
+    return pd.DataFrame(rows)
+
+
+def compute(*, quick: bool = False, arm=None, head=None,
+            live_runs: int | None = None) -> DiagnoseTrustStudy:
+    """Scores of the battery, the calibration of "high" and the detection limits.
+
+    Parameters
+    ----------
+    quick : bool, keyword-only
+        Fewer live scenarios and a shorter sawtooth.
+    arm : ppamsafety.params.ArmParameters, optional, keyword-only
+        Nominal arm (default the thesis arm).
+    head : HeadContactModel, optional, keyword-only
+        Unused (no impact in this section); accepted like every section's.
+    live_runs : int, optional, keyword-only
+        Scenarios re-run live (default :data:`LIVE_RUNS`, quick :data:`LIVE_RUNS_QUICK`).
+
+    Returns
+    -------
+    DiagnoseTrustStudy
+    """
+    thesis = compares_to_thesis(arm)
+    arm = resolve_arm(arm)
+    n = (LIVE_RUNS_QUICK if quick else LIVE_RUNS) if live_runs is None else \
+        check_int("live_runs", live_runs, 0, 1000)
+    t0 = time.perf_counter()
+    seeds = list(MEASURE_SEEDS)[:n]
+    live = run_battery(seeds, processes=1, arm=arm) if seeds else pd.DataFrame()
+    t1 = time.perf_counter()
+    limits = standard_limits(arm=arm, quick=quick)
+    t2 = time.perf_counter()
+    m = {"live_runs": len(seeds), "live_seconds": t1 - t0, "limits_seconds": t2 - t1}
+    if thesis:
+        results = load_results()
+        m["stored_scenarios"] = int(len(results))
+        m["stored_seeds"] = f"{int(results.seed.min())}-{int(results.seed.max())}"
+        m["live_reproduced"] = _reproduced(live, results)
+    else:
+        results = live
+    sc = scores(results)
+    cal = calibration_table(results)
+    high = cal[cal.claimed == "high"].iloc[0]
+    m.update({"high_names": int(high["names"]), "high_right": int(high["right"]),
+              "high_precision": float(high["precision"]),
+              "high_wilson_low": float(high["wilson_low"]),
+              "targets_met": int(sc["met"].sum()), "targets": int(len(sc))})
+    return DiagnoseTrustStudy(scores=sc, calibration=cal, by_effect=by_effect(results),
+                              curve=detection_curve(results), limits=limits, live=live,
+                              stored=thesis, metrics=m,
+                              note="" if thesis else other_arm_note(arm))
+
+
+def _reproduced(live: pd.DataFrame, stored: pd.DataFrame) -> str:
+    """'k of n': live rows whose claims (named, high, confounded) equal the stored ones."""
+    if live is None or not len(live):
+        return "0 of 0"
+    by_seed = {int(r.seed): r for r in stored.itertuples()}
+    same = 0
+    for r in live.itertuples():
+        s = by_seed.get(int(r.seed))
+        if s is not None and tuple(r.named) == tuple(s.named) and tuple(r.high) == tuple(
+                s.high) and tuple(map(tuple, r.confounded)) == tuple(map(tuple, s.confounded)):
+            same += 1
+    return f"{same} of {len(live)}"
+
+
+def _fmt(df: pd.DataFrame) -> pd.DataFrame:
+    out = df.copy()
+    for c in out.columns:
+        if out[c].dtype.kind == "f":
+            out[c] = out[c].map(lambda v: "" if pd.isna(v) else f"{v:.3g}")
+    return out
+
+
+def render(study: DiagnoseTrustStudy) -> Section:
+    """Markdown section and artifacts.
+
+    Parameters
+    ----------
+    study : DiagnoseTrustStudy
+        Output of :func:`compute`.
+    """
+    m = study.metrics
+    src = (f"the shipped battery, {m['stored_scenarios']} scenarios of seeds "
+           f"{m['stored_seeds']} (never used to set the gates; regenerate with `python -m "
+           f"ppamsafety.diagnose.scenarios`); the first {m['live_runs']} were re-run live here "
+           f"and {m['live_reproduced']} reproduced exactly" if study.stored else
+           f"{m['live_runs']} scenarios run live for this arm (the shipped battery is the "
+           f"thesis arm's)")
+    lim = study.limits.copy()
+    lim = _fmt(lim)
+    md = ([study.note, ""] if study.note else []) + [
+        "A confidence the tool prints is a promise; this section measures it.  Scores of the "
+        f"randomized scenario battery ({src}):",
+        "",
+        markdown_table(_fmt(study.scores)),
+        "",
+        "Calibration of the claimed confidence (a name is right when the scenario hid it; a "
+        "confounded group is not a claim and is scored apart):",
+        "",
+        markdown_table(_fmt(study.calibration)),
+        "",
+        "![calibration](diagnose_trust_calibration.png)",
+        "",
+        "Per effect (above the limit: the hidden magnitude is at least the record's naming "
+        "limit):",
+        "",
+        markdown_table(study.by_effect),
+        "",
+        "Detection limits of the standard records (`ppamsafety synthesize` defaults, Table "
+        "3.2 noise, nothing hidden): the smallest change of one parameter (from its nominal "
+        f"value) named with {POWER:.0%} probability against the nominal model ("
+        "`limit`), and the smallest at which it is also told apart from the library effect "
+        "that looks most like it on that record (`limit_named`, `closest`).  Every "
+        "diagnosis reports its own record's limits in `diagnosis.json` "
+        "(`detection_limits`).",
+        "",
+        markdown_table(lim),
+        "",
+        "Do the limits hold?  Named rate of the hidden effects against their magnitude over "
+        "their record's naming limit (scenarios without an out-of-library perturbation):",
+        "",
+        markdown_table(_fmt(study.curve)),
+        "",
+        "![detection](diagnose_trust_detection.png)",
+    ]
+    arts = list(study.plot().items()) + [
+        ("diagnose_trust_scores.csv", study.scores),
+        ("diagnose_trust_calibration.csv", study.calibration),
+        ("diagnose_trust_by_effect.csv", study.by_effect),
+        ("diagnose_trust_detection.csv", study.curve),
+        ("diagnose_trust_limits.csv", study.limits)]
+    return Section("Trust in the diagnosis: calibrated confidence, detection limits (issue 19)",
+                   "\n".join(md), arts, dict(m))
+
+
+__all__ = ["DiagnoseTrustStudy", "compute", "render", "standard_limits", "LIVE_RUNS",
+           "STANDARD_RECORDS"]
