@@ -160,14 +160,33 @@ def _options(**names):
             from None
 
 
+@contextlib.contextmanager
+def _named(option: str, value):
+    """Errors about the file or name given to ``option`` start with the option's name."""
+    try:
+        yield
+    except (ValueError, TypeError, OSError) as exc:
+        msg = str(exc)
+        if option in msg:
+            raise
+        raise ValueError(f"{option} {value}: {msg}") from None
+
+
 def _section_names(text: str) -> list[str]:
     from .sections import REGISTRY
 
-    names = [n.strip() for n in text.split(",") if n.strip()]
-    if not names:
+    names = [n.strip() for n in text.split(",")]
+    if not any(names):
         raise argparse.ArgumentTypeError(
             f"{text!r} names no report section; give comma-separated names from "
             f"{', '.join(REGISTRY)} (omit --only to run them all)")
+    if not all(names):
+        raise argparse.ArgumentTypeError(f"{text!r} has an empty name between commas; give "
+                                         f"comma-separated section names")
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        raise argparse.ArgumentTypeError(f"{text!r} names {', '.join(twice)} more than once; "
+                                         f"name each section once")
     unknown = [n for n in names if n not in REGISTRY]
     if unknown:
         raise argparse.ArgumentTypeError(
@@ -182,7 +201,8 @@ def _arm_of(args):
         return None
     from .params import load_arm
 
-    return load_arm(args.arm)
+    with _named("--arm", args.arm):
+        return load_arm(args.arm)
 
 
 def _head_of(args):
@@ -191,7 +211,8 @@ def _head_of(args):
         return None
     from .impact.head import resolve_head
 
-    return resolve_head(args.head)
+    with _named("--head", args.head):
+        return resolve_head(args.head)
 
 
 def _head_unused(args, command: str) -> None:
@@ -463,6 +484,7 @@ def _cmd_info(args) -> int:
     from .params.arm_file import arm_fingerprint
 
     arm = _arm_of(args) or thesis_arm()
+    head = _head_of(args) or head_model()          # both checked before anything is printed
     L = arm.links
     label = arm.name or "unnamed arm"
     print(f"{label}{' (the thesis arm)' if is_thesis_arm(arm) else ''} (plant):")
@@ -474,7 +496,6 @@ def _cmd_info(args) -> int:
     print(f"  fingerprint (sha256 of its arm file) {arm_fingerprint(arm)}")
     for part, text in arm.sources:
         print(f"  source [{part}]: {text}")
-    head = _head_of(args) or head_model()
     print(f"head model {head.name!r}: m = {head.mass:g} kg, R = {head.radius:g} m, "
           f"k = {head.stiffness:.4g} N/m^n, n = {head.exponent:g}, "
           f"lambda = {head.damping:.4g} N s/m^(n+1)")
@@ -499,6 +520,9 @@ def _cmd_arm_export(args) -> int:
     from .params import thesis_arm
     from .params.arm_file import arm_to_toml
 
+    if Path(args.out).suffix.lower() != ".toml":
+        raise ValueError(f"--out {args.out!r}: an arm file is TOML; give a name ending in .toml "
+                         f"(e.g. my_arm.toml)")
     arm = _arm_of(args) or thesis_arm()
     text = arm_to_toml(arm, comments=True)
     atomic_write(args.out, lambda tmp: Path(tmp).write_text(text, encoding="utf-8"),
@@ -535,10 +559,10 @@ def _cmd_arm_check(args) -> int:
 
 def _add_arm_head(p, *, head_used: bool = True) -> None:
     """The ``--arm FILE`` and ``--head NAME|FILE`` options every command takes."""
-    p.add_argument("--arm", default=None, metavar="FILE",
+    p.add_argument("--arm", type=_path, default=None, metavar="FILE",
                    help="arm file (TOML, docs/arm_files.md; default: the thesis arm; "
                         "`ppamsafety arm export` writes a template)")
-    p.add_argument("--head", default=None, metavar="NAME|FILE",
+    p.add_argument("--head", type=_path, default=None, metavar="NAME|FILE",
                    help="head model: a name (thesis-frontal, iso15066-forehead, iso15066-face, "
                         "child-frontal) or a head file (TOML)"
                         + ("" if head_used else "; this command computes no impact, so it is "
@@ -742,15 +766,16 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
     asub = a.add_subparsers(dest="arm_command", required=True)
     ae = asub.add_parser("export", help="write an arm file (default: the thesis arm) as a "
                                         "commented template", epilog=_EPILOG)
-    ae.add_argument("--out", required=True, metavar="FILE", help="new .toml file")
-    ae.add_argument("--arm", default=None, metavar="FILE",
+    ae.add_argument("--out", type=_path, required=True, metavar="FILE", help="new .toml file")
+    ae.add_argument("--arm", type=_path, default=None, metavar="FILE",
                     help="re-export this arm file (canonical form, with comments)")
-    ae.add_argument("--head", default=None, metavar="NAME|FILE", help=argparse.SUPPRESS)
+    ae.add_argument("--head", type=_path, default=None, metavar="NAME|FILE",
+                    help=argparse.SUPPRESS)
     ae.add_argument("--overwrite", action="store_true", help="allow replacing an existing file")
     ae.set_defaults(func=_cmd_arm_export)
     ac = asub.add_parser("check", help="validate an arm file and print its key numbers",
                          epilog=_EPILOG)
-    ac.add_argument("file", metavar="FILE", help="arm file (.toml)")
+    ac.add_argument("file", type=_path, metavar="FILE", help="arm file (.toml)")
     ac.add_argument("--q", nargs=2, type=_angle_deg, default=None, metavar=("Q1", "Q2"),
                     help="pose of the stiffness numbers [deg] (default 50 -80, the thesis' "
                          "step-response impact, or the centre of the working area)")

@@ -261,6 +261,9 @@ def grid_cases(grid: Mapping, base: Mapping | None = None, *, _check_only: bool 
     if base is not None and not isinstance(base, Mapping):
         raise TypeError(f"base must be a dict of parameters or None, got {type(base).__name__}")
     keys = list(grid)
+    if not keys:
+        raise ValueError("grid = {} has no parameter: give at least one key and its values "
+                         "(e.g. {'lam': [0.4, 0.8]}), or pass cases instead")
     values = []
     for k in keys:
         if not isinstance(k, str):

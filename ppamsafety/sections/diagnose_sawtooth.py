@@ -20,7 +20,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import pandas as pd
 
-from .._validation import check_int, check_range
+from .._validation import check_range, check_seed
 from ..diagnose import diagnose, synthesize
 from ..diagnose.arm.static import static_record
 from ..hysteresis import DELTA_25_FIBRES
@@ -128,7 +128,7 @@ def compute(*, quick: bool = False, arm=None, delta: float = HIDDEN_DELTA,
         arm = arm.replace(effects=replace(arm.effects, hysteresis_delta=None))
         delta = max(own)
     delta = check_range("delta", delta, 0.0, 1.0, lo_open=True)
-    seed = check_int("seed", seed, 0)
+    seed = check_seed("seed", seed)
     t0 = time.perf_counter()
     data = synthesize("static-sawtooth", {"hysteresis_delta": delta}, seed=seed, arm=arm,
                       duration=QUICK_DURATION if quick else None)
