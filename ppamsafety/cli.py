@@ -144,8 +144,10 @@ def _path(text: str) -> str:
 def _options(**names):
     """Errors of the library name its arguments; on the command line they name the options.
 
-    ``with _options(block_seconds="--block"):`` rewrites ``block_seconds`` (as a whole word)
-    into ``--block`` in a ``ValueError``/``TypeError`` raised inside the block.
+    ``with _options(block_seconds="--block"):`` rewrites ``block_seconds`` into ``--block``
+    in a ``ValueError``/``TypeError`` raised inside the block, where it is the subject of
+    the message (followed by ``=``, ``:``, ``[``, ``(``, "must", "is", "applies", "has" or
+    "gives"), not where the same word is prose.
     """
     try:
         yield
@@ -153,7 +155,10 @@ def _options(**names):
         msg = str(exc)
         new = msg
         for lib, opt in names.items():
-            new = re.sub(rf"(?<![\w.\[-]){re.escape(lib)}(?![\w-])", opt, new)
+            # the argument as the subject of the message ("seed = -1 ...", "seed must ...",
+            # "outdir: ..."), not the same word in prose ("the record's experiment")
+            new = re.sub(rf"(?<![\w.\[-]){re.escape(lib)}(?=\s*(=|:|\[|must\b|is\b|"
+                         rf"applies\b|has\b|gives\b|\())", opt, new)
         if new == msg:
             raise
         raise type(exc)(new) if type(exc) in (ValueError, TypeError) else ValueError(new) \
@@ -338,6 +343,12 @@ def _cmd_diagnose(args) -> int:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", MeasuredDataWarning)    # printed below, one line each
         if str(args.data).lower().endswith(".toml"):            # a bench campaign manifest
+            given = [o for o, v in (("--allow-gaps", args.allow_gaps),
+                                    ("--loose-units", args.loose_units)) if v]
+            if given:
+                raise ValueError(f"{', '.join(given)}: option(s) of a measured data file, not of "
+                                 f"a campaign manifest ({args.data}): its import profile says "
+                                 f"how the records are read")
             data = load_campaign(args.data)
         else:
             data = load_measured(args.data, allow_gaps=args.allow_gaps,

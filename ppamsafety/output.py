@@ -446,7 +446,7 @@ def check_new_file(path, *, overwrite: bool = False, name: str = "output file") 
     if not isinstance(overwrite, bool):
         raise TypeError(f"overwrite must be True or False, got {overwrite!r}")
     text = os.fspath(path)
-    if text.endswith(("/", os.sep)) or p.name in ("", ".", ".."):
+    if os.path.basename(text) in ("", ".", ".."):          # "x/", ".", "x/..": a folder
         raise OutputError(f"{name} '{text}' names a folder, not a file; give the name of a "
                           f"file (e.g. '{text.rstrip('/' + os.sep) or '.'}/x.csv')")
     parent = p.parent if str(p.parent) else Path(".")

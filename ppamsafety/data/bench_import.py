@@ -64,7 +64,7 @@ import pandas as pd
 
 from .._inputfiles import check_input_file, read_bytes, read_text
 from ..units import P_ATM
-from .measured import ACTUATOR_TYPES, MeasuredData, MeasuredDataError
+from .measured import ACTUATOR_TYPES, MeasuredData, MeasuredDataError, check_nominal_pressure
 
 #: Channels of an actuator record and the dimension pint must find for each.
 CHANNEL_DIMENSIONS = {"t": "[time]", "force": "[force]", "pressure": "[pressure]",
@@ -751,8 +751,9 @@ def import_bench(path, profile, *, actuator, experiment: str = "tensile", descri
                                 "'contraction'")
     record = dict(record or {})
     if "pressure_nominal" in record:
-        record["pressure_nominal"] = quantity("record pressure_nominal",
-                                              record["pressure_nominal"], "Pa")
+        record["pressure_nominal"] = check_nominal_pressure(
+            "record pressure_nominal", quantity("record pressure_nominal",
+                                                record["pressure_nominal"], "Pa"))
     src = str(p)
     text, raw = _open_text(p)
     sha = hashlib.sha256(raw).hexdigest()

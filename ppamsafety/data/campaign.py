@@ -39,7 +39,8 @@ import numpy as np
 from .._inputfiles import read_text
 from .._validation import did_you_mean
 from .bench_import import Actuator, BenchProfile, import_bench, quantity
-from .measured import MeasuredData, MeasuredDataError, MeasuredDataWarning, load_measured
+from .measured import (MeasuredData, MeasuredDataError, MeasuredDataWarning,
+                       check_nominal_pressure, load_measured)
 
 _MANIFEST_KEYS = ("name", "description", "profile", "experiment", "actuator", "records",
                   "source")
@@ -211,8 +212,9 @@ def load_campaign(path, *, check_signs: bool = True) -> Campaign:
         f = base / r["file"]
         info = {k: r[k] for k in ("pressure_nominal", "label", "run") if k in r}
         if "pressure_nominal" in info:
-            info["pressure_nominal"] = quantity(f"{where}.pressure_nominal",
-                                                info["pressure_nominal"], "Pa")
+            info["pressure_nominal"] = check_nominal_pressure(
+                f"{where}.pressure_nominal", quantity(f"{where}.pressure_nominal",
+                                                      info["pressure_nominal"], "Pa"))
         if fmt == "raw" and (profile is None or actuator is None):
             raise MeasuredDataError(f"{where} is a raw file: the manifest needs "
                                     f"profile = ... and an [actuator] table")

@@ -222,6 +222,9 @@ def _check_meta(meta: dict, src: str, columns, warn) -> dict:
     for key in ("import", "record"):
         if key in meta and not isinstance(meta[key], dict):
             raise MeasuredDataError(f"{src}: metadata {key} must be a table, got {meta[key]!r}")
+    if isinstance(meta.get("record"), dict) and "pressure_nominal" in meta["record"]:
+        check_nominal_pressure(f"{src}: metadata record.pressure_nominal",
+                               meta["record"]["pressure_nominal"])
     if "units" in meta:
         _check_units(meta["units"], src, kind)
     # closed loop: controller and reference
@@ -269,6 +272,27 @@ def _check_meta(meta: dict, src: str, columns, warn) -> dict:
     if unknown:
         warn(f"{src}: unknown metadata key(s) {', '.join(map(repr, unknown))} (kept)")
     return meta
+
+
+def check_nominal_pressure(where: str, value) -> float:
+    """A record's nominal gauge pressure [Pa]: a number in [-1 atm, the actuator maximum].
+
+    Parameters
+    ----------
+    where : str
+        The field, for the message.
+    value : float
+        The pressure [Pa] (a number; a campaign manifest's "3 bar" is converted before).
+    """
+    hi = PLAUSIBILITY["actuator"]["pressure"][1]
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or \
+            not math.isfinite(float(value)):
+        raise MeasuredDataError(f"{where} = {value!r} must be a finite gauge pressure [Pa]")
+    if not -P_ATM_STD <= float(value) <= hi:
+        raise MeasuredDataError(f"{where} = {float(value):g} Pa is physically impossible: a gauge "
+                                f"pressure is in [-1 atm, {hi / 1e5:g} bar] = [{-P_ATM_STD:g}, "
+                                f"{hi:g}] Pa")
+    return float(value)
 
 
 def _check_arm_record(arm, src):
@@ -1044,8 +1068,14 @@ def _format_of(p: Path) -> str:
         return "csv"
     if suf in (".parquet", ".pq"):
         return "parquet"
+    hint = {".toml": " (a .toml bench campaign manifest is read by `ppamsafety diagnose` and "
+                     "load_campaign)",
+            ".xz": " (a compressed raw bench file is imported with a profile: a campaign "
+                   "manifest, or import_bench)",
+            ".gz": " (a compressed raw bench file is imported with a profile: a campaign "
+                   "manifest, or import_bench)"}.get(suf, "")
     raise MeasuredDataError(f"{p}: unknown data file type {p.suffix!r}; the format is CSV (.csv) "
-                            f"or Parquet (.parquet)")
+                            f"or Parquet (.parquet){hint}")
 
 
 def _need_pyarrow(what: str) -> None:
@@ -1179,6 +1209,6 @@ def load_measured(path, *, allow_gaps: bool = False, strict_units: bool = True) 
 
 __all__ = ["check_save_path", "FORMAT_VERSION", "KINDS", "EXPERIMENTS", "ALLOWED", "ARM_CHANNELS",
            "ACTUATOR_TYPES", "ACTUATOR_CHANNELS", "MIN_ROWS", "MAX_FILE_BYTES", "DT_TOLERANCE",
-           "GAP_FACTOR", "MeasuredData",
+           "GAP_FACTOR", "MeasuredData", "check_nominal_pressure",
            "MeasuredDataError", "MeasuredDataWarning", "load_measured", "read_metadata",
            "dumps_toml"]

@@ -859,11 +859,21 @@ class _Prepared:
     B: np.ndarray | None = None
 
 
+def _check_cases_size(n: int, ref: str) -> None:
+    check_size(f"{n:,} impact cases ({ref} has {n:,} rows)", n * BYTES_PER_CASE,
+               remedy=f"simulate them in batches of at most {MAX_BYTES // BYTES_PER_CASE:,} "
+                      f"cases")
+
+
 def _prepare_impacts(arm, q, qd, stiffness, *, head, direction, head_velocity, fixed_arm, dt,
                      duration, history, warn_area, stacklevel,
                      joint_model="frozen-equilibrium", motor_inertia=None):
     """Validate the inputs of :func:`simulate_impacts` and pack the kernel rows (no run)."""
     arm = check_arm(arm)
+    rows = [np.shape(a)[0] for a in (q, qd, stiffness, direction, head_velocity, motor_inertia)
+            if isinstance(a, np.ndarray) and a.ndim == 2]
+    if rows:                              # sized before the arrays are checked or copied
+        _check_cases_size(max(rows), "the largest array")
     q = as_float_array("q", q, shape_tail=(2,), ndim=(1, 2))
     qd = as_float_array("qd", qd, shape_tail=(2,), ndim=(1, 2))
     jm = resolve_joint_model(joint_model)
@@ -906,9 +916,7 @@ def _prepare_impacts(arm, q, qd, stiffness, *, head, direction, head_velocity, f
     if q.ndim == 2 and q.shape[0] == 0:
         n = 0
     ref = next(nm for nm, a in named if (a.shape[0] if a.ndim == 2 else 1) == n)
-    check_size(f"{n:,} impact cases ({ref} has {n:,} rows)", n * BYTES_PER_CASE,
-               remedy=f"simulate them in batches of at most {MAX_BYTES // BYTES_PER_CASE:,} "
-                      f"cases")
+    _check_cases_size(n, ref)
     q = _rows("q", q, n, ref)
     qd = _rows("qd", qd, n, ref)
     K = _rows("stiffness", K, n, ref)

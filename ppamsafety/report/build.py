@@ -236,8 +236,16 @@ def build_report(outdir="reports", *, quick: bool = False, only=None, progress: 
                 # workers (report.warmup)
                 _run_in_pool(pool, processes, order, stage, quick, only is None, report,
                              arm, head)
-            finally:
-                pool.shutdown(wait=True, cancel_futures=True)
+            except BaseException:
+                # Ctrl-C or a failed section: stop the other sections now instead of waiting
+                # for them (the previous report is left untouched either way)
+                workers = list((getattr(pool, "_processes", None) or {}).values())
+                pool.shutdown(wait=False, cancel_futures=True)
+                for w in workers:
+                    if w.is_alive():
+                        w.terminate()
+                raise
+            pool.shutdown(wait=True)
         sections, metrics = [], {}
         for name in names:                                  # the order asked for
             res, dt = done[name]

@@ -356,9 +356,15 @@ def main(name: str, argv=None) -> int:
     p.add_argument("--head", default=None, metavar="NAME|FILE",
                    help="head model name or head file (default: thesis-frontal)")
 
+    def named(option, value, load):
+        try:
+            return load(value)
+        except (ValueError, TypeError, OSError) as exc:     # the option, then why
+            raise ValueError(f"{option} {value!r}: {exc}") from None
+
     def run(args):
-        arm = None if args.arm is None else load_arm(args.arm)
-        head = None if args.head is None else _head.resolve_head(args.head)
+        arm = None if args.arm is None else named("--arm", args.arm, load_arm)
+        head = None if args.head is None else named("--head", args.head, _head.resolve_head)
         with OutputFolder(args.outdir, kind="section", overwrite=args.overwrite,
                           clean=False, kinds=("section", "report")) as stage:
             res = run_section(name, stage, quick=args.quick, arm=arm, head=head)
