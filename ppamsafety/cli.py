@@ -146,23 +146,23 @@ def _options(**names):
 
     ``with _options(block_seconds="--block"):`` rewrites ``block_seconds`` into ``--block``
     in a ``ValueError``/``TypeError`` raised inside the block, where it is the subject of
-    the message (followed by ``=``, ``:``, ``[``, ``(``, "must", "is", "applies", "has" or
+    the message (followed by ``=``, ``:``, ``[``, "must", "is", "applies", "has" or
     "gives"), not where the same word is prose.
     """
     try:
         yield
-    except (ValueError, TypeError) as exc:
+    except (ValueError, TypeError, OSError) as exc:
         msg = str(exc)
         new = msg
         for lib, opt in names.items():
             # the argument as the subject of the message ("seed = -1 ...", "seed must ...",
             # "outdir: ..."), not the same word in prose ("the record's experiment")
             new = re.sub(rf"(?<![\w.\[-]){re.escape(lib)}(?=\s*(=|:|\[|must\b|is\b|"
-                         rf"applies\b|has\b|gives\b|\())", opt, new)
+                         rf"applies\b|has\b|gives\b))", opt, new)
         if new == msg:
             raise
-        raise type(exc)(new) if type(exc) in (ValueError, TypeError) else ValueError(new) \
-            from None
+        raise type(exc)(new) if type(exc) in (ValueError, TypeError, OSError) else \
+            ValueError(new) from None
 
 
 @contextlib.contextmanager
@@ -244,6 +244,13 @@ def _cmd_identify(args) -> int:
 
     from .data import MeasuredDataWarning, identify_measured, load_measured
 
+    if args.kind == "static":
+        given = [o for o, v in (("--drop", args.drop is not None), ("--no-friction",
+                                                                    args.no_friction),
+                                ("--sign-velocity", args.sign_velocity is not None)) if v]
+        if given:
+            raise ValueError(f"{', '.join(given)}: option(s) of --kind dynamic only (a static "
+                             f"identification uses neither friction nor filtered samples)")
     with _options(outdir="--out"):
         inspect_output_folder(args.out, overwrite=args.overwrite, kind="identify",
                               replace_kind=args.replace_other_kind)   # fail before computing
@@ -256,7 +263,8 @@ def _cmd_identify(args) -> int:
     with _options(kind="--kind", method="--method", drop="--drop", confidence="--confidence",
                   sign_velocity="--sign-velocity"):
         ident = identify_measured(data, args.kind, method=args.method,
-                                  friction=not args.no_friction, drop=args.drop,
+                                  friction=not args.no_friction,
+                                  drop=300 if args.drop is None else args.drop,
                                   confidence=args.confidence, sign_velocity=args.sign_velocity,
                                   arm=arm)
     for note in ident.notes:
@@ -355,10 +363,18 @@ def _cmd_diagnose(args) -> int:
                                  strict_units=not args.loose_units)
     for note in getattr(data, "notes", ()):
         print(f"ppamsafety: warning: {note}", file=sys.stderr)
+    if getattr(data, "kind", "actuator") == "actuator":       # a campaign or a bench record
+        given = [o for o, v in (("--block", args.block), ("--seed", args.seed),
+                                ("--bootstrap", args.bootstrap)) if v is not None]
+        if given:
+            raise ValueError(f"{', '.join(given)}: option(s) of an arm record; {args.data} is a "
+                             f"test-bench (actuator) record, diagnosed against its nominal force "
+                             f"law without them")
     with _options(experiment="--experiment", alpha="--alpha", rho_max="--rho-max",
                   block_seconds="--block", seed="--seed", bootstrap="--bootstrap", arm="--arm"):
         dg = diagnose(data, experiment=args.experiment, alpha=args.alpha, rho_max=args.rho_max,
-                      block_seconds=args.block, seed=args.seed, bootstrap=args.bootstrap,
+                      block_seconds=0.05 if args.block is None else args.block,
+                      seed=0 if args.seed is None else args.seed, bootstrap=args.bootstrap,
                       arm=arm)
     for note in dg.notes:
         if note.startswith("arm: ") and "diagnosed against arm" in note:
@@ -619,7 +635,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="ordinary or two-step per-joint weighted least squares (default LS)")
     d.add_argument("--no-friction", action="store_true",
                    help="dynamic: model without Coulomb and viscous friction (6 parameters)")
-    d.add_argument("--drop", type=_count(0, 10 ** 7), default=300, metavar="R",
+    d.add_argument("--drop", type=_count(0, 10 ** 7), default=None, metavar="R",
                    help="dynamic: filtered samples dropped per segment (default 300, thesis B.7)")
     d.add_argument("--sign-velocity", type=_positive, default=None, metavar="V",
                    help="dynamic: Coulomb columns tanh(qd/V) [rad/s] instead of sgn(qd)")
@@ -685,10 +701,11 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
                    help="level of the likelihood-ratio test (default 0.01, Bonferroni-divided)")
     g.add_argument("--rho-max", type=_positive, default=1.5,
                    help="largest residual/noise RMS ratio counted as explained (default 1.5)")
-    g.add_argument("--block", type=_positive, default=0.05, metavar="SECONDS",
-                   help="block length of the subsystem residuals [s] (default 0.05)")
-    g.add_argument("--seed", type=_seed, default=0,
-                   help="seed of the noise propagation and of the bootstrap")
+    g.add_argument("--block", type=_positive, default=None, metavar="SECONDS",
+                   help="arm records: block length of the subsystem residuals [s] (default 0.05)")
+    g.add_argument("--seed", type=_seed, default=None,
+                   help="arm records: seed of the noise propagation and of the bootstrap "
+                        "(default 0)")
     g.add_argument("--bootstrap", type=_count(0, 10000), default=None, metavar="B",
                    help="moving-block bootstrap replicates of the selection (default 40, 0: off)")
     g.add_argument("--allow-gaps", action="store_true",

@@ -360,7 +360,16 @@ class OutputFolder:
         finally:
             shutil.rmtree(self.staging, ignore_errors=True)   # our own temporary folder
             if exc_type is not None and self._created:
+                # a run that failed in a folder it created leaves nothing behind: its work
+                # folders if still empty, then the marker if nothing else is there
+                for d in sorted(self._dirs, reverse=True):
+                    try:
+                        (self.path / d).rmdir()               # only if still empty
+                    except OSError:
+                        pass
                 try:
+                    if [e.name for e in self.path.iterdir()] == [MARKER]:
+                        (self.path / MARKER).unlink()
                     self.path.rmdir()                         # only if still empty
                 except OSError:
                     pass

@@ -378,9 +378,10 @@ def _dask_client(scheduler, processes: int):
     if isinstance(scheduler, str) and scheduler:
         try:
             client = Client(scheduler, timeout="30s")
-        except OSError as exc:
+        except (OSError, ValueError, TypeError) as exc:      # unreachable, or not an address
             raise OSError(f"scheduler = {scheduler!r}: cannot connect to the dask scheduler "
-                          f"({_error_text(exc)})") from None
+                          f"({_error_text(exc)}); give its address, e.g. "
+                          f"'tcp://10.0.0.5:8786'") from None
         return client, client.close
     raise TypeError(f"scheduler must be None, a scheduler address str (e.g. "
                     f"'tcp://host:8786') or a dask.distributed.Client, got "

@@ -688,7 +688,26 @@ def _impact_inputs(speed, q1_deg, q2_deg, direction, stiffness, head, effects, a
 def check_impact_case(speed: float, *, q1_deg: float = IMPACT_POSE_DEG[0],
                       q2_deg: float = IMPACT_POSE_DEG[1], direction=(1.0, 0.0), stiffness=None,
                       head="thesis-frontal", effects=None, arm=None, **dotted) -> None:
-    """Check the arguments of :func:`impact_case` without simulating (same parameters).
+    """Check the arguments of :func:`impact_case` without simulating.
+
+    Parameters
+    ----------
+    speed : float
+        Tool (TCP) speed at impact [m/s], in (0, :data:`SPEED_MAX`].
+    q1_deg, q2_deg : float, keyword-only
+        Pose at impact [deg], in the working area.
+    direction : pair of float, keyword-only
+        Joint-space velocity direction (qd1, qd2), not zero.
+    stiffness : None, float or pair, keyword-only
+        Joint stiffness [Nm/rad].
+    head : str or HeadContactModel, keyword-only
+        Head model.
+    effects : dict, optional, keyword-only
+        Plant effects.
+    arm : ArmParameters, optional, keyword-only
+        The arm (default the thesis arm).
+    **dotted
+        ``"arm.<key>"`` and ``"effects.<name>"`` parameters.
 
     Raises
     ------

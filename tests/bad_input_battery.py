@@ -976,6 +976,15 @@ def campaign(manifest=MANIFEST + RECORD, *, record=True, profile=True, **extra):
     return setup
 
 
+def thesis_arm_file(d: Path, crlf=False, bom=False):
+    from ppamsafety.params import thesis_arm
+    from ppamsafety.params.arm_file import arm_to_toml
+    t = arm_to_toml(thesis_arm()).encode()
+    if crlf:
+        t = t.replace(b"\n", b"\r\n")
+    (d / "a.toml").write_bytes((b"\xef\xbb\xbf" if bom else b"") + t)
+
+
 def _xz_bomb(d: Path):
     """A small .xz record that decompresses to 300 MB."""
     import lzma
@@ -1034,6 +1043,18 @@ def _more_cases():
             ("raw-without-profile", MANIFEST.replace('profile = "profile.toml"\n', "") + RECORD,
              {}, ["profile", "records[0]"])):
         case("campaign-file", nm, DIAG_M, setup=campaign(man, **kw), names=nms)
+    for opt, v in (("--bootstrap", "0"), ("--seed", "3"), ("--block", "0.1"),
+                   ("--allow-gaps", None), ("--loose-units", None),
+                   ("--experiment", "open-loop"), ("--arm", "a.toml")):
+        case("campaign-file", f"arm-option{opt}", DIAG_M + [opt] + ([v] if v else []),
+             setup=chain(campaign(), lambda d: thesis_arm_file(d)), names=[opt])
+    for opt, v in (("--drop", "5"), ("--no-friction", None), ("--sign-velocity", "0.1")):
+        case("identify-option", f"static-with{opt}", IDENT_S + [opt] + ([v] if v else []),
+             setup=copy_base("st.csv", "data.csv"), names=[opt, "dynamic"])
+    case("identify-option", "sign-velocity-without-friction",
+         IDENT_D + ["--no-friction", "--sign-velocity", "0.1"], setup=copy_base("ol.csv",
+                                                                               "data.csv"),
+         names=["--sign-velocity", "friction"])
     case("campaign-file", "folder", ["diagnose", "m.toml", "--out", "o"],
          setup=files(**{"m.toml": None}), names=["m.toml", "folder"])
     case("campaign-file", "missing", ["diagnose", "m.toml", "--out", "o"],
@@ -1043,7 +1064,7 @@ def _more_cases():
     case("campaign-file", "huge-record", DIAG_M.copy(),
          setup=chain(campaign(MANIFEST + '[[records]]\nfile = "big.csv"\n', record=False),
                      _sparse("big.csv", 2 ** 30)), names=["big.csv", "MB"])
-    case("campaign-file", "bom-crlf-valid", DIAG_M + ["--bootstrap", "0"],
+    case("campaign-file", "bom-crlf-valid", DIAG_M,
          setup=campaign(b"\xef\xbb\xbf" + (MANIFEST + RECORD).replace("\n", "\r\n").encode()),
          expect="ok", timeout=180)
 
@@ -1072,14 +1093,6 @@ def _more_cases():
                       ("--arm-export", ["arm", "export", "--out", "x.toml", "--arm", ""])):
         case("input-file", f"{opt.strip('-')}-empty-path", argv,
              names=["--arm", "--head", "FILE", "empty"])
-
-    def thesis_arm_file(d: Path, crlf=False, bom=False):
-        from ppamsafety.params import thesis_arm
-        from ppamsafety.params.arm_file import arm_to_toml
-        t = arm_to_toml(thesis_arm()).encode()
-        if crlf:
-            t = t.replace(b"\n", b"\r\n")
-        (d / "a.toml").write_bytes((b"\xef\xbb\xbf" if bom else b"") + t)
 
     case("input-file-valid", "arm-bom-crlf", ["arm", "check", "a.toml"],
          setup=lambda d: thesis_arm_file(d, crlf=True, bom=True), expect="ok")
