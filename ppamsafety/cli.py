@@ -147,7 +147,8 @@ def _options(**names):
     ``with _options(block_seconds="--block"):`` rewrites ``block_seconds`` into ``--block``
     in a ``ValueError``/``TypeError`` raised inside the block, where it is the subject of
     the message (followed by ``=``, ``:``, ``[``, "must", "is", "applies", "has" or
-    "gives"), not where the same word is prose.
+    "gives", and not following another word: "the step experiment: ..." keeps its word),
+    not where the same word is prose.
     """
     try:
         yield
@@ -157,7 +158,7 @@ def _options(**names):
         for lib, opt in names.items():
             # the argument as the subject of the message ("seed = -1 ...", "seed must ...",
             # "outdir: ..."), not the same word in prose ("the record's experiment")
-            new = re.sub(rf"(?<![\w.\[-]){re.escape(lib)}(?=\s*(=|:|\[|must\b|is\b|"
+            new = re.sub(rf"(?<![\w.\[-])(?<!\w ){re.escape(lib)}(?=\s*(=|:|\[|must\b|is\b|"
                          rf"applies\b|has\b|gives\b))", opt, new)
         if new == msg:
             raise

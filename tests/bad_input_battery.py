@@ -1099,7 +1099,7 @@ def _more_cases():
     case("input-file-valid", "study-bom-crlf", ["sweep", "s.toml", "--out", "o", "--no-progress"],
          setup=files(**{"s.toml": b'\xef\xbb\xbf[case]\r\nexperiment = "step"\r\n'}), expect="ok")
 
-    # ---- a single-valued option given twice ------------------------------------------------------
+    # ---- a single-valued option given twice -----------------------------------------------------
     ol = copy_base("ol.csv", "data.csv")
     for nm, argv, setup in (
             ("impact-q", IMPACT + ["--q", "40", "-80"], None),
@@ -1124,7 +1124,7 @@ def _more_cases():
     case("cli-duplicate", "report-only-empty-part", ["report", "--only", "design,,safety"],
          names=["--only", "empty"])
 
-    # ---- single output files that name a folder ----------------------------------------------------
+    # ---- single output files that name a folder -------------------------------------------------
     for nm, argv in (("history-slash", IMPACT + ["--history", "h/"]),
                      ("history-dot", IMPACT + ["--history", "."]),
                      ("synth-slash", ["synthesize", "--duration", "1", "--out", "x.csv/"]),
@@ -1135,7 +1135,7 @@ def _more_cases():
     case("output-file", "arm-export-fifo", ["arm", "export", "--out", "a.toml", "--overwrite"],
          setup=lambda d: os.mkfifo(d / "a.toml"), names=["--out", "a.toml", "regular file"])
 
-    # ---- study files: [envelope] ranges and keys -------------------------------------------------
+    # ---- study files: [envelope] ranges and keys ------------------------------------------------
     E = '[envelope]\nparameter = "{p}"\nrange = [{a}, {b}]\n'
     for nm, text, nms in (
             ("speed-high-end", E.format(p="speed", a=0.1, b=1e9), ["envelope.range", "speed"]),
@@ -1160,7 +1160,7 @@ def _more_cases():
             ("unknown-parameter", E.format(p="lamda", a=0.1, b=1), ["lamda"])):
         case("study-envelope", nm, SWEEP, setup=files(**{"s.toml": text}), names=nms)
 
-    # ---- Ctrl-C: exit 130 at once, one line, nothing lost ------------------------------------------
+    # ---- Ctrl-C: exit 130 at once, one line, nothing lost ---------------------------------------
     long_sweep = files(**{"s.toml": '[case]\nexperiment = "circle10"\n[grid]\n'
                                     'duration = { linspace = [60.0, 90.0, 60] }\n'})
     case("interrupt", "sweep-early", SWEEP + ["--processes", "2", "--no-progress"],
@@ -1184,7 +1184,7 @@ def _more_api_cases():
         from ppamsafety.params import thesis_arm
         return thesis_arm()
 
-    # ---- sizes estimated before allocating -------------------------------------------------------
+    # ---- sizes estimated before allocating ------------------------------------------------------
     def impacts_n(n):
         from ppamsafety.impact import simulate_impacts
         q = np.broadcast_to(np.radians([50.0, -80.0]), (n, 2))
@@ -1240,7 +1240,7 @@ def _more_api_cases():
                                                                         * 1e-3)), 1e-6,
                                                            window=1.0), expect="ok")
 
-    # ---- paths given to the public readers and writers ---------------------------------------------
+    # ---- paths given to the public readers and writers ------------------------------------------
     def call(mod, fn, *a, **k):
         import importlib
         return getattr(importlib.import_module(mod), fn)(*a, **k)
@@ -1266,7 +1266,7 @@ def _more_api_cases():
         "ppamsafety.data.bench_import", "import_bench", "nope.csv", {},
         actuator={"type": "cylinder", "bore": 0.0257}), names=["nope.csv"])
 
-    # ---- seeds: integers in [0, 2^63 - 1] everywhere -------------------------------------------------
+    # ---- seeds: integers in [0, 2^63 - 1] everywhere --------------------------------------------
     def syn(**k):
         from ppamsafety.diagnose import synthesize
         return synthesize("open-loop", duration=0.5, **k)
@@ -1289,7 +1289,7 @@ def _more_api_cases():
         api("api-seed", nm, f, names=["seed"])
     api("api-seed", "synthesize-0d-valid", lambda: syn(seed=np.array(2 ** 62)), expect="ok")
 
-    # ---- envelopes: both ends of the range are checked before anything runs ------------------------
+    # ---- envelopes: both ends of the range are checked before anything runs ---------------------
     def env(p, b, **k):
         from ppamsafety.envelope import safety_envelope
         return safety_envelope(p, b, **k)
@@ -1308,7 +1308,7 @@ def _more_api_cases():
     api("api-envelope", "parameter-miscased", lambda: env("Speed", (0.1, 1.0)),
         names=["parameter", "Speed"])
 
-    # ---- the README's entry points with loose types ---------------------------------------------------
+    # ---- the README's entry points with loose types ---------------------------------------------
     def cc(**k):
         from ppamsafety.sweep_cases import check_case
         return check_case(**k)
@@ -1367,6 +1367,96 @@ def _more_api_cases():
         names=["did you mean 'design'"])
 
 
+def _section(name, **k):
+    import importlib
+    return importlib.import_module(f"ppamsafety.sections.{name}").compute(**k)
+
+
+def _more_api_cases_2():
+    # ---- the sections' compute(): common arguments checked even where unused ---------------------
+    for name in ("responses", "design", "tracking", "safety", "effects", "cylinder_friction"):
+        api("api-section", f"{name}-quick-str", lambda n=name: _section(n, quick="yes"),
+            names=["quick"])
+        api("api-section", f"{name}-arm-str", lambda n=name: _section(n, arm="thesis"),
+            names=["arm"])
+    for name in ("responses", "design", "safety", "effects"):
+        api("api-section", f"{name}-head-unknown", lambda n=name: _section(n, head="nope"),
+            names=["head", "nope"])
+
+    # ---- names of result signals: a KeyError that is also a ValueError, with the spelling -------
+    def ref_signal(name):
+        from ppamsafety.experiments import step
+        from ppamsafety.params import thesis_arm
+        return step(thesis_arm()).signal(name)
+
+    for v in ("X_d", "q1", 3, None):
+        api("api-experiment", f"reference-signal-{v!r}", lambda v=v: ref_signal(v),
+            names=["signal", repr(v)])
+
+    def circle(**k):
+        from ppamsafety.experiments.trajectories import circle as c
+        from ppamsafety.params import thesis_arm
+        return c(thesis_arm(), **k)
+
+    api("api-experiment", "circle-period-1ms", lambda: circle(period=1e-3, duration=10.0),
+        names=["period", "m/s"])
+    api("api-experiment", "circle-period-10ms", lambda: circle(period=1e-2, duration=10.0),
+        names=["period", "m/s"])
+    api("api-experiment", "circle-partial-valid", lambda: circle(period=10.0, duration=4.0),
+        expect="ok")
+
+    # ---- identify_measured: an option that changes nothing is refused --------------------------------
+    def ident(kind, **k):
+        from ppamsafety.data import identify_measured, load_measured
+        return identify_measured(load_measured(BASE / ("st.csv" if kind == "static" else
+                                                       "ol.csv")), kind, **k)
+
+    api("api-identify", "static-sign-velocity", lambda: ident("static", sign_velocity=0.1),
+        names=["sign_velocity"])
+    api("api-identify", "no-friction-sign-velocity", lambda: ident("dynamic", friction=False,
+                                                                   sign_velocity=0.1),
+        names=["sign_velocity", "friction"])
+    api("api-identify", "sign-velocity-negative", lambda: ident("dynamic", sign_velocity=-1.0),
+        names=["sign_velocity"])
+
+    def diag(**k):
+        from ppamsafety.data import load_measured
+        from ppamsafety.diagnose import diagnose
+        return diagnose(load_measured(BASE / "ten.csv"), **k)
+
+    api("api-diagnose", "actuator-with-arm", lambda: diag(arm=_thesis()), names=["arm"])
+    api("api-diagnose", "actuator-experiment-mismatch", lambda: diag(experiment="open-loop"),
+        names=["experiment", "tensile"])
+
+
+def _thesis():
+    from ppamsafety.params import thesis_arm
+    return thesis_arm()
+
+
+def _more_cli_cases_2():
+    st = copy_base("study.toml", "s.toml")
+    case("sweep-option", "scheduler-not-an-address", SWEEP + ["--backend", "dask", "--scheduler",
+                                                              "not an address"], setup=st,
+         names=["--scheduler"])
+    case("sweep-option", "scheduler-failed-leaves-nothing", SWEEP + ["--backend", "dask",
+                                                                     "--scheduler", "x"],
+         setup=st, names=["--scheduler"])
+    ol = copy_base("ol.csv", "data.csv")
+    ten = copy_base("ten.csv", "data.csv")
+    for opt, v in (("--seed", "3"), ("--block", "0.1"), ("--bootstrap", "5")):
+        case("diagnose-option", f"actuator-record{opt}", DIAG + [opt, v], setup=ten,
+             names=[opt, "actuator"])
+    case("diagnose-option", "experiment-mismatch-closed", DIAG + ["--experiment", "closed-loop"],
+         setup=ol, names=["--experiment", "open-loop"])
+    for nm, argv in (("synth-experiment-twice", SYN + ["--experiment", "open-loop",
+                                                       "--experiment", "closed-loop"]),
+                     ("identify-method-twice", IDENT_D + ["--method", "LS", "--method", "WLS"]),
+                     ("history-twice", IMPACT + ["--history", "a.csv", "--history", "b.csv"])):
+        opt = next(a for a in argv[::-1] if a.startswith("--"))
+        case("cli-duplicate", nm, argv, setup=ol, names=[opt, "twice"])
+
+
 def _hic(*a, **k):
     from ppamsafety.impact.hic import hic
     return hic(*a, **k)
@@ -1417,6 +1507,8 @@ _study_cases()
 _api_cases()
 _more_cases()
 _more_api_cases()
+_more_api_cases_2()
+_more_cli_cases_2()
 
 
 # ------------------------------------------------------------------------------ running

@@ -635,7 +635,7 @@ def test_an_option_given_twice_is_refused_naming_it(cmd, data, same):
     assert f"argument {opt}" in err.text() and "given twice" in err.text(), err.text()
 
 
-# ---- class: a single output file named like a folder ---------------------------------------------
+# ---- class: a single output file named like a folder --------------------------------------------
 
 @FEW
 @given(name=st.sampled_from(["x.csv", "h", "sub/x.csv", "a.toml"]),
@@ -655,7 +655,7 @@ def test_a_single_file_named_like_a_folder_is_refused(tmp_path_factory, name, ho
     assert sorted(p.name for p in d.rglob("*")) == before
 
 
-# ---- class: requests sized before anything is allocated --------------------------------------------
+# ---- class: requests sized before anything is allocated -----------------------------------------
 
 @FEW
 @given(n=st.integers(2 * 10 ** 6 + 1, 10 ** 9), what=st.sampled_from(["q", "qd", "stiffness"]))
@@ -688,7 +688,7 @@ def test_simulations_are_sized_before_allocating(rows, samples):
         simulate(ARM, np.array([0.8, -1.4, 0, 0, 1e5, 1e5, 1e5, 1e5]), U)
 
 
-# ---- class: envelope ranges (both ends are cases that must be allowed) -----------------------------
+# ---- class: envelope ranges (both ends are cases that must be allowed) --------------------------
 
 ENVELOPE_PARAMS = [("speed", {}, [0.0, 0.05, 1.0, 9.9, 10.0, 11.0, 1e3]),
                    ("lam", {"controller": "PSMC joint"}, [0.0, 0.1, 50.0, 100.0, 150.0, 1e300]),
@@ -731,7 +731,7 @@ def test_envelope_ranges_are_checked_at_both_ends_before_running(spec, data):
             parse_study(text, where="s.toml")
 
 
-# ---- class: seeds of every public function that draws ------------------------------------------------
+# ---- class: seeds of every public function that draws -------------------------------------------
 
 SEEDED = {
     "synthesize": lambda s: __import__("ppamsafety.diagnose", fromlist=["x"]).synthesize(
@@ -761,7 +761,7 @@ def test_every_seed_is_an_integer_in_0_to_2_63(fn, seed):
             SEEDED[fn](seed)
 
 
-# ---- class: a sweep cache folder that holds the user's files --------------------------------------------
+# ---- class: a sweep cache folder that holds the user's files ------------------------------------
 
 @FEW
 @given(names=st.lists(st.sampled_from(["notes.txt", "z" * 20 + ".pkl", "0123456789abcdef0123.pkl",
@@ -784,7 +784,7 @@ def test_a_cache_folder_of_user_files_is_refused_and_left_alone(tmp_path_factory
         assert run_sweep(_square, [{"x": 2}], cache_dir=d, progress=False)["sq"].tolist() == [4]
 
 
-# ---- class: Ctrl-C ----------------------------------------------------------------------------------------
+# ---- class: Ctrl-C ------------------------------------------------------------------------------
 
 def test_ctrl_c_stops_a_sweep_at_once_with_exit_130(tmp_path):
     import signal
@@ -868,7 +868,7 @@ def test_whole_battery(tmp_path):
     assert max(r["peak_mb"] for r in res if r["refused"]) < 1024
 
 
-# ---- helpers -------------------------------------------------------------------------------------
+# ---- helpers ------------------------------------------------------------------------------------
 
 class _Text:
     def __init__(self):

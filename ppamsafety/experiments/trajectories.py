@@ -32,7 +32,7 @@ import pandas as pd
 
 from .._validation import (MAX_BYTES, as_float_array, check_finite, check_increasing,
                            check_instance, check_range, check_shape, check_size,
-                           check_str, check_vector)
+                           check_str, check_vector, did_you_mean, UnknownNameError)
 from ..control.reference import (NREF, R_Q_D, R_QD_D, R_QDD_D, R_QDDD_D,  # noqa: F401
                                  R_R_D, R_RD_D, REF_COLUMNS, REFERENCE_ROW)
 from ..params.arm import ArmParameters
@@ -103,11 +103,13 @@ class Reference:
 
         Raises
         ------
-        KeyError
-            For a name that is not a reference column.
+        UnknownNameError
+            A ``KeyError`` and a ``ValueError``, for a name that is not a reference column.
         """
         if not (isinstance(name, str) and name in REF_COLUMNS):
-            raise KeyError(f"unknown reference signal {name!r}; choose from {REF_COLUMNS}")
+            raise UnknownNameError(f"unknown reference signal {name!r}"
+                                   f"{did_you_mean(name, list(REF_COLUMNS))}; choose from "
+                                   f"{REF_COLUMNS}")
         return self.data[:, REFERENCE_ROW.column_index(name)]
 
     def field(self, name: str) -> np.ndarray:

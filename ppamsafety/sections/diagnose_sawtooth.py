@@ -26,7 +26,8 @@ from ..diagnose.arm.static import static_record
 from ..hysteresis import DELTA_25_FIBRES
 from ..markdown import markdown_table
 from ..plots.diagnose import plot_sawtooth_diagnosis
-from . import Section, SectionInfo, compares_to_thesis, other_arm_note, resolve_arm
+from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
+               resolve_arm)
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -95,6 +96,7 @@ class DiagnoseSawtoothStudy:
                                                                  self.metrics)}
 
 
+@checked_compute
 def compute(*, quick: bool = False, arm=None, delta: float = HIDDEN_DELTA,
             seed: int = SEED, head=None) -> DiagnoseSawtoothStudy:
     """Synthesize the sawtooth with hidden hysteresis and diagnose it.

@@ -47,8 +47,8 @@ from ..plant.model import hysteresis_factors
 from ..plant.muscle import muscle_force
 from ..plots.effects import (plot_ratio_shift, plot_sawtooth_angles, plot_sawtooth_errors,
                              plot_sawtooth_forces)
-from . import (Section, SectionInfo, compares_to_thesis, other_arm_note, resolve_arm,
-               resolve_head_model, responses, safety, tracking)
+from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
+               resolve_arm, resolve_head_model, responses, safety, tracking)
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -469,6 +469,7 @@ def plants(arm, delta: float = HYSTERESIS_DELTA) -> dict:
             "hysteresis": arm}
 
 
+@checked_compute
 def compute(*, quick: bool = False, arm=None, delta: float = HYSTERESIS_DELTA,
             head=None) -> EffectsStudy:
     """Sawtooth validation, Table 5.2, conclusions and Table 6.1 with and without hysteresis.
