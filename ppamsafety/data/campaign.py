@@ -145,6 +145,14 @@ def load_campaign(path, *, check_signs: bool = True) -> Campaign:
     Returns
     -------
     Campaign
+
+    Raises
+    ------
+    MeasuredDataError
+        Anything wrong with the manifest, its profile or a record, naming the key
+        (``records[2].file``) and the file.
+    MissingFileError
+        The manifest does not exist (a ``FileNotFoundError`` and a ``ValueError``).
     """
     p, text = read_text(path, what="campaign manifest", error=MeasuredDataError)
     if not isinstance(check_signs, bool):
@@ -227,7 +235,7 @@ def load_campaign(path, *, check_signs: bool = True) -> Campaign:
                                  check_signs=check_signs)
             else:
                 d = load_measured(f)
-        except (ValueError, TypeError, OSError) as exc:
+        except (ValueError, OSError) as exc:         # the record's own error, with its key
             raise MeasuredDataError(f"{where}.file = {r['file']!r}: {exc}") from None
         if fmt == "measured" and info:
             meta = dict(d.meta)
