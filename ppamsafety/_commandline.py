@@ -84,6 +84,14 @@ class Parser(argparse.ArgumentParser):
         self._negative_number_matcher = re.compile(
             r"^-(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$|^-(inf|infinity|nan)$", re.IGNORECASE)
 
+    def error(self, message):
+        """A usage error in the format of every other error: one line ``ppamsafety: error:
+        ...`` on stderr (exit 2) naming the subcommand, with a pointer to its ``--help``
+        (argparse would print the whole usage first)."""
+        sub = self.prog.split(" ", 1)[1] + ": " if " " in self.prog else ""
+        self.exit(EXIT_USAGE, f"ppamsafety: error: {sub}{_one_line(message)} (see "
+                              f"'{self.prog} --help')\n")
+
     def parse_known_args(self, args=None, namespace=None):
         ns, rest = super().parse_known_args(args, namespace)
         ns.__dict__.pop(_GIVEN, None)
