@@ -552,6 +552,7 @@ def _cmd_arm_export(args) -> int:
         raise ValueError(f"--out {args.out!r}: an arm file is TOML; give a name ending in .toml "
                          f"(e.g. my_arm.toml)")
     arm = _arm_of(args) or thesis_arm()
+    _head_unused(args, "arm export")
     text = arm_to_toml(arm, comments=True)
     atomic_write(args.out, lambda tmp: Path(tmp).write_text(text, encoding="utf-8"),
                  overwrite=args.overwrite, name="--out")

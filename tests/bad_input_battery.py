@@ -20,6 +20,20 @@ exit1 / traceback / accepted / hang / memory / lost / noisy
     no answer within the time limit, more than :data:`MEMORY_KILL` of resident memory, a user
     file changed or deleted, or a raw Python warning printed beside the error.
 
+A case that expects an *interrupt* gets Ctrl-C (SIGINT to its process group, as a terminal
+sends it) after ``interrupt`` seconds and is clear when it exits 130 with ``ppamsafety:
+interrupted`` within :data:`INTERRUPT_GRACE` seconds (else "hang"; "not-interrupted" if it
+finished first).
+
+The classes of the first pass (``synth-effect``, ``data-file``, ``study-file``,
+``output-folder`` ...) were joined in the second pass by ``campaign-file`` (bench campaign
+manifests), ``input-file`` (arm, head and study files as files: binary, folders, pipes,
+devices, dangling links, oversized), ``cli-duplicate`` (an option given twice),
+``study-envelope``, ``interrupt`` (Ctrl-C), and the ``api-*`` classes of the public
+functions (sizes estimated before allocating, paths, seeds, sections, identification and
+diagnosis options that change nothing); ``*-valid`` classes hold odd but valid input (BOM,
+CRLF) that must work.
+
 The peak resident memory of every case is measured (``wait4``); the report gives the share of
 clear results per class, the failures, and the largest peak memory of a refused request.
 
