@@ -34,20 +34,68 @@ EXIT_OK, EXIT_FAILURE, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
 _MULTI_VALUE = ("--q", "--qd", "--stiffness")
 
 
+#: Attribute of the parsed namespace that records the options given (removed after parsing).
+_GIVEN = "_ppamsafety_given"
+
+
+class _StoreOnce(argparse._StoreAction):
+    """argparse's ``store``, refusing an option given twice (``--seed 1 ... --seed 2``).
+
+    argparse keeps the last value silently; a repeated option is almost always an edited
+    command line whose first value the user still believes in, so it is a usage error
+    naming the option and both values.  (Options that may repeat use ``action="append"``.)
+    """
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        given = namespace.__dict__.setdefault(_GIVEN, {})
+        if option_string is not None:
+            if self.dest in given:
+                first, before = given[self.dest]
+                raise argparse.ArgumentError(
+                    self, f"given twice ({first} {_shown(before)} and {option_string} "
+                          f"{_shown(values)}); give it once")
+            given[self.dest] = (option_string, values)
+        super().__call__(parser, namespace, values, option_string)
+
+
+def _shown(values) -> str:
+    if isinstance(values, (list, tuple)):
+        return " ".join(_shown(v) for v in values)
+    return repr(values) if isinstance(values, str) and (not values or " " in values) \
+        else str(values)
+
+
 class Parser(argparse.ArgumentParser):
-    """ArgumentParser that reads ``-1e5`` and ``-.5E-3`` as numbers, not as options.
+    """ArgumentParser that reads ``-1e5`` and ``-.5E-3`` as numbers, not as options, and
+    refuses a single-valued option given twice.
 
     argparse (Python < 3.13) recognises negative numbers only without an
     exponent; this widens its number pattern (the same idea as Python 3.13's
     own, which accepts any ``-`` followed by a digit).  The parser has no
-    option that looks like a number, so nothing is shadowed.
+    option that looks like a number, so nothing is shadowed.  Every ``store``
+    option is a :class:`_StoreOnce`: given twice, it is a usage error (exit 2).
     """
 
     def __init__(self, *args, **kwargs):
         kwargs.setdefault("formatter_class", argparse.RawDescriptionHelpFormatter)
         super().__init__(*args, **kwargs)
+        self.register("action", None, _StoreOnce)
+        self.register("action", "store", _StoreOnce)
         self._negative_number_matcher = re.compile(
             r"^-(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$|^-(inf|infinity|nan)$", re.IGNORECASE)
+
+    def error(self, message):
+        """A usage error in the format of every other error: one line ``ppamsafety: error:
+        ...`` on stderr (exit 2) naming the subcommand, with a pointer to its ``--help``
+        (argparse would print the whole usage first)."""
+        sub = self.prog.split(" ", 1)[1] + ": " if " " in self.prog else ""
+        self.exit(EXIT_USAGE, f"ppamsafety: error: {sub}{_one_line(message)} (see "
+                              f"'{self.prog} --help')\n")
+
+    def parse_known_args(self, args=None, namespace=None):
+        ns, rest = super().parse_known_args(args, namespace)
+        ns.__dict__.pop(_GIVEN, None)
+        return ns, rest
 
 
 def _split_multi_value(argv: list[str]) -> list[str]:

@@ -77,7 +77,17 @@ set, study file and command-line option:
   [-1 atm, :data:`PRESSURE_MAX`]); counts and sizes are bounded so that a
   request is refused with a size estimate *before* memory is allocated
   (:func:`check_size`), never by a ``MemoryError``.
-* **Seeds** are integers in [0, 2^63 - 1] (:func:`check_seed`).
+* **Seeds** are integers in [0, 2^63 - 1] (:func:`check_seed`), in every function that
+  draws random numbers.
+* **Arrays where a pair belongs** (a 1-D array of two numbers for ``stiffness = [K1, K2]``)
+  are the pair; a 2-D array is not.
+* **Names looked up in a result** (``result.signal("q1")``) raise
+  :class:`UnknownNameError` (a ``KeyError`` and a ``ValueError``) with the closest name.
+* **Paths** are ``str`` or ``os.PathLike``; an empty path is refused (``Path("")`` would be
+  the current folder), never taken for ``.``; input files are read by
+  :mod:`ppamsafety._inputfiles`.
+* **Arguments that change nothing** in the combination given (an option of another kind of
+  record or identification) are refused with the reason, not silently ignored.
 * **Numbers as text** (``NAME=VALUE`` on a command line): one number or
   comma-separated numbers (:func:`check_numbers`); ``inf``, ``nan`` and empty
   parts are refused naming the value's owner.
@@ -93,8 +103,8 @@ from typing import Iterable
 
 import numpy as np
 
-__all__ = ["InvalidTypeError", "PRESSURE_MAX", "SEED_MAX", "MAX_BYTES", "describe", "check_real",
-           "check_finite", "check_range",
+__all__ = ["InvalidTypeError", "UnknownNameError", "PRESSURE_MAX", "SEED_MAX", "MAX_BYTES",
+           "describe", "check_real", "check_finite", "check_range",
            "check_positive", "check_nonnegative", "check_int", "check_bool", "check_str",
            "check_choice", "check_instance", "check_vector", "check_numbers", "check_seed",
            "check_size", "did_you_mean", "as_float_array", "check_shape",
@@ -114,6 +124,14 @@ MAX_BYTES = 2 * 10 ** 9
 
 class InvalidTypeError(TypeError, ValueError):
     """A value of the wrong kind (a ``TypeError``; also a ``ValueError`` for old handlers)."""
+
+
+class UnknownNameError(KeyError, ValueError):
+    """A name that is not one of a result's (a ``KeyError`` for a lookup, and a ``ValueError``
+    like every other bad input); its message is shown as written (no ``KeyError`` quotes)."""
+
+    def __str__(self):
+        return str(self.args[0]) if self.args else ""
 
 
 def describe(value, limit: int = 60) -> str:

@@ -144,30 +144,55 @@ def _path(text: str) -> str:
 def _options(**names):
     """Errors of the library name its arguments; on the command line they name the options.
 
-    ``with _options(block_seconds="--block"):`` rewrites ``block_seconds`` (as a whole word)
-    into ``--block`` in a ``ValueError``/``TypeError`` raised inside the block.
+    ``with _options(block_seconds="--block"):`` rewrites ``block_seconds`` into ``--block``
+    in a ``ValueError``/``TypeError`` raised inside the block, where it is the subject of
+    the message (followed by ``=``, ``:``, ``[``, "must", "is", "applies", "has" or
+    "gives", and not following another word: "the step experiment: ..." keeps its word),
+    not where the same word is prose.
     """
     try:
         yield
-    except (ValueError, TypeError) as exc:
+    except (ValueError, TypeError, OSError) as exc:
         msg = str(exc)
         new = msg
         for lib, opt in names.items():
-            new = re.sub(rf"(?<![\w.\[-]){re.escape(lib)}(?![\w-])", opt, new)
+            # the argument as the subject of the message ("seed = -1 ...", "seed must ...",
+            # "outdir: ..."), not the same word in prose ("the record's experiment")
+            new = re.sub(rf"(?<![\w.\[-])(?<!\w ){re.escape(lib)}(?=\s*(=|:|\[|must\b|is\b|"
+                         rf"applies\b|has\b|gives\b))", opt, new)
         if new == msg:
             raise
-        raise type(exc)(new) if type(exc) in (ValueError, TypeError) else ValueError(new) \
-            from None
+        raise type(exc)(new) if type(exc) in (ValueError, TypeError, OSError) else \
+            ValueError(new) from None
+
+
+@contextlib.contextmanager
+def _named(option: str, value):
+    """Errors about the file or name given to ``option`` start with the option's name."""
+    try:
+        yield
+    except (ValueError, TypeError, OSError) as exc:
+        msg = str(exc)
+        if option in msg:
+            raise
+        raise ValueError(f"{option} {value}: {msg}") from None
 
 
 def _section_names(text: str) -> list[str]:
     from .sections import REGISTRY
 
-    names = [n.strip() for n in text.split(",") if n.strip()]
-    if not names:
+    names = [n.strip() for n in text.split(",")]
+    if not any(names):
         raise argparse.ArgumentTypeError(
             f"{text!r} names no report section; give comma-separated names from "
             f"{', '.join(REGISTRY)} (omit --only to run them all)")
+    if not all(names):
+        raise argparse.ArgumentTypeError(f"{text!r} has an empty name between commas; give "
+                                         f"comma-separated section names")
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        raise argparse.ArgumentTypeError(f"{text!r} names {', '.join(twice)} more than once; "
+                                         f"name each section once")
     unknown = [n for n in names if n not in REGISTRY]
     if unknown:
         raise argparse.ArgumentTypeError(
@@ -182,7 +207,8 @@ def _arm_of(args):
         return None
     from .params import load_arm
 
-    return load_arm(args.arm)
+    with _named("--arm", args.arm):
+        return load_arm(args.arm)
 
 
 def _head_of(args):
@@ -191,7 +217,8 @@ def _head_of(args):
         return None
     from .impact.head import resolve_head
 
-    return resolve_head(args.head)
+    with _named("--head", args.head):
+        return resolve_head(args.head)
 
 
 def _head_unused(args, command: str) -> None:
@@ -218,6 +245,13 @@ def _cmd_identify(args) -> int:
 
     from .data import MeasuredDataWarning, identify_measured, load_measured
 
+    if args.kind == "static":
+        given = [o for o, v in (("--drop", args.drop is not None), ("--no-friction",
+                                                                    args.no_friction),
+                                ("--sign-velocity", args.sign_velocity is not None)) if v]
+        if given:
+            raise ValueError(f"{', '.join(given)}: option(s) of --kind dynamic only (a static "
+                             f"identification uses neither friction nor filtered samples)")
     with _options(outdir="--out"):
         inspect_output_folder(args.out, overwrite=args.overwrite, kind="identify",
                               replace_kind=args.replace_other_kind)   # fail before computing
@@ -230,7 +264,8 @@ def _cmd_identify(args) -> int:
     with _options(kind="--kind", method="--method", drop="--drop", confidence="--confidence",
                   sign_velocity="--sign-velocity"):
         ident = identify_measured(data, args.kind, method=args.method,
-                                  friction=not args.no_friction, drop=args.drop,
+                                  friction=not args.no_friction,
+                                  drop=300 if args.drop is None else args.drop,
                                   confidence=args.confidence, sign_velocity=args.sign_velocity,
                                   arm=arm)
     for note in ident.notes:
@@ -317,17 +352,32 @@ def _cmd_diagnose(args) -> int:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", MeasuredDataWarning)    # printed below, one line each
         if str(args.data).lower().endswith(".toml"):            # a bench campaign manifest
+            given = [o for o, v in (("--allow-gaps", args.allow_gaps),
+                                    ("--loose-units", args.loose_units)) if v]
+            if given:
+                raise ValueError(f"{', '.join(given)}: option(s) of a measured data file, not of "
+                                 f"a campaign manifest ({args.data}): its import profile says "
+                                 f"how the records are read")
             data = load_campaign(args.data)
         else:
             data = load_measured(args.data, allow_gaps=args.allow_gaps,
                                  strict_units=not args.loose_units)
     for note in getattr(data, "notes", ()):
         print(f"ppamsafety: warning: {note}", file=sys.stderr)
+    if getattr(data, "kind", "actuator") == "actuator":       # a campaign or a bench record
+        given = [o for o, v in (("--block", args.block), ("--seed", args.seed),
+                                ("--bootstrap", args.bootstrap),
+                                ("--stability", args.stability)) if v is not None]
+        if given:
+            raise ValueError(f"{', '.join(given)}: option(s) of an arm record; {args.data} is a "
+                             f"test-bench (actuator) record, diagnosed against its nominal force "
+                             f"law without them")
     with _options(experiment="--experiment", alpha="--alpha", rho_max="--rho-max",
                   block_seconds="--block", seed="--seed", bootstrap="--bootstrap",
                   stability="--stability", arm="--arm"):
         dg = diagnose(data, experiment=args.experiment, alpha=args.alpha, rho_max=args.rho_max,
-                      block_seconds=args.block, seed=args.seed, bootstrap=args.bootstrap,
+                      block_seconds=0.05 if args.block is None else args.block,
+                      seed=0 if args.seed is None else args.seed, bootstrap=args.bootstrap,
                       stability=args.stability, arm=arm)
     for note in dg.notes:
         if note.startswith("arm: ") and "diagnosed against arm" in note:
@@ -464,6 +514,7 @@ def _cmd_info(args) -> int:
     from .params.arm_file import arm_fingerprint
 
     arm = _arm_of(args) or thesis_arm()
+    head = _head_of(args) or head_model()          # both checked before anything is printed
     L = arm.links
     label = arm.name or "unnamed arm"
     print(f"{label}{' (the thesis arm)' if is_thesis_arm(arm) else ''} (plant):")
@@ -475,7 +526,6 @@ def _cmd_info(args) -> int:
     print(f"  fingerprint (sha256 of its arm file) {arm_fingerprint(arm)}")
     for part, text in arm.sources:
         print(f"  source [{part}]: {text}")
-    head = _head_of(args) or head_model()
     print(f"head model {head.name!r}: m = {head.mass:g} kg, R = {head.radius:g} m, "
           f"k = {head.stiffness:.4g} N/m^n, n = {head.exponent:g}, "
           f"lambda = {head.damping:.4g} N s/m^(n+1)")
@@ -500,7 +550,11 @@ def _cmd_arm_export(args) -> int:
     from .params import thesis_arm
     from .params.arm_file import arm_to_toml
 
+    if Path(args.out).suffix.lower() != ".toml":
+        raise ValueError(f"--out {args.out!r}: an arm file is TOML; give a name ending in .toml "
+                         f"(e.g. my_arm.toml)")
     arm = _arm_of(args) or thesis_arm()
+    _head_unused(args, "arm export")
     text = arm_to_toml(arm, comments=True)
     atomic_write(args.out, lambda tmp: Path(tmp).write_text(text, encoding="utf-8"),
                  overwrite=args.overwrite, name="--out")
@@ -536,10 +590,10 @@ def _cmd_arm_check(args) -> int:
 
 def _add_arm_head(p, *, head_used: bool = True) -> None:
     """The ``--arm FILE`` and ``--head NAME|FILE`` options every command takes."""
-    p.add_argument("--arm", default=None, metavar="FILE",
+    p.add_argument("--arm", type=_path, default=None, metavar="FILE",
                    help="arm file (TOML, docs/arm_files.md; default: the thesis arm; "
                         "`ppamsafety arm export` writes a template)")
-    p.add_argument("--head", default=None, metavar="NAME|FILE",
+    p.add_argument("--head", type=_path, default=None, metavar="NAME|FILE",
                    help="head model: a name (thesis-frontal, iso15066-forehead, iso15066-face, "
                         "child-frontal) or a head file (TOML)"
                         + ("" if head_used else "; this command computes no impact, so it is "
@@ -585,7 +639,7 @@ def build_parser() -> argparse.ArgumentParser:
                    help="ordinary or two-step per-joint weighted least squares (default LS)")
     d.add_argument("--no-friction", action="store_true",
                    help="dynamic: model without Coulomb and viscous friction (6 parameters)")
-    d.add_argument("--drop", type=_count(0, 10 ** 7), default=300, metavar="R",
+    d.add_argument("--drop", type=_count(0, 10 ** 7), default=None, metavar="R",
                    help="dynamic: filtered samples dropped per segment (default 300, thesis B.7)")
     d.add_argument("--sign-velocity", type=_positive, default=None, metavar="V",
                    help="dynamic: Coulomb columns tanh(qd/V) [rad/s] instead of sgn(qd)")
@@ -651,14 +705,14 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
                    help="level of the likelihood-ratio test (default 0.01, Bonferroni-divided)")
     g.add_argument("--rho-max", type=_positive, default=1.5,
                    help="largest residual/noise RMS ratio counted as explained (default 1.5)")
-    g.add_argument("--block", type=_positive, default=0.05, metavar="SECONDS",
-                   help="block length of the subsystem residuals [s] (default 0.05)")
-    g.add_argument("--seed", type=_seed, default=0,
-                   help="seed of the noise propagation, the stability selection and the "
-                        "bootstrap")
+    g.add_argument("--block", type=_positive, default=None, metavar="SECONDS",
+                   help="arm records: block length of the subsystem residuals [s] (default 0.05)")
+    g.add_argument("--seed", type=_seed, default=None,
+                   help="arm records: seed of the noise propagation, the stability selection "
+                        "and the bootstrap (default 0)")
     g.add_argument("--stability", type=_count(0, 10000), default=None, metavar="B",
-                   help="complementary pairs of the stability selection behind 'high' "
-                        "confidence (default 25; 0: off, then nothing is 'high')")
+                   help="arm records: complementary pairs of the stability selection behind "
+                        "'high' confidence (default 25; 0: off, then nothing is 'high')")
     g.add_argument("--bootstrap", type=_count(0, 10000), default=None, metavar="B",
                    help="moving-block bootstrap replicates of the selection, reported as "
                         "bootstrap_frequency (default 0: off)")
@@ -748,15 +802,16 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
     asub = a.add_subparsers(dest="arm_command", required=True)
     ae = asub.add_parser("export", help="write an arm file (default: the thesis arm) as a "
                                         "commented template", epilog=_EPILOG)
-    ae.add_argument("--out", required=True, metavar="FILE", help="new .toml file")
-    ae.add_argument("--arm", default=None, metavar="FILE",
+    ae.add_argument("--out", type=_path, required=True, metavar="FILE", help="new .toml file")
+    ae.add_argument("--arm", type=_path, default=None, metavar="FILE",
                     help="re-export this arm file (canonical form, with comments)")
-    ae.add_argument("--head", default=None, metavar="NAME|FILE", help=argparse.SUPPRESS)
+    ae.add_argument("--head", type=_path, default=None, metavar="NAME|FILE",
+                    help=argparse.SUPPRESS)
     ae.add_argument("--overwrite", action="store_true", help="allow replacing an existing file")
     ae.set_defaults(func=_cmd_arm_export)
     ac = asub.add_parser("check", help="validate an arm file and print its key numbers",
                          epilog=_EPILOG)
-    ac.add_argument("file", metavar="FILE", help="arm file (.toml)")
+    ac.add_argument("file", type=_path, metavar="FILE", help="arm file (.toml)")
     ac.add_argument("--q", nargs=2, type=_angle_deg, default=None, metavar=("Q1", "Q2"),
                     help="pose of the stiffness numbers [deg] (default 50 -80, the thesis' "
                          "step-response impact, or the centre of the working area)")

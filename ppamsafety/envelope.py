@@ -34,7 +34,7 @@ from .params.head import HIC_SERIOUS_5PCT, MAXILLA_FRACTURE_N
 from .params.iso_ts_15066 import SKULL_FOREHEAD
 from .plots.sweep import plot_envelope
 from .sweep import run_sweep
-from .sweep_cases import case_function, check_case, is_dotted
+from .sweep_cases import case_function, check_case, check_impact_case, is_dotted
 
 
 @dataclass(frozen=True)
@@ -165,6 +165,43 @@ def _check_parameter(parameter: str, kind: str) -> str:
                      f"such as 'arm.pneumatics.mean_pressure'")
 
 
+def check_bounds(parameter: str, bounds, case=None, *, arm=None, head=None) -> None:
+    """Check the cases at both ends of an envelope's range, before anything runs.
+
+    Parameters
+    ----------
+    parameter : str
+        The parameter searched (:func:`safety_envelope`).
+    bounds : pair of float
+        Its range (low, high).
+    case : dict, optional
+        The other parameters of every case.
+    arm : ArmParameters, optional, keyword-only
+        The arm.
+    head : str or HeadContactModel, optional, keyword-only
+        The head model of the cases (``speed`` only: the impact's head).
+
+    Raises
+    ------
+    ValueError
+        Naming the bound, the parameter and why its case is not allowed.
+    """
+    base = dict(case or {})
+    for i, b in enumerate(bounds):
+        try:
+            if parameter == "speed":
+                kw = dict(base)
+                if head is not None:
+                    kw.setdefault("head", head)
+                check_impact_case(float(b), arm=arm, **kw)
+            else:
+                check_case(**base, **{parameter: float(b)}, arm=arm)
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"bounds[{i}] = {b:g}: {parameter} = {b:g} is not allowed "
+                             f"({exc}); narrow bounds = ({bounds[0]:g}, {bounds[1]:g})") \
+                from None
+
+
 def safety_envelope(parameter: str, bounds, *, limit: str = "F_max", case=None, arm=None,
                     head=None, tolerance: float = 0.01, processes: int | None = None,
                     max_rounds: int = 20, progress: bool = False, cache_dir=None,
@@ -237,8 +274,7 @@ def safety_envelope(parameter: str, bounds, *, limit: str = "F_max", case=None, 
     if "arm" in base or "histories" in base:
         raise ValueError("case must not set 'arm' (pass arm=...) or 'histories'")
     func = case_function(arm, head, kind=kind)
-    if kind == "safety":
-        check_case(**base, **{parameter: lo}, arm=arm)
+    check_bounds(parameter, (lo, hi), base, arm=arm, head=head)   # both ends, before running
     rows = []
 
     def evaluate(values, rnd):
@@ -301,4 +337,4 @@ def _cores() -> int:
         return 1
 
 
-__all__ = ["Limit", "LIMITS", "NUMERIC", "SafetyEnvelope", "safety_envelope"]
+__all__ = ["Limit", "LIMITS", "NUMERIC", "SafetyEnvelope", "safety_envelope", "check_bounds"]

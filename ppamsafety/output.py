@@ -70,9 +70,30 @@ def _as_path(name: str, value) -> Path:
     if isinstance(value, bool) or not isinstance(value, (str, os.PathLike)):
         raise TypeError(f"{name} must be a path (str or os.PathLike), got "
                         f"{type(value).__name__} {value!r}")
-    if str(value) == "":
-        raise ValueError(f"{name} must be a non-empty path, got ''")
-    return Path(value)
+    text = os.fspath(value)
+    if not isinstance(text, str):
+        raise TypeError(f"{name} must be a path given as str, got {type(text).__name__}")
+    if not text.strip():
+        raise ValueError(f"{name} must be a non-empty path, got {text!r}")
+    if "\0" in text:
+        raise ValueError(f"{name} = {text!r} holds a NUL character")
+    return Path(text)
+
+
+def check_output_path(name: str, value) -> Path:
+    """Check that ``value`` is a path (``str`` or ``os.PathLike``, not empty); return it.
+
+    ``Path("")`` is the current folder: an empty output path is refused, never taken
+    for ``.``.
+
+    Parameters
+    ----------
+    name : str
+        The argument's name, for the message.
+    value : str or os.PathLike
+        The path.
+    """
+    return _as_path(name, value)
 
 
 def _valid_relpath(f) -> bool:
@@ -339,7 +360,16 @@ class OutputFolder:
         finally:
             shutil.rmtree(self.staging, ignore_errors=True)   # our own temporary folder
             if exc_type is not None and self._created:
+                # a run that failed in a folder it created leaves nothing behind: its work
+                # folders if still empty, then the marker if nothing else is there
+                for d in sorted(self._dirs, reverse=True):
+                    try:
+                        (self.path / d).rmdir()               # only if still empty
+                    except OSError:
+                        pass
                 try:
+                    if [e.name for e in self.path.iterdir()] == [MARKER]:
+                        (self.path / MARKER).unlink()
                     self.path.rmdir()                         # only if still empty
                 except OSError:
                     pass
@@ -424,6 +454,10 @@ def check_new_file(path, *, overwrite: bool = False, name: str = "output file") 
     p = _as_path(name, path)
     if not isinstance(overwrite, bool):
         raise TypeError(f"overwrite must be True or False, got {overwrite!r}")
+    text = os.fspath(path)
+    if os.path.basename(text) in ("", ".", ".."):          # "x/", ".", "x/..": a folder
+        raise OutputError(f"{name} '{text}' names a folder, not a file; give the name of a "
+                          f"file (e.g. '{text.rstrip('/' + os.sep) or '.'}/x.csv')")
     parent = p.parent if str(p.parent) else Path(".")
     if not parent.is_dir():
         up = next((a for a in [parent, *parent.parents] if a.exists()), None)
@@ -492,4 +526,5 @@ def atomic_write(path, write, *, overwrite: bool = False, name: str = "output fi
 
 
 __all__ = ["MARKER", "OutputError", "OutputFolder", "atomic_write", "check_new_file",
+           "check_output_path",
            "inspect_output_folder", "read_marker"]

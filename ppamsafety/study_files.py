@@ -105,11 +105,12 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from ._validation import MAX_BYTES
-from .envelope import LIMITS, safety_envelope
+from ._inputfiles import check_input_path, read_text
+from ._validation import MAX_BYTES, check_int
+from .envelope import LIMITS, check_bounds, safety_envelope
 from .experiments.catalog import DEFAULT_DURATIONS
 from .impact.head import HeadContactModel, load_head
-from .output import OutputError, OutputFolder, read_marker
+from .output import OutputError, OutputFolder, check_output_path, read_marker
 from .params import ArmParameters
 from .params import load_arm
 from .params.arm_file import ArmFileError, arm_key, arm_to_toml, read_value
@@ -593,6 +594,10 @@ def _envelope(where: str, data: dict, base: dict, arm) -> dict | None:
             check_case(**case, **{par: float(rng[0])}, arm=arm)
         except (TypeError, ValueError) as exc:
             raise _err(where, f"envelope.parameter = {par!r}: {exc}") from None
+    try:                                  # both ends of the range, as the search will run them
+        check_bounds(par, (float(rng[0]), float(rng[1])), case, arm=arm)
+    except ValueError as exc:
+        raise _err(where, f"envelope.range = {rng!r}: {exc}") from None
     return {"parameter": par, "bounds": (float(rng[0]), float(rng[1])), "limit": lim,
             "tolerance": float(tol), "case": case}
 
@@ -627,6 +632,9 @@ def parse_study(text: str, *, where: str = "study file", default_name: str = "st
     StudyFileError
         Naming the key by its dotted path and what is allowed.
     """
+    if not isinstance(text, str):
+        raise TypeError(f"text must be the TOML text of a study file (str), got "
+                        f"{type(text).__name__}; to read a file use load_study(path)")
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -891,13 +899,7 @@ def load_study(path, *, arm=None, head=None) -> Study:
     Study
         The checked study (``path`` set).
     """
-    p = Path(path)
-    if not p.is_file():
-        raise FileNotFoundError(f"study file '{p}' does not exist or is not a file")
-    try:
-        text = p.read_text(encoding="utf-8")
-    except UnicodeDecodeError as exc:
-        raise _err(str(p), f"not UTF-8 text ({exc})") from None
+    p, text = read_text(path, what="study file", error=StudyFileError)
     st = parse_study(text, where=str(p), default_name=p.stem, base_dir=p.parent, arm=arm,
                      head=head)
     st.path = p
@@ -986,7 +988,9 @@ def run_study_file(study, outdir, *, backend: str = "local", scheduler=None,
     if isinstance(study, Study) and (arm is not None or head is not None):
         raise ValueError("arm and head apply to a study file path; a loaded Study has them "
                          "(load_study(path, arm=..., head=...))")
-    st = study if isinstance(study, Study) else load_study(study, arm=arm, head=head)
+    out = check_output_path("outdir", outdir)                # checked before the study runs
+    st = study if isinstance(study, Study) else load_study(check_input_path("study", study),
+                                                           arm=arm, head=head)
     for nm, v in (("resume", resume), ("overwrite", overwrite), ("progress", progress),
                   ("confirm", confirm), ("replace_kind", replace_kind)):
         if not isinstance(v, bool):
@@ -994,14 +998,12 @@ def run_study_file(study, outdir, *, backend: str = "local", scheduler=None,
     if backend not in BACKENDS:
         raise ValueError(f"backend = {backend!r} is not one of {list(BACKENDS)}")
     if max_cases is not None:
-        if isinstance(max_cases, bool) or not isinstance(max_cases, int) or max_cases < 1:
-            raise ValueError(f"max_cases = {max_cases!r} must be a positive int or None")
+        max_cases = check_int("max_cases", max_cases, 1)
     n = len(st.cases) if max_cases is None else min(max_cases, len(st.cases))
     cases = st.cases.head(n) if isinstance(st.cases, CaseGrid) else st.cases[:n]
     # on a cluster (a scheduler address or client) the time is the cluster's: not limited here
     check_run_size(st, estimate_cases(cases, processes=processes, histories=st.histories),
                    confirm=confirm or (backend == "dask" and scheduler is not None))
-    out = Path(outdir)
     ow, clean = overwrite, True
     if resume:
         marker = read_marker(out) if out.is_dir() else None

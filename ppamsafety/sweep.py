@@ -40,6 +40,7 @@ import json
 import operator
 import os
 import pickle
+import re
 import secrets
 import sys
 import itertools
@@ -261,6 +262,9 @@ def grid_cases(grid: Mapping, base: Mapping | None = None, *, _check_only: bool 
     if base is not None and not isinstance(base, Mapping):
         raise TypeError(f"base must be a dict of parameters or None, got {type(base).__name__}")
     keys = list(grid)
+    if not keys:
+        raise ValueError("grid = {} has no parameter: give at least one key and its values "
+                         "(e.g. {'lam': [0.4, 0.8]}), or pass cases instead")
     values = []
     for k in keys:
         if not isinstance(k, str):
@@ -319,6 +323,11 @@ class _Combined(Sequence):
         return {**self.cases[j], **{key: point[key] for key in self.keys}}
 
 
+#: Names of the files :func:`run_sweep` writes into ``cache_dir`` (a case key, ``.pkl``; and
+#: the temporary file of an atomic write).
+_CACHE_FILE = re.compile(r"^[0-9a-f]{20}(\.[0-9a-f]{8}\.tmp|\.pkl)$")
+
+
 class ResultColumnError(ValueError):
     """A case function returned a column named like a case parameter (it would replace it)."""
 
@@ -369,9 +378,10 @@ def _dask_client(scheduler, processes: int):
     if isinstance(scheduler, str) and scheduler:
         try:
             client = Client(scheduler, timeout="30s")
-        except OSError as exc:
+        except (OSError, ValueError, TypeError) as exc:      # unreachable, or not an address
             raise OSError(f"scheduler = {scheduler!r}: cannot connect to the dask scheduler "
-                          f"({_error_text(exc)})") from None
+                          f"({_error_text(exc)}); give its address, e.g. "
+                          f"'tcp://10.0.0.5:8786'") from None
         return client, client.close
     raise TypeError(f"scheduler must be None, a scheduler address str (e.g. "
                     f"'tcp://host:8786') or a dask.distributed.Client, got "
@@ -415,17 +425,36 @@ def _run_dask(func, cases, todo, keys, name, scheduler, processes, finish, on_er
 
 
 def _run_pool(func, cases, todo, nproc, finish, on_error) -> None:
-    """Run the cases ``todo`` in ``nproc`` worker processes, handing each result to ``finish``."""
-    with ProcessPoolExecutor(max_workers=nproc) as pool:
+    """Run the cases ``todo`` in ``nproc`` worker processes, handing each result to ``finish``.
+
+    An interrupt (Ctrl-C) or any other exception here cancels the cases not yet started
+    instead of waiting for them (a worker that was interrupted too reports it as the
+    case's result and would otherwise take the next case); finished cases are kept.
+    """
+    pool = ProcessPoolExecutor(max_workers=nproc)
+    try:
         futures = {pool.submit(_call, func, cases[i]): i for i in todo}
         for fut in as_completed(futures):
             if fut.cancelled():
                 continue
             exc = fut.exception()
+            if isinstance(exc, KeyboardInterrupt):   # the worker was interrupted with us
+                raise KeyboardInterrupt
             ok = finish(futures[fut], None if exc else fut.result(), exc)
             if not ok and on_error == "raise":
                 for other in futures:      # not started yet: cancel; running: finish
                     other.cancel()
+    except BaseException:
+        # stop at once: the workers' current cases are abandoned (the finished ones are in
+        # the cache), else the interpreter waits for them at exit (concurrent.futures joins
+        # its workers) and Ctrl-C would take as long as the longest running case
+        workers = list((getattr(pool, "_processes", None) or {}).values())
+        pool.shutdown(wait=False, cancel_futures=True)
+        for w in workers:
+            if w.is_alive():
+                w.terminate()
+        raise
+    pool.shutdown(wait=True)
 
 
 def run_sweep(func, cases=None, *, name: str | None = None, cache_dir=None,
@@ -450,7 +479,9 @@ def run_sweep(func, cases=None, *, name: str | None = None, cache_dir=None,
         the source of ``func`` and the package source are unchanged
         (:func:`case_key`, :func:`function_hash`).  An unreadable cache file is
         named in a warning and recomputed.  Failed cases are not cached.
-        None: no cache (an empty path ``""`` is refused: it would mean the current folder).
+        None: no cache (an empty path ``""`` is refused: it would mean the current folder;
+        so is a folder that holds other files than the cache's: give the cache a folder of
+        its own).
     processes : int or None
         Worker processes (1 = run in this process; None = every available
         core).  More than the available cores gives a warning and is capped at
@@ -558,7 +589,18 @@ def run_sweep(func, cases=None, *, name: str | None = None, cache_dir=None,
     if cache is not None:
         if cache.exists() and not cache.is_dir():
             raise ValueError(f"cache_dir = '{cache}' exists and is not a folder")
-        cache.mkdir(parents=True, exist_ok=True)
+        if cache.is_dir():
+            other = sorted(e.name for e in cache.iterdir() if not _CACHE_FILE.match(e.name))
+            if other:
+                raise ValueError(f"cache_dir = '{cache}' holds {len(other)} file(s) that are not "
+                                 f"sweep cache files (e.g. {other[0]!r}); the cache needs a "
+                                 f"folder of its own (e.g. '{cache / '.sweep_cache'}'), so "
+                                 f"that its files never mix with yours")
+        try:
+            cache.mkdir(parents=True, exist_ok=True)
+        except OSError as exc:
+            raise OSError(f"cache_dir = '{cache}' cannot be created ({exc.strerror or exc})") \
+                from None
     code = function_hash(func)
     keys = [case_key(name, c, code) for c in cases]     # also checks JSON-serialisability
     if processes > 1 and backend == "local":

@@ -36,6 +36,7 @@ from collections.abc import Mapping
 import numpy as np
 import pandas as pd
 
+from ._validation import did_you_mean
 from .control import PID, JointPSMC, TaskPSMC, SensorConfig
 from .control.pid import GAIN_MAX
 from .control.psmc import LAMBDA_MAX, TASK_GAIN_MAX
@@ -89,8 +90,14 @@ def _is_number(v) -> bool:
 
 
 def _number(name, v, lo=0.0, lo_open=False, unit="", hi=math.inf, why=""):
-    if not _is_number(v) or not math.isfinite(float(v)):
-        raise TypeError(f"{name} = {v!r} must be a finite number{' [' + unit + ']' if unit else ''}")
+    if not _is_number(v):
+        what = (f"an array of shape {v.shape}" if isinstance(v, np.ndarray) else
+                f"{type(v).__name__} {v!r:.60}")
+        raise TypeError(f"{name} must be a finite number{' [' + unit + ']' if unit else ''}, got "
+                        f"{what}")
+    if not math.isfinite(float(v)):
+        raise ValueError(f"{name} = {float(v)} is not allowed: it must be a finite number"
+                         f"{' [' + unit + ']' if unit else ''}")
     v = float(v)
     if v < lo or (lo_open and v == lo):
         raise ValueError(f"{name} = {v:g} is not allowed: it must be {'>' if lo_open else '>='} "
@@ -113,9 +120,17 @@ LIMITS = {"lam": (LAMBDA_MAX, "the JointPSMC/TaskPSMC limit"),
           "task_kd": (TASK_GAIN_MAX, "the TaskPSMC gain limit")}
 
 
+def _pair(v):
+    """A 1-D array of numbers (e.g. a pair) as a list; anything else unchanged."""
+    if isinstance(v, np.ndarray) and v.ndim == 1:
+        return v.tolist()
+    return v
+
+
 def _gain(name, v, unit):
     """A gain: one number or a pair [joint 1, joint 2], each in [0, its limit]."""
     hi, why = LIMITS.get(name, (math.inf, ""))
+    v = _pair(v)
     if isinstance(v, (list, tuple)):
         if len(v) != 2:
             raise ValueError(f"{name} = {v!r} must be one number or a pair [joint 1, joint 2] "
@@ -144,6 +159,7 @@ def _check_stiffness(v):
     if v is None:
         return None
     hi, why = stiffness_max(), "the largest the impact model resolves at its step of 20 us"
+    v = _pair(v)
     if isinstance(v, (list, tuple)):
         if len(v) != 2:
             raise ValueError(f"stiffness = {v!r} must be None, one number or a pair "
@@ -254,7 +270,8 @@ def case_arm(arm=None, *, effects=None, changes=None) -> ArmParameters:
 
 def _check_choice(name, v, choices):
     if not isinstance(v, str) or v not in choices:
-        raise ValueError(f"{name} = {v!r} is not allowed; choose from {list(choices)}")
+        raise ValueError(f"{name} = {v!r} is not allowed{did_you_mean(v, list(choices))}; "
+                         f"choose from {list(choices)}")
     return v
 
 
@@ -625,11 +642,34 @@ def impact_case(speed: float, *, q1_deg: float = IMPACT_POSE_DEG[0],
         ``F_max`` [N], ``HIC36``, ``HIC15``, ``tcp_speed`` [m/s], ``K1``, ``K2``
         [Nm/rad].
     """
+    v, q, d, st, hm, arm = _impact_inputs(speed, q1_deg, q2_deg, direction, stiffness, head,
+                                          effects, arm, dotted)
+    tcp = geo.jacobian(q, arm) @ d
+    qd = d * (v / float(np.hypot(*tcp)))
+    if st is None:
+        p = np.clip(pn.static_pressures(q, arm), 0.0, arm.pneumatics.p_max)
+        K = pn.joint_stiffness(q, p, arm)
+    else:
+        K = np.broadcast_to(np.asarray(st, float), (2,)).copy()
+    s = simulate_impacts(arm, q, qd, K, head=hm).summary.iloc[0]
+    return {"F_max": float(s.F_max), "HIC36": float(s.HIC36), "HIC15": float(s.HIC15),
+            "tcp_speed": float(s.tcp_speed), "K1": float(K[0]), "K2": float(K[1])}
+
+
+#: Largest tool speed of :func:`impact_case` [m/s].
+SPEED_MAX = 10.0
+
+
+def _impact_inputs(speed, q1_deg, q2_deg, direction, stiffness, head, effects, arm, dotted):
+    """The checked arguments of :func:`impact_case` (speed, q [rad], direction, stiffness,
+    head model, arm)."""
     v = _number("speed", speed, lo_open=True, unit="m/s")
-    if v > 10.0:
-        raise ValueError(f"speed = {v:g} m/s is outside (0, 10] m/s")
-    q = np.radians([_number("q1_deg", q1_deg, lo=-360.0, unit="deg"),
-                    _number("q2_deg", q2_deg, lo=-360.0, unit="deg")])
+    if v > SPEED_MAX:
+        raise ValueError(f"speed = {v:g} m/s is outside (0, {SPEED_MAX:g}] m/s")
+    q = np.radians([_number("q1_deg", q1_deg, lo=-360.0, hi=360.0, unit="deg"),
+                    _number("q2_deg", q2_deg, lo=-360.0, hi=360.0, unit="deg")])
+    if isinstance(direction, np.ndarray) and direction.ndim == 1:
+        direction = direction.tolist()
     d = np.asarray([_number(f"direction[{i}]", x, lo=-math.inf) for i, x in
                     enumerate(direction)] if isinstance(direction, (list, tuple)) and
                    len(direction) == 2 else [], float)
@@ -642,16 +682,39 @@ def impact_case(speed: float, *, q1_deg: float = IMPACT_POSE_DEG[0],
     arm = case_arm(arm, effects=effects or {}, changes=dotted)
     if not bool(geo.in_working_area(q, arm)):
         raise ValueError(f"q = ({q1_deg:g}, {q2_deg:g}) deg is outside the arm's working area")
-    tcp = geo.jacobian(q, arm) @ d
-    qd = d * (v / float(np.hypot(*tcp)))
-    if st is None:
-        p = np.clip(pn.static_pressures(q, arm), 0.0, arm.pneumatics.p_max)
-        K = pn.joint_stiffness(q, p, arm)
-    else:
-        K = np.broadcast_to(np.asarray(st, float), (2,)).copy()
-    s = simulate_impacts(arm, q, qd, K, head=hm).summary.iloc[0]
-    return {"F_max": float(s.F_max), "HIC36": float(s.HIC36), "HIC15": float(s.HIC15),
-            "tcp_speed": float(s.tcp_speed), "K1": float(K[0]), "K2": float(K[1])}
+    return v, q, d, st, hm, arm
+
+
+def check_impact_case(speed: float, *, q1_deg: float = IMPACT_POSE_DEG[0],
+                      q2_deg: float = IMPACT_POSE_DEG[1], direction=(1.0, 0.0), stiffness=None,
+                      head="thesis-frontal", effects=None, arm=None, **dotted) -> None:
+    """Check the arguments of :func:`impact_case` without simulating.
+
+    Parameters
+    ----------
+    speed : float
+        Tool (TCP) speed at impact [m/s], in (0, :data:`SPEED_MAX`].
+    q1_deg, q2_deg : float, keyword-only
+        Pose at impact [deg], in the working area.
+    direction : pair of float, keyword-only
+        Joint-space velocity direction (qd1, qd2), not zero.
+    stiffness : None, float or pair, keyword-only
+        Joint stiffness [Nm/rad].
+    head : str or HeadContactModel, keyword-only
+        Head model.
+    effects : dict, optional, keyword-only
+        Plant effects.
+    arm : ArmParameters, optional, keyword-only
+        The arm (default the thesis arm).
+    **dotted
+        ``"arm.<key>"`` and ``"effects.<name>"`` parameters.
+
+    Raises
+    ------
+    TypeError, ValueError
+        Naming the parameter, its value and what is allowed.
+    """
+    _impact_inputs(speed, q1_deg, q2_deg, direction, stiffness, head, effects, arm, dotted)
 
 
 def case_function(arm=None, head=None, *, kind: str = "safety"):
@@ -747,4 +810,4 @@ def safety_sweep(cases=None, *, grid=None, name: str = "safety", cache_dir=None,
 __all__ = ["EXPERIMENTS", "CONTROLLERS", "INSTANTS", "MIN_SPEED", "PARAMETERS", "DEFAULTS",
            "DOTTED", "RESULT_COLUMNS", "check_case", "make_controller", "safety_case",
            "safety_sweep", "case_arm", "case_function", "is_dotted", "impact_case",
-           "IMPACT_POSE_DEG"]
+           "check_impact_case", "SPEED_MAX", "IMPACT_POSE_DEG"]

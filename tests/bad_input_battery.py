@@ -20,6 +20,20 @@ exit1 / traceback / accepted / hang / memory / lost / noisy
     no answer within the time limit, more than :data:`MEMORY_KILL` of resident memory, a user
     file changed or deleted, or a raw Python warning printed beside the error.
 
+A case that expects an *interrupt* gets Ctrl-C (SIGINT to its process group, as a terminal
+sends it) after ``interrupt`` seconds and is clear when it exits 130 with ``ppamsafety:
+interrupted`` within :data:`INTERRUPT_GRACE` seconds (else "hang"; "not-interrupted" if it
+finished first).
+
+The classes of the first pass (``synth-effect``, ``data-file``, ``study-file``,
+``output-folder`` ...) were joined in the second pass by ``campaign-file`` (bench campaign
+manifests), ``input-file`` (arm, head and study files as files: binary, folders, pipes,
+devices, dangling links, oversized), ``cli-duplicate`` (an option given twice),
+``study-envelope``, ``interrupt`` (Ctrl-C), and the ``api-*`` classes of the public
+functions (sizes estimated before allocating, paths, seeds, sections, identification and
+diagnosis options that change nothing); ``*-valid`` classes hold odd but valid input (BOM,
+CRLF) that must work.
+
 The peak resident memory of every case is measured (``wait4``); the report gives the share of
 clear results per class, the failures, and the largest peak memory of a refused request.
 
@@ -74,9 +88,11 @@ class Case:
     api: object = None                  # callable run in the child (Python entry point)
     setup: object = None                # setup(d: Path) writes the input files
     names: tuple = ()                   # the message must name one of these (case-insensitive)
-    expect: str = "error"               # "error", "warn" (exit 0 + one-line warning), "ok"
+    expect: str = "error"               # "error", "warn" (exit 0 + one-line warning), "ok",
+    #                                     "interrupt" (Ctrl-C: exit 130 at once)
     unprivileged: bool = False          # run as user nobody (read-only targets)
     timeout: float = TIMEOUT
+    interrupt: float | None = None      # send Ctrl-C (SIGINT to the process group) after this [s]
 
 
 CASES: list[Case] = []
@@ -742,8 +758,8 @@ def _study_cases():
             ("noise_seed", "-1", ["noise_seed"]), ("noise_seed", "1.5", ["noise_seed"]),
             ("duration", "0.0", ["duration"]), ("duration", "-1.0", ["duration"]),
             ("duration", "1e9", ["duration"]), ("duration", "1.0", ["duration", "step"]),
-            ("duration", "nan", ["duration"]), ("effects", "{ payload_mass = 1 }",
-                                                 ["effects"])):
+            ("duration", "nan", ["duration"]), ("effects", "{ payload_mass = 9 }",
+                                                 ["effects", "payload_mass"])):
         ctrl = ('controller = "PSMC joint"\n' if k in ("lam", "kp_bar", "ki_bar", "kd_bar")
                 else 'controller = "PSMC task"\n' if k == "task_kp" else "")
         exp = "" if k == "experiment" else 'experiment = "step"\n'
@@ -761,6 +777,9 @@ def _study_cases():
     study("switch-too-short", '[case]\nexperiment = "switch"\nduration = 5.0\n',
           ["duration", "switch"])
     study("circle-huge", '[case]\nexperiment = "circle10"\nduration = 1e5\n', ["duration"])
+    # valid: plant effects of every case (README), a payload within its range
+    case("study-file-valid", "case-effects-payload-1kg", SWEEP + ["--no-progress"],
+         setup=files(**{"s.toml": B + "effects = { payload_mass = 1 }\n"}), expect="ok")
     # grids
     study("grid-empty-list", B + "[grid]\nlam = []\n", ["grid.lam"])
     study("grid-not-list", B + "[grid]\nlam = 0.4\n", ["grid.lam"])
@@ -832,7 +851,10 @@ def _api_cases():
     api("api-hic", "dt-0d-array", lambda: hic(a, np.array(1e-4)), names=["dt"], expect="ok")
     api("api-hic", "empty-batch", lambda: hic(np.zeros((0, 200)), 1e-4), names=["a"])
     api("api-hic", "empty-record", lambda: hic(np.zeros(0), 1e-4), names=["a"])
-    api("api-hic", "window-huge", lambda: hic(a, 1e-4, window=1e300), names=["window"])
+    # a window longer than the record covers the record (the unlimited HIC; documented)
+    api("api-hic", "window-huge-valid", lambda: hic(a, 1e-4, window=1e300), expect="ok")
+    api("api-hic", "window-nan", lambda: hic(a, 1e-4, window=math.nan), names=["window"])
+    api("api-hic", "window-inf", lambda: hic(a, 1e-4, window=math.inf), names=["window"])
     api("api-hic", "window-0", lambda: hic(a, 1e-4, window=0), names=["window"])
     api("api-hic", "negative-accel", lambda: hic(-a, 1e-4), names=["a", "non-negative"])
     api("api-hic", "list-of-str", lambda: hic(["1", "2"], 1e-4), names=["a"])
@@ -947,6 +969,513 @@ def _api_cases():
         names=["duration"])
 
 
+# ---- found in the second pass of issue 22 (classes the first battery did not hold) ---------
+
+DATASET = ROOT / "ppamsafety" / "data" / "datasets" / "zillen2021"
+MANIFEST = ('profile = "profile.toml"\nexperiment = "tensile"\n[actuator]\ntype = "cylinder"\n'
+            'bore = "25.7 mm"\n')
+RECORD = '[[records]]\nfile = "r1.csv.xz"\npressure_nominal = "1 bar"\n'
+
+
+def campaign(manifest=MANIFEST + RECORD, *, record=True, profile=True, **extra):
+    """A setup writing a campaign manifest ``m.toml`` beside a real record and profile."""
+    def setup(d: Path):
+        if profile:
+            shutil.copy(DATASET / "profile.toml", d / "profile.toml")
+        if record:
+            shutil.copy(DATASET / "O-ring257_1bar.csv.xz", d / "r1.csv.xz")
+        (d / "m.toml").write_bytes(manifest if isinstance(manifest, bytes)
+                                   else manifest.encode("utf-8"))
+        files(**extra)(d)
+    return setup
+
+
+def thesis_arm_file(d: Path, crlf=False, bom=False):
+    from ppamsafety.params import thesis_arm
+    from ppamsafety.params.arm_file import arm_to_toml
+    t = arm_to_toml(thesis_arm()).encode()
+    if crlf:
+        t = t.replace(b"\n", b"\r\n")
+    (d / "a.toml").write_bytes((b"\xef\xbb\xbf" if bom else b"") + t)
+
+
+def _xz_bomb(d: Path):
+    """A small .xz record that decompresses to 300 MB."""
+    import lzma
+    with lzma.open(d / "r1.csv.xz", "wb", preset=0) as fh:
+        block = b"0.0\t0.0\t0.0\t0.0\t0.0\t0.0\t0.0\n" * 10000
+        for _ in range(300 * 2 ** 20 // len(block) + 1):
+            fh.write(block)
+
+
+def _sparse(name, size):
+    def setup(d: Path):
+        with open(d / name, "wb") as fh:
+            fh.truncate(size)
+    return setup
+
+
+def _more_cases():
+    DIAG_M = ["diagnose", "m.toml", "--out", "o"]
+    # ---- campaign manifests (diagnose MANIFEST.toml) -----------------------------------------
+    for nm, man, kw, nms in (
+            ("empty", "", {}, ["m.toml", "records"]),
+            ("binary", bytes(range(256)) * 8, {}, ["m.toml", "binary", "UTF-8"]),
+            ("latin1", MANIFEST.encode() + "# \xb5\n".encode("latin-1") + RECORD.encode(), {},
+             ["m.toml", "UTF-8"]),
+            ("bad-toml", "records = [\n", {}, ["m.toml", "TOML"]),
+            ("unknown-key", MANIFEST + "pressure = 1\n" + RECORD, {}, ["pressure"]),
+            ("records-not-array", MANIFEST + "records = 5\n", {}, ["records"]),
+            ("records-empty", MANIFEST + "records = []\n", {}, ["records"]),
+            ("records-strings", MANIFEST + 'records = ["r1.csv.xz"]\n', {}, ["records"]),
+            ("record-no-file", MANIFEST + '[[records]]\nlabel = "a"\n', {}, ["records[0]", "file"]),
+            ("record-file-number", MANIFEST + "[[records]]\nfile = 5\n", {}, ["records[0].file"]),
+            ("record-file-empty", MANIFEST + '[[records]]\nfile = ""\n', {}, ["records[0].file"]),
+            ("record-file-missing", MANIFEST + '[[records]]\nfile = "nope.csv"\n', {},
+             ["records[0]", "nope.csv"]),
+            ("record-file-folder", MANIFEST + '[[records]]\nfile = "dir"\n', {"dir": None},
+             ["records[0]", "dir", "folder"]),
+            ("record-file-binary", MANIFEST + '[[records]]\nfile = "b.csv"\n',
+             {"b.csv": bytes(range(256)) * 8}, ["records[0]", "b.csv"]),
+            ("record-unknown-key", MANIFEST + RECORD + "bore = 1\n", {}, ["records[0]", "bore"]),
+            ("record-format-miscased", MANIFEST + RECORD + 'format = "Raw"\n', {},
+             ["records[0].format", "raw"]),
+            ("record-label-number", MANIFEST + RECORD + "label = 5\n", {}, ["records[0].label"]),
+            ("record-run-float", MANIFEST + RECORD + "run = 1.5\n", {}, ["records[0].run"]),
+            ("record-pressure-nonsense", MANIFEST + '[[records]]\nfile = "r1.csv.xz"\n'
+             'pressure_nominal = "3 parsecs"\n', {}, ["pressure_nominal"]),
+            ("profile-missing", MANIFEST.replace("profile.toml", "nope.toml") + RECORD, {},
+             ["profile", "nope.toml"]),
+            ("profile-number", MANIFEST.replace('"profile.toml"', "5") + RECORD, {}, ["profile"]),
+            ("profile-folder", MANIFEST.replace("profile.toml", "dir") + RECORD, {"dir": None},
+             ["profile", "dir"]),
+            ("actuator-string", MANIFEST.split("[actuator]")[0] + 'actuator = "cylinder"\n'
+             + RECORD, {}, ["actuator"]),
+            ("actuator-bore-negative", MANIFEST.replace("25.7 mm", "-25.7 mm") + RECORD, {},
+             ["bore", "actuator"]),
+            ("name-number", "name = 5\n" + MANIFEST + RECORD, {}, ["name"]),
+            ("raw-without-profile", MANIFEST.replace('profile = "profile.toml"\n', "") + RECORD,
+             {}, ["profile", "records[0]"])):
+        case("campaign-file", nm, DIAG_M, setup=campaign(man, **kw), names=nms)
+    for opt, v in (("--bootstrap", "0"), ("--seed", "3"), ("--block", "0.1"),
+                   ("--allow-gaps", None), ("--loose-units", None),
+                   ("--experiment", "open-loop"), ("--arm", "a.toml")):
+        case("campaign-file", f"arm-option{opt}", DIAG_M + [opt] + ([v] if v else []),
+             setup=chain(campaign(), lambda d: thesis_arm_file(d)), names=[opt])
+    for opt, v in (("--drop", "5"), ("--no-friction", None), ("--sign-velocity", "0.1")):
+        case("identify-option", f"static-with{opt}", IDENT_S + [opt] + ([v] if v else []),
+             setup=copy_base("st.csv", "data.csv"), names=[opt, "dynamic"])
+    case("identify-option", "sign-velocity-without-friction",
+         IDENT_D + ["--no-friction", "--sign-velocity", "0.1"], setup=copy_base("ol.csv",
+                                                                               "data.csv"),
+         names=["--sign-velocity", "friction"])
+    case("campaign-file", "folder", ["diagnose", "m.toml", "--out", "o"],
+         setup=files(**{"m.toml": None}), names=["m.toml", "folder"])
+    case("campaign-file", "missing", ["diagnose", "m.toml", "--out", "o"],
+         names=["m.toml", "does not exist"])
+    case("campaign-file", "xz-bomb", DIAG_M, setup=chain(campaign(record=False), _xz_bomb),
+         names=["r1.csv.xz", "decompresses", "MB"], timeout=120)
+    case("campaign-file", "huge-record", DIAG_M.copy(),
+         setup=chain(campaign(MANIFEST + '[[records]]\nfile = "big.csv"\n', record=False),
+                     _sparse("big.csv", 2 ** 30)), names=["big.csv", "MB"])
+    case("campaign-file", "bom-crlf-valid", DIAG_M,
+         setup=campaign(b"\xef\xbb\xbf" + (MANIFEST + RECORD).replace("\n", "\r\n").encode()),
+         expect="ok", timeout=180)
+
+    # ---- input text files: arm, head and study files share one reader ----------------------
+    for opt, argv, valid in (
+            ("--arm", IMPACT + ["--arm", "a.toml"], "arm"),
+            ("--head", IMPACT + ["--head", "a.toml"], "head"),
+            ("study", ["sweep", "a.toml", "--out", "o"], "study"),
+            ("arm-check", ["arm", "check", "a.toml"], "arm")):
+        for nm, setup, nms in (
+                ("binary", files(**{"a.toml": bytes(range(256)) * 4}), ["a.toml", "binary"]),
+                ("latin1", files(**{"a.toml": b'name = "\xb5"\n'}), ["a.toml", "UTF-8"]),
+                ("folder", files(**{"a.toml": None}), ["a.toml", "folder"]),
+                ("fifo", lambda d: os.mkfifo(d / "a.toml"), ["a.toml", "regular file"]),
+                ("dev-zero-link", lambda d: os.symlink("/dev/zero", d / "a.toml"),
+                 ["a.toml", "regular file"]),
+                ("dangling-link", lambda d: os.symlink("nowhere.toml", d / "a.toml"),
+                 ["a.toml", "does not exist"]),
+                ("huge", _sparse("a.toml", 200 * 2 ** 20), ["a.toml", "MB"]),
+                ("under-a-file", files(**{"f.txt": "x\n"}), ["f.txt", "does not exist"])):
+            a = [x.replace("a.toml", "f.txt/a.toml") for x in argv] if nm == "under-a-file" \
+                else argv
+            case("input-file", f"{opt.strip('-')}-{nm}", a, setup=setup, names=nms)
+    for opt, argv in (("--arm", IMPACT + ["--arm", ""]), ("--head", IMPACT + ["--head", ""]),
+                      ("arm-check", ["arm", "check", ""]),
+                      ("--arm-export", ["arm", "export", "--out", "x.toml", "--arm", ""])):
+        case("input-file", f"{opt.strip('-')}-empty-path", argv,
+             names=["--arm", "--head", "FILE", "empty"])
+
+    case("input-file-valid", "arm-bom-crlf", ["arm", "check", "a.toml"],
+         setup=lambda d: thesis_arm_file(d, crlf=True, bom=True), expect="ok")
+    case("input-file-valid", "study-bom-crlf", ["sweep", "s.toml", "--out", "o", "--no-progress"],
+         setup=files(**{"s.toml": b'\xef\xbb\xbf[case]\r\nexperiment = "step"\r\n'}), expect="ok")
+
+    # ---- a single-valued option given twice -----------------------------------------------------
+    ol = copy_base("ol.csv", "data.csv")
+    for nm, argv, setup in (
+            ("impact-q", IMPACT + ["--q", "40", "-80"], None),
+            ("impact-dt", IMPACT + ["--dt", "1e-5", "--dt", "2e-5"], None),
+            ("impact-head", IMPACT + ["--head", "thesis-frontal", "--head", "child-frontal"], None),
+            ("synth-seed", SYN + ["--seed", "1", "--seed", "2"], None),
+            ("synth-out", SYN + ["--out", "y.csv"], None),
+            ("synth-noise", SYN + ["--noise", "none", "--noise", "table-3.2"], None),
+            ("diagnose-seed", DIAG + ["--seed", "1", "--seed", "2"], ol),
+            ("diagnose-out", DIAG + ["--out", "p"], ol),
+            ("identify-kind", IDENT_D + ["--kind", "static"], ol),
+            ("sweep-processes", SWEEP + ["--processes", "1", "--processes", "2"],
+             copy_base("study.toml", "s.toml")),
+            ("report-outdir", ["report", "--outdir", "a", "--outdir", "b"], None),
+            ("arm-check-q", ["arm", "check", "a.toml", "--q", "50", "-80", "--q", "60", "-80"],
+             None),
+            ("arm-twice", IMPACT + ["--arm", "a.toml", "--arm", "b.toml"], None)):
+        opt = next(a for a in argv[::-1] if a.startswith("--"))
+        case("cli-duplicate", nm, argv, setup=setup, names=[opt, "twice"])
+    case("cli-duplicate", "report-only-name-twice", ["report", "--only", "design,design"],
+         names=["--only", "design", "more than once"])
+    case("cli-duplicate", "report-only-empty-part", ["report", "--only", "design,,safety"],
+         names=["--only", "empty"])
+
+    # ---- single output files that name a folder -------------------------------------------------
+    for nm, argv in (("history-slash", IMPACT + ["--history", "h/"]),
+                     ("history-dot", IMPACT + ["--history", "."]),
+                     ("synth-slash", ["synthesize", "--duration", "1", "--out", "x.csv/"]),
+                     ("synth-dotdot", ["synthesize", "--duration", "1", "--out", ".."]),
+                     ("arm-export-slash", ["arm", "export", "--out", "a/"]),
+                     ("arm-export-csv", ["arm", "export", "--out", "a.csv"])):
+        case("output-file", nm, argv, names=["--out", "--history", "folder", ".toml"])
+    case("output-file", "arm-export-fifo", ["arm", "export", "--out", "a.toml", "--overwrite"],
+         setup=lambda d: os.mkfifo(d / "a.toml"), names=["--out", "a.toml", "regular file"])
+
+    # ---- study files: [envelope] ranges and keys ------------------------------------------------
+    E = '[envelope]\nparameter = "{p}"\nrange = [{a}, {b}]\n'
+    for nm, text, nms in (
+            ("speed-high-end", E.format(p="speed", a=0.1, b=1e9), ["envelope.range", "speed"]),
+            ("speed-zero", E.format(p="speed", a=0, b=1), ["envelope.range", "speed"]),
+            ("lam-high-end", E.format(p="lam", a=0.1, b=1e300) +
+             '[case]\ncontroller = "PSMC joint"\n', ["envelope.range", "lam"]),
+            ("duration-high-end", E.format(p="duration", a=3, b=1e6), ["envelope.range",
+                                                                       "duration"]),
+            ("pressure-high-end", E.format(p="arm.pneumatics.mean_pressure", a=1e5, b=1e7),
+             ["envelope.range", "mean_pressure"]),
+            ("reversed", E.format(p="speed", a=1, b=0.1), ["envelope.range"]),
+            ("range-strings", '[envelope]\nparameter = "speed"\nrange = ["0.1", "1"]\n',
+             ["envelope.range"]),
+            ("limit-miscased", E.format(p="speed", a=0.1, b=1) + 'limit = "f_max"\n',
+             ["envelope.limit", "F_max"]),
+            ("tolerance-zero", E.format(p="speed", a=0.1, b=1) + "tolerance = 0\n",
+             ["envelope.tolerance"]),
+            ("pose-outside", E.format(p="speed", a=0.1, b=1) + "pose = [400.0, 0.0]\n",
+             ["q1_deg", "pose", "working area"]),
+            ("with-grid", E.format(p="speed", a=0.1, b=1) + "[grid]\nlam = [0.4]\n",
+             ["grid", "envelope"]),
+            ("unknown-parameter", E.format(p="lamda", a=0.1, b=1), ["lamda"])):
+        case("study-envelope", nm, SWEEP, setup=files(**{"s.toml": text}), names=nms)
+
+    # ---- Ctrl-C: exit 130 at once, one line, nothing lost ---------------------------------------
+    long_sweep = files(**{"s.toml": '[case]\nexperiment = "circle10"\n[grid]\n'
+                                    'duration = { linspace = [60.0, 90.0, 60] }\n'})
+    case("interrupt", "sweep-early", SWEEP + ["--processes", "2", "--no-progress"],
+         setup=long_sweep, interrupt=3.0, expect="interrupt")
+    case("interrupt", "sweep-running", SWEEP + ["--processes", "2", "--no-progress"],
+         setup=long_sweep, interrupt=12.0, expect="interrupt")
+    case("interrupt", "sweep-resume-after", SWEEP + ["--resume", "--processes", "2",
+                                                      "--no-progress"],
+         setup=chain(long_sweep, marked_folder("o", "sweep", ())), interrupt=8.0,
+         expect="interrupt")
+    case("interrupt", "report", ["report", "--quick", "--outdir", "r", "--processes", "2"],
+         interrupt=10.0, expect="interrupt")
+    case("interrupt", "diagnose", DIAG + ["--bootstrap", "200"], setup=ol, interrupt=4.0,
+         expect="interrupt")
+    case("interrupt", "synthesize", ["synthesize", "--out", "x.csv", "--duration", "600"],
+         interrupt=3.0, expect="interrupt")
+
+
+def _more_api_cases():
+    def arm():
+        from ppamsafety.params import thesis_arm
+        return thesis_arm()
+
+    # ---- sizes estimated before allocating ------------------------------------------------------
+    def impacts_n(n):
+        from ppamsafety.impact import simulate_impacts
+        q = np.broadcast_to(np.radians([50.0, -80.0]), (n, 2))
+        return simulate_impacts(arm(), q, np.broadcast_to([1.0, 0.0], (n, 2)), [43.0, 27.0])
+
+    api("api-size", "impacts-1e7-cases", lambda: impacts_n(10 ** 7), names=["cases", "GB"])
+    api("api-size", "impacts-1e8-cases", lambda: impacts_n(10 ** 8), names=["cases", "GB"])
+
+    def synexc(**k):
+        from ppamsafety.data import synthetic_excitation
+        return synthetic_excitation(arm(), **k)
+
+    api("api-size", "synthetic-excitation-dt-1e-9", lambda: synexc(dt=1e-9), names=["dt"])
+    api("api-size", "synthetic-excitation-1000-periods-1us", lambda: synexc(periods=1000,
+                                                                           dt=1e-6),
+        names=["periods", "GB"])
+
+    def simexc(**k):
+        from ppamsafety.data.synthetic import default_excitation
+        from ppamsafety.identify.excitation import simulate_excitation
+        a = arm()
+        return simulate_excitation(a, default_excitation(a), **k)
+
+    api("api-size", "simulate-excitation-dt-1e-9", lambda: simexc(dt=1e-9), names=["dt"])
+    api("api-size", "simulate-excitation-1e4-periods", lambda: simexc(periods=1e4, dt=1e-5),
+        names=["periods", "GB"])
+
+    def plant(n, rows=1):
+        from ppamsafety.plant.model import simulate
+        U = np.broadcast_to(np.full(4, 1e5), (rows, n, 4) if rows > 1 else (n, 4))
+        return simulate(arm(), np.array([0.8, -1.4, 0, 0, 1e5, 1e5, 1e5, 1e5]), U)
+
+    api("api-size", "plant-simulate-1e9-samples", lambda: plant(10 ** 9),
+        names=["samples", "GB"])
+    api("api-size", "plant-simulate-1e4-rows", lambda: plant(10 ** 5, 10 ** 4),
+        names=["rows", "GB"])
+
+    def directions(n):
+        from ppamsafety.impact.directions import direction_sweep
+        return direction_sweep(arm(), np.radians([50.0, -80.0]), [1.0, 0.0], [43.0, 27.0],
+                               angles=np.broadcast_to(0.1, (n,)))
+
+    api("api-size", "direction-sweep-1e8-angles", lambda: directions(10 ** 8),
+        names=["angles", "GB"])
+
+    def hic_bf(n, w):
+        from ppamsafety.impact.hic import hic_bruteforce
+        return hic_bruteforce(np.broadcast_to(1.0, (n,)), 1e-6, window=w)
+
+    api("api-size", "hic-bruteforce-1e6-samples-1s", lambda: hic_bf(10 ** 6, 1.0),
+        names=["windows", "hic()"])
+    api("api-size", "hic-long-window-valid", lambda: _hic(np.abs(np.sin(np.arange(10 ** 6)
+                                                                        * 1e-3)), 1e-6,
+                                                           window=1.0), expect="ok")
+
+    # ---- paths given to the public readers and writers ------------------------------------------
+    def call(mod, fn, *a, **k):
+        import importlib
+        return getattr(importlib.import_module(mod), fn)(*a, **k)
+
+    for fn, mod in (("load_arm", "ppamsafety.params"), ("load_head", "ppamsafety.impact.head"),
+                    ("load_study", "ppamsafety.study_files"),
+                    ("load_campaign", "ppamsafety.data.campaign"),
+                    ("load_measured", "ppamsafety.data")):
+        for nm, v in (("None", None), ("empty", ""), ("bytes", b"x.toml"), ("int", 3),
+                      ("folder", "."), ("missing", "nope.toml"), ("list", ["a.toml"])):
+            api("api-path", f"{fn}-{nm}", lambda mod=mod, fn=fn, v=v: call(mod, fn, v),
+                names=["path", "file", "''", "nope.toml", "folder"])
+    api("api-path", "run_study_file-outdir-empty", lambda: call(
+        "ppamsafety.study_files", "run_study_file", BASE / "study.toml", ""),
+        names=["outdir", "empty"])
+    api("api-path", "run_study_file-study-None", lambda: call(
+        "ppamsafety.study_files", "run_study_file", None, "o"), names=["study"])
+    api("api-path", "parse_study-None", lambda: call("ppamsafety.study_files", "parse_study",
+                                                     None), names=["text"])
+    api("api-path", "parse_study-bytes", lambda: call("ppamsafety.study_files", "parse_study",
+                                                      b"[case]\n"), names=["text"])
+    api("api-path", "import_bench-missing", lambda: call(
+        "ppamsafety.data.bench_import", "import_bench", "nope.csv", {},
+        actuator={"type": "cylinder", "bore": 0.0257}), names=["nope.csv"])
+
+    # ---- seeds: integers in [0, 2^63 - 1] everywhere --------------------------------------------
+    def syn(**k):
+        from ppamsafety.diagnose import synthesize
+        return synthesize("open-loop", duration=0.5, **k)
+
+    for nm, f in (("synthesize-2**64", lambda: syn(seed=2 ** 64)),
+                  ("synthesize-actuator-2**64", lambda: call(
+                      "ppamsafety.diagnose", "synthesize", kind="actuator", seed=2 ** 64)),
+                  ("synthetic-static-neg", lambda: call("ppamsafety.data", "synthetic_static",
+                                                        seed=-1)),
+                  ("equilibria-float", lambda: call("ppamsafety.identify.static",
+                                                    "equilibrium_configurations", arm(),
+                                                    seed=1.5)),
+                  ("static-experiment-str", lambda: call(
+                      "ppamsafety.identify.static", "static_experiment", arm(),
+                      np.radians([[50.0, -80.0]]), seed="1")),
+                  ("design-excitation-neg", lambda: call(
+                      "ppamsafety.identify.excitation", "design_excitation", arm(), seed=-1)),
+                  ("default-excitation-2**64", lambda: call(
+                      "ppamsafety.data.synthetic", "default_excitation", arm(), seed=2 ** 64))):
+        api("api-seed", nm, f, names=["seed"])
+    api("api-seed", "synthesize-0d-valid", lambda: syn(seed=np.array(2 ** 62)), expect="ok")
+
+    # ---- envelopes: both ends of the range are checked before anything runs ---------------------
+    def env(p, b, **k):
+        from ppamsafety.envelope import safety_envelope
+        return safety_envelope(p, b, **k)
+
+    api("api-envelope", "speed-1e3", lambda: env("speed", (0.1, 1e3)), names=["bounds[1]",
+                                                                             "speed"])
+    api("api-envelope", "lam-1e300", lambda: env("lam", (0.1, 1e300),
+                                                 case={"controller": "PSMC joint"}),
+        names=["bounds[1]", "lam"])
+    api("api-envelope", "duration-1e6", lambda: env("duration", (3.0, 1e6)),
+        names=["bounds[1]", "duration"])
+    api("api-envelope", "lam-pid", lambda: env("lam", (0.1, 1.0)), names=["lam", "PID"])
+    api("api-envelope", "pressure-negative", lambda: env("arm.pneumatics.mean_pressure",
+                                                         (-1e5, 2e5)),
+        names=["bounds[0]", "mean_pressure"])
+    api("api-envelope", "parameter-miscased", lambda: env("Speed", (0.1, 1.0)),
+        names=["parameter", "Speed"])
+
+    # ---- the README's entry points with loose types ---------------------------------------------
+    def cc(**k):
+        from ppamsafety.sweep_cases import check_case
+        return check_case(**k)
+
+    api("api-case", "stiffness-array-pair", lambda: cc(stiffness=np.array([40.0, 20.0])),
+        expect="ok")
+    api("api-case", "kp-array-pair", lambda: cc(kp_bar=np.array([1.0, 2.0])), expect="ok")
+    api("api-case", "stiffness-2d", lambda: cc(stiffness=np.ones((2, 2))), names=["stiffness"])
+    api("api-case", "lam-nan", lambda: cc(controller="PSMC joint", lam=math.nan),
+        names=["lam"])
+    api("api-case", "experiment-miscased-did-you-mean", lambda: cc(experiment="Step"),
+        names=["did you mean 'step'"])
+    api("api-case", "instants-miscased", lambda: cc(instants="Heuristic"),
+        names=["did you mean 'heuristic'"])
+
+    def sw(**k):
+        from ppamsafety.sweep import run_sweep
+        return run_sweep(_square, progress=False, **k)
+
+    api("api-sweep", "grid-empty-dict", lambda: sw(grid={}), names=["grid"])
+    api("api-sweep", "grid-list-of-lists", lambda: sw(grid=[["x", [1, 2]]]), names=["grid"])
+    api("api-sweep", "max-cases-0d-valid", lambda: call(
+        "ppamsafety.study_files", "run_study_file", BASE / "study.toml", "o",
+        max_cases=np.int64(1), progress=False), expect="ok", timeout=180)
+
+    def impacts(**k):
+        from ppamsafety.impact import simulate_impacts
+        kw = dict(q=np.radians([50.0, -80.0]), qd=[1.0, 0.0], stiffness=[43.0, 27.0])
+        kw.update(k)
+        return simulate_impacts(arm(), kw.pop("q"), kw.pop("qd"), kw.pop("stiffness"), **kw)
+
+    api("api-impact", "head-miscased-did-you-mean", lambda: impacts(head="Thesis-Frontal"),
+        names=["did you mean 'thesis-frontal'"])
+    api("api-impact", "bounds-head-name", lambda: call(
+        "ppamsafety.impact.bounds", "impact_bounds", arm(), np.radians([50.0, -80.0]),
+        [1.0, 0.0], head="thesis-frontal"), expect="ok")
+    api("api-impact", "bounds-duration-huge", lambda: call(
+        "ppamsafety.impact.bounds", "impact_bounds", arm(), np.radians([50.0, -80.0]),
+        [1.0, 0.0], head="thesis-frontal", duration=1e9), names=["duration"])
+    api("api-impact", "bounds-duration-str", lambda: call(
+        "ppamsafety.impact.bounds", "impact_bounds", arm(), np.radians([50.0, -80.0]),
+        [1.0, 0.0], head="thesis-frontal", duration="0.05"), names=["duration"])
+    api("api-impact", "acceleration-dt-1e-300", lambda: call(
+        "ppamsafety.identify.dynamic", "estimate_acceleration", np.zeros((100, 2)), 1e-300),
+        names=["dt"])
+    api("api-impact", "filter-dt-1e-300", lambda: call(
+        "ppamsafety.identify.dynamic", "filter_signal", np.zeros(100), 1e-300), names=["dt"])
+    api("api-impact", "chattering-dt-1e-300", lambda: call(
+        "ppamsafety.experiments.metrics", "chattering_index", np.zeros((100, 2)), 1e-300),
+        names=["dt"])
+    api("api-report", "only-twice", lambda: call("ppamsafety.report.build", "build_report",
+                                                 "r", only=["design", "design"]),
+        names=["only", "design"])
+    api("api-report", "only-miscased", lambda: call("ppamsafety.report.build", "build_report",
+                                                    "r", only=["Design"]),
+        names=["did you mean 'design'"])
+
+
+def _section(name, **k):
+    import importlib
+    return importlib.import_module(f"ppamsafety.sections.{name}").compute(**k)
+
+
+def _more_api_cases_2():
+    # ---- the sections' compute(): common arguments checked even where unused ---------------------
+    for name in ("responses", "design", "tracking", "safety", "effects", "cylinder_friction"):
+        api("api-section", f"{name}-quick-str", lambda n=name: _section(n, quick="yes"),
+            names=["quick"])
+        api("api-section", f"{name}-arm-str", lambda n=name: _section(n, arm="thesis"),
+            names=["arm"])
+    for name in ("responses", "design", "safety", "effects"):
+        api("api-section", f"{name}-head-unknown", lambda n=name: _section(n, head="nope"),
+            names=["head", "nope"])
+
+    # ---- names of result signals: a KeyError that is also a ValueError, with the spelling -------
+    def ref_signal(name):
+        from ppamsafety.experiments import step
+        from ppamsafety.params import thesis_arm
+        return step(thesis_arm()).signal(name)
+
+    for v in ("X_d", "q1", 3, None):
+        api("api-experiment", f"reference-signal-{v!r}", lambda v=v: ref_signal(v),
+            names=["signal", repr(v)])
+
+    def circle(**k):
+        from ppamsafety.experiments.trajectories import circle as c
+        from ppamsafety.params import thesis_arm
+        return c(thesis_arm(), **k)
+
+    api("api-experiment", "circle-period-1ms", lambda: circle(period=1e-3, duration=10.0),
+        names=["period", "m/s"])
+    api("api-experiment", "circle-period-10ms", lambda: circle(period=1e-2, duration=10.0),
+        names=["period", "m/s"])
+    api("api-experiment", "circle-partial-valid", lambda: circle(period=10.0, duration=4.0),
+        expect="ok")
+
+    # ---- identify_measured: an option that changes nothing is refused --------------------------------
+    def ident(kind, **k):
+        from ppamsafety.data import identify_measured, load_measured
+        return identify_measured(load_measured(BASE / ("st.csv" if kind == "static" else
+                                                       "ol.csv")), kind, **k)
+
+    api("api-identify", "static-sign-velocity", lambda: ident("static", sign_velocity=0.1),
+        names=["sign_velocity"])
+    api("api-identify", "no-friction-sign-velocity", lambda: ident("dynamic", friction=False,
+                                                                   sign_velocity=0.1),
+        names=["sign_velocity", "friction"])
+    api("api-identify", "sign-velocity-negative", lambda: ident("dynamic", sign_velocity=-1.0),
+        names=["sign_velocity"])
+
+    def diag(**k):
+        from ppamsafety.data import load_measured
+        from ppamsafety.diagnose import diagnose
+        return diagnose(load_measured(BASE / "ten.csv"), **k)
+
+    api("api-diagnose", "actuator-with-arm", lambda: diag(arm=_thesis()), names=["arm"])
+    api("api-diagnose", "actuator-experiment-mismatch", lambda: diag(experiment="open-loop"),
+        names=["experiment", "tensile"])
+
+
+def _thesis():
+    from ppamsafety.params import thesis_arm
+    return thesis_arm()
+
+
+def _more_cli_cases_2():
+    st = copy_base("study.toml", "s.toml")
+    case("sweep-option", "scheduler-not-an-address", SWEEP + ["--backend", "dask", "--scheduler",
+                                                              "not an address"], setup=st,
+         names=["--scheduler"])
+    case("sweep-option", "scheduler-failed-leaves-nothing", SWEEP + ["--backend", "dask",
+                                                                     "--scheduler", "x"],
+         setup=st, names=["--scheduler"])
+    ol = copy_base("ol.csv", "data.csv")
+    ten = copy_base("ten.csv", "data.csv")
+    for opt, v in (("--seed", "3"), ("--block", "0.1"), ("--bootstrap", "5")):
+        case("diagnose-option", f"actuator-record{opt}", DIAG + [opt, v], setup=ten,
+             names=[opt, "actuator"])
+    case("diagnose-option", "experiment-mismatch-closed", DIAG + ["--experiment", "closed-loop"],
+         setup=ol, names=["--experiment", "open-loop"])
+    for nm, argv in (("synth-experiment-twice", SYN + ["--experiment", "open-loop",
+                                                       "--experiment", "closed-loop"]),
+                     ("identify-method-twice", IDENT_D + ["--method", "LS", "--method", "WLS"]),
+                     ("history-twice", IMPACT + ["--history", "a.csv", "--history", "b.csv"])):
+        opt = next(a for a in argv[::-1] if a.startswith("--"))
+        case("cli-duplicate", nm, argv, setup=ol, names=[opt, "twice"])
+
+
+def _hic(*a, **k):
+    from ppamsafety.impact.hic import hic
+    return hic(*a, **k)
+
+
 def _square(x, y=0):
     return {"sq": x * x + y}
 
@@ -990,6 +1519,10 @@ _cli_cases()
 _data_cases()
 _study_cases()
 _api_cases()
+_more_cases()
+_more_api_cases()
+_more_api_cases_2()
+_more_cli_cases_2()
 
 
 # ------------------------------------------------------------------------------ running
@@ -1006,6 +1539,7 @@ class Result:
     peak_mb: float
     message: str
     refused: bool = False
+    expect: str = "error"
     detail: dict = field(default_factory=dict)
 
 
@@ -1086,24 +1620,41 @@ def _rmtree(d: Path) -> None:
     shutil.rmtree(d, ignore_errors=True)
 
 
-def _wait(pid: int, timeout: float):
-    """(status, rusage, verdict_override) of a child, killing it on timeout or memory."""
+#: Seconds a command may take to exit after Ctrl-C before it counts as a hang.
+INTERRUPT_GRACE = 10.0
+
+
+def _wait(pid: int, timeout: float, interrupt: float | None = None):
+    """(status, rusage, verdict_override, peak, seconds from Ctrl-C to exit) of a child,
+    killing it on timeout or memory; with ``interrupt``, SIGINT goes to its process group
+    after that many seconds (what Ctrl-C in a terminal does)."""
     t0 = time.monotonic()
     peak = 0
+    t_int = None
+
+    def kill(verdict):
+        os.killpg(pid, signal.SIGKILL)
+        _, status, ru = os.wait4(pid, 0)
+        return status, ru, verdict, peak, None
+
     while True:
         wpid, status, ru = os.wait4(pid, os.WNOHANG)
         if wpid == pid:
-            return status, ru, None, max(peak, ru.ru_maxrss * 1024)
+            after = None if t_int is None else time.monotonic() - t_int
+            return status, ru, None, max(peak, ru.ru_maxrss * 1024), after
         rss = _rss(pid)
         peak = max(peak, rss)
+        now = time.monotonic()
         if rss > MEMORY_KILL:
-            os.killpg(pid, signal.SIGKILL)
-            _, status, ru = os.wait4(pid, 0)
-            return status, ru, "memory", peak
-        if time.monotonic() - t0 > timeout:
-            os.killpg(pid, signal.SIGKILL)
-            _, status, ru = os.wait4(pid, 0)
-            return status, ru, "hang", peak
+            return kill("memory")
+        if interrupt is not None and t_int is None and now - t0 > interrupt:
+            try:
+                os.killpg(pid, signal.SIGINT)
+            except ProcessLookupError:
+                pass
+            t_int = now
+        if (t_int is not None and now - t_int > INTERRUPT_GRACE) or now - t0 > timeout:
+            return kill("hang")
         time.sleep(0.02)
 
 
@@ -1118,18 +1669,19 @@ def run_case(c: Case, workdir: Path, *, real: bool = False) -> Result:
     t0 = time.monotonic()
     if real:
         if c.api is not None:
-            cmd = [sys.executable, str(Path(__file__).resolve()), "--child", c.name,
-                   "--result", str(res_f)]
+            cmd = [sys.executable, str(Path(__file__).resolve()), "--child",
+                   f"{c.cls}:{c.name}", "--result", str(res_f)]
         else:
             cmd = [sys.executable, "-m", "ppamsafety.cli", *c.argv]
         with open(out_f, "wb") as o, open(err_f, "wb") as e:
             def pre():
                 os.setpgid(0, 0)
+                signal.signal(signal.SIGINT, signal.SIG_DFL)   # Ctrl-C as in a terminal
                 if c.unprivileged:
                     os.setgid(NOBODY)
                     os.setuid(NOBODY)
             p = subprocess.Popen(cmd, cwd=d, stdout=o, stderr=e, preexec_fn=pre)
-            status, ru, over, peak = _wait(p.pid, c.timeout)
+            status, ru, over, peak, t_exit = _wait(p.pid, c.timeout, c.interrupt)
             p.returncode = os.waitstatus_to_exitcode(status)
     else:
         sys.stdout.flush()
@@ -1139,6 +1691,9 @@ def run_case(c: Case, workdir: Path, *, real: bool = False) -> Result:
             rc = 1
             try:
                 os.setpgid(0, 0)
+                # Ctrl-C raises KeyboardInterrupt, as in a terminal (a battery started in the
+                # background inherits SIGINT ignored)
+                signal.signal(signal.SIGINT, signal.default_int_handler)
                 fo = os.open(out_f, os.O_WRONLY | os.O_CREAT, 0o666)
                 fe = os.open(err_f, os.O_WRONLY | os.O_CREAT, 0o666)
                 os.dup2(fo, 1)
@@ -1158,24 +1713,29 @@ def run_case(c: Case, workdir: Path, *, real: bool = False) -> Result:
                     sys.stderr.flush()
                 finally:
                     os._exit(rc if isinstance(rc, int) and 0 <= rc < 256 else 1)
-        status, ru, over, peak = _wait(pid, c.timeout)
+        status, ru, over, peak, t_exit = _wait(pid, c.timeout, c.interrupt)
     secs = time.monotonic() - t0
     rc = os.waitstatus_to_exitcode(status) if over is None else None
     out = out_f.read_text(errors="replace") if out_f.exists() else ""
     err = err_f.read_text(errors="replace") if err_f.exists() else ""
     after = _snapshot(d)
-    lost = [f for f, h in before.items() if after.get(f) != h]
+    # a user file changed or deleted (the marker of a toolkit output folder is the toolkit's
+    # own bookkeeping: a resumed sweep updates it)
+    lost = [f for f, h in before.items() if after.get(f) != h
+            and Path(f).name != ".ppamsafety-output"]
     peak_mb = peak / 2 ** 20
     if c.api is not None:
         res = json.loads(res_f.read_text()) if (over is None and res_f.exists()) else None
         verdict, msg = _classify_api(c, res, over, err)
+    elif c.expect == "interrupt":
+        verdict, msg = _classify_interrupt(rc, over, err, t_exit)
     else:
         verdict, msg = _classify_cli(c, rc, over, out, err)
     if lost:
         verdict, msg = "lost", f"user file(s) changed or deleted: {lost}; " + msg
     refused = verdict in ("clear", "vague") and c.expect == "error"
     r = Result(c.name, c.cls, verdict, rc, round(secs, 2), round(peak_mb, 1), msg[:600],
-               refused=refused)
+               refused=refused, expect=c.expect)
     for f in (out_f, err_f, res_f):
         f.unlink(missing_ok=True)
     _rmtree(d)
@@ -1225,6 +1785,19 @@ def _classify_cli(c: Case, rc, over, out: str, err: str):
     return "clear", ""
 
 
+def _classify_interrupt(rc, over, err, after):
+    """Ctrl-C: exit 130 within :data:`INTERRUPT_GRACE` s with one line, no traceback."""
+    if over:
+        return over, f"still running {INTERRUPT_GRACE:g} s after Ctrl-C; " + err[-300:]
+    if "Traceback (most recent call last)" in err:
+        return "traceback", err[-600:]
+    if after is None:
+        return "not-interrupted", f"rc={rc}: finished before Ctrl-C; " + err[-200:]
+    if rc == 130 and "ppamsafety: interrupted" in err:
+        return "clear", f"exit 130 {after:.1f} s after Ctrl-C"
+    return "other", f"rc={rc} {after:.1f} s after Ctrl-C: {err[-300:]}"
+
+
 def _classify_api(c: Case, res, over, err):
     if over:
         return over, err[-300:]
@@ -1265,6 +1838,7 @@ def run(cases, *, workdir: Path | None = None, real: bool = False, progress: boo
     os.chmod(work, 0o755)
     BASE = work / "_base"
     make_base(BASE)
+    os.environ["PPAMSAFETY_BATTERY_BASE"] = str(BASE)      # for --real children
     if not real:                 # import what the subcommands import, once, before forking
         import ppamsafety.cli  # noqa: F401
         import ppamsafety.data  # noqa: F401
@@ -1331,7 +1905,9 @@ def main(argv=None) -> int:
     ap.add_argument("--result", default=None, help=argparse.SUPPRESS)
     a = ap.parse_args(argv)
     if a.child:
-        c = next(c for c in CASES if c.name == a.child)
+        global BASE
+        BASE = Path(os.environ["PPAMSAFETY_BATTERY_BASE"])
+        c = next(c for c in CASES if f"{c.cls}:{c.name}" == a.child)
         return _child_run(c, Path.cwd(), Path(a.result))
     cs = select(a.only.split(",") if a.only else None, a.names.split(",") if a.names else None)
     if a.list:

@@ -51,11 +51,8 @@ position (or the force) has the wrong sign for the format's convention.
 from __future__ import annotations
 
 import functools
-import gzip
-import bz2
 import hashlib
 import io
-import lzma
 import math
 import numbers
 import tomllib
@@ -65,8 +62,9 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from .._inputfiles import check_input_file, read_bytes, read_text
 from ..units import P_ATM
-from .measured import ACTUATOR_TYPES, MeasuredData, MeasuredDataError
+from .measured import ACTUATOR_TYPES, MeasuredData, MeasuredDataError, check_nominal_pressure
 
 #: Channels of an actuator record and the dimension pint must find for each.
 CHANNEL_DIMENSIONS = {"t": "[time]", "force": "[force]", "pressure": "[pressure]",
@@ -83,7 +81,6 @@ MIN_SEGMENT_ROWS = 20
 SIGN_CHECK_STROKES = 4
 #: Fraction of the strokes that must dissipate the wrong way to call it a sign mismatch.
 SIGN_CHECK_FRACTION = 0.8
-_OPENERS = {".gz": gzip.open, ".xz": lzma.open, ".lzma": lzma.open, ".bz2": bz2.open}
 
 
 @functools.lru_cache(maxsize=1)
@@ -383,9 +380,9 @@ class BenchProfile:
         path : path-like
             The profile file.
         """
-        p = Path(path)
+        p, text = read_text(path, what="import profile", error=MeasuredDataError)
         try:
-            d = tomllib.loads(p.read_text(encoding="utf-8"))
+            d = tomllib.loads(text)
         except tomllib.TOMLDecodeError as exc:
             raise MeasuredDataError(f"{p}: the profile is not valid TOML: {exc}") from None
         return cls.from_dict(d)
@@ -498,18 +495,20 @@ class Actuator:
 
 # --------------------------------------------------------------------------- reading
 
+#: Largest raw bench file read [bytes] (decompressed): 256 MB, some 600 times the largest
+#: shipped record; the table it becomes takes a few times that in memory.
+MAX_BENCH_BYTES = 256 * 2 ** 20
+
+
 def _open_text(p: Path) -> str:
-    opener = _OPENERS.get(p.suffix.lower())
+    _, raw = read_bytes(p, what="bench file", max_bytes=MAX_BENCH_BYTES,
+                        error=MeasuredDataError, compressed=True)
+    if b"\0" in raw:
+        k = raw.index(b"\0")
+        raise MeasuredDataError(f"{p}: a binary file (a NUL byte at offset {k}), not the text "
+                                f"table of a bench record")
     try:
-        if opener is None:
-            raw = p.read_bytes()
-        else:
-            with opener(p, "rb") as fh:
-                raw = fh.read()
-    except (OSError, EOFError, lzma.LZMAError) as exc:
-        raise MeasuredDataError(f"{p}: cannot read the file ({exc})") from None
-    try:
-        return raw.decode("utf-8"), raw
+        return raw.decode("utf-8-sig"), raw            # a byte-order mark is skipped
     except UnicodeDecodeError:
         return raw.decode("latin-1"), raw
 
@@ -731,12 +730,7 @@ def import_bench(path, profile, *, actuator, experiment: str = "tensile", descri
     MeasuredDataError
         Anything wrong with the file or the profile, naming the column.
     """
-    if isinstance(path, bool) or not isinstance(path, (str, Path)) and not hasattr(path,
-                                                                                  "__fspath__"):
-        raise TypeError(f"path must be a path (str or os.PathLike), got {type(path).__name__}")
-    p = Path(path)
-    if not p.is_file():
-        raise FileNotFoundError(f"bench file '{p}' does not exist")
+    p = check_input_file(path, what="bench file")
     if isinstance(profile, dict):
         profile = BenchProfile.from_dict(profile)
     elif isinstance(profile, (str, Path)):
@@ -757,8 +751,9 @@ def import_bench(path, profile, *, actuator, experiment: str = "tensile", descri
                                 "'contraction'")
     record = dict(record or {})
     if "pressure_nominal" in record:
-        record["pressure_nominal"] = quantity("record pressure_nominal",
-                                              record["pressure_nominal"], "Pa")
+        record["pressure_nominal"] = check_nominal_pressure(
+            "record pressure_nominal", quantity("record pressure_nominal",
+                                                record["pressure_nominal"], "Pa"))
     src = str(p)
     text, raw = _open_text(p)
     sha = hashlib.sha256(raw).hexdigest()

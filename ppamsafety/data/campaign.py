@@ -36,8 +36,11 @@ from pathlib import Path
 
 import numpy as np
 
+from .._inputfiles import read_text
+from .._validation import did_you_mean
 from .bench_import import Actuator, BenchProfile, import_bench, quantity
-from .measured import MeasuredData, MeasuredDataError, MeasuredDataWarning, load_measured
+from .measured import (MeasuredData, MeasuredDataError, MeasuredDataWarning,
+                       check_nominal_pressure, load_measured)
 
 _MANIFEST_KEYS = ("name", "description", "profile", "experiment", "actuator", "records",
                   "source")
@@ -142,12 +145,20 @@ def load_campaign(path, *, check_signs: bool = True) -> Campaign:
     Returns
     -------
     Campaign
+
+    Raises
+    ------
+    MeasuredDataError
+        Anything wrong with the manifest, its profile or a record, naming the key
+        (``records[2].file``) and the file.
+    MissingFileError
+        The manifest does not exist (a ``FileNotFoundError`` and a ``ValueError``).
     """
-    p = Path(path)
-    if not p.is_file():
-        raise FileNotFoundError(f"campaign manifest '{p}' does not exist")
+    p, text = read_text(path, what="campaign manifest", error=MeasuredDataError)
+    if not isinstance(check_signs, bool):
+        raise TypeError(f"check_signs must be True or False, got {check_signs!r}")
     try:
-        man = tomllib.loads(p.read_text(encoding="utf-8"))
+        man = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise MeasuredDataError(f"{p}: the manifest is not valid TOML: {exc}") from None
     unknown = [k for k in man if k not in _MANIFEST_KEYS]
@@ -155,50 +166,84 @@ def load_campaign(path, *, check_signs: bool = True) -> Campaign:
         raise MeasuredDataError(f"{p}: unknown manifest key(s) {unknown} (allowed: "
                                 f"{', '.join(_MANIFEST_KEYS)}; a key after a [table] header "
                                 f"belongs to that table)")
+    for k in ("name", "description", "source", "experiment"):
+        if k in man and not isinstance(man[k], str):
+            raise MeasuredDataError(f"{p}: {k} = {man[k]!r} must be a string")
     recs = man.get("records")
-    if not isinstance(recs, list) or not recs:
+    if recs is None:
         raise MeasuredDataError(f"{p}: no [[records]] (each with file = ...)")
+    if not isinstance(recs, list) or not recs or not all(isinstance(r, dict) for r in recs):
+        raise MeasuredDataError(f"{p}: records = {recs!r:.80} must be [[records]] tables (at "
+                                f"least one, each with file = ...)")
     base = p.parent
     profile = None
     if "profile" in man:
-        profile = BenchProfile.from_toml(base / man["profile"]) if isinstance(
-            man["profile"], str) else BenchProfile.from_dict(man["profile"])
-    actuator = Actuator.from_dict(man["actuator"]) if "actuator" in man else None
+        prof = man["profile"]
+        try:
+            if isinstance(prof, str) and prof.strip():
+                profile = BenchProfile.from_toml(base / prof)
+            elif isinstance(prof, dict):
+                profile = BenchProfile.from_dict(prof)
+            else:
+                raise MeasuredDataError("must be the path of an import profile (relative to "
+                                        "the manifest) or a [profile] table")
+        except (ValueError, TypeError) as exc:
+            raise MeasuredDataError(f"{p}: profile = {prof!r:.80}: {exc}") from None
+    actuator = None
+    if "actuator" in man:
+        try:
+            actuator = Actuator.from_dict(man["actuator"])
+        except (ValueError, TypeError) as exc:
+            raise MeasuredDataError(f"{p}: [actuator]: {exc}") from None
     out = []
     for i, r in enumerate(recs):
-        if not isinstance(r, dict) or "file" not in r:
-            raise MeasuredDataError(f"{p}: records[{i}] must be a table with file = ...")
+        where = f"{p}: records[{i}]"
+        if "file" not in r:
+            raise MeasuredDataError(f"{where} has no file = ... (the record's file, relative to "
+                                    f"the manifest)")
         bad = [k for k in r if k not in _RECORD_KEYS]
         if bad:
-            raise MeasuredDataError(f"{p}: records[{i}]: unknown key(s) {bad} (allowed: "
+            raise MeasuredDataError(f"{where}: unknown key(s) {bad} (allowed: "
                                     f"{', '.join(_RECORD_KEYS)})")
+        if not isinstance(r["file"], str) or not r["file"].strip():
+            raise MeasuredDataError(f"{where}.file = {r['file']!r} must be the path of a record "
+                                    f"file (relative to the manifest)")
+        for k, typ, what in (("label", str, "a string"), ("description", str, "a string"),
+                             ("format", str, "'raw' or 'measured'"),
+                             ("run", int, "an integer")):
+            if k in r and (not isinstance(r[k], typ) or isinstance(r[k], bool)):
+                raise MeasuredDataError(f"{where}.{k} = {r[k]!r} must be {what}")
         fmt = r.get("format", "raw")
+        if fmt not in ("raw", "measured"):
+            raise MeasuredDataError(f"{where}.format = {fmt!r} is not 'raw' or 'measured'"
+                                    f"{did_you_mean(fmt, ('raw', 'measured'))}")
         f = base / r["file"]
         info = {k: r[k] for k in ("pressure_nominal", "label", "run") if k in r}
         if "pressure_nominal" in info:
-            info["pressure_nominal"] = quantity(f"{p}: records[{i}].pressure_nominal",
-                                                info["pressure_nominal"], "Pa")
-        if fmt == "raw":
-            if profile is None or actuator is None:
-                raise MeasuredDataError(f"{p}: records[{i}] is a raw file: the manifest needs "
-                                        f"profile = ... and an [actuator] table")
-            out.append(import_bench(f, profile, actuator=actuator,
-                                    experiment=man.get("experiment", "tensile"),
-                                    description=r.get("description", ""),
-                                    source=man.get("source"), record=info,
-                                    check_signs=check_signs))
-        elif fmt == "measured":
-            d = load_measured(f)
-            if info:
-                meta = dict(d.meta)
-                meta["record"] = {**meta.get("record", {}), **info}
-                with warnings.catch_warnings():
-                    warnings.simplefilter("ignore", MeasuredDataWarning)
-                    d = MeasuredData(meta, d.frame, source=d.source)
-            out.append(d)
-        else:
-            raise MeasuredDataError(f"{p}: records[{i}].format = {fmt!r} is not 'raw' or "
-                                    f"'measured'")
+            info["pressure_nominal"] = check_nominal_pressure(
+                f"{where}.pressure_nominal", quantity(f"{where}.pressure_nominal",
+                                                      info["pressure_nominal"], "Pa"))
+        if fmt == "raw" and (profile is None or actuator is None):
+            raise MeasuredDataError(f"{where} is a raw file: the manifest needs "
+                                    f"profile = ... and an [actuator] table")
+        try:
+            if fmt == "raw":
+                d = import_bench(f, profile, actuator=actuator,
+                                 experiment=man.get("experiment", "tensile"),
+                                 description=r.get("description", ""),
+                                 source=man.get("source"), record=info,
+                                 check_signs=check_signs)
+            else:
+                d = load_measured(f)
+        except (ValueError, OSError) as exc:         # the record's own error, with its key
+            raise MeasuredDataError(f"{where}.file = {r['file']!r}: {exc}") from None
+        if fmt == "measured" and info:
+            meta = dict(d.meta)
+            meta["record"] = {**meta.get("record", {}), **info}
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore", MeasuredDataWarning)
+                d = MeasuredData(meta, d.frame, source=d.source)
+        out.append(d)
     return Campaign(tuple(out), name=str(man.get("name", p.stem)),
                     description=str(man.get("description", "")))
 

@@ -284,8 +284,9 @@ def identify_measured(data, kind: str, *, method: str = "LS", friction: bool = T
     arm : ArmParameters, optional, keyword-only
         Known geometry and nominal muscle law (default the thesis arm).
     sign_velocity : float, optional, keyword-only
-        Dynamic: smooth sign tanh(qd/v) in the Coulomb columns [rad/s]; None
-        the ideal sgn (thesis (3.30)).
+        Dynamic with friction: smooth sign tanh(qd/v) in the Coulomb columns [rad/s], in
+        (0, 1000]; None the ideal sgn (thesis (3.30)).  Refused for a static identification
+        or without friction (it would change nothing).
 
     Returns
     -------
@@ -297,6 +298,14 @@ def identify_measured(data, kind: str, *, method: str = "LS", friction: bool = T
     friction = check_bool("friction", friction)
     drop = check_int("drop", drop, 0, 10 ** 7)
     confidence = check_range("confidence", confidence, 0.0, 1.0, lo_open=True, hi_open=True)
+    if sign_velocity is not None:
+        sign_velocity = check_range("sign_velocity", sign_velocity, 0.0, 1e3, lo_open=True,
+                                    unit="rad/s")
+        if kind == "static" or not friction:
+            raise ValueError(f"sign_velocity = {sign_velocity:g} rad/s shapes the Coulomb "
+                             f"friction columns of a dynamic identification with friction; it "
+                             f"has no meaning "
+                             f"{'in a static one' if kind == 'static' else 'without friction'}")
     arm = thesis_arm() if arm is None else check_instance("arm", arm, ArmParameters)
     arm_label = ("thesis_arm()" if arm is thesis_arm() else
                  f"{arm.name or 'unnamed arm'} (sha256 {arm_fingerprint(arm)[:16]})")

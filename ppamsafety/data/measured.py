@@ -45,6 +45,7 @@ import pandas as pd
 
 from ..experiments.catalog import (THESIS_KI_BAR, THESIS_LAMBDAS, label_of, EXPERIMENTS as NAMED,
                                    Family)
+from .._inputfiles import check_input_file, read_text
 from ..output import atomic_write, check_new_file
 from ..params.geometry import thesis_geometry
 
@@ -69,6 +70,10 @@ U = tuple(f"u{i}" for i in range(1, 5))
 F = tuple(f"F{i}" for i in range(1, 5))
 Q_D = ("q1_d", "q2_d")
 
+#: Largest measured data file read [bytes]: 512 MB of CSV, about 4 million rows of the 13
+#: columns of an arm record (more than an hour at 1 kHz); its table takes several times
+#: that in memory while it is parsed and checked.
+MAX_FILE_BYTES = 512 * 2 ** 20
 #: Fewest rows of a record per experiment (gravity: 4 parameters from 2 N equations;
 #: muscle law: 5 parameters; a dynamic record needs at least some samples to filter).
 MIN_ROWS = {"static-sawtooth": 3, "tensile": 6, "open-loop": 10, "closed-loop": 10}
@@ -217,6 +222,9 @@ def _check_meta(meta: dict, src: str, columns, warn) -> dict:
     for key in ("import", "record"):
         if key in meta and not isinstance(meta[key], dict):
             raise MeasuredDataError(f"{src}: metadata {key} must be a table, got {meta[key]!r}")
+    if isinstance(meta.get("record"), dict) and "pressure_nominal" in meta["record"]:
+        check_nominal_pressure(f"{src}: metadata record.pressure_nominal",
+                               meta["record"]["pressure_nominal"])
     if "units" in meta:
         _check_units(meta["units"], src, kind)
     # closed loop: controller and reference
@@ -264,6 +272,27 @@ def _check_meta(meta: dict, src: str, columns, warn) -> dict:
     if unknown:
         warn(f"{src}: unknown metadata key(s) {', '.join(map(repr, unknown))} (kept)")
     return meta
+
+
+def check_nominal_pressure(where: str, value) -> float:
+    """A record's nominal gauge pressure [Pa]: a number in [-1 atm, the actuator maximum].
+
+    Parameters
+    ----------
+    where : str
+        The field, for the message.
+    value : float
+        The pressure [Pa] (a number; a campaign manifest's "3 bar" is converted before).
+    """
+    hi = PLAUSIBILITY["actuator"]["pressure"][1]
+    if isinstance(value, bool) or not isinstance(value, numbers.Real) or \
+            not math.isfinite(float(value)):
+        raise MeasuredDataError(f"{where} = {value!r} must be a finite gauge pressure [Pa]")
+    if not -P_ATM_STD <= float(value) <= hi:
+        raise MeasuredDataError(f"{where} = {float(value):g} Pa is physically impossible: a gauge "
+                                f"pressure is in [-1 atm, {hi / 1e5:g} bar] = [{-P_ATM_STD:g}, "
+                                f"{hi:g}] Pa")
+    return float(value)
 
 
 def _check_arm_record(arm, src):
@@ -1039,8 +1068,14 @@ def _format_of(p: Path) -> str:
         return "csv"
     if suf in (".parquet", ".pq"):
         return "parquet"
+    hint = {".toml": " (a .toml bench campaign manifest is read by `ppamsafety diagnose` and "
+                     "load_campaign)",
+            ".xz": " (a compressed raw bench file is imported with a profile: a campaign "
+                   "manifest, or import_bench)",
+            ".gz": " (a compressed raw bench file is imported with a profile: a campaign "
+                   "manifest, or import_bench)"}.get(suf, "")
     raise MeasuredDataError(f"{p}: unknown data file type {p.suffix!r}; the format is CSV (.csv) "
-                            f"or Parquet (.parquet)")
+                            f"or Parquet (.parquet){hint}")
 
 
 def _need_pyarrow(what: str) -> None:
@@ -1096,8 +1131,8 @@ def _read_meta(p: Path, fmt: str):
         block, n_head = _split_header("".join(lines))
         if block.strip():
             head_meta = _parse_toml(block, f"{p} (header block, line numbers are file lines)")
-    side_meta = _parse_toml(side.read_text(encoding="utf-8-sig"), str(side)) \
-        if side.is_file() else {}
+    side_meta = _parse_toml(read_text(side, what="metadata sidecar", error=MeasuredDataError)[1],
+                            str(side)) if side.is_file() else {}
     if head_meta and side_meta:
         raise MeasuredDataError(f"{p}: metadata given twice (header block and {side.name}); "
                                 f"keep one")
@@ -1136,13 +1171,14 @@ def load_measured(path, *, allow_gaps: bool = False, strict_units: bool = True) 
         Anything wrong with the data or metadata; the message names file,
         column and row.
     """
-    if isinstance(path, bool) or not isinstance(path, (str, Path)) and not hasattr(path,
-                                                                                  "__fspath__"):
-        raise TypeError(f"path must be a path (str or os.PathLike), got {type(path).__name__}")
-    p = Path(path)
-    if not p.is_file():
-        raise FileNotFoundError(f"measured data file '{p}' does not exist"
-                                if not p.exists() else f"'{p}' is not a file")
+    p = check_input_file(path, what="measured data file")
+    size = p.stat().st_size
+    if size > MAX_FILE_BYTES:
+        raise MeasuredDataError(f"{p}: {size / 2 ** 20:.4g} MB, more than the "
+                                f"{MAX_FILE_BYTES / 2 ** 20:g} MB a measured data file may hold "
+                                f"(its table would need several times that in memory); split "
+                                f"the record (a campaign manifest diagnoses several together) or "
+                                f"decimate it")
     fmt = _format_of(p)
     if fmt == "parquet":
         _need_pyarrow("read")
@@ -1172,7 +1208,7 @@ def load_measured(path, *, allow_gaps: bool = False, strict_units: bool = True) 
 
 
 __all__ = ["check_save_path", "FORMAT_VERSION", "KINDS", "EXPERIMENTS", "ALLOWED", "ARM_CHANNELS",
-           "ACTUATOR_TYPES",
-           "ACTUATOR_CHANNELS", "MIN_ROWS", "DT_TOLERANCE", "GAP_FACTOR", "MeasuredData",
+           "ACTUATOR_TYPES", "ACTUATOR_CHANNELS", "MIN_ROWS", "MAX_FILE_BYTES", "DT_TOLERANCE",
+           "GAP_FACTOR", "MeasuredData", "check_nominal_pressure",
            "MeasuredDataError", "MeasuredDataWarning", "load_measured", "read_metadata",
            "dumps_toml"]

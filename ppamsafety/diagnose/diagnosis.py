@@ -20,7 +20,7 @@ from dataclasses import replace
 from threadpoolctl import threadpool_limits
 
 from ..data.campaign import Campaign
-from .._validation import check_instance, check_int, check_seed
+from .._validation import check_instance, check_int, check_seed, did_you_mean
 from ..data.measured import MeasuredData
 from ..params import thesis_arm
 from ..params.arm_file import arm_fingerprint
@@ -102,6 +102,18 @@ def _diagnose(data, *, arm, candidates, block_seconds, alpha, rho_max, experimen
         check_int("bootstrap", bootstrap, 0, 10000)
     if stability is not None:
         check_int("stability", stability, 0, 10000)
+    recs = data.records if isinstance(data, Campaign) else (data,)
+    if experiment is not None:
+        exps = sorted({r.experiment for r in recs})
+        if exps != [experiment]:
+            raise ValueError(f"experiment = {experiment!r} does not match the experiment "
+                             f"{', '.join(map(repr, exps))} of the record's metadata"
+                             f"{did_you_mean(experiment, exps)}")
+    if isinstance(data, Campaign) or data.kind == "actuator":
+        # what applies to arm records only is refused rather than silently ignored
+        if arm is not None:
+            raise ValueError("arm applies to arm records; an actuator record (a test bench) is "
+                             "diagnosed against its own nominal force law (leave arm out)")
     if isinstance(data, Campaign) or data.actuator_type == "cylinder":
         return diagnose_campaign(data, candidates=candidates, alpha=alpha, rho_max=rho_max)
     if data.kind == "actuator":

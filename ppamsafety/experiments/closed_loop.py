@@ -20,7 +20,7 @@ import numpy as np
 import pandas as pd
 
 from .._jit import kernel
-from .._validation import check_int, check_range, check_size
+from .._validation import UnknownNameError, check_int, check_range, check_size, did_you_mean
 from ..control import CONTROLLER_CLASSES
 from ..control.dispatch import NINT, NSCRATCH, NSTATE, controller_step
 from ..control.estimation import (ESTIMATOR_INTERNALS, ESTIMATOR_PARAMS, ESTIMATOR_SCRATCH,
@@ -289,8 +289,9 @@ class ExperimentResult:
 
         Raises
         ------
-        KeyError
-            For an unknown name (the message lists the allowed ones).
+        UnknownNameError
+            A ``KeyError`` and a ``ValueError``, for an unknown name (the message lists
+            the allowed ones).
         """
         names = self._log_names()
         if isinstance(name, str) and name in names and name not in _UNNAMED:
@@ -299,7 +300,9 @@ class ExperimentResult:
             return self.interaction[:, INTERACTION_LOG.column_index(name)]
         if isinstance(name, str) and name in REF_COLUMNS:
             return self.reference.signal(name)
-        raise KeyError(f"unknown signal {name!r}; choose from {self.signal_names()}")
+        raise UnknownNameError(f"unknown signal {name!r}"
+                               f"{did_you_mean(name, self.signal_names())}; choose from "
+                               f"{self.signal_names()}")
 
     def signals(self, *names: str) -> np.ndarray:
         """Several signals by name as columns, shape (n, len(names)).

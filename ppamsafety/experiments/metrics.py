@@ -14,7 +14,7 @@ import math
 import numpy as np
 import pandas as pd
 
-from .._validation import (as_float_array, check_finite, check_instance, check_int,
+from .._validation import (as_float_array, check_finite, check_instance, check_int, check_range,
                            check_positive, check_vector)
 from .catalog import STEP_TIMES, SWITCH_TIME
 from .closed_loop import ExperimentResult
@@ -245,14 +245,14 @@ def chattering_index(dp, dt: float, *, f_cut: float = 5.0) -> float:
     dp : array_like, shape (n, 2)
         Commanded Delta p per joint [Pa] at the control rate.
     dt : float
-        Sample period [s].
+        Sample period [s], in [1e-6, 1].
     f_cut : float
         Cut-off frequency [Hz].
     """
     x = as_float_array("dp", dp, ndim=2, allow_nonfinite=True)
     if x.shape[0] < 4:
         raise ValueError(f"dp must have shape (n >= 4, joints), got {x.shape}")
-    dt = check_positive("dt", dt, unit="s")
+    dt = check_range("dt", dt, 1e-6, 1.0, unit="s")      # a control period
     f_cut = check_positive("f_cut", f_cut, unit="Hz")
     if not np.all(np.isfinite(x)):
         return np.nan

@@ -32,7 +32,7 @@ import pandas as pd
 
 from .._validation import (MAX_BYTES, as_float_array, check_finite, check_increasing,
                            check_instance, check_range, check_shape, check_size,
-                           check_str, check_vector)
+                           check_str, check_vector, did_you_mean, UnknownNameError)
 from ..control.reference import (NREF, R_Q_D, R_QD_D, R_QDD_D, R_QDDD_D,  # noqa: F401
                                  R_R_D, R_RD_D, REF_COLUMNS, REFERENCE_ROW)
 from ..params.arm import ArmParameters
@@ -41,6 +41,10 @@ from ..units import DEG
 
 CIRCLE_CENTER = (0.44, 0.18)
 CIRCLE_RADIUS = 0.10
+#: Largest tool speed of a reference [m/s]: physically impossible for this arm beyond it
+#: (the value of :data:`ppamsafety.impact.model.MAX_SPEED`, 15 times the thesis' fastest
+#: impacts; the thesis circles move the tool at 0.03-0.13 m/s).
+MAX_TOOL_SPEED = 30.0
 
 
 @dataclass(frozen=True)
@@ -99,11 +103,13 @@ class Reference:
 
         Raises
         ------
-        KeyError
-            For a name that is not a reference column.
+        UnknownNameError
+            A ``KeyError`` and a ``ValueError``, for a name that is not a reference column.
         """
         if not (isinstance(name, str) and name in REF_COLUMNS):
-            raise KeyError(f"unknown reference signal {name!r}; choose from {REF_COLUMNS}")
+            raise UnknownNameError(f"unknown reference signal {name!r}"
+                                   f"{did_you_mean(name, list(REF_COLUMNS))}; choose from "
+                                   f"{REF_COLUMNS}")
         return self.data[:, REFERENCE_ROW.column_index(name)]
 
     def field(self, name: str) -> np.ndarray:
@@ -267,7 +273,8 @@ def circle_path(*, period: float, center=CIRCLE_CENTER, radius: float = CIRCLE_R
     Parameters
     ----------
     period : float, keyword-only
-        Time of one turn [s], in (0, 1e4].
+        Time of one turn [s], in (0, 1e4], and long enough that the tool moves at most
+        :data:`MAX_TOOL_SPEED` (2 pi radius / period).
     center : sequence of 2 float
         Centre (x, y) [m], each in [-1, 1] (the arm reaches 0.61 m).
     radius : float
@@ -287,6 +294,12 @@ def circle_path(*, period: float, center=CIRCLE_CENTER, radius: float = CIRCLE_R
     radius = check_range("radius", radius, 0.0, 1.0, lo_open=True, unit="m")
     phase = check_range("phase", phase, -1e3, 1e3, unit="rad")
     w = 2 * np.pi / period
+    if radius * w > MAX_TOOL_SPEED:
+        raise ValueError(f"period = {period:g} s with radius = {radius:g} m moves the tool at "
+                         f"{radius * w:.4g} m/s, physically impossible for this arm (at most "
+                         f"{MAX_TOOL_SPEED:g} m/s): period >= "
+                         f"{2 * np.pi * radius / MAX_TOOL_SPEED:.3g} s; the thesis circles take "
+                         f"5, 10 and 20 s")
 
     def path(t):
         ang = phase + w * np.asarray(t)
@@ -301,6 +314,8 @@ def _circle_segment(arm, t0, t1, dt, what, **circle):
     path = circle_path(**circle)
     c = {"center": CIRCLE_CENTER, "radius": CIRCLE_RADIUS, **circle}
     desc = f"center={tuple(c['center'])!r}, radius={c['radius']!r}"
+    if t1 > t0:             # its size first: a long circle is too large, not out of reach
+        check_reference_size(t1 - t0, dt, 8 * (NREF + 8 * 14))
     try:
         rows = _segment(arm, path, t0, t1, dt)
     except ValueError as exc:

@@ -164,6 +164,11 @@ def w_matrices(q, qd, arm, *, friction: bool = True, sign_velocity: float | None
     return W1, W2, W3
 
 
+#: Shortest sample time of the identification filters [s] (1 MHz sampling; also the
+#: shortest step of :func:`ppamsafety.plant.model.simulate`).
+DT_MIN = 1e-6
+
+
 def filter_coefficients(dt: float, omega: float = FILTER_OMEGA):
     """Bilinear (Tustin) discretisation (b, a) of F(s) = 1/(s/omega + 1) for ``lfilter``.
 
@@ -174,7 +179,7 @@ def filter_coefficients(dt: float, omega: float = FILTER_OMEGA):
     omega : float
         Cut-off [rad/s].
     """
-    dt = check_range("dt", dt, 0.0, 1.0, lo_open=True, unit="s")
+    dt = check_range("dt", dt, DT_MIN, 1.0, unit="s")
     omega = check_range("omega", omega, 0.0, math.pi / dt, lo_open=True, hi_open=True, unit="rad/s")
     wt = omega * dt
     b0 = wt / (2.0 + wt)
@@ -535,13 +540,18 @@ def estimate_acceleration(qd, dt: float, *, cutoff_hz: float = 5.0, order: int =
     from scipy.signal import butter, filtfilt
 
     qd = as_samples("qd", qd, ncols=2, ndim=2)
-    dt = check_range("dt", dt, 0.0, 1.0, lo_open=True, unit="s")
+    dt = check_range("dt", dt, DT_MIN, 1.0, unit="s")
     check_range("cutoff_hz", cutoff_hz, 0.0, 0.5 / dt, lo_open=True, hi_open=True, unit="Hz")
     order = check_int("order", order, 1, 10)
     b, a = butter(order, cutoff_hz * 2 * dt)
     if qd.shape[0] <= 3 * max(len(a), len(b)):
         raise ValueError(f"qd has {qd.shape[0]} samples, too few for the validation filter")
-    return np.gradient(filtfilt(b, a, qd, axis=0), dt, axis=0)
+    try:
+        return np.gradient(filtfilt(b, a, qd, axis=0), dt, axis=0)
+    except np.linalg.LinAlgError:
+        raise ValueError(f"cutoff_hz = {cutoff_hz:g} Hz at dt = {dt:g} s (normalised cut-off "
+                         f"{cutoff_hz * 2 * dt:.3g}) gives a filter of order {order} too narrow "
+                         f"to evaluate; raise cutoff_hz or lower order") from None
 
 
 def mean_squared_torque_error(result: DynamicResult, data: DynamicData, arm, *,

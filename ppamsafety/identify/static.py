@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from .._validation import check_int, check_nonnegative, check_range
+from .._validation import check_int, check_nonnegative, check_range, check_seed
 from ..params.inertia import BaseParameters
 from ..plant.geometry import lever_arms, contractions
 from ..plant.muscle import force_function
@@ -308,7 +308,7 @@ def equilibrium_configurations(arm, n: int = 31, *, seed: int = 0, margin: float
     """
     n = check_int("n", n, 1, 10000)
     check_range("margin", margin, 0.0, 0.45)
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(check_seed("seed", seed))
     g = arm.geometry
     m = int(np.ceil(np.sqrt(4 * n)))
     lo = np.array([g.q1_min, g.q2_min])
@@ -417,7 +417,7 @@ def static_experiment(arm, q, *, seed: int = 0, noise: bool = True,
     ps = valve_set_values(p, arm)
     eps_true = contractions(q, arm)
     F = p * np.stack([force_function(i + 1, eps_true[:, i], arm) for i in range(4)], axis=-1)
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(check_seed("seed", seed))
     n = q.shape[0]
     if noise:
         qm = q + rng.normal(size=(n, 2)) * np.sqrt(av)

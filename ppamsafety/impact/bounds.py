@@ -55,13 +55,15 @@ engine tests), so the returned bounds are multiplied by :data:`MARGIN`.
 from __future__ import annotations
 
 import functools
+import math
 
 import numpy as np
 
-from .._validation import as_float_array
+from .._validation import as_float_array, check_range
 from ..plant import dynamics as dyn
 from ..plant import geometry as geo
 from ..units import G0
+from .model import check_arm, resolve_head
 
 #: Safety factor on the bounds against integration and rounding error of the simulated values.
 MARGIN = 1.01
@@ -119,12 +121,12 @@ def impact_bounds(arm, q, qd, *, head, head_velocity=None, duration: float = 0.0
         Kinematics and link inertias.
     q, qd : array_like, shape (N, 2) or (2,)
         Link angles [rad] and velocities [rad/s] at the impact instant.
-    head : HeadContactModel, keyword-only
-        Head and contact parameters.
+    head : HeadContactModel or str, keyword-only
+        Head and contact parameters (a model or a head model name).
     head_velocity : array_like, shape (N, 2) or (2,), optional
         Initial head velocity [m/s] (default at rest).
     duration : float
-        Simulated time T [s].
+        Simulated time T [s], in [1e-4, 10] (as :func:`~ppamsafety.impact.simulate_impacts`).
     window : float
         HIC window limit W [s] (0.036 for HIC36, 0.015 for HIC15).
 
@@ -134,14 +136,17 @@ def impact_bounds(arm, q, qd, *, head, head_velocity=None, duration: float = 0.0
         F_max bound [N] and HIC bound [-], shape (N,); ``inf`` where no finite
         bound follows (never smaller than the true value).
     """
-    q = np.atleast_2d(as_float_array("q", q, shape_tail=(2,)))
-    qd = np.broadcast_to(as_float_array("qd", qd, shape_tail=(2,)), q.shape)
+    arm = check_arm(arm)
+    q = np.atleast_2d(as_float_array("q", q, shape_tail=(2,), ndim=(1, 2)))
+    qd = as_float_array("qd", qd, shape_tail=(2,), ndim=(1, 2))
+    head = resolve_head(head)
+    if np.atleast_2d(qd).shape[0] not in (1, q.shape[0]):
+        raise ValueError(f"qd has {np.atleast_2d(qd).shape[0]} rows, q has {q.shape[0]}")
+    qd = np.broadcast_to(qd, q.shape)
     vh = np.zeros(q.shape) if head_velocity is None else np.broadcast_to(
-        as_float_array("head_velocity", head_velocity, shape_tail=(2,)), q.shape)
-    if not (np.isfinite(duration) and duration > 0):
-        raise ValueError(f"duration = {duration!r} must be a positive number of seconds")
-    if not (np.isfinite(window) and window > 0):
-        raise ValueError(f"window = {window!r} must be a positive number of seconds")
+        as_float_array("head_velocity", head_velocity, shape_tail=(2,), ndim=(1, 2)), q.shape)
+    duration = check_range("duration", duration, 1e-4, 10.0, unit="s")
+    window = check_range("window", window, 1e-9, math.inf, unit="s")
     mh, R, k, n, b = head.mass, head.radius, head.stiffness, head.exponent, head.damping
     H = dyn.inertia_matrix(q, arm)
     e0 = 0.5 * np.einsum("ni,nij,nj->n", qd, H, qd) + 0.5 * mh * np.einsum("ni,ni->n", vh, vh)

@@ -664,7 +664,7 @@ def contact_episodes(force, a_head_g, dt: float, *, separation: float = SEPARATI
     a = as_float_array("a_head_g", a_head_g).reshape(-1)
     if a.shape != F.shape:
         raise ValueError(f"a_head_g has shape {a.shape}, force {F.shape}")
-    dt = check_range("dt", dt, 0.0, 1.0, lo_open=True, unit="s")
+    dt = check_range("dt", dt, 1e-9, 1.0, unit="s")          # as hic()
     separation = check_range("separation", separation, 0.0, 10.0, unit="s")
     window = check_range("window", window, 0.0, 1.0, lo_open=True, unit="s")
     cols = ["t_start", "t_end", "duration", "F_max", "t_Fmax", "impulse", "HIC36"]

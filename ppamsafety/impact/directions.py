@@ -80,8 +80,8 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
-from .._validation import (as_float_array, check_bool, check_int, check_range, check_range_array,
-                           check_finite_result)
+from .._validation import (MAX_BYTES, as_float_array, check_bool, check_int, check_range,
+                           check_range_array, check_finite_result, check_size)
 from ..plant import dynamics as dyn
 from ..plant import geometry as geo
 from ..plant import packing
@@ -90,8 +90,8 @@ from ..units import G0
 from . import engine as eng
 from .bounds import impact_bounds
 from .instants import impact_states, _check_result
-from .model import (ENERGY_TOL, MAX_JOINT_SPEED, check_angles, check_arm, check_pass_through,
-                    check_stiffness, resolve_head)
+from .model import (BYTES_PER_CASE, ENERGY_TOL, MAX_JOINT_SPEED, check_angles, check_arm,
+                    check_pass_through, check_stiffness, resolve_head)
 from .twobody import two_body_impact
 
 #: Largest |psi| searched [rad]: 89 deg (v_n = |v_tcp| cos(psi) > 0; at 90 deg the tool grazes).
@@ -121,9 +121,18 @@ VMAX_DEFAULT = 8.0
 
 
 def _check_psi(name, psi):
+    n = np.size(psi) if isinstance(psi, np.ndarray) else None
+    if n is not None:                       # an array is sized before it is copied
+        _check_placements(name, n)
     a = as_float_array(name, psi, ndim=(0, 1))
+    _check_placements(name, a.size)
     check_range_array(name, a, -PSI_LIMIT, PSI_LIMIT, unit="rad")
     return a
+
+
+def _check_placements(name, n):
+    check_size(f"{name}: {n:,} head placements", n * BYTES_PER_CASE,
+               remedy=f"give at most {MAX_BYTES // BYTES_PER_CASE:,} angles per call")
 
 
 def _s(mu, v, hm):

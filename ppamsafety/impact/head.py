@@ -40,7 +40,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .._validation import check_range, check_str
+from .._inputfiles import read_text
+from .._validation import check_range, check_str, did_you_mean
 from ..params.arm_file import ArmFileError, Key, _literal, read_value
 from .contact import hunt_crossley_force_batch, hunt_crossley_max_penetration
 
@@ -371,13 +372,7 @@ def load_head(path) -> "HeadContactModel":
     -------
     HeadContactModel
     """
-    p = Path(path)
-    if not p.is_file():
-        raise FileNotFoundError(f"head file '{p}' does not exist or is not a file")
-    try:
-        text = p.read_text(encoding="utf-8")
-    except UnicodeDecodeError as exc:
-        raise ArmFileError(f"{p}: not UTF-8 text ({exc})") from None
+    p, text = read_text(path, what="head file", error=ArmFileError)
     return HeadContactModel.from_toml(text, where=str(p))
 
 
@@ -464,7 +459,8 @@ def head_model(name: str = "thesis-frontal") -> HeadContactModel:
     check_str("name", name)
     models = _models()
     if name not in models:
-        raise ValueError(f"unknown head model {name!r}; choose from {sorted(models)}")
+        raise ValueError(f"unknown head model {name!r}{did_you_mean(name, list(models))}; "
+                         f"choose from {sorted(models)} (or give a head file, .toml)")
     return models[name]
 
 

@@ -440,7 +440,12 @@ class HICResult:
 _LOG_MAX = math.log(np.finfo(float).max)
 
 
-def _evaluate(single, batch, a, dt, window) -> HICResult:
+#: Largest number of windows :func:`hic_bruteforce` evaluates in one call (about 20 s at
+#: 10^8 windows per second); :func:`hic` has no such limit (it is linear in the samples).
+BRUTEFORCE_MAX_WINDOWS = 2 * 10 ** 9
+
+
+def _evaluate(single, batch, a, dt, window, max_windows=None) -> HICResult:
     arr = as_float_array("a", a)                # refuses masked arrays with masked entries
     if arr.ndim not in (1, 2) or arr.shape[-1] < 2:
         raise ValueError(f"a must be 1-D or 2-D (records along the last axis) with at least "
@@ -459,6 +464,12 @@ def _evaluate(single, batch, a, dt, window) -> HICResult:
     if ratio < 1.0:
         raise ValueError(f"window = {window:g} s is shorter than one sample interval dt = {dt:g} s")
     wn = n - 1 if ratio >= n - 1 else math.floor(ratio)   # longer windows cannot occur
+    rows = 1 if arr.ndim == 1 else arr.shape[0]
+    if max_windows is not None and rows * n * wn > max_windows:
+        raise ValueError(f"a ({rows} record(s) of {n:,} samples) with window = {window:g} s "
+                         f"({wn:,} samples) has {rows * n * wn:.3g} windows, more than the "
+                         f"{max_windows:.3g} the brute force evaluates in one call; use hic() "
+                         f"(exact, linear in the samples) or shorter records")
     # HIC <= max(a)^2.5 * (longest window): refuse records whose HIC would overflow float64
     amax = float(arr.max())
     span = min(window, dt * (n - 1))
@@ -540,9 +551,11 @@ def hic_bruteforce(a, dt, *, window=0.036) -> HICResult:
     Returns
     -------
     HICResult
-        As :func:`hic` (same validation and errors).
+        As :func:`hic` (same validation and errors); a call of more than
+        :data:`BRUTEFORCE_MAX_WINDOWS` windows is refused (``ValueError``).
     """
-    return _evaluate(hic_bruteforce_kernel, _bruteforce_batch_kernel, a, dt, window)
+    return _evaluate(hic_bruteforce_kernel, _bruteforce_batch_kernel, a, dt, window,
+                     max_windows=BRUTEFORCE_MAX_WINDOWS)
 
 
 def _half_sine_g(beta):

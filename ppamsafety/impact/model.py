@@ -17,9 +17,10 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from .._validation import (InvalidTypeError, as_float_array, check_bool, check_choice,
-                           check_finite_result, check_int, check_range,
-                           check_range_array, check_same_rows, check_str, describe)
+from .._validation import (MAX_BYTES, InvalidTypeError, as_float_array, check_bool,
+                           check_choice, check_finite_result, check_int, check_range, check_size,
+                           check_range_array, check_same_rows, check_str, describe,
+                           did_you_mean)
 from ..plant import dynamics as dyn
 from ..plant import geometry as geo
 from ..plant import packing
@@ -62,6 +63,11 @@ ENERGY_TOL = 1e-3
 MAX_STEPS = 10 ** 7
 #: Largest memory of the recorded histories of one call [bytes].
 MAX_HISTORY_BYTES = 2 * 10 ** 9
+#: Memory one impact case of a call takes until its summary row is built [bytes] (the
+#: checked inputs, the Jacobians, the packed kernel row, the summary array and DataFrame;
+#: 880 bytes per case measured with ``tracemalloc`` on 2 x 10^4 cases, rounded up): a call
+#: whose cases exceed :data:`ppamsafety._validation.MAX_BYTES` is refused before packing.
+BYTES_PER_CASE = 1000
 
 
 def resolve_head(head, name: str = "head") -> HeadContactModel:
@@ -86,7 +92,8 @@ def resolve_head(head, name: str = "head") -> HeadContactModel:
     names = head_model_names()
     if isinstance(head, str):
         if head not in names:
-            raise ValueError(f"{name} = {head!r}: unknown head model; choose from "
+            raise ValueError(f"{name} = {head!r}: unknown head model"
+                             f"{did_you_mean(head, names)}; choose from "
                              f"{', '.join(map(repr, names))} or pass a HeadContactModel")
         return head_model(head)
     raise InvalidTypeError(f"{name} must be a HeadContactModel or a head model name "
@@ -852,11 +859,21 @@ class _Prepared:
     B: np.ndarray | None = None
 
 
+def _check_cases_size(n: int, ref: str) -> None:
+    check_size(f"{n:,} impact cases ({ref} has {n:,} rows)", n * BYTES_PER_CASE,
+               remedy=f"simulate them in batches of at most {MAX_BYTES // BYTES_PER_CASE:,} "
+                      f"cases")
+
+
 def _prepare_impacts(arm, q, qd, stiffness, *, head, direction, head_velocity, fixed_arm, dt,
                      duration, history, warn_area, stacklevel,
                      joint_model="frozen-equilibrium", motor_inertia=None):
     """Validate the inputs of :func:`simulate_impacts` and pack the kernel rows (no run)."""
     arm = check_arm(arm)
+    rows = [np.shape(a)[0] for a in (q, qd, stiffness, direction, head_velocity, motor_inertia)
+            if isinstance(a, np.ndarray) and a.ndim == 2]
+    if rows:                              # sized before the arrays are checked or copied
+        _check_cases_size(max(rows), "the largest array")
     q = as_float_array("q", q, shape_tail=(2,), ndim=(1, 2))
     qd = as_float_array("qd", qd, shape_tail=(2,), ndim=(1, 2))
     jm = resolve_joint_model(joint_model)
@@ -899,6 +916,7 @@ def _prepare_impacts(arm, q, qd, stiffness, *, head, direction, head_velocity, f
     if q.ndim == 2 and q.shape[0] == 0:
         n = 0
     ref = next(nm for nm, a in named if (a.shape[0] if a.ndim == 2 else 1) == n)
+    _check_cases_size(n, ref)
     q = _rows("q", q, n, ref)
     qd = _rows("qd", qd, n, ref)
     K = _rows("stiffness", K, n, ref)

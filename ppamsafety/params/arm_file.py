@@ -54,10 +54,10 @@ import math
 import re
 import tomllib
 from dataclasses import dataclass, fields
-from pathlib import Path
 
 import tomli_w
 
+from .._inputfiles import read_text
 from ..units import si_factor
 from .effects import Effects
 from .geometry import ArmGeometry
@@ -653,13 +653,7 @@ def read_arm_file(path, *, cls):
     -------
     ArmParameters
     """
-    p = Path(path)
-    if not p.is_file():
-        raise FileNotFoundError(f"arm file '{p}' does not exist or is not a file")
-    try:
-        text = p.read_text(encoding="utf-8")
-    except UnicodeDecodeError as exc:
-        raise _err(str(p), f"not UTF-8 text ({exc})") from None
+    p, text = read_text(path, what="arm file", error=ArmFileError)
     return arm_from_toml(text, cls=cls, where=str(p))
 
 

@@ -33,7 +33,7 @@ import warnings
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from pathlib import Path
 
-from .._validation import check_int
+from .._validation import check_int, did_you_mean
 from ..impact.head import head_model, resolve_head
 from ..output import OutputFolder
 from ..params import ArmParameters, is_thesis_arm, thesis_arm
@@ -193,9 +193,17 @@ def build_report(outdir="reports", *, quick: bool = False, only=None, progress: 
     names = list(REGISTRY if only is None else only)
     if not names:
         raise ValueError(f"only = {only!r} names no report section; choose from {REGISTRY}")
+    bad = [n for n in names if not isinstance(n, str)]
+    if bad:
+        raise TypeError(f"only must hold section names (str), got {bad[0]!r}")
     unknown = [n for n in names if n not in REGISTRY]
     if unknown:
-        raise ValueError(f"unknown report sections {unknown}; choose from {REGISTRY}")
+        raise ValueError(f"unknown report sections {unknown}"
+                         f"{did_you_mean(unknown[0], list(REGISTRY))}; choose from {REGISTRY}")
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        raise ValueError(f"only = {names!r} names {twice} more than once; name each section "
+                         f"once")
     if processes is None:
         processes = os.cpu_count() or 1
     processes = min(check_int("processes", processes, 1, 1024), len(names))
@@ -228,8 +236,16 @@ def build_report(outdir="reports", *, quick: bool = False, only=None, progress: 
                 # workers (report.warmup)
                 _run_in_pool(pool, processes, order, stage, quick, only is None, report,
                              arm, head)
-            finally:
-                pool.shutdown(wait=True, cancel_futures=True)
+            except BaseException:
+                # Ctrl-C or a failed section: stop the other sections now instead of waiting
+                # for them (the previous report is left untouched either way)
+                workers = list((getattr(pool, "_processes", None) or {}).values())
+                pool.shutdown(wait=False, cancel_futures=True)
+                for w in workers:
+                    if w.is_alive():
+                        w.terminate()
+                raise
+            pool.shutdown(wait=True)
         sections, metrics = [], {}
         for name in names:                                  # the order asked for
             res, dt = done[name]

@@ -27,13 +27,16 @@ file run by ``ppamsafety sweep``, :mod:`ppamsafety.study_files`).
 
 from __future__ import annotations
 
+import functools
 import importlib
+import inspect
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import pandas as pd
 
 from .._commandline import Parser, run_guarded
+from .._validation import check_bool
 from ..output import OutputFolder
 # the impact.head module by its own name: ``head_model`` is a section module here
 from ..impact import head as _head
@@ -184,6 +187,33 @@ def resolve_head_model(head) -> "_head.HeadContactModel":
     HeadContactModel
     """
     return _head.resolve_head(head)
+
+
+def checked_compute(compute):
+    """Decorator of a section's ``compute``: its common arguments are checked first.
+
+    ``quick`` must be a bool, ``arm`` an ArmParameters or None, ``head`` a head model, a
+    name or a head file (resolved, so a wrong head is refused even by a section that
+    crashes into none and does not use it).
+
+    Parameters
+    ----------
+    compute : callable
+        The section's ``compute(*, quick=False, arm=None, head=None, ...)``.
+    """
+    sig = inspect.signature(compute)
+
+    @functools.wraps(compute)
+    def checked(*args, **kwargs):
+        given = sig.bind(*args, **kwargs).arguments
+        if "quick" in given:
+            check_bool("quick", given["quick"])
+        if given.get("arm") is not None:
+            resolve_arm(given["arm"])
+        if given.get("head") is not None:
+            resolve_head_model(given["head"])
+        return compute(*args, **kwargs)
+    return checked
 
 
 def compares_to_thesis(arm, head=None) -> bool:
@@ -356,9 +386,15 @@ def main(name: str, argv=None) -> int:
     p.add_argument("--head", default=None, metavar="NAME|FILE",
                    help="head model name or head file (default: thesis-frontal)")
 
+    def named(option, value, load):
+        try:
+            return load(value)
+        except (ValueError, TypeError, OSError) as exc:     # the option, then why
+            raise ValueError(f"{option} {value!r}: {exc}") from None
+
     def run(args):
-        arm = None if args.arm is None else load_arm(args.arm)
-        head = None if args.head is None else _head.resolve_head(args.head)
+        arm = None if args.arm is None else named("--arm", args.arm, load_arm)
+        head = None if args.head is None else named("--head", args.head, _head.resolve_head)
         with OutputFolder(args.outdir, kind="section", overwrite=args.overwrite,
                           clean=False, kinds=("section", "report")) as stage:
             res = run_section(name, stage, quick=args.quick, arm=arm, head=head)

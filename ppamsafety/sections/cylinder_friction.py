@@ -34,7 +34,7 @@ from ..diagnose.bench.calibration import (HIGH_PRECISION, MEASURE_SEEDS, calibra
                                           run_calibration)
 from ..markdown import markdown_table
 from ..plots.bench import seal_parameters_figure
-from . import Section, SectionInfo
+from . import Section, SectionInfo, checked_compute
 
 SECTION = SectionInfo(
     summary=("bench case study: friction of three real 3D-printed cylinders (campaigns over "
@@ -119,6 +119,7 @@ def _fmt_params(params: dict) -> str:
     return "; ".join(out)
 
 
+@checked_compute
 def compute(*, quick: bool = False, arm=None, calibration_runs: int | None = None,
             seals=ZILLEN2021_SEALS) -> BenchCaseStudy:
     """Diagnose the shipped seals as campaigns and calibrate the confidence.

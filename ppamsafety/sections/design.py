@@ -14,7 +14,8 @@ from ..plant import pneumatics as pn
 from ..plant.muscle import force_function, force_polynomial
 from ..plant.ppam_theory import theoretical_muscles
 from ..units import BAR, DEG, MM
-from . import Section, SectionInfo, compares_to_thesis, other_arm_note, resolve_arm
+from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
+               resolve_arm)
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -103,6 +104,7 @@ class DesignStudy:
                 "design_max_load.png": self.max_load.plot()}
 
 
+@checked_compute
 def compute(*, quick: bool = False, arm=None, head=None) -> DesignStudy:
     """Torque functions, stiffness and maximum-load maps, Table A.1.
 

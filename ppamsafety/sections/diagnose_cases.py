@@ -38,7 +38,8 @@ from ..diagnose.arm.summary_fit import (TableDesign, fit_pair, fit_summary, CONF
                                         PRINT_STD, RANK_TOL, REPRODUCIBILITY, axis)
 from ..markdown import markdown_table
 from ..plots.diagnose import plot_confusion, plot_gap
-from . import Section, SectionInfo, compares_to_thesis, other_arm_note, resolve_arm
+from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
+               resolve_arm)
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -232,6 +233,7 @@ def confusion_matrix(battery: pd.DataFrame) -> pd.DataFrame:
         index=list(dict.fromkeys(battery["case"])), fill_value=0)
 
 
+@checked_compute
 def compute(*, quick: bool = False, arm=None, head=None) -> DiagnoseCasesStudy:
     """Run case (c), case (b) and the battery (module docstring).
 

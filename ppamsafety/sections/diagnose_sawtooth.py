@@ -20,13 +20,14 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import pandas as pd
 
-from .._validation import check_int, check_range
+from .._validation import check_range, check_seed
 from ..diagnose import diagnose, synthesize
 from ..diagnose.arm.static import static_record
 from ..hysteresis import DELTA_25_FIBRES
 from ..markdown import markdown_table
 from ..plots.diagnose import plot_sawtooth_diagnosis
-from . import Section, SectionInfo, compares_to_thesis, other_arm_note, resolve_arm
+from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
+               resolve_arm)
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -95,6 +96,7 @@ class DiagnoseSawtoothStudy:
                                                                  self.metrics)}
 
 
+@checked_compute
 def compute(*, quick: bool = False, arm=None, delta: float = HIDDEN_DELTA,
             seed: int = SEED, head=None) -> DiagnoseSawtoothStudy:
     """Synthesize the sawtooth with hidden hysteresis and diagnose it.
@@ -128,7 +130,7 @@ def compute(*, quick: bool = False, arm=None, delta: float = HIDDEN_DELTA,
         arm = arm.replace(effects=replace(arm.effects, hysteresis_delta=None))
         delta = max(own)
     delta = check_range("delta", delta, 0.0, 1.0, lo_open=True)
-    seed = check_int("seed", seed, 0)
+    seed = check_seed("seed", seed)
     t0 = time.perf_counter()
     data = synthesize("static-sawtooth", {"hysteresis_delta": delta}, seed=seed, arm=arm,
                       duration=QUICK_DURATION if quick else None)

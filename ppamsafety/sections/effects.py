@@ -32,12 +32,13 @@ from types import SimpleNamespace
 import numpy as np
 import pandas as pd
 
+from .._validation import as_float_array, check_range
 from ..control import GravityCompensation
 from ..experiments import catalog
 from ..experiments.case import ExperimentCase
 from ..experiments.closed_loop import run_batch
 from ..experiments.conclusions import conclusions_table, evaluate_conclusions
-from ..experiments.trajectories import REFERENCE_ROW, Reference
+from ..experiments.trajectories import REFERENCE_ROW, Reference, check_reference_size
 from ..hysteresis import DELTA_25_FIBRES
 from ..markdown import markdown_table
 from ..params.effects import Effects
@@ -46,8 +47,8 @@ from ..plant.model import hysteresis_factors
 from ..plant.muscle import muscle_force
 from ..plots.effects import (plot_ratio_shift, plot_sawtooth_angles, plot_sawtooth_errors,
                              plot_sawtooth_forces)
-from . import (Section, SectionInfo, compares_to_thesis, other_arm_note, resolve_arm,
-               resolve_head_model, responses, safety, tracking)
+from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
+               resolve_arm, resolve_head_model, responses, safety, tracking)
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -151,16 +152,17 @@ def sawtooth_reference(arm, levels, *, ramp: float = RAMP_S, settle: float = SET
     windows : numpy.ndarray, shape (m, 2) of int
         First and one-past-last sample index of each level's data window.
     """
-    lv = np.asarray(levels, dtype=float)
-    if lv.ndim != 2 or lv.shape[1] != 2 or lv.shape[0] < 2:
+    lv = as_float_array("levels", levels, shape_tail=(2,), ndim=2)
+    if lv.shape[0] < 2:
         raise ValueError(f"levels must have shape (m >= 2, 2), got {lv.shape}")
-    for name, v in (("ramp", ramp), ("settle", settle), ("window", window)):
-        if not (np.isfinite(v) and v > 0):
-            raise ValueError(f"{name} = {v!r} s must be a positive finite duration")
+    ramp, settle, window = (check_range(name, v, 0.0, 1e4, lo_open=True, unit="s")
+                            for name, v in (("ramp", ramp), ("settle", settle),
+                                            ("window", window)))
+    dt = check_range("dt", dt, 1e-5, 0.1, unit="s")
     hold = settle + window
     t_start = [0.0] + [hold + i * (ramp + hold) for i in range(lv.shape[0] - 1)]
     duration = hold + (lv.shape[0] - 1) * (ramp + hold)
-    n = int(round(duration / dt))
+    n = check_reference_size(duration, dt, 8 * REFERENCE_ROW.size + 7 * 8 * 2)
     t = np.arange(n) * dt
     q = np.tile(lv[0], (n, 1))
     qd = np.zeros((n, 2))
@@ -467,6 +469,7 @@ def plants(arm, delta: float = HYSTERESIS_DELTA) -> dict:
             "hysteresis": arm}
 
 
+@checked_compute
 def compute(*, quick: bool = False, arm=None, delta: float = HYSTERESIS_DELTA,
             head=None) -> EffectsStudy:
     """Sawtooth validation, Table 5.2, conclusions and Table 6.1 with and without hysteresis.

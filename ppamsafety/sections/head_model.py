@@ -13,8 +13,8 @@ from ..impact.head import head_model, head_model_names
 from ..impact.instants import evaluate_experiment
 from ..markdown import markdown_table
 from ..plots.impact import plot_head_fit
-from . import (Section, SectionInfo, compares_to_thesis, other_arm_note, resolve_arm,
-               resolve_head_model)
+from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
+               resolve_arm, resolve_head_model)
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -93,6 +93,7 @@ def _sensitivity(arm, heads) -> pd.DataFrame:
     return pd.DataFrame(sens)
 
 
+@checked_compute
 def compute(*, quick: bool = False, arm=None, head=None) -> HeadModelStudy:
     """Fit the head model to Table 6.1 and check it against the drop test and ISO/TS 15066.
 

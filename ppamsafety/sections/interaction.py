@@ -47,8 +47,8 @@ from ..params.inertia import BaseParameters
 from ..plant import geometry as geo
 from ..plots.interaction import (plot_force_estimates, plot_interaction_path, plot_observer_step,
                                  plot_release)
-from . import (Section, SectionInfo, compares_to_thesis, other_arm_note, resolve_arm,
-               resolve_head_model)
+from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
+               resolve_arm, resolve_head_model)
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -167,6 +167,7 @@ class InteractionStudy:
         }
 
 
+@checked_compute
 def compute(*, quick: bool = False, arm=None, head=None) -> InteractionStudy:
     """Run the five interaction experiments (see the module docstring).
 

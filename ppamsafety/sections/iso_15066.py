@@ -55,8 +55,8 @@ from ..params.iso_ts_15066 import FACE, SKULL_FOREHEAD, THESIS_ARM_MASS
 from ..plant.geometry import jacobian
 from ..plots import iso as f
 from ..units import BAR, DEG
-from . import (Section, SectionInfo, compares_to_thesis, other_arm_note, resolve_arm,
-               resolve_head_model)
+from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
+               resolve_arm, resolve_head_model)
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -382,6 +382,7 @@ class IsoStudy:
                 "iso_hc_vs_linear.png": f.plot_hc_vs_linear(self)}
 
 
+@checked_compute
 def compute(*, quick: bool = False, arm=None, head=None) -> IsoStudy:
     """Clamping and ISO/TS 15066 power and force limiting for the head.
 

@@ -24,8 +24,8 @@ from ..params import thesis_arm
 from ..plots.impact import plot_lambda_sweep
 from ..sweep import run_sweep
 from ..units import BAR
-from . import (Section, SectionInfo, compares_to_thesis, other_arm_note, resolve_arm,
-               resolve_head_model)
+from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
+               resolve_arm, resolve_head_model)
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -115,6 +115,7 @@ class LambdaSweepStudy:
         return {"lambda_sweep.png": plot_lambda_sweep(self.table, tracking="circle_err_mean")}
 
 
+@checked_compute
 def compute(*, quick: bool = False, arm=None, processes: int | None = None,
             head=None) -> LambdaSweepStudy:
     """Sweep lambda x Ki of joint PSMC: step-impact safety against circle tracking.

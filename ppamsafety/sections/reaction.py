@@ -51,8 +51,8 @@ from ..plant.pneumatics import joint_stiffness
 from ..plant.torque import torque_functions
 from ..plots.reaction import plot_collision, plot_reactions
 from ..units import BAR
-from . import (Section, SectionInfo, compares_to_thesis, other_arm_note, resolve_arm,
-               resolve_head_model)
+from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
+               resolve_arm, resolve_head_model)
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -163,6 +163,7 @@ def _row(exp, ctrl, margin, res):
             "energy_error": res.energy["contact_balance_error"]}
 
 
+@checked_compute
 def compute(*, quick: bool = False, arm=None, head=None) -> ReactionStudy:
     """Run the collision-detection and reaction study (see the module docstring).
 

@@ -18,7 +18,8 @@ from ..experiments.metrics import response_table
 from ..experiments.trajectories import CIRCLE_CENTER, CIRCLE_RADIUS
 from ..markdown import markdown_table
 from ..plots.control import plot_lambda_recovery, plot_step_comparison, plot_switch
-from . import Section, SectionInfo, compares_to_thesis, other_arm_note, resolve_arm
+from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
+               resolve_arm)
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -140,6 +141,7 @@ def _figures(study) -> dict:
     return figs
 
 
+@checked_compute
 def compute(*, quick: bool = False, arm=None, variants=None, sensors=None,
             head=None) -> ResponsesStudy:
     """Run step and switch for the thesis variants and tabulate their responses.

@@ -19,8 +19,8 @@ from ..params import thesis_arm
 from ..params.head import MAXILLA_FRACTURE_N
 from ..plots.impact import plot_fmax_over_time, plot_safety_table, plot_worst_histories
 from ..sweep import run_sweep
-from . import (Section, SectionInfo, compares_to_thesis, other_arm_note, resolve_arm,
-               resolve_head_model)
+from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
+               resolve_arm, resolve_head_model)
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -219,6 +219,7 @@ def _figures(study) -> dict:
             "safety_fmax_over_time.png": plot_fmax_over_time(plot_items)}
 
 
+@checked_compute
 def compute(*, quick: bool = False, arm=None, processes: int | None = None,
             head=None) -> SafetyStudy:
     """Reproduce Table 6.1 and scan every impact instant of the step and switch experiments.

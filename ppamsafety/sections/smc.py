@@ -40,7 +40,8 @@ from ..markdown import markdown_table
 from ..params import thesis_arm
 from ..plots.control import plot_smc_chattering, plot_smc_commands
 from ..units import BAR
-from . import Section, SectionInfo, compares_to_thesis, other_arm_note, resolve_arm
+from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
+               resolve_arm)
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -370,6 +371,7 @@ def _figures(study) -> dict:
     return figs
 
 
+@checked_compute
 def compute(*, quick: bool = False, arm=None, head=None) -> SmcStudy:
     """SMC defaults (grid search), chattering vs boundary layer and valve time constant.
 

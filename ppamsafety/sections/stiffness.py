@@ -38,8 +38,8 @@ from ..markdown import markdown_table
 from ..plant import dynamics as dyn
 from ..plant import geometry as geo
 from ..plots.impact import plot_stiffness_conventions
-from . import (Section, SectionInfo, compares_to_thesis, other_arm_note, resolve_arm,
-               resolve_head_model)
+from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
+               resolve_arm, resolve_head_model)
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -214,6 +214,7 @@ class StiffnessStudy:
             reference=tuple(self.instant[["K1", "K2"]]))}
 
 
+@checked_compute
 def compute(*, quick: bool = False, arm=None, head=None) -> StiffnessStudy:
     """Sweep both joint stiffnesses for the step-response impact, for each motor-side convention.
 

@@ -28,8 +28,8 @@ from ..experiments.trajectories import CIRCLE_CENTER
 from ..markdown import markdown_table
 from ..plots.control import plot_error_traces, plot_experiment, plot_tracking_comparison
 from ..units import BAR
-from . import (Section, SectionInfo, compares_to_thesis, other_arm_note, resolve_arm,
-               responses)
+from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
+               resolve_arm, responses)
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -414,6 +414,7 @@ def _figures(study) -> dict:
     return figs
 
 
+@checked_compute
 def compute(*, quick: bool = False, arm=None, head=None) -> TrackingStudy:
     """Table 5.2, conclusions (a)-(f), sensor and gravity-compensation ablations.
 

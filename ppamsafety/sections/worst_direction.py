@@ -24,8 +24,8 @@ from ..impact.thesis_data import join_table_6_1
 from ..markdown import markdown_table
 from ..params.head import MAXILLA_FRACTURE_N
 from ..plots.impact import plot_direction_polar, plot_direction_ratios
-from . import (Section, SectionInfo, compares_to_thesis, other_arm_note, resolve_arm,
-               resolve_head_model)
+from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
+               resolve_arm, resolve_head_model)
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -125,6 +125,7 @@ def _figures(study) -> dict:
     return figs
 
 
+@checked_compute
 def compute(*, quick: bool = False, arm=None, head=None) -> WorstDirectionStudy:
     """Worst head placement and instant for the experiments of Table 6.1.
 

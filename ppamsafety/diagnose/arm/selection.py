@@ -78,7 +78,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 from scipy import stats
 
-from ..._validation import check_int
+from ..._validation import check_int, check_seed
 from ..core.criteria import (ALPHA, CV_SEGMENTS, RHO_MAX, Step, _chi2_sf, _normal_quantile, aicc,
                              bic, rank_step)
 from ...lstsq import step_scores
@@ -930,7 +930,7 @@ def bootstrap_frequency(prob: Problem, candidates=None, *, replicates: int = 40,
         ``replicates``, ``block_length``, ``seed``, ``method``.
     """
     replicates = check_int("replicates", replicates, 1, 10000)
-    seed = check_int("seed", seed, 0)
+    seed = check_seed("seed", seed)
     nb = prob.bs.nb
     L = (max(1, int(math.ceil(nb ** (1.0 / 3.0)))) if block_length is None
          else check_int("block_length", block_length, 1, nb))

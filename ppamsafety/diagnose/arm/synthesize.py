@@ -79,8 +79,8 @@ import numpy as np
 import pandas as pd
 from scipy.signal import lfilter
 
-from ..._validation import (InvalidTypeError, check_bool, check_choice, check_int,
-                            check_numbers, check_range, check_size)
+from ..._validation import (InvalidTypeError, check_bool, check_choice, check_numbers, check_range,
+                            check_seed, check_size)
 from ...control.sensors import SensorConfig
 from ...data.measured import MeasuredData
 from ...data.synthetic import VELOCITY_NOISE_VARIANCES, _arm, default_excitation
@@ -596,7 +596,7 @@ def synthesize_arm(experiment: str = "open-loop", effects=None, *, noise: str = 
     """
     experiment = check_choice("experiment", experiment, EXPERIMENTS)
     noise = check_choice("noise", noise, NOISES)
-    seed = check_int("seed", seed, 0)
+    seed = check_seed("seed", seed)
     if duration is not None:
         duration = check_range("duration", duration, 0.5, 3600.0, unit="s")
     dt = check_range("dt", dt, 1e-4, 0.01, unit="s")

@@ -37,7 +37,7 @@ import warnings
 import numpy as np
 import pandas as pd
 
-from ..._validation import check_int
+from ..._validation import check_seed
 from ...data.measured import MeasuredDataWarning
 from ...hysteresis.tensile import DEFAULT_FORCE_LAW
 from .pipeline import diagnose_actuator
@@ -164,7 +164,7 @@ def run_battery(cases=None, seeds=(1, 2, 3, 4, 5), **options) -> pd.DataFrame:
     bad = [c for c in cases if c not in CASES]
     if bad:
         raise ValueError(f"cases: unknown {bad}; allowed {list(CASES)}")
-    seeds = [check_int("seeds[i]", s, 0) for s in seeds]
+    seeds = [check_seed(f"seeds[{i}]", s) for i, s in enumerate(seeds)]
     rows = []
     for case in cases:
         for s in seeds:

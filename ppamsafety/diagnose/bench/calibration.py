@@ -33,7 +33,7 @@ import warnings
 import numpy as np
 import pandas as pd
 
-from ..._validation import check_int
+from ..._validation import check_seed
 from ...data.measured import MeasuredDataWarning
 from .campaign import diagnose_campaign
 from .cylinder_synth import LIBRARY_NAME, synthesize_cylinder
@@ -67,7 +67,7 @@ def random_scenario(seed: int) -> dict:
         ``effects``, ``nuisance``, ``options`` (of
         :func:`~.cylinder_synth.synthesize_cylinder`), ``seed``.
     """
-    seed = check_int("seed", seed, 0)
+    seed = check_seed("seed", seed)
     rng = np.random.default_rng([seed, 20])
     fx = {"coulomb": _logu(rng, 1.0, 10.0)}
     sgn = lambda: float(rng.choice([-1.0, 1.0]))            # noqa: E731

@@ -47,7 +47,8 @@ import warnings
 import numpy as np
 import pandas as pd
 
-from ..._validation import check_bool, check_choice, check_int, check_range, check_vector
+from ..._validation import (check_bool, check_choice, check_int, check_range, check_seed,
+                            check_vector)
 from ...data.campaign import Campaign
 from ...data.measured import MeasuredData, MeasuredDataWarning
 from ...hysteresis.dahl import dahl_path
@@ -230,7 +231,7 @@ def synthesize_cylinder(effects=None, *, seed: int = 0, pressures=(1e5, 3e5, 5e5
     """
     fx = _check(effects, EFFECTS, "effects")
     nz = _check(DEFAULT_NUISANCE if nuisance is None else nuisance, NUISANCES, "nuisances")
-    seed = check_int("seed", seed, 0)
+    seed = check_seed("seed", seed)
     pressures = check_vector("pressures", pressures, None, 0.0, 2e6, lo_open=True, unit="Pa")
     if not pressures:
         raise ValueError("pressures must hold at least one pressure [Pa]")
@@ -294,7 +295,7 @@ def raw_text(data, *, spikes: int = 0, seed: int = 0) -> str:
     str
     """
     spikes = check_int("spikes", spikes, 0)
-    rng = np.random.default_rng(check_int("seed", seed, 0))
+    rng = np.random.default_rng(check_seed("seed", seed))
     t = data.column("t") * 1e3 + 273.0
     x = -data.column("position") * 1e3
     if spikes:

@@ -58,8 +58,8 @@ import math
 import numpy as np
 import pandas as pd
 
-from ..._validation import (as_float_array, check_bool, check_choice, check_int,
-                            check_numbers, check_range, check_size, check_vector)
+from ..._validation import (as_float_array, check_bool, check_choice, check_int, check_numbers,
+                            check_range, check_seed, check_size, check_vector)
 from ...data.measured import MeasuredData
 from ...hysteresis import EPS_MAX, preisach_response, scaled_input, w_fit
 from ...hysteresis.tensile import DEFAULT_FORCE_LAW
@@ -189,7 +189,7 @@ def synthesize_actuator(effects=None, *, noise: str = "tester", seed: int = 0,
     """
     fx = _check_effects(effects)
     noise = check_choice("noise", noise, NOISES)
-    seed = check_int("seed", seed, 0)
+    seed = check_seed("seed", seed)
     protocol = check_choice("protocol", protocol, PROTOCOLS)
     pressures = check_vector("pressures", pressures, None, 0.0, 1e6, lo_open=True, unit="Pa")
     if not pressures:
