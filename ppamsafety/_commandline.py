@@ -27,6 +27,8 @@ import sys
 import traceback
 import warnings
 
+from ._interrupt import install as install_interrupt, restore as restore_interrupt
+
 EXIT_OK, EXIT_FAILURE, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
 
 
@@ -181,6 +183,7 @@ def run_guarded(parser: argparse.ArgumentParser, func, argv=None) -> int:
         args = parser.parse_args(_split_multi_value([str(a) for a in argv]))
     except SystemExit as exc:          # argparse: --help (0) or a usage error (2)
         return exc.code if isinstance(exc.code, int) else EXIT_USAGE
+    previous_sigint = install_interrupt()
     shown = _Warnings()
     log = logging.getLogger("ppamsafety")
     handler = _LineHandler()
@@ -222,6 +225,7 @@ def run_guarded(parser: argparse.ArgumentParser, func, argv=None) -> int:
     finally:
         log.removeHandler(handler)
         log.setLevel(old_level)
+        restore_interrupt(previous_sigint)
 
 
 __all__ = ["EXIT_OK", "EXIT_FAILURE", "EXIT_USAGE", "EXIT_INTERRUPTED", "Parser", "run_guarded"]

@@ -42,19 +42,23 @@ import os
 import pickle
 import re
 import secrets
+import signal
 import sys
 import itertools
 import math
 import warnings
 from collections.abc import Iterable, Mapping, Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
+from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from pathlib import Path
 
 import pandas as pd
 
+from ._interrupt import requested as interrupt_requested
 from ._sourcehash import source_hash
 
 _STATUS_COLUMNS = ("status", "error")
+#: How often [s] a pooled sweep looks for Ctrl-C while its cases run.
+_POLL_S = 0.2
 #: Default largest number of cases of one :func:`run_sweep` call.
 MAX_CASES = 10 ** 6
 #: Memory one case holds until the table is assembled (key, result row) [bytes], estimated.
@@ -226,6 +230,12 @@ def _assemble(cases, results, failures, on_error, name) -> pd.DataFrame:
 
 def _call(func, case):
     return func(**case)
+
+
+def _ignore_interrupt():
+    """Worker initializer: Ctrl-C is the parent's to handle (it terminates the workers);
+    a worker that died of it would break the pool and its cases would read as failures."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def _error_text(exc: BaseException) -> str:
@@ -424,6 +434,25 @@ def _run_dask(func, cases, todo, keys, name, scheduler, processes, finish, on_er
         close()
 
 
+def _stop_pool(pool) -> None:
+    """Stop a process pool at once: cancel its queued cases and end its workers.
+
+    The workers' current cases are abandoned (the finished ones are in the cache); else the
+    interpreter waits for them at exit (concurrent.futures and multiprocessing join their
+    workers) and Ctrl-C would take as long as the longest running case.
+    """
+    workers = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for w in workers:
+        if w.is_alive():
+            w.terminate()
+    for w in workers:
+        w.join(timeout=5.0)
+        if w.is_alive():
+            w.kill()
+            w.join(timeout=5.0)
+
+
 def _run_pool(func, cases, todo, nproc, finish, on_error) -> None:
     """Run the cases ``todo`` in ``nproc`` worker processes, handing each result to ``finish``.
 
@@ -431,28 +460,42 @@ def _run_pool(func, cases, todo, nproc, finish, on_error) -> None:
     instead of waiting for them (a worker that was interrupted too reports it as the
     case's result and would otherwise take the next case); finished cases are kept.
     """
-    pool = ProcessPoolExecutor(max_workers=nproc)
+    # Ctrl-C is held back while the workers are forked: an interrupt that lands in a fork
+    # handler (logging's lock release) is swallowed by the interpreter and lost.  One that
+    # another thread received just before may still be raised here: every exit path below
+    # therefore stops the workers already forked.
+    block = hasattr(signal, "pthread_sigmask")
+    mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT}) if block else None
+    pool = None
     try:
+        pool = ProcessPoolExecutor(max_workers=nproc, initializer=_ignore_interrupt)
         futures = {pool.submit(_call, func, cases[i]): i for i in todo}
-        for fut in as_completed(futures):
-            if fut.cancelled():
-                continue
-            exc = fut.exception()
-            if isinstance(exc, KeyboardInterrupt):   # the worker was interrupted with us
+        if block:                       # a held-back interrupt is raised here, inside the try
+            block = False
+            signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+        pending = set(futures)
+        while pending:
+            # a short timeout, not a blocking as_completed: the kernel may deliver Ctrl-C to
+            # another thread (the pool's, tqdm's), and then the main thread would see it only
+            # when the next case finishes, which can be minutes away
+            done, pending = wait(pending, timeout=_POLL_S, return_when=FIRST_COMPLETED)
+            if interrupt_requested():           # an interrupt the interpreter swallowed
                 raise KeyboardInterrupt
-            ok = finish(futures[fut], None if exc else fut.result(), exc)
-            if not ok and on_error == "raise":
-                for other in futures:      # not started yet: cancel; running: finish
-                    other.cancel()
+            for fut in done:
+                if fut.cancelled():
+                    continue
+                exc = fut.exception()
+                if isinstance(exc, KeyboardInterrupt):   # the worker was interrupted with us
+                    raise KeyboardInterrupt
+                ok = finish(futures[fut], None if exc else fut.result(), exc)
+                if not ok and on_error == "raise":
+                    for other in futures:      # not started yet: cancel; running: finish
+                        other.cancel()
     except BaseException:
-        # stop at once: the workers' current cases are abandoned (the finished ones are in
-        # the cache), else the interpreter waits for them at exit (concurrent.futures joins
-        # its workers) and Ctrl-C would take as long as the longest running case
-        workers = list((getattr(pool, "_processes", None) or {}).values())
-        pool.shutdown(wait=False, cancel_futures=True)
-        for w in workers:
-            if w.is_alive():
-                w.terminate()
+        if block:
+            signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+        if pool is not None:
+            _stop_pool(pool)
         raise
     pool.shutdown(wait=True)
 
@@ -668,6 +711,8 @@ def run_sweep(func, cases=None, *, name: str | None = None, cache_dir=None,
                 here, pooled = [], list(todo)
             stop = False
             for i in here:
+                if interrupt_requested():
+                    raise KeyboardInterrupt
                 try:
                     out = func(**cases[i])
                 except Exception as exc:
@@ -679,6 +724,8 @@ def run_sweep(func, cases=None, *, name: str | None = None, cache_dir=None,
                     break
             if pooled and not stop:
                 _run_pool(func, cases, pooled, min(nproc, len(pooled)), finish, on_error)
+            if interrupt_requested():
+                raise KeyboardInterrupt
     finally:
         bar.close()
 

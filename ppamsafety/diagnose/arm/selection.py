@@ -1045,7 +1045,7 @@ def stability_selection(prob: Problem, candidates=None, *, pairs: int = STABILIT
     Stability
     """
     pairs = check_int("pairs", pairs, 1, 10000)
-    seed = check_int("seed", seed, 0)
+    seed = check_seed("seed", seed)
     names = [c.name for c in library(candidates)]
     counts = dict.fromkeys(names, 0)
     s = profiled_shift(prob, candidates)
