@@ -272,6 +272,9 @@ def _kernel_hash(root: Path, cache_dir) -> str:
 
 def _machine_code_environment(packages) -> list:
     """(name, value) pairs outside the source that change the kernels' machine code, sorted."""
+    # deferred on purpose (the one exception in this module): hashing source needs no numba,
+    # and this bottom-layer module is imported by every command, `--help` included; numba and
+    # llvmlite take 1.5 s to import (python -X importtime) and are needed only for a kernel key
     import llvmlite
     import numba
     import numpy

@@ -36,6 +36,8 @@ import sys
 import warnings
 from pathlib import Path
 
+import numpy as np
+
 from ._commandline import EXIT_FAILURE, EXIT_OK, EXIT_USAGE
 from ._commandline import Parser as _Parser
 from ._commandline import _split_multi_value, run_guarded  # noqa: F401  (tests use both)
@@ -470,8 +472,6 @@ def _cmd_synthesize(args) -> int:
 
 
 def _cmd_impact(args) -> int:
-    import numpy as np
-
     from .impact.head import head_model
     from .impact.model import simulate_impacts
     from .params import thesis_arm
@@ -507,8 +507,6 @@ def _cmd_impact(args) -> int:
 
 
 def _cmd_info(args) -> int:
-    import numpy as np
-
     from .impact.head import head_model
     from .params import is_thesis_arm, thesis_arm
     from .params.arm_file import arm_fingerprint
@@ -567,8 +565,6 @@ THESIS_TWIN = ", the thesis arm's parameters"
 
 
 def _cmd_arm_check(args) -> int:
-    import numpy as np
-
     from .design import arm_summary
     from .params import is_thesis_arm
     from .params import load_arm
@@ -619,7 +615,7 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--replace-other-kind", action="store_true",
                    help="with --overwrite: also replace a ppamsafety output of another kind")
     r.add_argument("--processes", type=_positive_int, default=None, metavar="N",
-                   help="studies run at the same time in worker processes (default: every "
+                   help="sections run at the same time in worker processes (default: every "
                         "core; 1: one after the other in this process)")
     _add_arm_head(r)
     r.set_defaults(func=_cmd_report)

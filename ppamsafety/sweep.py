@@ -52,6 +52,7 @@ from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from pathlib import Path
 
 import pandas as pd
+from tqdm.auto import tqdm
 
 from ._interrupt import requested as interrupt_requested
 from ._sourcehash import source_hash
@@ -580,8 +581,6 @@ def run_sweep(func, cases=None, *, name: str | None = None, cache_dir=None,
     :class:`~ppamsafety.study_files.CaseGrid`) and a ``grid`` is combined on demand: the
     cases are generated as they run, never stored as one list.
     """
-    from tqdm.auto import tqdm
-
     if not callable(func):
         raise TypeError(f"func must be callable, got {type(func).__name__} {func!r:.80}")
     if cases is None and grid is None:

@@ -34,9 +34,11 @@ Scoring (what the targets of ``docs/diagnose.md`` count)
 
 from __future__ import annotations
 
+import argparse
 import json
 import lzma
 import math
+import multiprocessing
 import os
 import time
 import traceback
@@ -517,8 +519,7 @@ def run_battery(seeds, *, processes: int | None = None, progress: bool = False,
             if progress:
                 print(_progress_line(rows[-1]), flush=True)
     else:
-        import multiprocessing as mp
-        ctx = mp.get_context("fork")
+        ctx = multiprocessing.get_context("fork")
         with ctx.Pool(processes, maxtasksperchild=50) as pool:
             for r in pool.imap_unordered(work, seeds):
                 rows.append(r)
@@ -800,8 +801,6 @@ def main(argv=None) -> int:
     ----------
     argv : list of str, optional
     """
-    import argparse
-
     ap = argparse.ArgumentParser(prog="python -m ppamsafety.diagnose.scenarios",
                                  description="the randomized scenario battery of the diagnosis")
     ap.add_argument("--seeds", default=f"{MEASURE_SEEDS.start}:{MEASURE_SEEDS.start + 1000}",

@@ -33,6 +33,8 @@ import warnings
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from pathlib import Path
 
+from threadpoolctl import threadpool_limits
+
 from .._validation import check_int, did_you_mean
 from ..impact.head import head_model, resolve_head
 from ..output import OutputFolder
@@ -107,10 +109,6 @@ def _one_blas_thread() -> None:
     the other workers (the diagnosis section: 19.1 s of CPU for 16.9 s of wall
     time with OpenBLAS's default two threads, 16.6 s for 16.6 s with one).
     """
-    try:
-        from threadpoolctl import threadpool_limits
-    except ImportError:      # a declared dependency, but only an optimisation: never fail on it
-        return
     threadpool_limits(limits=1)
 
 

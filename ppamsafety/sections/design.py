@@ -98,7 +98,7 @@ class DesignStudy:
         return self.table_a1.copy()
 
     def plot(self) -> dict:
-        """The study's figures, ``{file name: Figure}``."""
+        """The section's figures, ``{file name: Figure}``."""
         return {"design_torque_functions.png": self.torque_functions.plot(),
                 "design_stiffness_map.png": self.stiffness.plot(),
                 "design_max_load.png": self.max_load.plot()}

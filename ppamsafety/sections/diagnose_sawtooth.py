@@ -91,7 +91,7 @@ class DiagnoseSawtoothStudy:
         return self.rest_points.copy()
 
     def plot(self) -> dict:
-        """The study's figures, ``{file name: Figure}``."""
+        """The section's figures, ``{file name: Figure}``."""
         return {"diagnose_sawtooth.png": plot_sawtooth_diagnosis(self.rest_points,
                                                                  self.metrics)}
 

@@ -420,7 +420,7 @@ class EffectsStudy:
         return self.sawtooth_summary.copy()
 
     def plot(self) -> dict:
-        """The study's figures, ``{file name: Figure}``."""
+        """The section's figures, ``{file name: Figure}``."""
         return _figures(self)
 
 

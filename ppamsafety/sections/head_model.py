@@ -75,7 +75,7 @@ class HeadModelStudy:
         return self.evidence.copy()
 
     def plot(self) -> dict:
-        """The study's figures, ``{file name: Figure}`` (none for another arm or head)."""
+        """The section's figures, ``{file name: Figure}`` (none for another arm or head)."""
         if not self.fits:
             return {}
         return {"head_model_fit.png": plot_head_fit(self.fit.pairs, self.curve)}

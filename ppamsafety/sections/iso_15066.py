@@ -375,7 +375,7 @@ class IsoStudy:
         return self.verdict.copy()
 
     def plot(self) -> dict:
-        """The study's figures, ``{file name: Figure}``."""
+        """The section's figures, ``{file name: Figure}``."""
         return {"iso_clamping_transient.png": f.plot_clamping_vs_limits(self),
                 "iso_quasi_static.png": f.plot_quasi_static(self),
                 "iso_lambda.png": f.plot_lambda_limits(self),

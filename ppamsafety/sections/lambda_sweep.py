@@ -111,7 +111,7 @@ class LambdaSweepStudy:
         return self.table.copy()
 
     def plot(self) -> dict:
-        """The study's figures, ``{file name: Figure}``."""
+        """The section's figures, ``{file name: Figure}``."""
         return {"lambda_sweep.png": plot_lambda_sweep(self.table, tracking="circle_err_mean")}
 
 

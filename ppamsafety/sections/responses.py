@@ -82,7 +82,7 @@ class ResponsesStudy:
                           self.switch_table.assign(experiment="switch")], ignore_index=True)
 
     def plot(self) -> dict:
-        """The study's figures, ``{file name: Figure}``."""
+        """The section's figures, ``{file name: Figure}``."""
         return _figures(self)
 
 

@@ -192,7 +192,7 @@ class SafetyStudy:
                            "K2"]].copy()
 
     def plot(self) -> dict:
-        """The study's figures, ``{file name: Figure}``."""
+        """The section's figures, ``{file name: Figure}``."""
         return _figures(self)
 
 

@@ -331,7 +331,7 @@ class SmcStudy:
         return self.sweep.copy()
 
     def plot(self) -> dict:
-        """The study's figures, ``{file name: Figure}``."""
+        """The section's figures, ``{file name: Figure}``."""
         return _figures(self)
 
 

@@ -208,7 +208,7 @@ class StiffnessStudy:
         return self.sweep.copy()
 
     def plot(self) -> dict:
-        """The study's figures, ``{file name: Figure}``."""
+        """The section's figures, ``{file name: Figure}``."""
         return {"stiffness_sweep.png": plot_stiffness_conventions(
             self.sweep, thesis=FIG_6_3 if self.thesis else None,
             reference=tuple(self.instant[["K1", "K2"]]))}

@@ -365,7 +365,7 @@ class TrackingStudy:
         return self.comparison.copy()
 
     def plot(self) -> dict:
-        """The study's figures, ``{file name: Figure}``."""
+        """The section's figures, ``{file name: Figure}``."""
         return _figures(self)
 
 

@@ -95,7 +95,7 @@ class WorstDirectionStudy:
         return self.table.copy()
 
     def plot(self) -> dict:
-        """The study's figures, ``{file name: Figure}``.
+        """The section's figures, ``{file name: Figure}``.
 
         Returns
         -------

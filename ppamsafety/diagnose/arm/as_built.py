@@ -106,6 +106,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
+import scipy.linalg
+from scipy.optimize import lsq_linear
 
 from ..._validation import check_int, check_range
 from ...control import GravityCompensation, SensorConfig
@@ -743,7 +745,6 @@ def identifiability(J, names, *, rank_tol: float = RANK_TOL,
     -------
     Identifiability
     """
-    import scipy.linalg
 
     J = np.asarray(J, dtype=float)
     names = tuple(names)
@@ -854,7 +855,6 @@ def lm_broyden(evaluate, theta0, r0, J0, *, lower, upper, prior_sd: float = PRIO
     -------
     FitPath
     """
-    from scipy.optimize import lsq_linear
 
     th = np.asarray(theta0, float).copy()
     r = np.asarray(r0, float).copy()

@@ -17,6 +17,7 @@ from dataclasses import replace
 
 import numpy as np
 import pandas as pd
+from scipy import stats
 
 from ..._validation import check_int, check_range, check_seed
 from ...params import thesis_arm
@@ -46,7 +47,6 @@ REPLAY_UNITS = ("rad", "rad", "rad/s", "rad/s", "Pa", "Pa", "Pa", "Pa")
 
 def _where(prob, e, feats, rho_max):
     """Operating regions of significant residual (see :func:`diagnose`)."""
-    from scipy import stats
 
 
     nb = e.shape[0]

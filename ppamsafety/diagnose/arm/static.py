@@ -38,6 +38,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.optimize import fsolve
 
 from ...data.measured import MeasuredData
 from ...hysteresis.force import hysteresis_factor, scaled_contraction
@@ -387,7 +388,6 @@ def static_equilibria(rec: StaticRecord, rows, *, steps: int = CONTINUATION_STEP
     p : numpy.ndarray, shape (B, m, 4)
         Pressures used [Pa].
     """
-    from scipy.optimize import fsolve
 
 
     rows = np.atleast_2d(np.asarray(rows, dtype=float))

@@ -55,6 +55,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
+from scipy.interpolate import RegularGridInterpolator
 
 from ..._validation import check_range
 from ...control import SensorConfig
@@ -492,7 +493,6 @@ def fit_pair(fit: SummaryFit, arm=None, names=None, *, fine: int = 41) -> PairFi
     -------
     PairFit
     """
-    from scipy.interpolate import RegularGridInterpolator
 
 
     if not isinstance(fit, SummaryFit):

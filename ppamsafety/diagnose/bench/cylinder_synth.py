@@ -46,6 +46,7 @@ import warnings
 
 import numpy as np
 import pandas as pd
+from scipy.signal import lfilter
 
 from ..._validation import (check_bool, check_choice, check_int, check_range, check_seed,
                             check_vector)
@@ -169,8 +170,6 @@ def _record(rng, p_bar, fx, nz, *, cycles, stroke, area, protocol, noise, prof, 
         dtr = np.where(np.arange(tf.size) >= (rev[0] if rev.size else tf.size), tf - last, np.inf)
         F = F + nz["slow_transient"] * sgn * np.exp(-dtr / 0.25)
     if nz.get("ripple", 0.0) > 0:
-        from scipy.signal import lfilter
-
         a = math.exp(-dt_f / 0.05)
         e = rng.normal(0, nz["ripple"] * math.sqrt(1 - a * a), tf.size)
         e[0] = rng.normal(0, nz["ripple"])
