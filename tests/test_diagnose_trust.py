@@ -1,7 +1,7 @@
 """Trust in the diagnosis (issue 19): sensor faults, Gram fits, gates, stability, detection limits.
 
 The randomized battery itself (``ppamsafety.diagnose.scenarios``) runs a seeded subset here
-and in full behind ``slow`` (``tests/test_diagnose_battery.py``).
+and in full behind ``slow`` (``tests/test_diagnose_scenarios.py``).
 """
 
 import math

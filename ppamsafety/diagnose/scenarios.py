@@ -63,10 +63,14 @@ from .arm.static import static_record, static_system
 from .diagnosis import diagnose
 from .synthesize import synthesize
 
-#: Seeds the thresholds of the gates were set on (never used to measure them).
-TUNING_SEEDS = range(0, 300)
+#: Seeds the gates were set on (never used to measure them): 0-299 set the thresholds; a
+#: first measurement on 1000-1999 showed two kinds of wrong names (an encoder offset whose
+#: interval held zero, and one that a constant joint torque explains as well), which set the
+#: "moved" rule of naming and the look-alikes outside the library, so those seeds are
+#: tuning seeds now.
+TUNING_SEEDS = range(0, 2000)
 #: Seeds of the measurement (the report and ``docs/diagnose.md``).
-MEASURE_SEEDS = range(1000, 3000)
+MEASURE_SEEDS = range(2000, 4000)
 #: Required precision of "high" (issue 19).
 HIGH_PRECISION = 0.97
 #: Residual/noise ratio that the irreducible part of an out-of-library perturbation must
@@ -431,17 +435,25 @@ def run_scenario(sc: Scenario, *, gap: bool = True, arm=None) -> dict:
     row = {"seed": sc.seed, "kind": sc.kind, "reference": sc.reference,
            "controller": sc.controller, "dt": sc.dt, "duration": sc.duration,
            "hidden": tuple(sorted(sc.hidden)), "perturbation": ";".join(
-               f"{k}={v}" for k, v in sc.perturbation.items()), "error": ""}
+               f"{k}={v}" for k, v in sc.perturbation.items()), "error": "",
+           "stage": ""}
     t0 = time.perf_counter()
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", MeasuredDataWarning)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", MeasuredDataWarning)
+        try:
+            # a drawn plant that cannot make the record (no rest state within the pressure
+            # range, a closed loop that diverges) is not a scenario: reported, not scored
             rec = record_of(sc, arm=arm)
+        except (ValueError, FloatingPointError, np.linalg.LinAlgError) as exc:
+            row.update(error=f"{type(exc).__name__}: {exc}", stage="record",
+                       seconds=time.perf_counter() - t0)
+            return row
+        try:
             dg = diagnose(rec, seed=sc.seed, arm=_arm_of(arm))
-    except (ValueError, FloatingPointError, np.linalg.LinAlgError) as exc:
-        row["error"] = f"{type(exc).__name__}: {exc}"
-        row["seconds"] = time.perf_counter() - t0
-        return row
+        except Exception as exc:      # a diagnosis that fails on a valid record is scored
+            row.update(error=f"{type(exc).__name__}: {exc}", stage="diagnose",
+                       seconds=time.perf_counter() - t0)
+            return row
     hidden = set(sc.hidden)
     named = [e["name"] for e in dg.effects]
     row.update({
@@ -485,7 +497,7 @@ def _worker(seed, arm=None):
     try:
         return run_scenario(random_scenario(seed, arm=arm), arm=arm)
     except Exception as exc:                     # a failure is a result of the battery
-        return {"seed": seed, "error": f"{type(exc).__name__}: {exc}",
+        return {"seed": seed, "error": f"{type(exc).__name__}: {exc}", "stage": "battery",
                 "traceback": traceback.format_exc()}
 
 
@@ -538,7 +550,7 @@ def _progress_line(r):
 # ----------------------------------------------------------------------------- stored results
 
 #: The battery's measured results shipped with the package (JSON lines, xz): written by
-#: ``python studies/diagnose_trust.py --battery 1000:2000`` (see its README).
+#: ``python -m ppamsafety.diagnose.scenarios`` (see its README).
 RESULTS_FILE = Path(__file__).resolve().parent / "calibration_data" / "arm_battery.jsonl.xz"
 #: Columns that hold Python containers (tuples, dicts, lists) in a results table.
 _CONTAINERS = ("hidden", "named", "high", "low", "partial", "confounded", "ratios",
@@ -637,6 +649,31 @@ def _ok(df):
     return df[df["error"].fillna("") == ""] if "error" in df else df
 
 
+def _stage(df) -> pd.Series:
+    """Where a row failed: "" (it did not), "record" (the drawn plant cannot make the
+    record), "diagnose" or "battery" (the code under test failed).  Rows written before the
+    stage was recorded read their error: the generator's errors name the record."""
+    if "error" not in df:
+        return pd.Series("", index=df.index)
+    err = df["error"].fillna("")
+    stage = df["stage"].fillna("") if "stage" in df else pd.Series("", index=df.index)
+    old = (err != "") & (stage == "")
+    guess = err.str.contains("rest_state|diverged|run_batch", regex=True)
+    return stage.where(~old, guess.map({True: "record", False: "diagnose"}))
+
+
+def failures(results: pd.DataFrame) -> dict:
+    """Counts of the rows that are not scored: ``{"record": k, "diagnose": k, "battery": k}``.
+
+    "record": the drawn plant could not make the record (e.g. the rest pose needs a
+    pressure outside the valves' range); these are not scenarios.  "diagnose" and
+    "battery": the diagnosis or the runner raised on a valid record -- a failure of the
+    code under test, which :func:`scores` counts against it.
+    """
+    st = _stage(results)
+    return {k: int((st == k).sum()) for k in ("record", "diagnose", "battery")}
+
+
 def _detectable(row) -> bool:
     return all(v >= 1.0 for v in row["ratios"].values())
 
@@ -658,6 +695,7 @@ def scores(results: pd.DataFrame) -> pd.DataFrame:
     """
     df = _ok(results)
     rows = []
+    fail = failures(results)
 
     def add(name, hits, n, target, better="higher"):
         v = hits / n if n else math.nan
@@ -698,6 +736,9 @@ def scores(results: pd.DataFrame) -> pd.DataFrame:
            for c in (r.coverage or [])]
     add("... of which where exactly the hidden effects were named (the model is right)",
         sum(c["covered"] for c in cov), len(cov), 0.90)
+    made = len(df) + fail["diagnose"] + fail["battery"]
+    add("valid records on which the diagnosis raised an error", fail["diagnose"] +
+        fail["battery"], made, 0.0, better="lower")
     return pd.DataFrame(rows)
 
 
@@ -793,7 +834,7 @@ def detection_curve(results: pd.DataFrame, *, key: str = "ratios") -> pd.DataFra
 def main(argv=None) -> int:
     """Run the battery on a range of seeds, write its rows, print its scores.
 
-    ``python -m ppamsafety.diagnose.scenarios [--seeds 1000:2000] [--processes N]
+    ``python -m ppamsafety.diagnose.scenarios [--seeds 2000:3000] [--processes N]
     [--out FILE] [--overwrite]``; the default writes :data:`RESULTS_FILE` (refused if it
     exists unless ``--overwrite``).  About 25 min for 1000 scenarios on 2 cores.
 
@@ -813,7 +854,7 @@ def main(argv=None) -> int:
     try:
         a, b = (int(x) for x in args.seeds.split(":"))
     except ValueError:
-        ap.error(f"--seeds {args.seeds!r}: give first:last+1, e.g. 1000:2000")
+        ap.error(f"--seeds {args.seeds!r}: give first:last+1, e.g. 2000:3000")
     check_new_file(args.out, overwrite=args.overwrite, name="--out")
     t0 = time.time()
     df = run_battery(range(a, b), processes=args.processes, progress=True)
@@ -821,8 +862,9 @@ def main(argv=None) -> int:
     save_results(df, args.out, overwrite=args.overwrite)
     pd.set_option("display.width", 200)
     pd.set_option("display.max_columns", 20)
-    print(f"{len(df)} scenarios in {wall:.0f} s; errors: "
-          f"{int((df['error'].fillna('') != '').sum())}")
+    fail = failures(df)
+    print(f"{len(df)} scenarios in {wall:.0f} s; records the drawn plant could not make: "
+          f"{fail['record']}; diagnosis failures: {fail['diagnose'] + fail['battery']}")
     for table in (scores(df), calibration_table(df), by_effect(df), detection_curve(df)):
         print(table.to_string())
     print(f"written: {args.out}")
@@ -832,7 +874,7 @@ def main(argv=None) -> int:
 __all__ = ["Scenario", "random_scenario", "record_of", "run_scenario", "run_battery",
            "detection_curve", "RATIO_BINS",
            "save_results", "load_results", "RESULTS_FILE",
-           "irreducible_gap", "scores", "calibration_table", "by_effect", "LIBRARY_DRAWS",
+           "irreducible_gap", "scores", "failures", "calibration_table", "by_effect", "LIBRARY_DRAWS",
            "TUNING_SEEDS", "MEASURE_SEEDS", "HIGH_PRECISION", "GAP_ABOVE_NOISE"]
 
 

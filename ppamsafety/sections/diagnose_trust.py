@@ -39,7 +39,8 @@ from .._validation import check_int
 from ..diagnose import diagnose, synthesize
 from ..diagnose.arm.detection import POWER
 from ..diagnose.scenarios import (HIGH_PRECISION, MEASURE_SEEDS, by_effect, calibration_table,
-                                  detection_curve, load_results, run_battery, scores)
+                                  detection_curve, failures, load_results, run_battery,
+                                  scores)
 from ..markdown import markdown_table
 from ..plots.diagnose import plot_calibration, plot_detection_curve
 from . import Section, SectionInfo, compares_to_thesis, other_arm_note, resolve_arm
@@ -175,6 +176,9 @@ def compute(*, quick: bool = False, arm=None, head=None,
         m["live_reproduced"] = _reproduced(live, results)
     else:
         results = live
+    fail = failures(results)
+    m.update({"records_not_made": fail["record"],
+              "diagnosis_failures": fail["diagnose"] + fail["battery"]})
     sc = scores(results)
     cal = calibration_table(results)
     high = cal[cal.claimed == "high"].iloc[0]
@@ -229,7 +233,10 @@ def render(study: DiagnoseTrustStudy) -> Section:
     lim = _fmt(lim)
     md = ([study.note, ""] if study.note else []) + [
         "A confidence the tool prints is a promise; this section measures it.  Scores of the "
-        f"randomized scenario battery ({src}):",
+        f"randomized scenario battery ({src}; {m['records_not_made']} drawn plants could not "
+        "make their record -- no rest pose within the valves' pressure range, or a closed "
+        "loop that diverged -- and are not scenarios; the diagnosis raised an error on "
+        f"{m['diagnosis_failures']} valid records):",
         "",
         markdown_table(_fmt(study.scores)),
         "",

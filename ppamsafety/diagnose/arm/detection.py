@@ -96,7 +96,7 @@ def _schur(A, cc, cm):
 
 
 def detection_limits(prob: Problem, fit, candidates=None, *, alpha: float = 0.01,
-                     power: float = POWER) -> dict:
+                     power: float = POWER, shadows=()) -> dict:
     """Detection limit of every parameter of every candidate on this record (module docstring).
 
     Parameters
@@ -111,6 +111,10 @@ def detection_limits(prob: Problem, fit, candidates=None, *, alpha: float = 0.01
         Level of the LR test before the Bonferroni division.
     power : float, keyword-only
         Probability of naming at the limit.
+    shadows : sequence of str, keyword-only
+        Candidates outside the library that the diagnosis tries as look-alikes
+        (:func:`.subsets.search`): they count as ``closest`` too, since a name they can
+        replace is reported as confounded.
 
     Returns
     -------
@@ -123,7 +127,8 @@ def detection_limits(prob: Problem, fit, candidates=None, *, alpha: float = 0.01
         reported as confounded, not named).
     """
     universe = tuple(c.name for c in library(candidates))
-    A, cols = _design(prob, fit, universe)
+    shadows = tuple(n for n in shadows if n not in universe)
+    A, cols = _design(prob, fit, universe + shadows)
     m = prob.bs.nb * prob.bs.y.shape[1]
     model = [n for n in fit.names]
     out = {}
@@ -134,7 +139,7 @@ def detection_limits(prob: Problem, fit, candidates=None, *, alpha: float = 0.01
         cc = cols[c.name]
         S = _schur(A, cc, cm)
         alts = {}
-        for a in universe:
+        for a in universe + shadows:
             if a == c.name or a in others:
                 continue
             alts[a] = _schur(A, cc, np.concatenate([cm, cols[a]]))

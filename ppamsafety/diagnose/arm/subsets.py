@@ -24,7 +24,11 @@ library up to a few effects (from the per-chunk Gram matrices of
 * finds the **look-alikes** of each member: the best subset that replaces it
   by another candidate, with its BIC difference.  A member whose replacement
   is nearly as good (BIC within :data:`LOOKALIKE_BIC`) cannot be told from it
-  on this record: the two are reported as confounded.
+  on this record: the two are reported as confounded.  Opt-in candidates the
+  user left out of the library (``shadows``: ``joint_torque_bias``) are tried
+  as replacements too, never as members: a constant torque the model lacks
+  poses as an encoder offset on many records, and a name the record cannot
+  tell from a plausible cause outside the chosen library is not a name.
 
 The dead time is held at the shift profiled for it (the search is linear).
 """
@@ -89,7 +93,7 @@ class SubsetResult:
 
 
 def search(prob: Problem, universe, *, greedy, shift: int, alpha: float,
-           max_size: int = MAX_SIZE) -> SubsetResult:
+           max_size: int = MAX_SIZE, shadows=()) -> SubsetResult:
     """Fit every subset of ``universe`` up to ``max_size`` effects and pick the best (module
     docstring).
 
@@ -106,19 +110,24 @@ def search(prob: Problem, universe, *, greedy, shift: int, alpha: float,
     alpha : float, keyword-only
         Level of the LR test before the Bonferroni division.
     max_size : int, keyword-only
+    shadows : sequence of str, keyword-only
+        Candidates outside ``universe`` tried only as look-alikes (replacements of a
+        member), never selected.
 
     Returns
     -------
     SubsetResult
     """
     universe = tuple(universe)
+    shadows = tuple(n for n in shadows if n not in universe)
+    wide = universe + shadows
     size = max(min(max_size, len(universe)), len(greedy))
     fits = {}
 
-    def fit(names):
-        key = tuple(sorted(names, key=universe.index))
+    def fit(names, univ=universe):
+        key = (tuple(sorted(names, key=univ.index)), univ)
         if key not in fits:
-            fits[key] = gram_fit(prob, key, universe=universe, shift=shift, cov=False)
+            fits[key] = gram_fit(prob, key[0], universe=univ, shift=shift, cov=False)
         return fits[key]
 
     subsets = [()]
@@ -132,23 +141,23 @@ def search(prob: Problem, universe, *, greedy, shift: int, alpha: float,
     level = alpha / max(len(universe), 1)
     admissible = {}
 
-    def ok(s):
-        if s in admissible:
-            return admissible[s]
+    def ok(s, univ=universe):
+        if (s, univ) in admissible:
+            return admissible[s, univ]
         good = True
         if s:
-            full = gram_fit(prob, s, universe=universe, shift=shift)
-            cv_full = gram_cv(prob, s, universe=universe, shift=shift)
+            full = gram_fit(prob, s, universe=univ, shift=shift)
+            cv_full = gram_cv(prob, s, universe=univ, shift=shift)
             for c in s:
                 rest = tuple(n for n in s if n != c)
-                fr = fit(rest)
+                fr = fit(rest, univ)
                 d = max(fr.chi2 - full.chi2, 0.0)
                 if not (in_bounds(prob, full, c) and _chi2_sf(d, max(full.k - fr.k, 1)) < level
                         and fr.bic > full.bic
-                        and gram_cv(prob, rest, universe=universe, shift=shift) > cv_full):
+                        and gram_cv(prob, rest, universe=univ, shift=shift) > cv_full):
                     good = False
                     break
-        admissible[s] = good
+        admissible[s, univ] = good
         return good
 
     g = tuple(sorted(greedy, key=universe.index))
@@ -170,6 +179,10 @@ def search(prob: Problem, universe, *, greedy, shift: int, alpha: float,
     w /= w.sum()
     inclusion = {c: float(sum(wi for s, wi in zip(near, w) if c in s)) for c in universe}
     look = {}
+    replaced = {c: tuple(sorted([n for n in best if n != c] + [a], key=wide.index))
+                for c in best for a in shadows}
+    shadow_bics = _bics(prob, wide, sorted(set(replaced.values())), shift)[0] if replaced \
+        else {}
     for c in best:
         alts = []
         for a in universe:
@@ -178,6 +191,10 @@ def search(prob: Problem, universe, *, greedy, shift: int, alpha: float,
             s = tuple(sorted([n for n in best if n != c] + [a], key=universe.index))
             if s in bics and ok(s) and bics[s] - bics[best] < LOOKALIKE_BIC:
                 alts.append((a, float(bics[s] - bics[best])))
+        for a in shadows:
+            s = tuple(sorted([n for n in best if n != c] + [a], key=wide.index))
+            if shadow_bics[s] - bics[best] < LOOKALIKE_BIC and ok(s, wide):
+                alts.append((a, float(shadow_bics[s] - bics[best])))
         look[c] = sorted(alts, key=lambda x: x[1])
     evidence = {}
     if best:
@@ -193,7 +210,7 @@ def search(prob: Problem, universe, *, greedy, shift: int, alpha: float,
                            "cv_gain": gram_cv(prob, rest, universe=universe, shift=shift)
                            - cv_full}
     ranking = [{"subset": "+".join(s) or "nominal", "k": int(ks[s]), "chi2": chis[s],
-                "bic": bics[s], "admissible": admissible.get(s)} for s in order[:20]]
+                "bic": bics[s], "admissible": admissible.get((s, universe))} for s in order[:20]]
     return SubsetResult(names=best, bic=float(bics[best]), inclusion=inclusion, lookalikes=look,
                         evidence=evidence, evaluated=len(bics), greedy_bic=float(bics[g]),
                         ranking=ranking)
