@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..._validation import check_int, check_range
+from ..core.linear_selection import fit_linear
 from .selection import select
 
 #: Complementary pairs (2 x this many reruns of the selection).
@@ -137,18 +138,13 @@ def stability_selection(design, *, alpha: float, pairs: int = PAIRS, seed: int =
     pairs = check_int("pairs", pairs, 1, 10000)
     seed = check_int("seed", seed, 0)
     threshold = check_range("threshold", threshold, 0.5, 1.0, lo_open=True)
-    labels, unit = loop_units(design)
-    U = int(labels.max()) + 1
+    splits, labels, unit, U = _splits(design, pairs, seed)
     names = list(design.columns)
     counts = dict.fromkeys(names, 0)
-    rng = np.random.default_rng(seed)
     total = 0
-    for _ in range(pairs):
-        perm = rng.permutation(U)
-        half = np.zeros(U, bool)
-        half[perm[:U // 2]] = True
-        for h in (half, ~half):
-            for n in select(design, alpha=alpha, mask=h[labels]).names:
+    for pair in splits:
+        for h in pair:
+            for n in select(design, alpha=alpha, mask=h).names:
                 counts[n] += 1
                 total += 1
     halves = 2 * pairs
@@ -160,5 +156,87 @@ def stability_selection(design, *, alpha: float, pairs: int = PAIRS, seed: int =
                          units=U, unit=unit)
 
 
-__all__ = ["LoopStability", "loop_units", "stability_selection", "PAIRS", "THRESHOLD",
+def _splits(design, pairs, seed):
+    """The B complementary splits of :func:`stability_selection` (same seed, same splits)."""
+    labels, unit = loop_units(design)
+    U = int(labels.max()) + 1
+    rng = np.random.default_rng(seed)
+    out = []
+    for _ in range(pairs):
+        perm = rng.permutation(U)
+        half = np.zeros(U, bool)
+        half[perm[:U // 2]] = True
+        out.append((half[labels], ~half[labels]))
+    return out, labels, unit, U
+
+
+def half_sample_covariance(design, names, *, pairs: int = PAIRS, seed: int = 0) -> np.ndarray:
+    """Covariance of the final model's coefficients from its fits on complementary halves.
+
+    On each of the B splits of :func:`stability_selection` the model ``names`` is
+    fitted on both halves of the record's loops (or time segments); with
+    ``d = (phi_A - phi_B) / 2`` the half-sample covariance is the mean of ``d d^T``
+    (``phi_full ~ (phi_A + phi_B) / 2``, so ``d`` has the full record's covariance).
+    Unlike the HAC covariance of one fit it sees every error that differs from loop to
+    loop -- the noise of the contraction that the Preisach input and the direction of
+    motion are built from (errors in variables), a model slightly off in one loop --
+    because whole loops are left out.
+
+    Parameters
+    ----------
+    design : ActuatorDesign
+    names : sequence of str
+        The model's candidates.
+    pairs : int, keyword-only
+        B (>= 1).
+    seed : int, keyword-only
+        Seed of the splits (:func:`stability_selection`'s, for the same splits).
+
+    Returns
+    -------
+    numpy.ndarray, shape (k, k)
+        In the order of ``fit_linear(..., names)``'s coefficients.
+    """
+    pairs = check_int("pairs", pairs, 1, 10000)
+    seed = check_int("seed", seed, 0)
+    names = list(names)
+    k = sum(design.columns[n].shape[1] for n in names)
+    if k == 0:
+        return np.zeros((0, 0))
+    splits, _, _, U = _splits(design, pairs, seed)
+    C = np.zeros((k, k))
+    for a, b in splits:
+        fa = fit_linear(design.e0, design.columns, names, mask=a)
+        fb = fit_linear(design.e0, design.columns, names, mask=b)
+        d = (fa.phi - fb.phi) / 2.0
+        C += np.outer(d, d)
+    return C / len(splits)
+
+
+def inflated_covariance(cov, half) -> np.ndarray:
+    """``cov`` with each coefficient's variance raised to its half-sample variance where larger.
+
+    ``D cov D`` with ``D = diag(sqrt(max(1, half_jj / cov_jj)))``: the correlations
+    of ``cov`` are kept, no variance is lowered.
+
+    Parameters
+    ----------
+    cov : numpy.ndarray, shape (k, k)
+        Covariance of one fit (HAC).
+    half : numpy.ndarray, shape (k, k)
+        :func:`half_sample_covariance`.
+    """
+    cov = np.asarray(cov, float)
+    half = np.asarray(half, float)
+    if cov.shape != half.shape:
+        raise ValueError(f"half must have the shape of cov {cov.shape}, got {half.shape}")
+    v = np.diag(cov)
+    s = np.ones_like(v)
+    ok = v > 0
+    s[ok] = np.sqrt(np.maximum(1.0, np.diag(half)[ok] / v[ok]))
+    return cov * np.outer(s, s)
+
+
+__all__ = ["LoopStability", "loop_units", "stability_selection", "half_sample_covariance",
+           "inflated_covariance", "PAIRS", "THRESHOLD",
            "MIN_UNITS", "TIME_SEGMENTS"]
