@@ -126,6 +126,46 @@ def detection_limits(design, model, *, alpha: float = 0.01, power: float = POWER
     return out
 
 
+def limit_ratio(design, model, name: str, lr_stat: float, *, alpha: float = 0.01,
+                power: float = POWER) -> float:
+    """How far above its detection limit a *fitted* effect stands: ``sqrt(LR / lambda*)``.
+
+    ``LR`` is the likelihood-ratio statistic of ``name`` against the final model
+    without it, ``lambda*`` the noncentrality the naming rule needs to pick the
+    effect up with probability ``power`` (module docstring).  For a one-parameter
+    candidate this is about |change| / limit (the arm's ratio of the ``clear`` gate);
+    for several parameters it measures the fitted change as a whole, as
+    :func:`signature_ratio` does for a true one.
+
+    Parameters
+    ----------
+    design : ActuatorDesign
+    model : sequence of str
+        The final model's candidates.
+    name : str
+        A member of ``model``.
+    lr_stat : float
+        Its likelihood-ratio statistic given the other members (>= 0).
+    alpha, power : float, keyword-only
+        As :func:`detection_limits`.
+
+    Returns
+    -------
+    float
+    """
+    cols = design.columns
+    if name not in cols:
+        raise ValueError(f"name = {name!r} is not an applicable candidate of the record; "
+                         f"allowed {list(cols)}")
+    if not (lr_stat >= 0.0):
+        raise ValueError(f"lr_stat = {lr_stat!r}: a likelihood-ratio statistic is >= 0")
+    model = [n for n in model if n in cols]
+    k = cols[name].shape[1]
+    lam = needed_noncentrality(k, _critical(k, design.m, _level(len(cols), len(model),
+                                                             name in model, alpha)), power)
+    return math.sqrt(lr_stat / lam)
+
+
 def _limit(s, lam):
     return math.sqrt(lam / s) if s > 1e-12 * lam else math.inf
 
@@ -179,4 +219,4 @@ def signature_ratio(design, model, name: str, signature, *, alpha: float = 0.01,
     return math.sqrt(lt / lam), math.sqrt(ln / lam)
 
 
-__all__ = ["detection_limits", "signature_ratio", "POWER"]
+__all__ = ["detection_limits", "signature_ratio", "limit_ratio", "POWER"]

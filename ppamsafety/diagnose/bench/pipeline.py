@@ -44,10 +44,11 @@ from .design import (AMBIGUOUS_SIGMAS, LOCAL_WINDOW, NOISE_PLATEAU, PRESSURE_LEV
                      REVERSAL_SIGMAS,
                      ActuatorRecord, actuator_design, actuator_record, contraction_rate,
                      motion_direction, residual_noise)
-from .detection import detection_limits
-from .gates import GATES, MIN_REVERSALS_HIGH, RHO_HIGH, gates, level, rho_high
+from .detection import detection_limits, limit_ratio
+from .gates import CLEAR_RATIO, GATES, MIN_REVERSALS_HIGH, RHO_HIGH, gates, level, rho_high
 from .selection import MIN_EFFECT_RMS, relinearised, select
-from .stability import PAIRS, THRESHOLD, stability_selection
+from .stability import (PAIRS, THRESHOLD, half_sample_covariance, inflated_covariance,
+                        stability_selection)
 
 
 def _where(e, feats, rho_max):
@@ -171,6 +172,11 @@ def diagnose_actuator(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
     # model slightly off, coloured noise) widens them
     cov = hac_covariance_linear(np.concatenate([des.columns[n] for n in fit.names], axis=1),
                                 fit.e) if fit.names else fit.cov
+    # ... and raised to the spread of the fits on complementary halves of the loops, which
+    # sees what differs from loop to loop (errors in the contraction, a model slightly off)
+    if pairs and fit.names:
+        cov = inflated_covariance(cov, half_sample_covariance(des, fit.names, pairs=pairs,
+                                                              seed=seed))
     effects, partial = [], []
     for name in fit.names:
         if name in grouped:
@@ -194,8 +200,12 @@ def diagnose_actuator(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
                      f"{PRESSURE_LEVELS_RATIO}): a refitted force law, a force-sensor offset and "
                      "a pressure-sensor offset are then nearly the same column and are reported "
                      "with low confidence at most; record several pressures to separate them")
+    limits = detection_limits(des, fit.names, alpha=alpha) if detection else {}
     for e in effects:
         sl = fit.slices[e["name"]]
+        e["evidence"]["limit_ratio"] = (limit_ratio(des, fit.names, e["name"],
+                                                    max(e["evidence"]["lr_stat"], 0.0),
+                                                    alpha=alpha) if detection else None)
         e["evidence"]["time_consistency_p"] = cons = time_consistency(des, fit.names,
                                                                        e["name"])
         g = gates(e["name"], exts[e["name"]], fit.phi[sl], cov[sl, sl],
@@ -203,7 +213,8 @@ def diagnose_actuator(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
                   stability=None if stab is None else stab.frequency.get(e["name"], 0.0),
                   stability_threshold=THRESHOLD if stab is None else stab.threshold,
                   rho=rho, m=des.m, unexplained=unexplained, turns=turns,
-                  one_level=des.one_level, consistency=cons)
+                  one_level=des.one_level, consistency=cons,
+                  clear=math.inf if not detection else e["evidence"]["limit_ratio"])
         e["gates"] = g
         e["confidence_level"] = level(g)
     for e in partial:
@@ -239,7 +250,6 @@ def diagnose_actuator(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
                               for r_ in worst.itertuples()) or "everywhere"
         notes.append(f"force residual {rho:.2f} x the noise (> {rho_max}): no effect of the "
                      f"tester library explains it; largest where {where_txt}")
-    limits = detection_limits(des, fit.names, alpha=alpha) if detection else {}
     t3 = time.perf_counter()
     settings = {"kind": "actuator", "alpha": alpha, "rho_max": rho_max,
                 "criterion": "BIC (known noise level), LR test p < alpha/K, 2-fold CV gain, "
@@ -249,6 +259,7 @@ def diagnose_actuator(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
                              "is not significant) reported as confounded, not named",
                 "min_effect_rms": MIN_EFFECT_RMS, "rho_high": rho_high(des.m),
                 "high_confidence": {"rho_high_factor": RHO_HIGH, "gates": list(GATES),
+                                    "clear_ratio": CLEAR_RATIO,
                                     "stability_threshold": THRESHOLD if stab is None
                                     else stab.threshold,
                                     "min_reversals": MIN_REVERSALS_HIGH},
@@ -268,7 +279,9 @@ def diagnose_actuator(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
                                                    for k, v in des.estimates.items()},
                                    "contraction": float(des.sigma_eps)},
                 "intervals": "95 %, on the HAC (Newey-West) covariance of the whitened "
-                             "equations in time order",
+                             "equations in time order, each variance raised to the "
+                             "half-sample variance of the fits on complementary halves of "
+                             "the loops where that is larger",
                 "noise_method": "robust interpolation residual: 1.4826 MAD(x[k] - (w x[k-1] + "
                                 "(1-w) x[k+1]))/sqrt(1 + w^2 + (1-w)^2); per sample: rolling "
                                 f"median over {LOCAL_WINDOW} samples (local_N: min, median, "
