@@ -379,14 +379,16 @@ def run_scenario(sc: BenchScenario) -> dict:
         Exactly the keys of a row of :func:`ppamsafety.diagnose.scenarios.run_scenario`:
         seed, kind, reference, controller, dt, duration, hidden, perturbation, error,
         named, high, low, partial, confounded, unexplained, rho_before, rho_after, ratios,
-        ratios_detected, gates, stability_bound, coverage, gap, seconds (module docstring).
+        ratios_detected, gates, named_ratios, stability_bound, coverage, gap, seconds
+        (module docstring; ``named_ratios``: each name's fitted effect over its detection
+        limit, the ``clear`` gate's measure, as main's arm rows carry it).
     """
     row = {"seed": sc.seed, "kind": sc.kind, "reference": None, "controller": None,
            "dt": math.nan, "duration": math.nan, "hidden": tuple(sorted(sc.hidden)),
            "perturbation": ";".join(f"{k}={v}" for k, v in sc.perturbation.items()),
            "error": "", "named": (), "high": (), "low": (), "partial": (), "confounded": (),
            "unexplained": False, "rho_before": math.nan, "rho_after": math.nan, "ratios": {},
-           "ratios_detected": {}, "gates": {}, "stability_bound": None, "coverage": [],
+           "ratios_detected": {}, "gates": {}, "named_ratios": {}, "stability_bound": None, "coverage": [],
            "gap": None}
     t0 = time.perf_counter()
     try:
@@ -419,6 +421,7 @@ def run_scenario(sc: BenchScenario) -> dict:
         "rho_after": float(dg.residual_rms["block_force"]["after"]),
         "ratios": ratios, "ratios_detected": detected,
         "gates": {e["name"]: dict(e.get("gates", {})) for e in dg.effects},
+        "named_ratios": {e["name"]: e["evidence"].get("limit_ratio") for e in dg.effects},
         "stability_bound": (dg.stability or {}).get("expected_false_selections_bound"),
         "coverage": _coverage(dg, sc, measured_truth(sc)), "gap": gap})
     row["seconds"] = time.perf_counter() - t0
@@ -472,6 +475,52 @@ def _progress_line(r):
             f"unexpl={r.get('unexplained')} {r.get('seconds', 0):.1f}s {r.get('error') or ''}")
 
 
+def single_effect_outcomes(results: pd.DataFrame) -> pd.DataFrame:
+    """What became of every single hidden library effect (no perturbation), whatever its size.
+
+    :func:`ppamsafety.diagnose.scenarios.scores` counts a single effect only above its
+    detection limit *against its look-alikes* (``ratios`` >= 1); on a muscle record many
+    sensor faults are never above it (a force gain is nested in a refitted law).  This
+    table says what the diagnosis made of all of them.
+
+    Parameters
+    ----------
+    results : pandas.DataFrame
+        :func:`run_battery`.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Index: hidden candidate; columns ``hidden``, ``named_right`` (exactly it named),
+        ``high`` (of those, "high"), ``confounded`` (not named, reported in a confounded
+        group), ``nothing`` (nothing named, no group holds it), ``other`` (something
+        else named), ``unexplained`` (record flagged).
+    """
+    if not isinstance(results, pd.DataFrame) or not {"hidden", "named", "high", "confounded",
+                                                     "perturbation"} <= set(results.columns):
+        raise TypeError("results must be the DataFrame of run_battery()")
+    df = results[(results["error"].fillna("") == "") & (results["perturbation"] == "")]
+    df = df[df["hidden"].map(len) == 1]
+    rows = {}
+    for r in df.itertuples():
+        h = r.hidden[0]
+        d = rows.setdefault(h, dict.fromkeys(("hidden", "named_right", "high", "confounded",
+                                              "nothing", "other", "unexplained"), 0))
+        d["hidden"] += 1
+        d["unexplained"] += bool(r.unexplained)
+        if tuple(r.named) == (h,):
+            d["named_right"] += 1
+            d["high"] += h in r.high
+        elif not r.named and any(h in g for g in r.confounded):
+            d["confounded"] += 1
+        elif not r.named:
+            d["nothing"] += 1
+        else:
+            d["other"] += 1
+    return pd.DataFrame.from_dict(rows, orient="index").sort_index()
+
+
 __all__ = ["BenchScenario", "random_scenario", "record_of", "run_scenario", "run_battery",
+           "single_effect_outcomes",
            "measured_truth", "irreducible_gap", "law_change", "LIBRARY_DRAWS", "PERTURBATIONS",
            "P_COUNT", "P_PERTURBATION", "P_SWEEP", "MAX_SAMPLES"]
