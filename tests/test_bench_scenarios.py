@@ -13,10 +13,13 @@ import numpy as np
 import pytest
 
 from ppamsafety.data import MeasuredDataWarning
+from ppamsafety.diagnose.bench.design import actuator_design
 from ppamsafety.diagnose.bench.gates import CLEAR_RATIO, GATES
-from ppamsafety.diagnose.bench.scenarios import (random_scenario, record_of, run_battery,
-                                                 run_scenario)
+from ppamsafety.diagnose.bench.pipeline import diagnose_actuator
+from ppamsafety.diagnose.bench.scenarios import random_scenario, record_of, run_battery
 from ppamsafety.diagnose.bench.stability import half_sample_covariance, inflated_covariance
+from ppamsafety.diagnose.bench.synthesize import synthesize_actuator
+from ppamsafety.diagnose.core.linear_selection import fit_linear
 from ppamsafety.diagnose.scenarios import (HIGH_PRECISION, MEASURE_SEEDS, calibration_table,
                                            scores)
 
@@ -84,7 +87,6 @@ def test_quick_seeds_cover_what_they_are_chosen_for(quick):
 
 
 def test_confounded_group_names_the_separating_experiment():
-    from ppamsafety.diagnose.bench.pipeline import diagnose_actuator
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", MeasuredDataWarning)
         dg = diagnose_actuator(record_of(random_scenario(7)), seed=7)
@@ -108,9 +110,6 @@ def test_half_sample_covariance_inflates_never_deflates():
 def test_half_sample_covariance_matches_the_noise_on_a_clean_record():
     """A friction on a clean record: the half-sample variance of c agrees with the ordinary
     one within the sampling error of 10 pairs (a factor 3 either way is far outside it)."""
-    from ppamsafety.diagnose.bench.design import actuator_design
-    from ppamsafety.diagnose.bench.synthesize import synthesize_actuator
-    from ppamsafety.diagnose.core.linear_selection import fit_linear
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", MeasuredDataWarning)
         des = actuator_design(synthesize_actuator({"friction_coulomb": 10.0}, seed=3))
