@@ -20,8 +20,8 @@ from ppamsafety.data import MeasuredData, load_measured
 from ppamsafety.diagnose import diagnose, synthesize
 from ppamsafety.diagnose.bench.pipeline import (actuator_record, diagnose_actuator,
                                                 motion_direction, residual_noise)
-from ppamsafety.diagnose.bench.battery import (CASES, confusion_matrix, outcome, parameter_failures,
-                                               required_rate, run_battery)
+from ppamsafety.diagnose.bench.battery import (CASES, CONFOUNDED, confusion_matrix, outcome,
+                                               parameter_failures, required_rate, run_battery)
 from ppamsafety.diagnose.bench.synthesize import synthesize_actuator
 from ppamsafety.diagnose.core.noise import interpolation_sigma, second_difference_sigma
 
@@ -89,11 +89,18 @@ def test_exact_record_has_zero_residual_and_names_nothing():
 
 
 @pytest.mark.parametrize("case", ["nothing", "hysteresis", "friction", "force_law",
-                                  "hysteresis+friction", "outside:pressure_offset"])
+                                  "force_law_shape", "hysteresis+friction", "pressure_offset",
+                                  "outside:force_drift"])
 def test_battery_fast_subset(case):
     dg = run(case)
     assert outcome(case, dg) in ("correct", "refused"), (case, dg.names, dg.notes)
     assert parameter_failures(case, dg) == []
+    if case in CONFOUNDED:
+        # a uniform scale of the force law is a load-cell gain: reported as a pair with the
+        # experiment that separates them, neither named
+        g = next(g for g in dg.confounded if set(g["members"]) == CONFOUNDED[case])
+        assert "dead-weight" in g["separating_experiment"]
+        assert not set(dg.names) & CONFOUNDED[case]
     if CASES[case][1]:
         assert all(e["confidence_level"] == "high" for e in dg.effects)
         rr = dg.residual_rms["force"]
@@ -182,10 +189,16 @@ def test_cylinder_law_friction_and_area():
     dg = diagnose(synthesize_actuator({"friction_coulomb": 15.0}, seed=10, **law))
     assert dg.names == ("actuator_friction",)
     assert abs(dg.effects[0]["parameters"]["c"]["value"] - 15.0) < 1.5
+    # a 5 % area error scales the whole force: on this record it is a load-cell gain too,
+    # so the pair is reported confounded (issue 19), the area read from its interpretation
     dg = diagnose(synthesize_actuator({"force_law_scale": 0.05}, seed=10, **law))
-    assert dg.names == ("force_law_refit",)
-    a1 = dg.effects[0]["parameters"]["a1"]
+    assert dg.names == ()
+    g = next(g for g in dg.confounded
+             if set(g["members"]) == {"force_law_refit", "force_sensor_gain"})
+    a1 = g["interpretations"]["force_law_refit"]["a1"]
     assert abs(a1["value"] - 1.05 * A) < 0.005 * A and a1["ci_low"] > A
+    gain = g["interpretations"]["force_sensor_gain"]["g"]
+    assert abs(gain["value"] - 0.05) < 0.005
 
 
 def test_pressure_sweep_at_fixed_contraction_names_nothing_spurious():

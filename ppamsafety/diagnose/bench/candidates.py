@@ -5,22 +5,49 @@ candidate extends the nominal force law (3.9)
 ``F_nom = p (a0/eps + a1 + a2 eps + a3 eps^2 + a4 eps^3)`` by a term linear
 in its parameters, ``F = F_nom + C phi`` with columns C [N per unit of phi]
 computed from the *measured* pressure and contraction history, so it is
-fitted by linear regression on the force residual (:mod:`.linear_selection`):
+fitted by linear regression on the force residual (:mod:`.linear_selection`).
+The columns that hold the force function are computed on the contraction made
+monotone between reversals (``eps_monotone``, the Preisach input of
+:func:`~.design.monotone_contraction`) and on a smoothed pressure
+(:func:`~.design.smooth_pressure`), not on the measured ones: the residual
+carries the sensors' noise as ``-n_p f(eps) - p f'(eps) d_eps``, and columns
+built on the noisy signals would fit part of it (errors in variables: at a
+fixed contraction a force gain and a refitted level, at one pressure level a
+force gain and a pressure offset, would "explain" that noise):
 
-=================  ==============================================  =================================
-name               extension (columns)                             parameters
-=================  ==============================================  =================================
-actuator_friction  ``-c s - b v``: s = direction of motion (+1     c [N] (Coulomb); b [N s/m], or
-                   contracting, -1 extending, held at rest),       [N s] without l0 (viscous, only
-                   v = l0 d eps/dt [m/s]                           when the speed varies enough)
-hysteresis         ``delta F_nom (W[eps_s] - W_fit(eps_s))``,      delta [-] (3.35)
-                   (3.34)-(3.35), Preisach operator of §3.6
-                   (:mod:`ppamsafety.hysteresis`) along the
-                   measured contraction
-force_law_refit    ``p (da0/eps + da1 + da2 eps + ...)``: the      a0..a4 [N/Pa] (refitted; the
-                   coefficients of (3.9) that are nonzero in the   nominal ones for the terms not
-                   nominal law, and a1 always (a cylinder: A)      freed)
-=================  ==============================================  =================================
+======================  ==============================================  ============================
+name                    extension (columns)                             parameters
+======================  ==============================================  ============================
+actuator_friction       ``-c s - b v``: s = direction of motion (+1     c [N] (Coulomb); b [N s/m],
+                        contracting, -1 extending, held at rest),       or [N s] without l0
+                        v = l0 d eps/dt [m/s]                           (viscous, only when the
+                                                                        speed varies enough)
+hysteresis              ``delta F_nom (W[eps_s] - W_fit(eps_s))``,      delta [-] (3.35)
+                        (3.34)-(3.35), Preisach operator of §3.6
+                        (:mod:`ppamsafety.hysteresis`) along the
+                        measured contraction
+force_law_refit         ``p (da0/eps + da1 + da2 eps + ...)``: the      a0..a4 [N/Pa] (refitted; the
+                        coefficients of (3.9) that are nonzero in the   nominal ones for the terms
+                        nominal law, and a1 always (a cylinder: A)      not freed)
+force_sensor_offset     ``o``: the load cell reads F + o                o [N]
+force_sensor_gain       ``g F_nom``: the load cell reads (1 + g) F      g [-] (first order: the
+                                                                        other effects' forces are
+                                                                        read (1 + g) x too)
+pressure_sensor_offset  ``-o f(eps)``: the transducer reads p + o, so   o [Pa]
+                        the law is evaluated at a pressure o too high
+======================  ==============================================  ============================
+
+Sensor faults (issue 19 item 3) are the first thing an experimenter checks.
+A **pressure-sensor gain** is not a candidate of its own: reading (1 + g_p) p
+makes the nominal force p f(eps) (1 + g_p) x too large, exactly the column of a
+force-sensor gain g = -g_p / (1 + g_p) (both scale p f(eps)); the separating
+experiment of that pair names both sensors.  A force-sensor gain is in turn
+**nested** in the refitted law (a uniform scale of its coefficients): the two
+can never be told apart on one record, the diagnosis reports them as
+confounded (:data:`SEPARATING`: a dead-weight check of the load cell, a
+reference gauge) and names neither.  At one pressure level (a pressure sweep
+excepted) the offsets are nearly in the refit's span too: the pipeline then
+keeps them below "high".
 
 Signatures (what a reviewer looks for in the residual, ``where`` table):
 friction jumps by 2c at every reversal of the motion and is independent of
@@ -39,21 +66,66 @@ working actuator); b in [0, 0.2 max |F_nom| / max |v|]; delta in [0, 0.5]
 (the thesis found 0.139 and 0.299, §3.6.5; the range of
 :func:`ppamsafety.hysteresis.tensile.simulate_tensile_test`); the refitted
 law's change of the force function at the 10/50/90 % quantiles of the
-measured contraction within +-50 % of the nominal force function there.
+measured contraction within +-50 % of the nominal force function there;
+offsets within 20 % of the largest nominal force (pressure: of the largest
+pressure) and a gain within +-20 % (the cylinder library's
+:data:`~.friction.OFFSET_MAX_FRACTION` and :data:`~.friction.GAIN_MAX`).
+
+Physical ranges (the admissibility gate before "high", :mod:`.gates`): c, b
+and delta >= 0 and delta <= 1 (the factor of (3.35) stays positive), a gain
+> -1 (a load cell that reads nothing is broken, not miscalibrated), and a
+refitted force function positive at the quantile nodes (a muscle pulls).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
-from scipy import stats
 
 from ...hysteresis import EPS_MAX, preisach_response, scaled_input, w_fit
-from ..core.parameter import Parameter
+from ..core.criteria import _normal_quantile
+from ..core.parameter import Parameter, physically_admissible
+from .friction import GAIN_MAX, OFFSET_MAX_FRACTION
+from .friction import separating_experiment as friction_separating
 
 #: Fixed vocabulary of effect names on a tester (actuator records).
-ACTUATOR_VOCABULARY = ("actuator_friction", "hysteresis", "force_law_refit")
+ACTUATOR_VOCABULARY = ("actuator_friction", "hysteresis", "force_law_refit",
+                       "force_sensor_offset", "force_sensor_gain", "pressure_sensor_offset")
+#: The sensor faults of the library (issue 19 item 3).
+SENSOR_FAULTS = ("force_sensor_offset", "force_sensor_gain", "pressure_sensor_offset")
+#: Largest hysteresis scale that keeps the factor 1 + delta (W - W_fit) of (3.35) positive.
+DELTA_PHYSICAL_MAX = 1.0
+#: The experiment that separates the members of a confounded group on a muscle record
+#: (issue 19 item 3; looked up by :func:`separating_experiment`).
+SEPARATING = {
+    frozenset({"force_sensor_gain", "force_law_refit"}):
+        "a dead-weight check of the load cell (known masses hung from it: a gain error scales "
+        "their reading) and a calibrated reference gauge on the muscle's pressure port (a "
+        "pressure-sensor gain is the same column as a force gain on a muscle record: both scale "
+        "p f(eps)); if both sensors read true, the force law itself is off",
+    frozenset({"force_sensor_offset", "pressure_sensor_offset"}):
+        "vent the muscle and read both sensors at 0 bar with the load cell unloaded: a load-cell "
+        "zero error shows in the force, a pressure-sensor zero error in the pressure",
+    frozenset({"force_sensor_offset", "force_law_refit"}):
+        "record at several pressures (a constant force and one proportional to the pressure are "
+        "then distinct), and read the load cell unloaded with the muscle vented",
+    frozenset({"pressure_sensor_offset", "force_law_refit"}):
+        "record at several pressures and read the pressure sensor with the muscle vented "
+        "(0 bar)",
+    frozenset({"hysteresis", "force_law_refit"}):
+        "cycle the contraction at each pressure: hysteresis shows as a loop between contracting "
+        "and extending, a wrong force law does not",
+    frozenset({"actuator_friction", "hysteresis"}):
+        "loops of several amplitudes and speeds: friction jumps by 2c at every reversal whatever "
+        "the amplitude, hysteresis moves gradually from branch to branch and scales with the "
+        "force",
+}
+#: Text for a confounded group no entry of :data:`SEPARATING` covers.
+SEPARATING_DEFAULT = ("record more loops over a wider range (several pressures, contraction "
+                      "amplitudes and speeds) and check the sensors against references (dead "
+                      "weights on the load cell, a reference gauge, both sensors read with the "
+                      "muscle vented at 0 bar)")
 #: Largest Coulomb friction, fraction of max |F_nom| (module docstring).
 FRICTION_MAX_FRACTION = 0.2
 #: Range of the hysteresis scale delta (thesis §3.6.5: 0.139, 0.299).
@@ -98,6 +170,14 @@ class Extension:
         Parameters that must not be significantly negative (95 % interval
         reaching 0): dissipation, a friction or a hysteresis loop that gives
         energy back is not physical.
+    physical : callable or None
+        ``physical(phi, cov) -> bool`` replacing the per-parameter physical
+        ranges of :meth:`physically_admissible` (the refitted law: its force
+        function positive at the quantile nodes).
+    per_force : numpy.ndarray, shape (N,), or None
+        For an effect proportional to the muscle's force (hysteresis: ``W -
+        W_fit``), its column per newton of that force; :meth:`on_force` rebuilds
+        the column on a better estimate of the force than the nominal law.
     """
 
     name: str
@@ -110,6 +190,21 @@ class Extension:
     note: str = ""
     shift: object = field(default=None, repr=False)
     nonnegative: tuple = ()
+    physical: object = field(default=None, repr=False)
+    per_force: object = field(default=None, repr=False)
+
+    def on_force(self, force) -> "Extension":
+        """The same extension with its column rebuilt on ``force`` [N] (see ``per_force``).
+
+        Parameters
+        ----------
+        force : numpy.ndarray, shape (N,)
+            The muscle's force as the record reads it (e.g. the nominal law with the fitted
+            law and gain corrections).
+        """
+        if self.per_force is None:
+            raise ValueError(f"{self.name}: its column is not proportional to the force")
+        return replace(self, columns=(np.asarray(force, float) * self.per_force)[:, None])
 
     @property
     def k(self) -> int:
@@ -133,7 +228,7 @@ class Extension:
         dict
             parameter name -> {value, unit, ci_low, ci_high, std_error, nominal}.
         """
-        z = stats.norm.ppf(0.5 + confidence / 2)
+        z = _normal_quantile(0.5 + confidence / 2)
         v = self.nominal + self.T @ phi
         se = np.sqrt(np.maximum(np.diag(self.T @ cov @ self.T.T), 0.0))
         return {p.name: {"value": float(v[i]), "unit": p.unit, "ci_low": float(v[i] - z * se[i]),
@@ -155,6 +250,27 @@ class Extension:
             return bool(self.shift(phi, cov))
         return any(not (p["ci_low"] <= p["nominal"] <= p["ci_high"])
                    for p in self.values(phi, cov).values())
+
+    def physically_admissible(self, phi, cov) -> bool:
+        """The fit is physically possible: the admissibility gate before "high".
+
+        Every parameter that moved (its 95 % interval excludes the nominal
+        value) has its interval inside the parameter's physical range, and no
+        other parameter lies significantly outside it
+        (:func:`~ppamsafety.diagnose.core.parameter.physically_admissible`).
+
+        Parameters
+        ----------
+        phi : numpy.ndarray, shape (k,)
+            This extension's coefficients.
+        cov : numpy.ndarray, shape (k, k)
+            Their covariance.
+        """
+        if self.physical is not None:
+            return bool(self.physical(phi, cov))
+        tab = self.values(phi, cov)
+        moved = [n for n, d in tab.items() if not d["ci_low"] <= d["nominal"] <= d["ci_high"]]
+        return physically_admissible(self.parameters, tab, moved)
 
     def admissible(self, phi, cov) -> bool:
         """Rule 3: the fitted parameters are determined and physically possible.
@@ -192,11 +308,13 @@ def _friction(ctx):
         note = (f"friction: every run of the motion had about the same speed (fastest/slowest "
                 f"{ctx['speed_ratio']:.2f} < {VISCOUS_SPEED_RATIO}), so a viscous part is not "
                 f"separable from the Coulomb part; fitted Coulomb only (c includes b |v|)")
-    params = [Parameter("c", "N", 0.0, fmax, "Coulomb friction opposing the motion")]
+    params = [Parameter("c", "N", 0.0, fmax, "Coulomb friction opposing the motion",
+                        phys_lo=0.0)]
     cols = [-s]
     if use_visc:
         params.append(Parameter("b", bunit, 0.0, fmax / vmax,
-                                f"viscous friction (force per unit speed, speed in {vunit})"))
+                                f"viscous friction (force per unit speed, speed in {vunit})",
+                                phys_lo=0.0))
         cols.append(-v)
     k = len(cols)
     return Extension(
@@ -217,23 +335,25 @@ def _hysteresis(ctx):
     initial = "negative" if s[moving[0]] > 0 else "positive"
     W = preisach_response(eps_s, initial=initial, clip=True)
     a, b = w_fit()
-    col = ctx["f_nom"] * (W - (a * eps_s + b))
+    shape = W - (a * eps_s + b)
+    col = ctx["f_smooth"] * shape
     lo, hi = DELTA_BOUNDS
     return Extension(
         "hysteresis", col[:, None],
         (Parameter("delta", "-", lo, hi, "hysteresis scale of (3.35) (thesis 0.139 for 25 "
-                                         "fibres, 0.299 for 40, §3.6.5)"),),
+                                         "fibres, 0.299 for 40, §3.6.5)",
+                   phys_lo=0.0, phys_hi=DELTA_PHYSICAL_MAX),),
         np.zeros(1), np.eye(1),
         "memory: after a reversal the force moves gradually from one branch to the other, "
         "minor loops are nested; proportional to the force (and so to the pressure)",
         note=f"hysteresis: Preisach memory started from {initial} saturation (eps_max = "
              f"{EPS_MAX}, (3.34)), input: the contraction made monotone between reversals",
-        nonnegative=("delta",)), ""
+        nonnegative=("delta",), per_force=shape), ""
 
 
 def _refit(ctx):
     a = ctx["a"]
-    eps, p = ctx["eps"], ctx["pressure"]
+    eps, p = ctx["eps_monotone"], ctx["p_smooth"]
     free = [j for j in range(5) if a[j] != 0.0 or j == 1]
     if 0 in free and np.any(eps <= 0):
         free.remove(0)
@@ -252,7 +372,7 @@ def _refit(ctx):
     q = np.quantile(eps, [0.1, 0.5, 0.9])
     G = np.column_stack([basis[j](q) for j in free])
     f_q = sum(a[j] * basis[j](q) for j in range(5) if not (j == 0 and np.any(q <= 0)))
-    z = stats.norm.ppf(0.975)
+    z = _normal_quantile(0.975)
     lim = 2 * REFIT_MAX_RELATIVE        # the +-50 % band widened by half its width
 
     def check(phi, cov):
@@ -267,19 +387,91 @@ def _refit(ctx):
         se = np.sqrt(np.maximum(np.diag(G @ cov @ G.T), 0.0))
         return bool(np.any(np.abs(d) > z * se))
 
+    def physical(phi, cov):
+        # a muscle pulls: the refitted force function stays positive at the nodes
+        d = G @ phi
+        se = np.sqrt(np.maximum(np.diag(G @ cov @ G.T), 0.0))
+        return bool(np.all(f_q + d - z * se > 0.0))
+
     params = tuple(Parameter(f"a{j}", "N/Pa", -1.0, 1.0, f"coefficient a{j} of (3.9)")
                    for j in range(5))
     return Extension(
         "force_law_refit", cols, params, np.asarray(a, float), T,
         "a smooth function of the contraction, proportional to the pressure, the same in both "
-        "directions of motion", check=check, shift=shift,
+        "directions of motion", check=check, shift=shift, physical=physical,
         note=f"force_law_refit: coefficients a{', a'.join(map(str, free))} refitted"
              + (f" (the contraction spans fewer than {REFIT_MIN_SPAN_SIGMAS:g} noise levels: "
                 f"only the force function's level is identifiable)" if narrow else "")), ""
 
 
+def force_function(a, eps) -> np.ndarray:
+    """The force function f(eps) = a0/eps + a1 + a2 eps + a3 eps^2 + a4 eps^3 of (3.9) [N/Pa].
+
+    Parameters
+    ----------
+    a : array_like, shape (5,)
+        Coefficients [N/Pa].
+    eps : numpy.ndarray
+        Contraction [-] (> 0 where a0 != 0).
+    """
+    a = np.asarray(a, float)
+    inv = a[0] / eps if a[0] != 0.0 else 0.0
+    return inv + a[1] + eps * (a[2] + eps * (a[3] + eps * a[4]))
+
+
+def _force_offset(ctx):
+    fmax = float(np.max(np.abs(ctx["f_nom"])))
+    lim = OFFSET_MAX_FRACTION * fmax
+    return Extension(
+        "force_sensor_offset", np.ones((ctx["eps"].size, 1)),
+        (Parameter("o", "N", -lim, lim, "load-cell zero error: it reads F + o"),),
+        np.zeros(1), np.eye(1),
+        "a constant force at every pressure, contraction and direction of motion"), ""
+
+
+def _force_gain(ctx):
+    return Extension(
+        "force_sensor_gain", np.asarray(ctx["f_smooth"], float)[:, None],
+        (Parameter("g", "-", -GAIN_MAX, GAIN_MAX, "load-cell gain error: it reads (1 + g) F "
+                   "(a pressure-sensor gain g_p gives the same column, g = -g_p/(1 + g_p))",
+                   phys_lo=-1.0),),
+        np.zeros(1), np.eye(1),
+        "a force proportional to the nominal force p f(eps), in both directions of motion "
+        "(a pressure-sensor gain looks the same)",
+        note="force_sensor_gain: a pressure-sensor gain g_p is the same column on a muscle "
+             "record (g = -g_p/(1 + g_p): both scale p f(eps)); the force gain is nested in "
+             "force_law_refit (a uniform scale of its coefficients)"), ""
+
+
+def _pressure_offset(ctx):
+    eps = ctx["eps_monotone"]
+    if ctx["a"][0] != 0.0 and np.any(eps <= 0):
+        return None, "pressure_sensor_offset: the force function is not defined at eps <= 0"
+    f = force_function(ctx["a"], eps)
+    pmax = float(np.max(np.abs(ctx["pressure"])))
+    lim = OFFSET_MAX_FRACTION * max(pmax, 1.0)
+    return Extension(
+        "pressure_sensor_offset", -f[:, None],
+        (Parameter("o", "Pa", -lim, lim, "pressure-sensor zero error: it reads p + o"),),
+        np.zeros(1), np.eye(1),
+        "a force -o f(eps): the same at every pressure, a function of the contraction only, "
+        "in both directions of motion"), ""
+
+
 BUILDERS = {"actuator_friction": _friction, "hysteresis": _hysteresis,
-            "force_law_refit": _refit}
+            "force_law_refit": _refit, "force_sensor_offset": _force_offset,
+            "force_sensor_gain": _force_gain, "pressure_sensor_offset": _pressure_offset}
+
+
+def separating_experiment(members) -> str:
+    """The experiment that would separate the members of a confounded group on a muscle record.
+
+    Parameters
+    ----------
+    members : iterable of str
+        Candidate names.
+    """
+    return friction_separating(members, table=SEPARATING, default=SEPARATING_DEFAULT)
 
 
 def build_extensions(ctx: dict, names=None) -> tuple:
@@ -288,11 +480,15 @@ def build_extensions(ctx: dict, names=None) -> tuple:
     Parameters
     ----------
     ctx : dict
-        The record's arrays: ``eps`` [-], ``pressure`` [Pa], ``f_nom`` [N],
-        ``direction`` (+1/-1/0), ``speed`` and ``speed_unit``, ``a`` (the
-        nominal coefficients, N/Pa), ``eps_monotone`` (the Preisach input),
-        ``speed_ratio`` (fastest/slowest run), ``eps_span_sigmas``
-        (contraction span in noise levels).
+        The record's arrays: ``eps`` [-], ``pressure`` [Pa], ``f_nom`` [N]
+        (the nominal law at the measured p and eps), ``f_smooth`` [N] (the same
+        at ``eps_monotone``), ``direction`` (+1/-1/0), ``speed`` and
+        ``speed_unit``, ``a`` (the nominal coefficients, N/Pa), ``eps_monotone``
+        (the contraction made monotone between reversals: the Preisach input and
+        the argument of every force-function column), ``p_smooth`` [Pa] (the
+        pressure of those columns, :func:`~.design.smooth_pressure`), ``speed_ratio``
+        (fastest/slowest run), ``eps_span_sigmas`` (contraction span in noise
+        levels), ``one_level`` (one pressure level).
     names : sequence of str, optional
         Subset of :data:`~.candidates.ACTUATOR_VOCABULARY` (default all).
 
@@ -324,5 +520,7 @@ def build_extensions(ctx: dict, names=None) -> tuple:
     return out, notes
 
 
-__all__ = ["Extension", "build_extensions", "BUILDERS", "FRICTION_MAX_FRACTION",
+__all__ = ["Extension", "build_extensions", "BUILDERS", "ACTUATOR_VOCABULARY", "SENSOR_FAULTS",
+           "SEPARATING", "SEPARATING_DEFAULT", "separating_experiment", "force_function",
+           "DELTA_PHYSICAL_MAX", "FRICTION_MAX_FRACTION",
            "DELTA_BOUNDS", "REFIT_MAX_RELATIVE", "REFIT_MIN_SPAN_SIGMAS", "VISCOUS_SPEED_RATIO"]

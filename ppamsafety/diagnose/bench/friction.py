@@ -454,23 +454,30 @@ def admissible(name: str, model: dict, phi, cov, slices, ctx) -> bool:
     return True
 
 
-def separating_experiment(members) -> str:
+def separating_experiment(members, *, table=None, default: str | None = None) -> str:
     """The experiment that would separate the members of a confounded group.
 
     Parameters
     ----------
     members : iterable of str
         Candidate names.
+    table : dict, optional, keyword-only
+        frozenset of names -> text (default :data:`SEPARATING`, the cylinder's; the muscle
+        library passes its own, :data:`~.candidates.SEPARATING`).
+    default : str, optional, keyword-only
+        Text for a group no entry covers (default :data:`SEPARATING_DEFAULT`).
     """
+    table = SEPARATING if table is None else table
+    default = SEPARATING_DEFAULT if default is None else default
     m = frozenset(members)
-    for key, txt in SEPARATING.items():
+    for key, txt in table.items():
         if m <= key:
             return txt
-    touched = [k for k in SEPARATING if m & k]
+    touched = [k for k in table if m & k]
     if touched and m <= frozenset().union(*touched):
         return ("record at several pressures (a constant force and one proportional to the "
-                "pressure are then distinct); then: " + "; ".join(SEPARATING[k] for k in touched))
-    return SEPARATING_DEFAULT
+                "pressure are then distinct); then: " + "; ".join(table[k] for k in touched))
+    return default
 
 
 __all__ = ["VOCABULARY", "FRICTION", "Variant", "build_variants", "parameters", "admissible",

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..core.noise import interpolation_sigma
-from .pipeline import motion_direction
+from .design import motion_direction
 
 #: Dead band of the reversal detector, in position noise levels.
 REVERSAL_SIGMAS = 12.0

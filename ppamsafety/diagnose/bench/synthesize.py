@@ -27,7 +27,7 @@ the volume change); the record carries it, so it is no discrepancy.
 
 Effects (``{name: value}``, SI):
 
-in the tester library
+in the tester library (:mod:`.candidates`)
     ``hysteresis_delta`` [-]: (3.35) with the Preisach operator of §3.6,
     memory from negative saturation (the test starts on the stretched
     muscle, §3.6.6); ``friction_coulomb`` [N] and ``friction_viscous``
@@ -35,15 +35,29 @@ in the tester library
     the sign kept through rests); ``force_law_scale`` [-]: the true law is
     (1 + s) x the nominal one (a slenderness l0/R known only roughly,
     §3.6.1); ``force_law_delta`` [N/Pa]: five values added to a0..a4;
+    sensor faults (issue 19): ``force_sensor_offset`` [N] (added to the
+    recorded force), ``force_sensor_gain`` [-] (the recorded force is
+    (1 + g) x the force), ``pressure_sensor_offset`` [Pa] (added to the
+    recorded pressure) and ``pressure_sensor_gain`` [-] (the recorded
+    pressure is (1 + g) x the pressure; on a muscle record the same as a
+    force gain -g/(1 + g): both scale p f(eps));
 outside the library
-    ``force_sensor_offset`` [N] (added to the recorded force);
-    ``pressure_sensor_offset`` [Pa] (added to the recorded pressure);
     ``backlash`` [m]: play of total width ``backlash`` between the measured
     crosshead position and the muscle end (the muscle's contraction is the
     play operator of the measured one); ``leak_rate`` [1/s]: the muscle
     leaks behind the pressure sensor, which sits at the regulator: its
     pressure decays as exp(-leak_rate tau) after each pressure change tau
-    seconds ago while the sensor keeps reading the regulated pressure.
+    seconds ago while the sensor keeps reading the regulated pressure;
+    ``force_sensor_drift`` [N/s]: the load cell's zero drifts linearly from
+    the start of the record (warming); ``pressure_sensor_lag`` [s]: the
+    pressure reading is the true pressure through a first-order lag of this
+    time constant (a slow transducer or a long tube); ``noise_correlation_time``
+    [s]: the measurement noise of every channel is coloured (first-order
+    autoregressive with this correlation time and the same variance: the
+    same draws filtered); ``outlier_rate`` [-]: that fraction of the samples
+    each carry a spike of 10-50 noise levels on one channel (force, pressure
+    or position; their own random stream, so the record is otherwise the
+    same).
 
 Noise ``"tester"``: white Gaussian noise of 1 N on the force (a 0.1 %
 class load cell of a few kN), 500 Pa on the pressure (the arm's choice,
@@ -74,8 +88,20 @@ POSITION_NOISE_STD = 10e-6
 THESIS_PRESSURES = (1.0e5, 1.5e5, 2.5e5)
 THESIS_L0 = 0.06
 EFFECTS = ("hysteresis_delta", "friction_coulomb", "friction_viscous", "force_law_scale",
-           "force_law_delta", "force_sensor_offset", "pressure_sensor_offset", "backlash",
-           "leak_rate")
+           "force_law_delta", "force_sensor_offset", "force_sensor_gain", "pressure_sensor_offset",
+           "pressure_sensor_gain", "backlash", "leak_rate", "force_sensor_drift",
+           "pressure_sensor_lag", "noise_correlation_time", "outlier_rate")
+#: Range of every scalar effect: (lo, hi, unit).
+EFFECT_BOUNDS = {"hysteresis_delta": (0.0, 0.5, "-"), "friction_coulomb": (0.0, 1e5, "N"),
+                 "friction_viscous": (0.0, 1e7, "N s/m"), "force_law_scale": (-0.5, 0.5, "-"),
+                 "force_sensor_offset": (-1e5, 1e5, "N"), "force_sensor_gain": (-0.5, 0.5, "-"),
+                 "pressure_sensor_offset": (-1e6, 1e6, "Pa"),
+                 "pressure_sensor_gain": (-0.5, 0.5, "-"), "backlash": (0.0, 0.05, "m"),
+                 "leak_rate": (0.0, 10.0, "1/s"), "force_sensor_drift": (-1e3, 1e3, "N/s"),
+                 "pressure_sensor_lag": (0.0, 10.0, "s"),
+                 "noise_correlation_time": (0.0, 100.0, "s"), "outlier_rate": (0.0, 0.05, "-")}
+#: Spikes of ``outlier_rate``: amplitude range in noise levels.
+OUTLIER_LEVELS = (10.0, 50.0)
 #: Hold at each pressure change [s] and the pressure ramp inside it [s].
 HOLD_SECONDS, RAMP_SECONDS = 2.0, 1.0
 
@@ -96,11 +122,7 @@ def _check_effects(effects) -> dict:
                 unit="N/Pa"))
             continue
         v = check_numbers(f"effect {name}", value, (1,))[0]
-        lim = {"hysteresis_delta": (0.0, 0.5, "-"), "friction_coulomb": (0.0, 1e5, "N"),
-               "friction_viscous": (0.0, 1e7, "N s/m"), "force_law_scale": (-0.5, 0.5, "-"),
-               "force_sensor_offset": (-1e5, 1e5, "N"),
-               "pressure_sensor_offset": (-1e6, 1e6, "Pa"), "backlash": (0.0, 0.05, "m"),
-               "leak_rate": (0.0, 10.0, "1/s")}[name]
+        lim = EFFECT_BOUNDS[name]
         out[name] = check_range(f"effect {name}", v, lim[0], lim[1], unit=lim[2])
     return out
 
@@ -134,6 +156,40 @@ def _knots(protocol, pressures, cycles, period, eps_range):
             E += [mid, mid]
             P += [pmax, pmin]
     return np.array(T), np.array(E), np.array(P)
+
+
+def _lag(t, x, tau):
+    """``x`` through a first-order lag of time constant ``tau`` [s] (exact for a held input)."""
+    y = np.empty_like(x)
+    y[0] = x[0]
+    g = 1.0 - np.exp(-np.diff(t) / tau)
+    for k in range(1, x.size):
+        y[k] = y[k - 1] + g[k - 1] * (x[k] - y[k - 1])
+    return y
+
+
+def _ar1(t, w, tau):
+    """White noise ``w`` made first-order autoregressive with correlation time ``tau`` [s] and
+    the same variance (non-uniform sampling: the coefficient of each step from its length)."""
+    a = np.exp(-np.diff(t) / tau)
+    b = np.sqrt(1.0 - a * a)
+    y = np.empty_like(w)
+    y[0] = w[0]
+    for k in range(1, w.size):
+        y[k] = a[k - 1] * y[k - 1] + b[k - 1] * w[k]
+    return y
+
+
+def _outliers(channels, stds, rate, rng):
+    """Spikes of :data:`OUTLIER_LEVELS` noise levels on ``rate`` of the samples, one channel each."""
+    out = [np.array(c, dtype=float) for c in channels]
+    n = out[0].size
+    hit = rng.random(n) < rate
+    ch = rng.integers(0, len(out), size=n)
+    amp = rng.uniform(*OUTLIER_LEVELS, size=n) * rng.choice([-1.0, 1.0], size=n)
+    for k in np.flatnonzero(hit):
+        out[ch[k]][k] += amp[k] * stds[ch[k]]
+    return tuple(out)
 
 
 def _play(x, half):
@@ -257,13 +313,25 @@ def synthesize_actuator(effects=None, *, noise: str = "tester", seed: int = 0,
         force = f_law * (1.0 + fx["hysteresis_delta"] * (W - (sl * es + ic)))
     v = l0 * rate_cmd
     force = force - fx.get("friction_coulomb", 0.0) * s - fx.get("friction_viscous", 0.0) * v
-    force = force + fx.get("force_sensor_offset", 0.0)
-    p_rec = p_reg + fx.get("pressure_sensor_offset", 0.0)
+    # the sensors: the load cell (gain, zero, drifting zero) and the pressure transducer (lag,
+    # gain, zero) read the muscle's force and the regulated pressure
+    force = ((1.0 + fx.get("force_sensor_gain", 0.0)) * force + fx.get("force_sensor_offset", 0.0)
+             + fx.get("force_sensor_drift", 0.0) * t)
+    p_read = _lag(t, p_reg, fx["pressure_sensor_lag"]) if fx.get("pressure_sensor_lag", 0.0) > 0 \
+        else p_reg
+    p_rec = (1.0 + fx.get("pressure_sensor_gain", 0.0)) * p_read + fx.get(
+        "pressure_sensor_offset", 0.0)
     pos = l0 * (1.0 - eps_cmd)
+    stds = (FORCE_NOISE_STD, PRESSURE_NOISE_STD, POSITION_NOISE_STD)
     if noise == "tester":
-        force = force + rng.normal(0.0, FORCE_NOISE_STD, t.size)
-        p_rec = p_rec + rng.normal(0.0, PRESSURE_NOISE_STD, t.size)
-        pos = pos + rng.normal(0.0, POSITION_NOISE_STD, t.size)
+        tau = fx.get("noise_correlation_time", 0.0)
+        w = [rng.normal(0.0, sd, t.size) for sd in stds]
+        if tau > 0:
+            w = [_ar1(t, x, tau) for x in w]
+        force, p_rec, pos = force + w[0], p_rec + w[1], pos + w[2]
+    if fx.get("outlier_rate", 0.0) > 0:
+        force, p_rec, pos = _outliers((force, p_rec, pos), stds, fx["outlier_rate"],
+                                      np.random.default_rng([seed, 7]))
     cols = {"t": t, "force": force, "pressure": p_rec}
     if position:
         cols["position"] = pos
@@ -279,5 +347,5 @@ def synthesize_actuator(effects=None, *, noise: str = "tester", seed: int = 0,
     return MeasuredData(meta, pd.DataFrame(cols), source="synthesize")
 
 
-__all__ = ["synthesize_actuator", "EFFECTS", "NOISES", "PROTOCOLS", "THESIS_PRESSURES",
+__all__ = ["synthesize_actuator", "EFFECTS", "EFFECT_BOUNDS", "OUTLIER_LEVELS", "NOISES", "PROTOCOLS", "THESIS_PRESSURES",
            "THESIS_L0", "FORCE_NOISE_STD", "PRESSURE_NOISE_STD", "POSITION_NOISE_STD"]

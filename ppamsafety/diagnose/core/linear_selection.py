@@ -13,8 +13,9 @@ effect under identical rules (constants :data:`~.selection.ALPHA`,
 * data: whitened residuals ``e0 = r / sigma`` (m equations, approximately
   independent N(0, 1) under a correct model) and, per candidate, whitened
   columns ``Z_c`` (m, k_c): the extension is ``e = e0 - [Z_c ...] phi``;
-* fit: linear least squares (columns scaled to unit norm), covariance
-  ``s^2 (A^T A)^-1`` with ``s^2 = chi2/(m - k)``;
+* fit: linear least squares from the Gram matrices of the columns
+  (:class:`LinearGram`, columns scaled to unit norm, a pseudo-inverse for
+  nested candidates), covariance ``s^2 (A^T A)^-1`` with ``s^2 = chi2/(m - k)``;
 * BIC = chi2 + k ln m; naming rule: BIC below the current model's,
   likelihood-ratio p < alpha/K (Bonferroni over the K candidates of the
   step), parameters determined and physically possible (a callable per
@@ -31,6 +32,8 @@ effect under identical rules (constants :data:`~.selection.ALPHA`,
 
 from __future__ import annotations
 
+import itertools
+import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -100,6 +103,128 @@ def fold_of(m: int, segments: int = CV_SEGMENTS) -> np.ndarray:
     return seg % 2
 
 
+#: Eigenvalues of the (unit-diagonal) normal matrix below this fraction of the largest are
+#: treated as zero: exactly nested candidates (a force gain inside a refitted force law) make
+#: it singular; the legitimate directions of the muscle library stay above 1e-10.
+EIGEN_CUTOFF = 1e-13
+
+
+class LinearGram:
+    """Per-fold Gram matrices of the whitened columns and residual: each fit is a k x k solve.
+
+    ``[Z e0]^T [Z e0]`` summed over the equations of each cross-validation fold (and of
+    ``mask``).  A fit of any subset of the candidates, its covariance and its held-out chi2
+    follow from these small matrices, so a forward selection over K candidates costs two
+    products of the data instead of one least-squares problem per candidate, step and fold.
+    The solve is a pseudo-inverse of the unit-diagonal normal matrix (eigenvalues below
+    :data:`EIGEN_CUTOFF` x the largest dropped): the minimum-norm solution when candidates
+    are nested.
+
+    Parameters
+    ----------
+    e0 : numpy.ndarray, shape (m,)
+        Whitened nominal residual.
+    columns : dict
+        Candidate name -> whitened columns (m, k_c).
+    fold : numpy.ndarray of int, shape (m,), optional
+        Cross-validation fold 0/1 of every equation (default :func:`fold_of` of the
+        equations used).
+    mask : numpy.ndarray of bool, shape (m,), optional
+        Equations to fit on (default all); residuals are returned for all.
+    """
+
+    def __init__(self, e0, columns: dict, fold=None, mask=None):
+        self.e0 = np.asarray(e0, float)
+        m_all = self.e0.size
+        self.mask = np.ones(m_all, bool) if mask is None else np.asarray(mask, bool)
+        self.slices, j, blocks = {}, 0, []
+        for n, Z in columns.items():
+            blocks.append(Z)
+            self.slices[n] = slice(j, j + Z.shape[1])
+            j += Z.shape[1]
+        self.Z = np.concatenate(blocks, axis=1) if blocks else np.zeros((m_all, 0))
+        used = np.flatnonzero(self.mask)
+        self.m = int(used.size)
+        if fold is None:
+            fold_used = fold_of(self.m)
+        else:
+            fold_used = np.asarray(fold)[used] if np.asarray(fold).size == m_all else \
+                np.asarray(fold)
+        X = np.concatenate([self.Z[used], self.e0[used, None]], axis=1)
+        self.G = [X[fold_used == f].T @ X[fold_used == f] for f in (0, 1)]
+        self.G_all = self.G[0] + self.G[1]
+
+    def _index(self, names):
+        if not names:
+            return np.zeros(0, dtype=int)
+        return np.concatenate([np.arange(self.slices[n].start, self.slices[n].stop)
+                               for n in names])
+
+    @staticmethod
+    def _solve(G, idx):
+        """Coefficients, chi2 and unscaled covariance of the columns ``idx`` on Gram ``G``."""
+        yy = float(G[-1, -1])
+        if idx.size == 0:
+            return np.zeros(0), max(yy, 0.0), np.zeros((0, 0))
+        A = G[np.ix_(idx, idx)]
+        b = G[idx, -1]
+        d = np.sqrt(np.maximum(np.diag(A), 0.0))
+        d[d == 0] = 1.0
+        w, V = np.linalg.eigh(A / np.outer(d, d))
+        keep = w > EIGEN_CUTOFF * max(float(w.max()), 1e-300)
+        inv = (V[:, keep] / w[keep]) @ V[:, keep].T
+        phi = (inv @ (b / d)) / d
+        chi2 = max(yy - 2.0 * float(phi @ b) + float(phi @ A @ phi), 0.0)
+        return phi, chi2, inv / np.outer(d, d)
+
+    @staticmethod
+    def _chi2(G, idx, phi):
+        if idx.size == 0:
+            return max(float(G[-1, -1]), 0.0)
+        A = G[np.ix_(idx, idx)]
+        b = G[idx, -1]
+        return max(float(G[-1, -1]) - 2.0 * float(phi @ b) + float(phi @ A @ phi), 0.0)
+
+    def fit(self, names) -> LinearFit:
+        """Least-squares fit of the residual by the columns of ``names`` (on ``mask``).
+
+        Parameters
+        ----------
+        names : sequence of str
+
+        Returns
+        -------
+        LinearFit
+        """
+        names = tuple(names)
+        idx = self._index(names)
+        phi, chi2, cu = self._solve(self.G_all, idx)
+        k = idx.size
+        cov = chi2 / max(self.m - k, 1) * cu
+        slices, j = {}, 0
+        for n in names:
+            w = self.slices[n].stop - self.slices[n].start
+            slices[n] = slice(j, j + w)
+            j += w
+        e = self.e0 - self.Z[:, idx] @ phi if k else self.e0.copy()
+        return LinearFit(names=names, k=int(k), m=self.m, chi2=chi2, phi=phi, cov=cov,
+                         slices=slices, e=e)
+
+    def cv_chi2(self, names) -> float:
+        """Held-out chi2 of 2-fold cross-validation (fit on one fold, chi2 on the other, and back).
+
+        Parameters
+        ----------
+        names : sequence of str
+        """
+        idx = self._index(tuple(names))
+        total = 0.0
+        for f in (0, 1):
+            phi, _, _ = self._solve(self.G[1 - f], idx)
+            total += self._chi2(self.G[f], idx, phi)
+        return total
+
+
 def fit_linear(e0, columns: dict, names, mask=None) -> LinearFit:
     """Least-squares fit of the nominal residual ``e0`` by the columns of ``names``.
 
@@ -119,36 +244,7 @@ def fit_linear(e0, columns: dict, names, mask=None) -> LinearFit:
     LinearFit
     """
     names = tuple(names)
-    m_all = e0.size
-    mask = np.ones(m_all, bool) if mask is None else np.asarray(mask, bool)
-    blocks, slices, j = [], {}, 0
-    for n in names:
-        Z = columns[n]
-        blocks.append(Z)
-        slices[n] = slice(j, j + Z.shape[1])
-        j += Z.shape[1]
-    Z = np.concatenate(blocks, axis=1) if blocks else np.zeros((m_all, 0))
-    b = e0[mask]
-    A = Z[mask]
-    k = Z.shape[1]
-    if k:
-        scale = np.sqrt(np.sum(A ** 2, axis=0))
-        scale[scale == 0] = 1.0
-        sol, *_ = np.linalg.lstsq(A / scale, b, rcond=None)
-        phi = sol / scale
-    else:
-        phi = np.zeros(0)
-    r = b - A @ phi
-    chi2 = float(r @ r)
-    m = b.size
-    if k:
-        s2 = chi2 / max(m - k, 1)
-        An = A / scale
-        cov = s2 * np.linalg.pinv(An.T @ An) / np.outer(scale, scale)
-    else:
-        cov = np.zeros((0, 0))
-    return LinearFit(names=names, k=k, m=m, chi2=chi2, phi=phi, cov=cov, slices=slices,
-                     e=e0 - Z @ phi)
+    return LinearGram(e0, {n: columns[n] for n in names}, mask=mask).fit(names)
 
 
 def cv_chi2_linear(e0, columns: dict, names, fold) -> float:
@@ -165,11 +261,8 @@ def cv_chi2_linear(e0, columns: dict, names, fold) -> float:
     fold : numpy.ndarray of int, shape (m,)
         Fold 0/1 of every equation (:func:`fold_of`).
     """
-    total = 0.0
-    for f in (0, 1):
-        fit = fit_linear(e0, columns, names, mask=fold != f)
-        total += float(np.sum(fit.e[fold == f] ** 2))
-    return total
+    names = tuple(names)
+    return LinearGram(e0, {n: columns[n] for n in names}, fold=fold).cv_chi2(names)
 
 
 def forward_selection_linear(e0, columns: dict, admissible, *, alpha: float = ALPHA,
@@ -206,10 +299,11 @@ def forward_selection_linear(e0, columns: dict, admissible, *, alpha: float = AL
     """
     e0 = np.asarray(e0, float)
     fold = fold_of(e0.size) if fold is None else np.asarray(fold)
+    gram = LinearGram(e0, columns, fold=fold)
     names = list(columns)
     selected: list = []
-    current = fit_linear(e0, columns, selected)
-    cur_cv = cv_chi2_linear(e0, columns, selected, fold)
+    current = gram.fit(selected)
+    cur_cv = gram.cv_chi2(selected)
     steps = []
     while len(selected) < max_effects:
         rest = [n for n in names if n not in selected]
@@ -217,11 +311,11 @@ def forward_selection_linear(e0, columns: dict, admissible, *, alpha: float = AL
             break
         rows, fits = [], {}
         for n in rest:
-            f = fit_linear(e0, columns, selected + [n])
+            f = gram.fit(selected + [n])
             fits[n] = f
             d = current.chi2 - f.chi2
             df = max(f.k - current.k, 1)
-            cv = cv_chi2_linear(e0, columns, selected + [n], fold)
+            cv = gram.cv_chi2(selected + [n])
             rows.append({"name": n, "k": f.k - current.k, "chi2": f.chi2, "bic": f.bic,
                          "aicc": f.aicc, "delta_bic": f.bic - current.bic, "lr_stat": d,
                          "lr_df": df, "p_value": _chi2_sf(max(d, 0.0), df),
@@ -237,8 +331,241 @@ def forward_selection_linear(e0, columns: dict, admissible, *, alpha: float = AL
             break
         selected.append(chosen)
         current = fits[chosen]
-        cur_cv = cv_chi2_linear(e0, columns, selected, fold)
+        cur_cv = gram.cv_chi2(selected)
     return current, steps
 
 
-__all__ = ["LinearFit", "fit_linear", "cv_chi2_linear", "forward_selection_linear", "fold_of"]
+#: Subsets within this BIC of the best carry its inclusion probabilities (the weights of
+#: the others are below exp(-15) relative to the best), as the arm's ``subsets.CHECK_BIC``.
+CHECK_BIC = 30.0
+
+
+@dataclass(frozen=True)
+class SubsetChoice:
+    """Result of :func:`subset_search_linear`.
+
+    Attributes
+    ----------
+    names : tuple of str
+        The best subset whose members each pass the naming rule given the others.
+    inclusion : dict
+        Candidate -> inclusion probability (the BIC weights of the admissible subsets
+        near the best that hold it).
+    evidence : dict
+        Member -> {lr_stat, lr_df, p_value, delta_bic, cv_gain, gain_per_equation}: the
+        member against the best subset without it.
+    evaluated : int
+        Subsets fitted.
+    ranking : list of dict
+        The 20 best subsets by BIC (``subset``, ``k``, ``chi2``, ``bic``, ``admissible``).
+    """
+
+    names: tuple
+    inclusion: dict
+    evidence: dict
+    evaluated: int
+    ranking: list
+
+
+def subset_search_linear(e0, columns: dict, admissible, *, alpha: float = ALPHA,
+                         max_k: int, min_gain_per_equation: float = 0.0,
+                         fold=None) -> SubsetChoice:
+    """Every subset of the candidates with at most ``max_k`` coefficients, ranked by BIC.
+
+    Forward selection is greedy: a first step that takes a candidate explaining parts of
+    two effects (a refitted law taking a force gain and the branch-average of a small
+    hysteresis) can block the right pair.  Here every subset is fitted (from the Gram
+    matrices: a k x k solve each), and the best one by BIC whose members each pass the
+    naming rule given the others -- LR p < alpha/K, a lower BIC, a positive held-out gain,
+    rule 5 and admissible parameters -- is chosen; no subset has more coefficients than
+    the forward path's model (the search guards against wrong turns, it is no licence for
+    bigger models; the arm's :mod:`ppamsafety.diagnose.arm.subsets`).  A candidate's
+    inclusion probability is the sum of the BIC weights ``exp(-BIC/2)`` of the admissible
+    subsets within :data:`CHECK_BIC` of the chosen one that hold it.
+
+    Parameters
+    ----------
+    e0 : numpy.ndarray, shape (m,)
+        Whitened nominal residual.
+    columns : dict
+        Candidate name -> whitened columns (m, k_c).
+    admissible : callable
+        ``admissible(fit, name) -> bool`` (rule 3).
+    alpha : float, keyword-only
+        Level of the LR test before the Bonferroni division (over every candidate).
+    max_k : int, keyword-only
+        Largest number of coefficients of a subset.
+    min_gain_per_equation : float, keyword-only
+        Rule 5.
+    fold : numpy.ndarray of int, optional, keyword-only
+        Cross-validation folds (default :func:`fold_of`).
+
+    Returns
+    -------
+    SubsetChoice
+    """
+    e0 = np.asarray(e0, float)
+    gram = LinearGram(e0, columns, fold=fold_of(e0.size) if fold is None else fold)
+    names = list(columns)
+    K = max(len(names), 1)
+    width = {n: columns[n].shape[1] for n in names}
+    subsets = [()]
+    for r in range(1, len(names) + 1):
+        for c in itertools.combinations(names, r):
+            if sum(width[n] for n in c) <= max_k:
+                subsets.append(c)
+    fits = {c: gram.fit(c) for c in subsets}
+    order = sorted(subsets, key=lambda c: fits[c].bic)
+    cv = {}
+
+    def cv_of(c):
+        if c not in cv:
+            cv[c] = gram.cv_chi2(c)
+        return cv[c]
+
+    ok_memo = {}
+
+    def member_evidence(c, n):
+        rest = tuple(x for x in c if x != n)
+        full, fr = fits[c], fits.get(rest) or gram.fit(rest)
+        d = max(fr.chi2 - full.chi2, 0.0)
+        df = max(full.k - fr.k, 1)
+        return {"lr_stat": d, "lr_df": df, "p_value": _chi2_sf(d, df),
+                "delta_bic": full.bic - fr.bic, "cv_gain": cv_of(rest) - cv_of(c),
+                "gain_per_equation": d / max(full.m, 1)}
+
+    def ok(c):
+        if c not in ok_memo:
+            good = True
+            for n in c:
+                ev = member_evidence(c, n)
+                if not (ev["p_value"] < alpha / K and ev["delta_bic"] < 0 and ev["cv_gain"] > 0
+                        and ev["gain_per_equation"] >= min_gain_per_equation
+                        and admissible(fits[c], n)):
+                    good = False
+                    break
+            ok_memo[c] = good
+        return ok_memo[c]
+
+    best = next((c for c in order if ok(c)), ())
+    b0 = fits[best].bic
+    near = [c for c in order if fits[c].bic - b0 <= CHECK_BIC and ok(c)]
+    if best not in near:
+        near.insert(0, best)
+    w = np.exp(-(np.array([fits[c].bic for c in near]) - b0) / 2.0)
+    w /= w.sum()
+    inclusion = {n: float(sum(wi for c, wi in zip(near, w) if n in c)) for n in names}
+    evidence = {n: member_evidence(best, n) for n in best}
+    ranking = [{"subset": "+".join(c) or "nominal", "k": int(fits[c].k), "chi2": fits[c].chi2,
+                "bic": fits[c].bic, "admissible": ok_memo.get(c)} for c in order[:20]]
+    return SubsetChoice(names=tuple(best), inclusion=inclusion, evidence=evidence,
+                        evaluated=len(subsets), ranking=ranking)
+
+
+def hac_covariance_linear(Z, e, *, lags: int | None = None) -> np.ndarray:
+    """Heteroskedasticity- and autocorrelation-consistent covariance of a linear fit.
+
+    The sandwich ``B^+ M B^+`` with ``B = Z^T Z`` (whitened columns) and the Newey-West
+    meat ``M = sum_|l|<=L w_l sum_i s_i s_(i-l)^T``, Bartlett weights ``w_l = 1 - |l|/(L+1)``,
+    scores ``s_i = Z_i e_i``, times m/(m - k): the arm's
+    :func:`ppamsafety.diagnose.arm.selection.hac_covariance` on equations in time order.
+    A residual correlated over neighbouring equations (a model that is slightly off, coloured
+    noise) widens the intervals; white residuals at the noise level give the ordinary
+    covariance.
+
+    Parameters
+    ----------
+    Z : numpy.ndarray, shape (m, k)
+        Whitened columns of the fitted model, equations in time order.
+    e : numpy.ndarray, shape (m,)
+        Whitened residual of the fit.
+    lags : int, optional, keyword-only
+        L; default ceil(m^(1/3)).
+
+    Returns
+    -------
+    numpy.ndarray, shape (k, k)
+    """
+    Z = np.asarray(Z, float)
+    e = np.asarray(e, float)
+    m, k = Z.shape
+    if k == 0:
+        return np.zeros((0, 0))
+    S = Z * e[:, None]
+    L = int(math.ceil(m ** (1.0 / 3.0))) if lags is None else int(lags)
+    M = S.T @ S
+    for lag in range(1, min(L, m - 1) + 1):
+        G = S[lag:].T @ S[:-lag]
+        M += (1.0 - lag / (L + 1.0)) * (G + G.T)
+    B = Z.T @ Z
+    d = np.sqrt(np.maximum(np.diag(B), 0.0))
+    d[d == 0] = 1.0
+    w, V = np.linalg.eigh(B / np.outer(d, d))
+    keep = w > EIGEN_CUTOFF * max(float(w.max()), 1e-300)
+    Bi = ((V[:, keep] / w[keep]) @ V[:, keep].T) / np.outer(d, d)
+    return Bi @ M @ Bi * m / max(m - k, 1)
+
+
+def backward_pass_linear(e0, columns: dict, names, *, alpha: float = ALPHA,
+                         n_candidates: int | None = None,
+                         min_gain_per_equation: float = 0.0) -> tuple:
+    """Drop, one at a time, the members of a model that no longer pass the naming rule given
+    the others.
+
+    Forward selection adds an effect given the effects before it; a later effect may explain
+    its part as well (a force gain chosen first, then a refitted law that contains it).  A
+    member is kept when, against the model without it, its likelihood-ratio test gives
+    p < alpha / n_candidates, it lowers the BIC and (rule 5) it lowers chi2 by at least
+    ``min_gain_per_equation`` per equation.  The weakest failing member (largest p-value) is
+    dropped and the rest refitted, until every member passes.
+
+    Parameters
+    ----------
+    e0 : numpy.ndarray, shape (m,)
+        Whitened nominal residual.
+    columns : dict
+        Candidate name -> whitened columns (m, k_c).
+    names : sequence of str
+        The model.
+    alpha : float, keyword-only
+        Level of the LR test before the Bonferroni division.
+    n_candidates : int, optional, keyword-only
+        Bonferroni divisor (default the number of candidates in ``columns``).
+    min_gain_per_equation : float, keyword-only
+        Rule 5 (0 = off).
+
+    Returns
+    -------
+    LinearFit
+        The model after the pass.
+    list of dict
+        The members dropped, in order: ``name``, ``lr_stat``, ``lr_df``, ``p_value``,
+        ``delta_bic`` (with it minus without it), ``gain_per_equation``.
+    """
+    K = len(columns) if n_candidates is None else int(n_candidates)
+    gram = LinearGram(e0, columns)
+    names = list(names)
+    dropped = []
+    while names:
+        full = gram.fit(names)
+        worst = None
+        for n in names:
+            fr = gram.fit([x for x in names if x != n])
+            d = max(fr.chi2 - full.chi2, 0.0)
+            df = max(full.k - fr.k, 1)
+            row = {"name": n, "lr_stat": d, "lr_df": df, "p_value": _chi2_sf(d, df),
+                   "delta_bic": full.bic - fr.bic, "gain_per_equation": d / max(full.m, 1)}
+            keep = (row["p_value"] < alpha / max(K, 1) and row["delta_bic"] < 0
+                    and row["gain_per_equation"] >= min_gain_per_equation)
+            if not keep and (worst is None or row["p_value"] > worst["p_value"]):
+                worst = row
+        if worst is None:
+            return full, dropped
+        dropped.append(worst)
+        names.remove(worst["name"])
+    return gram.fit([]), dropped
+
+
+__all__ = ["LinearFit", "LinearGram", "EIGEN_CUTOFF", "fit_linear", "cv_chi2_linear", "forward_selection_linear",
+           "backward_pass_linear", "hac_covariance_linear", "subset_search_linear",
+           "SubsetChoice", "CHECK_BIC", "fold_of"]

@@ -1,7 +1,8 @@
 """One parameter of a candidate effect: name, SI unit, plausible and physical bounds, meaning.
 
 Shared by the arm library (:mod:`ppamsafety.diagnose.arm.candidates`) and the
-test-bench library (:mod:`ppamsafety.diagnose.bench.candidates`).
+test-bench library (:mod:`ppamsafety.diagnose.bench.candidates`), and the physical-range
+check of a fitted parameter table (:func:`physically_admissible`).
 """
 
 from __future__ import annotations
@@ -47,4 +48,39 @@ class Parameter:
                              f"got {self.phys_lo}, {self.lo}, {self.hi}, {self.phys_hi}")
 
 
-__all__ = ["Parameter"]
+def physically_admissible(parameters, table: dict, moved) -> bool:
+    """The raw 95 % interval of every moved parameter inside its physical range, and no other
+    parameter's interval entirely outside it.
+
+    A fit outside the physical range (a negative friction, a hysteresis loop that gives
+    energy back) is a symptom of something else, not an effect.  A parameter that did not
+    move (its interval holds the nominal value) only has to reach into the range: a viscous
+    friction of -0.002 +- 0.01 is a zero.
+
+    Parameters
+    ----------
+    parameters : iterable of Parameter
+    table : dict
+        Parameter name -> {value, ci_low, ci_high, ...} (raw intervals under
+        ``ci_low_raw``/``ci_high_raw`` when the reported ones were cut at the range).
+    moved : collection of str
+        Names of the parameters whose interval excludes the nominal value.
+
+    Returns
+    -------
+    bool
+    """
+    moved = set(moved)
+    for p in parameters:
+        d = table[p.name]
+        lo = d.get("ci_low_raw", d["ci_low"])
+        hi = d.get("ci_high_raw", d["ci_high"])
+        if p.name in moved:
+            if not (p.phys_lo <= lo and hi <= p.phys_hi):
+                return False
+        elif hi < p.phys_lo or lo > p.phys_hi:
+            return False
+    return True
+
+
+__all__ = ["Parameter", "physically_admissible"]
