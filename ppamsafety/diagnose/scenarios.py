@@ -57,6 +57,7 @@ from ..experiments.catalog import thesis_variants
 from ..params import thesis_arm
 from ..plant import packing
 from .arm.candidates import REGISTRY, default_candidates
+from .bench import scenarios as bench_scenarios
 from .arm.residuals import arm_record, block_system, model_vector
 from .arm.selection import _directions, make_problem
 from .arm.static import static_record, static_system
@@ -552,6 +553,9 @@ def _progress_line(r):
 #: The battery's measured results shipped with the package (JSON lines, xz): written by
 #: ``python -m ppamsafety.diagnose.scenarios`` (see its README).
 RESULTS_FILE = Path(__file__).resolve().parent / "calibration_data" / "arm_battery.jsonl.xz"
+#: The muscle bench battery's measured results (:mod:`.bench.scenarios`, same row keys):
+#: ``python -m ppamsafety.diagnose.scenarios --kind bench``.
+BENCH_RESULTS_FILE = RESULTS_FILE.with_name("bench_battery.jsonl.xz")
 #: Columns that hold Python containers (tuples, dicts, lists) in a results table.
 _CONTAINERS = ("hidden", "named", "high", "low", "partial", "confounded", "ratios",
                "ratios_detected", "gates", "named_ratios", "coverage")
@@ -776,13 +780,18 @@ def by_effect(results: pd.DataFrame) -> pd.DataFrame:
     """
     df = _ok(results)
     rows = []
-    for name in REGISTRY:
+    seen = {n for r in df.itertuples() for n in (*r.hidden, *r.named)}
+    # the arm's library in its order, then any other (the bench's) in alphabetical order
+    names = [n for n in REGISTRY if n in seen] + sorted(seen - set(REGISTRY))
+    for name in names:
         hid = [r for r in df.itertuples() if name in r.hidden]
         det = [r for r in hid if r.ratios.get(name, 0.0) >= 1.0]
         highs = [r for r in df.itertuples() if name in r.high]
         rows.append({"effect": name, "hidden": len(hid), "above_limit": len(det),
                      "named_when_above": sum(name in r.named for r in det),
                      "high_when_above": sum(name in r.high for r in det),
+                     "confounded_when_hidden": sum(any(name in g for g in r.confounded)
+                                                   for r in hid),
                      "named_when_below": sum(name in r.named for r in hid
                                              if r.ratios.get(name, 0.0) < 1.0),
                      "high_names": len(highs),
@@ -834,9 +843,12 @@ def detection_curve(results: pd.DataFrame, *, key: str = "ratios") -> pd.DataFra
 def main(argv=None) -> int:
     """Run the battery on a range of seeds, write its rows, print its scores.
 
-    ``python -m ppamsafety.diagnose.scenarios [--seeds 2000:3000] [--processes N]
-    [--out FILE] [--overwrite]``; the default writes :data:`RESULTS_FILE` (refused if it
-    exists unless ``--overwrite``).  About 25 min for 1000 scenarios on 2 cores.
+    ``python -m ppamsafety.diagnose.scenarios [--kind arm|bench] [--seeds 2000:3000]
+    [--processes N] [--out FILE] [--overwrite]``; the default writes :data:`RESULTS_FILE`
+    (``--kind bench``: the muscle bench battery of :mod:`.bench.scenarios` on its
+    measurement seeds into :data:`BENCH_RESULTS_FILE`), refused if it exists unless
+    ``--overwrite``.  About 35 min for the 1000 arm scenarios on 2 cores, 5 min for the
+    300 bench scenarios.
 
     Parameters
     ----------
@@ -844,20 +856,36 @@ def main(argv=None) -> int:
     """
     ap = argparse.ArgumentParser(prog="python -m ppamsafety.diagnose.scenarios",
                                  description="the randomized scenario battery of the diagnosis")
-    ap.add_argument("--seeds", default=f"{MEASURE_SEEDS.start}:{MEASURE_SEEDS.start + 1000}",
-                    help="first:last+1 (default the first 1000 measurement seeds)")
+    ap.add_argument("--kind", choices=("arm", "bench"), default="arm",
+                    help="arm records (default) or muscle test-bench records")
+    ap.add_argument("--seeds", default=None,
+                    help="first:last+1 (default the measurement seeds: arm "
+                         f"{MEASURE_SEEDS.start}:{MEASURE_SEEDS.start + 1000}, bench "
+                         f"{bench_scenarios.MEASURE_SEEDS.start}:"
+                         f"{bench_scenarios.MEASURE_SEEDS.stop})")
     ap.add_argument("--processes", type=int, default=None,
                     help="worker processes (default: every core)")
-    ap.add_argument("--out", default=str(RESULTS_FILE), help="results file (.jsonl.xz)")
+    ap.add_argument("--out", default=None, help="results file (.jsonl.xz; default the "
+                                                "shipped file of the kind)")
     ap.add_argument("--overwrite", action="store_true", help="replace an existing file")
     args = ap.parse_args(argv)
+    bench = args.kind == "bench"
+    if args.seeds is None:
+        seeds = bench_scenarios.MEASURE_SEEDS if bench else MEASURE_SEEDS[:1000]
+        args.seeds = f"{seeds.start}:{seeds.stop}"
+    if args.out is None:
+        args.out = str(BENCH_RESULTS_FILE if bench else RESULTS_FILE)
     try:
         a, b = (int(x) for x in args.seeds.split(":"))
     except ValueError:
         ap.error(f"--seeds {args.seeds!r}: give first:last+1, e.g. 2000:3000")
     check_new_file(args.out, overwrite=args.overwrite, name="--out")
     t0 = time.time()
-    df = run_battery(range(a, b), processes=args.processes, progress=True)
+    if bench:
+        df = bench_scenarios.run_battery(range(a, b), processes=args.processes or
+                                         (os.cpu_count() or 1), progress=True)
+    else:
+        df = run_battery(range(a, b), processes=args.processes, progress=True)
     wall = time.time() - t0
     save_results(df, args.out, overwrite=args.overwrite)
     pd.set_option("display.width", 200)
@@ -873,7 +901,7 @@ def main(argv=None) -> int:
 
 __all__ = ["Scenario", "random_scenario", "record_of", "run_scenario", "run_battery",
            "detection_curve", "RATIO_BINS",
-           "save_results", "load_results", "RESULTS_FILE",
+           "save_results", "load_results", "RESULTS_FILE", "BENCH_RESULTS_FILE",
            "irreducible_gap", "scores", "failures", "calibration_table", "by_effect", "LIBRARY_DRAWS",
            "TUNING_SEEDS", "MEASURE_SEEDS", "HIGH_PRECISION", "GAP_ABOVE_NOISE"]
 

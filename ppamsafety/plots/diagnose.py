@@ -403,7 +403,8 @@ def plot_calibration(table, *, required: float):
     ----------
     table : pandas.DataFrame
         :func:`ppamsafety.diagnose.scenarios.calibration_table` (``claimed``, ``names``,
-        ``right``, ``precision``, ``wilson_low``).
+        ``right``, ``precision``, ``wilson_low``; an optional ``battery`` column labels
+        the bars of several batteries).
     required : float, keyword-only
         The promised precision of "high" (drawn as a line).
 
@@ -411,16 +412,20 @@ def plot_calibration(table, *, required: float):
     -------
     matplotlib.figure.Figure
     """
-    fig, ax = new_figure(1, 1, figsize=(6.5, 3.6))
+    fig, ax = new_figure(1, 1, figsize=(6.5 if len(table) <= 3 else 9.0, 3.6))
     x = np.arange(len(table))
     prec = table["precision"].to_numpy(dtype=float)
     low = table["wilson_low"].to_numpy(dtype=float)
-    ax.bar(x, prec, color=["tab:green", "tab:orange", "tab:gray"][:len(x)], alpha=0.8)
+    colors = [{"high": "tab:green", "low": "tab:orange"}.get(c, "tab:gray")
+              for c in table["claimed"]]
+    ax.bar(x, prec, color=colors, alpha=0.8)
     ax.errorbar(x, prec, yerr=[np.nan_to_num(prec - low), np.zeros_like(prec)], fmt="none",
                 ecolor="k", capsize=4, lw=1)
     ax.axhline(required, color="tab:red", ls="--", lw=1, label=f"promised for 'high': "
                f"{required:.0%}")
-    labels = [f"{c}\n{int(n)} names" for c, n in zip(table["claimed"], table["names"])]
+    batteries = table["battery"] if "battery" in table else [""] * len(table)
+    labels = [f"{b + ': ' if b else ''}{c}\n{int(n)} names"
+              for b, c, n in zip(batteries, table["claimed"], table["names"])]
     ax.set_xticks(x, [lab.replace(" (group holds a hidden member)", "") for lab in labels],
                   fontsize=8)
     ax.set_ylim(0, 1.05)

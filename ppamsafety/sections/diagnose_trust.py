@@ -15,6 +15,12 @@ prints:
   (:data:`~ppamsafety.diagnose.scenarios.RESULTS_FILE`) and every number below
   is computed from them by the same code; the section also re-runs the first
   seeds live and says how many rows it reproduced exactly.
+* **The muscle test bench**: the same scores on the randomized battery of
+  tensile-tester records (:mod:`ppamsafety.diagnose.bench.scenarios`: sawtooth
+  and pressure-sweep protocols, the four muscle groups' force laws, force- and
+  pressure-sensor faults, out-of-library perturbations), shipped in
+  :data:`~ppamsafety.diagnose.scenarios.BENCH_RESULTS_FILE`; the scores table
+  gives every measure over all records and per battery.
 * **Detection limits of the standard records**: the smallest change of each
   library parameter that the default records of ``ppamsafety synthesize``
   (open loop and closed loop, 10 s; the full sawtooth) reveal at their
@@ -38,9 +44,10 @@ import pandas as pd
 from .._validation import check_int
 from ..diagnose import diagnose, synthesize
 from ..diagnose.arm.detection import POWER
-from ..diagnose.scenarios import (HIGH_PRECISION, MEASURE_SEEDS, by_effect, calibration_table,
-                                  detection_curve, failures, load_results, run_battery,
-                                  scores)
+from ..diagnose.bench.scenarios import single_effect_outcomes
+from ..diagnose.scenarios import (BENCH_RESULTS_FILE, HIGH_PRECISION, MEASURE_SEEDS, by_effect,
+                                  calibration_table, detection_curve, failures, load_results,
+                                  run_battery, scores)
 from ..markdown import markdown_table
 from ..plots.diagnose import plot_calibration, plot_detection_curve
 from . import Section, SectionInfo, compares_to_thesis, other_arm_note, resolve_arm
@@ -70,9 +77,14 @@ class DiagnoseTrustStudy:
     Attributes
     ----------
     scores : pandas.DataFrame
-        The battery's measures against the targets (:func:`~ppamsafety.diagnose.scenarios.scores`).
+        The battery's measures against the targets (:func:`~ppamsafety.diagnose.scenarios.scores`),
+        over every record kind, with the arm's and the bench's hits/count beside.
     calibration : pandas.DataFrame
-        Claimed level -> precision (:func:`~ppamsafety.diagnose.scenarios.calibration_table`).
+        Claimed level -> precision (:func:`~ppamsafety.diagnose.scenarios.calibration_table`),
+        per battery (``battery``: arm, bench, all).
+    outcomes : pandas.DataFrame
+        What became of every single hidden effect, whatever its size (named right, "high",
+        confounded, nothing, other), per battery.
     by_effect : pandas.DataFrame
         Per library effect: hidden, above its limit, named, "high".
     curve : pandas.DataFrame
@@ -93,6 +105,7 @@ class DiagnoseTrustStudy:
 
     scores: pd.DataFrame
     calibration: pd.DataFrame
+    outcomes: pd.DataFrame
     by_effect: pd.DataFrame
     curve: pd.DataFrame
     limits: pd.DataFrame
@@ -169,25 +182,42 @@ def compute(*, quick: bool = False, arm=None, head=None,
     limits = standard_limits(arm=arm, quick=quick)
     t2 = time.perf_counter()
     m = {"live_runs": len(seeds), "live_seconds": t1 - t0, "limits_seconds": t2 - t1}
+    bench = pd.DataFrame()
     if thesis:
         results = load_results()
         m["stored_scenarios"] = int(len(results))
         m["stored_seeds"] = f"{int(results.seed.min())}-{int(results.seed.max())}"
         m["live_reproduced"] = _reproduced(live, results)
+        # the muscle bench battery does not depend on the arm: shown with the thesis arm's
+        bench = load_results(BENCH_RESULTS_FILE)
+        m["bench_scenarios"] = int(len(bench))
+        m["bench_seeds"] = f"{int(bench.seed.min())}-{int(bench.seed.max())}"
     else:
         results = live
-    fail = failures(results)
+    batteries = {"arm": results, "bench": bench} if len(bench) else {"arm": results}
+    every = pd.concat(list(batteries.values()), ignore_index=True)
+    fail = failures(every)
     m.update({"records_not_made": fail["record"],
               "diagnosis_failures": fail["diagnose"] + fail["battery"]})
-    sc = scores(results)
-    cal = calibration_table(results)
-    high = cal[cal.claimed == "high"].iloc[0]
+    sc = scores(every)
+    for name, df in batteries.items():
+        part = scores(df)
+        sc[name] = [f"{h}/{n}" for h, n in zip(part["hits"], part["count"])]
+    cal = pd.concat([calibration_table(df).assign(battery=name)
+                     for name, df in {**batteries, "all": every}.items()], ignore_index=True)
+    cal = cal[["battery"] + [c for c in cal.columns if c != "battery"]]
+    outcomes = pd.concat([single_effect_outcomes(df).rename_axis("effect").reset_index()
+                          .assign(battery=name)
+                          for name, df in batteries.items()], ignore_index=True)
+    outcomes = outcomes[["battery"] + [c for c in outcomes.columns if c != "battery"]]
+    high = cal[(cal.claimed == "high") & (cal.battery == "all")].iloc[0]
     m.update({"high_names": int(high["names"]), "high_right": int(high["right"]),
               "high_precision": float(high["precision"]),
               "high_wilson_low": float(high["wilson_low"]),
               "targets_met": int(sc["met"].sum()), "targets": int(len(sc))})
-    return DiagnoseTrustStudy(scores=sc, calibration=cal, by_effect=by_effect(results),
-                              curve=detection_curve(results), limits=limits, live=live,
+    return DiagnoseTrustStudy(scores=sc, calibration=cal, outcomes=outcomes,
+                              by_effect=by_effect(every),
+                              curve=detection_curve(every), limits=limits, live=live,
                               stored=thesis, metrics=m,
                               note="" if thesis else other_arm_note(arm))
 
@@ -223,10 +253,13 @@ def render(study: DiagnoseTrustStudy) -> Section:
         Output of :func:`compute`.
     """
     m = study.metrics
-    src = (f"the shipped battery, {m['stored_scenarios']} scenarios of seeds "
-           f"{m['stored_seeds']} (never used to set the gates; regenerate with `python -m "
-           f"ppamsafety.diagnose.scenarios`); the first {m['live_runs']} were re-run live here "
-           f"and {m['live_reproduced']} reproduced exactly" if study.stored else
+    src = (f"the shipped batteries: {m['stored_scenarios']} arm scenarios of seeds "
+           f"{m['stored_seeds']} (open loop, closed loop under every reference and controller "
+           f"family, the static sawtooth) and {m.get('bench_scenarios', 0)} muscle test-bench "
+           f"scenarios of seeds {m.get('bench_seeds', '-')}, none used to set the gates "
+           f"(regenerate with `python -m ppamsafety.diagnose.scenarios [--kind bench]`); the "
+           f"first {m['live_runs']} arm scenarios were re-run live here and "
+           f"{m['live_reproduced']} reproduced exactly" if study.stored else
            f"{m['live_runs']} scenarios run live for this arm (the shipped battery is the "
            f"thesis arm's)")
     lim = study.limits.copy()
@@ -246,6 +279,14 @@ def render(study: DiagnoseTrustStudy) -> Section:
         markdown_table(_fmt(study.calibration)),
         "",
         "![calibration](diagnose_trust_calibration.png)",
+        "",
+        "What became of every single hidden effect without an out-of-library perturbation, "
+        "whatever its size (the scores above count it only above its detection limit "
+        "against its look-alikes): named right, of those \"high\", reported in a "
+        "confounded group with the experiment that separates it, nothing named, or "
+        "something else named:",
+        "",
+        markdown_table(study.outcomes),
         "",
         "Per effect (above the limit: the hidden magnitude is at least the record's naming "
         "limit):",
@@ -272,6 +313,7 @@ def render(study: DiagnoseTrustStudy) -> Section:
     arts = list(study.plot().items()) + [
         ("diagnose_trust_scores.csv", study.scores),
         ("diagnose_trust_calibration.csv", study.calibration),
+        ("diagnose_trust_outcomes.csv", study.outcomes),
         ("diagnose_trust_by_effect.csv", study.by_effect),
         ("diagnose_trust_detection.csv", study.curve),
         ("diagnose_trust_limits.csv", study.limits)]

@@ -39,6 +39,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pandas as pd
+from scipy.optimize import isotonic_regression, nnls
 
 from ..._validation import check_range, as_float_array
 from ...data.measured import MeasuredData
@@ -261,8 +262,6 @@ def monotone_contraction(eps, direction) -> np.ndarray:
     -------
     numpy.ndarray, shape (N,)
     """
-    from scipy.optimize import isotonic_regression
-
     out = np.asarray(eps, float).copy()
     edges = np.flatnonzero(np.diff(direction)) + 1
     bounds = np.concatenate([[0], edges, [out.size]])
@@ -550,8 +549,6 @@ def local_sigma(t, r, stride: int = 1, features=None) -> np.ndarray:
     numpy.ndarray, shape (N,)
         [N].
     """
-    from scipy.optimize import nnls
-
     ts, xs = t[::stride], r[::stride]
     w = (ts[2:] - ts[1:-1]) / (ts[2:] - ts[:-2])
     d = np.abs(xs[1:-1] - (w * xs[:-2] + (1.0 - w) * xs[2:])) / np.sqrt(1.0 + w ** 2

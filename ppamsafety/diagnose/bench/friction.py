@@ -53,6 +53,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import stats
+from scipy.interpolate import BSpline
 
 VOCABULARY = ("coulomb", "coulomb_pressure", "coulomb_pressure2", "viscous", "stribeck",
               "presliding", "stroke_profile", "stroke_profile_pressure", "friction_drift",
@@ -162,8 +163,6 @@ def bspline_basis(x, K, lo, hi):
     numpy.ndarray, shape (x.size, K - 1)
         Each column minus its mean over a uniform grid of [lo, hi].
     """
-    from scipy.interpolate import BSpline
-
     deg = 3
     inner = np.linspace(lo, hi, K - deg + 1)
     knots = np.concatenate([[lo] * deg, inner, [hi] * deg])

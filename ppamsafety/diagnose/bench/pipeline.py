@@ -33,6 +33,7 @@ import time
 
 import numpy as np
 import pandas as pd
+from scipy import stats
 
 from ..._validation import check_int, check_range
 from ..core.linear_selection import hac_covariance_linear
@@ -53,8 +54,6 @@ from .stability import (PAIRS, THRESHOLD, half_sample_covariance, inflated_covar
 
 def _where(e, feats, rho_max):
     """Operating regions of significant residual (same columns as the arm's table)."""
-    from scipy import stats
-
     zcrit = stats.norm.isf(0.0005)
     rows = []
     d = feats["direction"]

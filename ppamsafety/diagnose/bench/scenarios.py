@@ -63,6 +63,10 @@ from .detection import signature_ratio
 from .pipeline import diagnose_actuator
 from .synthesize import synthesize_actuator
 
+#: Seeds the bench gates were set on (the ``clear`` ratio); never used to measure them.
+TUNING_SEEDS = range(0, 200)
+#: Seeds of the bench battery's measurement (shipped in ``calibration_data``).
+MEASURE_SEEDS = range(1000, 1300)
 #: Probabilities of 0, 1, 2, 3 hidden library effects (as the arm's battery).
 P_COUNT = (0.2, 0.4, 0.28, 0.12)
 #: Probability of an out-of-library perturbation in a scenario.
@@ -523,4 +527,5 @@ def single_effect_outcomes(results: pd.DataFrame) -> pd.DataFrame:
 __all__ = ["BenchScenario", "random_scenario", "record_of", "run_scenario", "run_battery",
            "single_effect_outcomes",
            "measured_truth", "irreducible_gap", "law_change", "LIBRARY_DRAWS", "PERTURBATIONS",
-           "P_COUNT", "P_PERTURBATION", "P_SWEEP", "MAX_SAMPLES"]
+           "P_COUNT", "P_PERTURBATION", "P_SWEEP", "MAX_SAMPLES", "TUNING_SEEDS",
+           "MEASURE_SEEDS"]
