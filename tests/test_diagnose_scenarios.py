@@ -100,8 +100,16 @@ def test_report_section_quick(tmp_path):
     m = st.metrics
     assert st.stored and m["stored_scenarios"] >= MIN_SCENARIOS
     assert m["live_reproduced"] == "1 of 1"
-    high = st.calibration.set_index("claimed").loc["high"]
-    assert m["high_names"] == high["names"] and m["high_right"] == high["right"]
+    cal = st.calibration
+    high = cal[(cal.battery == "all") & (cal.claimed == "high")].iloc[0]
+    arm = cal[(cal.battery == "arm") & (cal.claimed == "high")].iloc[0]
+    bench = cal[(cal.battery == "bench") & (cal.claimed == "high")].iloc[0]
+    assert m["high_names"] == high["names"] == arm["names"] + bench["names"]
+    assert m["high_right"] == high["right"] == arm["right"] + bench["right"]
+    assert m["bench_scenarios"] >= 300
+    # every measure is given over all records and per battery
+    assert {"arm", "bench"} <= set(st.scores.columns)
+    assert set(st.outcomes.battery) == {"arm", "bench"}
     # detection limits of the three standard records, positive and finite
     assert set(st.limits.record.str.split(",").str[0]) == {"open loop", "closed loop",
                                                            "static sawtooth of §3.5.1.6"}
@@ -110,7 +118,7 @@ def test_report_section_quick(tmp_path):
     sec = diagnose_trust.render(st)
     names = [a for a, _ in sec.artifacts]
     assert "diagnose_trust_calibration.png" in names and "diagnose_trust_scores.csv" in names
-    assert f"{m['stored_scenarios']} scenarios" in sec.markdown
+    assert f"{m['stored_scenarios']} arm scenarios" in sec.markdown
 
 
 @pytest.mark.slow

@@ -740,6 +740,8 @@ def scores(results: pd.DataFrame) -> pd.DataFrame:
            for c in (r.coverage or [])]
     add("... of which where exactly the hidden effects were named (the model is right)",
         sum(c["covered"] for c in cov), len(cov), 0.90)
+    cov = [c for r in df.itertuples() for c in (r.coverage or []) if c["level"] == "high"]
+    add("... of which of 'high' names", sum(c["covered"] for c in cov), len(cov), 0.90)
     made = len(df) + fail["diagnose"] + fail["battery"]
     add("valid records on which the diagnosis raised an error", fail["diagnose"] +
         fail["battery"], made, 0.0, better="lower")
