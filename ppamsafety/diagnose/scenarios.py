@@ -673,6 +673,11 @@ def failures(results: pd.DataFrame) -> dict:
     pressure outside the valves' range); these are not scenarios.  "diagnose" and
     "battery": the diagnosis or the runner raised on a valid record -- a failure of the
     code under test, which :func:`scores` counts against it.
+
+    Parameters
+    ----------
+    results : pandas.DataFrame
+        :func:`run_battery` (or the bench battery's rows).
     """
     st = _stage(results)
     return {k: int((st == k).sum()) for k in ("record", "diagnose", "battery")}

@@ -25,7 +25,7 @@ level and length, against the final model M of the diagnosis (without c):
 
 The dead time enters through the linearisation of the design in the shift
 (one sample).  The limits are first-order: the battery of
-:mod:`ppamsafety.diagnose.calibration` checks them (named rate of effects
+:mod:`ppamsafety.diagnose.scenarios` checks them (named rate of effects
 above and below their limit).  "High" confidence needs more than naming (a
 stable choice on each half of the record, a residual at the noise): about
 sqrt(2) x the limit.

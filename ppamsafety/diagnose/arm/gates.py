@@ -3,10 +3,10 @@
 A name reaches ``confidence_level = "high"`` only through every gate below;
 otherwise it is ``"low"`` (a hint, not a finding).  The gates and their
 thresholds were set on the randomized scenario battery
-(:mod:`ppamsafety.diagnose.calibration`, seeds 0-299) and the claim they make
--- of all effects named "high", at least 97 % are right -- is measured on
-unseen seeds (``docs/diagnose.md``, the report section
-``diagnose_calibration``).
+(:mod:`ppamsafety.diagnose.scenarios`, its ``TUNING_SEEDS``) and the claim they
+make -- of all effects named "high", at least 97 % are right -- is measured on
+unseen seeds (``MEASURE_SEEDS``; ``docs/diagnose.md``, the report section
+``diagnose_trust``).
 
 ==================  ==============================================================
 gate                passes when

@@ -198,6 +198,8 @@ class BenchScenario:
         Library candidate -> {parameter: true value} (before :func:`measured_truth`).
     perturbation : dict
         Out-of-library effects (empty for none).
+    kind : str
+        Always ``"actuator"`` (the record kind, as the arm battery's rows carry it).
     """
 
     seed: int

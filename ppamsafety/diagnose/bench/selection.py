@@ -142,7 +142,17 @@ def masked(design, mask=None) -> tuple:
 
 
 def admissible_in(design):
-    """``admissible(fit, name)``: rule 3 for candidate ``name`` inside a fitted model."""
+    """``admissible(fit, name)``: rule 3 for candidate ``name`` inside a fitted model.
+
+    Parameters
+    ----------
+    design : ActuatorDesign
+        The record's design (its extensions' physical ranges decide).
+
+    Returns
+    -------
+    callable
+    """
     def admissible(fit, name):
         sl = fit.slices[name]
         return design.extensions[name].admissible(fit.phi[sl], fit.cov[sl, sl])
