@@ -9,6 +9,7 @@ a flag that long loops check with :func:`requested` between units of work.
 
 import signal
 import threading
+from contextlib import contextmanager
 
 _flag = [False]
 
@@ -46,4 +47,38 @@ def requested() -> bool:
     return _flag[0]
 
 
-__all__ = ["install", "requested", "restore"]
+@contextmanager
+def deferred():
+    """Hold Ctrl-C back for the block: inside, SIGINT only sets the flags; on leaving, a
+    Ctrl-C that came raises ``KeyboardInterrupt``.
+
+    The flag of :func:`requested` is not set (a library caller's next sweep must not see
+    an old Ctrl-C).  For code that must not be cut in two, such as forking a pool's workers: a
+    ``KeyboardInterrupt`` raised between ``fork()`` and the pool's bookkeeping leaves a
+    worker nobody knows of, which holds the output pipes open after the program exits.
+    Blocking the signal at the OS level is not enough: one the kernel handed to another
+    thread just before is raised in the main thread at the next bytecode, wherever that is;
+    here it finds this handler.  Outside the main thread, or with SIGINT ignored, a no-op.
+    """
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    old = signal.getsignal(signal.SIGINT)
+    if old is signal.SIG_IGN or old is None:
+        yield
+        return
+    came = [False]
+
+    def hold(signum, frame):
+        came[0] = True
+
+    signal.signal(signal.SIGINT, hold)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, old)
+    if came[0]:
+        raise KeyboardInterrupt
+
+
+__all__ = ["deferred", "install", "requested", "restore"]

@@ -46,6 +46,7 @@ import signal
 import sys
 import itertools
 import math
+import multiprocessing
 import warnings
 from collections.abc import Iterable, Mapping, Sequence
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
@@ -54,6 +55,7 @@ from pathlib import Path
 import pandas as pd
 from tqdm.auto import tqdm
 
+from ._interrupt import deferred as interrupt_deferred
 from ._interrupt import requested as interrupt_requested
 from ._sourcehash import source_hash
 
@@ -435,14 +437,20 @@ def _run_dask(func, cases, todo, keys, name, scheduler, processes, finish, on_er
         close()
 
 
-def _stop_pool(pool) -> None:
+def _stop_pool(pool, before=()) -> None:
     """Stop a process pool at once: cancel its queued cases and end its workers.
 
     The workers' current cases are abandoned (the finished ones are in the cache); else the
     interpreter waits for them at exit (concurrent.futures and multiprocessing join their
-    workers) and Ctrl-C would take as long as the longest running case.
+    workers) and Ctrl-C would take as long as the longest running case.  ``before``: the
+    child processes that existed before the pool; every other live child is one of its
+    workers, including one forked in the instant before an interrupt that the pool had not
+    registered yet (it would hold the output pipes open after this process exits).
     """
     workers = list((getattr(pool, "_processes", None) or {}).values())
+    known = {id(w) for w in workers}
+    workers += [c for c in multiprocessing.active_children()
+                if c not in before and id(c) not in known]
     pool.shutdown(wait=False, cancel_futures=True)
     for w in workers:
         if w.is_alive():
@@ -461,19 +469,14 @@ def _run_pool(func, cases, todo, nproc, finish, on_error) -> None:
     instead of waiting for them (a worker that was interrupted too reports it as the
     case's result and would otherwise take the next case); finished cases are kept.
     """
-    # Ctrl-C is held back while the workers are forked: an interrupt that lands in a fork
-    # handler (logging's lock release) is swallowed by the interpreter and lost.  One that
-    # another thread received just before may still be raised here: every exit path below
-    # therefore stops the workers already forked.
-    block = hasattr(signal, "pthread_sigmask")
-    mask = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT}) if block else None
+    # Ctrl-C is held back while the workers are forked (see _interrupt.deferred): raised in
+    # the middle, it would leave a worker the pool does not know of
+    before = set(multiprocessing.active_children())
     pool = None
     try:
-        pool = ProcessPoolExecutor(max_workers=nproc, initializer=_ignore_interrupt)
-        futures = {pool.submit(_call, func, cases[i]): i for i in todo}
-        if block:                       # a held-back interrupt is raised here, inside the try
-            block = False
-            signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+        with interrupt_deferred():
+            pool = ProcessPoolExecutor(max_workers=nproc, initializer=_ignore_interrupt)
+            futures = {pool.submit(_call, func, cases[i]): i for i in todo}
         pending = set(futures)
         while pending:
             # a short timeout, not a blocking as_completed: the kernel may deliver Ctrl-C to
@@ -493,10 +496,8 @@ def _run_pool(func, cases, todo, nproc, finish, on_error) -> None:
                     for other in futures:      # not started yet: cancel; running: finish
                         other.cancel()
     except BaseException:
-        if block:
-            signal.pthread_sigmask(signal.SIG_SETMASK, mask)
         if pool is not None:
-            _stop_pool(pool)
+            _stop_pool(pool, before)
         raise
     pool.shutdown(wait=True)
 

@@ -226,12 +226,19 @@ def _reproduced(live: pd.DataFrame, stored: pd.DataFrame) -> str:
     """'k of n': live rows whose claims (named, high, confounded) equal the stored ones."""
     if live is None or not len(live):
         return "0 of 0"
+    def err(x):
+        return x if isinstance(x, str) else ""
+
     by_seed = {int(r.seed): r for r in stored.itertuples()}
     same = 0
     for r in live.itertuples():
         s = by_seed.get(int(r.seed))
-        if s is not None and tuple(r.named) == tuple(s.named) and tuple(r.high) == tuple(
-                s.high) and tuple(map(tuple, r.confounded)) == tuple(map(tuple, s.confounded)):
+        if s is None:
+            continue
+        if err(r.error) or err(s.error):    # a record the drawn plant cannot make: same error
+            same += err(r.error) == err(s.error)
+        elif tuple(r.named) == tuple(s.named) and tuple(r.high) == tuple(s.high) and tuple(
+                map(tuple, r.confounded)) == tuple(map(tuple, s.confounded)):
             same += 1
     return f"{same} of {len(live)}"
 
