@@ -4,7 +4,8 @@ Python turns SIGINT into ``KeyboardInterrupt`` in the main thread at the next by
 that happens inside a handler the interpreter runs for itself (logging's lock release after a
 ``fork``, a ``__del__``), the exception is printed as "Exception ignored" and dropped, and a
 long sweep runs on.  :func:`install` (called by the command line) makes the handler also set
-a flag that long loops check with :func:`requested` between units of work.
+a flag that long loops check with :func:`requested` between units of work; :func:`deferred`
+holds Ctrl-C back over code that must not be cut in two (forking a pool's workers).
 """
 
 import signal
@@ -49,8 +50,8 @@ def requested() -> bool:
 
 @contextmanager
 def deferred():
-    """Hold Ctrl-C back for the block: inside, SIGINT only sets the flags; on leaving, a
-    Ctrl-C that came raises ``KeyboardInterrupt``.
+    """Hold Ctrl-C back for the block: inside, SIGINT is only noted; on leaving, a Ctrl-C
+    that came raises ``KeyboardInterrupt``.
 
     The flag of :func:`requested` is not set (a library caller's next sweep must not see
     an old Ctrl-C).  For code that must not be cut in two, such as forking a pool's workers: a
