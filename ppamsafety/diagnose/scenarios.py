@@ -38,7 +38,6 @@ import argparse
 import json
 import lzma
 import math
-import multiprocessing
 import os
 import time
 import traceback
@@ -58,6 +57,7 @@ from ..params import thesis_arm
 from ..plant import packing
 from .arm.candidates import REGISTRY, default_candidates
 from .bench import scenarios as bench_scenarios
+from .core.battery import run_seeds
 from .arm.residuals import arm_record, block_system, model_vector
 from .arm.selection import _directions, make_problem
 from .arm.static import static_record, static_system
@@ -524,28 +524,8 @@ def run_battery(seeds, *, processes: int | None = None, progress: bool = False,
     seeds = [check_int("seed", s, 0) for s in seeds]
     processes = os.cpu_count() or 1 if processes is None else check_int("processes",
                                                                           processes, 1, 256)
-    rows = []
-    work = partial(_worker, arm=arm)
-    if processes == 1:
-        for s in seeds:
-            rows.append(work(s))
-            if progress:
-                print(_progress_line(rows[-1]), flush=True)
-    else:
-        ctx = multiprocessing.get_context("fork")
-        with ctx.Pool(processes, maxtasksperchild=50) as pool:
-            for r in pool.imap_unordered(work, seeds):
-                rows.append(r)
-                if progress:
-                    print(_progress_line(r), flush=True)
-    return pd.DataFrame(rows).sort_values("seed").reset_index(drop=True)
-
-
-def _progress_line(r):
-    return (f"seed {r.get('seed')}: {r.get('kind')} hidden={r.get('hidden')} "
-            f"pert={r.get('perturbation') or '-'} named={r.get('named')} high={r.get('high')} "
-            f"conf={r.get('confounded')} unexpl={r.get('unexplained')} "
-            f"{r.get('seconds', 0):.1f}s {r.get('error') or ''}")
+    return run_seeds(partial(_worker, arm=arm), seeds, processes=processes,
+                     progress=progress)
 
 
 # ----------------------------------------------------------------------------- stored results

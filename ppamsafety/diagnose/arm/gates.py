@@ -57,6 +57,7 @@ import math
 import numpy as np
 from scipy import stats
 
+from ..core.parameter import physically_admissible as core_admissible
 from .candidates import REGISTRY
 
 #: Inclusion probability at or above which a name counts as decisive.
@@ -99,17 +100,7 @@ def physically_admissible(name: str, table: dict) -> bool:
         Its parameter table (raw intervals under ``ci_low_raw``/``ci_high_raw`` when the
         reported ones were cut at the physical range).
     """
-    moved = set(moved_parameters(name, table))
-    for p in REGISTRY[name].parameters:
-        d = table[p.name]
-        lo = d.get("ci_low_raw", d["ci_low"])
-        hi = d.get("ci_high_raw", d["ci_high"])
-        if p.name in moved:
-            if not (p.phys_lo <= lo and hi <= p.phys_hi):
-                return False
-        elif hi < p.phys_lo or lo > p.phys_hi:
-            return False
-    return True
+    return core_admissible(REGISTRY[name].parameters, table, moved_parameters(name, table))
 
 
 def rho_high(blocks: int) -> float:

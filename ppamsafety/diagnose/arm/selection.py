@@ -80,7 +80,7 @@ from scipy import stats
 
 from ..._validation import check_int, check_seed
 from ..core.criteria import (ALPHA, CV_SEGMENTS, RHO_MAX, Step, _chi2_sf, _normal_quantile, aicc,
-                             bic, rank_step)
+                             bic, false_selection_bound, rank_step)
 from ...lstsq import step_scores
 from .candidates import DEAD_TIME_MAX, REGISTRY, identity_values, library
 from .gram import GramSet, chi2_at, chunk_layout, covariance, solve
@@ -1071,7 +1071,7 @@ def stability_selection(prob: Problem, candidates=None, *, pairs: int = STABILIT
     halves = 2 * pairs
     q = total / halves
     p = len(names)
-    bound = q * q / ((2 * threshold - 1) * p) if threshold > 0.5 else None
+    bound = false_selection_bound(q, threshold, p)
     return Stability(frequency={n: counts[n] / halves for n in names}, pairs=pairs,
                      threshold=threshold, q=q, p=p, expected_false_bound=bound, seed=seed,
                      chunk_blocks=prob.bs.nb / max(C, 1))

@@ -44,7 +44,6 @@ against the truth:
 from __future__ import annotations
 
 import math
-import multiprocessing
 import time
 import traceback
 import warnings
@@ -57,6 +56,7 @@ from ..._validation import check_int
 from ...data.measured import MeasuredDataWarning
 from ...params.muscles import TABLE_B1_N_PER_BAR
 from ...units import BAR
+from ..core.battery import run_seeds
 from .candidates import ACTUATOR_VOCABULARY, force_function
 from .design import actuator_design, actuator_record
 from .detection import signature_ratio
@@ -460,25 +460,7 @@ def run_battery(seeds, *, processes: int = 1, progress: bool = False) -> pd.Data
     """
     seeds = [check_int("seed", s, 0) for s in seeds]
     processes = check_int("processes", processes, 1, 256)
-    rows = []
-    if processes == 1:
-        for s in seeds:
-            rows.append(_worker(s))
-            if progress:
-                print(_progress_line(rows[-1]), flush=True)
-    else:
-        with multiprocessing.get_context("fork").Pool(processes, maxtasksperchild=50) as pool:
-            for r in pool.imap_unordered(_worker, seeds):
-                rows.append(r)
-                if progress:
-                    print(_progress_line(r), flush=True)
-    return pd.DataFrame(rows).sort_values("seed").reset_index(drop=True)
-
-
-def _progress_line(r):
-    return (f"seed {r.get('seed')}: hidden={r.get('hidden')} pert={r.get('perturbation') or '-'} "
-            f"named={r.get('named')} high={r.get('high')} conf={r.get('confounded')} "
-            f"unexpl={r.get('unexplained')} {r.get('seconds', 0):.1f}s {r.get('error') or ''}")
+    return run_seeds(_worker, seeds, processes=processes, progress=progress)
 
 
 def single_effect_outcomes(results: pd.DataFrame) -> pd.DataFrame:

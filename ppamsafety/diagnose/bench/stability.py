@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..._validation import check_int, check_range
+from ..core.criteria import false_selection_bound
 from ..core.linear_selection import fit_linear
 from .selection import select
 
@@ -152,7 +153,7 @@ def stability_selection(design, *, alpha: float, pairs: int = PAIRS, seed: int =
     p = max(len(names), 1)
     return LoopStability(frequency={n: counts[n] / halves for n in names}, pairs=pairs,
                          threshold=threshold, q=q, p=p,
-                         expected_false_bound=q * q / ((2 * threshold - 1) * p), seed=seed,
+                         expected_false_bound=false_selection_bound(q, threshold, p), seed=seed,
                          units=U, unit=unit)
 
 

@@ -168,4 +168,30 @@ def rank_step(rows: list, current_bic: float, *, alpha: float, n_candidates: int
     return chosen, float(w[0])
 
 
-__all__ = ["ALPHA", "RHO_MAX", "CV_SEGMENTS", "bic", "aicc", "Step", "rank_step"]
+def false_selection_bound(q: float, threshold: float, p: int):
+    """Bound on the expected number of false selections among the stable names.
+
+    ``q^2 / ((2 pi - 1) p)`` (Meinshausen & Buehlmann 2010, Theorem 1; Shah & Samworth 2013
+    for complementary pairs, under the same exchangeability assumption).
+
+    Parameters
+    ----------
+    q : float
+        Mean number of candidates selected per half of the record.
+    threshold : float
+        pi: the selection frequency at which a name counts as stable.
+    p : int
+        Number of candidates.
+
+    Returns
+    -------
+    float or None
+        None when ``threshold <= 0.5`` (no bound) or ``p < 1``.
+    """
+    if threshold <= 0.5 or p < 1:
+        return None
+    return q * q / ((2 * threshold - 1) * p)
+
+
+__all__ = ["ALPHA", "RHO_MAX", "CV_SEGMENTS", "bic", "aicc", "Step", "rank_step",
+           "false_selection_bound"]
