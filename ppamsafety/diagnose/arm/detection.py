@@ -36,24 +36,12 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy import optimize, stats
+from scipy import stats
 
+from ..core.power import POWER, needed_noncentrality
 from .candidates import REGISTRY, library
 from .gram import covariance
 from .selection import Problem, _directions, _gram_set
-
-#: Probability with which an effect at its detection limit is named.
-POWER = 0.9
-
-
-def _needed_noncentrality(df: int, crit: float, power: float = POWER) -> float:
-    """Smallest lambda with P(noncentral chi2_df(lambda) > crit) >= power."""
-    def f(lam):
-        return stats.ncx2.sf(crit, df, lam) - power
-    hi = max(1.0, crit)
-    while f(hi) < 0:
-        hi *= 2.0
-    return float(optimize.brentq(f, 1e-9, hi, xtol=1e-6))
 
 
 def _design(prob: Problem, fit, universe):
@@ -146,7 +134,7 @@ def detection_limits(prob: Problem, fit, candidates=None, *, alpha: float = 0.01
         k = len(c.parameters)
         level = alpha / (n_rest + (1 if c.name in fit.names else 0))
         crit = max(float(stats.chi2.isf(level, k)), k * math.log(m))
-        lam = _needed_noncentrality(k, crit, power)
+        lam = needed_noncentrality(k, crit, power)
         entry = {}
         for j, p in enumerate(c.parameters):
             lim = _limit(S, j, lam)

@@ -55,9 +55,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy import stats
 
 from ..core.parameter import physically_admissible as core_admissible
+from ..core.power import noise_rho_quantile
 from .candidates import REGISTRY
 
 #: Inclusion probability at or above which a name counts as decisive.
@@ -111,7 +111,7 @@ def rho_high(blocks: int) -> float:
     blocks : int
     """
     m = max(int(blocks), 1)
-    return RHO_HIGH * math.sqrt(float(stats.chi2.ppf(0.999, m)) / m)
+    return RHO_HIGH * noise_rho_quantile(m, 0.999)
 
 
 def gates(name: str, table: dict, *, weight: float, stability: float | None,
