@@ -53,7 +53,7 @@ def test_shipped_scores_are_computed_not_stored(shipped):
     assert cal.loc["high", "right"] == right
     assert math.isclose(cal.loc["high", "precision"], right / len(names))
     sc = scores(shipped)
-    assert set(sc.target_kind) <= {">=", "<="}
+    assert set(sc.target_kind) <= {">=", "<=", "in [0.9, 0.98]", ""}
     assert (sc["count"] > 0).all(), sc
     prec = sc[sc.measure.str.startswith("'high' names right")].iloc[0]
     assert prec.target == HIGH_PRECISION and prec.hits == right
@@ -68,6 +68,30 @@ def test_first_measurement_seeds_reproduce_the_shipped_rows(shipped):
         assert r.error == s.error or (r.error == "" and pd.isna(s.error)), (r.seed, r.error)
         if not r.error:
             assert _claims(r) == _claims(s), r.seed
+            # ... and the intervals (reported and the fit's own); rtol 1e-6 leaves room for
+            # another BLAS's rounding, not for a changed method
+            assert len(r.coverage) == len(s.coverage), r.seed
+            for a, b in zip(r.coverage, s.coverage):
+                for k in ("ci_low", "ci_high", "ci_low_noise", "ci_high_noise"):
+                    assert math.isclose(a[k], b[k], rel_tol=1e-6, abs_tol=1e-12), (r.seed, k)
+
+
+def test_interval_coverage_is_scored_both_ways(shipped):
+    """The reported intervals hold the fit's own; the coverage target is a range."""
+    cov = [c for r in shipped.itertuples() for c in (r.coverage or [])]
+    assert len(cov) > 1000
+    for c in cov:
+        assert c["ci_low"] <= c["ci_high"]
+        assert c["covered_noise"] == (c["ci_low_noise"] <= c["true"] <= c["ci_high_noise"])
+    sc = scores(shipped).set_index("measure")
+    rep = sc[sc.index.str.startswith("95 % intervals")].iloc[0]
+    own = sc[sc.index.str.startswith("... the fit's own")].iloc[0]
+    assert rep.target_kind == "in [0.9, 0.98]"
+    assert rep.hits == sum(c["covered"] for c in cov)
+    assert own.hits == sum(c["covered_noise"] for c in cov) and pd.isna(own.target)
+    # the reported interval holds the fit's own, cut at the physical range, which holds the
+    # truth: whatever the fit's own covers, the reported one covers
+    assert all(c["covered"] for c in cov if c["covered_noise"])
 
 
 def test_scenarios_are_seeded_and_varied():

@@ -23,9 +23,10 @@ Scoring (what the targets of ``docs/diagnose.md`` count)
   their limit are "too small to see on this record" -- the diagnosis says so
   -- and the recall targets count the scenarios whose hidden effects are all
   above their limit; the rest are reported separately.
-* Interval coverage: for every right name, each parameter's 95 % interval
-  against its true value (the nominal value for a parameter the scenario did
-  not change).
+* Interval coverage: for every right name, each parameter's reported 95 %
+  interval against its true value (the nominal value for a parameter the
+  scenario did not change), and the fit's own interval before it was widened
+  (:mod:`.core.omitted`) for comparison.
 * Out of library: the *irreducible gap* (:func:`irreducible_gap`) is the part
   of the perturbation's signature in the block residuals that no combination of
   the library can reproduce, as the residual-to-noise ratio it alone leaves
@@ -57,7 +58,7 @@ from ..params import thesis_arm
 from ..plant import packing
 from .arm.candidates import REGISTRY, default_candidates
 from .bench import scenarios as bench_scenarios
-from .core.battery import run_seeds
+from .core.battery import coverage_entry, run_seeds
 from .arm.residuals import arm_record, block_system, model_vector
 from .arm.selection import _directions, make_problem
 from .arm.static import static_record, static_system
@@ -68,10 +69,12 @@ from .synthesize import synthesize
 #: first measurement on 1000-1999 showed two kinds of wrong names (an encoder offset whose
 #: interval held zero, and one that a constant joint torque explains as well), which set the
 #: "moved" rule of naming and the look-alikes outside the library, so those seeds are
-#: tuning seeds now.
-TUNING_SEEDS = range(0, 2000)
+#: tuning seeds now.  A second measurement on 2000-2999 met every target but interval
+#: coverage; the hint level of the widened intervals (:mod:`.core.omitted`) was chosen on
+#: 2000-2299, so those seeds are tuning seeds too.
+TUNING_SEEDS = range(0, 3000)
 #: Seeds of the measurement (the report and ``docs/diagnose.md``).
-MEASURE_SEEDS = range(2000, 4000)
+MEASURE_SEEDS = range(3000, 5000)
 #: Required precision of "high" (issue 19).
 HIGH_PRECISION = 0.97
 #: Residual/noise ratio that the irreducible part of an out-of-library perturbation must
@@ -483,10 +486,7 @@ def run_scenario(sc: Scenario, *, gap: bool = True, arm=None) -> dict:
             true = sc.truth[e["name"]].get(p)
             if true is None:
                 continue
-            cover.append({"effect": e["name"], "parameter": p, "true": true,
-                          "value": d["value"], "ci_low": d["ci_low"], "ci_high": d["ci_high"],
-                          "covered": bool(d["ci_low"] <= true <= d["ci_high"]),
-                          "level": e["confidence_level"]})
+            cover.append(coverage_entry(e["name"], p, true, d, e["confidence_level"]))
     row["coverage"] = cover
     row["gap"] = (irreducible_gap(sc, rec, list(dg.settings["block_noise"].values()), arm=arm)
                   if gap and sc.perturbation else None)
@@ -626,7 +626,7 @@ def _wilson_low(k, n, z=1.96):
     den = 1 + z * z / n
     centre = p + z * z / (2 * n)
     half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n))
-    return (centre - half) / den
+    return max((centre - half) / den, 0.0)           # 0 of n: exactly 0, not -3e-18
 
 
 def _ok(df):
@@ -686,15 +686,20 @@ def scores(results: pd.DataFrame) -> pd.DataFrame:
     rows = []
     fail = failures(results)
 
-    def add(name, hits, n, target, better="higher"):
+    def add(name, hits, n, target, better="higher", upper=None):
         v = hits / n if n else math.nan
-        if better == "higher":
-            met = bool(n and v >= target)
+        if better == "info":
+            met, kind = None, ""
+        elif upper is not None:
+            met, kind = bool(n and target <= v <= upper), f"in [{target:g}, {upper:g}]"
+        elif better == "higher":
+            met, kind = bool(n and v >= target), ">="
         else:
-            met = bool(n and v <= target)
+            met, kind = bool(n and v <= target), "<="
         rows.append({"measure": name, "count": int(n), "hits": int(hits), "value": v,
-                     "wilson_low": _wilson_low(hits, n), "target": target,
-                     "target_kind": ">=" if better == "higher" else "<=", "met": met})
+                     "wilson_low": _wilson_low(hits, n),
+                     "target": math.nan if better == "info" else target,
+                     "target_kind": kind, "met": met})
 
     clean = df[df["perturbation"] == ""]
     single = clean[clean["hidden"].map(len) == 1]
@@ -719,18 +724,49 @@ def scores(results: pd.DataFrame) -> pd.DataFrame:
     add("'high' names right (precision)", sum(n in h for n, h in high_names), len(high_names),
         HIGH_PRECISION)
     cov = [c for r in df.itertuples() for c in (r.coverage or [])]
-    add("95 % intervals of right names covering the truth (in 0.90-0.98)",
-        sum(c["covered"] for c in cov), len(cov), 0.90)
+    add("95 % intervals of right names covering the truth (as reported: widened for the "
+        "effects the record hints at)", sum(c["covered"] for c in cov), len(cov), 0.90,
+        upper=0.98)
+    add("... the fit's own intervals (before widening; for comparison)",
+        sum(c.get("covered_noise", c["covered"]) for c in cov), len(cov), 0.90, "info")
     cov = [c for r in df.itertuples() if set(r.named) == set(r.hidden) and not r.perturbation
            for c in (r.coverage or [])]
-    add("... of which where exactly the hidden effects were named (the model is right)",
-        sum(c["covered"] for c in cov), len(cov), 0.90)
+    add("... reported, where exactly the hidden effects were named (the model is right)",
+        sum(c["covered"] for c in cov), len(cov), 0.90, upper=0.98)
     cov = [c for r in df.itertuples() for c in (r.coverage or []) if c["level"] == "high"]
-    add("... of which of 'high' names", sum(c["covered"] for c in cov), len(cov), 0.90)
+    add("... reported, of 'high' names", sum(c["covered"] for c in cov), len(cov), 0.90,
+        upper=0.98)
     made = len(df) + fail["diagnose"] + fail["battery"]
     add("valid records on which the diagnosis raised an error", fail["diagnose"] +
         fail["battery"], made, 0.0, better="lower")
     return pd.DataFrame(rows)
+
+
+def interval_widening(results: pd.DataFrame) -> dict:
+    """How much the reported intervals of right names widened the fit's own.
+
+    Parameters
+    ----------
+    results : pandas.DataFrame
+        :func:`run_battery`.
+
+    Returns
+    -------
+    dict
+        ``parameters`` (count), ``widened`` (how many), ``median`` and ``p90`` of the
+        width ratio reported / fit's own.
+    """
+    ratios = []
+    for r in _ok(results).itertuples():
+        for c in (r.coverage or []):
+            own = c.get("ci_high_noise", c["ci_high"]) - c.get("ci_low_noise", c["ci_low"])
+            if own > 0:
+                ratios.append((c["ci_high"] - c["ci_low"]) / own)
+    ratios = np.asarray(ratios, dtype=float)
+    if not ratios.size:
+        return {"parameters": 0, "widened": 0, "median": math.nan, "p90": math.nan}
+    return {"parameters": int(ratios.size), "widened": int(np.sum(ratios > 1.0 + 1e-9)),
+            "median": float(np.median(ratios)), "p90": float(np.percentile(ratios, 90))}
 
 
 def calibration_table(results: pd.DataFrame) -> pd.DataFrame:
@@ -889,7 +925,8 @@ def main(argv=None) -> int:
 __all__ = ["Scenario", "random_scenario", "record_of", "run_scenario", "run_battery",
            "detection_curve", "RATIO_BINS",
            "save_results", "load_results", "RESULTS_FILE", "BENCH_RESULTS_FILE",
-           "irreducible_gap", "scores", "failures", "calibration_table", "by_effect", "LIBRARY_DRAWS",
+           "irreducible_gap", "scores", "failures", "calibration_table", "by_effect",
+           "interval_widening", "LIBRARY_DRAWS",
            "TUNING_SEEDS", "MEASURE_SEEDS", "HIGH_PRECISION", "GAP_ABOVE_NOISE"]
 
 

@@ -38,15 +38,17 @@ import math
 import numpy as np
 from scipy import stats
 
+from ..core.omitted import omitted_effects
 from ..core.power import POWER, needed_noncentrality
 from .candidates import REGISTRY, library
 from .gram import covariance
 from .selection import Problem, _directions, _gram_set
 
 
-def _design(prob: Problem, fit, universe):
+def _design(prob: Problem, fit, universe, *, blocks: bool = False):
     """Whitened normal matrix of every candidate's columns (the dead time linearised in its
-    shift: one sample of delay) at the final model; columns per candidate."""
+    shift: one sample of delay) at the final model; columns per candidate; with ``blocks``
+    also the columns themselves, whitened, shape (nb, 6, K)."""
     shift = int(fit.shift)
     lin = [n for n in universe if not REGISTRY[n].grid]
     gs, _ = _gram_set(prob, tuple(universe), shift)
@@ -56,15 +58,17 @@ def _design(prob: Problem, fit, universe):
     A = np.tensordot(w, Gs[:, :K, :K], axes=1)
     cols = {n: gs.columns([n]) for n in lin}
     grid = [n for n in universe if REGISTRY[n].grid]
-    if grid:
+    P = None
+    if grid or blocks:
         X0 = prob.X(shift)
-        X1 = prob.X(shift + 1)
         nb, nc, nm = X0.shape
-        col = ((X1 - X0).reshape(nb * nc, nm) @ prob.mu0).reshape(nb, nc)
         D, _, _, E = _directions(prob, lin)
         P = (X0.reshape(nb * nc, nm) @ D).reshape(nb, nc, D.shape[1])
         if E is not None:
             P = P + E
+    if grid:
+        X1 = prob.X(shift + 1)
+        col = ((X1 - X0).reshape(nb * nc, nm) @ prob.mu0).reshape(nb, nc)
         cross = np.einsum("bci,c,bc->i", P, w, col)
         A2 = np.zeros((K + 1, K + 1))
         A2[:K, :K] = A
@@ -72,6 +76,10 @@ def _design(prob: Problem, fit, universe):
         A2[K, K] = float(np.einsum("bc,c,bc->", col, w, col))
         A = A2
         cols[grid[0]] = np.array([K])
+        if blocks:
+            P = np.concatenate([P, col[:, :, None]], axis=2)
+    if blocks:
+        return A, cols, P / prob.sigma[None, :, None]
     return A, cols
 
 
@@ -150,6 +158,48 @@ def detection_limits(prob: Problem, fit, candidates=None, *, alpha: float = 0.01
     return out
 
 
+def omitted(prob: Problem, fit, candidates=None, *, shadows=()) -> dict:
+    """What adding each candidate the diagnosis did not name would do to the named ones
+    (:mod:`ppamsafety.diagnose.core.omitted`).
+
+    Parameters
+    ----------
+    prob : Problem
+        The problem at the final model's noise levels.
+    fit : Fit
+        The final fit (its names form M; ``fit.e`` formed).
+    candidates : sequence of str, optional
+        The library searched (default all).
+    shadows : sequence of str, keyword-only
+        Opt-in candidates outside the library that the diagnosis tried as look-alikes: a
+        user's arm may hold them as well.
+
+    Returns
+    -------
+    dict
+        Name of every candidate not in M -> :class:`~ppamsafety.diagnose.core.omitted.
+        OmittedEffect` in the coordinates of ``fit.phi`` (a named dead time, which has no
+        coefficient, is conditioned on).
+    """
+    universe = tuple(c.name for c in library(candidates))
+    shadows = tuple(n for n in shadows if n not in universe)
+    names = tuple(fit.names)
+    if not any(not REGISTRY[n].grid for n in names):
+        return {}
+    A, cols, Z = _design(prob, fit, tuple(dict.fromkeys(universe + shadows + names)),
+                         blocks=True)
+    cm = np.concatenate([cols[n] for n in names])
+    rows = np.zeros(fit.phi.size, dtype=int)       # positions in cm of fit.phi's entries
+    at = 0
+    for n in names:
+        if not REGISTRY[n].grid:
+            rows[fit.slices[n]] = np.arange(at, at + cols[n].size)
+        at += cols[n].size
+    score = np.einsum("bck,bc->k", Z, fit.e)
+    rest = {c.name: cols[c.name] for c in library(universe + shadows) if c.name not in names}
+    return omitted_effects(A, score, cm, rest, rows=rows)
+
+
 def _limit(S, j, lam):
     """Coefficient change of column j detected with noncentrality lam (inf: not at all)."""
     sjj = float(S[j, j]) if S.size else 0.0
@@ -172,4 +222,4 @@ def _physical_slope(prob, c, j, dphi):
     return (v1[j] - v0[j]) / h, nominal
 
 
-__all__ = ["detection_limits", "POWER"]
+__all__ = ["detection_limits", "omitted", "POWER"]

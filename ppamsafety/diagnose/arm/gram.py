@@ -36,6 +36,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..core.criteria import CV_SEGMENTS
+from ..core.omitted import pinv_psd
 
 
 def chunk_layout(nb: int, *, segments: int = CV_SEGMENTS, length: int | None = None) -> tuple:
@@ -285,21 +286,14 @@ def _solve_normal(A, b) -> np.ndarray:
 
 
 def covariance(A) -> np.ndarray:
-    """(A)^-1 with the same scaling and rank handling as :func:`solve` (pseudo-inverse).
+    """(A)^-1 with the same scaling and rank handling as :func:`solve` (pseudo-inverse,
+    :func:`~ppamsafety.diagnose.core.omitted.pinv_psd`).
 
     Parameters
     ----------
     A : numpy.ndarray, shape (k, k)
     """
-    if A.size == 0:
-        return np.zeros((0, 0))
-    d = np.sqrt(np.maximum(np.diag(A), 0.0))
-    d[d == 0] = 1.0
-    As = A / d[:, None] / d[None, :]
-    wv, V = np.linalg.eigh(As)
-    keep = wv > 1e-12 * max(float(wv[-1]), 1e-300)
-    Vk = V[:, keep]
-    return ((Vk / wv[keep]) @ Vk.T) / d[:, None] / d[None, :]
+    return pinv_psd(A)
 
 
 __all__ = ["GramSet", "GramFit", "chunk_layout", "solve", "chi2_at", "covariance"]

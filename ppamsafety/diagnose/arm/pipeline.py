@@ -23,9 +23,10 @@ from ..._validation import check_int, check_range, check_seed
 from ...params import thesis_arm
 from ...params.arm import ArmParameters
 from ...plant import packing
+from ..core.omitted import HINT_P
 from ..core.result import Diagnosis
 from .candidates import REGISTRY, SensorFault, default_candidates, separating_experiment
-from .detection import detection_limits
+from .detection import detection_limits, omitted
 from .gates import GATES, HIGH_WEIGHT, RHO_HIGH, gates, level, moved_parameters
 from .residuals import (CHANNELS, CHANNEL_UNITS, PRESSURE_GAIN_COLUMNS, SUBSYSTEM, ArmRecord,
                         Columns, arm_record, block_system, channel_noise, coulomb_velocity,
@@ -365,12 +366,18 @@ def diagnose_arm(data, *, arm=None, candidates=None, block_seconds: float = 0.05
     tb = time.perf_counter()
     rho = fit.rho()
     hac = hac_covariance(fprob, fit) if fit.names else None
+    # the gates judge the fit's own intervals; the reported ones also cover what adding an
+    # effect the record holds a hint of would do to the named ones (core.omitted)
     params = parameter_table(fprob, fit, cov=hac) if fit.names else {}
-    if "encoder_offset" in params and np.any(enc_shift):
-        for j, d in enumerate(params["encoder_offset"].values()):
-            for k in ("value", "ci_low", "ci_high", "ci_low_raw", "ci_high_raw"):
-                if k in d:
-                    d[k] += float(enc_shift[j])
+    reported = (parameter_table(fprob, fit, cov=hac, omitted=omitted(
+        fprob, fit, candidates, shadows=shadows)) if fit.names else {})
+    for table in (params, reported):
+        if "encoder_offset" in table and np.any(enc_shift):
+            for j, d in enumerate(table["encoder_offset"].values()):
+                for k in ("value", "ci_low", "ci_high", "ci_low_raw", "ci_high_raw",
+                          "ci_low_noise", "ci_high_noise"):
+                    if k in d:
+                        d[k] += float(enc_shift[j])
     sfreq = None if stab is None else stab.frequency
     effects, partial, confounded = [], [], []
     if static and rec.u is None:
@@ -438,6 +445,10 @@ def diagnose_arm(data, *, arm=None, candidates=None, block_seconds: float = 0.05
     for e in partial:
         e["confidence_level"] = "low"
         e["gates"] = {}
+    for e in effects + partial:
+        e["parameters"] = reported[e["name"]]
+    for g in confounded:
+        g["interpretations"][g["members"][0]] = reported[g["members"][0]]
     row_after = after_row(arm, fit, params)
     fault = sensor_fault(fit, params)
     rr = {}
@@ -527,7 +538,10 @@ def diagnose_arm(data, *, arm=None, candidates=None, block_seconds: float = 0.05
                 "coulomb_velocity": None if static else [
                     float(v) for v in coulomb_velocity(arm, noise["qd"])],
                 "intervals": "95 %, delta method on the HAC (Newey-West) covariance of the "
-                             "block scores; cut at the physical range (raw interval kept)",
+                             "block scores; the union with the intervals of the fit plus "
+                             "each candidate the record holds a hint of (LR p < "
+                             f"{HINT_P}; the fit's own as ci_*_noise); cut at the physical "
+                             "range (raw interval kept)",
                 "bootstrap": boot_info,
                 "data": {"kind": data.kind, "experiment": data.experiment,
                          "description": data.meta.get("description", "")}}

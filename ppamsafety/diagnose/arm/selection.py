@@ -81,6 +81,7 @@ from scipy import stats
 from ..._validation import check_int, check_seed
 from ..core.criteria import (ALPHA, CV_SEGMENTS, RHO_MAX, Step, _chi2_sf, _normal_quantile, aicc,
                              bic, false_selection_bound, rank_step)
+from ..core.omitted import widened_interval
 from ...lstsq import step_scores
 from .candidates import DEAD_TIME_MAX, REGISTRY, identity_values, library
 from .gram import GramSet, chi2_at, chunk_layout, covariance, solve
@@ -1256,7 +1257,8 @@ def hac_covariance(prob: Problem, fit: Fit, *, lags: int | None = None) -> np.nd
 
 
 def parameter_table(prob: Problem, fit: Fit, confidence: float = 0.95, *,
-                    cov: np.ndarray | None = None, truncate: bool = True) -> dict:
+                    cov: np.ndarray | None = None, truncate: bool = True,
+                    omitted: dict | None = None) -> dict:
     """Reported parameters of every effect of ``fit`` with delta-method intervals.
 
     Parameters
@@ -1272,6 +1274,13 @@ def parameter_table(prob: Problem, fit: Fit, confidence: float = 0.95, *,
         Intersect every interval with the parameter's physical range (the
         physical range is prior knowledge); the raw interval is kept as
         ``ci_low_raw``/``ci_high_raw``.
+    omitted : dict, optional, keyword-only
+        Candidate -> :class:`~ppamsafety.diagnose.core.omitted.OmittedEffect`
+        (:func:`.detection.omitted`): the effects not named.  Each interval is then the union
+        of the fit's and that of the fit plus each candidate the record holds a hint of
+        (:func:`~ppamsafety.diagnose.core.omitted.widened_interval`); the fit's own is kept
+        as ``ci_low_noise``/``ci_high_noise`` and ``widened_by`` names the candidates that
+        widened it.
 
     Returns
     -------
@@ -1321,6 +1330,14 @@ def parameter_table(prob: Problem, fit: Fit, confidence: float = 0.95, *,
             d = {"value": float(v[i]), "unit": p.unit, "ci_low": float(lo[i]),
                  "ci_high": float(hi[i]), "std_error": float(se[i]),
                  "nominal": float(v_nom[i]) if not c.grid else 0.0}
+            if omitted is not None:
+                d["ci_low_noise"], d["ci_high_noise"], d["widened_by"] = lo[i], hi[i], []
+                if not c.grid:          # the dead time: its profile interval, as it is
+                    lo[i], hi[i], by = widened_interval(v[i], se[i], J[i], omitted,
+                                                        confidence=confidence)
+                    d.update(ci_low=float(lo[i]), ci_high=float(hi[i]), widened_by=list(by))
+                d["ci_low_noise"], d["ci_high_noise"] = (float(d["ci_low_noise"]),
+                                                         float(d["ci_high_noise"]))
             if truncate and (lo[i] < p.phys_lo or hi[i] > p.phys_hi):
                 d["ci_low_raw"], d["ci_high_raw"] = d["ci_low"], d["ci_high"]
                 d["ci_low"] = float(min(max(lo[i], p.phys_lo), p.phys_hi))

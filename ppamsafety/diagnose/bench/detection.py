@@ -40,6 +40,7 @@ import math
 import numpy as np
 from scipy import stats
 
+from ..core.omitted import omitted_effects
 from ..core.power import POWER, needed_noncentrality
 from .selection import MIN_EFFECT_RMS
 
@@ -166,6 +167,36 @@ def limit_ratio(design, model, name: str, lr_stat: float, *, alpha: float = 0.01
     return math.sqrt(lr_stat / lam)
 
 
+def omitted(design, fit) -> dict:
+    """What adding each applicable candidate left out of the final model would do to its
+    coefficients (:mod:`ppamsafety.diagnose.core.omitted`).
+
+    Parameters
+    ----------
+    design : ActuatorDesign
+    fit : LinearFit
+        The final fit (``fit.e`` the whitened residual on the design's samples).
+
+    Returns
+    -------
+    dict
+        Name -> :class:`~ppamsafety.diagnose.core.omitted.OmittedEffect` in the
+        coordinates of ``fit.phi``.
+    """
+    cols = design.columns
+    names = [n for n in fit.names if n in cols]
+    if not names:
+        return {}
+    rest = [c for c in cols if c not in names]
+    Z = np.concatenate([cols[n] for n in names + rest], axis=1)
+    k_m = sum(cols[n].shape[1] for n in names)
+    at, idx = k_m, {}
+    for c in rest:
+        idx[c] = np.arange(at, at + cols[c].shape[1])
+        at += cols[c].shape[1]
+    return omitted_effects(Z.T @ Z, Z.T @ fit.e, np.arange(k_m), idx)
+
+
 def _limit(s, lam):
     return math.sqrt(lam / s) if s > 1e-12 * lam else math.inf
 
@@ -219,4 +250,4 @@ def signature_ratio(design, model, name: str, signature, *, alpha: float = 0.01,
     return math.sqrt(lt / lam), math.sqrt(ln / lam)
 
 
-__all__ = ["detection_limits", "signature_ratio", "limit_ratio", "POWER"]
+__all__ = ["detection_limits", "signature_ratio", "limit_ratio", "omitted", "POWER"]

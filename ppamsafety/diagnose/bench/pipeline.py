@@ -37,6 +37,7 @@ from scipy import stats
 
 from ..._validation import check_int, check_range
 from ..core.linear_selection import hac_covariance_linear
+from ..core.omitted import HINT_P, widened_interval
 from ..core.result import Diagnosis
 from .candidates import ACTUATOR_VOCABULARY
 from .confounded import confounded_groups
@@ -45,7 +46,7 @@ from .design import (AMBIGUOUS_SIGMAS, LOCAL_WINDOW, NOISE_PLATEAU, PRESSURE_LEV
                      REVERSAL_SIGMAS,
                      ActuatorRecord, actuator_design, actuator_record, contraction_rate,
                      motion_direction, residual_noise)
-from .detection import detection_limits, limit_ratio
+from .detection import detection_limits, limit_ratio, omitted
 from .gates import CLEAR_RATIO, GATES, MIN_REVERSALS_HIGH, RHO_HIGH, gates, level, rho_high
 from .selection import MIN_EFFECT_RMS, relinearised, select
 from .stability import (PAIRS, THRESHOLD, half_sample_covariance, inflated_covariance,
@@ -89,6 +90,19 @@ def _terciles(x, name, scale, unit):
 def _segments(t, n=8):
     edges = np.linspace(t.min(), t.max() + 1e-12, n + 1)
     return [(edges[i], edges[i + 1], (t >= edges[i]) & (t < edges[i + 1])) for i in range(n)]
+
+
+def _widened(params: dict, ext, sl: slice, k: int, left_out: dict) -> dict:
+    """``params`` (:meth:`Extension.values`) with every interval widened by
+    :func:`~ppamsafety.diagnose.core.omitted.widened_interval` (the fit's own kept as
+    ``ci_low_noise``/``ci_high_noise``)."""
+    for i, d in enumerate(params.values()):
+        g = np.zeros(k)
+        g[sl] = ext.T[i]
+        lo, hi, by = widened_interval(d["value"], d["std_error"], g, left_out)
+        d.update(ci_low_noise=d["ci_low"], ci_high_noise=d["ci_high"], ci_low=float(lo),
+                 ci_high=float(hi), widened_by=list(by))
+    return params
 
 
 def diagnose_actuator(data, *, candidates=None, alpha: float = 0.01, rho_max: float = 1.5,
@@ -177,11 +191,15 @@ def diagnose_actuator(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
         cov = inflated_covariance(cov, half_sample_covariance(des, fit.names, pairs=pairs,
                                                               seed=seed))
     effects, partial = [], []
+    # the reported intervals also cover what adding a candidate the record holds a hint of
+    # would do to the named ones (core.omitted); the gates judge the fit's own
+    left_out = omitted(des, fit)
     for name in fit.names:
         if name in grouped:
             continue
         sl = fit.slices[name]
-        params = exts[name].values(fit.phi[sl], cov[sl, sl])
+        params = _widened(exts[name].values(fit.phi[sl], cov[sl, sl]), exts[name], sl,
+                          fit.phi.size, left_out)
         # evidence: the member against the final model without it
         ev = dict(sel.subsets.evidence[name])
         ev["evidence_ratio_log10"] = rowof.get(name, {}).get("evidence_ratio_log10")
@@ -280,7 +298,9 @@ def diagnose_actuator(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
                 "intervals": "95 %, on the HAC (Newey-West) covariance of the whitened "
                              "equations in time order, each variance raised to the "
                              "half-sample variance of the fits on complementary halves of "
-                             "the loops where that is larger",
+                             "the loops where that is larger; reported as the union with "
+                             "the intervals of the fit plus each candidate the record holds "
+                             f"a hint of (LR p < {HINT_P}; the fit's own as ci_*_noise)",
                 "noise_method": "robust interpolation residual: 1.4826 MAD(x[k] - (w x[k-1] + "
                                 "(1-w) x[k+1]))/sqrt(1 + w^2 + (1-w)^2); per sample: rolling "
                                 f"median over {LOCAL_WINDOW} samples (local_N: min, median, "

@@ -30,6 +30,33 @@ def progress_line(row: dict) -> str:
             f"{r.get('seconds', 0):.1f}s {r.get('error') or ''}")
 
 
+def coverage_entry(effect: str, parameter: str, true: float, d: dict, level: str) -> dict:
+    """One right name's parameter scored against its true value (the ``coverage`` rows).
+
+    Parameters
+    ----------
+    effect, parameter : str
+    true : float
+        The value the scenario hid (the nominal one for a parameter it did not change).
+    d : dict
+        The parameter's entry in the diagnosis (``ci_low``/``ci_high`` the reported
+        interval, ``ci_low_noise``/``ci_high_noise`` the fit's own where it was widened).
+    level : str
+        The name's confidence level.
+
+    Returns
+    -------
+    dict
+        ``covered`` for the reported interval, ``covered_noise`` for the fit's own.
+    """
+    lo_n, hi_n = d.get("ci_low_noise", d["ci_low"]), d.get("ci_high_noise", d["ci_high"])
+    return {"effect": effect, "parameter": parameter, "true": float(true),
+            "value": d["value"], "ci_low": d["ci_low"], "ci_high": d["ci_high"],
+            "covered": bool(d["ci_low"] <= true <= d["ci_high"]),
+            "ci_low_noise": lo_n, "ci_high_noise": hi_n, "covered_noise": bool(lo_n <= true <= hi_n),
+            "level": level}
+
+
 def run_seeds(work, seeds, *, processes: int, progress: bool = False) -> pd.DataFrame:
     """``work(seed)`` for every seed, in this process (``processes == 1``) or in a pool.
 

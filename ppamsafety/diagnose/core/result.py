@@ -58,7 +58,9 @@ class Diagnosis:
         The record diagnosed.
     effects : list of dict
         Named effects in the order found: ``name``, ``parameters``
-        ({name: {value, unit, ci_low, ci_high, std_error, nominal}}),
+        ({name: {value, unit, ci_low, ci_high, std_error, nominal, ci_low_noise,
+        ci_high_noise, widened_by}}: the reported 95 % interval, the fit's own, and the
+        candidates that widened it, :mod:`.omitted`),
         ``evidence`` (delta_bic, lr_stat, lr_df, p_value, cv_gain,
         evidence_ratio_log10, subsystem_rho), ``confidence`` (BIC weight) and
         ``confidence_level`` ("high"/"low").
@@ -138,7 +140,7 @@ class Diagnosis:
                     rows.append({"effect": e["name"], "status": status, "parameter": pn, **p,
                                  "confidence": e["confidence"]})
         cols = ["effect", "status", "parameter", "value", "unit", "ci_low", "ci_high",
-                "std_error", "nominal", "confidence"]
+                "ci_low_noise", "ci_high_noise", "std_error", "nominal", "confidence"]
         return pd.DataFrame(rows, columns=cols)
 
     def ranking(self) -> pd.DataFrame:
@@ -210,9 +212,12 @@ class Diagnosis:
                          f"{e['evidence']['delta_bic']:.1f}, p = "
                          f"{e['evidence']['p_value']:.2g})")
                 for pn, p in e["parameters"].items():
+                    wide = (f"; widened for {', '.join(p['widened_by'])}, the fit's own "
+                            f"[{p['ci_low_noise']:.5g}, {p['ci_high_noise']:.5g}]"
+                            if p.get("widened_by") else "")
                     L.append(f"    * {pn} = {p['value']:.5g} {p['unit']} "
                              f"[{p['ci_low']:.5g}, {p['ci_high']:.5g}] (nominal "
-                             f"{p['nominal']:.5g})")
+                             f"{p['nominal']:.5g}{wide})")
         else:
             L.append("No effect is named.")
         if self.partial:
