@@ -113,3 +113,34 @@ def test_arm_reports_both_intervals():
 def test_bench_reports_both_intervals():
     """... and each named muscle-bench parameter."""
     _check_reported(diagnose(synthesize_actuator(CASES["hysteresis"][0], seed=11)))
+
+
+def test_a_candidate_column_the_model_reproduces_is_dropped_not_inverted():
+    """A candidate [3 x_0, w]: its first column copies a model column exactly.  The Schur
+    complement's first direction is rounding error; scaled by its own size it used to be
+    inverted into an interval millions of times the fit's (review of cd9edef).  It is dropped:
+    one degree of freedom, and the interval stays the size the real column w gives."""
+    for seed in range(6):
+        rng = np.random.default_rng(seed)
+        n = 300
+        XM = rng.standard_normal((n, 2))
+        w = 0.5 * XM[:, 0] + rng.standard_normal(n)
+        y = XM @ np.array([1.0, -2.0]) + 0.3 * w + rng.standard_normal(n)
+        phi, e = _fit(XM, y)
+        X = np.column_stack([XM, 3.0 * XM[:, 0], w])
+        om = omitted_effects(X.T @ X, X.T @ e, np.arange(2), {"c": np.array([2, 3])})["c"]
+        assert om.k == 1
+        ref = omitted_effects(X.T @ X, X.T @ e, np.arange(2), {"w": np.array([3])})["w"]
+        np.testing.assert_allclose(om.shift, ref.shift, rtol=1e-6, atol=1e-12)
+        np.testing.assert_allclose(om.V, ref.V, rtol=1e-6, atol=1e-12)
+    # wholly reproduced: nothing to add, the candidate is left out
+    X = np.column_stack([XM, 2.0 * XM[:, 1]])
+    assert omitted_effects(X.T @ X, X.T @ e, np.arange(2), {"c": np.array([2])}) == {}
+
+
+def test_widened_interval_refuses_what_is_not_finite():
+    om = {"c": OmittedEffect(V=np.array([[np.nan]]), shift=np.array([0.0]), lr=50.0, k=1)}
+    with pytest.raises(ValueError, match="'c'"):
+        widened_interval(1.0, 0.1, np.array([1.0]), om)
+    with pytest.raises(ValueError, match="se = nan"):
+        widened_interval(1.0, float("nan"), np.array([1.0]), {})

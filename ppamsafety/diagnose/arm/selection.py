@@ -1279,8 +1279,8 @@ def parameter_table(prob: Problem, fit: Fit, confidence: float = 0.95, *,
         (:func:`.detection.omitted`): the effects not named.  Each interval is then the union
         of the fit's and that of the fit plus each candidate the record holds a hint of
         (:func:`~ppamsafety.diagnose.core.omitted.widened_interval`); the fit's own is kept
-        as ``ci_low_noise``/``ci_high_noise`` and ``widened_by`` names the candidates that
-        widened it.
+        as ``ci_low_noise``/``ci_high_noise`` (cut at the physical range like the reported
+        one) and ``widened_by`` names the candidates that widened it, farthest first.
 
     Returns
     -------
@@ -1342,6 +1342,9 @@ def parameter_table(prob: Problem, fit: Fit, confidence: float = 0.95, *,
                 d["ci_low_raw"], d["ci_high_raw"] = d["ci_low"], d["ci_high"]
                 d["ci_low"] = float(min(max(lo[i], p.phys_lo), p.phys_hi))
                 d["ci_high"] = float(max(min(hi[i], p.phys_hi), p.phys_lo))
+            if truncate and "ci_low_noise" in d:     # cut the same way: still inside
+                d["ci_low_noise"] = float(min(max(d["ci_low_noise"], p.phys_lo), p.phys_hi))
+                d["ci_high_noise"] = float(max(min(d["ci_high_noise"], p.phys_hi), p.phys_lo))
             entry[p.name] = d
         out[n] = entry
     return out

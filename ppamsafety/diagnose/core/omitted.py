@@ -60,7 +60,8 @@ class OmittedEffect:
     lr : float
         Likelihood-ratio statistic of adding it (decrease of chi2).
     k : int
-        Its number of coefficients (the test's degrees of freedom).
+        The test's degrees of freedom: the rank of its Schur complement (its number of
+        coefficients unless the model reproduces some direction of it).
     """
 
     V: np.ndarray
@@ -125,7 +126,8 @@ def omitted_effects(A, score, model, candidates: dict, *, rows=None) -> dict:
     Returns
     -------
     dict
-        Name -> :class:`OmittedEffect`.
+        Name -> :class:`OmittedEffect`; a candidate the model reproduces exactly (every
+        direction within :data:`COLLINEAR_TOL`) is left out: adding it changes nothing.
     """
     A = np.asarray(A, dtype=float)
     score = np.asarray(score, dtype=float)
@@ -137,14 +139,34 @@ def omitted_effects(A, score, model, candidates: dict, *, rows=None) -> dict:
         cc = np.asarray(cc, dtype=int)
         Amc = A[np.ix_(model, cc)]
         B = Ainv @ Amc
-        S = A[np.ix_(cc, cc)] - Amc.T @ B
-        Si = pinv_psd(0.5 * (S + S.T))
+        Acc = A[np.ix_(cc, cc)]
+        Si, rank = _schur_pinv(Acc - Amc.T @ B, Acc)
+        if rank == 0:
+            continue                    # M reproduces it exactly: adding it changes nothing
         r = score[cc] - B.T @ score[model]
         phi = Si @ r
         Br = B[rows]
         out[name] = OmittedEffect(V=Br @ Si @ Br.T, shift=-(Br @ phi),
-                                  lr=float(max(r @ phi, 0.0)), k=int(cc.size))
+                                  lr=float(max(r @ phi, 0.0)), k=rank)
     return out
+
+
+#: Fraction of a candidate direction's squared norm that the model must leave unexplained for
+#: the direction to count (below it, the Schur complement is rounding error).
+COLLINEAR_TOL = 1e-10
+
+
+def _schur_pinv(S, Acc) -> tuple:
+    """Pseudo-inverse and rank of the Schur complement S of a candidate against the model,
+    directions judged against the candidate's own columns (``Acc``): a direction the model
+    reproduces to within :data:`COLLINEAR_TOL` of its norm is dropped, not inverted (scaled
+    by S's own diagonal, rounding error would look like a direction of full size)."""
+    d = np.sqrt(np.maximum(np.diag(Acc), 0.0))
+    d[d == 0] = 1.0
+    w, U = np.linalg.eigh(0.5 * (S + S.T) / d[:, None] / d[None, :])
+    keep = w > COLLINEAR_TOL
+    Uk = U[:, keep]
+    return (Uk / w[keep]) @ Uk.T / d[:, None] / d[None, :], int(keep.sum())
 
 
 def widened_interval(value: float, se: float, gradient, omitted: dict, *,
@@ -170,6 +192,9 @@ def widened_interval(value: float, se: float, gradient, omitted: dict, *,
         ``(low, high, widened_by)``: the bounds and the candidates whose interval reached
         beyond the fit's, in order of how far.
     """
+    if not (math.isfinite(value) and math.isfinite(se) and se >= 0.0):
+        raise ValueError(f"value = {value!r}, se = {se!r}: a finite estimate and a finite "
+                         f"standard error >= 0 are needed")
     z = _normal_quantile(0.5 + confidence / 2)
     g = np.asarray(gradient, dtype=float)
     lo0, hi0 = value - z * se, value + z * se
@@ -180,6 +205,9 @@ def widened_interval(value: float, se: float, gradient, omitted: dict, *,
             continue
         centre = value + float(g @ o.shift)
         half = z * math.sqrt(se ** 2 + max(float(g @ o.V @ g), 0.0))
+        if not (math.isfinite(centre) and math.isfinite(half)):
+            raise ValueError(f"candidate {name!r}: its change of the coefficients is not "
+                             f"finite (centre {centre!r}, half-width {half!r})")
         beyond = max(lo0 - (centre - half), (centre + half) - hi0, 0.0)
         if beyond > 0:
             reach[name] = beyond
@@ -187,4 +215,5 @@ def widened_interval(value: float, se: float, gradient, omitted: dict, *,
     return lo, hi, tuple(sorted(reach, key=reach.get, reverse=True))
 
 
-__all__ = ["HINT_P", "OmittedEffect", "omitted_effects", "widened_interval", "pinv_psd"]
+__all__ = ["HINT_P", "COLLINEAR_TOL", "OmittedEffect", "omitted_effects", "widened_interval",
+           "pinv_psd"]

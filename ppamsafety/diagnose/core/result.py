@@ -138,9 +138,11 @@ class Diagnosis:
             for e in lst:
                 for pn, p in e["parameters"].items():
                     rows.append({"effect": e["name"], "status": status, "parameter": pn, **p,
+                                 "widened_by": ", ".join(p.get("widened_by", ())),
                                  "confidence": e["confidence"]})
         cols = ["effect", "status", "parameter", "value", "unit", "ci_low", "ci_high",
-                "ci_low_noise", "ci_high_noise", "std_error", "nominal", "confidence"]
+                "ci_low_noise", "ci_high_noise", "widened_by", "std_error", "nominal",
+                "confidence"]
         return pd.DataFrame(rows, columns=cols)
 
     def ranking(self) -> pd.DataFrame:
