@@ -53,8 +53,8 @@ def coverage_entry(effect: str, parameter: str, true: float, d: dict, level: str
     return {"effect": effect, "parameter": parameter, "true": float(true),
             "value": d["value"], "ci_low": d["ci_low"], "ci_high": d["ci_high"],
             "covered": bool(d["ci_low"] <= true <= d["ci_high"]),
-            "ci_low_noise": lo_n, "ci_high_noise": hi_n, "covered_noise": bool(lo_n <= true <= hi_n),
-            "level": level}
+            "ci_low_noise": lo_n, "ci_high_noise": hi_n,
+            "covered_noise": bool(lo_n <= true <= hi_n), "level": level}
 
 
 def run_seeds(work, seeds, *, processes: int, progress: bool = False) -> pd.DataFrame:
