@@ -728,7 +728,7 @@ def scores(results: pd.DataFrame) -> pd.DataFrame:
         "effects the record hints at)", sum(c["covered"] for c in cov), len(cov), 0.90,
         upper=0.98)
     add("... the fit's own intervals (before widening; for comparison)",
-        sum(c.get("covered_noise", c["covered"]) for c in cov), len(cov), 0.90, "info")
+        sum(c["covered_noise"] for c in cov), len(cov), 0.90, "info")
     cov = [c for r in df.itertuples() if set(r.named) == set(r.hidden) and not r.perturbation
            for c in (r.coverage or [])]
     add("... reported, where exactly the hidden effects were named (the model is right)",
@@ -759,7 +759,7 @@ def interval_widening(results: pd.DataFrame) -> dict:
     ratios = []
     for r in _ok(results).itertuples():
         for c in (r.coverage or []):
-            own = c.get("ci_high_noise", c["ci_high"]) - c.get("ci_low_noise", c["ci_low"])
+            own = c["ci_high_noise"] - c["ci_low_noise"]
             if own > 0:
                 ratios.append((c["ci_high"] - c["ci_low"]) / own)
     ratios = np.asarray(ratios, dtype=float)

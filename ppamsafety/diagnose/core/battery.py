@@ -40,7 +40,7 @@ def coverage_entry(effect: str, parameter: str, true: float, d: dict, level: str
         The value the scenario hid (the nominal one for a parameter it did not change).
     d : dict
         The parameter's entry in the diagnosis (``ci_low``/``ci_high`` the reported
-        interval, ``ci_low_noise``/``ci_high_noise`` the fit's own where it was widened).
+        interval, ``ci_low_noise``/``ci_high_noise`` the fit's own).
     level : str
         The name's confidence level.
 
@@ -49,7 +49,7 @@ def coverage_entry(effect: str, parameter: str, true: float, d: dict, level: str
     dict
         ``covered`` for the reported interval, ``covered_noise`` for the fit's own.
     """
-    lo_n, hi_n = d.get("ci_low_noise", d["ci_low"]), d.get("ci_high_noise", d["ci_high"])
+    lo_n, hi_n = d["ci_low_noise"], d["ci_high_noise"]
     return {"effect": effect, "parameter": parameter, "true": float(true),
             "value": d["value"], "ci_low": d["ci_low"], "ci_high": d["ci_high"],
             "covered": bool(d["ci_low"] <= true <= d["ci_high"]),

@@ -138,7 +138,7 @@ class Diagnosis:
             for e in lst:
                 for pn, p in e["parameters"].items():
                     rows.append({"effect": e["name"], "status": status, "parameter": pn, **p,
-                                 "widened_by": ", ".join(p.get("widened_by", ())),
+                                 "widened_by": ", ".join(p["widened_by"]),
                                  "confidence": e["confidence"]})
         cols = ["effect", "status", "parameter", "value", "unit", "ci_low", "ci_high",
                 "ci_low_noise", "ci_high_noise", "widened_by", "std_error", "nominal",
@@ -216,7 +216,7 @@ class Diagnosis:
                 for pn, p in e["parameters"].items():
                     wide = (f"; widened for {', '.join(p['widened_by'])}, the fit's own "
                             f"[{p['ci_low_noise']:.5g}, {p['ci_high_noise']:.5g}]"
-                            if p.get("widened_by") else "")
+                            if p["widened_by"] else "")
                     L.append(f"    * {pn} = {p['value']:.5g} {p['unit']} "
                              f"[{p['ci_low']:.5g}, {p['ci_high']:.5g}] (nominal "
                              f"{p['nominal']:.5g}{wide})")
