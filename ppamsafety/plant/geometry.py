@@ -466,9 +466,28 @@ def inverse_kinematics(r, arm) -> np.ndarray:
     if np.any(np.abs(c2) > 1.0):
         raise ValueError("inverse_kinematics: a target point is out of reach of the arm "
                          f"(distance from O must be in [{abs(a - b):g}, {a + b:g}] m)")
-    q2 = -np.arccos(c2)
-    q1 = np.arctan2(y, x) - np.arctan2(b * np.sin(q2), a + b * np.cos(q2))
-    return np.stack([q1, q2], axis=-1)
+    # the inverse trigonometric functions run in a compiled loop on the C library's scalar
+    # functions: numpy's vectorised arccos/arctan2 differ in the last bit between CPUs
+    # (AVX-512 has its own implementations), and a reference that depends on the CPU makes
+    # a closed loop's log depend on it too
+    q = np.empty(x.shape + (2,))
+    _inverse_kinematics_many(np.ascontiguousarray(x, dtype=float).reshape(-1),
+                             np.ascontiguousarray(y, dtype=float).reshape(-1),
+                             np.ascontiguousarray(c2, dtype=float).reshape(-1), float(a),
+                             float(b), q.reshape(-1, 2))
+    return q
+
+
+@kernel
+def _inverse_kinematics_many(x, y, c2, a, b, q):
+    """Elbow-up inverse kinematics of many reachable TCP positions ``x, y`` [m] with the
+    elbow cosines ``c2`` into ``q`` (n, 2) [rad] (the arithmetic of
+    :func:`inverse_kinematics`, with the C library's acos and atan2); ``a, b`` are the link
+    lengths L1, L2 [m]."""
+    for n in range(x.shape[0]):
+        q2 = -math.acos(c2[n])
+        q[n, 0] = math.atan2(y[n], x[n]) - math.atan2(b * math.sin(q2), a + b * math.cos(q2))
+        q[n, 1] = q2
 
 
 @checks_arm
