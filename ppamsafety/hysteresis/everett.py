@@ -44,7 +44,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._jit import kernel, leaf
+from .._jit import kernel, leaf, step_kernel
 from .._validation import as_float_array, check_range
 
 #: Weight parameters of (3.33), thesis §3.6.3 (after Zsolt 2002).
@@ -86,7 +86,7 @@ def _piece(alpha, beta, lo, hi, c, d):
     return total
 
 
-@kernel
+@step_kernel
 def everett_raw(alpha, beta, c, d):
     """Un-normalised Everett function of the weight (3.33) with parameters c, d.
 

@@ -83,7 +83,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._jit import kernel, leaf
+from .._jit import kernel, leaf, step_kernel
 from .._validation import as_float_array, check_int
 from ..layouts import Field, Layout
 from .everett import (C_THESIS, D_THESIS, THESIS_WEIGHT, PreisachWeight, check_weight,
@@ -136,7 +136,7 @@ def _signed(a, b, c, d, inv_z):
     return 0.0
 
 
-@kernel
+@step_kernel
 def advance(z, o, cap, v, c, d, inv_z, write):
     """Move the input of the memory row ``z[o:]`` to ``v``; return the output W.
 
