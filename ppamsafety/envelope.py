@@ -22,13 +22,13 @@ as HIC and F_max are in lambda, fig. 6.6); the evaluations are checked for it an
 from __future__ import annotations
 
 import math
-import os
 import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
 
+from ._jit import available_cores
 from ._validation import check_int, check_range, check_str
 from .params.head import HIC_SERIOUS_5PCT, MAXILLA_FRACTURE_N
 from .params.iso_ts_15066 import SKULL_FOREHEAD
@@ -267,7 +267,7 @@ def safety_envelope(parameter: str, bounds, *, limit: str = "F_max", case=None, 
     tolerance = check_range("tolerance", tolerance, 1e-6, 0.5)
     max_rounds = check_int("max_rounds", max_rounds, 1, 100)
     procs = 1 if processes is None else min(check_int("processes", processes, 1, 1024),
-                                                _cores())
+                                            available_cores())
     base = dict(case or {})
     if parameter in base:
         raise ValueError(f"case sets {parameter!r}, the parameter searched; leave it out")
@@ -328,13 +328,6 @@ def safety_envelope(parameter: str, bounds, *, limit: str = "F_max", case=None, 
                           limit_value=lim.value, limit_label=lim.label, bounds=(lo, hi),
                           safe_value=safe, unsafe_value=unsafe, direction=direction,
                           monotone=monotone, evaluations=ev, tolerance=tolerance)
-
-
-def _cores() -> int:
-    try:
-        return len(os.sched_getaffinity(0))
-    except (AttributeError, OSError):
-        return 1
 
 
 __all__ = ["Limit", "LIMITS", "NUMERIC", "SafetyEnvelope", "safety_envelope", "check_bounds"]

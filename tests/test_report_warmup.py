@@ -148,7 +148,7 @@ def _scheduled(monkeypatch, tasks, studies=("s1", "s2"), processes=2):
     def fake_study(name, stage, quick):
         with lock:
             log.append(("start", name))
-        return name, 0.0
+        return name, 0.0, 0.0
 
     monkeypatch.setattr(warmup, "TASKS", tuple(warmup.Task(task(*spec[:3]), after=spec[3])
                                                for spec in tasks))
@@ -156,7 +156,7 @@ def _scheduled(monkeypatch, tasks, studies=("s1", "s2"), processes=2):
     reported = []
     with ThreadPoolExecutor(processes) as pool:
         build._run_in_pool(pool, processes, list(studies), None, False, True,
-                           lambda name, res, dt: reported.append(name))
+                           lambda name, res, dt, cpu: reported.append(name))
     return {e: i for i, e in enumerate(log)}, reported
 
 
