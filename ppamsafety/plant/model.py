@@ -378,7 +378,8 @@ def plant_rhs(x, z, u, tau_ext, P, dx, work):
         volumes and (hysteresis on) force factors of the four groups;
         overwritten.
     """
-    plant_rhs_at(x, 0, z, u, tau_ext, P, dx, 0, work, 0)
+    zero = np.int64(0)          # not a compile-time constant: one compiled plant_rhs_at
+    plant_rhs_at(x, zero, z, u, tau_ext, P, dx, zero, work, zero)
 
 
 @step_kernel
@@ -471,8 +472,8 @@ def rk4_step(x, z, u, tau_ext, h, P, work):
     # numba compiles a kernel once per distinct constant argument
     for stage in range(4):
         src = x if stage == 0 else work
-        plant_rhs_at(src, 0 if stage == 0 else W_XT, z, u, tau_ext, P, work,
-                     _STAGE_OFFSETS[stage], work, W_RHS)
+        plant_rhs_at(src, np.int64(0 if stage == 0 else W_XT), z, u, tau_ext, P, work,
+                     _STAGE_OFFSETS[stage], work, np.int64(W_RHS))
         if stage < 3:
             c = h if stage == 2 else 0.5 * h       # x + h/2 k1, x + h/2 k2, x + h k3
             o = _STAGE_OFFSETS[stage]

@@ -176,7 +176,7 @@ def delta_p_to_set_values(dp1, dp2, P, out):
         out[i] = set_value(i, min(max(pd, 0.0), pmax), P)
 
 
-@leaf
+@step_kernel
 def gravity_compensation_dp(q1, q2, Pc, mt):
     """Delta-p for static gravity compensation (3.18)-(3.19) [Pa].
 

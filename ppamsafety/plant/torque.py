@@ -76,13 +76,15 @@ def torque_kernel_cs(c1, s1, c12, s12, P, mt, dmt, vol):
         mt[k], dmt[k], vol[k], _ = group_terms(k, c1, s1, c12, s12, P)
 
 
-@leaf
+@step_kernel
 def torque_functions_cs(c1, s1, c12, s12, P, mt):
     """Fill m_tau (4) [m^3] only: :func:`torque_kernel_cs` without the derivatives and volumes.
 
     The same arithmetic as :func:`group_terms` (bitwise the same m_tau); what a caller
     does not use is left out by the compiler (no logarithm of the volume, no
-    derivative of the force law).
+    derivative of the force law).  Compiled once (not inlined into its callers: the
+    gravity compensation, the task PSMC and the SMC model), which keeps their first
+    compilation short.
 
     Parameters
     ----------

@@ -959,10 +959,11 @@ def levenberg_marquardt(evaluate, theta0, r0, J0, *, lower, upper, probe,
     <= upper``.  Each iteration solves the linearised problem inside the trust region
     ``|dtheta|_inf <= radius`` by bounded linear least squares and evaluates the point; an
     accepted step (F lower) doubles the radius (up to ``max_radius``) and updates J by
-    Broyden's rank-one secant formula, a rejected one halves it.  When a step fails on a
-    Broyden-updated J, or before convergence is declared, J is measured afresh by finite
-    differences at the current point (``theta + probe_j e_j``, or minus where the upper bound
-    is too close), all probes in one batch.
+    Broyden's rank-one secant formula.  When a step fails on a Broyden-updated J, the radius
+    is halved and J is measured afresh by finite differences at the current point
+    (``theta + probe_j e_j``, or minus where the upper bound is too close; all probes in one
+    batch), as it is before convergence is declared; when a step fails on a fresh J, the
+    radius becomes a quarter of that step.
 
     Convergence, tested only with a fresh finite-difference Jacobian at the current point:
 
@@ -1092,9 +1093,12 @@ def levenberg_marquardt(evaluate, theta0, r0, J0, *, lower, upper, probe,
             best_i = len(hist) - 1
             radius = min(max_radius, 2.0 * radius)
             fresh = False
+        elif fresh:
+            # the model was measured at th: its step is wrong at this length, try a quarter
+            radius = 0.25 * min(radius, float(np.max(np.abs(s))))
         else:
             radius *= 0.5
-            if not fresh and not refresh():
+            if not refresh():
                 reason = "evaluation budget"
                 break
     if not fresh:
