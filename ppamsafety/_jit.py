@@ -313,8 +313,8 @@ PARTS_PER_THREAD = 4
 #: Threads of :func:`run_threaded` when none are given (None: every core this process may
 #: use, :func:`available_cores`); set with :func:`set_default_threads`.
 _default_threads = [None]
-#: The thread pool of this process: (process id, pool, threads), made on first use (a pool made before
-#: a ``fork`` has no threads in the child, so the child makes its own).
+#: The thread pool of this process: (process id, pool, threads), made on first use (a pool
+#: made before a ``fork`` has no threads in the child, so the child makes its own).
 _pool = [None, None, 0]
 _pool_lock = threading.Lock()
 

@@ -81,13 +81,13 @@ Fit
    minimise ``chi2 + sum (theta / PRIOR_SD)^2`` (a prior towards the nominal arm: the end of
    an axis is a two-sigma deviation, ``PRIOR_SD`` = 0.5) inside the axis bounds, by bounded
    linear least-squares steps within a trust region; after each step one evaluation, a
-   Broyden update of J, the trust region halved on failure, doubled on success; after a
-   failure on an updated J, and before convergence is declared, J is measured afresh by
-   finite differences (:data:`PROBE`, all probes in one batch).  Converged when, with a
-   fresh J, the projected gradient times the probe step is at most :data:`GTOL` in every
-   theta, or the bounded Gauss-Newton step is at most :data:`XTOL`, or the trust region
-   shrank below :data:`XTOL` without a decrease; a budget of :data:`MAX_EVALUATIONS`
-   points stops it otherwise (reported as not converged).
+   Broyden update of J, the trust region doubled on success; after a failure on an updated
+   J, and before convergence is declared, J is measured afresh by finite differences
+   (:data:`PROBE`, all probes in one batch).  Converged when, with a fresh J, the projected
+   gradient times the probe step is at most :data:`GTOL` in every theta, or the bounded
+   Gauss-Newton step is at most :data:`XTOL`, or the model's steps failed until its trust
+   region shrank below :data:`XTOL`; a budget of :data:`MAX_EVALUATIONS` points stops it
+   otherwise (reported as not converged).
 4. *Intervals.*  95 % intervals from the posterior covariance
    ``s2 (J^T J + I / PRIOR_SD^2)^-1``, scaled by the residual variance s2 = max(1, chi2 /
    (m - k)) as in :mod:`ppamsafety.diagnose.arm.summary_fit`, clipped to the axis.
@@ -193,10 +193,10 @@ CONTROL_PERIOD = 1e-3
 #: hundredths of an axis, because the simulated statistics are rough at the percent level.
 PROBE = 0.05
 #: Step tolerance of the fit (theta units): converged when, with a fresh Jacobian, the bounded
-#: Gauss-Newton step moves no theta by more than this, or no step inside a trust region this
-#: small lowers chi2 + prior.  Below it the objective is rough (moving a theta by 0.002
-#: changes chi2 by about 10 at the fitted point: the statistics are a maximum over a window
-#: and impacts at one sample), so a smaller step resolves noise, not a minimum.
+#: Gauss-Newton step moves no theta by more than this, or the steps the model proposes fail
+#: until its trust region is smaller than this.  Below it the objective is rough (moving a
+#: theta by 0.002 changes chi2 by about 10 at the fitted point: the statistics are a maximum
+#: over a window and impacts at one sample), so a smaller step resolves noise, not a minimum.
 XTOL = 0.02
 #: Gradient tolerance of the fit (chi2 + prior per probe step): converged when no theta,
 #: moved by one probe step along the projected gradient, lowers chi2 + prior by more than
@@ -972,8 +972,9 @@ def levenberg_marquardt(evaluate, theta0, r0, J0, *, lower, upper, probe,
       prior by at most ``gtol`` to first order);
     * *step*: the bounded Gauss-Newton step of the linear model (no trust region) moves
       every theta by at most ``xtol``;
-    * *trust region*: the trust region has shrunk to ``xtol`` and no step inside it lowers
-      F (a minimum at the resolution ``xtol``).
+    * *trust region*: every step the fresh model proposed raised F, until the trust region
+      shrank below ``xtol`` (a minimum at the resolution ``xtol``, though not one the linear
+      model predicts: its gradient and Gauss-Newton step are reported).
 
     The fit also stops after ``max_evaluations`` evaluated points (reported as not
     converged).  A finite difference over a probe step of a few hundredths of an axis, not
@@ -1519,5 +1520,5 @@ __all__ = ["REPRODUCIBILITY", "PRINT_STEP", "FIG_3_1_RMS_DEG", "RANK_TOL", "CONF
            "sawtooth_reference", "PlantEvaluation", "evaluate_plants", "whitened_residuals",
            "check_measurements", "Identifiability", "identifiability", "FitPath",
            "levenberg_marquardt", "posterior_intervals", "candidate_probe", "DesignReferences",
-           "PROBE", "XTOL", "GTOL", "MAX_EVALUATIONS", "CONTROL_PERIOD", "AsBuiltFit", "statement_checks",
-           "fit_as_built", "simulated_measurements"]
+           "PROBE", "XTOL", "GTOL", "MAX_EVALUATIONS", "CONTROL_PERIOD", "AsBuiltFit",
+           "statement_checks", "fit_as_built", "simulated_measurements"]
