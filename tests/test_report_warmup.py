@@ -206,3 +206,17 @@ def test_report_workers_use_one_blas_thread():
 def test_bad_task_is_named(kwargs, match):
     with pytest.raises(TypeError, match=match):
         warmup.Task(**kwargs)
+
+
+def test_metrics_record_wall_and_cpu_time_of_each_section(tmp_path):
+    """metrics.json holds each section's wall and CPU time [s] (the CPU time counts the
+    threads of the process that ran it); here one quick section in this process."""
+    import json
+
+    from ppamsafety.report.build import build_report
+
+    build_report(tmp_path / "r", quick=True, only=["stiffness"], processes=1, progress=False)
+    m = json.loads((tmp_path / "r" / "metrics.json").read_text())["stiffness"]
+    assert m["wall_time_s"] > 0 and m["cpu_time_s"] > 0
+    # one thread mostly: the CPU time is not far above the wall time
+    assert m["cpu_time_s"] < 4.0 * m["wall_time_s"] + 1.0
