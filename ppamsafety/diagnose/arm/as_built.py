@@ -575,7 +575,19 @@ class DesignReferences:
 
     @classmethod
     def of(cls, arm, design: "Design") -> "DesignReferences":
-        """The references of ``design`` for the nominal ``arm``."""
+        """The references of ``design`` for the nominal ``arm``.
+
+        Parameters
+        ----------
+        arm : ArmParameters
+            The nominal arm (the references' kinematics).
+        design : Design
+            What is simulated.
+
+        Returns
+        -------
+        DesignReferences
+        """
         if not isinstance(design, Design):
             raise TypeError(f"design must be a Design, got {type(design).__name__}")
         saw, win = sawtooth_reference(arm, design.sawtooth_levels)
