@@ -359,8 +359,9 @@ def _hic_branch_and_bound(a, dt, max_window_samples):
             best, bi, bj = v, i, i + w
     blocks = np.empty((_STACK, 4), np.int64)
     bounds = np.empty(_STACK)
-    root = _clip(0, n - 2, 1, n - 1, wn, nxt, prv)
-    top = _push(blocks, bounds, 0, root, _bound(root, s, dt, wn, t, lg, first), best)
+    # run-time ints, not constants: numba compiles a kernel once per constant argument
+    root = _clip(np.int64(0), n - 2, np.int64(1), n - 1, wn, nxt, prv)
+    top = _push(blocks, bounds, np.int64(0), root, _bound(root, s, dt, wn, t, lg, first), best)
     while top > 0:
         top -= 1
         if bounds[top] <= best:
