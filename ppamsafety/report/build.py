@@ -21,7 +21,10 @@ start, the workers compile the large kernels between them
 calls are done, and the sections once every task has started), so that a cold
 kernel cache is not filled by every worker at once.  Each worker runs one BLAS
 thread.  Sections that start their own worker processes (the safety scan, the
-lambda sweep) still do; the operating system shares the cores.
+lambda sweep) still do, and the closed-loop batches of a section run in threads on every
+core (:func:`~ppamsafety.experiments.run_batch`), so that the last sections of a report,
+when the other workers are idle, still use the whole machine; the operating system shares
+the cores.  ``metrics.json`` records each section's wall and CPU time.
 """
 
 from __future__ import annotations

@@ -218,8 +218,8 @@ def _convergence_text(fit) -> str:
                                 f"prior, until its trust region was smaller than {XTOL:g} (a "
                                 f"minimum at that resolution, not one the linear model "
                                 f"predicts)")}[p.reason]
-        return text + (f"**Converged**: {why} at the best point, with a Jacobian measured "
-                       f"there ({crit}).")
+        return text + (f"**Converged** at the best point, with a Jacobian measured there: "
+                       f"{why} ({crit}).")
     return text + (f"**Not converged**: the budget of {m['fit_budget']} points ran out "
                    f"({crit}, from a Broyden-updated Jacobian); the best point found, not a "
                    f"proven minimum.")

@@ -12,7 +12,9 @@ For the git revision ``--baseline REV`` and for the working tree, alternately (:
 
 Each is timed (wall) with the CPU time of the process tree (children's rusage); the warm and
 cold reports also give every section's wall time (``metrics.json``) and CPU time (where the
-version records it).  The cold minus the warm report is the compilation.  Finally the CSVs of
+version records it).  ``--sections`` instead measures the CPU time of every section of the
+full report run alone, one after the other in one process per version (one BLAS thread,
+the kernels cached by a first run), the same measurement for both versions.  The cold minus the warm report is the compilation.  Finally the CSVs of
 the two versions' warm reports are compared: identical files, and for the others the largest
 relative difference per numeric column (a timing column is expected to differ).
 
@@ -20,6 +22,7 @@ Absolute times mean something only on a quiet machine (the load averages are pri
 and after each run); the ratios are measured side by side.
 
 Run:  python studies/bench/bench_report.py --baseline REV [--rounds N] [--skip-cold]
+      python studies/bench/bench_report.py --baseline REV --sections
 """
 
 import argparse
@@ -110,16 +113,72 @@ def compare_csvs(a: Path, b: Path) -> tuple:
     return same, diff
 
 
+def measure_sections() -> dict:
+    """CPU time [s] of each section of the full report, run alone one after the other here."""
+    from threadpoolctl import threadpool_limits
+
+    from ppamsafety.sections import REGISTRY, run_section
+
+    def cpu():
+        me, kids = (resource.getrusage(resource.RUSAGE_SELF),
+                    resource.getrusage(resource.RUSAGE_CHILDREN))
+        return me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime
+
+    threadpool_limits(limits=1)
+    out = {}
+    with tempfile.TemporaryDirectory() as d:
+        for name in REGISTRY:
+            c0 = cpu()
+            run_section(name, d)
+            out[name] = cpu() - c0
+    return out
+
+
+def sections_side_by_side(trees: dict, work: Path) -> None:
+    from baseline import run                              # the bench folder's helper
+
+    me = str(Path(__file__).resolve())
+    res = {}
+    for name, tree in trees.items():
+        cache = work / f"cache-sections-{name}"
+        env = {"PPAMSAFETY_CACHE_DIR": str(cache)}
+        run(tree, [me, "--measure-sections"], env=env)      # compiles the kernels
+        la = load()
+        res[name] = run(tree, [me, "--measure-sections"], env=env)
+        print(f"{name}: {sum(res[name].values()):.1f} s of CPU (load before {la}, after "
+              f"{load()})", flush=True)
+    print("\n| section | baseline CPU [s] | now CPU [s] | ratio |\n|---|---|---|---|")
+    for s in res["now"]:
+        b, n = res["baseline"].get(s), res["now"][s]
+        print(f"| {s} | {b:.1f} | {n:.1f} | {b / n:.2f} |" if b else f"| {s} | - | {n:.1f} | |")
+    b, n = sum(res["baseline"].values()), sum(res["now"].values())
+    print(f"| total | {b:.1f} | {n:.1f} | {b / n:.2f} |")
+
+
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--baseline", metavar="REV", required=True,
+    p.add_argument("--baseline", metavar="REV",
                    help="the earlier version (a git revision)")
     p.add_argument("--rounds", type=int, default=1, help="alternating rounds")
     p.add_argument("--skip-cold", action="store_true", help="no cold reports")
     p.add_argument("--keep", metavar="DIR", help="keep the reports in DIR/<version>")
+    p.add_argument("--sections", action="store_true",
+                   help="CPU time of each section run alone, per version")
+    p.add_argument("--measure-sections", action="store_true", help=argparse.SUPPRESS)
     args = p.parse_args(argv)
+    if args.measure_sections:
+        print(json.dumps(measure_sections()))
+        return
+    if not args.baseline:
+        p.error("--baseline REV is required")
     trees = {"baseline": checkout(args.baseline), "now": HERE}
     work = Path(tempfile.mkdtemp(prefix="bench-report-"))
+    if args.sections:
+        try:
+            sections_side_by_side(trees, work)
+        finally:
+            shutil.rmtree(work, ignore_errors=True)
+        return
     res = {k: [] for k in trees}
     print(f"baseline {args.baseline} ({trees['baseline'].name[:12]}) vs the working tree; "
           f"work folder {work}; load {load()}", flush=True)
