@@ -42,6 +42,7 @@ from ._commandline import EXIT_FAILURE, EXIT_OK, EXIT_USAGE
 from ._commandline import Parser as _Parser
 from ._commandline import _split_multi_value, run_guarded  # noqa: F401  (tests use both)
 from ._validation import SEED_MAX, did_you_mean
+from ._version import __version__
 from .output import atomic_write, check_new_file, inspect_output_folder
 from .units import BAR, DEG
 
@@ -603,6 +604,7 @@ def build_parser() -> argparse.ArgumentParser:
         description="Safety and impact analysis of a 2-DOF arm driven by pleated pneumatic "
                     "artificial muscles (PPAMs).",
         epilog=_EPILOG)
+    p.add_argument("--version", action="version", version=f"ppamsafety {__version__}")
     sub = p.add_subparsers(dest="command", required=True)
     r = sub.add_parser("report", help="regenerate the report folder from scratch", epilog=_EPILOG)
     r.add_argument("--outdir", type=_path, default="reports",
