@@ -123,8 +123,8 @@ from .params.arm_file import ArmFileError, arm_key, arm_to_toml, read_value
 from .plots.figure import save as save_figure
 from .plots.sweep import plot_sweep
 from .sweep import BACKENDS, run_sweep
-from .sweep_cases import (DEFAULTS, IMPACT_POSE_DEG, PARAMETERS, SPEED_MAX, case_arm,
-                          case_function, check_case, check_impact_case, is_dotted)
+from .sweep_cases import (DEFAULTS, IMPACT_POSE_DEG, PARAMETERS, SPEED_MAX, add_verdicts,
+                          case_arm, case_function, check_case, check_impact_case, is_dotted)
 from .units import si_factor
 
 #: Allowed keys per table of a study file.
@@ -1134,6 +1134,7 @@ def run_study_file(study, outdir, *, backend: str = "local", scheduler=None,
             df = run_sweep(case_function(st.arm, st.head), cases, name=st.name, cache_dir=cache,
                            processes=processes, progress=progress, on_error="record",
                            backend=backend, scheduler=scheduler)
+            df = add_verdicts(df, head=st.head)
         if "time_histories" in df.columns:
             _write_histories(df, stage / "histories")
             # the frames are in histories/; the flag is [output], not a parameter of the cases
