@@ -144,7 +144,8 @@ class SafetyEnvelope:
         The unsafe end of that bracket (None when the whole range is safe).
     direction : str
         ``"largest"`` (safe below the boundary), ``"smallest"`` (safe above it),
-        ``"all safe"`` or ``"none safe"``.
+        ``"all safe"``, ``"none safe"`` or ``"inside"`` (neither end of the range is safe:
+        safe between two crossings).
     monotone : bool
         The evaluations are consistent with one crossing.
     evaluations : pandas.DataFrame
@@ -160,7 +161,12 @@ class SafetyEnvelope:
     margin : float or None
         Limit - result at :attr:`safe_value` (in the limit's unit).
     min_margin : float or None
-        The smallest margin over the evaluations inside the safe range reported.
+        The smallest margin over the scan's values inside the safe range reported (the
+        bisection's values near the boundary excluded: their margin is small by
+        construction).
+    safe_ranges : list of (float, float)
+        Every stretch of the searched range the evaluations show safe (ends: a bound of
+        the range or the safe end of a crossing's bracket).
     head : str
         The head model the results were computed with.
     region : str
@@ -184,6 +190,7 @@ class SafetyEnvelope:
     min_margin: float | None = None
     head: str = ""
     region: str = ""
+    safe_ranges: list = field(default_factory=list)
 
     @property
     def unit(self) -> str:
@@ -208,11 +215,18 @@ class SafetyEnvelope:
         if self.direction == "none safe":
             return (f"{self.metric} reaches {self.limit_label} everywhere in {self.parameter} "
                     f"in [{lo:.4g}, {hi:.4g}]{with_head}")
+        if self.direction == "inside":
+            where = " and ".join(f"[{a:.4g}, {b:.4g}]" for a, b in self.safe_ranges)
+            return (f"safe only for {self.parameter} in {where} (both ends of [{lo:.4g}, "
+                    f"{hi:.4g}] unsafe): {self.metric} below {self.limit_label}{with_head}; "
+                    f"margin {self.margin:.4g}{u} at {self.safe_value:.4g}"
+                    + (f", at least {self.min_margin:.4g}{u} inside"
+                       if self.min_margin is not None else ""))
         rel = "<=" if self.direction == "largest" else ">="
         return (f"safe for {self.parameter} {rel} {self.safe_value:.4g} (unsafe at "
                 f"{self.unsafe_value:.4g}): {self.metric} below {self.limit_label}{with_head}; "
                 f"margin {self.margin:.4g}{u} at the boundary"
-                + (f", at least {self.min_margin:.4g}{u} over the safe range evaluated"
+                + (f", at least {self.min_margin:.4g}{u} at the scan values of the safe range"
                    if self.min_margin is not None else ""))
 
     def lines(self) -> list:
@@ -220,8 +234,14 @@ class SafetyEnvelope:
         u = f" {self.unit}" if self.unit else ""
         out = [self.description]
         if len(self.crossings) > 1:
-            out.append(f"the limit is crossed {len(self.crossings)} times (not monotone): the "
-                       f"answer above is the safe range from the safe end of the range")
+            out.append(f"the limit is crossed {len(self.crossings)} times (not monotone): safe "
+                       f"for {self.parameter} in " + " and ".join(
+                           f"[{a:.4g}, {b:.4g}]" for a, b in self.safe_ranges))
+        if self.min_margin is not None and self.min_margin < FLAT_FRACTION * self.limit_value:
+            out.append(f"NARROW: the smallest margin at the scan values of the safe range is "
+                       f"{self.min_margin:.3g}{u}, {100 * self.min_margin / self.limit_value:.2g} % "
+                       f"of the limit: the verdict hangs on less than {FLAT_FRACTION:.0%} of "
+                       f"the limit")
         for c in self.crossings:
             out.append(f"  crossing in {self.parameter} between {c['safe_value']:.6g} (safe, "
                        f"{self.metric} {c['result_safe']:.5g}{u}, margin {c['margin']:+.3g}{u}) "
@@ -386,9 +406,8 @@ def safety_envelope(parameter: str, bounds, *, limit: str = "F_max", limit_value
     hname = (head.name if isinstance(head, HeadContactModel) else
              base["head"].name if isinstance(base.get("head"), HeadContactModel) else
              str(base.get("head", head_model().name)))
-    rows = []
 
-    def evaluate(values, rnd):
+    def evaluate(values):
         cases = [{**base, parameter: float(v)} for v in values]
         with warnings.catch_warnings():      # a failed case is reported by the envelope itself
             warnings.filterwarnings("ignore", message=r"sweep .* cases? failed",
@@ -396,19 +415,95 @@ def safety_envelope(parameter: str, bounds, *, limit: str = "F_max", limit_value
             df = run_sweep(func, cases, name=f"{name}-{parameter}-{lim.metric}",
                            processes=procs, progress=progress, on_error="record",
                            cache_dir=cache_dir)
+        return [(r.get("status", "ok"), r.get("error", ""),
+                 float(r[lim.metric]) if r.get("status", "ok") == "ok" else math.nan)
+                for _, r in df.iterrows()]
+
+    found = _search(evaluate, lo, hi, lim.value, lim.metric, parameter=parameter,
+                    tolerance=tolerance, scan=scan, max_rounds=max_rounds, points=procs)
+    return SafetyEnvelope(parameter=parameter, limit=limit, metric=lim.metric,
+                          limit_value=lim.value, limit_label=lim.label, bounds=(lo, hi),
+                          tolerance=tolerance, head=hname, region=reg.name, **found)
+
+
+def search_envelope(func, bounds, *, limit_value: float, metric: str = "F_max",
+                    parameter: str = "x", limit_label: str = "", tolerance: float = 0.01,
+                    scan: int = SCAN, max_rounds: int = 20) -> SafetyEnvelope:
+    """The envelope search of :func:`safety_envelope` on any function of one parameter.
+
+    Parameters
+    ----------
+    func : callable
+        ``func(value) -> result`` (a finite number in the limit's unit).
+    bounds : pair of float
+        The range searched, low < high.
+    limit_value : float, keyword-only
+        The limit (strict: a result below it is safe), positive.
+    metric : str, keyword-only
+        Name of the result.
+    parameter : str, keyword-only
+        Name of the parameter.
+    limit_label : str, keyword-only
+        What the limit is.
+    tolerance, scan, max_rounds : keyword-only
+        As :func:`safety_envelope`.
+
+    Returns
+    -------
+    SafetyEnvelope
+    """
+    if not callable(func):
+        raise TypeError(f"func must be callable, got {type(func).__name__}")
+    if not (isinstance(bounds, (list, tuple)) and len(bounds) == 2):
+        raise ValueError(f"bounds = {bounds!r} must be a pair (low, high)")
+    lo = check_range("bounds[0]", bounds[0], -1e12, 1e12)
+    hi = check_range("bounds[1]", bounds[1], -1e12, 1e12)
+    if not lo < hi:
+        raise ValueError(f"bounds = ({lo:g}, {hi:g}): low must be smaller than high")
+    lv = check_range("limit_value", limit_value, 0.0, 1e12, lo_open=True)
+    tolerance = check_range("tolerance", tolerance, 1e-6, 0.5)
+    scan = check_int("scan", scan, 2, 1000)
+    max_rounds = check_int("max_rounds", max_rounds, 1, 100)
+
+    def evaluate(values):
+        out = []
+        for v in values:
+            try:
+                m = float(func(v))
+            except (TypeError, ValueError) as exc:
+                out.append(("failed", f"{type(exc).__name__}: {exc}", math.nan))
+                continue
+            out.append(("ok", "", m) if math.isfinite(m) else
+                       ("failed", f"ValueError: result {m}", math.nan))
+        return out
+
+    found = _search(evaluate, lo, hi, lv, metric, parameter=parameter, tolerance=tolerance,
+                    scan=scan, max_rounds=max_rounds, points=1)
+    return SafetyEnvelope(parameter=parameter, limit="", metric=metric, limit_value=lv,
+                          limit_label=limit_label or f"{lv:g}", bounds=(lo, hi),
+                          tolerance=tolerance, **found)
+
+
+def _search(evaluate, lo, hi, limit_value, metric, *, parameter, tolerance, scan, max_rounds,
+            points) -> dict:
+    """Scan, bracket every crossing, and the margins (the fields of a SafetyEnvelope).
+
+    ``evaluate(values) -> [(status, error, result), ...]``.
+    """
+    rows = []
+
+    def run(values, rnd):
         new = []
-        for v, (_, r) in zip(values, df.iterrows()):
-            ok = r.get("status", "ok") == "ok"
-            m = float(r[lim.metric]) if ok else math.nan
-            new.append({"round": rnd, "value": float(v), "status": r.get("status", "ok"),
-                        "error": r.get("error", ""), lim.metric: m,
-                        "margin": lim.value - m, "safe": bool(ok and m < lim.value)})
+        for v, (status, error, m) in zip(values, evaluate(values)):
+            new.append({"round": rnd, "value": float(v), "status": status, "error": error,
+                        metric: m, "margin": limit_value - m,
+                        "safe": bool(status == "ok" and m < limit_value)})
         rows.extend(new)
         return new
 
     pts = [lo + (hi - lo) * i / (scan - 1) for i in range(scan)]
     pts[-1] = hi
-    res = evaluate(pts, 0)
+    res = run(pts, 0)
     for r in res:
         if r["status"] != "ok":
             raise ValueError(f"{parameter} = {r['value']:g} cannot be evaluated ({r['error']}); "
@@ -419,14 +514,14 @@ def safety_envelope(parameter: str, bounds, *, limit: str = "F_max", limit_value
         if ra["safe"] == rb["safe"]:
             continue
         a, b = (ra, rb) if ra["safe"] else (rb, ra)          # a safe, b unsafe
-        spread = abs(ra[lim.metric] - rb[lim.metric])
+        spread = abs(ra[metric] - rb[metric])
         for rnd in range(1, max_rounds + 1):
             if abs(b["value"] - a["value"]) <= tolerance * max(abs(a["value"]),
                                                                 abs(b["value"]), 1e-300):
                 break
-            inner = [a["value"] + (b["value"] - a["value"]) * (k + 1) / (procs + 1)
-                     for k in range(procs)]
-            got = evaluate(inner, rnd)
+            inner = [a["value"] + (b["value"] - a["value"]) * (k + 1) / (points + 1)
+                     for k in range(points)]
+            got = run(inner, rnd)
             failed = [r for r in got if r["status"] != "ok"]
             if failed:
                 raise ValueError(f"{parameter} = {failed[0]['value']:g} cannot be evaluated "
@@ -437,9 +532,9 @@ def safety_envelope(parameter: str, bounds, *, limit: str = "F_max", limit_value
                     break
                 a = r
         crossings.append({"safe_value": a["value"], "unsafe_value": b["value"],
-                          "result_safe": a[lim.metric], "result_unsafe": b[lim.metric],
-                          "margin": lim.value - a[lim.metric], "spread": spread,
-                          "flat": bool(spread < FLAT_FRACTION * lim.value)})
+                          "result_safe": a[metric], "result_unsafe": b[metric],
+                          "margin": limit_value - a[metric], "spread": spread,
+                          "flat": bool(spread < FLAT_FRACTION * limit_value)})
     s_lo, s_hi = res[0]["safe"], res[-1]["safe"]
     ev = pd.DataFrame(rows)
     ok = ev[ev.status == "ok"].sort_values("value")
@@ -448,30 +543,44 @@ def safety_envelope(parameter: str, bounds, *, limit: str = "F_max", limit_value
     if not crossings:
         direction = "all safe" if s_lo else "none safe"
         # all safe: the end nearest the limit (the most aggressive safe value) is the envelope
-        safe = (hi if res[-1][lim.metric] >= res[0][lim.metric] else lo) if s_lo else None
+        safe = (hi if res[-1][metric] >= res[0][metric] else lo) if s_lo else None
         unsafe = None
-        margin = None if safe is None else lim.value - max(res[0][lim.metric],
-                                                             res[-1][lim.metric])
-        min_margin = float(ok["margin"].min()) if s_lo else None
+        margin = None if safe is None else limit_value - max(res[0][metric], res[-1][metric])
+        min_margin = float(ok[ok["round"] == 0]["margin"].min()) if s_lo else None
     else:
         # the safe range that starts at a safe end of the searched range; if neither end is
-        # safe, the first safe stretch from the low end
-        if s_lo or not s_hi:
-            c = crossings[0]
-            direction = "largest" if c["safe_value"] < c["unsafe_value"] else "smallest"
+        # safe, the first safe stretch from the low end (between two crossings)
+        if s_lo:
+            c, direction = crossings[0], "largest"
+            inside = ok[ok.value <= c["safe_value"]]
+        elif s_hi:
+            c, direction = crossings[-1], "smallest"
+            inside = ok[ok.value >= c["safe_value"]]
         else:
-            c = crossings[-1]
-            direction = "smallest"
+            c, direction = crossings[0], "inside"
+            end = crossings[1]["safe_value"] if len(crossings) > 1 else c["safe_value"]
+            inside = ok[(ok.value >= c["safe_value"]) & (ok.value <= end)]
         safe, unsafe, margin = c["safe_value"], c["unsafe_value"], c["margin"]
-        inside = ok[(ok.value <= safe) if direction == "largest" else (ok.value >= safe)]
-        inside = inside[inside.safe]
+        inside = inside[inside.safe & (inside["round"] == 0)]       # the scan's values
         min_margin = float(inside["margin"].min()) if len(inside) else None
-    return SafetyEnvelope(parameter=parameter, limit=limit, metric=lim.metric,
-                          limit_value=lim.value, limit_label=lim.label, bounds=(lo, hi),
-                          safe_value=safe, unsafe_value=unsafe, direction=direction,
-                          monotone=monotone, evaluations=ev, tolerance=tolerance,
-                          crossings=crossings, margin=margin, min_margin=min_margin,
-                          head=hname, region=reg.name)
+    # the safe ranges the evaluations show: from a safe end or a crossing's safe end to the
+    # next crossing's safe end or a safe end of the range
+    marks = sorted([(c["safe_value"], c["unsafe_value"]) for c in crossings])
+    ranges, start = [], (lo if s_lo else None)
+    for sv, uv in marks:
+        if sv < uv:                               # safe below this crossing: a range ends
+            ranges.append((lo if start is None else start, sv))
+            start = None
+        else:                                     # safe above it: a range starts
+            start = sv
+    if start is not None or (s_hi and not marks):
+        ranges.append((lo if start is None else start, hi))
+    if not ranges and s_lo:
+        ranges = [(lo, hi)]
+    return {"safe_value": safe, "unsafe_value": unsafe, "direction": direction,
+            "safe_ranges": ranges,
+            "monotone": monotone, "evaluations": ev, "crossings": crossings, "margin": margin,
+            "min_margin": min_margin}
 
 
 def _cores() -> int:
@@ -482,4 +591,4 @@ def _cores() -> int:
 
 
 __all__ = ["Limit", "LIMITS", "NUMERIC", "SCAN", "FLAT_FRACTION", "SafetyEnvelope",
-           "safety_envelope", "check_bounds", "resolve_limit"]
+           "safety_envelope", "search_envelope", "check_bounds", "resolve_limit"]

@@ -213,7 +213,13 @@ def criterion(name: str, region=None) -> Criterion:
 
 
 def criterion_names(region=None) -> list:
-    """Names :func:`criterion` accepts for a region (aliases included)."""
+    """Names :func:`criterion` accepts for a region (aliases included).
+
+    Parameters
+    ----------
+    region : optional
+        The body region (default ``"skull/forehead"``).
+    """
     names = [c.name for c in criteria_for(region)]
     names += [c.name for c in criteria_for(region, contact="quasi-static") if c.name not in names]
     return names + [a for a, k in ALIASES.items() if k in names]
@@ -247,7 +253,13 @@ class Verdicts:
         return bool(self.table["passed"].all())
 
     def governing(self, head: str | None = None) -> pd.Series:
-        """The row of the smallest relative margin (of one head model, default the first)."""
+        """The row of the smallest relative margin of one head model.
+
+        Parameters
+        ----------
+        head : str, optional
+            The head model's name (default the first of the table).
+        """
         t = self.table
         h = t["head_model"].iloc[0] if head is None else head
         sub = t[t["head_model"] == h]
@@ -379,7 +391,13 @@ def annex_a_head(region=None) -> HeadContactModel:
 
 
 def describe_head(h: HeadContactModel) -> str:
-    """One phrase: the contact law and mass of a head model."""
+    """One phrase: the contact law and mass of a head model.
+
+    Parameters
+    ----------
+    h : HeadContactModel
+        The head model.
+    """
     if h.exponent == 1.0 and h.damping == 0.0:
         return f"linear spring {h.stiffness / 1e3:g} N/mm, {h.mass:g} kg"
     return (f"Hunt-Crossley k = {h.stiffness:.3g} N/m^{h.exponent:g}, n = {h.exponent:g}, "

@@ -296,14 +296,26 @@ class BodyRegion:
         return self.pressure_transient_factor * self.pressure_quasi_static
 
     def source_of(self, name: str) -> str:
-        """Citation of one value (a key of :data:`VALUE_FIELDS`)."""
+        """Citation of one value.
+
+        Parameters
+        ----------
+        name : str
+            A key of :data:`VALUE_FIELDS`.
+        """
         if name not in VALUE_FIELDS:
             raise ValueError(f"name = {name!r}: not a value of a body region; choose from "
                              f"{list(VALUE_FIELDS)}")
         return dict(self.sources).get(name, self.source)
 
     def confirmed(self, name: str) -> bool:
-        """Whether a public source we read confirms one value (module docstring)."""
+        """Whether a public source we read confirms one value (module docstring).
+
+        Parameters
+        ----------
+        name : str
+            A key of :data:`VALUE_FIELDS`.
+        """
         self.source_of(name)
         return name not in self.unconfirmed
 
