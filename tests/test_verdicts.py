@@ -326,3 +326,13 @@ def test_the_same_question_gets_the_same_answer_from_envelope_sweep_and_report()
              & (lt.region == "skull/forehead")].iloc[0]
     assert row.head_model == "iso15066-skull-4.4kg" and row.hc_head_model == "thesis-frontal"
     assert row.lambda_min_force_hc < row.lambda_min_force
+
+
+def test_the_docs_list_every_region_value_with_its_source():
+    from pathlib import Path
+    from ppamsafety.params.iso_ts_15066 import annex_a_table
+
+    doc = (Path(__file__).parent.parent / "docs" / "body_regions.md").read_text()
+    assert annex_a_table() in doc
+    for c in criteria_for():
+        assert f"`{c.name}`" in doc

@@ -693,7 +693,30 @@ def resolve_region(region=None) -> BodyRegion:
                     f"BodyRegion, got {type(region).__name__} {region!r:.60}")
 
 
-__all__ = ["BodyRegion", "PainThreshold", "SKULL_FOREHEAD", "FACE", "body_region",
+def annex_a_table() -> str:
+    """The 29 locations with every value and which transcriptions confirm it (Markdown).
+
+    ``docs/body_regions.md`` holds this table (a test keeps it equal).
+
+    Returns
+    -------
+    str
+        A Markdown table, one row per Annex A body location.
+    """
+    head = ("| # | body region | location | name in the toolkit | p_qs [N/cm^2] | F_qs [N] | "
+            "transient factor | F_transient [N] | K [N/mm] | m_H [kg] | confirmed by |\n"
+            "|---|---|---|---|---|---|---|---|---|---|---|\n")
+    rows = []
+    for number, region, location, name, p, p_by in LOCATIONS:
+        short, F, K, m, in_ts, hd, F_by, K_by, m_by = REGIONS[region]
+        fac = "2" if in_ts else "none in the TS (2 by analogy, unconfirmed)"
+        rows.append(f"| {number} | {region} | {location} | `{name}` | {p:g} | {F:g} | {fac} | "
+                    f"{2 * F:g} | {K:g} | {m:g} | p: {', '.join(p_by)}; F: {', '.join(F_by)}; "
+                    f"K: {', '.join(K_by)}; m_H: {', '.join(m_by)} |")
+    return head + "\n".join(rows) + "\n"
+
+
+__all__ = ["annex_a_table", "BodyRegion", "PainThreshold", "SKULL_FOREHEAD", "FACE", "body_region",
            "body_region_names", "resolve_region", "load_region", "REGIONS", "LOCATIONS",
            "VALUE_FIELDS", "REGION_FORMAT", "TRANSCRIPTIONS", "THESIS_ARM_MASS", "SOURCE",
            "N_PER_CM2", "N_PER_MM"]
