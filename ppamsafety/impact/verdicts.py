@@ -119,7 +119,7 @@ class Criterion:
         """
         unit = f" {self.unit}" if self.unit else ""
         return Criterion(self.name, self.metric, float(value), self.kind,
-                         f"{self.label.split(' (')[0]} set to {float(value):g}{unit}", source,
+                         f"{float(value):g}{unit} (chosen, in place of {self.label})", source,
                          False, self.region)
 
 

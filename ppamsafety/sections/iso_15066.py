@@ -546,11 +546,16 @@ def compute(*, quick: bool = False, arm=None, head=None) -> IsoStudy:
                     arm=arm, head=hc)
 
 
-def _fmt_lam(lam, at_min, adm):
+def _fmt_lam(lam, at_min, adm, lams):
+    """The answer on the lambda grid: the bracket of grid values, then the interpolation."""
     if lam != lam:
         return "no lambda of the grid meets it"
-    return (f"already the smallest grid lambda {lam:.3g} s meets it" if at_min else
-            f"lambda >= {lam:.3g} s") + f" (grid values that meet it: {adm})"
+    if at_min:
+        return f"already the smallest grid lambda {lam:.3g} s meets it (grid values: {adm})"
+    ok = [float(x) for x in str(adm).split()]
+    below = [x for x in lams if x < ok[0]]
+    return (f"the crossing lies between the grid values {below[-1]:g} s (fails) and {ok[0]:g} s "
+            f"(passes), log-linear interpolation {lam:.3g} s (grid values that meet it: {adm})")
 
 
 def _two_heads(study: IsoStudy) -> list:
@@ -561,6 +566,7 @@ def _two_heads(study: IsoStudy) -> list:
         return []
     iso = _iso_head(SKULL_FOREHEAD)
     hc = study.head if study.head is not None else head_model()
+    lams = sorted(study.lambdas)
     out = ["**The same question with two head models.** Is a PSMC family safe against the "
            "forehead limits? The answer depends on the head model, so both are given (the "
            "same verdicts as `ppamsafety impact`, the sweeps and the envelopes, "
@@ -571,15 +577,20 @@ def _two_heads(study: IsoStudy) -> list:
         which = ("transient contact" if r.factor > 1 else "quasi-static force, the TS reading "
                  "for the head")
         out.append(f"* {r.family}, {r.F_limit:g} N ({which}): with `{r.head_model}` "
-                   f"{_fmt_lam(r.lambda_min_force, r.at_grid_min, r.admissible_grid)}; with "
-                   f"`{r.hc_head_model}` "
-                   f"{_fmt_lam(r.lambda_min_force_hc, r.at_grid_min_hc, r.admissible_grid_hc)}.")
+                   f"{_fmt_lam(r.lambda_min_force, r.at_grid_min, r.admissible_grid, lams)}; "
+                   f"with `{r.hc_head_model}` "
+                   f"{_fmt_lam(r.lambda_min_force_hc, r.at_grid_min_hc, r.admissible_grid_hc, lams)}"
+                   f".")
     out += ["", "The two answers differ because the contact law and the struck mass set the "
             "force at a given speed: at these speeds the Hunt-Crossley head (fitted to Table "
             "6.1) is softer than the 150 N/mm spring with 4.4 kg (the crossover speed is in the "
             "next paragraph). The transient forehead limit 2 x 130 N is not in the TS (it gives "
             "no transient value for the skull and face, see `ppamsafety.params.iso_ts_15066`); "
-            "the quasi-static 130 N rows are the TS reading.", ""]
+            "the quasi-static 130 N rows are the TS reading. The grid brackets each answer; a "
+            "safety envelope brackets the crossing of one experiment to any tolerance with "
+            "the same verdicts (e.g. `ppamsafety sweep studies/psmc_forehead_envelope.toml`; "
+            "for the Annex A body model `safety_envelope(..., "
+            "head=ppamsafety.impact.verdicts.annex_a_head())`).", ""]
     return out
 
 
