@@ -385,12 +385,7 @@ def safety_envelope(parameter: str, bounds, *, limit: str = "F_max", limit_value
         lim = resolve_limit(limit, limit_value, reg)
     except ValueError as exc:
         raise ValueError(str(exc)) from None
-    if not (isinstance(bounds, (list, tuple)) and len(bounds) == 2):
-        raise ValueError(f"bounds = {bounds!r} must be a pair (low, high)")
-    lo = check_range("bounds[0]", bounds[0], -1e12, 1e12)
-    hi = check_range("bounds[1]", bounds[1], -1e12, 1e12)
-    if not lo < hi:
-        raise ValueError(f"bounds = ({lo:g}, {hi:g}): low must be smaller than high")
+    lo, hi = _bounds(bounds)
     tolerance = check_range("tolerance", tolerance, 1e-6, 0.5)
     scan = check_int("scan", scan, 2, 1000)
     max_rounds = check_int("max_rounds", max_rounds, 1, 100)
@@ -454,12 +449,7 @@ def search_envelope(func, bounds, *, limit_value: float, metric: str = "F_max",
     """
     if not callable(func):
         raise TypeError(f"func must be callable, got {type(func).__name__}")
-    if not (isinstance(bounds, (list, tuple)) and len(bounds) == 2):
-        raise ValueError(f"bounds = {bounds!r} must be a pair (low, high)")
-    lo = check_range("bounds[0]", bounds[0], -1e12, 1e12)
-    hi = check_range("bounds[1]", bounds[1], -1e12, 1e12)
-    if not lo < hi:
-        raise ValueError(f"bounds = ({lo:g}, {hi:g}): low must be smaller than high")
+    lo, hi = _bounds(bounds)
     lv = check_range("limit_value", limit_value, 0.0, 1e12, lo_open=True)
     tolerance = check_range("tolerance", tolerance, 1e-6, 0.5)
     scan = check_int("scan", scan, 2, 1000)
@@ -581,6 +571,17 @@ def _search(evaluate, lo, hi, limit_value, metric, *, parameter, tolerance, scan
             "safe_ranges": ranges,
             "monotone": monotone, "evaluations": ev, "crossings": crossings, "margin": margin,
             "min_margin": min_margin}
+
+
+def _bounds(bounds) -> tuple:
+    """The checked range (low, high) of a search."""
+    if not (isinstance(bounds, (list, tuple)) and len(bounds) == 2):
+        raise ValueError(f"bounds = {bounds!r} must be a pair (low, high)")
+    lo = check_range("bounds[0]", bounds[0], -1e12, 1e12)
+    hi = check_range("bounds[1]", bounds[1], -1e12, 1e12)
+    if not lo < hi:
+        raise ValueError(f"bounds = ({lo:g}, {hi:g}): low must be smaller than high")
+    return lo, hi
 
 
 def _cores() -> int:

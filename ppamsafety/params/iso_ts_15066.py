@@ -32,8 +32,8 @@ and pages; :data:`TRANSCRIPTIONS`):
   (150 N/mm) and the face (75 N/mm).
 
 So the transient limits of the two head regions are *not* in the TS: the
-factor 2 used for them (260 N at the forehead, the limit the thesis-era
-outputs quote) is an analogy with the other regions and is flagged
+factor 2 used for them (260 N at the forehead, the limit the report
+quotes) is an analogy with the other regions and is flagged
 unconfirmed in :attr:`BodyRegion.unconfirmed`; every head verdict is also
 given against the quasi-static force (factor 1), the reading of the TS.
 
@@ -56,7 +56,6 @@ The full table of values with their sources is ``docs/body_regions.md``.
 from __future__ import annotations
 
 import math
-import tomllib
 import types
 from dataclasses import dataclass
 from pathlib import Path
@@ -64,7 +63,7 @@ from pathlib import Path
 from .._inputfiles import read_text
 from .._validation import check_range, check_str, did_you_mean
 from ..units import si_factor
-from .arm_file import ArmFileError, _literal
+from .arm_file import ArmFileError, _literal, parse_document
 
 #: Citation of the Annex used by every value of this module.
 SOURCE = "ISO/TS 15066:2016, Annex A (informative), Tables A.2 and A.3"
@@ -373,17 +372,7 @@ class BodyRegion:
         ArmFileError
             A ``ValueError`` naming the key, its value and what is allowed.
         """
-        if not isinstance(text, str):
-            raise TypeError(f"text must be the TOML text (a str), got {type(text).__name__}")
-        pre = f"{where}: " if where else ""
-        try:
-            data = tomllib.loads(text)
-        except tomllib.TOMLDecodeError as exc:
-            raise ArmFileError(f"{pre}not valid TOML ({exc})") from None
-        try:
-            return _region_from_dict(data)
-        except ArmFileError as exc:
-            raise ArmFileError(f"{pre}{exc}") from None
+        return parse_document(text, _region_from_dict, where=where)
 
 
 #: The ``format`` string of a region file.
