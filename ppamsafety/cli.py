@@ -323,6 +323,8 @@ def _cmd_sweep(args) -> int:
                             overwrite=args.overwrite, max_cases=args.max_cases,
                             progress=not args.no_progress, confirm=args.yes,
                             replace_kind=args.replace_other_kind)
+    for line in df.attrs.get("envelope_lines", ()):
+        print(line)
     failed = int((df["status"] == "failed").sum()) if "status" in df.columns else 0
     print(f"results written to {args.out}/{study.csv} ({len(df) - failed} ok, {failed} failed); "
           f"summary: {args.out}/summary.html")
@@ -475,12 +477,16 @@ def _cmd_synthesize(args) -> int:
 def _cmd_impact(args) -> int:
     from .impact.head import head_model
     from .impact.model import simulate_impacts
+    from .impact.verdicts import impact_verdicts
+    from .params.iso_ts_15066 import resolve_region
     from .params import thesis_arm
 
     if args.history is not None:        # fail before simulating, not after
         check_new_file(args.history, overwrite=args.overwrite, name="--history")
     arm = _arm_of(args) or thesis_arm()
     head = _head_of(args) or head_model()
+    with _named("--region", args.region):
+        region = resolve_region(args.region)
     q = np.array(args.q, dtype=float) * DEG
     with _options(q="--q", qd="--qd", stiffness="--stiffness", head="--head", dt="--dt"):
         res = simulate_impacts(arm, q, args.qd, args.stiffness, head=head, dt=args.dt,
@@ -499,6 +505,10 @@ def _cmd_impact(args) -> int:
     print(f"HIC15           {s.HIC15:.4g}  window [{1e3 * s.HIC15_t1:.3g}, {1e3 * s.HIC15_t2:.3g}] ms")
     print(f"max penetration {1e3 * s.delta_max:.4g} mm, peak head acceleration {s.a_max_g:.4g} g")
     print(f"energy to head  {s.E_head_final:.4g} J of {s.E_initial:.4g} J")
+    verdicts = impact_verdicts(arm, q, args.qd, args.stiffness, head=head, dt=args.dt,
+                               region=region)
+    for line in verdicts.lines():
+        print(line)
     if args.history is not None:
         hist = res.histories[0]
         atomic_write(args.history, lambda tmp: hist.to_csv(tmp, index=False),
@@ -783,6 +793,10 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
     m.add_argument("--dt", type=_positive, default=2e-5, help="integration step [s], > 0")
     m.add_argument("--history", type=_path, default=None, metavar="FILE",
                    help="write the time history to this new CSV file")
+    m.add_argument("--region", default="skull/forehead", metavar="NAME|FILE",
+                   help="body region of the verdicts: an ISO/TS 15066 Annex A location "
+                        "(skull/forehead, face, chest/sternum ...; docs/body_regions.md), its "
+                        "number 1-29, or a region file (TOML); default skull/forehead")
     m.add_argument("--overwrite", action="store_true",
                    help="allow --history to replace an existing file")
     _add_arm_head(m)

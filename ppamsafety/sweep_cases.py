@@ -46,6 +46,7 @@ from .experiments.metrics import tracking_stats
 from .impact.head import HeadContactModel, head_model_names, head_model
 from .impact.instants import HEURISTICS, evaluate_experiment, heuristic_instants, impact_states
 from .impact.engine import FREE_STRIDE
+from .impact.verdicts import criteria_for, evaluate
 from .impact.model import simulate_impacts, stiffness_limit
 from .params import ArmParameters, thesis_arm
 from .params.arm_file import ArmFileError, apply_arm_changes, effects_from_dict
@@ -752,6 +753,61 @@ def case_function(arm=None, head=None, *, kind: str = "safety"):
     return functools.partial(func, **kw) if kw else func
 
 
+def add_verdicts(df: pd.DataFrame, criteria=None, *, region=None, head=None) -> pd.DataFrame:
+    """A sweep's result table with the verdict of every case against the criteria.
+
+    The same verdicts as ``ppamsafety impact``, the envelopes and the report
+    (:func:`ppamsafety.impact.verdicts.evaluate`).
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        Result rows with ``F_max``/``HIC36``/``HIC15`` (failed rows get no verdict).
+    criteria : sequence of Criterion, optional
+        Default :func:`~ppamsafety.impact.verdicts.criteria_for` the region.
+    region : optional
+        The body region of the criteria (default ``"skull/forehead"``).
+    head : str or HeadContactModel, optional
+        The head model of cases without a ``head`` column (default ``"thesis-frontal"``).
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``df`` with ``head_model``, ``verdict`` (``"pass"``/``"fail"``), ``governing`` (the
+        criterion with the smallest relative margin), ``governing_margin_pct`` and per
+        criterion ``<name>_margin`` (limit - value, in the limit's unit: N or HIC) and
+        ``<name>_pass``.
+    """
+    crit = criteria_for(region) if criteria is None else tuple(criteria)
+    out = df.copy()
+    default = head.name if isinstance(head, HeadContactModel) else (head or "thesis-frontal")
+    names = (out["head"].map(lambda h: h.name if isinstance(h, HeadContactModel) else str(h))
+             if "head" in out.columns else pd.Series(default, index=out.index))
+    cols = {"head_model": [], "verdict": [], "governing": [], "governing_margin_pct": []}
+    for c in crit:
+        cols[f"{c.name}_margin"], cols[f"{c.name}_pass"] = [], []
+    for i, r in out.iterrows():
+        ok = r.get("status", "ok") == "ok" and all(
+            m in r and pd.notna(r[m]) for m in {c.metric for c in crit})
+        t = evaluate({c.metric: r[c.metric] for c in crit}, crit, head=names[i]) if ok else None
+        cols["head_model"].append(names[i])
+        if t is None or not len(t):
+            for k in cols:
+                if k != "head_model":
+                    cols[k].append(None)
+            continue
+        g = t.loc[t["margin_pct"].idxmin()]
+        cols["verdict"].append("pass" if t["passed"].all() else "fail")
+        cols["governing"].append(g.criterion)
+        cols["governing_margin_pct"].append(float(g.margin_pct))
+        for row in t.itertuples():
+            cols[f"{row.criterion}_margin"].append(float(row.margin))
+            cols[f"{row.criterion}_pass"].append(bool(row.passed))
+    for k, v in cols.items():
+        out[k] = v
+    return out
+
+
 def safety_sweep(cases=None, *, grid=None, name: str = "safety", cache_dir=None,
                  processes: int | None = None, progress: bool = True, on_error: str = "record",
                  backend: str = "local", scheduler=None, arm=None, head=None) -> pd.DataFrame:
@@ -787,7 +843,8 @@ def safety_sweep(cases=None, *, grid=None, name: str = "safety", cache_dir=None,
     Returns
     -------
     pandas.DataFrame
-        Case parameters, ``status``, ``error`` and the :func:`safety_case` results.
+        Case parameters, ``status``, ``error``, the :func:`safety_case` results and their
+        verdicts against the criteria of the skull/forehead (:func:`add_verdicts`).
     """
     all_cases = _check_cases([{}] if cases is None else cases)
     if grid is not None:
@@ -803,11 +860,12 @@ def safety_sweep(cases=None, *, grid=None, name: str = "safety", cache_dir=None,
             check_case(**c, arm=arm)
         except (TypeError, ValueError) as exc:
             raise type(exc)(f"case {i} {c!r}: {exc}") from None
-    return run_sweep(func, all_cases, name=name, cache_dir=cache_dir, processes=processes,
-                     progress=progress, on_error=on_error, backend=backend, scheduler=scheduler)
+    df = run_sweep(func, all_cases, name=name, cache_dir=cache_dir, processes=processes,
+                   progress=progress, on_error=on_error, backend=backend, scheduler=scheduler)
+    return add_verdicts(df, head=head)
 
 
 __all__ = ["EXPERIMENTS", "CONTROLLERS", "INSTANTS", "MIN_SPEED", "PARAMETERS", "DEFAULTS",
            "DOTTED", "RESULT_COLUMNS", "check_case", "make_controller", "safety_case",
            "safety_sweep", "case_arm", "case_function", "is_dotted", "impact_case",
-           "check_impact_case", "SPEED_MAX", "IMPACT_POSE_DEG"]
+           "check_impact_case", "SPEED_MAX", "IMPACT_POSE_DEG", "add_verdicts"]

@@ -627,16 +627,7 @@ def arm_from_toml(text: str, *, cls, where: str = ""):
     ArmFileError
         ``"<where>: <dotted key> = <value>: <what is allowed>"``.
     """
-    if not isinstance(text, str):
-        raise TypeError(f"text must be the TOML text (a str), got {type(text).__name__}")
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise _err(where, f"not valid TOML ({exc})") from None
-    try:
-        return arm_from_dict(data, cls=cls)
-    except ArmFileError as exc:
-        raise _err(where, str(exc)) from None
+    return parse_document(text, lambda data: arm_from_dict(data, cls=cls), where=where)
 
 
 def read_arm_file(path, *, cls):
@@ -658,6 +649,35 @@ def read_arm_file(path, *, cls):
 
 
 # ----------------------------------------------------------------------------- writing
+def parse_document(text: str, build, *, where: str = ""):
+    """Parse the TOML text of a parameter file and build its object from the table.
+
+    Parameters
+    ----------
+    text : str
+        TOML text.
+    build : callable
+        ``build(table) -> object``, raising :class:`ArmFileError` naming the key.
+    where : str
+        How to name the file in error messages (its path): every error starts with it.
+
+    Returns
+    -------
+    object
+        What ``build`` returns.
+    """
+    if not isinstance(text, str):
+        raise TypeError(f"text must be the TOML text (a str), got {type(text).__name__}")
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise _err(where, f"not valid TOML ({exc})") from None
+    try:
+        return build(data)
+    except ArmFileError as exc:
+        raise _err(where, str(exc)) from None
+
+
 def _literal(v) -> str:
     """One TOML value (exact floats: Python's shortest round-trip repr, via tomli-w)."""
     if isinstance(v, (list, tuple)):

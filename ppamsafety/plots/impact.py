@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..params.head import MAXILLA_FRACTURE_N
+from ..params.iso_ts_15066 import SKULL_FOREHEAD
 from .figure import new_figure
 
 FAMILY_COLORS = {"PID": "tab:red", "PSMC joint Ki=2": "tab:blue", "PSMC joint Ki=12": "tab:green",
@@ -88,7 +89,10 @@ def plot_worst_histories(items, *, title: str = ""):
 
 
 def plot_safety_table(table, *, experiments=("step", "switch")):
-    """F_max and HIC per controller variant with the thesis values and the 660 N line.
+    """F_max and HIC per controller variant with the thesis values and the limit lines.
+
+    F_max panels carry the 660 N maxilla line and the ISO/TS 15066 forehead lines (transient
+    2 x 130 N, quasi-static 130 N).
 
     Parameters
     ----------
@@ -118,6 +122,12 @@ def plot_safety_table(table, *, experiments=("step", "switch")):
                 a.plot(x, sub[thcol], "k_", ms=18, mew=2, label="thesis Table 6.1")
             if col == "F_max":
                 a.axhline(MAXILLA_FRACTURE_N, color="r", ls="--", lw=1.2, label="maxilla 660 N")
+                a.axhline(SKULL_FOREHEAD.force_transient, color="darkorange", ls=":", lw=1.2,
+                          label=f"ISO/TS 15066 forehead transient "
+                                f"{SKULL_FOREHEAD.force_transient:g} N (not in the TS)")
+                a.axhline(SKULL_FOREHEAD.force_quasi_static, color="darkorange", ls="-.",
+                          lw=1.0, label=f"ISO/TS 15066 forehead quasi-static "
+                                        f"{SKULL_FOREHEAD.force_quasi_static:g} N")
             else:
                 a.set_yscale("log")
             a.set_ylabel(ylab)

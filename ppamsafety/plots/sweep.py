@@ -129,6 +129,12 @@ def plot_envelope(envelope, *, title: str = ""):
     if envelope.safe_value is not None:
         ax.axvline(envelope.safe_value, color="g", lw=1.2,
                    label=f"envelope: {envelope.parameter} = {envelope.safe_value:.4g}")
+    for i, c in enumerate(getattr(envelope, "crossings", ())):
+        ax.axvspan(min(c["safe_value"], c["unsafe_value"]), max(c["safe_value"],
+                                                                c["unsafe_value"]),
+                   color="tab:orange" if c["flat"] else "tab:gray", alpha=0.3,
+                   label=("crossing bracket" + (" (flat)" if c["flat"] else "")) if i == 0
+                   else None)
     ax.set_xlabel(envelope.parameter)
     ax.set_ylabel(envelope.metric)
     ax.grid(alpha=0.3)
