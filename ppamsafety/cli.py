@@ -472,6 +472,7 @@ def _cmd_synthesize(args) -> int:
 
 
 def _cmd_impact(args) -> int:
+    from .design import rest_stiffness
     from .impact.head import head_model
     from .impact.model import simulate_impacts
     from .params import thesis_arm
@@ -482,7 +483,16 @@ def _cmd_impact(args) -> int:
     head = _head_of(args) or head_model()
     q = np.array(args.q, dtype=float) * DEG
     with _options(q="--q", qd="--qd", stiffness="--stiffness", head="--head", dt="--dt"):
-        res = simulate_impacts(arm, q, args.qd, args.stiffness, head=head, dt=args.dt,
+        if args.stiffness is None:      # the arm's own stiffness at rest in this pose
+            rest = rest_stiffness(arm, q)
+            stiffness = rest.stiffness
+            origin = ("the arm's own at rest in this pose: (2.18) with the static pressures "
+                      + ", ".join(f"{v / BAR:.3f}" for v in rest.pressures) + " bar"
+                      + ("" if rest.holdable else ", clipped to [0, max_pressure]: the arm "
+                                                  "cannot hold this pose"))
+        else:
+            stiffness, origin = tuple(args.stiffness), "given by --stiffness"
+        res = simulate_impacts(arm, q, args.qd, stiffness, head=head, dt=args.dt,
                                history=args.history is not None)
     s = res.summary.iloc[0]
     if not s.tcp_speed >= 1e-3:
@@ -490,8 +500,14 @@ def _cmd_impact(args) -> int:
                          f"{args.q[1]:g} deg gives a tool speed of {s.tcp_speed:.3g} m/s: the "
                          f"arm does not move, so nothing hits the head; give joint speeds "
                          f"(e.g. --qd 1 0)")
+    h = res.head
     print(f"arm             {arm.name or args.arm}")
-    print(f"head model      {res.head.name}")
+    print(f"pose            q = {args.q[0]:g}, {args.q[1]:g} deg, qd = {args.qd[0]:g}, "
+          f"{args.qd[1]:g} rad/s")
+    print(f"joint stiffness K1 = {stiffness[0]:.4g}, K2 = {stiffness[1]:.4g} N m/rad ({origin})")
+    print(f"head model      {h.name}: m = {h.mass:g} kg, R = {h.radius:g} m, Hunt-Crossley "
+          f"k = {h.stiffness:.4g} N/m^n, n = {h.exponent:g}, lambda = {h.damping:.4g} "
+          f"N s/m^(n+1)")
     print(f"tool speed      {s.tcp_speed:.4g} m/s")
     print(f"F_max           {s.F_max:.4g} N at {1e3 * s.t_Fmax:.3g} ms")
     print(f"HIC36           {s.HIC36:.4g}  window [{1e3 * s.HIC36_t1:.3g}, {1e3 * s.HIC36_t2:.3g}] ms")
@@ -776,8 +792,10 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
                    help="link angles at impact [deg], each in [-360, 360]")
     m.add_argument("--qd", nargs=2, type=_finite, required=True, metavar=("QD1", "QD2"),
                    help="link angular velocities at impact [rad/s]")
-    m.add_argument("--stiffness", nargs=2, type=_nonnegative, default=(43.0, 27.0),
-                   metavar=("K1", "K2"), help="joint stiffnesses [Nm/rad], >= 0 (default 43 27)")
+    m.add_argument("--stiffness", nargs=2, type=_nonnegative, default=None,
+                   metavar=("K1", "K2"),
+                   help="joint stiffnesses [Nm/rad], >= 0 (default: the arm's own at rest in "
+                        "the pose --q, (2.18) with its static pressures)")
     m.add_argument("--dt", type=_positive, default=2e-5, help="integration step [s], > 0")
     m.add_argument("--history", type=_path, default=None, metavar="FILE",
                    help="write the time history to this new CSV file")

@@ -40,6 +40,7 @@ from ._validation import did_you_mean
 from .control import PID, JointPSMC, TaskPSMC, SensorConfig
 from .control.pid import GAIN_MAX
 from .control.psmc import LAMBDA_MAX, TASK_GAIN_MAX
+from .design import rest_stiffness
 from .experiments.catalog import (CIRCLE_PERIODS, CIRCLE_WARMUP, DEFAULT_DURATIONS, STEP_TIMES,
                                   SWITCH_TIME, run_thesis_experiment, ControllerVariant)
 from .experiments.metrics import tracking_stats
@@ -50,7 +51,6 @@ from .impact.model import simulate_impacts, stiffness_limit
 from .params import ArmParameters, thesis_arm
 from .params.arm_file import ArmFileError, apply_arm_changes, effects_from_dict
 from .plant import geometry as geo
-from .plant import pneumatics as pn
 from .sweep import _check_cases, grid_cases, run_sweep
 from .units import BAR
 
@@ -647,8 +647,7 @@ def impact_case(speed: float, *, q1_deg: float = IMPACT_POSE_DEG[0],
     tcp = geo.jacobian(q, arm) @ d
     qd = d * (v / float(np.hypot(*tcp)))
     if st is None:
-        p = np.clip(pn.static_pressures(q, arm), 0.0, arm.pneumatics.p_max)
-        K = pn.joint_stiffness(q, p, arm)
+        K = np.array(rest_stiffness(arm, q).stiffness)
     else:
         K = np.broadcast_to(np.asarray(st, float), (2,)).copy()
     s = simulate_impacts(arm, q, qd, K, head=hm).summary.iloc[0]
