@@ -233,12 +233,15 @@ def _head_unused(args, command: str) -> None:
 def _cmd_report(args) -> int:
     from .report.build import build_report
 
-    with _options(outdir="--outdir", processes="--processes",
-                  replace_kind="--replace-other-kind"):
+    if args.only is not None and (args.include is not None or args.exclude is not None):
+        raise ValueError("--only names every section to run; give --include/--exclude "
+                         "without it")
+    with _options(outdir="--outdir", processes="--processes", include="--include",
+                  exclude="--exclude", replace_kind="--replace-other-kind"):
         index = build_report(args.outdir, quick=args.quick, only=args.only,
                              overwrite=args.overwrite, processes=args.processes,
                              replace_kind=args.replace_other_kind, arm=_arm_of(args),
-                             head=_head_of(args))
+                             head=_head_of(args), include=args.include, exclude=args.exclude)
     print(f"report written to {index}")
     return EXIT_OK
 
@@ -625,7 +628,14 @@ def build_parser() -> argparse.ArgumentParser:
                    help="output folder (default: reports)")
     r.add_argument("--quick", action="store_true", help="coarse grids and short sweeps")
     r.add_argument("--only", type=_section_names, default=None, metavar="NAMES",
-                   help="comma-separated report section names to run (default: all)")
+                   help="comma-separated report section names to run, and no other (default: "
+                        "every section that concerns the arm: all of them for the thesis arm)")
+    r.add_argument("--include", type=_section_names, default=None, metavar="NAMES",
+                   help="sections to add to the arm's default selection (e.g. "
+                        "cylinder_friction, the bench case study, which is left out of the "
+                        "report for another arm)")
+    r.add_argument("--exclude", type=_section_names, default=None, metavar="NAMES",
+                   help="sections to leave out of the default selection")
     r.add_argument("--overwrite", action="store_true",
                    help="replace a previous ppamsafety report in OUTDIR (never other files)")
     r.add_argument("--replace-other-kind", action="store_true",

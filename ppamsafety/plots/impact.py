@@ -380,7 +380,7 @@ def plot_direction_polar(sweeps, *, metric: str = "F_max", title: str = ""):
                 label="two-body prediction")
         rmax = float(max(t[metric].max(), t[pred].max()))
         v = np.radians(sw.velocity_deg)
-        ax.plot([v, v], [0, rmax], "k-", lw=1.2, label="TCP velocity (thesis)")
+        ax.plot([v, v], [0, rmax], "k-", lw=1.2, label="TCP velocity (thesis' placement)")
         i = int(np.argmax(t[metric].to_numpy()))
         ax.plot([th[i]], [t[metric].iloc[i]], "o", color="tab:red",
                 label=f"grid max: {t[metric].iloc[i]:.4g}{unit} at psi = {t['psi_deg'].iloc[i]:+.1f} deg")
@@ -415,7 +415,7 @@ def plot_direction_ratios(table):
     ax.set_xticks(x)
     ax.set_xticklabels([f"{e}: {lab}" for e, lab in zip(t["experiment"], t["label"])],
                        rotation=75, fontsize=6)
-    ax.set_ylabel("worst placement vs thesis placement [%]")
+    ax.set_ylabel("worst placement vs head along the TCP velocity [%]")
     ax.set_title("how much worse the worst head placement is (every instant)")
     ax.legend()
     fig.tight_layout()

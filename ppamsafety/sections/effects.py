@@ -56,7 +56,7 @@ from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_
 SECTION = SectionInfo(
     summary=("the gravity-compensation sawtooth with and without Preisach hysteresis, Tables 5.2 "
              "and 6.1 regenerated with hysteresis"),
-    thesis="§3.5.1.6, §3.6, figs. 3.1-3.2", typical_seconds=14.0)
+    thesis="§3.5.1.6, §3.6, figs. 3.1-3.2", typical_seconds=14.0, scope="hysteresis")
 
 #: Hysteresis scale delta per muscle group (25-fibre muscles, thesis §3.6.5) [-].
 HYSTERESIS_DELTA = DELTA_25_FIBRES
@@ -773,6 +773,12 @@ def _render_other(study: EffectsStudy) -> Section:
     """The effects section for another arm or head: with and without hysteresis, no thesis."""
     sm = study.sawtooth_summary.set_index("plant")
     hd = study.arm.effects.hysteresis_delta
+    delta_text = (f"δ = {', '.join(f'{v:g}' for v in hd)} per muscle group, the arm's own"
+                  if hd is not None else
+                  f"δ = {study.delta:g} in every muscle group, ASSUMED: the arm declares no "
+                  f"hysteresis, so the value fitted for the thesis' 25-fibre muscles (§3.6.5) "
+                  f"stands in; declare `hysteresis_delta` in the arm file's [effects] for its "
+                  f"own muscles")
     saw_tab = pd.DataFrame({
         "plant": list(sm.index),
         "RMS q1 [deg]": [f"{v:.2f}" for v in sm.rms_q1_deg],
@@ -798,7 +804,7 @@ def _render_other(study: EffectsStudy) -> Section:
     md = f"""{other_arm_note(study.arm, study.head)}
 
 The plant truth with and without the muscle-force hysteresis of §3.6 ((3.35), Preisach weight
-(3.33), δ = {', '.join(f'{v:g}' for v in hd)} per muscle group); the controllers keep the nominal
+(3.33), {delta_text}); the controllers keep the nominal
 model. Every experiment runs on both plants.{' (quick mode)' if study.quick else ''}
 
 ### Gravity-compensation sawtooth (§3.5.1.6)
