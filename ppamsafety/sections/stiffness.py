@@ -454,8 +454,9 @@ difference) and the flexible joint at the largest k:
 {markdown_table(study.rigid.drop(columns=["B2"]), digits=4)}
 
 * **Why the change is small at PPAM stiffnesses:** the impact lasts {1e3 * study.contact:.1f} ms, far
-  shorter than the arm's vibration on its joint springs (smallest period {1e3 * per["experiment"]:.0f} ms at the
-  experiment's K = {row.K1:.0f}/{row.K2:.0f} Nm/rad at the impact instant), so the tool behaves like the links' effective mass at the tool,
+  shorter than the arm's vibration on its joint springs (smallest period
+  {1e3 * per["experiment"]:.0f} ms at the experiment's K = {row.K1:.4g}/{row.K2:.4g} Nm/rad at the impact
+  instant), so the tool behaves like the links' effective mass at the tool,
   m_eff = 1/(u^T J H^-1 J^T u) = {study.m_eff:.3f} kg (forearm alone: {study.m_link2:.3f} kg); a two-body
   impact of that mass gives {study.f_two_body:.1f} N, against {m['F_k1_N']:.1f} N for the full model at
   k = 1 Nm/rad, and {m['F_k1_N'] / F_ref:.3f} of the thesis' {F_ref:.0f} N.
@@ -494,7 +495,7 @@ F_max [N] against k (last column: largest |energy-balance error| of the row):
   {m['dF_flexible_Bppam_6000_N']:.2f} N up to 6000 Nm/rad; it saturates at {m['rise_saturation_N']:.2f} N
   for a large motor-side inertia (90 % from B = {m['B_90_kgm2']:.2g} kg m^2).
 * The impact lasts {1e3 * study.contact:.1f} ms, against the arm's shortest vibration period on its
-  joint springs of {1e3 * per["experiment"]:.0f} ms at the experiment's K = {row.K1:.0f}/{row.K2:.0f} Nm/rad
+  joint springs of {1e3 * per["experiment"]:.0f} ms at the experiment's K = {row.K1:.4g}/{row.K2:.4g} Nm/rad
   at the impact instant: the tool behaves like the links' effective
   mass m_eff = {study.m_eff:.3f} kg (two-body impact {study.f_two_body:.1f} N, full model at k = 1 Nm/rad
   {m['F_k1_N']:.1f} N).
