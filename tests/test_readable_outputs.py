@@ -199,3 +199,38 @@ def test_header_units_are_added_only_where_missing():
     assert out.startswith("text | not a table")
     assert unit_in_name("q1_deg") == "deg" and unit_in_name("F [N]") == "N"
     assert unit_of("k", "head_model") != unit_of("k", "stiffness")
+
+
+def _unlabelled_axes(fig) -> list:
+    """Axis labels of a figure without a unit ([...]) on an axis of numbers."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    FigureCanvasAgg(fig).draw()
+    bad = []
+    for ax in fig.axes:
+        for axis in (ax.xaxis, ax.yaxis):
+            label = axis.get_label_text()
+            if not label or re.search(r"\[[^\]]*\]", label):
+                continue
+            ticks = [t.get_text().replace("−", "-") for t in axis.get_ticklabels()
+                     if t.get_text()]
+            numeric = all(re.fullmatch(r"[-+]?[\d.]+(e[-+]?\d+)?|\$.*\$", t) for t in ticks)
+            if ticks and numeric:
+                bad.append(label)
+    return bad
+
+
+@pytest.mark.parametrize("name", ["design", "head_model", "stiffness", "diagnose_sawtooth"])
+def test_every_axis_of_numbers_in_a_section_figure_has_a_unit(name):
+    from ppamsafety.sections import section_module
+
+    mod = section_module(name)
+    sec = mod.render(mod.compute(quick=True))
+    figs = [(f, obj) for f, obj in sec.artifacts if hasattr(obj, "savefig")]
+    assert figs
+    fig, ax = new_figure()                        # the check can fail
+    ax.plot([1, 2], [3, 4])
+    ax.set_ylabel("HIC36")
+    assert _unlabelled_axes(fig) == ["HIC36"]
+    bad = {f: _unlabelled_axes(obj) for f, obj in figs}
+    assert not any(bad.values()), bad

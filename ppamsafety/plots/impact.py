@@ -111,7 +111,7 @@ def plot_safety_table(table, *, experiments=("step", "switch")):
         x = np.arange(len(sub))
         colors = [FAMILY_COLORS.get(f, "gray") for f in sub["family"]]
         for i, (col, thcol, ylab) in enumerate((("F_max", "Fmax_thesis", "F_max [N]"),
-                                                  ("HIC36", "HIC_thesis", "HIC36"))):
+                                                  ("HIC36", "HIC_thesis", "HIC36 [-]"))):
             a = axes[i, j]
             a.bar(x, sub[col], color=colors, alpha=0.8, label="toolkit")
             if thcol in sub.columns:
@@ -294,7 +294,7 @@ def plot_head_fit(pairs, curve, *, drop=None, title: str = ""):
         ax.loglog(sub["F_max"], sub["HIC"], marker, ls="none", label=f"Table 6.1, {exp}")
     ax.loglog(curve["F_max"], curve["HIC36"], "k-", label="fitted Hunt-Crossley model")
     ax.set_xlabel("F_max [N]")
-    ax.set_ylabel("HIC36")
+    ax.set_ylabel("HIC36 [-]")
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=8)
     ax.set_title(title or "one contact model: HIC vs F_max")
