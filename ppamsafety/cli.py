@@ -536,8 +536,10 @@ def _cmd_info(args) -> int:
     label = arm.name or "unnamed arm"
     print(f"{label}{' (the thesis arm)' if is_thesis_arm(arm) else ''} (plant):")
     print(f"  link masses m1 = {L.m1:.3f} kg, m2 = {L.m2:.3f} kg")
-    print(f"  mean pressures p_m = {np.array(arm.pneumatics.p_mean) / BAR} bar")
-    print(f"  valve time constants = {[v.time_constant for v in arm.valves.valves]} s")
+    print("  mean pressures p_m = " + ", ".join(f"{p / BAR:.4g}" for p in arm.pneumatics.p_mean)
+          + " bar")
+    print("  valve time constants = "
+          + ", ".join(f"{1e3 * v.time_constant:.4g}" for v in arm.valves.valves) + " ms")
     print(f"  muscles per group = {[g.n_muscles for g in arm.muscles.groups]}")
     print(f"  effects on: {', '.join(arm.effects.enabled()) or 'none'}")
     print(f"  fingerprint (sha256 of its arm file) {arm_fingerprint(arm)}")
