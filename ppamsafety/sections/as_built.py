@@ -244,7 +244,7 @@ def render(study: AsBuiltStudy) -> Section:
     study : AsBuiltStudy
         Output of :func:`compute`.
     """
-    title = "The as-built arm: the library fitted to the thesis' own measurements (issue 20)"
+    title = "The as-built arm: the library fitted to the thesis' own measurements"
     if study.fit is None:
         return Section(title, study.note + "\n\nThe as-built fit uses the thesis' printed "
                        "measurements of its own arm and head; it is not run for this arm.",

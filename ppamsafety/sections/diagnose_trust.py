@@ -353,7 +353,7 @@ def render(study: DiagnoseTrustStudy) -> Section:
         ("diagnose_trust_by_effect.csv", study.by_effect),
         ("diagnose_trust_detection.csv", study.curve),
         ("diagnose_trust_limits.csv", study.limits)]
-    return Section("Trust in the diagnosis: calibrated confidence, detection limits (issue 19)",
+    return Section("Trust in the diagnosis: calibrated confidence, detection limits",
                    "\n".join(md), arts, dict(m))
 
 

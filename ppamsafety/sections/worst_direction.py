@@ -274,7 +274,7 @@ F_max over every placement and instant is {m["psmc_max_F_max_worst"]:.0f} N
 ![ratios](worst_direction_ratios.png)
 """
     arts = [("worst_direction.csv", t), *study.plot().items()]
-    return Section("Worst head placement around the tool point (issue 12 item 6)", md, arts,
+    return Section("Worst head placement around the tool point", md, arts,
                    dict(study.metrics))
 
 
