@@ -231,6 +231,9 @@ def test_the_whole_quick_report_for_another_arm_has_no_thesis_value(which, tmp_p
     assert all(f"*Study `{name}` ran in" in md for name in REGISTRY)
     leaks = tl.scan_folder(out, arm)
     assert leaks == [], _leaks_text(leaks)
+    cols = pd.read_csv(out / "columns.csv", keep_default_na=False)    # and every unit declared
+    num = cols[cols.kind == "number"]
+    assert (num.unit != "").all(), num[num.unit == ""].to_dict("records")
 
 
 def test_random_arms_are_valid_not_the_thesis_arm_and_reproducible():
