@@ -162,3 +162,17 @@ def test_rows_with_nothing_to_score_are_not_failed():
     text = _met_text(s.reset_index()).set_index("measure")["met"]
     assert text["nothing hidden: something named"] == "no samples"
     assert set(text) <= {"yes", "no", "no samples", ""}
+
+
+@pytest.mark.slow
+def test_the_hysteresis_studies_asked_for_an_arm_without_hysteresis_state_the_assumption(
+        tmp_path):
+    from ppamsafety.params.effects import Effects
+    from ppamsafety.sections import run_section
+
+    bare = load_arm(EXAMPLE).replace(effects=Effects(), name="no hysteresis declared")
+    for name in ("effects", "diagnose_sawtooth"):
+        (tmp_path / name).mkdir()
+        md = run_section(name, tmp_path / name, quick=True, arm=bare).markdown
+        assert "ASSUMED: the arm declares no hysteresis" in md, name
+        assert "25-fibre muscles (§3.6.5)" in md, name
