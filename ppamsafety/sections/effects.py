@@ -392,6 +392,8 @@ class EffectsStudy:
         The hysteresis plant (the arm with its hysteresis).
     head : HeadContactModel or None
         The head model of Table 6.1.
+    delta_assumed : bool
+        The arm (not the thesis arm) declares no hysteresis: ``delta`` stands in for it.
     """
 
     quick: bool
@@ -414,6 +416,7 @@ class EffectsStudy:
     thesis: bool = True
     arm: object = None
     head: object = None
+    delta_assumed: bool = False
 
     def to_pandas(self) -> pd.DataFrame:
         """The sawtooth summary (RMS errors and pattern counts per plant)."""
@@ -527,8 +530,10 @@ def compute(*, quick: bool = False, arm=None, delta: float = HYSTERESIS_DELTA,
             a, head, runs={"step": resp.step, "switch": resp.switch}, thesis=thesis)
         walls[f"responses + table_6_1 {lab}"] = time.perf_counter() - t0
     if not thesis:
-        return _compute_other(quick, delta, arms, runs, windows, saw, summ, warmup, evaluate,
-                              errs, cmps, concl, t61, walls, head)
+        study = _compute_other(quick, delta, arms, runs, windows, saw, summ, warmup, evaluate,
+                               errs, cmps, concl, t61, walls, head)
+        study.delta_assumed = arm.effects.hysteresis_delta is None
+        return study
 
     rows = []
     for lab in arms:
@@ -774,7 +779,7 @@ def _render_other(study: EffectsStudy) -> Section:
     sm = study.sawtooth_summary.set_index("plant")
     hd = study.arm.effects.hysteresis_delta
     delta_text = (f"δ = {', '.join(f'{v:g}' for v in hd)} per muscle group, the arm's own"
-                  if hd is not None else
+                  if not study.delta_assumed else
                   f"δ = {study.delta:g} in every muscle group, ASSUMED: the arm declares no "
                   f"hysteresis, so the value fitted for the thesis' 25-fibre muscles (§3.6.5) "
                   f"stands in; declare `hysteresis_delta` in the arm file's [effects] for its "
