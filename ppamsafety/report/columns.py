@@ -81,6 +81,7 @@ BY_SECTION = {
     "effects": {
         "median |ln ratio|": "-", "median ratio": "-", "min ratio": "-", "max ratio": "-",
         "cells": "-", "level": "-", **{f"eps{k}": "-" for k in range(1, 5)},
+        "median hysteresis / nominal": "-", "min": "-", "max": "-",
         **{f"F{k}_model": "N" for k in range(1, 5)}, **{f"F{k}_plant": "N" for k in range(1, 5)},
         **{f"F{k}_ratio": "-" for k in range(1, 5)},
         "pattern_q1": "-", "steps_q1": "-", "pattern_unbiased_q1": "-", "pattern_q2": "-",
