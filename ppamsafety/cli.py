@@ -234,12 +234,15 @@ def _head_unused(args, command: str) -> None:
 def _cmd_report(args) -> int:
     from .report.build import build_report
 
-    with _options(outdir="--outdir", processes="--processes",
-                  replace_kind="--replace-other-kind"):
+    if args.only is not None and (args.include is not None or args.exclude is not None):
+        raise ValueError("--only names every section to run; give --include/--exclude "
+                         "without it")
+    with _options(outdir="--outdir", processes="--processes", include="--include",
+                  exclude="--exclude", replace_kind="--replace-other-kind"):
         index = build_report(args.outdir, quick=args.quick, only=args.only,
                              overwrite=args.overwrite, processes=args.processes,
                              replace_kind=args.replace_other_kind, arm=_arm_of(args),
-                             head=_head_of(args))
+                             head=_head_of(args), include=args.include, exclude=args.exclude)
     print(f"report written to {index}")
     return EXIT_OK
 
@@ -475,6 +478,7 @@ def _cmd_synthesize(args) -> int:
 
 
 def _cmd_impact(args) -> int:
+    from .design import rest_stiffness
     from .impact.head import head_model
     from .impact.model import simulate_impacts
     from .impact.verdicts import impact_verdicts
@@ -489,7 +493,16 @@ def _cmd_impact(args) -> int:
         region = resolve_region(args.region)
     q = np.array(args.q, dtype=float) * DEG
     with _options(q="--q", qd="--qd", stiffness="--stiffness", head="--head", dt="--dt"):
-        res = simulate_impacts(arm, q, args.qd, args.stiffness, head=head, dt=args.dt,
+        if args.stiffness is None:      # the arm's own stiffness at rest in this pose
+            rest = rest_stiffness(arm, q)
+            stiffness = rest.stiffness
+            origin = ("the arm's own at rest in this pose: (2.18) with the static pressures "
+                      + ", ".join(f"{v / BAR:.3f}" for v in rest.pressures) + " bar"
+                      + ("" if rest.holdable else ", clipped to [0, max_pressure]: the arm "
+                                                  "cannot hold this pose"))
+        else:
+            stiffness, origin = tuple(args.stiffness), "given by --stiffness"
+        res = simulate_impacts(arm, q, args.qd, stiffness, head=head, dt=args.dt,
                                history=args.history is not None)
     s = res.summary.iloc[0]
     if not s.tcp_speed >= 1e-3:
@@ -497,15 +510,21 @@ def _cmd_impact(args) -> int:
                          f"{args.q[1]:g} deg gives a tool speed of {s.tcp_speed:.3g} m/s: the "
                          f"arm does not move, so nothing hits the head; give joint speeds "
                          f"(e.g. --qd 1 0)")
+    h = res.head
     print(f"arm             {arm.name or args.arm}")
-    print(f"head model      {res.head.name}")
+    print(f"pose            q = {args.q[0]:g}, {args.q[1]:g} deg, qd = {args.qd[0]:g}, "
+          f"{args.qd[1]:g} rad/s")
+    print(f"joint stiffness K1 = {stiffness[0]:.4g}, K2 = {stiffness[1]:.4g} N m/rad ({origin})")
+    print(f"head model      {h.name}: m = {h.mass:g} kg, R = {h.radius:g} m, Hunt-Crossley "
+          f"k = {h.stiffness:.4g} N/m^n, n = {h.exponent:g}, lambda = {h.damping:.4g} "
+          f"N s/m^(n+1)")
     print(f"tool speed      {s.tcp_speed:.4g} m/s")
     print(f"F_max           {s.F_max:.4g} N at {1e3 * s.t_Fmax:.3g} ms")
     print(f"HIC36           {s.HIC36:.4g}  window [{1e3 * s.HIC36_t1:.3g}, {1e3 * s.HIC36_t2:.3g}] ms")
     print(f"HIC15           {s.HIC15:.4g}  window [{1e3 * s.HIC15_t1:.3g}, {1e3 * s.HIC15_t2:.3g}] ms")
     print(f"max penetration {1e3 * s.delta_max:.4g} mm, peak head acceleration {s.a_max_g:.4g} g")
     print(f"energy to head  {s.E_head_final:.4g} J of {s.E_initial:.4g} J")
-    verdicts = impact_verdicts(arm, q, args.qd, args.stiffness, head=head, dt=args.dt,
+    verdicts = impact_verdicts(arm, q, args.qd, stiffness, head=head, dt=args.dt,
                                region=region)
     for line in verdicts.lines():
         print(line)
@@ -528,8 +547,10 @@ def _cmd_info(args) -> int:
     label = arm.name or "unnamed arm"
     print(f"{label}{' (the thesis arm)' if is_thesis_arm(arm) else ''} (plant):")
     print(f"  link masses m1 = {L.m1:.3f} kg, m2 = {L.m2:.3f} kg")
-    print(f"  mean pressures p_m = {np.array(arm.pneumatics.p_mean) / BAR} bar")
-    print(f"  valve time constants = {[v.time_constant for v in arm.valves.valves]} s")
+    print("  mean pressures p_m = " + ", ".join(f"{p / BAR:.4g}" for p in arm.pneumatics.p_mean)
+          + " bar")
+    print("  valve time constants = "
+          + ", ".join(f"{1e3 * v.time_constant:.4g}" for v in arm.valves.valves) + " ms")
     print(f"  muscles per group = {[g.n_muscles for g in arm.muscles.groups]}")
     print(f"  effects on: {', '.join(arm.effects.enabled()) or 'none'}")
     print(f"  fingerprint (sha256 of its arm file) {arm_fingerprint(arm)}")
@@ -621,7 +642,14 @@ def build_parser() -> argparse.ArgumentParser:
                    help="output folder (default: reports)")
     r.add_argument("--quick", action="store_true", help="coarse grids and short sweeps")
     r.add_argument("--only", type=_section_names, default=None, metavar="NAMES",
-                   help="comma-separated report section names to run (default: all)")
+                   help="comma-separated report section names to run, and no other (default: "
+                        "every section that concerns the arm: all of them for the thesis arm)")
+    r.add_argument("--include", type=_section_names, default=None, metavar="NAMES",
+                   help="sections to add to the arm's default selection (e.g. "
+                        "cylinder_friction, the bench case study, which is left out of the "
+                        "report for another arm)")
+    r.add_argument("--exclude", type=_section_names, default=None, metavar="NAMES",
+                   help="sections to leave out of the default selection")
     r.add_argument("--overwrite", action="store_true",
                    help="replace a previous ppamsafety report in OUTDIR (never other files)")
     r.add_argument("--replace-other-kind", action="store_true",
@@ -788,8 +816,10 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
                    help="link angles at impact [deg], each in [-360, 360]")
     m.add_argument("--qd", nargs=2, type=_finite, required=True, metavar=("QD1", "QD2"),
                    help="link angular velocities at impact [rad/s]")
-    m.add_argument("--stiffness", nargs=2, type=_nonnegative, default=(43.0, 27.0),
-                   metavar=("K1", "K2"), help="joint stiffnesses [Nm/rad], >= 0 (default 43 27)")
+    m.add_argument("--stiffness", nargs=2, type=_nonnegative, default=None,
+                   metavar=("K1", "K2"),
+                   help="joint stiffnesses [Nm/rad], >= 0 (default: the arm's own at rest in "
+                        "the pose --q, (2.18) with its static pressures)")
     m.add_argument("--dt", type=_positive, default=2e-5, help="integration step [s], > 0")
     m.add_argument("--history", type=_path, default=None, metavar="FILE",
                    help="write the time history to this new CSV file")

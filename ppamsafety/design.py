@@ -143,11 +143,7 @@ def stiffness_map(arm, *, n1: int = 61, n2: int = 61) -> StiffnessMap:
         Grid size over q1 and q2, each in [2, 2000].
     """
     q = _grid(arm, n1, n2)
-    p = pn.static_pressures(q, arm)
-    pmax = arm.pneumatics.p_max
-    holdable = np.all((p >= 0) & (p <= pmax), axis=1)
-    pc = np.clip(p, 0.0, pmax)
-    K = pn.joint_stiffness(q, pc, arm)
+    _, pc, holdable, K = _rest(q, arm)
     df = pd.DataFrame({"q1_rad": q[:, 0], "q2_rad": q[:, 1], "K1_Nm_per_rad": K[:, 0],
                        "K2_Nm_per_rad": K[:, 1]})
     for i in range(4):
@@ -273,6 +269,70 @@ def max_load_map(arm, *, links: LinkInertia | None = None, p_max: float | None =
     return MaxLoadMap(df, p_max)
 
 
+@dataclass(frozen=True)
+class RestStiffness:
+    """An arm's joint stiffness at rest in one pose.
+
+    Made by :func:`rest_stiffness`.
+
+    Attributes
+    ----------
+    q : tuple of 2 float
+        The pose (q1, q2) [rad].
+    pressures : tuple of 4 float
+        Static Delta-p pressures of groups 1..4 that hold the arm there [Pa] (unclipped).
+    holdable : bool
+        Those pressures lie in [0, p_max] (otherwise the stiffness is that of the clipped
+        pressures).
+    stiffness : tuple of 2 float
+        Joint stiffness K1, K2 (2.18) with the clipped pressures [N m/rad].
+    """
+
+    q: tuple
+    pressures: tuple
+    holdable: bool
+    stiffness: tuple
+
+
+def rest_stiffness(arm, q) -> RestStiffness:
+    """The joint stiffness (2.18) of an arm at rest in pose ``q``.
+
+    The muscles hold the pose with the static Delta-p pressures of the arm's own mean
+    pressures (:func:`ppamsafety.plant.pneumatics.static_pressures`, the plant truth,
+    payload included), clipped to [0, p_max]; the stiffness (2.18) follows from the
+    muscles, those pressures and the pose.  This is the default stiffness of an impact
+    of the arm at rest pressures (``ppamsafety impact``, :func:`ppamsafety.sweep_cases.
+    impact_case`) and the stiffness ``ppamsafety arm check`` prints.
+
+    Parameters
+    ----------
+    arm : ArmParameters
+        Any valid arm.
+    q : sequence of 2 float
+        Pose (q1, q2) [rad], |q| <= 2 pi.
+
+    Returns
+    -------
+    RestStiffness
+    """
+    arm = _arm(arm)
+    q = np.asarray(q, dtype=float)
+    if q.shape != (2,):
+        raise ValueError(f"q = {q.tolist()!r} must be one pose (q1, q2) [rad]")
+    p, _, holdable, K = _rest(q, arm)
+    return RestStiffness(q=(float(q[0]), float(q[1])), pressures=tuple(float(v) for v in p),
+                         holdable=bool(holdable), stiffness=(float(K[0]), float(K[1])))
+
+
+def _rest(q, arm):
+    """Static pressures (unclipped, clipped to [0, p_max]), whether they are in range, and the
+    stiffness (2.18) with the clipped ones, for poses ``q`` of shape (..., 2)."""
+    p = pn.static_pressures(q, arm)
+    pmax = arm.pneumatics.p_max
+    pc = np.clip(p, 0.0, pmax)
+    return p, pc, np.all((p >= 0) & (p <= pmax), axis=-1), pn.joint_stiffness(q, pc, arm)
+
+
 #: Pose at which :func:`arm_summary` reports the stiffness when none is given: the
 #: step-response impact configuration of thesis §6.3.3, q = (50, -80) deg (if it lies in
 #: the arm's working area; else the centre of the working area).
@@ -358,10 +418,8 @@ def arm_summary(arm, *, q=None, n: int = 61) -> ArmSummary:
             raise ValueError(f"q = {np.degrees(q).round(3).tolist()} deg is outside the working "
                              f"area q1 in [{np.degrees(g.q1_min):.4g}, {np.degrees(g.q1_max):.4g}]"
                              f", q2 in [{np.degrees(g.q2_min):.4g}, {np.degrees(g.q2_max):.4g}] deg")
-    p = pn.static_pressures(q, arm)
-    pmax = arm.pneumatics.p_max
-    holdable = bool(np.all((p >= 0) & (p <= pmax)))
-    K = pn.joint_stiffness(q, np.clip(p, 0.0, pmax), arm)
+    rest = rest_stiffness(arm, q)
+    p, holdable, K = np.array(rest.pressures), rest.holdable, rest.stiffness
     sm = stiffness_map(arm, n1=n, n2=n).data
     ml = max_load_map(arm, n1=2 * n, n2=2 * n)
     grid = _grid(arm, n, n)

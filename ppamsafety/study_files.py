@@ -121,10 +121,11 @@ from .params import ArmParameters
 from .params import load_arm
 from .params.arm_file import ArmFileError, arm_key, arm_to_toml, read_value
 from .plots.figure import save as save_figure
-from .plots.sweep import plot_sweep
+from .plots.sweep import limit_lines, plot_sweep
 from .sweep import BACKENDS, run_sweep
 from .sweep_cases import (DEFAULTS, IMPACT_POSE_DEG, PARAMETERS, SPEED_MAX, add_verdicts,
-                          case_arm, case_function, check_case, check_impact_case, is_dotted)
+                          case_arm, case_function, check_case, check_impact_case, column_unit,
+                          is_dotted)
 from .units import si_factor
 
 #: Allowed keys per table of a study file.
@@ -164,6 +165,9 @@ class Axis(Sequence):
     materialised: its i-th value is computed from the formula (equal to NumPy's up to
     rounding), so a grid of 10^9 points costs nothing until it runs.
 
+    The values are in SI units; ``unit`` and ``factor`` say in which unit the study file
+    gave them (shown so in the table and figure of the sweep).
+
     Parameters
     ----------
     values : list, optional
@@ -180,6 +184,9 @@ class Axis(Sequence):
         self.gen, self.start, self.stop, self.num = gen, start, stop, num
         self._values = None if values is None else list(values)
         self._reps = None
+        #: The unit the study file wrote the values in and its factor to SI (``value_si =
+        #: value * factor``); None: SI.
+        self.unit, self.factor = None, 1.0
         if gen is not None and num <= MATERIALISE:
             f = np.geomspace if gen == "geomspace" else np.linspace
             self._values = [float(x) for x in f(start, stop, num)]
@@ -378,6 +385,23 @@ class Study:
         keys = list(dict.fromkeys(k for case in c for k in case if k != "histories"))
         return [k for k in keys if len({repr(case.get(k)) for case in c}) > 1]
 
+    def unit_of(self, key: str) -> tuple:
+        """(unit, factor to SI) a parameter or result column is shown in: the unit the study
+        file gave a grid key in, else its SI unit (:func:`ppamsafety.sweep_cases.column_unit`;
+        ``"-"`` dimensionless; None: text, a flag or a list).
+
+        Parameters
+        ----------
+        key : str
+            A case parameter or result column.
+        """
+        axis = self.cases.axes.get(key) if isinstance(self.cases, CaseGrid) else None
+        if axis is not None and axis.unit is not None:
+            return axis.unit, axis.factor
+        if self.envelope is not None and key == "value":
+            return column_unit(self.envelope["parameter"]), 1.0
+        return column_unit(key), 1.0
+
     @property
     def origins(self) -> list:
         """Per case, the index of the ``[[variants]]`` entry it came from."""
@@ -414,14 +438,15 @@ def _grid_values(where: str, key: str, v) -> Axis:
                 args = [_dotted_si(where, f"grid.{key}.{gen}[{i}]", key,
                                    {"value": x, "unit": unit}) for i, x in enumerate(args[:2])
                         ] + args[2:]
-            return _grid_values(where, key, {gen: args})
+            return _with_unit(_grid_values(where, key, {gen: args}), key, unit)
         vals = v.pop("values") if set(v) == {"values"} else None
         if not isinstance(vals, list) or not vals:
             raise _err(where, f"grid.{key} = {v!r}: with a unit give {{values = [...], unit = "
                               f"...}} (a non-empty list) or a generator {{linspace = [start, "
                               f"stop, num], unit = ...}}")
-        return Axis([_dotted_si(where, f"grid.{key}[{i}]", key, {"value": x, "unit": unit})
-                     for i, x in enumerate(vals)])
+        return _with_unit(Axis([_dotted_si(where, f"grid.{key}[{i}]", key,
+                                           {"value": x, "unit": unit})
+                                for i, x in enumerate(vals)]), key, unit)
     if isinstance(v, dict):
         if len(v) != 1 or next(iter(v)) not in GENERATORS:
             raise _err(where, f"grid.{key} = {v!r}: an inline table must be one of "
@@ -445,6 +470,14 @@ def _grid_values(where: str, key: str, v) -> Axis:
     if not v:
         raise _err(where, f"grid.{key} is an empty list; give at least one value")
     return Axis(v)
+
+
+def _with_unit(axis: Axis, key: str, unit: str) -> Axis:
+    """``axis`` with the unit the study file gave its values in (already checked)."""
+    si = arm_key(key).unit
+    if si is not None:
+        axis.unit, axis.factor = unit, si_factor(unit, si, name=f"grid.{key}.unit")
+    return axis
 
 
 def _dotted_si(where: str, path: str, key: str, v):
@@ -1139,7 +1172,7 @@ def run_study_file(study, outdir, *, backend: str = "local", scheduler=None,
             _write_histories(df, stage / "histories")
             # the frames are in histories/; the flag is [output], not a parameter of the cases
             df = df.drop(columns=[c for c in ("time_histories", "histories") if c in df.columns])
-        df.to_csv(stage / st.csv, index=False)
+        display_table(st, df).to_csv(stage / st.csv, index=False)   # units in the header
         (stage / "study.toml").write_text(st.source, encoding="utf-8")
         _write_summary(st, df, stage, env)
     return df
@@ -1160,6 +1193,56 @@ SUMMARY_FIGURE, SUMMARY_PAGE, ARM_COPY, HEAD_COPY = ("summary.png", "summary.htm
                                                      "head.toml")
 
 
+def _in_unit(v, factor: float):
+    """A value shown in a unit of SI factor ``factor`` (numbers and lists of numbers)."""
+    if factor == 1.0:
+        return v
+    if isinstance(v, (list, tuple)):
+        return [_in_unit(x, factor) for x in v]
+    if isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool):
+        return float(v) / factor
+    return v
+
+
+def unit_label(name: str, unit) -> str:
+    """A column or axis name with its unit: ``F_max [N]``, ``HIC36 [-]``; a text column as is.
+
+    Parameters
+    ----------
+    name : str
+        The name.
+    unit : str or None
+        Its unit (``"-"``: dimensionless; None: none).
+    """
+    return name if unit is None else f"{name} [{unit}]"
+
+
+def display_table(st: Study, df: pd.DataFrame) -> pd.DataFrame:
+    """The result table as a person reads it (the CSV, the HTML page): every column named with
+    its unit (``[-]`` dimensionless), a grid key's values in the unit the study file gave them
+    in (a mean pressure written in bar, in bar).
+
+    Parameters
+    ----------
+    st : Study
+        The study.
+    df : pandas.DataFrame
+        Its result table in SI units (:func:`run_study_file`'s).
+
+    Returns
+    -------
+    pandas.DataFrame
+    """
+    out = {}
+    for col in df.columns:
+        unit, factor = st.unit_of(col)
+        label = (f"{st.envelope['parameter']} [{unit}]" if col == "value" and st.envelope
+                 else unit_label(col, unit))
+        out[label] = df[col].map(lambda v, f=factor: _in_unit(v, f)) if factor != 1.0 else \
+            df[col]
+    return pd.DataFrame(out)
+
+
 def _write_summary(st: Study, df: pd.DataFrame, stage: Path, envelope=None) -> None:
     """The figure, the HTML page and the arm and head of a finished study."""
     if st.arm is not None:
@@ -1168,15 +1251,48 @@ def _write_summary(st: Study, df: pd.DataFrame, stage: Path, envelope=None) -> N
         (stage / HEAD_COPY).write_text(st.head.to_toml(), encoding="utf-8")
     title = f"{st.name}: {st.description}" if st.description else st.name
     if envelope is not None:
-        fig = envelope.plot(title=title)
+        fig = envelope.plot(title=title, unit=st.unit_of(envelope.parameter)[0])
         swept, what = [envelope.parameter], " ".join(envelope.lines())
     else:       # what varies among the cases run (--max-cases may run fewer)
         swept = [k for k in st.swept if k in df.columns and df[k].map(repr).nunique() > 1]
-        fig = plot_sweep(df, swept, title=title)
+        shown = df.copy()
+        for k in swept:                        # the swept values in the study file's unit
+            shown[k] = df[k].map(lambda v, f=st.unit_of(k)[1]: _in_unit(v, f))
+        fig = plot_sweep(shown, swept, title=title,
+                         units={k: st.unit_of(k)[0] for k in [*swept, *shown.columns]})
         what = (f"{len(df)} cases, {int((df.get('status') == 'ok').sum())} ok"
                 if "status" in df.columns else f"{len(df)} cases")
     save_figure(fig, stage / SUMMARY_FIGURE)
     (stage / SUMMARY_PAGE).write_text(summary_page(st, df, what, swept), encoding="utf-8")
+
+
+def _mark_above(shown: pd.DataFrame) -> tuple:
+    """The displayed table as HTML cell texts, the values above a limit line of the figure
+    marked (red, ``▲``, the limits exceeded in the tooltip); and the sentence that says so."""
+    out = shown.copy()
+    count = [0]
+
+    def cell(v, lines):
+        if v is None or isinstance(v, (bool, np.bool_, str)):
+            return html.escape("" if v is None else str(v))
+        if not isinstance(v, (int, float, np.integer, np.floating)):
+            return html.escape(str(v))
+        if not np.isfinite(v):
+            return ""
+        over = [text for lim, text, *_ in lines if v > lim]
+        if not over:
+            return f"{v:.4g}"
+        count[0] += 1
+        return (f'<span class="above" title="above: {html.escape("; ".join(over))}">{v:.4g} '
+                f"▲</span>")
+
+    for col in shown.columns:
+        lines = limit_lines(col.split(" [")[0])
+        out[col] = shown[col].map(lambda v, lines=lines: cell(v, lines))
+    note = (f'<p><span class="above">▲</span> {count[0]} values above a limit line of the '
+            f"figure (hover over a value for the limit).</p>" if count[0] else
+            "<p>No value above a limit line of the figure.</p>")
+    return out, note
 
 
 def summary_page(st: Study, df: pd.DataFrame, what: str, swept) -> str:
@@ -1203,25 +1319,29 @@ def summary_page(st: Study, df: pd.DataFrame, what: str, swept) -> str:
     limits = ("660 N maxilla fracture (Haddadin et al. 2007a, thesis §6.3.3); HIC36 650 (5 % "
               "risk of AIS 3+, thesis §6.3.3); ISO/TS 15066 skull/forehead transient contact "
               f"{LIMITS['iso_ts_15066'].value:g} N (Annex A)")
-    shown = df.drop(columns=[c for c in ("error",) if c in df.columns and not df[c].any()])
+    shown = display_table(st, df.drop(columns=[c for c in ("error",) if c in df.columns
+                                               and not df[c].any()]))
     rows = [("study", st.name), ("description", st.description or "-"),
             ("arm", arm + (" (arm.toml)" if st.arm is not None else "")),
             ("head", head + (" (head.toml)" if st.head is not None else "")),
-            ("swept", ", ".join(swept) or "-"), ("result", what), ("limits drawn", limits)]
+            ("swept", ", ".join(unit_label(k, st.unit_of(k)[0]) for k in swept) or "-"),
+            ("result", what), ("limits drawn", limits)]
     meta = "".join(f"<tr><th>{html.escape(k)}</th><td>{html.escape(str(v))}</td></tr>"
                    for k, v in rows)
-    table = shown.to_html(index=False, na_rep="", float_format=lambda x: f"{x:.4g}",
-                          border=0, classes="results")
+    marked, note = _mark_above(shown)
+    table = marked.to_html(index=False, na_rep="", escape=False, border=0, classes="results")
     return f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>{html.escape(st.name)}: ppamsafety sweep</title>
 <style>body{{font-family:sans-serif;max-width:80em;margin:1em auto;padding:0 1em}}
 table{{border-collapse:collapse;font-size:0.85em}}td,th{{border:1px solid #ccc;padding:2px 6px}}
-th{{background:#f3f3f3;text-align:left}}img{{max-width:100%}}</style></head>
+th{{background:#f3f3f3;text-align:left}}img{{max-width:100%}}
+.above{{color:#b00;font-weight:bold}}</style></head>
 <body><h1>{html.escape(st.name)}</h1>
 <table>{meta}</table>
 <p><img src="{SUMMARY_FIGURE}" alt="results against the swept parameters"></p>
 <p>Files: the table <a href="{html.escape(st.csv)}">{html.escape(st.csv)}</a>, the study
 <a href="study.toml">study.toml</a>.</p>
+{note}
 {table}
 </body></html>
 """
@@ -1230,4 +1350,4 @@ th{{background:#f3f3f3;text-align:left}}img{{max-width:100%}}</style></head>
 __all__ = ["SCHEMA", "GENERATORS", "KIND", "MATERIALISE", "CHECK_ALL", "COST", "CONFIRM_HOURS",
            "Axis", "CaseGrid", "Study", "StudyFileError", "parse_study", "load_study",
            "estimate_cases", "describe_estimate", "check_run_size", "history_format",
-           "run_study_file", "summary_page"]
+           "run_study_file", "summary_page", "display_table", "unit_label"]

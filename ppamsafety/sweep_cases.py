@@ -32,6 +32,7 @@ import functools
 import inspect
 import math
 from collections.abc import Mapping
+from dataclasses import fields
 
 import numpy as np
 import pandas as pd
@@ -40,18 +41,19 @@ from ._validation import did_you_mean
 from .control import PID, JointPSMC, TaskPSMC, SensorConfig
 from .control.pid import GAIN_MAX
 from .control.psmc import LAMBDA_MAX, TASK_GAIN_MAX
+from .design import rest_stiffness
 from .experiments.catalog import (CIRCLE_PERIODS, CIRCLE_WARMUP, DEFAULT_DURATIONS, STEP_TIMES,
                                   SWITCH_TIME, run_thesis_experiment, ControllerVariant)
 from .experiments.metrics import tracking_stats
 from .impact.head import HeadContactModel, head_model_names, head_model
 from .impact.instants import HEURISTICS, evaluate_experiment, heuristic_instants, impact_states
 from .impact.engine import FREE_STRIDE
-from .impact.verdicts import criteria_for, evaluate
+from .impact.verdicts import METRICS, criteria_for, criterion, evaluate
 from .impact.model import simulate_impacts, stiffness_limit
 from .params import ArmParameters, thesis_arm
-from .params.arm_file import ArmFileError, apply_arm_changes, effects_from_dict
+from .params.arm_file import ArmFileError, apply_arm_changes, arm_key, effects_from_dict
+from .params.effects import Effects
 from .plant import geometry as geo
-from .plant import pneumatics as pn
 from .sweep import _check_cases, grid_cases, run_sweep
 from .units import BAR
 
@@ -336,6 +338,61 @@ PARAMETERS = {
     "histories": (lambda v: _check_bool("histories", v),
                   "return the full time histories (closed loop and worst impact)"),
 }
+
+
+#: Units of the case parameters and result columns of a sweep (what a CSV header, an axis or
+#: a table shows beside the name): SI unless the name says otherwise; "-" dimensionless; None
+#: text, flags or lists (no unit).  Dotted arm and effect keys carry the unit of their
+#: declaration (:func:`column_unit`).
+COLUMN_UNITS = {
+    "lam": "s", "kp_bar": "bar/rad", "ki_bar": "bar/(rad s)", "kd_bar": "bar s/rad",
+    "task_kp": "N/m", "task_ki": "N/(m s)", "task_kd": "N s/m", "stiffness": "Nm/rad",
+    "every": "ms", "duration": "s", "noise_seed": "-", "speed": "m/s", "q1_deg": "deg",
+    "q2_deg": "deg", "direction": None, "experiment": None, "controller": None, "head": None,
+    "instants": None, "effects": None, "histories": None,
+    "label": None, "F_max": "N", "HIC36": "-", "HIC15": "-", "t0_F_max": "s", "t0_HIC36": "s",
+    "instant_HIC36": None, "tcp_speed": "m/s", "K1": "Nm/rad", "K2": "Nm/rad",
+    "n_impacts": "-", "track_mean": "m", "track_max": "m", "track_rms": "m", "diverged": None,
+    "status": None, "error": None, "value": None,
+}
+
+
+def column_unit(name: str):
+    """The unit of a sweep column or case parameter, as shown to a reader.
+
+    Parameters
+    ----------
+    name : str
+        A case parameter (``lam``, ``arm.pneumatics.mean_pressure``, ``effects.payload_mass``)
+        or a result column (``F_max`` ...).
+
+    Returns
+    -------
+    str or None
+        The SI unit (``"N"``, ``"Nm/rad"``, ``"-"`` for a dimensionless number), or None for a
+        text, flag or list column and an unknown name.
+    """
+    if not isinstance(name, str):
+        return None
+    if name == "governing_margin_pct":
+        return "%"
+    if name.endswith("_margin"):                 # a verdict column: the criterion's own unit
+        try:
+            return METRICS[criterion(name.removesuffix("_margin")).metric] or "-"
+        except ValueError:
+            return None
+    if name.startswith("arm.effects.") or name.startswith("effects."):
+        f = {f.name: f for f in fields(Effects)}.get(name.rsplit(".", 1)[-1])
+        if f is None or isinstance(f.default, bool) or f.name == "hysteresis_initial":
+            return None
+        return f.metadata["unit"] or "-"
+    if name.startswith("arm."):
+        try:
+            k = arm_key(name)
+        except ArmFileError:
+            return None
+        return k.unit if k.unit else ("-" if k.kind in ("float", "int") else None)
+    return COLUMN_UNITS.get(name)
 
 
 def _checked(case: dict) -> tuple:
@@ -648,8 +705,7 @@ def impact_case(speed: float, *, q1_deg: float = IMPACT_POSE_DEG[0],
     tcp = geo.jacobian(q, arm) @ d
     qd = d * (v / float(np.hypot(*tcp)))
     if st is None:
-        p = np.clip(pn.static_pressures(q, arm), 0.0, arm.pneumatics.p_max)
-        K = pn.joint_stiffness(q, p, arm)
+        K = np.array(rest_stiffness(arm, q).stiffness)
     else:
         K = np.broadcast_to(np.asarray(st, float), (2,)).copy()
     s = simulate_impacts(arm, q, qd, K, head=hm).summary.iloc[0]
@@ -868,4 +924,5 @@ def safety_sweep(cases=None, *, grid=None, name: str = "safety", cache_dir=None,
 __all__ = ["EXPERIMENTS", "CONTROLLERS", "INSTANTS", "MIN_SPEED", "PARAMETERS", "DEFAULTS",
            "DOTTED", "RESULT_COLUMNS", "check_case", "make_controller", "safety_case",
            "safety_sweep", "case_arm", "case_function", "is_dotted", "impact_case",
-           "check_impact_case", "SPEED_MAX", "IMPACT_POSE_DEG", "add_verdicts"]
+           "check_impact_case", "SPEED_MAX", "IMPACT_POSE_DEG", "add_verdicts", "COLUMN_UNITS",
+           "column_unit"]

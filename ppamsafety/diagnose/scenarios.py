@@ -680,7 +680,7 @@ def scores(results: pd.DataFrame) -> pd.DataFrame:
     pandas.DataFrame
         One row per measure: ``measure``, ``count`` (scenarios or names it is
         measured on), ``hits``, ``value``, ``wilson_low``/``high`` bound, ``target``,
-        ``met``.
+        ``met`` (None where there is no target, or no scenario or name to score it on).
     """
     df = _ok(results)
     rows = []
@@ -691,11 +691,13 @@ def scores(results: pd.DataFrame) -> pd.DataFrame:
         if better == "info":
             met, kind = None, ""
         elif upper is not None:
-            met, kind = bool(n and target <= v <= upper), f"in [{target:g}, {upper:g}]"
+            met, kind = bool(target <= v <= upper), f"in [{target:g}, {upper:g}]"
         elif better == "higher":
-            met, kind = bool(n and v >= target), ">="
+            met, kind = bool(v >= target), ">="
         else:
-            met, kind = bool(n and v <= target), "<="
+            met, kind = bool(v <= target), "<="
+        if not n:                   # nothing to score (e.g. a short battery): not "not met"
+            met = None
         rows.append({"measure": name, "count": int(n), "hits": int(hits), "value": v,
                      "wilson_low": _wilson_low(hits, n),
                      "target": math.nan if better == "info" else target,

@@ -40,7 +40,7 @@ SECTION = SectionInfo(
     summary=("bench case study: friction of three real 3D-printed cylinders (campaigns over "
              "pressure), loops before/after, named effects, laws vs pressure; confidence "
              "calibration"),
-    thesis="(new)", typical_seconds=35.0)
+    thesis="(new)", typical_seconds=35.0, scope="bench")
 
 #: Synthetic campaigns of the calibration in the report: none by default (the report's time
 #: budget; the full measurement, >= 200 campaigns, is ``tests/test_bench_calibration.py``

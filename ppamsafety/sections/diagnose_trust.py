@@ -248,6 +248,16 @@ def _reproduced(live: pd.DataFrame, stored: pd.DataFrame) -> str:
     return f"{same} of {len(live)}"
 
 
+def _met_text(scores: pd.DataFrame) -> pd.DataFrame:
+    """The scores with ``met`` as yes / no, "no samples" where nothing was scored (a short
+    battery) and empty where the measure has no target."""
+    out = scores.copy()
+    out["met"] = ["no samples" if n == 0 and pd.notna(t) else "" if m is None or pd.isna(m)
+                  else "yes" if m else "no"
+                  for m, n, t in zip(out["met"], out["count"], out["target"])]
+    return out
+
+
 def _fmt(df: pd.DataFrame) -> pd.DataFrame:
     out = df.copy()
     for c in out.columns:
@@ -283,7 +293,7 @@ def render(study: DiagnoseTrustStudy) -> Section:
         "loop that diverged -- and are not scenarios; the diagnosis raised an error on "
         f"{m['diagnosis_failures']} valid records):",
         "",
-        markdown_table(_fmt(study.scores)),
+        markdown_table(_fmt(_met_text(study.scores))),
         "",
         "Intervals.  A fit's own 95 % interval covers at 95 % only if the model is right.  "
         "An effect of the library too small to name, left out of the model, biases the "
@@ -343,7 +353,7 @@ def render(study: DiagnoseTrustStudy) -> Section:
         ("diagnose_trust_by_effect.csv", study.by_effect),
         ("diagnose_trust_detection.csv", study.curve),
         ("diagnose_trust_limits.csv", study.limits)]
-    return Section("Trust in the diagnosis: calibrated confidence, detection limits (issue 19)",
+    return Section("Trust in the diagnosis: calibrated confidence, detection limits",
                    "\n".join(md), arts, dict(m))
 
 

@@ -91,23 +91,59 @@ ASSUMPTIONS = (
     "Transient limit = 2 x quasi-static (Table A.2 multiplier of the other regions, as the brief "
     "asks). Our reading of the TS is that it gives no transient allowance for the head; every "
     "verdict is also stated against the quasi-static force (factor 1).",
-    "Robot effective mass: Annex A.4 m_R = M/2 + m_L with M = 2.5 kg (thesis §6.3.5), m_L = 0; "
+    "Robot effective mass: Annex A.4 m_R = M/2 + m_L with M = {mass}, m_L = 0; "
     "and the arm's own apparent mass 1/(u^T J H^-1 J^T u) along the impact direction.",
     "Free transient contact: the thesis impact model (flexible joints, horizontal plane, 50 ms) "
     "at the four instants of §6.3.3 (worst reported); ISO head = linear undamped spring K with "
     "a 4.4 kg free head.",
     "Transient clamping: the head's back touches a rigid frictionless wall perpendicular to the "
     "tool velocity (worst orientation); wall contact = skull spring 150 N/mm (ISO heads) or the "
-    "thesis Hunt-Crossley fit (checked on the Hybrid III drop onto a rigid plate).",
+    "{head}.",
     "Quasi-static clamping, closed loop: the tool is held where it passes at its largest speed in "
     "the 30->70 deg step by an isotropic spring-damper (75 N/mm = two 150 N/mm skull springs in "
     "series, 300 N s/m; head mass neglected) until the end of the 12 s run; the contact force is its magnitude "
     "(normal and tangential parts listed). Transient peaks of this run are not used (massless "
     "head, 1 ms zero-order hold of the force).",
     "Quasi-static bound: exact maximum of the static tool force over muscle pressures in "
-    "[0, 3 bar] (or the Delta-p approach at the calibrated mean pressures), gravity of the "
+    "[0, {p_max}] (or the Delta-p approach at the {mean_pressures}), gravity of the "
     "vertical plane included, over a 25 x 25 grid of the working area and 72 directions.",
 )
+
+
+def assumptions(arm=None, head=None) -> list:
+    """The :data:`ASSUMPTIONS` for an arm and head: the robot mass, the largest muscle
+    pressure, the mean pressures and the Hunt-Crossley head are the arm's and head's own.
+
+    Parameters
+    ----------
+    arm : ArmParameters, optional
+        The arm (default the thesis arm).
+    head : HeadContactModel, optional
+        The Hunt-Crossley head beside the ISO heads (default ``thesis-frontal``).
+
+    Returns
+    -------
+    list of str
+    """
+    a = resolve_arm(arm)
+    hc = resolve_head_model(head)
+    if compares_to_thesis(a):
+        mass = f"{THESIS_ARM_MASS:g} kg (thesis §6.3.5)"
+        means = "calibrated mean pressures"
+    else:
+        mass = f"{_robot_mass(a):.3g} kg (the arm's link masses plus payload)"
+        means = ("arm's mean pressures " + ", ".join(f"{p / BAR:.4g}" for p in
+                                                     a.pneumatics.p_mean) + " bar")
+    hd = ("thesis Hunt-Crossley fit (checked on the Hybrid III drop onto a rigid plate)"
+          if hc == head_model() else f"Hunt-Crossley contact of head model `{hc.name}`")
+    return [t.format(mass=mass, head=hd, p_max=f"{a.pneumatics.p_max / BAR:g} bar",
+                     mean_pressures=means) for t in ASSUMPTIONS]
+
+
+def _robot_mass(arm) -> float:
+    """Annex A's total robot mass M of an arm that is not the thesis arm [kg]: its link masses
+    plus payload."""
+    return arm.links.m1 + arm.links.m2 + arm.effects.payload_mass
 
 
 def _variants(lams):
@@ -435,8 +471,7 @@ def compute(*, quick: bool = False, arm=None, head=None) -> IsoStudy:
     hc = resolve_head_model(head)
     hc_label = HC_LABEL if hc == head_model() else "head HC"
     lams = LAMBDAS_QUICK if quick else LAMBDAS_FULL
-    mass = (THESIS_ARM_MASS if compares_to_thesis(arm) else
-            arm.links.m1 + arm.links.m2 + arm.effects.payload_mass)
+    mass = THESIS_ARM_MASS if compares_to_thesis(arm) else _robot_mass(arm)
     m_r = robot_effective_mass_annex_a(mass)
     free, step_runs = _free_impacts(arm, lams, hc, hc_label)
     worst = _worst_per_variant(free)
@@ -619,7 +654,7 @@ def render(study: IsoStudy) -> Section:
         "pain-onset study at the University of Mainz, its force limits from a literature review).",
         "",
         "**Assumptions**", "",
-        *[f"{i + 1}. {a}" for i, a in enumerate(ASSUMPTIONS)], "",
+        *[f"{i + 1}. {a}" for i, a in enumerate(assumptions(study.arm, study.head))], "",
         "**ISO/TS 15066 limits, transfer energy and permissible relative speed** "
         f"(m_R = M/2 = {m['m_R_annex_kg']:g} kg; E = F^2/(2K), v_max = F/sqrt(mu K)):", "",
         markdown_table(lim, digits=4), "",
@@ -707,7 +742,7 @@ def _render_other(study: IsoStudy) -> Section:
         f"{m['robot_mass_kg']:.3g} kg: link masses plus payload; m_R = M/2 = "
         f"{m['m_R_annex_kg']:.3g} kg) and head model `{study.head.name}` beside the ISO heads.", "",
         "**Assumptions**", "",
-        *[f"{i + 1}. {a}" for i, a in enumerate(ASSUMPTIONS)], "",
+        *[f"{i + 1}. {a}" for i, a in enumerate(assumptions(study.arm, study.head))], "",
         "**Limits, transfer energy and permissible relative speed:**", "",
         markdown_table(study.limits.drop(columns=["m_H"]), digits=4), "",
         "**Transient clamping** (worst free-impact state of each controller; F in N):", "",
@@ -740,4 +775,4 @@ def _render_other(study: IsoStudy) -> Section:
                    arts, dict(m))
 
 
-__all__ = ["IsoStudy", "compute", "render", "ASSUMPTIONS"]
+__all__ = ["IsoStudy", "compute", "render", "ASSUMPTIONS", "assumptions"]
