@@ -292,11 +292,11 @@ def point_batch(CASES, P, S, dt, nsteps, w36, w15, stride, free, SUM, HIST, hist
 
     In contact (and near it) the RK4 step is ``stride`` x dt and the force is sampled once per
     step; while the point and the body are apart and cannot touch within a long step (gap >
-    FREE_GAP + 2 x closing speed x step), steps of ``free`` x dt.  ``stride`` = 1 is the exact
-    engine (every step dt, HIC by branch and bound, as the tool-point engine); ``stride`` > 1 a
-    screening run (module docstring; no histories).  ``nsteps`` must be a multiple of
-    ``stride`` and ``free`` of ``stride``; ``w36``, ``w15`` are the HIC windows in samples of
-    ``stride`` x dt.
+    FREE_GAP + 2 x closing speed x step), steps of (``free`` // ``stride``) x ``stride`` x dt.
+    ``stride`` = 1 is the exact engine (every step dt, HIC by branch and bound, as the
+    tool-point engine); ``stride`` > 1 a screening run (module docstring; no histories).
+    ``nsteps`` must be a multiple of ``stride``; ``w36``, ``w15`` are the HIC windows in
+    samples of ``stride`` x dt.
 
     Parameters
     ----------
