@@ -69,6 +69,9 @@ from .model import (ENERGY_TOL, MAX_JOINT_SPEED, MAX_SPEED, PLAUSIBLE_SPEED, _fm
 #: pressure) is within 1e-3 of the exact engine's at 8 dt, the HIC (coarser window ends)
 #: within 0.5 % at 4 dt (tests/test_anywhere.py).
 SCREEN_STRIDE = {"F_max": 8, "HIC36": 4, "p_max": 8}
+#: A screening value stands in for the bound only if the contact lasted at least this many
+#: long steps (shorter, negligible contacts fall between the screening grid's samples).
+SCREEN_MIN_SAMPLES = 8
 #: Relative margin on the screening values (tests/test_anywhere.py: the largest shortfall of a
 #: screening value below the exact one, over random and scan states, stays under half of it).
 SCREEN_MARGIN = 0.02
@@ -461,8 +464,8 @@ def _run(prep: _PointPrep, idx, stride: int = 1, HIST=None) -> np.ndarray:
     if idx.size == 0:
         return out
     nst = prep.nsteps
-    if stride > 1:
-        nst = max(stride, (nst // stride) * stride)
+    if stride > 1:                          # whole long steps, covering the duration
+        nst = -(-nst // stride) * stride
     h = stride * prep.dt
     w36 = int(math.floor(0.036 / h * (1 + 1e-9)))
     w15 = int(math.floor(0.015 / h * (1 + 1e-9)))
@@ -873,9 +876,12 @@ def worst_contact(result, arm, *, points=None, bodies=None, limits=None,
                         rows[int(c)] = out[j]
                     best = max(best, float(vals.max()))
                 else:
+                    # a contact shorter than SCREEN_MIN_SAMPLES long steps is not resolved
+                    # by the screening grid: such a candidate keeps its bound
+                    ok = out[:, pt.U_TCONT] >= SCREEN_MIN_SAMPLES * stride * prep.dt
                     screened[sel] = True
-                    scr[sel] = vals
-                    up[sel] = vals * (1.0 + SCREEN_MARGIN)
+                    scr[sel] = np.where(ok, vals, np.nan)
+                    up[sel] = np.where(ok, vals * (1.0 + SCREEN_MARGIN), up[sel])
         n_scr += int(screened.sum())
         n_sim += int(simulated.sum())
         bi_all = np.repeat(np.arange(nb), nk)

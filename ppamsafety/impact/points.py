@@ -26,8 +26,10 @@ engine's arithmetic step for step (the same summary values, bit for bit; tested)
 
 A *screening* run (``stride`` m > 1) takes its steps in contact with m dt and samples the
 force on that coarser grid (the HIC on it, the peak force refined by a parabola through the
-largest sample and its neighbours): a cheap estimate used by the every-instant scan
-(:mod:`ppamsafety.impact.anywhere`) to choose the instants simulated exactly.
+largest sample and its neighbours); a long step across which the contact starts or ends is
+taken again in steps of dt (their peak kept), so short contacts are resolved: a cheap
+estimate used by the every-instant scan (:mod:`ppamsafety.impact.anywhere`) to choose the
+instants simulated exactly.
 
 Data layouts (declared here): :data:`PCASE` (one case), :data:`PSTATE` (integrator state),
 :data:`PSUMMARY` (summary row; :data:`PSUMMARY_COLUMNS`) and :data:`PHIST` (history sample).
@@ -322,6 +324,7 @@ def point_batch(CASES, P, S, dt, nsteps, w36, w15, stride, free, SUM, HIST, hist
         History row of each case, or -1.
     """
     y = np.empty(NZ)
+    ys = np.empty(NZ)
     yt = np.empty(NZ)
     k1, k2, k3, k4 = np.empty(NZ), np.empty(NZ), np.empty(NZ), np.empty(NZ)
     work = np.empty(NWORK)
@@ -336,6 +339,7 @@ def point_batch(CASES, P, S, dt, nsteps, w36, w15, stride, free, SUM, HIST, hist
         e0 = _energy(y, case, P, S, work)
         fmax, tmax, dmax, tcont, v0, pmax, cuse = 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0
         imax = 0
+        ffine, tfine = 0.0, 0.0
         hrow = hist_of[c]
         s = 0
         f, delta, ddelta, vt = point_rhs(y, case, P, S, work, k1)
@@ -366,18 +370,42 @@ def point_batch(CASES, P, S, dt, nsteps, w36, w15, stride, free, SUM, HIST, hist
                 for i in range(1, m):
                     acc[s + i] = 0.0
                 s += m
-            else:
+            elif stride == 1:
                 f, delta, ddelta, vt = _rk4(y, h, case, P, S, work, k1, k2, k3, k4, yt)
                 s += 1
+            else:
+                for i in range(NZ):
+                    ys[i] = y[i]
+                f1, d1, dd1, vt1 = _rk4(y, h, case, P, S, work, k1, k2, k3, k4, yt)
+                if (f1 > 0.0) == (f > 0.0):
+                    f, delta, ddelta, vt = f1, d1, dd1, vt1
+                else:
+                    # the contact starts or ends inside the long step: redo it with steps of
+                    # dt, keeping their peak (onset and separation are not smooth)
+                    for i in range(NZ):
+                        y[i] = ys[i]
+                    point_rhs(y, case, P, S, work, k1)
+                    for j in range(stride):
+                        f, delta, ddelta, vt = _rk4(y, dt, case, P, S, work, k1, k2, k3, k4,
+                                                    yt)
+                        if f > ffine:
+                            ffine, tfine = f, s * h + (j + 1) * dt
+                        dmax = max(dmax, delta)
+                        if delta > 0.0 and f / (S[S_AF] * delta) > pmax:
+                            pmax = f / (S[S_AF] * delta)
+                s += 1
         r = SUM[c]
-        if stride > 1 and 0 < imax < nsamp:
-            # screening: the peak between samples, from the parabola through three samples
-            fa, fb, fc = acc[imax - 1] * mg, acc[imax] * mg, acc[imax + 1] * mg
-            den = fa - 2.0 * fb + fc
-            if den < 0.0:
-                x = 0.5 * (fa - fc) / den
-                fmax = fb - 0.25 * (fa - fc) * x
-                tmax = (imax + x) * h
+        if stride > 1:
+            if 0 < imax < nsamp:
+                # screening: the peak between samples, from the parabola through three samples
+                fa, fb, fc = acc[imax - 1] * mg, acc[imax] * mg, acc[imax + 1] * mg
+                den = fa - 2.0 * fb + fc
+                if den < 0.0:
+                    x = 0.5 * (fa - fc) / den
+                    fmax = fb - 0.25 * (fa - fc) * x
+                    tmax = (imax + x) * h
+            if ffine > fmax:
+                fmax, tmax = ffine, tfine
         r[U_FMAX], r[U_TFMAX] = fmax, tmax
         r[U_HIC36], i1, i2, r[U_HIC15], j1, j2 = hic_pair_kernel(acc, h, w36, w15, stride == 1)
         r[U_W36], r[U_W36 + 1] = i1 * h, i2 * h
