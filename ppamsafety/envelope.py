@@ -74,7 +74,7 @@ LIMITS = {
 }
 #: Numeric safety_case parameters an envelope can search (besides dotted arm parameters).
 NUMERIC = ("lam", "kp_bar", "ki_bar", "kd_bar", "task_kp", "task_ki", "task_kd", "stiffness",
-           "duration")
+           "duration", "covering_thickness", "covering_modulus", "covering_hysteresis")
 
 
 @dataclass

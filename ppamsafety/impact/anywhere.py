@@ -28,9 +28,10 @@ grid point with V >= E0 stands for delta_m).  The HIC bound is that of the tool 
 body's acceleration F / m_b, its impulse, the cone about the initial normal with the body's
 radius).  Both are multiplied by :data:`~ppamsafety.impact.bounds.MARGIN` (integration error).
 
-**Screening.**  The engine run with contact steps of :data:`SCREEN_STRIDE` x dt (force
-sampled on that grid, peak refined by a parabola; free flight in steps of 100 dt where they
-resolve the joint springs, as the tool point's dense integrator): its F_max and HIC36 times
+**Screening.**  The engine run with longer contact steps (:data:`SCREEN_STRIDE` x dt for the
+HIC; for the force and pressure about :data:`SCREEN_SAMPLES_PER_CONTACT` steps per contact;
+force sampled on that grid, peak refined by a parabola; free flight in steps of 100 dt where
+they resolve the joint springs, as the tool point's dense integrator): its F_max and HIC36 times
 1 + :data:`SCREEN_MARGIN` stand in for the bounds; tests/test_anywhere.py checks screen x
 (1 + margin) >= exact on random and scan states.
 """
@@ -61,20 +62,34 @@ from .head import HeadContactModel
 from .instants import _check_result, impact_states
 from .layers import (NL, S_ALPHA, S_NL, SeriesContact, series_contact, stack_batch,
                      stack_force_bound)
-from .model import (ENERGY_TOL, MAX_JOINT_SPEED, MAX_SPEED, PLAUSIBLE_SPEED, _fmt_cases,
-                    _history_indices, _rows, _unit, check_angles, check_arm, check_stiffness,
-                    stiffness_limit)
+from .model import (ENERGY_TOL, MAX_JOINT_SPEED, MAX_SPEED, PLAUSIBLE_SPEED, STEPS_PER_PERIOD,
+                    _fmt_cases, _history_indices, _rows, _unit, check_angles, check_arm,
+                    check_stiffness, stiffness_limit)
 
-#: Contact steps of a screening run, in units of dt, by criterion: the peak force (and
-#: pressure) is within 1e-3 of the exact engine's at 8 dt, the HIC (coarser window ends)
-#: within 0.5 % at 4 dt (tests/test_anywhere.py).
-SCREEN_STRIDE = {"F_max": 8, "HIC36": 4, "p_max": 8}
+#: Contact steps of a screening run, in units of dt, by criterion: the HIC (coarser window
+#: ends) is within 0.5 % of the exact engine's at 4 dt (tests/test_anywhere.py).  For the
+#: force and the pressure these are the shortest steps: a longer contact gets longer steps,
+#: about
+#: :data:`SCREEN_SAMPLES_PER_CONTACT` per contact (a power of 2 times dt, at most
+#: :data:`SCREEN_MAX_STRIDE`).
+SCREEN_STRIDE = {"F_max": 4, "HIC36": 4, "p_max": 4}
+#: Samples per contact of an adaptive screening run, from the contact time of the undamped
+#: two-body impact, 2.8 delta*/v with V(delta*) = mu v^2 / 2 (2.94 for Hertz, pi for a linear
+#: spring, 2.80 for a thin layer), divided by 1 + alpha_max v for the sharper peak of a damped
+#: contact: an estimate that only sets the step.
+SCREEN_SAMPLES_PER_CONTACT = 24
+#: Longest screening step [dt].
+SCREEN_MAX_STRIDE = 64
 #: A screening value stands in for the bound only if the contact lasted at least this many
 #: long steps (shorter, negligible contacts fall between the screening grid's samples).
 SCREEN_MIN_SAMPLES = 8
-#: Relative margin on the screening values (tests/test_anywhere.py: the largest shortfall of a
-#: screening value below the exact one, over random and scan states, stays under half of it).
-SCREEN_MARGIN = 0.02
+#: Relative margin on the screening values, by criterion (tests/test_anywhere.py: the largest
+#: shortfall of a screening value below the exact one, over random states at every contact
+#: point, stays under half of it).
+SCREEN_MARGIN = {"F_max": 0.001, "HIC36": 0.01, "p_max": 0.001}
+#: Screening values below these floors are not used (the candidate keeps its bound):
+#: negligible contacts the screening grid need not resolve.
+SCREEN_FLOOR = {"F_max": 1.0, "HIC36": 1e-4, "p_max": 1e3}
 #: Criteria :func:`worst_contact` can rank by: summary column -> unit.
 CRITERIA = {"F_max": "N", "HIC36": "-", "p_max": "Pa"}
 
@@ -356,6 +371,7 @@ class _PointPrep:
     nsteps: int
     fixed_arm: bool
     arm: object = None
+    long_free: np.ndarray | None = None
 
 
 def _with_body(prep: _PointPrep, body: BodyContact) -> _PointPrep:
@@ -380,7 +396,11 @@ def _check_through(contact: SeriesContact, v_close) -> None:
 
 
 def _prepare(arm, q, qd, stiffness, *, point, body, covering, direction, body_velocity,
-             fixed_arm, dt, duration, history, warn_area, stacklevel):
+             fixed_arm, dt, duration, history, warn_area, stacklevel, Hinv=None,
+             checked=False):
+    """Validate and pack the cases (:func:`simulate_contacts`).  ``Hinv`` (H(q)^-1 of the
+    cases) and ``checked`` (the stiffnesses already checked for these q) spare a scan over
+    several points the work it has done once."""
     arm = check_arm(arm)
     point = resolve_point(point, arm, covering)
     body = resolve_body(body)
@@ -415,7 +435,7 @@ def _prepare(arm, q, qd, stiffness, *, point, body, covering, direction, body_ve
     check_range_array("qd", qd, -MAX_JOINT_SPEED, MAX_JOINT_SPEED, unit="rad/s")
     check_range_array("stiffness", K, 0.0, math.inf, unit="N m/rad")
     check_range_array("body_velocity", vb, -1e3, 1e3, unit="m/s")
-    if not fixed_arm and n:
+    if not fixed_arm and n and not checked:
         check_stiffness(K, q, arm, eng.FREE_STRIDE * dt, dt)
     J = point_jacobian(q, arm, point)
     vp = np.einsum("nij,nj->ni", J, qd)
@@ -435,8 +455,9 @@ def _prepare(arm, q, qd, stiffness, *, point, body, covering, direction, body_ve
     v_close = np.einsum("ni,ni->n", (0.0 if fixed_arm else vp) - vb, u)
     _check_through(contact, v_close)
     with np.errstate(divide="ignore", invalid="ignore"):
-        M = J @ np.linalg.inv(dyn.inertia_matrix(q, arm)) @ np.swapaxes(J, -1, -2)
-        inv = np.einsum("ni,nij,nj->n", u, M, u)
+        Hi = np.linalg.inv(dyn.inertia_matrix(q, arm)) if Hinv is None else Hinv
+        w = np.einsum("nji,nj->ni", J, u)                     # J^T u
+        inv = np.einsum("ni,nij,nj->n", w, Hi, w)
         meff = np.where(inv > 0, 1.0 / np.where(inv > 0, inv, 1.0), np.inf)
     active = (np.linalg.norm((0.0 if fixed_arm else vp) - vb, axis=1) > 0)
     cases = np.zeros((n, pt.NPCASE))
@@ -475,8 +496,10 @@ def _run(prep: _PointPrep, idx, stride: int = 1, HIST=None) -> np.ndarray:
         HIST = np.zeros((0, nst + 1, pt.NPHIST))
     groups = [(np.ones(idx.size, bool), eng.FREE_STRIDE)]
     if stride > 1 and not prep.fixed_arm:
-        longer = prep.K[idx].max(axis=1) <= stiffness_limit(
-            prep.q[idx], prep.arm, eng.DENSE_FREE_STRIDE * prep.dt)
+        if prep.long_free is None:           # once per set of cases
+            prep.long_free = prep.K.max(axis=1) <= stiffness_limit(
+                prep.q, prep.arm, eng.DENSE_FREE_STRIDE * prep.dt)
+        longer = prep.long_free[idx]
         groups = [(longer, eng.DENSE_FREE_STRIDE), (~longer, eng.FREE_STRIDE)]
     for sel, free in groups:
         if not sel.any():
@@ -489,6 +512,43 @@ def _run(prep: _PointPrep, idx, stride: int = 1, HIST=None) -> np.ndarray:
     return out
 
 
+def _screen_strides(prep: _PointPrep, idx, criterion: str) -> np.ndarray:
+    """The screening step of each case [dt]: :data:`SCREEN_STRIDE` for the HIC, and for the
+    force and pressure the step that puts about :data:`SCREEN_SAMPLES_PER_CONTACT` samples in
+    the contact (never shorter than :data:`SCREEN_STRIDE`)."""
+    base = SCREEN_STRIDE[criterion]
+    idx = np.asarray(idx, dtype=np.int64)
+    if criterion == "HIC36":
+        return np.full(idx.size, base, dtype=np.int64)
+    mb = prep.contact.body.mass
+    me = prep.meff[idx]
+    mu = np.where(np.isfinite(me), mb * me / (mb + np.where(np.isfinite(me), me, 1.0)), mb)
+    v = np.maximum(prep.speed[idx], 1e-12)
+    tab = _stack_table(prep.contact)
+    dstar = tab.delta_at(0.5 * mu * v * v)
+    # a Hunt-Crossley damped pulse peaks earlier and sharper: shorten the scale with alpha v
+    tc = 2.8 * np.minimum(dstar, 1.0) / v / (1.0 + tab.alpha_max * v)
+    st = tc / (SCREEN_SAMPLES_PER_CONTACT * prep.dt)
+    p2 = 2 ** np.floor(np.log2(np.maximum(st, 1.0)))
+    return np.clip(p2, base, SCREEN_MAX_STRIDE).astype(np.int64)
+
+
+def _screen(prep: _PointPrep, idx, criterion: str) -> tuple:
+    """Screening rows of the cases ``idx``, and whether each is usable (its contact spans at
+    least :data:`SCREEN_MIN_SAMPLES` long steps and its value reaches
+    :data:`SCREEN_FLOOR`)."""
+    idx = np.asarray(idx, dtype=np.int64)
+    strides = _screen_strides(prep, idx, criterion)
+    out = np.zeros((idx.size, pt.NPSUM))
+    for st in np.unique(strides):
+        sel = strides == st
+        out[sel] = _run(prep, idx[sel], int(st))
+    col = {"F_max": pt.U_FMAX, "HIC36": pt.U_HIC36, "p_max": pt.U_PMAX}[criterion]
+    ok = ((out[:, pt.U_TCONT] >= SCREEN_MIN_SAMPLES * strides * prep.dt)
+          & (out[:, col] >= SCREEN_FLOOR[criterion]))
+    return out, ok
+
+
 _INPUTS = ["q1", "q2", "qd1", "qd2", "K1", "K2", "ux", "uy", "point_speed", "m_eff"]
 
 
@@ -496,13 +556,15 @@ def _frame(prep: _PointPrep, rows, SUM, *, stacklevel) -> pd.DataFrame:
     rows = np.asarray(rows, dtype=np.int64)
     data = np.column_stack([prep.q[rows], prep.qd[rows], prep.K[rows], prep.u[rows],
                             prep.speed[rows], prep.meff[rows], SUM])
-    df = pd.DataFrame(data, columns=_INPUTS + list(pt.PSUMMARY_COLUMNS))
     nl = len(prep.contact.layers)
-    df = df.drop(columns=[f"E_layer{i + 1}" for i in range(nl, NL)])
+    drop = {f"E_layer{i + 1}" for i in range(nl, NL)}
+    if prep.contact.covering.bare:
+        drop.add("covering_use")
+    cols = _INPUTS + list(pt.PSUMMARY_COLUMNS)
+    keep = [j for j, c in enumerate(cols) if c not in drop]
+    df = pd.DataFrame(data[:, keep], columns=[cols[j] for j in keep])
     if not math.isfinite(prep.contact.effective_radius):
         df["p_max"] = np.nan
-    if prep.contact.covering.bare:
-        df = df.drop(columns=["covering_use"])
     active = np.zeros(prep.cases.shape[0], dtype=bool)
     active[prep.sel] = True
     act = active[rows]
@@ -737,7 +799,7 @@ def worst_contact(result, arm, *, points=None, bodies=None, limits=None,
     winners are simulated by the exact engine), but only the candidates that can still win are
     simulated: (1) rigorous bounds of every candidate (:func:`contact_bounds`); (2) with
     ``screen``, candidates whose bound reaches the best exact value so far are screened in
-    batches of ``chunk`` (contact steps of :data:`SCREEN_STRIDE` x dt; the value x
+    batches of ``chunk`` (longer contact steps, :func:`_screen_strides`; the value x
     (1 + :data:`SCREEN_MARGIN`) replaces the bound); (3) candidates whose bound or screening value still reaches it are simulated
     exactly.  A candidate is dropped only when strictly below an exact value.
 
@@ -803,7 +865,15 @@ def worst_contact(result, arm, *, points=None, bodies=None, limits=None,
     sub = st.iloc[idx].reset_index(drop=True)
     q, qd, K = (sub[["q1", "q2"]].to_numpy(), sub[["qd1", "qd2"]].to_numpy(),
                 sub[["K1", "K2"]].to_numpy())
-    e0_arm = 0.5 * np.einsum("ni,nij,nj->n", qd, dyn.inertia_matrix(q, arm), qd)
+    Hq = dyn.inertia_matrix(q, arm)
+    e0_arm = 0.5 * np.einsum("ni,nij,nj->n", qd, Hq, qd)
+    Hinv = np.linalg.inv(Hq)
+    if len(q):
+        check_stiffness(K, q, arm, eng.FREE_STRIDE * dt, dt)
+    # which instants the screening's long free-flight steps resolve (stiffness_limit, once)
+    lam_min = np.linalg.eigvalsh(Hq)[..., 0]
+    long_free = K.max(axis=1) <= lam_min * (
+        2.0 * math.pi / (STEPS_PER_PERIOD * eng.DENSE_FREE_STRIDE * dt)) ** 2
     col = {"F_max": pt.U_FMAX, "HIC36": pt.U_HIC36, "p_max": pt.U_PMAX}[criterion]
     tables, worst_rows = [], []
     n_scr = n_sim = n_cand = 0
@@ -816,7 +886,9 @@ def worst_contact(result, arm, *, points=None, bodies=None, limits=None,
         preps, ups, scale = [], [], []
         base = _prepare(arm, q[keep], qd[keep], K[keep], point=p, body=bds[0], covering=None,
                         direction=None, body_velocity=None, fixed_arm=False, dt=dt,
-                        duration=duration, history=False, warn_area=False, stacklevel=3)
+                        duration=duration, history=False, warn_area=False, stacklevel=3,
+                        Hinv=Hinv[keep], checked=True)
+        base.long_free = long_free[keep]
         for bi, b in enumerate(bds):
             prep = base if bi == 0 else _with_body(base, b)
             fb, hb = _bounds(arm, p, prep.contact, e0_arm[keep], np.zeros((keep.size, 2)),
@@ -863,10 +935,13 @@ def worst_contact(result, arm, *, points=None, bodies=None, limits=None,
             else:
                 take = order[open_[order]][:chunk]
                 take = np.sort(take)
-                stride = 1 if not screen else SCREEN_STRIDE[criterion]
+                stride = 1 if not screen else 2
             for bi, sel, inst in _split(take):
                 prep = preps[bi]
-                out = _run(prep, inst, stride)
+                if stride == 1:
+                    out = _run(prep, inst, 1)
+                else:
+                    out, ok = _screen(prep, inst, criterion)
                 vals = out[:, col] * scale[bi]
                 if stride == 1:
                     simulated[sel] = True
@@ -878,15 +953,14 @@ def worst_contact(result, arm, *, points=None, bodies=None, limits=None,
                 else:
                     # a contact shorter than SCREEN_MIN_SAMPLES long steps is not resolved
                     # by the screening grid: such a candidate keeps its bound
-                    ok = out[:, pt.U_TCONT] >= SCREEN_MIN_SAMPLES * stride * prep.dt
                     screened[sel] = True
                     scr[sel] = np.where(ok, vals, np.nan)
-                    up[sel] = np.where(ok, vals * (1.0 + SCREEN_MARGIN), up[sel])
+                    up[sel] = np.where(ok, vals * (1.0 + SCREEN_MARGIN[criterion]), up[sel])
         n_scr += int(screened.sum())
         n_sim += int(simulated.sum())
         bi_all = np.repeat(np.arange(nb), nk)
         inst_all = np.tile(keep, nb)
-        t = pd.DataFrame({"point": p.name, "body": [names[i] for i in bi_all],
+        t = pd.DataFrame({"point": p.name, "body": np.array(names, dtype=object)[bi_all],
                           "t0": sub["t"].to_numpy()[inst_all],
                           "point_speed": np.tile(sp[keep], nb),
                           "bound": np.concatenate(ups) / np.repeat(scale, nk),

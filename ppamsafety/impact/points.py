@@ -27,7 +27,8 @@ engine's arithmetic step for step (the same summary values, bit for bit; tested)
 A *screening* run (``stride`` m > 1) takes its steps in contact with m dt and samples the
 force on that coarser grid (the HIC on it, the peak force refined by a parabola through the
 largest sample and its neighbours); a long step across which the contact starts or ends is
-taken again in steps of dt (their peak kept), so short contacts are resolved: a cheap
+taken again in :data:`REDO_STEPS` shorter steps (their peak kept), so the onset and the
+separation are resolved: a cheap
 estimate used by the every-instant scan (:mod:`ppamsafety.impact.anywhere`) to choose the
 instants simulated exactly.
 
@@ -132,6 +133,11 @@ PHIST = Layout("contact point history row", [
     "E_total")
 PHIST_COLUMNS = PHIST.columns()
 NPHIST = PHIST.size
+
+
+#: A long screening step across which the contact starts or ends is redone in this many
+#: steps (of dt at the least).
+REDO_STEPS = 8
 
 
 @kernel
@@ -380,16 +386,18 @@ def point_batch(CASES, P, S, dt, nsteps, w36, w15, stride, free, SUM, HIST, hist
                 if (f1 > 0.0) == (f > 0.0):
                     f, delta, ddelta, vt = f1, d1, dd1, vt1
                 else:
-                    # the contact starts or ends inside the long step: redo it with steps of
-                    # dt, keeping their peak (onset and separation are not smooth)
+                    # the contact starts or ends inside the long step: redo it in REDO_STEPS
+                    # shorter steps (of dt at the least), keeping their peak (onset and
+                    # separation are not smooth)
                     for i in range(NZ):
                         y[i] = ys[i]
                     point_rhs(y, case, P, S, work, k1)
-                    for j in range(stride):
-                        f, delta, ddelta, vt = _rk4(y, dt, case, P, S, work, k1, k2, k3, k4,
-                                                    yt)
+                    sub = max(stride // REDO_STEPS, 1)
+                    for j in range(stride // sub):
+                        f, delta, ddelta, vt = _rk4(y, sub * dt, case, P, S, work, k1, k2, k3,
+                                                    k4, yt)
                         if f > ffine:
-                            ffine, tfine = f, s * h + (j + 1) * dt
+                            ffine, tfine = f, s * h + (j + 1) * sub * dt
                         dmax = max(dmax, delta)
                         if delta > 0.0 and f / (S[S_AF] * delta) > pmax:
                             pmax = f / (S[S_AF] * delta)
