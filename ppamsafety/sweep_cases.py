@@ -190,8 +190,8 @@ def _check_head(v):
 
 
 #: Contact points a case can name (the defaults of every arm,
-#: :func:`ppamsafety.params.contact.arm_contact_points`).
-CONTACT_POINTS = ("tool point", "elbow", "forearm", "upper arm")
+#: :func:`ppamsafety.params.contact.arm_contact_points`); ``"all"``: the worst of them.
+CONTACT_POINTS = ("tool point", "elbow", "forearm", "upper arm", "all")
 #: Keys that route a case through the contact-point engine (covering and body in series).
 CONTACT_KEYS = ("contact", "body", "covering", "covering_thickness", "covering_modulus",
                 "covering_hysteresis")
@@ -541,8 +541,12 @@ def contact_covering(p: dict):
 
 
 def _contact_impacts(result, arm, p):
-    """Impacts of a record at a contact point through a covering and a body (contact keys)."""
+    """Impacts of a record at a contact point through a covering and a body (contact keys);
+    ``contact = "all"``: at every contact point, the point with the largest F_max kept."""
     pts = {c.name: c for c in arm_contact_points(arm)}
+    if p["contact"] == "all":
+        runs = [_contact_impacts(result, arm, {**p, "contact": name}) for name in pts]
+        return max(runs, key=lambda r: float(r[0].summary["F_max"].max()))
     point = pts[p["contact"] or "tool point"]
     body = body_contact(p["body"]) if p["body"] else body_contact()
     st = impact_states(result, arm)
@@ -638,7 +642,8 @@ def safety_case(experiment: str = "step", controller: str = "PID", *, lam=None, 
     duration : float, optional
         Experiment length [s] (default: the catalog's, e.g. 12 s for the step).
     contact : str, optional
-        A contact point of the arm (:data:`CONTACT_POINTS`).  With any of ``contact``,
+        A contact point of the arm (:data:`CONTACT_POINTS`; ``"all"``: every one, the
+        results of the point with the largest F_max).  With any of ``contact``,
         ``body``, ``covering`` and ``covering_*`` the impacts go through the contact-point
         engine (:func:`ppamsafety.impact.anywhere.simulate_contacts`): the point (default the
         tool point) hits the body (default the head that passes the Hybrid III drop) through
@@ -675,8 +680,8 @@ def safety_case(experiment: str = "step", controller: str = "PID", *, lam=None, 
         at impact), ``K1``, ``K2`` [Nm/rad] (stiffness of the worst-HIC
         impact), ``n_impacts``; ``track_mean``, ``track_max``, ``track_rms``
         [m] (task-space tracking error; circles after the 5 s warm-up, NaN if
-        the run diverged) and ``diverged``; with contact keys also ``contact``, ``body``,
-        ``covering`` (names), ``p_max`` [Pa] (peak mean contact pressure) and
+        the run diverged) and ``diverged``; with contact keys also ``contact_point``,
+        ``body_region``, ``covering_name``, ``p_max`` [Pa] (peak mean contact pressure) and
         ``covering_use`` (largest compression of the covering over its limit; 1: bottomed
         out), and ``tcp_speed`` is the contact point's speed.
     """
@@ -717,7 +722,8 @@ def safety_case(experiment: str = "step", controller: str = "PID", *, lam=None, 
            "n_impacts": int(len(s)), "track_mean": tr["mean"], "track_max": tr["max"],
            "track_rms": tr["rms"], "diverged": bool(res.diverged)}
     if contact:
-        out.update({"contact": point.name, "body": body.name, "covering": ev.point.covering.name,
+        out.update({"contact_point": point.name, "body_region": body.name,
+                    "covering_name": ev.point.covering.name,
                     "p_max": float(s["p_max"].max()),
                     "covering_use": float(s["covering_use"].max()) if "covering_use" in s
                     else 0.0})

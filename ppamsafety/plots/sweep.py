@@ -15,7 +15,9 @@ from .figure import new_figure
 
 #: Result columns a sweep figure draws, with their axis labels (the ones present are drawn).
 RESULTS = (("F_max", "F_max [N]"), ("HIC36", "HIC36"), ("HIC15", "HIC15"),
-           ("tcp_speed", "TCP speed at impact [m/s]"), ("track_rms", "tracking error RMS [m]"))
+           ("tcp_speed", "TCP speed at impact [m/s]"), ("track_rms", "tracking error RMS [m]"),
+           ("p_max", "peak contact pressure [Pa]"),
+           ("covering_use", "covering compression / its limit"))
 #: Most lines per panel: beyond, the other swept parameters are drawn as points.
 MAX_LINES = 8
 
@@ -46,7 +48,7 @@ def _label(v) -> str:
     return f"{v:g}" if isinstance(v, (int, float, np.integer, np.floating)) else str(v)
 
 
-def plot_sweep(df: pd.DataFrame, swept, *, title: str = ""):
+def plot_sweep(df: pd.DataFrame, swept, *, title: str = "", region_limits=None):
     """Each result of a sweep against each swept parameter, with the safety limits.
 
     Parameters
@@ -57,13 +59,18 @@ def plot_sweep(df: pd.DataFrame, swept, *, title: str = ""):
         The case parameters that vary (one column of panels each).
     title : str
         Figure title.
+    region_limits : dict, optional
+        Body region name -> {result column: limit} (e.g. ``{"face": {"F_max": 130.0}}``):
+        each region that appears in the table's ``body_region`` column gets its limit line
+        on the panels of that result.
 
     Returns
     -------
     matplotlib.figure.Figure
         One row of panels per result of :data:`RESULTS` present, one column per swept
         parameter; F_max panels carry the 660 N maxilla line and the ISO/TS 15066
-        transient forehead limit, HIC panels the HIC 650 line (log scale).
+        transient forehead limit, HIC panels the HIC 650 line (log scale), and the limits
+        of the body regions present (``region_limits``).
     """
     ok = df[df["status"] == "ok"] if "status" in df.columns else df
     results = [(c, lab) for c, lab in RESULTS if c in ok.columns and ok[c].notna().any()]
@@ -92,6 +99,11 @@ def plot_sweep(df: pd.DataFrame, swept, *, title: str = ""):
                         label=name if lines else None)
             for v, text, color, style in limit_lines(col):
                 ax.axhline(v, color=color, ls=style, lw=1, label=text)
+            present = set(ok["body_region"]) if "body_region" in ok.columns else set()
+            for k, (region, lims) in enumerate(sorted((region_limits or {}).items())):
+                if region in present and col in lims:
+                    ax.axhline(lims[col], color=f"C{(k + 3) % 10}", ls="-.", lw=1,
+                               label=f"{region}: {lims[col]:g}")
             if col.startswith("HIC") and (ok[col] > 0).all():
                 ax.set_yscale("log")
             ax.set_ylabel(lab)
