@@ -196,3 +196,29 @@ def test_worst_contact_inputs(arm):
         simulate_contacts(arm, [0.9, -1.4], [1.0, 0.0], [40, 30], point="knee")
     with pytest.raises(TypeError, match="body"):
         simulate_contacts(arm, [0.9, -1.4], [1.0, 0.0], [40, 30], body=3.0)
+
+
+@pytest.mark.parametrize("point, stack", [("upper arm", "head bare"),
+                                          ("forearm", "head covered"),
+                                          ("elbow", "face spring")])
+def test_pymunk_builds_the_same_contact_point_impact(arm, point, stack):
+    """The same impact from pymunk bodies, pivots and rotary springs (an independent
+    integrator and joint solver; the contact force of the layers applied at the point of the
+    link body): F_max and HIC36 within 1 % of the engine, as for the tool point."""
+    pytest.importorskip("pymunk")
+    from ppamsafety.impact.layers import series_contact
+    from ppamsafety.impact.pymunk_engine import simulate_impact_pymunk
+
+    body, cov = {"head bare": (FOREHEAD, None), "head covered": (FOREHEAD, THESIS_COVERING),
+                 "face spring": (body_from_region(iso.FACE, radius=0.08), None)}[stack]
+    p = {c.name: c for c in arm_contact_points(arm)}[point]
+    if cov is not None:
+        p = p.replace(covering=cov)
+    q, qd, K = np.array([60.0, -75.0]) * DEG, np.array([2.5, -1.5]), np.array([43.0, 27.0])
+    ref = simulate_contacts(arm, q, qd, K, point=p, body=body, dt=1e-5).summary.iloc[0]
+    pm = simulate_impact_pymunk(arm, q, qd, K, point=p, contact=series_contact(body=body,
+                                                                             point=p),
+                                dt=1e-6, duration=0.03)
+    assert pm.F_max == pytest.approx(ref.F_max, rel=0.01)
+    assert pm.HIC36 == pytest.approx(ref.HIC36, rel=0.01)
+    assert pm.joint_error_max < 1e-5
