@@ -521,7 +521,13 @@ def make_controller(controller: str = "PID", *, lam=None, kp_bar=None, ki_bar=No
 def contact_covering(p: dict):
     """The covering of a case with contact keys: the named covering (default bare metal, or
     ``"thesis-implied"`` when a ``covering_*`` key is given) with its first layer's
-    thickness, modulus and hysteresis replaced by the case's ``covering_*`` values."""
+    thickness, modulus and hysteresis replaced by the case's ``covering_*`` values.
+
+    Parameters
+    ----------
+    p : dict
+        The case's parameters (``covering`` and ``covering_*``).
+    """
     changes = {k[len("covering_"):]: p[k] for k in COVERING_RANGES if p.get(k) is not None}
     name = p.get("covering") or ("thesis-implied" if changes else "bare metal")
     cov = named_covering(name)

@@ -1,8 +1,6 @@
 """Contact anywhere on the arm (impact.anywhere, impact.points): the engine, its bounds, the
 screening margin and the worst case over contact point x body region x instant."""
 
-import math
-
 import numpy as np
 import pytest
 

@@ -1,6 +1,5 @@
 """The covering as a design parameter: sweep keys of safety_case, study files, envelopes."""
 
-import numpy as np
 import pandas as pd
 import pytest
 

@@ -48,11 +48,11 @@ import pandas as pd
 
 from .._validation import (as_float_array, check_bool, check_choice, check_instance, check_int,
                            check_nonnegative, check_range, check_range_array, describe)
-from ..params import ArmParameters
 from ..params.contact import (BARE, FOREHEAD, BodyContact, ContactPoint, Covering,
                               arm_contact_points)
 from ..plant import dynamics as dyn
 from ..plant import packing
+from ..plots.contacts import plot_contact_history, plot_contact_margins
 from ..units import G0
 from . import engine as eng
 from . import points as pt
@@ -165,7 +165,17 @@ def point_jacobian(q, arm, point: ContactPoint) -> np.ndarray:
 
 
 def point_position(q, arm, point: ContactPoint) -> np.ndarray:
-    """Position of a contact point [m], shape (..., 2)."""
+    """Position of a contact point [m], shape (..., 2).
+
+    Parameters
+    ----------
+    q : array_like, shape (..., 2)
+        Joint angles [rad].
+    arm : ArmParameters
+        Link lengths.
+    point : ContactPoint
+        The point (link and position).
+    """
     q = np.asarray(q, dtype=float)
     s = point.position
     p1 = np.stack([np.cos(q[..., 0]), np.sin(q[..., 0])], axis=-1)
@@ -331,7 +341,13 @@ class ContactResults:
         return len(self.summary)
 
     def history(self, index: int) -> pd.DataFrame:
-        """Time history of case ``index`` (recorded with ``history=``)."""
+        """Time history of case ``index`` (recorded with ``history=``).
+
+        Parameters
+        ----------
+        index : int
+            Case index (row of :attr:`summary`) whose history was recorded.
+        """
         i = check_int("index", index)
         if i not in self.histories:
             raise KeyError(f"index = {i}: no history recorded for this case; recorded: "
@@ -339,9 +355,15 @@ class ContactResults:
         return self.histories[i]
 
     def plot(self, index=None, **kwargs):
-        """The force, body acceleration and compression of a recorded case (a Figure)."""
-        from ..plots.contacts import plot_contact_history
+        """The force, body acceleration and compression of a recorded case (a Figure).
 
+        Parameters
+        ----------
+        index : int, optional
+            Case whose history is plotted (default the first recorded).
+        **kwargs
+            Passed to :func:`ppamsafety.plots.contacts.plot_contact_history`.
+        """
         if index is None:
             if not self.histories:
                 raise KeyError("no history was recorded (pass history=True)")
@@ -761,9 +783,15 @@ class WorstContact:
 
     def plot(self, arm, **kwargs):
         """The arm at the overall worst instant, each contact point with its worst body region
-        and margin (:func:`ppamsafety.plots.contacts.plot_contact_margins`)."""
-        from ..plots.contacts import plot_contact_margins
+        and margin (:func:`ppamsafety.plots.contacts.plot_contact_margins`).
 
+        Parameters
+        ----------
+        arm : ArmParameters
+            The arm of the scan (its link lengths draw it).
+        **kwargs
+            Passed to :func:`ppamsafety.plots.contacts.plot_contact_margins`.
+        """
         return plot_contact_margins(_arm_drawing(arm, self), **kwargs)
 
 

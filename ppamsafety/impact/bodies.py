@@ -33,7 +33,7 @@ import pandas as pd
 from .._validation import check_instance, check_range
 from ..params.contact import BodyContact, Layer
 from ..units import G0
-from .head import HeadContactModel, resolve_head
+from .head import resolve_head
 from .layers import _two_body_run, series_contact, two_body_series
 
 #: The Hybrid III head drop of 49 CFR 572.32: head mass [kg] (10 lb), drop height [m]

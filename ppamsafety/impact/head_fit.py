@@ -238,7 +238,13 @@ def hic_at_force(F, curve: pd.DataFrame) -> np.ndarray:
 def pair_sigma(hic) -> np.ndarray:
     """Log-space standard deviation of Table 6.1 HIC values: max(0.15, 0.005/HIC) (module
     docstring: rounding of two printed decimals, plus 15 % for the configuration-dependent
-    effective mass)."""
+    effective mass).
+
+    Parameters
+    ----------
+    hic : array_like
+        Printed HIC values (> 0).
+    """
     return np.maximum(0.15, 0.005 / np.asarray(hic, dtype=float))
 
 

@@ -486,6 +486,13 @@ class SeriesContact:
     def evaluate(self, delta, delta_dot=0.0) -> pd.DataFrame:
         """The law at total compressions ``delta`` [m] and rates ``delta_dot`` [m/s].
 
+        Parameters
+        ----------
+        delta : array_like
+            Total compressions [m] (<= 0: no contact), finite.
+        delta_dot : float or array_like
+            Their rates [m/s], broadcast against ``delta``.
+
         Returns
         -------
         pandas.DataFrame
@@ -511,7 +518,13 @@ class SeriesContact:
         return df
 
     def potential(self, delta) -> np.ndarray:
-        """Elastic potential V(delta) of the stack [J] (dV/d(delta) = F_el)."""
+        """Elastic potential V(delta) of the stack [J] (dV/d(delta) = F_el).
+
+        Parameters
+        ----------
+        delta : array_like
+            Total compressions [m].
+        """
         return self.evaluate(delta)["V"].to_numpy()
 
     def compression_at_energy(self, energy) -> float:

@@ -47,7 +47,7 @@ from ..layouts import Field, Layout
 from ..plant.dynamics import coriolis_cs, mass_matrix_cs
 from ..plant.layout import L1
 from ..units import G0
-from .engine import FREE_GAP, FREE_STRIDE, ArmMode
+from .engine import FREE_GAP, ArmMode
 from .hic import hic_pair_kernel
 from .layers import NL, NWORK, S_AF, S_LIM, S_M, S_NC, S_R, W_HINT, stack_eval
 
@@ -148,6 +148,17 @@ def point_terms(q1, q2, P, link, s):
     For link 2 at s = L2 the arithmetic is that of the tool point
     (:func:`~ppamsafety.plant.geometry.tcp_kinematics_cs`).
 
+    Parameters
+    ----------
+    q1, q2 : float
+        Link angles [rad].
+    P : ndarray of float64
+        Packed plant parameter row (reads L1 and the inertia terms).
+    link : int
+        1 or 2.
+    s : float
+        Distance of the point from its link's joint [m].
+
     Returns
     -------
     tuple of float
@@ -177,6 +188,21 @@ def _rhs_py(y, case, P, S, work, dy):
     Frozen-equilibrium joint springs (H qdd + C qd = -K (q - q0) + J_p^T f), or a fixed arm;
     the contact force of the stack ``S`` (:func:`~ppamsafety.impact.layers.stack_eval`, which
     also fills ``work``).
+
+    Parameters
+    ----------
+    y : ndarray of float64, shape (NZ,)
+        State, layout :data:`PSTATE` (read).
+    case : ndarray of float64, shape (NPCASE,)
+        The case, layout :data:`PCASE`.
+    P : ndarray of float64
+        Packed plant parameter row.
+    S : ndarray of float64
+        The contact stack (:data:`~ppamsafety.impact.layers.STACK`).
+    work : ndarray of float64
+        Work array of :func:`~ppamsafety.impact.layers.stack_eval`.
+    dy : ndarray of float64, shape (NZ,)
+        Output: dy/dt.
     """
     c2, s2, h11, h12, h22, x, yy, j11, j12, j21, j22 = _terms(y, case, P)
     w1, w2 = y[Z_W], y[Z_W + 1]
@@ -239,7 +265,19 @@ def _energy(y, case, P, S, work):
 
 @kernel
 def point_initial_state(case, P, S, y):
-    """Arm at q0 with qd0, body centre at p + R_b u with velocity v_b0, nothing dissipated."""
+    """Arm at q0 with qd0, body centre at p + R_b u with velocity v_b0, nothing dissipated.
+
+    Parameters
+    ----------
+    case : ndarray of float64, shape (NPCASE,)
+        The case, layout :data:`PCASE`.
+    P : ndarray of float64
+        Packed plant parameter row.
+    S : ndarray of float64
+        The contact stack (its body radius is read).
+    y : ndarray of float64, shape (NZ,)
+        Output: the initial state, layout :data:`PSTATE`.
+    """
     y[Z_Q], y[Z_Q + 1] = case[P_Q], case[P_Q + 1]
     y[Z_W], y[Z_W + 1] = case[P_QD], case[P_QD + 1]
     _, _, _, _, _, x, yy, _, _, _, _ = _terms(y, case, P)

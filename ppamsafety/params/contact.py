@@ -153,7 +153,13 @@ class Layer:
         return self.strain_limit * self.thickness
 
     def replace(self, **changes) -> "Layer":
-        """A copy with some fields changed (checked again)."""
+        """A copy with some fields changed (checked again).
+
+        Parameters
+        ----------
+        **changes
+            New values of fields, by name.
+        """
         return replace(self, **changes)
 
 
@@ -213,7 +219,13 @@ class Covering:
         return float(sum(lay.thickness for lay in self.layers))
 
     def replace(self, **changes) -> "Covering":
-        """A copy with some fields changed (checked again)."""
+        """A copy with some fields changed (checked again).
+
+        Parameters
+        ----------
+        **changes
+            New values of fields, by name.
+        """
         return replace(self, **changes)
 
 
@@ -269,7 +281,13 @@ class BodyContact:
             raise TypeError(f"BodyContact.checks{w} must be a tuple of (check, met, note)")
 
     def replace(self, **changes) -> "BodyContact":
-        """A copy with some fields changed (checked again)."""
+        """A copy with some fields changed (checked again).
+
+        Parameters
+        ----------
+        **changes
+            New values of fields, by name.
+        """
         return replace(self, **changes)
 
 
@@ -335,7 +353,13 @@ class ContactPoint:
                 "flat": (math.inf, math.inf)}[self.shape]
 
     def replace(self, **changes) -> "ContactPoint":
-        """A copy with some fields changed (checked again)."""
+        """A copy with some fields changed (checked again).
+
+        Parameters
+        ----------
+        **changes
+            New values of fields, by name.
+        """
         return replace(self, **changes)
 
 
