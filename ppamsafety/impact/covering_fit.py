@@ -26,11 +26,15 @@ import pandas as pd
 
 from .._validation import as_float_array, check_choice, check_instance, check_range
 from ..params import ArmParameters, thesis_arm
-from ..params.contact import (COVERING_STRAIN_LIMIT, FOREHEAD, THESIS_COVERING_THICKNESS,
-                              BodyContact, ContactPoint, Covering, Layer, arm_contact_points)
+from ..params.contact import (COVERING_STRAIN_LIMIT, FOREHEAD, THESIS_COVERING,
+                              THESIS_COVERING_THICKNESS, BodyContact, ContactPoint, Covering,
+                              Layer, arm_contact_points)
+from ..experiments.catalog import run_thesis_experiment, thesis_variants
+from .anywhere import simulate_contacts
 from .head_fit import TABLE_6_1_MAX_RMS_SIGMA, default_arm_mass, hic_at_force, pair_sigma
+from .instants import evaluate_experiment, heuristic_instants, impact_states
 from .layers import SeriesContact, series_contact, two_body_series
-from .thesis_data import table_6_1_pairs
+from .thesis_data import table_6_1, table_6_1_pairs
 
 #: Head mass of the thesis' impacts [kg] (§6.3.2): the validated head is fitted with it.
 THESIS_HEAD_MASS = 5.0
@@ -240,5 +244,55 @@ def implied_coverings(thicknesses=(5e-3, 10e-3, 20e-3, 40e-3), *, arm=None,
     return pd.DataFrame(rows)
 
 
+def table_6_1_models(arm=None, *, experiments=("step", "switch")) -> pd.DataFrame:
+    """Table 6.1 recomputed with three contact models, beside the thesis' values.
+
+    For every controller variant and experiment of Table 6.1, the worst of the four
+    heuristic impact instants (§6.3.3) at the tool point with: the thesis' lumped contact
+    (``thesis-frontal``, :func:`~ppamsafety.impact.instants.evaluate_experiment`: the
+    Table 6.1 section's numbers), the validated head behind the covering Table 6.1 implies
+    (:data:`~ppamsafety.params.contact.THESIS_COVERING`), and the validated head against the
+    bare link (the arm as built); the head has the thesis' 5 kg throughout.
+
+    Parameters
+    ----------
+    arm : ArmParameters, optional
+        Default the thesis arm.
+    experiments : sequence of {"step", "switch"}
+        The experiments.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per variant and experiment: ``experiment``, ``label``, ``Fmax_thesis`` [N],
+        ``HIC_thesis``, and ``F_max`` [N] / ``HIC36`` per model (suffixes ``_frontal``,
+        ``_covered``, ``_bare``).
+    """
+    arm = thesis_arm() if arm is None else check_instance("arm", arm, ArmParameters)
+    head = FOREHEAD.replace(mass=THESIS_HEAD_MASS)
+    tool = arm_contact_points(arm)[0]
+    t61 = table_6_1()
+    rows = []
+    for exp in experiments:
+        runs = run_thesis_experiment(arm, exp, thesis_variants())
+        for i, (variant, res) in enumerate(zip(thesis_variants(), runs)):
+            st = impact_states(res, arm)
+            sub = st.iloc[list(heuristic_instants(st).values())]
+            q, qd, K = (sub[["q1", "q2"]].to_numpy(), sub[["qd1", "qd2"]].to_numpy(),
+                        sub[["K1", "K2"]].to_numpy())
+            row = {"experiment": exp, "label": variant.label,
+                   "Fmax_thesis": float(t61[f"Fmax_{exp}"].iloc[i]),
+                   "HIC_thesis": float(t61[f"HIC_{exp}"].iloc[i])}
+            fr = evaluate_experiment(res, arm).summary
+            row.update(F_max_frontal=float(fr.F_max.max()), HIC36_frontal=float(fr.HIC36.max()))
+            for key, cov in (("covered", THESIS_COVERING), ("bare", None)):
+                s = simulate_contacts(arm, q, qd, K, point=tool, body=head,
+                                      covering=cov).summary
+                row.update({f"F_max_{key}": float(s.F_max.max()),
+                            f"HIC36_{key}": float(s.HIC36.max())})
+            rows.append(row)
+    return pd.DataFrame(rows)
+
+
 __all__ = ["fit_covering", "CoveringFit", "implied_coverings", "table_6_1_residuals",
-           "stack_curve", "THESIS_HEAD_MASS"]
+           "stack_curve", "table_6_1_models", "THESIS_HEAD_MASS"]

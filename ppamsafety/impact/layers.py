@@ -700,6 +700,97 @@ def phase_plane_max_compression(contact: SeriesContact, mu: float, v0: float) ->
     return contact.compression_at_energy(level)
 
 
+def two_body_dashpots(speed, contact: SeriesContact, *, arm_mass, duration: float = 0.03,
+                      rtol: float = 1e-7) -> pd.DataFrame:
+    """Reference model: the same layers as Kelvin-Voigt-like dashpots in series, a massless
+    interface between each (scipy's stiff Radau integrator; for comparison, not speed).
+
+    Each damped layer i (alpha_i > 0) carries its own Hunt-Crossley law F = k_i delta_i^n_i
+    (1 + alpha_i d(delta_i)/dt) with its compression as a state, so the rate splits between
+    the layers by their damping as well as their stiffness (the layers' memory); the undamped
+    layers share the force elastically (the split of :func:`stack_eval`).  The force is the
+    undamped layers' elastic force, so at least one layer must be undamped (the bone).  The
+    layers do not bottom out here, and a layer's compression stays >= 0.  Compare with the
+    lumped law of :func:`stack_eval` (docs/impact_models.md): they agree when one layer
+    carries the damping, and differ when a heavily damped layer sits in series with a lightly
+    damped one (the damped layer then acts stiff at impact rates).
+
+    Parameters
+    ----------
+    speed : array_like
+        Closing speeds [m/s], each in (0, 20].
+    contact : SeriesContact
+        The layers (their k, n, alpha at the contact's geometry).
+    arm_mass : float
+        Effective arm mass [kg] (``inf``: a fixed surface).
+    duration : float
+        Longest simulated time [s] (the run stops when the bodies separate).
+    rtol : float
+        Relative tolerance of the integrator.
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``speed``, ``F_max`` [N], ``delta_max`` [m], ``separation_speed`` [m/s].
+    """
+    from scipy.integrate import solve_ivp
+    from scipy.optimize import brentq
+
+    contact = check_instance("contact", contact, SeriesContact)
+    v = np.atleast_1d(as_float_array("speed", speed, ndim=(0, 1)))
+    check_range_array("speed", v, 0.0, 20.0, unit="m/s")
+    ma = float(arm_mass)
+    nl = int(contact.row[S_NL])
+    k = contact.row[S_K:S_K + nl]
+    n = contact.row[S_N:S_N + nl]
+    a = contact.row[S_ALPHA:S_ALPHA + nl]
+    damped = np.nonzero(a > 0)[0]
+    elastic = np.nonzero(a == 0)[0]
+    if elastic.size == 0:
+        raise ValueError("two_body_dashpots needs at least one undamped layer (the bone)")
+    mb = contact.body.mass
+    mu = mb if not math.isfinite(ma) else ma * mb / (ma + mb)
+
+    def f_el(d):                       # the undamped layers' shared force at compression d
+        if d <= 0.0:
+            return 0.0
+        if elastic.size == 1:
+            return k[elastic[0]] * d ** n[elastic[0]]
+        hi = min(k[j] * d ** n[j] for j in elastic)
+        return brentq(lambda f: sum((f / k[j]) ** (1.0 / n[j]) for j in elastic) - d, 0.0, hi,
+                      xtol=1e-300, rtol=1e-13)
+
+    def force(y):
+        return f_el(y[0] - sum(max(y[2 + i], 0.0) for i in range(damped.size)))
+
+    def rhs(t, y):
+        f = force(y)
+        out = [y[1], -f / mu]
+        for i, j in enumerate(damped):
+            di = max(y[2 + i], 1e-15)
+            out.append((f / (k[j] * di ** n[j]) - 1.0) / a[j])
+        return out
+
+    rows = []
+    for v0 in v:
+        d0 = 1e-6 * v0                      # start on the elastic split after about 1 us
+        f0 = brentq(lambda f: sum((f / k[j]) ** (1.0 / n[j]) for j in range(nl)) - d0, 0.0,
+                    min(k[j] * d0 ** n[j] for j in range(nl)), rtol=1e-13)
+        y0 = [d0, float(v0)] + [(f0 / k[j]) ** (1.0 / n[j]) for j in damped]
+
+        def apart(t, y):
+            return force(y) - 1e-12 if t > 1e-6 else 1.0
+        apart.terminal, apart.direction = True, -1
+        sol = solve_ivp(rhs, (0.0, duration), y0, method="Radau", rtol=rtol, atol=1e-15,
+                        events=apart, dense_output=True)
+        tt = np.linspace(0.0, sol.t[-1], 4001)
+        Y = sol.sol(tt)
+        F = np.array([force(Y[:, i]) for i in range(tt.size)])
+        rows.append({"speed": float(v0), "F_max": float(F.max()),
+                     "delta_max": float(Y[0].max()), "separation_speed": float(-sol.y[1, -1])})
+    return pd.DataFrame(rows)
+
+
 __all__ = ["STACK", "SeriesContact", "series_contact", "pack_stack", "effective_radius",
            "layer_law", "contact_area", "two_body_series", "phase_plane_max_compression",
-           "stack_eval"]
+           "stack_eval", "two_body_dashpots"]
