@@ -19,23 +19,25 @@ exactly (each layer's force is F_el), so the elastic part is conservative.
 Damping.  Each layer carries a Hunt-Crossley hysteresis factor alpha_i = b_i / k_i [s/m].  In a
 stack they act through one factor on the shared force::
 
-    F = max(F_el(delta) (1 + alpha_eff delta_dot), 0),   alpha_eff = sum_i w_i alpha_i,
+    F = max(F_el(delta) (1 + alpha_eff delta_dot), 0),   alpha_eff = sum_i w_i^2 alpha_i,
     w_i = (d delta_i / d F) / sum_j (d delta_j / d F)      (the layers' share of the compliance:
           a rate delta_dot moves layer i by w_i delta_dot when the layers follow the force)
 
-so the force is never negative, is 0 at first touch (F_el(0) = 0, no jump), and the power
-dissipated, (F - F_el) delta_dot >= 0, is booked to layer i in the share w_i: kinetic energy
-in = kinetic out + sum of what each layer dissipated (+ the potential still stored).  With one
-layer this *is* the Hunt-Crossley law of thesis eq. (6.2), evaluated by the same compiled
-function (:func:`~ppamsafety.impact.contact.hunt_crossley_force`), so a bare robot with a
-one-layer body reproduces the single-layer engine bit for bit.  When every layer has the same
-alpha, alpha_eff = alpha and the Hunt-Crossley phase-plane invariant holds for the stack with
-its potential V: mu [v/alpha - ln(1 + alpha v)/alpha^2] + V(delta) = const
-(:func:`phase_plane_max_compression`).
-The lumped factor is a model of two dampers in series: it keeps each layer's own damping when
-one layer dominates the compliance (a soft covering on a stiff head, or a bare robot), and
-interpolates by compliance in between (docs/impact_models.md compares it with two
-Hunt-Crossley dampers in series and a massless interface).
+Layer i's damping force F_el alpha_i w_i delta_dot acts through its own rate w_i delta_dot,
+so it dissipates F_el alpha_i (w_i delta_dot)^2: summed, the power (F - F_el) delta_dot of the
+factor above, which is booked to layer i in the share w_i^2 alpha_i / alpha_eff.  This is the
+damping of dashpots in series to first order in the damping (Kelvin-Voigt elements in series:
+K x + sum w_i^2 C_i x_dot on the slow manifold), exact for identical layers.  So the force is
+never negative, is 0 at first touch (F_el(0) = 0, no jump), the dissipated power is >= 0, and
+kinetic energy in = kinetic out + what each layer dissipated + the potential still stored.
+With one layer this *is* the Hunt-Crossley law of thesis eq. (6.2), evaluated by the same
+compiled function (:func:`~ppamsafety.impact.contact.hunt_crossley_force`), so a bare robot
+with a one-layer body reproduces the single-layer engine bit for bit.  When the layers share
+one exponent and none bottoms out, the shares w_i are constant, the stack's elastic law is
+one power law and alpha_eff one constant: the Hunt-Crossley phase-plane invariant holds for
+the stack, mu [v/alpha_eff - ln(1 + alpha_eff v)/alpha_eff^2] + V(delta) = const
+(:func:`phase_plane_max_compression`).  docs/impact_models.md compares the factor with the
+layers as dashpots in series and a massless interface (:func:`two_body_dashpots`).
 
 Geometry.  A material law's stiffness follows from the contact's effective radius
 R_e = sqrt(R_1 R_2), with 1/R_1 = 1/R_body + 1/r_1 and 1/R_2 = 1/R_body + 1/r_2 (R_body the
@@ -218,8 +220,9 @@ def stack_eval(delta, ddelta, S, work):
 
     Returns ``(F, F_el, alpha_eff, V)``: the contact force [N] (>= 0), its elastic part [N],
     the stack's hysteresis factor [s/m] and the elastic potential [J].  Fills ``work[:L]``
-    with the layers' compressions [m] and ``work[NL:NL + L]`` with their compliance shares
-    (sum 1); ``work[W_HINT]`` holds ln F_el of the last solve (a warm start; NaN: none).
+    with the layers' compressions [m] and ``work[NL:NL + L]`` with their shares of the
+    dissipated power, w_i^2 alpha_i / alpha_eff (sum 1; all 0 without damping);
+    ``work[W_HINT]`` holds ln F_el of the last solve (a warm start; NaN: none).
     A one-layer stack that cannot bottom out is the Hunt-Crossley law itself (same compiled
     functions, same arithmetic).
 
@@ -302,11 +305,16 @@ def stack_eval(delta, ddelta, S, work):
             c = di * S[S_INVN + i]
             work[NL + i] = c
             csum += c
+    # alpha_eff = sum w_i^2 alpha_i: layer i moves at w_i d(delta)/dt and its damping force
+    # F_el alpha_i w_i d(delta)/dt acts through that rate (module docstring); work[NL + i]
+    # becomes layer i's share of the dissipated power, w_i^2 alpha_i / alpha_eff
     alpha = 0.0
     for i in range(nl):
         w = work[NL + i] / csum
-        work[NL + i] = w
-        alpha += w * S[S_ALPHA + i]
+        work[NL + i] = w * w * S[S_ALPHA + i]
+        alpha += work[NL + i]
+    for i in range(nl):
+        work[NL + i] = work[NL + i] / alpha if alpha > 0.0 else 0.0
     f = fel * (1.0 + alpha * ddelta)
     return max(f, 0.0), fel, alpha, v
 
@@ -668,16 +676,18 @@ def _two_body_run(v, mu, contact, dt, nsteps):
 def phase_plane_max_compression(contact: SeriesContact, mu: float, v0: float) -> float:
     """Largest compression [m] of a two-body impact through a stack, from the phase plane.
 
-    With one hysteresis factor alpha for every layer (alpha_eff = alpha), the invariant of
-    Hunt & Crossley (Marhefka & Orin 1999) holds for the stack with its potential V:
-    mu [v/alpha - ln(1 + alpha v)/alpha^2] + V(delta) = const, so V(delta_max) = mu [v0/alpha -
+    When the layers share one exponent and none bottoms out, the compliance shares are
+    constant and so is alpha_eff = sum w_i^2 alpha_i; then the invariant of Hunt & Crossley
+    (Marhefka & Orin 1999) holds for the stack with its potential V: mu [v/alpha -
+    ln(1 + alpha v)/alpha^2] + V(delta) = const, so V(delta_max) = mu [v0/alpha -
     ln(1 + alpha v0)/alpha^2] (mu v0^2 / 2 without damping), solved on V
     (:meth:`SeriesContact.compression_at_energy`).
 
     Parameters
     ----------
     contact : SeriesContact
-        Its layers must share one alpha (else ``ValueError``).
+        Its layers must share one exponent (else ``ValueError``); the caller keeps the impact
+        below every layer's bottoming limit.
     mu : float
         Reduced mass [kg], > 0.
     v0 : float
@@ -687,11 +697,11 @@ def phase_plane_max_compression(contact: SeriesContact, mu: float, v0: float) ->
     mu = check_range("mu", mu, 0.0, 1e6, lo_open=True, unit="kg")
     v0 = check_range("v0", v0, 0.0, 1e3, lo_open=True, unit="m/s")
     nl = int(contact.row[S_NL])
-    a = contact.row[S_ALPHA:S_ALPHA + nl]
-    if np.ptp(a) > 1e-12 * max(abs(a).max(), 1e-300):
-        raise ValueError(f"the phase-plane closed form needs one hysteresis factor for every "
-                         f"layer; this stack has alpha = {a.tolist()} s/m")
-    alpha = float(a[0])
+    n = contact.row[S_N:S_N + nl]
+    if np.ptp(n) > 0.0:
+        raise ValueError(f"the phase-plane closed form needs one exponent for every layer; this "
+                         f"stack has n = {n.tolist()}")
+    alpha = float(contact.evaluate([1e-9])["alpha"].iloc[0])   # constant with one exponent
     x = alpha * v0
     if x < 1e-3:
         level = mu * v0 * v0 / 2.0 * (1.0 - 2.0 * x / 3.0 + x * x / 2.0 - 2.0 * x ** 3 / 5.0)
@@ -701,37 +711,36 @@ def phase_plane_max_compression(contact: SeriesContact, mu: float, v0: float) ->
 
 
 def two_body_dashpots(speed, contact: SeriesContact, *, arm_mass, duration: float = 0.03,
-                      rtol: float = 1e-7) -> pd.DataFrame:
+                      rtol: float = 1e-8) -> pd.DataFrame:
     """Reference model: the same layers as Kelvin-Voigt-like dashpots in series, a massless
     interface between each (scipy's stiff Radau integrator; for comparison, not speed).
 
-    Each damped layer i (alpha_i > 0) carries its own Hunt-Crossley law F = k_i delta_i^n_i
-    (1 + alpha_i d(delta_i)/dt) with its compression as a state, so the rate splits between
-    the layers by their damping as well as their stiffness (the layers' memory); the undamped
-    layers share the force elastically (the split of :func:`stack_eval`).  The force is the
-    undamped layers' elastic force, so at least one layer must be undamped (the bone).  The
-    layers do not bottom out here, and a layer's compression stays >= 0.  Compare with the
-    lumped law of :func:`stack_eval` (docs/impact_models.md): they agree when one layer
-    carries the damping, and differ when a heavily damped layer sits in series with a lightly
-    damped one (the damped layer then acts stiff at impact rates).
+    Each damped layer i (alpha_i > 0) carries its own Hunt-Crossley law F = a_i (1 + alpha_i
+    d(delta_i)/dt), a_i = k_i delta_i^n_i, so the rate splits between the layers by their
+    damping as well as their stiffness (the layers' memory).  With one undamped layer (the
+    bone) the force is its elastic force and every damped layer's compression is a state;
+    with none, the force follows from the rates adding up, F = (d(delta)/dt + sum 1/alpha_i)
+    / sum 1/(alpha_i a_i), and all but the last layer's compression are states.  The layers
+    do not bottom out here; the run stops when the force returns to 0.  Compare with the
+    lumped law of :func:`stack_eval` (docs/impact_models.md).
 
     Parameters
     ----------
     speed : array_like
         Closing speeds [m/s], each in (0, 20].
     contact : SeriesContact
-        The layers (their k, n, alpha at the contact's geometry).
+        The layers (their k, n, alpha at the contact's geometry); at most one undamped.
     arm_mass : float
         Effective arm mass [kg] (``inf``: a fixed surface).
     duration : float
-        Longest simulated time [s] (the run stops when the bodies separate).
+        Longest simulated time [s].
     rtol : float
         Relative tolerance of the integrator.
 
     Returns
     -------
     pandas.DataFrame
-        ``speed``, ``F_max`` [N], ``delta_max`` [m], ``separation_speed`` [m/s].
+        ``speed``, ``F_max`` [N], ``delta_max`` [m] (largest total compression).
     """
     from scipy.integrate import solve_ivp
     from scipy.optimize import brentq
@@ -744,50 +753,51 @@ def two_body_dashpots(speed, contact: SeriesContact, *, arm_mass, duration: floa
     k = contact.row[S_K:S_K + nl]
     n = contact.row[S_N:S_N + nl]
     a = contact.row[S_ALPHA:S_ALPHA + nl]
-    damped = np.nonzero(a > 0)[0]
     elastic = np.nonzero(a == 0)[0]
-    if elastic.size == 0:
-        raise ValueError("two_body_dashpots needs at least one undamped layer (the bone)")
+    if elastic.size > 1:
+        raise ValueError("two_body_dashpots takes at most one undamped layer")
+    states = [i for i in range(nl) if a[i] > 0][:nl - 1] if elastic.size == 0 else \
+        [i for i in range(nl) if a[i] > 0]
+    last = [i for i in range(nl) if i not in states][0]       # the layer that closes the sum
     mb = contact.body.mass
     mu = mb if not math.isfinite(ma) else ma * mb / (ma + mb)
 
-    def f_el(d):                       # the undamped layers' shared force at compression d
-        if d <= 0.0:
-            return 0.0
-        if elastic.size == 1:
-            return k[elastic[0]] * d ** n[elastic[0]]
-        hi = min(k[j] * d ** n[j] for j in elastic)
-        return brentq(lambda f: sum((f / k[j]) ** (1.0 / n[j]) for j in elastic) - d, 0.0, hi,
-                      xtol=1e-300, rtol=1e-13)
+    def parts(y):
+        ds = [max(min(y[2 + i], y[0]), 1e-300) for i in range(len(states))]
+        return ds, max(y[0] - sum(ds), 1e-300)
 
     def force(y):
-        return f_el(y[0] - sum(max(y[2 + i], 0.0) for i in range(damped.size)))
+        ds, dl = parts(y)
+        if elastic.size:
+            return k[last] * dl ** n[last]
+        acs = [k[j] * d ** n[j] for j, d in zip(states, ds)] + [k[last] * dl ** n[last]]
+        al = [a[j] for j in states] + [a[last]]
+        return (y[1] + sum(1.0 / x for x in al)) / sum(1.0 / (x * c) for x, c in zip(al, acs))
 
     def rhs(t, y):
         f = force(y)
-        out = [y[1], -f / mu]
-        for i, j in enumerate(damped):
-            di = max(y[2 + i], 1e-15)
-            out.append((f / (k[j] * di ** n[j]) - 1.0) / a[j])
-        return out
+        ds, _ = parts(y)
+        return [y[1], -f / mu] + [(f / (k[j] * d ** n[j]) - 1.0) / a[j]
+                                  for j, d in zip(states, ds)]
 
     rows = []
     for v0 in v:
         d0 = 1e-6 * v0                      # start on the elastic split after about 1 us
         f0 = brentq(lambda f: sum((f / k[j]) ** (1.0 / n[j]) for j in range(nl)) - d0, 0.0,
                     min(k[j] * d0 ** n[j] for j in range(nl)), rtol=1e-13)
-        y0 = [d0, float(v0)] + [(f0 / k[j]) ** (1.0 / n[j]) for j in damped]
+        y0 = [d0, float(v0)] + [(f0 / k[j]) ** (1.0 / n[j]) for j in states]
 
         def apart(t, y):
-            return force(y) - 1e-12 if t > 1e-6 else 1.0
+            return force(y) if t > 1e-5 else 1.0
         apart.terminal, apart.direction = True, -1
-        sol = solve_ivp(rhs, (0.0, duration), y0, method="Radau", rtol=rtol, atol=1e-15,
-                        events=apart, dense_output=True)
-        tt = np.linspace(0.0, sol.t[-1], 4001)
-        Y = sol.sol(tt)
-        F = np.array([force(Y[:, i]) for i in range(tt.size)])
+        with np.errstate(divide="ignore", over="ignore"):
+            sol = solve_ivp(rhs, (0.0, duration), y0, method="Radau", rtol=rtol, atol=1e-14,
+                            events=apart, dense_output=True)
+            tt = np.linspace(0.0, sol.t[-1], 4001)
+            Y = sol.sol(tt)
+            F = np.array([force(Y[:, i]) for i in range(tt.size)])
         rows.append({"speed": float(v0), "F_max": float(F.max()),
-                     "delta_max": float(Y[0].max()), "separation_speed": float(-sol.y[1, -1])})
+                     "delta_max": float(Y[0].max())})
     return pd.DataFrame(rows)
 
 

@@ -379,8 +379,8 @@ FOREHEAD_TISSUE_THICKNESS = 5.4e-3
 #: by the VIVA+ human body model documentation); 15.5 MPa lies within one SD, and the
 #: measured mean gives 280 g in the drop (2 % above the corridor).
 FOREHEAD_TISSUE_MODULUS = 15.5e6
-#: Hunt-Crossley hysteresis factor of the soft tissue [s/m]: an assumption, restitution 0.65 in
-#: the drop (2.7 m/s).  The drop's peak is insensitive to it: 250-264 g for 0.1 to 1 s/m
+#: Hunt-Crossley hysteresis factor of the soft tissue [s/m]: an assumption, restitution 0.66 in
+#: the drop (2.7 m/s).  The drop's peak is insensitive to it: 250-265 g for 0.1 to 1 s/m
 #: (an elastic tissue, 0, gives 287 g).
 FOREHEAD_TISSUE_HYSTERESIS = 0.3
 #: Strain at which the soft tissue is squeezed onto the bone [-] (an assumption; the drop
@@ -421,9 +421,9 @@ FOREHEAD = BodyContact(
 THESIS_COVERING_THICKNESS = 10e-3
 #: Its modulus [Pa] and hysteresis [s/m], fitted to Table 6.1 with the head above (5 kg, as in
 #: the thesis) at the tool point (a 30 mm sphere), rounded
-#: (:func:`ppamsafety.impact.covering_fit.fit_covering` recomputes them).
-THESIS_COVERING_MODULUS = 1.14e6
-THESIS_COVERING_HYSTERESIS = 8.2
+#: (:func:`ppamsafety.impact.covering_fit.fit_covering` recomputes 1.163 MPa and 9.78 s/m).
+THESIS_COVERING_MODULUS = 1.16e6
+THESIS_COVERING_HYSTERESIS = 9.8
 #: Strain at which a foam or elastomer covering bottoms out [-] (foams densify near 0.6-0.8,
 #: Gibson & Ashby, Cellular Solids, 1997).
 COVERING_STRAIN_LIMIT = 0.8
