@@ -790,7 +790,7 @@ def two_body_dashpots(speed, contact: SeriesContact, *, arm_mass, duration: floa
         def apart(t, y):
             return force(y) if t > 1e-5 else 1.0
         apart.terminal, apart.direction = True, -1
-        with np.errstate(divide="ignore", over="ignore"):
+        with np.errstate(divide="ignore", over="ignore", invalid="ignore"):
             sol = solve_ivp(rhs, (0.0, duration), y0, method="Radau", rtol=rtol, atol=1e-14,
                             events=apart, dense_output=True)
             tt = np.linspace(0.0, sol.t[-1], 4001)
