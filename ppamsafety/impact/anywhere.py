@@ -30,8 +30,8 @@ radius).  Both are multiplied by :data:`~ppamsafety.impact.bounds.MARGIN` (integ
 
 **Screening.**  The engine run with longer contact steps (:data:`SCREEN_STRIDE` x dt for the
 HIC; for the force and pressure about :data:`SCREEN_SAMPLES_PER_CONTACT` steps per contact;
-force sampled on that grid, peak refined by a parabola; free flight in steps of 100 dt where
-they resolve the joint springs, as the tool point's dense integrator): its F_max and HIC36 times
+force sampled on that grid, peak refined by a parabola; free flight in steps of 100 dt where they
+resolve the joint springs, as the tool point's dense integrator): its F_max and HIC36 times
 1 + :data:`SCREEN_MARGIN` stand in for the bounds; tests/test_anywhere.py checks screen x
 (1 + margin) >= exact on random and scan states.
 """
@@ -64,7 +64,7 @@ from .layers import (NL, S_ALPHA, S_NL, SeriesContact, series_contact, stack_bat
                      stack_force_bound)
 from .model import (ENERGY_TOL, MAX_JOINT_SPEED, MAX_SPEED, PLAUSIBLE_SPEED, STEPS_PER_PERIOD,
                     _fmt_cases, _history_indices, _rows, _unit, check_angles, check_arm,
-                    check_stiffness, stiffness_limit)
+                    check_stiffness)
 
 #: Contact steps of a screening run, in units of dt, by criterion: the HIC (coarser window
 #: ends) is within 0.5 % of the exact engine's at 4 dt (tests/test_anywhere.py).  For the
@@ -393,7 +393,24 @@ class _PointPrep:
     nsteps: int
     fixed_arm: bool
     arm: object = None
-    long_free: np.ndarray | None = None
+    free_steps: np.ndarray | None = None
+
+
+#: Free-flight steps of a screening run [dt], longest first: each case takes the longest that
+#: resolves its joint springs (:func:`~ppamsafety.impact.model.stiffness_limit`), else the
+#: exact engine's (100 dt: the tool point's dense integrator's; 200 dt measured no faster).
+SCREEN_FREE_STEPS = (100,)
+
+
+def _free_steps(K, lam_min, dt) -> np.ndarray:
+    """The screening free-flight step of each case [dt] (:data:`SCREEN_FREE_STEPS`), from the
+    joint stiffnesses ``K`` [N m/rad] and the smallest eigenvalue of H(q) [kg m^2]."""
+    out = np.full(len(K), eng.FREE_STRIDE, dtype=np.int64)
+    kmax = np.asarray(K).max(axis=1)
+    for f in SCREEN_FREE_STEPS[::-1]:
+        ok = kmax <= lam_min * (2.0 * math.pi / (STEPS_PER_PERIOD * f * dt)) ** 2
+        out[ok] = f
+    return out
 
 
 def _with_body(prep: _PointPrep, body: BodyContact) -> _PointPrep:
@@ -408,7 +425,12 @@ def _check_through(contact: SeriesContact, v_close) -> None:
     """Refuse a case whose closing speed would drive the point through the body's centre
     (the stack cannot store the kinetic energy of the body on a rigid arm before it)."""
     body = contact.body
-    reach = _stack_table(contact).delta_at(0.5 * body.mass * np.maximum(v_close, 0.0) ** 2)
+    v = np.maximum(np.asarray(v_close, dtype=float), 0.0)
+    tab = _stack_table(contact)
+    # the reach grows with the speed: if the fastest case stops short, every case does
+    if v.size == 0 or tab.delta_at(0.5 * body.mass * v.max() ** 2) < body.radius:
+        return
+    reach = tab.delta_at(0.5 * body.mass * v ** 2)
     bad = np.nonzero(reach >= body.radius)[0]
     if bad.size:
         i = int(bad[0])
@@ -500,8 +522,8 @@ def _prepare(arm, q, qd, stiffness, *, point, body, covering, direction, body_ve
 
 
 def _run(prep: _PointPrep, idx, stride: int = 1, HIST=None) -> np.ndarray:
-    """Summary rows of the cases ``idx`` (stride 1: exact; > 1: screening, with free-flight
-    steps of DENSE_FREE_STRIDE x dt where they resolve the joint springs)."""
+    """Summary rows of the cases ``idx`` (stride 1: exact; > 1: screening, with the longest
+    free-flight steps of :data:`SCREEN_FREE_STEPS` that resolve the joint springs)."""
     idx = np.asarray(idx, dtype=np.int64)
     out = np.zeros((idx.size, pt.NPSUM))
     if idx.size == 0:
@@ -518,11 +540,11 @@ def _run(prep: _PointPrep, idx, stride: int = 1, HIST=None) -> np.ndarray:
         HIST = np.zeros((0, nst + 1, pt.NPHIST))
     groups = [(np.ones(idx.size, bool), eng.FREE_STRIDE)]
     if stride > 1 and not prep.fixed_arm:
-        if prep.long_free is None:           # once per set of cases
-            prep.long_free = prep.K.max(axis=1) <= stiffness_limit(
-                prep.q, prep.arm, eng.DENSE_FREE_STRIDE * prep.dt)
-        longer = prep.long_free[idx]
-        groups = [(longer, eng.DENSE_FREE_STRIDE), (~longer, eng.FREE_STRIDE)]
+        if prep.free_steps is None:          # once per set of cases
+            prep.free_steps = _free_steps(prep.K, np.linalg.eigvalsh(
+                dyn.inertia_matrix(prep.q, prep.arm))[..., 0], prep.dt)
+        fs = prep.free_steps[idx]
+        groups = [(fs == f, int(f)) for f in np.unique(fs)]
     for sel, free in groups:
         if not sel.any():
             continue
@@ -898,10 +920,8 @@ def worst_contact(result, arm, *, points=None, bodies=None, limits=None,
     Hinv = np.linalg.inv(Hq)
     if len(q):
         check_stiffness(K, q, arm, eng.FREE_STRIDE * dt, dt)
-    # which instants the screening's long free-flight steps resolve (stiffness_limit, once)
-    lam_min = np.linalg.eigvalsh(Hq)[..., 0]
-    long_free = K.max(axis=1) <= lam_min * (
-        2.0 * math.pi / (STEPS_PER_PERIOD * eng.DENSE_FREE_STRIDE * dt)) ** 2
+    # the screening's free-flight steps the joint springs allow (stiffness_limit, once)
+    free_steps = _free_steps(K, np.linalg.eigvalsh(Hq)[..., 0], dt)
     col = {"F_max": pt.U_FMAX, "HIC36": pt.U_HIC36, "p_max": pt.U_PMAX}[criterion]
     tables, worst_rows = [], []
     n_scr = n_sim = n_cand = 0
@@ -916,7 +936,7 @@ def worst_contact(result, arm, *, points=None, bodies=None, limits=None,
                         direction=None, body_velocity=None, fixed_arm=False, dt=dt,
                         duration=duration, history=False, warn_area=False, stacklevel=3,
                         Hinv=Hinv[keep], checked=True)
-        base.long_free = long_free[keep]
+        base.free_steps = free_steps[keep]
         for bi, b in enumerate(bds):
             prep = base if bi == 0 else _with_body(base, b)
             fb, hb = _bounds(arm, p, prep.contact, e0_arm[keep], np.zeros((keep.size, 2)),
@@ -986,17 +1006,14 @@ def worst_contact(result, arm, *, points=None, bodies=None, limits=None,
                     up[sel] = np.where(ok, vals * (1.0 + SCREEN_MARGIN[criterion]), up[sel])
         n_scr += int(screened.sum())
         n_sim += int(simulated.sum())
-        bi_all = np.repeat(np.arange(nb), nk)
         inst_all = np.tile(keep, nb)
-        t = pd.DataFrame({"point": p.name, "body": np.array(names, dtype=object)[bi_all],
-                          "t0": sub["t"].to_numpy()[inst_all],
-                          "point_speed": np.tile(sp[keep], nb),
-                          "bound": np.concatenate(ups) / np.repeat(scale, nk),
-                          "screened": screened, "screen": scr / np.repeat(scale, nk),
-                          "simulated": simulated, "value": exact / np.repeat(scale, nk),
-                          "limit": np.repeat([lim[n] if lim else np.nan for n in names], nk),
-                          "objective": exact})
-        tables.append(t)
+        sc = np.repeat(scale, nk)
+        tables.append({"point": np.full(n, len(tables)), "body": np.repeat(np.arange(nb), nk),
+                       "t0": sub["t"].to_numpy()[inst_all], "point_speed": np.tile(sp[keep], nb),
+                       "bound": np.concatenate(ups) / sc, "screened": screened,
+                       "screen": scr / sc, "simulated": simulated, "value": exact / sc,
+                       "limit": np.repeat([lim[n] if lim else np.nan for n in names], nk),
+                       "objective": exact, "_name": p.name})
         done = np.nonzero(simulated)[0]
         cw = int(done[np.argmax(exact[done])])          # the earliest on ties (sorted)
         bi, ii = divmod(cw, nk)
@@ -1011,8 +1028,11 @@ def worst_contact(result, arm, *, points=None, bodies=None, limits=None,
         worst_rows.append({**head, **fr.to_dict()})
     if not worst_rows:
         raise ValueError("no contact point moves faster than min_speed at any instant")
-    return WorstContact(pd.concat(tables, ignore_index=True), pd.DataFrame(worst_rows),
-                        criterion, lim, n_cand, n_scr, n_sim, tuple(pts))
+    cols = {c: np.concatenate([t[c] for t in tables]) for c in tables[0] if c != "_name"}
+    cols["point"] = pd.Categorical.from_codes(cols["point"], [t["_name"] for t in tables])
+    cols["body"] = pd.Categorical.from_codes(cols["body"], names)
+    return WorstContact(pd.DataFrame(cols), pd.DataFrame(worst_rows), criterion, lim, n_cand,
+                        n_scr, n_sim, tuple(pts))
 
 
 __all__ = ["simulate_contacts", "ContactResults", "point_effective_mass", "point_jacobian",
