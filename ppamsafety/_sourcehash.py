@@ -44,7 +44,8 @@ KERNEL_FILES = (
     "hysteresis/__init__.py", "hysteresis/dahl.py", "hysteresis/everett.py",
     "hysteresis/force.py", "hysteresis/memory.py", "hysteresis/tensile.py",
     "impact/__init__.py", "impact/clamping.py", "impact/collision.py", "impact/contact.py",
-    "impact/engine.py", "impact/hic.py", "impact/twobody.py",
+    "impact/engine.py", "impact/hic.py", "impact/layers.py", "impact/points.py",
+    "impact/twobody.py",
     "plant/__init__.py", "plant/dynamics.py", "plant/geometry.py", "plant/layout.py",
     "plant/model.py", "plant/muscle.py", "plant/pneumatics.py", "plant/torque.py",
 )

@@ -114,7 +114,7 @@ def resolve_limit(limit="F_max", limit_value=None, region=None) -> Limit:
 LIMITS = {n: resolve_limit(n) for n in criterion_names()}
 #: Numeric safety_case parameters an envelope can search (besides dotted arm parameters).
 NUMERIC = ("lam", "kp_bar", "ki_bar", "kd_bar", "task_kp", "task_ki", "task_kd", "stiffness",
-           "duration")
+           "duration", "covering_thickness", "covering_modulus", "covering_hysteresis")
 
 
 @dataclass

@@ -45,6 +45,7 @@ from .design import rest_stiffness
 from .experiments.catalog import (CIRCLE_PERIODS, CIRCLE_WARMUP, DEFAULT_DURATIONS, STEP_TIMES,
                                   SWITCH_TIME, run_thesis_experiment, ControllerVariant)
 from .experiments.metrics import tracking_stats
+from .impact.anywhere import simulate_contacts
 from .impact.head import HeadContactModel, head_model_names, head_model
 from .impact.instants import HEURISTICS, evaluate_experiment, heuristic_instants, impact_states
 from .impact.engine import FREE_STRIDE
@@ -52,6 +53,8 @@ from .impact.verdicts import METRICS, criteria_for, criterion, evaluate
 from .impact.model import simulate_impacts, stiffness_limit
 from .params import ArmParameters, thesis_arm
 from .params.arm_file import ArmFileError, apply_arm_changes, arm_key, effects_from_dict
+from .params.contact import arm_contact_points, body_contact, body_contact_names, covering_names
+from .params.contact import covering as named_covering
 from .params.effects import Effects
 from .plant import geometry as geo
 from .sweep import _check_cases, grid_cases, run_sweep
@@ -187,6 +190,35 @@ def _check_head(v):
         raise ValueError(f"head = {v!r} is not a head model name; allowed: {names} (a head "
                          f"file: the study file's [head] file, or a HeadContactModel)")
     return v
+
+
+#: Contact points a case can name (the defaults of every arm,
+#: :func:`ppamsafety.params.contact.arm_contact_points`); ``"all"``: the worst of them.
+CONTACT_POINTS = ("tool point", "elbow", "forearm", "upper arm", "all")
+#: Keys that route a case through the contact-point engine (covering and body in series).
+CONTACT_KEYS = ("contact", "body", "covering", "covering_thickness", "covering_modulus",
+                "covering_hysteresis")
+#: Ranges of the covering keys (SI): thickness [m], modulus [Pa], hysteresis [s/m].
+COVERING_RANGES = {"covering_thickness": (1e-4, 0.2, "m"),
+                   "covering_modulus": (1e3, 1e10, "Pa"),
+                   "covering_hysteresis": (0.0, 100.0, "s/m")}
+
+
+def _check_named(name, v, names):
+    if v is None:
+        return v
+    if not isinstance(v, str) or v not in names:
+        raise ValueError(f"{name} = {v!r}{did_you_mean(v, names) if isinstance(v, str) else ''}"
+                         f" is not allowed; choose from {list(names)}")
+    return v
+
+
+def _check_covering_value(name):
+    lo, hi, unit = COVERING_RANGES[name]
+
+    def check(v):
+        return None if v is None else _number(name, v, lo=lo, unit=unit, hi=hi)
+    return check
 
 
 def _check_effects(v):
@@ -335,6 +367,21 @@ PARAMETERS = {
     "duration": (_check_duration,
                  "experiment length [s] (default: the catalog's), in [1, 1800] s and longer "
                  "than the experiment's events (step: 2 s, switch: 7.5 s)"),
+    "contact": (lambda v: _check_named("contact", v, CONTACT_POINTS),
+                "contact point of the arm hitting the body: None = the tool point with the head "
+                f"model (thesis path); one of {list(CONTACT_POINTS)} (contact-point engine)"),
+    "body": (lambda v: _check_named("body", v, body_contact_names()),
+             "body region contact model (ppamsafety.params.contact.body_contact_names); "
+             "default with a contact key: the head that passes the Hybrid III drop"),
+    "covering": (lambda v: _check_named("covering", v, covering_names()),
+                 "robot covering (ppamsafety.params.contact.covering_names); default with a "
+                 "contact key: bare metal, or 'thesis-implied' when a covering_* key is given"),
+    "covering_thickness": (_check_covering_value("covering_thickness"),
+                           "thickness of the covering's layer [m]"),
+    "covering_modulus": (_check_covering_value("covering_modulus"),
+                         "modulus (stiffness) of the covering's layer [Pa]"),
+    "covering_hysteresis": (_check_covering_value("covering_hysteresis"),
+                            "Hunt-Crossley hysteresis factor of the covering's layer [s/m]"),
     "histories": (lambda v: _check_bool("histories", v),
                   "return the full time histories (closed loop and worst impact)"),
 }
@@ -354,6 +401,9 @@ COLUMN_UNITS = {
     "instant_HIC36": None, "tcp_speed": "m/s", "K1": "Nm/rad", "K2": "Nm/rad",
     "n_impacts": "-", "track_mean": "m", "track_max": "m", "track_rms": "m", "diverged": None,
     "status": None, "error": None, "value": None,
+    "contact": None, "body": None, "covering": None, "covering_thickness": "m",
+    "covering_modulus": "Pa", "covering_hysteresis": "s/m", "contact_point": None,
+    "body_region": None, "covering_name": None, "p_max": "Pa", "covering_use": "-",
 }
 
 
@@ -424,6 +474,12 @@ def _checked(case: dict) -> tuple:
         given = [k for k in _TASK_GAINS if full[k] is not None]
         if given:
             raise ValueError(f"{given} apply only to controller = 'PSMC task', not {ctrl!r}")
+    if any(full[k] is not None for k in CONTACT_KEYS):
+        contact_covering(full)                       # the covering can be built
+        if full["head"] != DEFAULTS["head"]:
+            raise ValueError(f"head = {full['head']!r} with a contact key "
+                             f"({[k for k in CONTACT_KEYS if full[k] is not None]}): the body "
+                             f"is set by body (a body contact model), not head")
     if full["every"] is not None and full["instants"] != "all":
         raise ValueError(f"every = {full['every']} applies only to instants = 'all', not "
                          f"{full['instants']!r}")
@@ -477,7 +533,8 @@ DEFAULTS = {"experiment": "step", "controller": "PID", "lam": None, "kp_bar": No
             "ki_bar": None, "kd_bar": None, "task_kp": None, "task_ki": None, "task_kd": None,
             "stiffness": None, "head": "thesis-frontal", "effects": None,
             "instants": "heuristic", "every": None, "noise_seed": None, "duration": None,
-            "histories": False}
+            "contact": None, "body": None, "covering": None, "covering_thickness": None,
+            "covering_modulus": None, "covering_hysteresis": None, "histories": False}
 """Default parameters of :func:`safety_case`."""
 
 
@@ -522,6 +579,66 @@ def make_controller(controller: str = "PID", *, lam=None, kp_bar=None, ki_bar=No
     return JointPSMC(**kw)
 
 
+def contact_covering(p: dict):
+    """The covering of a case with contact keys: the named covering (default bare metal, or
+    ``"thesis-implied"`` when a ``covering_*`` key is given) with its first layer's
+    thickness, modulus and hysteresis replaced by the case's ``covering_*`` values.
+
+    Parameters
+    ----------
+    p : dict
+        The case's parameters (``covering`` and ``covering_*``).
+    """
+    changes = {k[len("covering_"):]: p[k] for k in COVERING_RANGES if p.get(k) is not None}
+    name = p.get("covering") or ("thesis-implied" if changes else "bare metal")
+    cov = named_covering(name)
+    if not changes:
+        return cov
+    if cov.bare:
+        raise ValueError(f"{sorted('covering_' + k for k in changes)} change a covering layer; "
+                         f"covering = {name!r} has none (give a covering with a layer, e.g. "
+                         f"'thesis-implied')")
+    lay = cov.layers[0]
+    if lay.law == "power" and "modulus" in changes:
+        raise ValueError(f"covering_modulus: the layer of covering {name!r} is a 'power' law "
+                         f"(no modulus)")
+    label = ", ".join(f"{k} {v:g}" for k, v in changes.items())
+    return cov.replace(name=f"{name} ({label})",
+                       layers=(lay.replace(**changes),) + cov.layers[1:])
+
+
+def _contact_impacts(result, arm, p):
+    """Impacts of a record at a contact point through a covering and a body (contact keys);
+    ``contact = "all"``: at every contact point, the point with the largest F_max kept."""
+    pts = {c.name: c for c in arm_contact_points(arm)}
+    if p["contact"] == "all":
+        runs = [_contact_impacts(result, arm, {**p, "contact": name}) for name in pts]
+        return max(runs, key=lambda r: float(r[0].summary["F_max"].max()))
+    point = pts[p["contact"] or "tool point"]
+    body = body_contact(p["body"]) if p["body"] else body_contact()
+    st = impact_states(result, arm)
+    if p["instants"] == "all":
+        idx = np.arange(0, len(st), p["every"] or 1)
+        idx = idx[st["tcp_speed"].to_numpy()[idx] >= MIN_SPEED]
+        names = None
+    else:
+        h = heuristic_instants(st)
+        names = list(h) if p["instants"] == "heuristic" else [p["instants"]]
+        idx = np.array([h[n] for n in names])
+    sub = st.iloc[idx]
+    K = sub[["K1", "K2"]].to_numpy()
+    if p["stiffness"] is not None:
+        K = np.broadcast_to(np.asarray(p["stiffness"], float), K.shape).copy()
+    res = simulate_contacts(arm, sub[["q1", "q2"]].to_numpy(), sub[["qd1", "qd2"]].to_numpy(),
+                            K, point=point, body=body, covering=contact_covering(p))
+    s = res.summary
+    s.insert(0, "t0", sub["t"].to_numpy())
+    if names is not None:
+        s.insert(0, "instant", names)
+    s["tcp_speed"] = s["point_speed"]
+    return res, body, point
+
+
 def _impacts(result, arm, instants, every, head, stiffness):
     """Impacts of a record; the same calls as the safety study without a stiffness override."""
     if stiffness is None and instants in ("heuristic", "all"):
@@ -552,7 +669,9 @@ def safety_case(experiment: str = "step", controller: str = "PID", *, lam=None, 
                 ki_bar=None, kd_bar=None, task_kp=None, task_ki=None, task_kd=None,
                 stiffness=None, head="thesis-frontal", effects=None,
                 instants: str = "heuristic", every: int | None = None, noise_seed=None,
-                duration=None, histories: bool = False, arm=None, **dotted) -> dict:
+                duration=None, contact=None, body=None, covering=None,
+                covering_thickness=None, covering_modulus=None, covering_hysteresis=None,
+                histories: bool = False, arm=None, **dotted) -> dict:
     """One experiment with one controller, crashed into a head: a compact result row.
 
     Parameters
@@ -589,6 +708,22 @@ def safety_case(experiment: str = "step", controller: str = "PID", *, lam=None, 
         sensor noise of Table 3.2 with this seed.
     duration : float, optional
         Experiment length [s] (default: the catalog's, e.g. 12 s for the step).
+    contact : str, optional
+        A contact point of the arm (:data:`CONTACT_POINTS`; ``"all"``: every one, the
+        results of the point with the largest F_max).  With any of ``contact``,
+        ``body``, ``covering`` and ``covering_*`` the impacts go through the contact-point
+        engine (:func:`ppamsafety.impact.anywhere.simulate_contacts`): the point (default the
+        tool point) hits the body (default the head that passes the Hybrid III drop) through
+        the covering in series; ``head`` is then not used.
+    body : str, optional
+        A body contact model (:func:`ppamsafety.params.contact.body_contact_names`).
+    covering : str, optional
+        A named covering (:func:`ppamsafety.params.contact.covering_names`; default bare
+        metal, or ``"thesis-implied"`` when a ``covering_*`` value is given).
+    covering_thickness, covering_modulus, covering_hysteresis : float, optional
+        Replace the thickness [m], modulus [Pa] and hysteresis factor [s/m] of the
+        covering's (first) layer (:func:`contact_covering`): the covering as a design
+        parameter, in sweeps and envelopes.
     histories : bool
         Also return the full time histories under the key ``"time_histories"`` (a result
         may not take a parameter's name, :func:`ppamsafety.sweep.run_sweep`):
@@ -612,13 +747,19 @@ def safety_case(experiment: str = "step", controller: str = "PID", *, lam=None, 
         at impact), ``K1``, ``K2`` [Nm/rad] (stiffness of the worst-HIC
         impact), ``n_impacts``; ``track_mean``, ``track_max``, ``track_rms``
         [m] (task-space tracking error; circles after the 5 s warm-up, NaN if
-        the run diverged) and ``diverged``.
+        the run diverged) and ``diverged``; with contact keys also ``contact_point``,
+        ``body_region``, ``covering_name``, ``p_max`` [Pa] (peak mean contact pressure) and
+        ``covering_use`` (largest compression of the covering over its limit; 1: bottomed
+        out), and ``tcp_speed`` is the contact point's speed.
     """
     p, arm = _checked(dict(experiment=experiment, controller=controller, lam=lam,
                            kp_bar=kp_bar, ki_bar=ki_bar, kd_bar=kd_bar, task_kp=task_kp,
                            task_ki=task_ki, task_kd=task_kd, stiffness=stiffness, head=head,
                            effects=effects, instants=instants, every=every,
-                           noise_seed=noise_seed, duration=duration, histories=histories,
+                           noise_seed=noise_seed, duration=duration, contact=contact,
+                           body=body, covering=covering, covering_thickness=covering_thickness,
+                           covering_modulus=covering_modulus,
+                           covering_hysteresis=covering_hysteresis, histories=histories,
                            arm=arm, **dotted))
     hm = p["head"] if isinstance(p["head"], HeadContactModel) else head_model(p["head"])
     ctrl = make_controller(p["controller"], lam=p["lam"], kp_bar=p["kp_bar"], ki_bar=p["ki_bar"],
@@ -629,7 +770,11 @@ def safety_case(experiment: str = "step", controller: str = "PID", *, lam=None, 
                else SensorConfig.for_arm(arm, noise=True, seed=p["noise_seed"]))
     res = run_thesis_experiment(arm, p["experiment"], [variant], sensors=sensors,
                                 duration=p["duration"])[0]
-    ev = _impacts(res, arm, p["instants"], p["every"] or 1, hm, p["stiffness"])
+    contact = any(p[k] is not None for k in CONTACT_KEYS)
+    if contact:
+        ev, body, point = _contact_impacts(res, arm, p)
+    else:
+        ev = _impacts(res, arm, p["instants"], p["every"] or 1, hm, p["stiffness"])
     s = ev.summary
     if len(s) == 0:
         raise ValueError(f"no impact instant: the TCP never moves faster than {MIN_SPEED} m/s")
@@ -643,6 +788,15 @@ def safety_case(experiment: str = "step", controller: str = "PID", *, lam=None, 
            "tcp_speed": float(s["tcp_speed"].max()), "K1": float(w.K1), "K2": float(w.K2),
            "n_impacts": int(len(s)), "track_mean": tr["mean"], "track_max": tr["max"],
            "track_rms": tr["rms"], "diverged": bool(res.diverged)}
+    if contact:
+        out.update({"contact_point": point.name, "body_region": body.name,
+                    "covering_name": ev.point.covering.name,
+                    "p_max": float(s["p_max"].max()),
+                    "covering_use": float(s["covering_use"].max()) if "covering_use" in s
+                    else 0.0})
+    if histories and contact:
+        raise ValueError("histories with a contact key: use ppamsafety.impact.anywhere."
+                         "simulate_contacts(history=True) for the impact's history")
     if histories:
         worst = int(s["HIC36"].idxmax())
         ev_w = _impacts_one(res, arm, s.iloc[worst], hm)
@@ -923,6 +1077,7 @@ def safety_sweep(cases=None, *, grid=None, name: str = "safety", cache_dir=None,
 
 __all__ = ["EXPERIMENTS", "CONTROLLERS", "INSTANTS", "MIN_SPEED", "PARAMETERS", "DEFAULTS",
            "DOTTED", "RESULT_COLUMNS", "check_case", "make_controller", "safety_case",
+           "CONTACT_KEYS", "CONTACT_POINTS", "contact_covering",
            "safety_sweep", "case_arm", "case_function", "is_dotted", "impact_case",
            "check_impact_case", "SPEED_MAX", "IMPACT_POSE_DEG", "add_verdicts", "COLUMN_UNITS",
            "column_unit"]

@@ -15,7 +15,9 @@ from .figure import new_figure
 
 #: Result columns a sweep figure draws, with their axis labels (the ones present are drawn).
 RESULTS = (("F_max", "F_max [N]"), ("HIC36", "HIC36 [-]"), ("HIC15", "HIC15 [-]"),
-           ("tcp_speed", "TCP speed at impact [m/s]"), ("track_rms", "tracking error RMS [m]"))
+           ("tcp_speed", "TCP speed at impact [m/s]"), ("track_rms", "tracking error RMS [m]"),
+           ("p_max", "peak contact pressure [Pa]"),
+           ("covering_use", "covering compression / its limit [-]"))
 #: Marker of the points above a limit line.
 ABOVE = dict(marker="o", ms=8, mfc="none", mec="r", mew=1.2, ls="none")
 #: Most lines per panel: beyond, the other swept parameters are drawn as points.
@@ -77,7 +79,8 @@ def mark_above(ax, x, y, column: str) -> bool:
     return bool(above.any())
 
 
-def plot_sweep(df: pd.DataFrame, swept, *, title: str = "", units=None):
+def plot_sweep(df: pd.DataFrame, swept, *, title: str = "", units=None,
+               region_limits=None):
     """Each result of a sweep against each swept parameter, with the safety limits.
 
     Parameters
@@ -92,14 +95,19 @@ def plot_sweep(df: pd.DataFrame, swept, *, title: str = "", units=None):
     units : dict, optional
         Column -> unit shown on the axes and in the legends (``"-"`` dimensionless, None
         none); default: the SI units of :data:`RESULTS` only.
+    region_limits : dict, optional
+        Body region name -> {result column: limit} (e.g. ``{"face": {"F_max": 130.0}}``):
+        each region that appears in the table's ``body_region`` column gets its limit line
+        on the panels of that result.
 
     Returns
     -------
     matplotlib.figure.Figure
         One row of panels per result of :data:`RESULTS` present, one column per swept
         parameter; F_max panels carry the 660 N maxilla line and the ISO/TS 15066
-        transient forehead limit, HIC panels the HIC 650 line (log scale), each labelled in
-        the panel's legend; points above the lowest limit of their panel are ringed red.
+        transient forehead limit, HIC panels the HIC 650 line (log scale), and the limits
+        of the body regions present (``region_limits``), each labelled in the panel's legend;
+        points above the lowest limit of their panel are ringed red.
     """
     units = dict(units or {})
     ok = df[df["status"] == "ok"] if "status" in df.columns else df
@@ -131,6 +139,11 @@ def plot_sweep(df: pd.DataFrame, swept, *, title: str = "", units=None):
                 ax.axhline(v, color=color, ls=style, lw=1, label=text)
             if mark_above(ax, xv, ok[col], col):
                 ax.plot([], [], label="above a limit", **ABOVE)
+            present = set(ok["body_region"]) if "body_region" in ok.columns else set()
+            for k, (region, lims) in enumerate(sorted((region_limits or {}).items())):
+                if region in present and col in lims:
+                    ax.axhline(lims[col], color=f"C{(k + 3) % 10}", ls="-.", lw=1,
+                               label=f"{region}: {lims[col]:g}")
             if col.startswith("HIC") and (ok[col] > 0).all():
                 ax.set_yscale("log")
             ax.set_ylabel(lab)
