@@ -147,6 +147,11 @@ def _option(name, value):
 
 
 def _nominal_vector(arm, field):
+    """The plant's value of a vector effect field: the arm's declared effect, else its
+    nominal parameter (a relative effect form multiplies or shifts it)."""
+    declared = getattr(arm.effects, field)
+    if declared is not None:
+        return np.array(declared, dtype=float)
     if field == "friction_coulomb":
         return np.array(arm.plant_base.coulomb)
     if field == "friction_viscous":
@@ -371,6 +376,7 @@ def plant_with(arm, effects: dict):
         elif name == "valve_dead_time":
             dead = check_range("effect valve_dead_time", _as_list(name, value, 1)[0], 0.0, 1.0,
                                unit="s")
+            fx["valve_dead_time"] = None        # the hidden one replaces what the arm declares
         elif name == "pressure_sensor_offset":
             offset = np.array([check_range(f"effect pressure_sensor_offset[{i}]", v,
                                            -PRESSURE_OFFSET_MAX, PRESSURE_OFFSET_MAX, unit="Pa")
@@ -405,7 +411,9 @@ def plant_with(arm, effects: dict):
         if links:
             plant = plant.replace(links=replace(plant.links, **links))
         if fx:
-            plant = plant.replace(effects=Effects(**fx))
+            # on top of the arm's declared effects (a hidden value of a declared effect
+            # replaces it)
+            plant = plant.replace(effects=replace(plant.effects, **fx))
     except (TypeError, ValueError) as exc:   # the parameter sets' own ranges: name the effect
         given = ", ".join(f"{k}={v!r}" for k, v in effects.items())
         raise type(exc)(f"effect(s) {given}: {exc}") from None
