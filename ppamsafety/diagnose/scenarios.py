@@ -12,6 +12,15 @@ diagnoses it blind (default options) and scores every claim against the truth;
 :func:`run_battery` runs many, in parallel processes; :func:`scores` and
 :func:`calibration_table` summarise them.
 
+A second battery (``random_scenario(seed, declared=True)``) draws arms that declare
+effects of their own in their ``[effects]`` (:data:`DECLARED_DRAWS`: a payload,
+friction, valve offsets/gains, valve time constants, a polytropic exponent, muscle
+hysteresis, a valve dead time, a joint torque bias; 1-4 kinds), and with probability
+:data:`P_DECLARED_CHANGE` hides a change of one of them; the record is made with that arm
+and diagnosed against it, so a declared effect is the nominal model and only a change of
+it is a right name.  Its seeds (:data:`DECLARED_TUNING_SEEDS`,
+:data:`DECLARED_MEASURE_SEEDS`) are its own.
+
 Scoring (what the targets of ``docs/diagnose.md`` count)
 --------------------------------------------------------
 * A named effect (any confidence) is *right* when the scenario hid it.  A
@@ -75,6 +84,13 @@ from .synthesize import synthesize
 TUNING_SEEDS = range(0, 3000)
 #: Seeds of the measurement (the report and ``docs/diagnose.md``).
 MEASURE_SEEDS = range(3000, 5000)
+#: Seeds of the battery of arms that declare effects of their own
+#: (``random_scenario(seed, declared=True)``): tuning (the replay's threshold and any rule
+#: set for declared effects) and measurement, never overlapping each other or the above.
+DECLARED_TUNING_SEEDS = range(10000, 11000)
+DECLARED_MEASURE_SEEDS = range(20000, 22000)
+#: Scenarios of the shipped measurement of that battery (its first seeds).
+DECLARED_MEASURE_COUNT = 800
 #: Required precision of "high" (issue 19).
 HIGH_PRECISION = 0.97
 #: Residual/noise ratio that the irreducible part of an out-of-library perturbation must
@@ -693,9 +709,17 @@ RESULTS_FILE = Path(__file__).resolve().parent / "calibration_data" / "arm_batte
 #: The muscle bench battery's measured results (:mod:`.bench.scenarios`, same row keys):
 #: ``python -m ppamsafety.diagnose.scenarios --kind bench``.
 BENCH_RESULTS_FILE = RESULTS_FILE.with_name("bench_battery.jsonl.xz")
+#: The battery of arms with declared effects (``--kind declared``).
+DECLARED_RESULTS_FILE = RESULTS_FILE.with_name("arm_declared_battery.jsonl.xz")
+#: Tuning rows the replay's thresholds were set on (:func:`replay_limits`): thesis-arm seeds
+#: 0-299 and declared-effect seeds 10000-10299, run with the replay gate off.
+REPLAY_TUNING_FILE = RESULTS_FILE.with_name("replay_tuning.jsonl.xz")
+#: The replay threshold is this multiple of the largest replay ratio of a right model on the
+#: tuning rows (:func:`replay_limits`).
+REPLAY_MARGIN = 1.25
 #: Columns that hold Python containers (tuples, dicts, lists) in a results table.
 _CONTAINERS = ("hidden", "named", "high", "low", "partial", "confounded", "ratios",
-               "ratios_detected", "gates", "named_ratios", "coverage")
+               "ratios_detected", "gates", "named_ratios", "coverage", "replay_rho")
 
 
 def _jsonable(v):
@@ -762,15 +786,16 @@ def load_results(path=None) -> pd.DataFrame:
     if "confounded" in df:
         df["confounded"] = df["confounded"].map(
             lambda v: tuple(tuple(g) for g in v) if isinstance(v, list) else ())
-    for c in ("ratios", "ratios_detected", "gates", "named_ratios"):
+    for c in ("ratios", "ratios_detected", "gates", "named_ratios", "replay_rho"):
         if c in df:
             df[c] = df[c].map(lambda v: v if isinstance(v, dict) else {})
     if "coverage" in df:
         df["coverage"] = df["coverage"].map(lambda v: v if isinstance(v, list) else [])
     if "error" in df:
         df["error"] = df["error"].fillna("")
-    if "perturbation" in df:
-        df["perturbation"] = df["perturbation"].fillna("")
+    for c in ("perturbation", "declared"):
+        if c in df:
+            df[c] = df[c].fillna("")
     return df
 
 
@@ -870,6 +895,11 @@ def scores(results: pd.DataFrame) -> pd.DataFrame:
     p_det = pair[pair.apply(_detectable, axis=1)]
     add("two effects above their limits: both named, nothing else",
         int(sum(set(r.named) == set(r.hidden) for r in p_det.itertuples())), len(p_det), 0.85)
+    right = clean[np.array([set(r.named) == set(r.hidden) for r in clean.itertuples()],
+                           dtype=bool)]
+    add("model right (exactly the hidden effects named, nothing out of library): flagged "
+        "unexplained", int(sum(bool(r.unexplained) for r in right.itertuples())), len(right),
+        0.02, better="lower")
     ool = df[df["perturbation"] != ""]
     ool0 = ool[ool["hidden"].map(len) == 0]
     add("out of library (nothing else hidden): no high-confidence name",
@@ -897,6 +927,62 @@ def scores(results: pd.DataFrame) -> pd.DataFrame:
     add("valid records on which the diagnosis raised an error", fail["diagnose"] +
         fail["battery"], made, 0.0, better="lower")
     return pd.DataFrame(rows)
+
+
+def replay_null(results: pd.DataFrame) -> pd.DataFrame:
+    """The replay statistic of the models the diagnosis got right: its null distribution.
+
+    A model is right when the scenario holds no out-of-library perturbation and exactly
+    the hidden effects were named; its statistic is the largest replay RMS over the sample
+    noise over the record's channels (``replay_rho``), what a correct model replayed on a
+    noisy record leaves.
+
+    Parameters
+    ----------
+    results : pandas.DataFrame
+        Battery rows with ``replay_rho``.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per record class (``dynamic``: open and closed loop; ``static``: the
+        sawtooth): ``models`` (right models), ``median``, ``p95``, ``p99``, ``max``.
+    """
+    df = _ok(results)
+    right = np.array([set(n) == set(h) for n, h in zip(df["named"], df["hidden"])], bool)
+    df = df[(df["perturbation"] == "").to_numpy() & right]
+    stat = df["replay_rho"].map(lambda d: max(d.values()) if isinstance(d, dict) and d
+                                else math.nan)
+    rows = []
+    for cls, sel in (("dynamic", df["kind"] != "static-sawtooth"),
+                     ("static", df["kind"] == "static-sawtooth")):
+        x = stat[sel].dropna().to_numpy(float)
+        q = np.quantile(x, [0.5, 0.95, 0.99]) if x.size else [math.nan] * 3
+        rows.append({"records": cls, "models": int(x.size), "median": float(q[0]),
+                     "p95": float(q[1]), "p99": float(q[2]),
+                     "max": float(x.max()) if x.size else math.nan})
+    return pd.DataFrame(rows)
+
+
+def replay_limits(results: pd.DataFrame, *, margin: float = REPLAY_MARGIN) -> tuple:
+    """The replay thresholds the rule gives on tuning rows: ``margin`` x the largest
+    statistic of a right model (:func:`replay_null`), rounded down to 0.1.
+
+    Parameters
+    ----------
+    results : pandas.DataFrame
+        Tuning rows (:data:`REPLAY_TUNING_FILE`).
+    margin : float, keyword-only
+
+    Returns
+    -------
+    tuple of float
+        (open and closed loop, static sawtooth): the values of
+        :data:`ppamsafety.diagnose.arm.pipeline.REPLAY_RHO` and ``REPLAY_RHO_STATIC``.
+    """
+    null = replay_null(results).set_index("records")
+    return tuple(math.floor(10 * margin * null.loc[c, "max"] + 1e-9) / 10
+                 for c in ("dynamic", "static"))
 
 
 def interval_widening(results: pd.DataFrame) -> dict:
@@ -1023,12 +1109,13 @@ def detection_curve(results: pd.DataFrame, *, key: str = "ratios") -> pd.DataFra
 def main(argv=None) -> int:
     """Run the battery on a range of seeds, write its rows, print its scores.
 
-    ``python -m ppamsafety.diagnose.scenarios [--kind arm|bench] [--seeds 2000:3000]
-    [--processes N] [--out FILE] [--overwrite]``; the default writes :data:`RESULTS_FILE`
-    (``--kind bench``: the muscle bench battery of :mod:`.bench.scenarios` on its
-    measurement seeds into :data:`BENCH_RESULTS_FILE`), refused if it exists unless
-    ``--overwrite``.  About 35 min for the 1000 arm scenarios on 2 cores, 5 min for the
-    300 bench scenarios.
+    ``python -m ppamsafety.diagnose.scenarios [--kind arm|declared|bench] [--seeds
+    2000:3000] [--processes N] [--out FILE] [--overwrite]``; the default writes
+    :data:`RESULTS_FILE` (``--kind declared``: arms with declared effects on
+    :data:`DECLARED_MEASURE_SEEDS` into :data:`DECLARED_RESULTS_FILE`; ``--kind bench``: the
+    muscle bench battery of :mod:`.bench.scenarios` on its measurement seeds into
+    :data:`BENCH_RESULTS_FILE`), refused if it exists unless ``--overwrite``.  About 35 min
+    for the 1000 arm scenarios on 2 cores, 5 min for the 300 bench scenarios.
 
     Parameters
     ----------
@@ -1036,11 +1123,14 @@ def main(argv=None) -> int:
     """
     ap = argparse.ArgumentParser(prog="python -m ppamsafety.diagnose.scenarios",
                                  description="the randomized scenario battery of the diagnosis")
-    ap.add_argument("--kind", choices=("arm", "bench"), default="arm",
-                    help="arm records (default) or muscle test-bench records")
+    ap.add_argument("--kind", choices=("arm", "declared", "bench"), default="arm",
+                    help="arm records (default), arm records of arms that declare effects, "
+                         "or muscle test-bench records")
     ap.add_argument("--seeds", default=None,
                     help="first:last+1 (default the measurement seeds: arm "
-                         f"{MEASURE_SEEDS.start}:{MEASURE_SEEDS.start + 1000}, bench "
+                         f"{MEASURE_SEEDS.start}:{MEASURE_SEEDS.start + 1000}, declared "
+                         f"{DECLARED_MEASURE_SEEDS.start}:"
+                         f"{DECLARED_MEASURE_SEEDS.start + DECLARED_MEASURE_COUNT}, bench "
                          f"{bench_scenarios.MEASURE_SEEDS.start}:"
                          f"{bench_scenarios.MEASURE_SEEDS.stop})")
     ap.add_argument("--processes", type=int, default=None,
@@ -1051,10 +1141,12 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     bench = args.kind == "bench"
     if args.seeds is None:
-        seeds = bench_scenarios.MEASURE_SEEDS if bench else MEASURE_SEEDS[:1000]
+        seeds = {"bench": bench_scenarios.MEASURE_SEEDS, "arm": MEASURE_SEEDS[:1000],
+                 "declared": DECLARED_MEASURE_SEEDS[:DECLARED_MEASURE_COUNT]}[args.kind]
         args.seeds = f"{seeds.start}:{seeds.stop}"
     if args.out is None:
-        args.out = str(BENCH_RESULTS_FILE if bench else RESULTS_FILE)
+        args.out = str({"bench": BENCH_RESULTS_FILE, "arm": RESULTS_FILE,
+                        "declared": DECLARED_RESULTS_FILE}[args.kind])
     try:
         a, b = (int(x) for x in args.seeds.split(":"))
     except ValueError:
@@ -1065,7 +1157,8 @@ def main(argv=None) -> int:
         df = bench_scenarios.run_battery(range(a, b), processes=args.processes or
                                          (os.cpu_count() or 1), progress=True)
     else:
-        df = run_battery(range(a, b), processes=args.processes, progress=True)
+        df = run_battery(range(a, b), processes=args.processes, progress=True,
+                         declared=args.kind == "declared")
     wall = time.time() - t0
     save_results(df, args.out, overwrite=args.overwrite)
     pd.set_option("display.width", 200)
@@ -1082,8 +1175,11 @@ def main(argv=None) -> int:
 __all__ = ["Scenario", "random_scenario", "record_of", "run_scenario", "run_battery",
            "detection_curve", "RATIO_BINS",
            "save_results", "load_results", "RESULTS_FILE", "BENCH_RESULTS_FILE",
+           "DECLARED_RESULTS_FILE", "DECLARED_TUNING_SEEDS", "DECLARED_MEASURE_SEEDS",
+           "DECLARED_MEASURE_COUNT", "DECLARED_DRAWS", "declared_arm",
            "irreducible_gap", "scores", "failures", "calibration_table", "by_effect",
-           "interval_widening", "LIBRARY_DRAWS",
+           "interval_widening", "LIBRARY_DRAWS", "replay_null", "replay_limits",
+           "REPLAY_TUNING_FILE", "REPLAY_MARGIN",
            "TUNING_SEEDS", "MEASURE_SEEDS", "HIGH_PRECISION", "GAP_ABOVE_NOISE"]
 
 

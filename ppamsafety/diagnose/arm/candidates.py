@@ -24,7 +24,8 @@ name                   subsystem   parameters
 =====================  ==========  =================================================
 valve_offset_gain      pressure    v1_1..v1_4 [Pa], v2_1..v2_4 [-]  (3.12)
 valve_lag              pressure    T_1..T_4 [s]  (3.2)
-valve_dead_time        pressure    d [s], common to the four valves
+valve_dead_time        pressure    d [s], common to the four valves (or the change
+                                   of the declared one per valve)
 polytropic_exponent    pressure    n [-]  (3.3)
 joint_friction         torque      c1, c2 [N m], b1, b2 [N m s/rad]  (3.30)
 payload                torque      M [kg] at the load point A_L (2.19), (A.21)
@@ -47,6 +48,17 @@ from a plant effect, the selection reports them as confounded
 
 Every parameter has a plausible range (the naming rule's bounds) and a physical range
 (``Parameter.phys_lo``/``phys_hi``: a fit outside it is a symptom, not an effect).
+
+Declared effects.  The nominal model is the arm under test with its declared
+``[effects]`` (:mod:`ppamsafety.diagnose.arm.residuals`).  A candidate's
+coefficients are the *change* from the declared value, and its reported
+parameters are absolute with the declared value as ``nominal``
+(:meth:`Candidate.values`): a declared delta of 0.3 fitted to 0.2 reports
+``delta = 0.2`` (nominal 0.3); friction on top of a declared friction reports
+the total; a dead time other than the declared one reports the new dead time.
+A candidate is therefore named only where the record asks for a change from
+the declared value.  With four declared deltas that differ, the hysteresis
+candidate changes them by one common amount and reports their mean.
 
 Names on a tester (actuator records) have their own vocabulary and library:
 :mod:`ppamsafety.diagnose.bench.candidates`.

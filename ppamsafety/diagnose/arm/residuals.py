@@ -41,6 +41,23 @@ Both block residuals are linear in the *model vector* mu (:data:`MU_NAMES`,
 b2), ``prediction = X mu``; every candidate effect of
 :mod:`ppamsafety.diagnose.candidates` is a direction (or a change of X) in
 that space, which is why they can be fitted by linear regression.
+
+The model under test is the arm *as declared*, its ``[effects]`` included
+(:class:`ppamsafety.params.effects.Effects`):
+
+* parameter effects (payload, friction, valve offset/gain/lag, polytropic
+  exponent) are folded into the plant row (:func:`ppamsafety.plant.packing.pack`),
+  so the model vector mu of that row carries them;
+* a declared joint torque bias and muscle hysteresis (3.35) -- the arm's delta
+  per group, its initial memory -- are torques beside the muscles' at every
+  sample (:func:`declared_torque`), moved to the measured side of the torque
+  equations;
+* a declared valve dead time delays the set values in the design
+  (:attr:`BlockSystem.delay0`, :func:`declared_delays`); the dead-time
+  candidate profiles *changes* of it.
+
+An arm cannot declare a sensor fault (``[sensors]`` describes the hardware,
+not its faults), so the sensor-fault columns always start from none.
 """
 
 from __future__ import annotations

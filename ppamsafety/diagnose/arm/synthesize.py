@@ -9,7 +9,11 @@ generic description and the seed), the set values are those the experimenter
 computed with the *nominal* arm, and nothing else is written.
 
 Effects (``NAME=VALUE``; vectors as comma-separated values, a single value
-is used for every joint/valve):
+is used for every joint/valve) act on top of the effects the arm declares
+(its ``[effects]``): a hidden value of a field the arm declares replaces the
+declared one (a hidden change of it), a relative form multiplies or shifts
+the arm's value with its declared effects, and a hidden ``valve_dead_time``
+replaces a declared dead time:
 
 * every field of :class:`ppamsafety.params.effects.Effects` (absolute values
   in SI units): ``payload_mass`` [kg], ``friction_coulomb`` [N m],
