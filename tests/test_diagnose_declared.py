@@ -119,6 +119,26 @@ def test_declared_dead_time_and_payload_are_the_nominal_values():
     assert abs(s["valve_dead_time"]["d"][0] - 0.025) <= 0.0025
 
 
+def test_declared_valves_and_polytropic_exponent_are_the_model():
+    t = tuple(1.5 * v.time_constant for v in thesis_arm().valves.valves)
+    arm = _arm("test arm: long tubes", valve_time_constant=t, polytropic_n=1.2,
+               valve_offset=(6000.0, 2000.0, 4000.0, 1000.0))
+    dg0 = diagnose(synthesize("open-loop", {}, seed=19, duration=8.0, arm=arm), arm=arm,
+                   seed=19)
+    assert dg0.names == () and not dg0.unexplained, _summary(dg0)
+    # the valves are slower still than declared: the lag is named, the declared time
+    # constants beside the fitted ones
+    rec = synthesize("open-loop", {"valve_time_constant_factor": 1.6}, seed=19, duration=8.0,
+                     arm=arm)
+    dg = diagnose(rec, arm=arm, seed=19)
+    assert dg.names == ("valve_lag",), _summary(dg)
+    p = dg.effects[0]["parameters"]
+    for i in range(4):
+        d = p[f"T_{i + 1}"]
+        assert d["nominal"] == pytest.approx(t[i])
+        assert abs(d["value"] / (1.6 * t[i]) - 1) < 0.1, d
+
+
 def test_declared_torque_bias_enters_the_equations_and_the_static_replay():
     arm = _arm("test arm: a cable", joint_torque_bias=(0.5, -0.3))
     data = synthesize("static-sawtooth", {}, seed=15, duration=40.0, arm=arm)

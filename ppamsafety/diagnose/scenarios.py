@@ -70,6 +70,7 @@ from .bench import scenarios as bench_scenarios
 from .core.battery import coverage_entry, run_seeds
 from .arm.residuals import arm_record, block_system, model_vector
 from .arm.selection import _directions, make_problem
+from .arm.synthesize import plant_vector
 from .arm.static import static_record, static_system
 from .diagnosis import diagnose
 from .synthesize import synthesize
@@ -90,7 +91,7 @@ MEASURE_SEEDS = range(3000, 5000)
 DECLARED_TUNING_SEEDS = range(10000, 11000)
 DECLARED_MEASURE_SEEDS = range(20000, 22000)
 #: Scenarios of the shipped measurement of that battery (its first seeds).
-DECLARED_MEASURE_COUNT = 800
+DECLARED_MEASURE_COUNT = 1600
 #: Required precision of "high" (issue 19).
 HIGH_PRECISION = 0.97
 #: Residual/noise ratio that the irreducible part of an out-of-library perturbation must
@@ -144,21 +145,9 @@ def _payload(rng, arm, dt=1e-3):
     return {"payload_mass": m}, {"M": m}
 
 
-def _plant_vector(arm, name):
-    """The plant's value of a vector effect field: declared, else the nominal parameter."""
-    declared = getattr(arm.effects, name)
-    if declared is not None:
-        return np.array(declared, float)
-    if name in ("friction_coulomb", "friction_viscous"):
-        return np.array(getattr(arm.plant_base, name.split("_")[1]), float)
-    vs = arm.valves.valves
-    return np.array({"valve_offset": [v.v1 for v in vs], "valve_gain": [v.v2 for v in vs],
-                     "valve_time_constant": [v.time_constant for v in vs]}[name], float)
-
-
 def _friction(rng, arm, dt=1e-3):
-    c = _plant_vector(arm, "friction_coulomb")
-    b = _plant_vector(arm, "friction_viscous")
+    c = plant_vector(arm, "friction_coulomb")
+    b = plant_vector(arm, "friction_viscous")
     on = _some(rng, 2)
     c[on] = [_logu(rng, 0.02, 1.5) for _ in range(int(on.sum()))]
     fx = {"friction_coulomb": tuple(c)}
@@ -170,8 +159,8 @@ def _friction(rng, arm, dt=1e-3):
 
 
 def _valve_offset_gain(rng, arm, dt=1e-3):
-    v1 = _plant_vector(arm, "valve_offset")
-    v2 = _plant_vector(arm, "valve_gain")
+    v1 = plant_vector(arm, "valve_offset")
+    v2 = plant_vector(arm, "valve_gain")
     on = _some(rng, 4)
     v1[on] += [_sgn(rng) * _logu(rng, 200.0, 3.0e4) for _ in range(int(on.sum()))]
     fx = {"valve_offset": tuple(v1)}
@@ -184,7 +173,7 @@ def _valve_offset_gain(rng, arm, dt=1e-3):
 
 
 def _valve_lag(rng, arm, dt=1e-3):
-    T = _plant_vector(arm, "valve_time_constant")
+    T = plant_vector(arm, "valve_time_constant")
     on = _some(rng, 4)
     f = [(_logu(rng, 1.05, 3.0) if rng.random() < 0.7 else 1.0 / _logu(rng, 1.05, 2.0))
          for _ in range(int(on.sum()))]
@@ -276,7 +265,7 @@ def _declare_friction(rng, arm):
     fx = {"friction_coulomb": tuple(_logu(rng, 0.02, 1.0) for _ in range(2))}
     if rng.random() < 0.5:
         fx["friction_viscous"] = tuple(b * _logu(rng, 1.0, 3.0)
-                                       for b in _plant_vector(arm, "friction_viscous"))
+                                       for b in plant_vector(arm, "friction_viscous"))
     return fx
 
 
@@ -284,17 +273,17 @@ def _declare_valves(rng, arm):
     fx = {}
     if rng.random() < 0.6:
         fx["valve_offset"] = tuple(v + _sgn(rng) * _logu(rng, 200.0, 1.0e4)
-                                   for v in _plant_vector(arm, "valve_offset"))
+                                   for v in plant_vector(arm, "valve_offset"))
     if rng.random() < 0.6 or not fx:
         fx["valve_gain"] = tuple(v * (1.0 + _sgn(rng) * _logu(rng, 0.005, 0.1))
-                                 for v in _plant_vector(arm, "valve_gain"))
+                                 for v in plant_vector(arm, "valve_gain"))
     return fx
 
 
 def _declare_lag(rng, arm):
     f = _logu(rng, 0.6, 2.0)
     return {"valve_time_constant": tuple(T * f * _logu(rng, 0.9, 1.1)
-                                         for T in _plant_vector(arm, "valve_time_constant"))}
+                                         for T in plant_vector(arm, "valve_time_constant"))}
 
 
 def _declare_polytropic(rng, arm):

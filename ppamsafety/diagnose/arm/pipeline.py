@@ -457,11 +457,12 @@ def diagnose_arm(data, *, arm=None, candidates=None, block_seconds: float = 0.05
                   "after": float(np.sqrt(np.mean((after[:, k] - meas[:, k]) ** 2))),
                   "noise": float(sig_replay[k])}
     # the fitted model's replay against the measured record: "explained" also needs it at
-    # the noise (:func:`replay_statistic`)
+    # the noise (:data:`REPLAY_RHO`); a replay that is not finite is not at the noise
     replay_rho = {ch: rr[ch]["after"] / rr[ch]["noise"] for ch in REPLAY_CHANNELS if ch in rr
                   and rr[ch]["noise"] > 0}
     replay_limit = REPLAY_RHO_STATIC if static else REPLAY_RHO
-    replay_bad = [f"replay {ch}" for ch, v in replay_rho.items() if v > replay_limit]
+    replay_bad = [f"replay {ch}" for ch, v in replay_rho.items()
+                  if not (math.isfinite(v) and v <= replay_limit)]
     sfreq = None if stab is None else stab.frequency
     effects, partial, confounded = [], [], []
     if static and rec.u is None:

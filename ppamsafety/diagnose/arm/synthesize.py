@@ -150,9 +150,15 @@ def _option(name, value):
     return value
 
 
-def _nominal_vector(arm, field):
+def plant_vector(arm, field) -> np.ndarray:
     """The plant's value of a vector effect field: the arm's declared effect, else its
-    nominal parameter (a relative effect form multiplies or shifts it)."""
+    nominal parameter (a relative effect form multiplies or shifts it).
+
+    Parameters
+    ----------
+    arm : ArmParameters
+    field : {"friction_coulomb", "friction_viscous", "valve_offset", "valve_gain", "valve_time_constant"}
+    """
     declared = getattr(arm.effects, field)
     if declared is not None:
         return np.array(declared, dtype=float)
@@ -373,9 +379,9 @@ def plant_with(arm, effects: dict):
             raise InvalidTypeError(f"effects: an effect name must be a str, got {name!r}")
         if name in RELATIVE:
             f, n = RELATIVE[name]
-            fx[f] = tuple(_nominal_vector(arm, f) * np.array(_as_list(name, value, n)))
+            fx[f] = tuple(plant_vector(arm, f) * np.array(_as_list(name, value, n)))
         elif name == "valve_offset_delta":
-            fx["valve_offset"] = tuple(_nominal_vector(arm, "valve_offset")
+            fx["valve_offset"] = tuple(plant_vector(arm, "valve_offset")
                                        + np.array(_as_list(name, value, 4)))
         elif name == "valve_dead_time":
             dead = check_range("effect valve_dead_time", _as_list(name, value, 1)[0], 0.0, 1.0,
@@ -766,7 +772,7 @@ def _closed_loop(arm, plant, dead, meas, *, noise, seed, duration, dt, controlle
     return _record(meta, t, q, qd, p, u)
 
 
-__all__ = ["synthesize_arm", "plant_with", "hidden_effects", "Measurement", "MEASUREMENT_EFFECTS",
+__all__ = ["synthesize_arm", "plant_with", "plant_vector", "hidden_effects", "Measurement", "MEASUREMENT_EFFECTS",
            "closed_loop_case", "sawtooth_set_angles",
            "gravity_compensation_set_values", "EXPERIMENTS", "NOISES", "FORCE_NOISE_STD",
            "DEFAULT_CONTROLLER", "DEFAULT_REFERENCE"]
