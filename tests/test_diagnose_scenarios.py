@@ -16,8 +16,10 @@ from ppamsafety.diagnose.scenarios import (DECLARED_MEASURE_COUNT, DECLARED_MEAS
                                            DECLARED_RESULTS_FILE, DECLARED_TUNING_SEEDS,
                                            HIGH_PRECISION, MEASURE_SEEDS, TUNING_SEEDS,
                                            calibration_table, declared_arm, failures,
-                                           load_results, random_scenario, run_battery,
-                                           save_results, scores)
+                                           load_results, random_scenario, replay_limits,
+                                           replay_null, run_battery, save_results, scores,
+                                           REPLAY_TUNING_FILE)
+from ppamsafety.diagnose.arm.pipeline import REPLAY_RHO, REPLAY_RHO_STATIC
 from ppamsafety.sections import diagnose_trust
 
 #: Scenarios of the shipped battery (issue 19: ">= 1000").
@@ -147,9 +149,25 @@ def test_declared_battery_is_a_measurement_on_its_own_unseen_seeds(shipped_decla
     # "high" keeps its promise on arms with declared effects (measured, not stored)
     cal = calibration_table(df).set_index("claimed")
     assert cal.loc["high", "names"] > 100 and cal.loc["high", "precision"] >= HIGH_PRECISION
-    # with nothing hidden the declared effects are the model: nothing is named
+    # with nothing hidden the declared effects are the model: (almost) nothing is named,
+    # never with high confidence (the battery's target: at most 2 % of the records)
     none = ok[(ok.hidden.map(len) == 0) & (ok.perturbation == "")]
-    assert len(none) > 50 and sum(len(n) for n in none.named) == 0
+    assert len(none) > 50 and sum(len(n) > 0 for n in none.named) <= 0.02 * len(none)
+    assert sum(len(h) for h in none.high) == 0
+
+
+def test_replay_thresholds_come_from_the_tuning_rows():
+    """The replay gate's thresholds are the rule applied to shipped tuning rows only."""
+    rows = load_results(REPLAY_TUNING_FILE)
+    seeds = set(rows.seed.astype(int))
+    assert seeds <= set(TUNING_SEEDS) | set(DECLARED_TUNING_SEEDS)
+    assert seeds & set(TUNING_SEEDS) and seeds & set(DECLARED_TUNING_SEEDS)
+    assert replay_limits(rows) == (REPLAY_RHO, REPLAY_RHO_STATIC)
+    null = replay_null(rows).set_index("records")
+    # enough right models of both record classes, and every one of them below the limit
+    assert null.loc["dynamic", "models"] > 200 and null.loc["static", "models"] > 50
+    assert null.loc["dynamic", "max"] < REPLAY_RHO and null.loc["static", "max"] < \
+        REPLAY_RHO_STATIC
 
 
 def test_declared_scenarios_are_seeded_and_draw_the_arm():

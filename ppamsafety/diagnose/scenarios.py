@@ -315,6 +315,13 @@ DECLARED_DRAWS = {"payload": (_declare_payload, "payload"),
                   "hysteresis": (_declare_hysteresis, "hysteresis"),
                   "dead_time": (_declare_dead_time, "valve_dead_time"),
                   "torque_bias": (_declare_torque_bias, None)}
+#: ``Effects`` field an arm declares -> the library candidate that names a change of it.
+DECLARED_CANDIDATE = {"payload_mass": "payload", "friction_coulomb": "joint_friction",
+                      "friction_viscous": "joint_friction", "valve_offset": "valve_offset_gain",
+                      "valve_gain": "valve_offset_gain", "valve_time_constant": "valve_lag",
+                      "polytropic_n": "polytropic_exponent", "hysteresis_delta": "hysteresis",
+                      "valve_dead_time": "valve_dead_time",
+                      "joint_torque_bias": "joint_torque_bias"}
 #: Probabilities of 1, 2, 3, 4 declared effect kinds in an arm of that battery.
 P_DECLARED_COUNT = (0.35, 0.35, 0.2, 0.1)
 #: Probability that a scenario of that battery hides a change of one of its declared effects.
@@ -918,6 +925,45 @@ def scores(results: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(rows)
 
 
+def declared_names(results: pd.DataFrame) -> dict:
+    """What became of the effects the scenarios' arms declare (the battery of arms with
+    declared effects).
+
+    Parameters
+    ----------
+    results : pandas.DataFrame
+        Rows of ``random_scenario(seed, declared=True)`` (``declared`` column).
+
+    Returns
+    -------
+    dict
+        ``changes``: hidden changes of a declared effect (no out-of-library perturbation),
+        ``changes_above``: of those above their detection limit, ``changes_named``: of those
+        named; ``high``: "high" names of an effect the arm declares, ``high_right``: of
+        those a change the scenario hid; ``unchanged_named``: names (any level) of a
+        declared effect the scenario did not change.
+    """
+    out = dict.fromkeys(("changes", "changes_above", "changes_named", "high", "high_right",
+                         "unchanged_named"), 0)
+    df = _ok(results)
+    if "declared" not in df:
+        return out
+    for r in df.itertuples():
+        decl = {DECLARED_CANDIDATE[k.split("=")[0]] for k in (r.declared or "").split(";")
+                if k.split("=")[0] in DECLARED_CANDIDATE}
+        out["high"] += sum(n in decl for n in r.high)
+        out["high_right"] += sum(n in decl and n in r.hidden for n in r.high)
+        out["unchanged_named"] += sum(n in decl and n not in r.hidden for n in r.named)
+        if not r.perturbation:
+            for h in r.hidden:
+                if h in decl:
+                    out["changes"] += 1
+                    above = r.ratios.get(h, 0.0) >= 1.0
+                    out["changes_above"] += above
+                    out["changes_named"] += above and h in r.named
+    return out
+
+
 def replay_null(results: pd.DataFrame) -> pd.DataFrame:
     """The replay statistic of the models the diagnosis got right: its null distribution.
 
@@ -1168,6 +1214,7 @@ __all__ = ["Scenario", "random_scenario", "record_of", "run_scenario", "run_batt
            "DECLARED_MEASURE_COUNT", "DECLARED_DRAWS", "declared_arm",
            "irreducible_gap", "scores", "failures", "calibration_table", "by_effect",
            "interval_widening", "LIBRARY_DRAWS", "replay_null", "replay_limits",
+           "declared_names", "DECLARED_CANDIDATE",
            "REPLAY_TUNING_FILE", "REPLAY_MARGIN",
            "TUNING_SEEDS", "MEASURE_SEEDS", "HIGH_PRECISION", "GAP_ABOVE_NOISE"]
 

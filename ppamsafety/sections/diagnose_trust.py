@@ -56,7 +56,7 @@ from ..diagnose.core.omitted import HINT_P
 from ..diagnose.arm.pipeline import REPLAY_RHO, REPLAY_RHO_STATIC
 from ..diagnose.scenarios import (BENCH_RESULTS_FILE, DECLARED_MEASURE_SEEDS,
                                   DECLARED_RESULTS_FILE, HIGH_PRECISION, MEASURE_SEEDS,
-                                  P_DECLARED_CHANGE,
+                                  P_DECLARED_CHANGE, declared_names,
                                   by_effect, calibration_table, detection_curve, failures,
                                   interval_widening, load_results, run_battery, scores)
 from ..markdown import markdown_table
@@ -212,6 +212,7 @@ def compute(*, quick: bool = False, arm=None, head=None,
         m["declared_seeds"] = f"{int(declared.seed.min())}-{int(declared.seed.max())}"
         m["declared_live_runs"] = int(len(live_declared))
         m["declared_live_reproduced"] = _reproduced(live_declared, declared)
+        m.update({f"declared_{k}": v for k, v in declared_names(declared).items()})
         results = load_results()
         m["stored_scenarios"] = int(len(results))
         m["stored_seeds"] = f"{int(results.seed.min())}-{int(results.seed.max())}"
@@ -325,6 +326,16 @@ def render(study: DiagnoseTrustStudy) -> Section:
         "",
         markdown_table(_fmt(study.scores)),
         "",
+    ] + ([
+        "Arms with declared effects: a declared effect is the model under test, so only a "
+        "change of it is a right name.  Of the "
+        f"{m['declared_changes']} hidden changes of a declared effect (no out-of-library "
+        f"perturbation), {m['declared_changes_above']} were above their detection limit "
+        f"and {m['declared_changes_named']} of those were named; "
+        f"{m['declared_high_right']} of the {m['declared_high']} \"high\" names of an "
+        "effect the arm declares were such a change; a declared effect the record did not "
+        f"change was named (at any level) {m['declared_unchanged_named']} times.",
+        ""] if "declared_changes" in m else []) + [
         "\"Unexplained: no\" needs the fitted model at the noise twice: every block channel's "
         "residual at most `rho_max` (1.5) times its noise, and the replay of the fitted "
         "model (the arm with its declared effects, changed by the fit) within "

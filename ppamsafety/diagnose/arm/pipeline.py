@@ -37,8 +37,9 @@ from .candidates import REGISTRY, SensorFault, default_candidates, separating_ex
 from .detection import detection_limits, omitted
 from .gates import GATES, HIGH_WEIGHT, RHO_HIGH, gates, level, moved_parameters
 from .residuals import (CHANNELS, CHANNEL_UNITS, PRESSURE_GAIN_COLUMNS, SUBSYSTEM, ArmRecord,
-                        Columns, arm_record, block_system, channel_noise, coulomb_velocity,
-                        declared_delays, model_vector, noise_draws, replay, row_from_mu)
+                        Columns, arm_record, block_system, changed_delays, channel_noise,
+                        coulomb_velocity, declared_delays, model_vector, noise_draws, replay,
+                        row_from_mu)
 from .selection import (BOOTSTRAP_REPLICATES, CONSTANCY_ALPHA, STABILITY_PAIRS,
                         STABILITY_THRESHOLD, at_model, bootstrap_frequency, fit_model,
                         forward_selection,
@@ -140,7 +141,8 @@ def after_row(arm, fit, params) -> np.ndarray:
             vals = np.array([p["value"] for p in params[n].values()])
             over.update(c.plant_effect(vals, arm))
         if c.grid:
-            d = [min(x, VALVE_DEAD_TIME_MAX) for x in dead_time_delays(arm, fit.shift)]
+            d = [min(x, VALVE_DEAD_TIME_MAX) for x in changed_delays(declared_delays(arm),
+                                                                     fit.shift)]
             over["valve_dead_time"] = tuple(d) if any(d) else None
     if "joint_torque_bias" in over:
         over["joint_torque_bias"] = tuple(float(np.clip(b, -20.0, 20.0))
@@ -148,16 +150,6 @@ def after_row(arm, fit, params) -> np.ndarray:
     base = arm.replace(effects=replace(arm.effects, **over)) if over else arm
     return row_from_mu(packing.pack(base), fit.mu)
 
-
-def dead_time_delays(arm, shift: int) -> tuple:
-    """Per-valve dead time [samples] of the arm's declared one changed by ``shift`` samples.
-
-    Parameters
-    ----------
-    arm : ArmParameters
-    shift : int
-    """
-    return tuple(max(int(d) + int(shift), 0) for d in declared_delays(arm))
 
 
 def sensor_fault(fit, params) -> SensorFault:

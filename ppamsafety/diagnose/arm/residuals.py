@@ -303,6 +303,19 @@ def declared_delays(arm) -> np.ndarray:
     return np.zeros(4, dtype=int) if d is None else np.array(d, dtype=int)
 
 
+def changed_delays(delay0, shift: int) -> tuple:
+    """Per-valve delays [samples] ``delay0`` changed by ``shift`` samples, at least 0.
+
+    Parameters
+    ----------
+    delay0 : sequence of 4 int
+        The model's dead time per valve (:func:`declared_delays`).
+    shift : int
+        The change (the dead-time candidate's profiled shift).
+    """
+    return tuple(max(int(d) + int(shift), 0) for d in delay0)
+
+
 def declared_torque_bias(arm) -> np.ndarray:
     """The constant joint torque the arm declares (``Effects.joint_torque_bias``) [N m] (2,).
 
@@ -415,14 +428,14 @@ class BlockSystem:
         return self.y.shape[0]
 
     def delays(self, shift: int) -> tuple:
-        """Per-valve delay [samples] of a change of the dead time by ``shift`` samples from
-        the model's (:attr:`delay0`), at least 0.
+        """Per-valve delay [samples] of the model's dead time changed by ``shift`` samples
+        (:func:`changed_delays` of :attr:`delay0`).
 
         Parameters
         ----------
         shift : int
         """
-        return tuple(max(int(d) + int(shift), 0) for d in self.delay0)
+        return changed_delays(self.delay0, shift)
 
     def shift_grid(self, max_shift: int) -> tuple:
         """The changes of the dead time a profile tries: every whole sample from no delay
@@ -960,5 +973,6 @@ __all__ = ["ArmRecord", "arm_record", "Columns", "BlockSystem", "smooth", "smoot
            "coulomb_velocity", "sensor_columns", "encoder_columns", "PRESSURE_OFFSET_COLUMNS",
            "PRESSURE_GAIN_COLUMNS", "ENCODER_OFFSET_COLUMNS", "TORQUE_BIAS_COLUMNS",
            "block_noise", "channel_noise", "noise_draws", "replay", "hysteresis_signature",
-           "model_vector", "row_from_mu", "delayed", "MU_NAMES",
+           "model_vector", "row_from_mu", "delayed", "declared_delays", "changed_delays",
+           "declared_torque", "declared_torque_bias", "declared_hysteresis", "MU_NAMES",
            "MU_UNITS", "NMU", "CHANNELS", "CHANNEL_UNITS", "SUBSYSTEM", "BLOCK_SECONDS"]

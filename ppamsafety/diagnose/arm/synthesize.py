@@ -157,7 +157,9 @@ def plant_vector(arm, field) -> np.ndarray:
     Parameters
     ----------
     arm : ArmParameters
-    field : {"friction_coulomb", "friction_viscous", "valve_offset", "valve_gain", "valve_time_constant"}
+    field : str
+        ``"friction_coulomb"``, ``"friction_viscous"``, ``"valve_offset"``, ``"valve_gain"``
+        or ``"valve_time_constant"``.
     """
     declared = getattr(arm.effects, field)
     if declared is not None:
@@ -772,7 +774,7 @@ def _closed_loop(arm, plant, dead, meas, *, noise, seed, duration, dt, controlle
     return _record(meta, t, q, qd, p, u)
 
 
-__all__ = ["synthesize_arm", "plant_with", "plant_vector", "hidden_effects", "Measurement", "MEASUREMENT_EFFECTS",
-           "closed_loop_case", "sawtooth_set_angles",
+__all__ = ["synthesize_arm", "plant_with", "plant_vector", "hidden_effects", "Measurement",
+           "MEASUREMENT_EFFECTS", "closed_loop_case", "sawtooth_set_angles",
            "gravity_compensation_set_values", "EXPERIMENTS", "NOISES", "FORCE_NOISE_STD",
            "DEFAULT_CONTROLLER", "DEFAULT_REFERENCE"]
