@@ -351,6 +351,7 @@ def _cmd_diagnose(args) -> int:
 
     from .data import MeasuredDataWarning, load_campaign, load_measured
     from .diagnose import diagnose
+    from .diagnose.diagnosis import other_arm
 
     with _options(outdir="--out"):
         inspect_output_folder(args.out, overwrite=args.overwrite, kind="diagnose",
@@ -380,21 +381,34 @@ def _cmd_diagnose(args) -> int:
             raise ValueError(f"{', '.join(given)}: option(s) of an arm record; {args.data} is a "
                              f"test-bench (actuator) record, diagnosed against its nominal force "
                              f"law without them")
+    mismatch = other_arm(data, arm)
+    if mismatch is not None and not args.allow_other_arm:
+        # refused before computing: a forgotten --arm would name every difference between
+        # the two arms as a missing effect
+        raise ValueError(f"{args.data}: {mismatch}; give the record's arm file with --arm FILE "
+                         f"(the file whose fingerprint starts "
+                         f"{data.meta['arm']['sha256'][:16]}: `ppamsafety arm check FILE` prints "
+                         f"it), or --allow-other-arm to compare the two arms on purpose")
+    if args.allow_other_arm and mismatch is None:
+        raise ValueError(f"--allow-other-arm: {args.data} names no other arm than the one it is "
+                         f"diagnosed against; leave it out")
     with _options(experiment="--experiment", alpha="--alpha", rho_max="--rho-max",
                   block_seconds="--block", seed="--seed", bootstrap="--bootstrap",
                   stability="--stability", arm="--arm"):
         dg = diagnose(data, experiment=args.experiment, alpha=args.alpha, rho_max=args.rho_max,
                       block_seconds=0.05 if args.block is None else args.block,
                       seed=0 if args.seed is None else args.seed, bootstrap=args.bootstrap,
-                      stability=args.stability, arm=arm)
-    for note in dg.notes:
-        if note.startswith("arm: ") and "diagnosed against arm" in note:
-            print(f"ppamsafety: warning: {note[5:]}", file=sys.stderr)
+                      stability=args.stability, arm=arm, allow_other_arm=args.allow_other_arm)
+    for w in dg.warnings:
+        print(f"ppamsafety: warning: {w}", file=sys.stderr)
     with _options(outdir="--out"):
         dg.write(args.out, overwrite=args.overwrite, replace_kind=args.replace_other_kind)
+    for w in dg.warnings:
+        print(f"WARNING: {w}")
     for e in dg.effects:
         ps = ", ".join(f"{n} = {p['value']:.4g} [{p['ci_low']:.4g}, {p['ci_high']:.4g}] "
-                       f"{p['unit']}" for n, p in e["parameters"].items())
+                       f"{p['unit']} (declared {p['nominal']:.4g})"
+                       for n, p in e["parameters"].items())
         print(f"effect {e['name']} (confidence {e['confidence']:.3f}, "
               f"{e['confidence_level']}): {ps}")
     if not dg.effects:
@@ -759,6 +773,11 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
     g.add_argument("--overwrite", action="store_true",
                    help="replace a previous ppamsafety diagnosis in DIR (never other files)")
     _add_arm_head(g, head_used=False)
+    g.add_argument("--allow-other-arm", action="store_true",
+                   help="arm records: diagnose a record that names another arm (metadata "
+                        "[arm], as synthesize writes it) against this one on purpose; "
+                        "refused otherwise (every difference between the two arms would be "
+                        "named as a missing effect)")
     g.add_argument("--replace-other-kind", action="store_true",
                    help="with --overwrite: also replace a ppamsafety output of another kind")
     g.set_defaults(func=_cmd_diagnose)
