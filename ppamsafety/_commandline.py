@@ -9,7 +9,10 @@ error ends in a Python traceback:
 2
     Bad usage or input (``ppamsafety: error: ...`` on stderr).
 1
-    A failure that is not the user's; ``PPAMSAFETY_DEBUG=1`` shows the traceback.
+    A failure that is not the user's; ``PPAMSAFETY_DEBUG=1`` shows the traceback.  A
+    ``TypeError`` is the user's only when the library raised it on purpose
+    (:func:`is_internal_error`): a call with a wrong keyword, an operation on the wrong type,
+    a ``TypeError`` of numpy or the standard library are bugs of ppamsafety.
 130
     Interrupted (Ctrl-C).
 
@@ -20,6 +23,7 @@ every layer use it (``docs/architecture.md``).
 from __future__ import annotations
 
 import argparse
+import dis
 import logging
 import os
 import re
@@ -149,6 +153,77 @@ class _Warnings:
             pass
 
 
+#: The package's source folder: a ``raise`` statement in a file below it is the library
+#: refusing an input on purpose (:func:`is_internal_error`).
+_PACKAGE_DIR = os.path.dirname(os.path.abspath(__file__)) + os.sep
+_RAISE_OPS = frozenset({"RAISE_VARARGS", "RERAISE"})
+
+
+class InternalFailure(RuntimeError):
+    """A bug of ppamsafety met in a worker process (its message names the original error).
+
+    A worker's exception reaches the parent without its traceback, which
+    :func:`is_internal_error` reads: :func:`mark_internal` turns it into this class in the
+    worker, and :func:`run_guarded` reports it as an internal failure (exit 1).
+    """
+
+
+def is_internal_error(exc: BaseException) -> bool:
+    """True if ``exc`` is a bug of ppamsafety, not bad input.
+
+    Only ``TypeError`` needs a look: the library refuses a wrong type with a ``raise``
+    statement of its own (:mod:`ppamsafety._validation` names the argument), while a call
+    with an unexpected keyword, ``1 + "a"`` or a ``TypeError`` raised inside numpy, the
+    standard library or ``inspect`` (``got an unexpected keyword argument 'head'``) is
+    raised by the interpreter or by code that never saw the user's input.  The innermost
+    frame of the traceback tells them apart: a ``raise`` instruction in a file of the package.
+
+    Parameters
+    ----------
+    exc : BaseException
+        A raised exception (with its traceback).
+
+    Returns
+    -------
+    bool
+        True for an :class:`InternalFailure` and for a ``TypeError`` not raised by a
+        ``raise`` statement of ppamsafety; False otherwise (and for an exception without a
+        traceback: nothing to tell).
+    """
+    if isinstance(exc, InternalFailure):
+        return True
+    if not isinstance(exc, TypeError) or exc.__traceback__ is None:
+        return False
+    tb = exc.__traceback__
+    while tb.tb_next is not None:
+        tb = tb.tb_next
+    code = tb.tb_frame.f_code
+    if not os.path.abspath(code.co_filename).startswith(_PACKAGE_DIR):
+        return True
+    op = next((i.opname for i in dis.get_instructions(code) if i.offset == tb.tb_lasti), "")
+    return op not in _RAISE_OPS
+
+
+def mark_internal(exc: BaseException, where: str) -> BaseException:
+    """``exc``, or an :class:`InternalFailure` naming it if it is a bug (for worker processes).
+
+    Parameters
+    ----------
+    exc : BaseException
+        An exception caught in a worker.
+    where : str
+        What the worker was doing (e.g. ``"report section 'design'"``).
+
+    Returns
+    -------
+    BaseException
+        Raise it (``raise mark_internal(exc, where) from exc``).
+    """
+    if is_internal_error(exc) and not isinstance(exc, InternalFailure):
+        return InternalFailure(f"{where}: {type(exc).__name__}: {exc}")
+    return exc
+
+
 def run_guarded(parser: argparse.ArgumentParser, func, argv=None) -> int:
     """Parse ``argv`` and run ``func(args)``, turning every error into an exit status.
 
@@ -156,8 +231,9 @@ def run_guarded(parser: argparse.ArgumentParser, func, argv=None) -> int:
     ``ValueError``, ``TypeError`` or ``OSError`` (bad input, including
     :class:`ppamsafety.output.OutputError`) prints ``ppamsafety: error: ...``
     and gives 2, and so does a ``MemoryError`` (a request too large for the machine:
-    the library refuses the sizes it can estimate before allocating, this is the net); any other exception prints one line asking to report it and
-    gives 1.  No traceback unless the environment sets ``PPAMSAFETY_DEBUG=1``.
+    the library refuses the sizes it can estimate before allocating, this is the net);
+    any other exception, and a ``TypeError`` that is a bug (:func:`is_internal_error`),
+    prints one line asking to report it and gives 1.  No traceback unless the environment sets ``PPAMSAFETY_DEBUG=1``.
     Every warning raised while ``func`` runs is printed once as one line
     ``ppamsafety: warning: ...`` (no Python source line).
 
@@ -214,18 +290,26 @@ def run_guarded(parser: argparse.ArgumentParser, func, argv=None) -> int:
             argparse.ArgumentTypeError) as exc:
         if debug:
             traceback.print_exc()
+        if is_internal_error(exc):
+            return _internal(exc)
         _error(str(exc) or type(exc).__name__)
         return EXIT_USAGE
     except Exception as exc:           # not the user's fault
         if debug:
             traceback.print_exc()
-        _error(f"internal failure ({type(exc).__name__}: {exc}); please report this with the "
-               f"command line used (PPAMSAFETY_DEBUG=1 shows the traceback)")
-        return EXIT_FAILURE
+        return _internal(exc)
     finally:
         log.removeHandler(handler)
         log.setLevel(old_level)
         restore_interrupt(previous_sigint)
 
 
-__all__ = ["EXIT_OK", "EXIT_FAILURE", "EXIT_USAGE", "EXIT_INTERRUPTED", "Parser", "run_guarded"]
+def _internal(exc: BaseException) -> int:
+    what = str(exc) if isinstance(exc, InternalFailure) else f"{type(exc).__name__}: {exc}"
+    _error(f"internal failure ({what}); please report this with the command line used "
+           f"(PPAMSAFETY_DEBUG=1 shows the traceback)")
+    return EXIT_FAILURE
+
+
+__all__ = ["EXIT_OK", "EXIT_FAILURE", "EXIT_USAGE", "EXIT_INTERRUPTED", "Parser", "run_guarded",
+           "InternalFailure", "is_internal_error", "mark_internal"]

@@ -35,6 +35,7 @@ from pathlib import Path
 
 from threadpoolctl import threadpool_limits
 
+from .._commandline import mark_internal
 from .._validation import check_int, did_you_mean
 from ..impact.head import head_model, resolve_head
 from ..output import OutputFolder
@@ -46,9 +47,20 @@ from .html import report_page
 
 
 def _timed_section(name: str, stage, quick: bool, arm=None, head=None):
-    """Run one section into ``stage``; (SectionResult, wall time [s]).  Top level: picklable."""
+    """Run one section into ``stage``; (SectionResult, wall time [s]).  Top level: picklable.
+
+    A bug (:func:`ppamsafety._commandline.is_internal_error`, read from the traceback, which
+    a worker's exception loses on its way to the parent) is raised as an
+    ``InternalFailure`` naming the section, so that it is never reported as bad input.
+    """
     t0 = time.perf_counter()
-    res = run_section(name, stage, quick=quick, arm=arm, head=head)   # compute, render, write
+    try:
+        res = run_section(name, stage, quick=quick, arm=arm, head=head)  # compute, render, write
+    except TypeError as exc:
+        marked = mark_internal(exc, f"report section {name!r}")
+        if marked is exc:
+            raise
+        raise marked from exc
     return res, time.perf_counter() - t0
 
 

@@ -335,7 +335,9 @@ def run_section(name: str, outdir, *, quick: bool = False, arm=None,
     arm : ArmParameters, optional
         The arm (default the thesis arm).
     head : HeadContactModel, optional
-        The head model of the impacts (default ``thesis-frontal``).
+        The head model of the impacts (default ``thesis-frontal``).  A section whose
+        ``compute`` takes no ``head`` (it crashes into none) runs without it: the report
+        passes each section only the options it takes (:func:`section_options`).
 
     Returns
     -------
@@ -348,7 +350,28 @@ def run_section(name: str, outdir, *, quick: bool = False, arm=None,
         kw["arm"] = resolve_arm(arm)
     if head is not None:
         kw["head"] = _head.resolve_head(head)
+    taken = section_options(name)
+    kw = {k: v for k, v in kw.items() if k in taken}
     return write_section(mod.render(mod.compute(quick=quick, **kw)), outdir)
+
+
+def section_options(name: str) -> frozenset:
+    """The keyword options a section's ``compute`` takes (``quick``, ``arm``, ``head`` ...).
+
+    Parameters
+    ----------
+    name : str
+        Section name (see :data:`REGISTRY`).
+
+    Returns
+    -------
+    frozenset of str
+        Names of the keyword parameters of ``compute`` (read from its signature, through
+        the :func:`checked_compute` wrapper).
+    """
+    params = inspect.signature(section_module(name).compute).parameters.values()
+    return frozenset(p.name for p in params
+                     if p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD))
 
 
 def main(name: str, argv=None) -> int:
