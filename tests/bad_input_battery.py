@@ -21,9 +21,11 @@ exit1 / traceback / accepted / hang / memory / lost / noisy
     file changed or deleted, or a raw Python warning printed beside the error.
 
 A case that expects an *interrupt* gets Ctrl-C (SIGINT to its process group, as a terminal
-sends it) after ``interrupt`` seconds and is clear when it exits 130 with ``ppamsafety:
-interrupted`` within :data:`INTERRUPT_GRACE` seconds (else "hang"; "not-interrupted" if it
-finished first).
+sends it) after ``interrupt`` seconds, or as soon as its stderr shows ``interrupt_on`` (a line
+the command prints once its work has started, on an input long enough that the work cannot
+end in the moment between that line and the signal: no dependence on how fast the work is),
+and is clear when it exits 130 with ``ppamsafety: interrupted`` within
+:data:`INTERRUPT_GRACE` seconds (else "hang"; "not-interrupted" if it finished first).
 
 The classes of the first pass (``synth-effect``, ``data-file``, ``study-file``,
 ``output-folder`` ...) were joined in the second pass by ``campaign-file`` (bench campaign
@@ -93,6 +95,7 @@ class Case:
     unprivileged: bool = False          # run as user nobody (read-only targets)
     timeout: float = TIMEOUT
     interrupt: float | None = None      # send Ctrl-C (SIGINT to the process group) after this [s]
+    interrupt_on: str | None = None     # ... or once the command's stderr shows this text
 
 
 CASES: list[Case] = []
@@ -124,6 +127,14 @@ def make_base(folder: Path) -> None:
                    controller="PID").save(folder / "cl.csv")
     if not (folder / "st.csv").exists():
         synthetic_static().save(folder / "st.csv")
+    if not (folder / "ol_long.csv").exists():
+        # a record whose diagnosis takes far longer than the moment between the line that
+        # starts it and Ctrl-C (the interrupt of diagnose), with a metadata key the loader
+        # only notes: that note is the line
+        synthesize("open-loop", duration=10.0, seed=2).save(folder / "ol_long.csv")
+        m, df = _split(folder / "ol_long.csv")
+        m["interrupt_marker"] = "the diagnosis starts after this note"
+        write_record(folder / "ol_long.csv", m, df)
     if not (folder / "ten.csv").exists():
         synthesize(kind="actuator", seed=1, cycles=1).save(folder / "ten.csv")
     (folder / "study.toml").write_text('[case]\nexperiment = "step"\ncontroller = "PID"\n'
@@ -1187,7 +1198,8 @@ def _more_cases():
          expect="interrupt")
     case("interrupt", "report", ["report", "--quick", "--outdir", "r", "--processes", "2"],
          interrupt=10.0, expect="interrupt")
-    case("interrupt", "diagnose", DIAG + ["--bootstrap", "200"], setup=ol, interrupt=4.0,
+    case("interrupt", "diagnose", DIAG + ["--bootstrap", "200"],
+         setup=copy_base("ol_long.csv", "data.csv"), interrupt_on="interrupt_marker",
          expect="interrupt")
     case("interrupt", "synthesize", ["synthesize", "--out", "x.csv", "--duration", "600"],
          interrupt=3.0, expect="interrupt")
@@ -1624,10 +1636,12 @@ def _rmtree(d: Path) -> None:
 INTERRUPT_GRACE = 10.0
 
 
-def _wait(pid: int, timeout: float, interrupt: float | None = None):
+def _wait(pid: int, timeout: float, interrupt: float | None = None, interrupt_on=None,
+          err_file: Path | None = None):
     """(status, rusage, verdict_override, peak, seconds from Ctrl-C to exit) of a child,
     killing it on timeout or memory; with ``interrupt``, SIGINT goes to its process group
-    after that many seconds (what Ctrl-C in a terminal does)."""
+    after that many seconds (what Ctrl-C in a terminal does); with ``interrupt_on``, as soon
+    as ``err_file`` (its stderr) holds that text."""
     t0 = time.monotonic()
     peak = 0
     t_int = None
@@ -1647,7 +1661,10 @@ def _wait(pid: int, timeout: float, interrupt: float | None = None):
         now = time.monotonic()
         if rss > MEMORY_KILL:
             return kill("memory")
-        if interrupt is not None and t_int is None and now - t0 > interrupt:
+        due = (interrupt is not None and now - t0 > interrupt) or (
+            interrupt_on is not None and err_file is not None and err_file.exists()
+            and interrupt_on in err_file.read_text(errors="replace"))
+        if t_int is None and due:
             try:
                 os.killpg(pid, signal.SIGINT)
             except ProcessLookupError:
@@ -1681,7 +1698,7 @@ def run_case(c: Case, workdir: Path, *, real: bool = False) -> Result:
                     os.setgid(NOBODY)
                     os.setuid(NOBODY)
             p = subprocess.Popen(cmd, cwd=d, stdout=o, stderr=e, preexec_fn=pre)
-            status, ru, over, peak, t_exit = _wait(p.pid, c.timeout, c.interrupt)
+            status, ru, over, peak, t_exit = _wait(p.pid, c.timeout, c.interrupt, c.interrupt_on, err_f)
             p.returncode = os.waitstatus_to_exitcode(status)
     else:
         sys.stdout.flush()
@@ -1713,7 +1730,7 @@ def run_case(c: Case, workdir: Path, *, real: bool = False) -> Result:
                     sys.stderr.flush()
                 finally:
                     os._exit(rc if isinstance(rc, int) and 0 <= rc < 256 else 1)
-        status, ru, over, peak, t_exit = _wait(pid, c.timeout, c.interrupt)
+        status, ru, over, peak, t_exit = _wait(pid, c.timeout, c.interrupt, c.interrupt_on, err_f)
     secs = time.monotonic() - t0
     rc = os.waitstatus_to_exitcode(status) if over is None else None
     out = out_f.read_text(errors="replace") if out_f.exists() else ""
