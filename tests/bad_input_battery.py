@@ -1271,7 +1271,7 @@ def _more_api_cases():
         import importlib
         return getattr(importlib.import_module(mod), fn)(*a, **k)
 
-    for fn, mod in (("load_arm", "ppamsafety.params"), ("load_head", "ppamsafety.impact.head"),
+    for fn, mod in (("load_arm", "ppamsafety.design"), ("load_head", "ppamsafety.impact.head"),
                     ("load_study", "ppamsafety.study_files"),
                     ("load_campaign", "ppamsafety.data.campaign"),
                     ("load_measured", "ppamsafety.data")):

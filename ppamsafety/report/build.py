@@ -184,7 +184,7 @@ def build_report(outdir="reports", *, quick: bool = False, only=None, progress: 
         the other in this process.  The report is the same either way.
     arm : ArmParameters, optional
         The arm of every section (default the thesis arm): any valid arm, e.g. from an
-        arm file (:func:`ppamsafety.params.arm_file.load_arm`).  Thesis values and
+        arm file (:func:`ppamsafety.design.load_arm`).  Thesis values and
         ratios appear only for the thesis arm.
     head : HeadContactModel, str or path-like, optional
         The head model of the impacts (default ``thesis-frontal``): a model, a name or

@@ -40,7 +40,8 @@ from .._validation import check_bool
 from ..output import OutputFolder
 # the impact.head module by its own name: ``head_model`` is a section module here
 from ..impact import head as _head
-from ..params import ArmParameters, is_thesis_arm, load_arm, thesis_arm
+from ..design import load_arm
+from ..params import ArmParameters, is_thesis_arm, thesis_arm
 from ..plots.figure import save
 
 
