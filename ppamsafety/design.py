@@ -465,9 +465,9 @@ def _bar(values) -> str:
 
 
 @lru_cache(maxsize=64)
-def _theory_pull(l0: float, slenderness: float, lo: float, hi: float) -> float:
-    """Mean force per pressure [N/Pa] of the theoretical PPAM over contractions [lo, hi]."""
-    return float(np.mean(l0 ** 2 * ppam_theory.f_t0(np.linspace(lo, hi, 5), slenderness)))
+def _theory_pull(slenderness: float, lo: float, hi: float) -> float:
+    """Mean f_t0 of the theoretical PPAM over contractions [lo, hi] [-] (F/p = l0^2 f_t0)."""
+    return float(np.mean(ppam_theory.f_t0(np.linspace(lo, hi, 5), slenderness)))
 
 
 def _check_force_laws(arm) -> None:
@@ -479,7 +479,7 @@ def _check_force_laws(arm) -> None:
         if not hi > lo:          # too stubby a muscle for the theory over this range
             continue
         pull = float(np.mean(polynomial(grp.coefficients, np.linspace(lo, hi, 5))))
-        theory = _theory_pull(grp.l0, grp.slenderness, lo, hi)
+        theory = grp.l0 ** 2 * _theory_pull(grp.slenderness, lo, hi)
         ratio = pull / theory
         if 1.0 / FORCE_LAW_FACTOR <= ratio <= FORCE_LAW_FACTOR:
             continue
