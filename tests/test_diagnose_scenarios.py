@@ -146,6 +146,7 @@ def test_report_section_quick(tmp_path):
 
 
 @pytest.mark.slow
+@pytest.mark.battery
 def test_full_measurement_battery_reproduces_the_shipped_file(shipped):
     """About 25-45 min on 2 cores: the whole battery, re-run, claims equal row by row."""
     seeds = sorted(int(s) for s in shipped.seed)
