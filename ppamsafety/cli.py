@@ -216,14 +216,13 @@ def _arm_of(args):
     return arm
 
 
-def _print_notes(arm, where) -> int:
-    """Print the arm's notes as ``ppamsafety: note: <file>: ...`` lines; their number."""
+def _print_notes(arm, where, notes=None) -> None:
+    """Print the arm's notes (default :func:`ppamsafety.design.arm_notes`) as
+    ``ppamsafety: note: <file>: ...`` lines on stderr."""
     from .design import arm_notes
 
-    notes = arm_notes(arm)
-    for note in notes:
+    for note in arm_notes(arm) if notes is None else notes:
         print(f"ppamsafety: note: {where}: {note}", file=sys.stderr)
-    return len(notes)
 
 
 def _head_of(args):
@@ -588,13 +587,14 @@ def _cmd_arm_check(args) -> int:
     arm = load_arm(args.file)
     q = None if args.q is None else np.array(args.q, dtype=float) * DEG
     summary = arm_summary(arm, q=q)
-    n = len(arm_notes(arm))
+    notes = arm_notes(arm)
+    n = len(notes)
     print(f"{args.file}: valid arm file ({arm.name or 'unnamed arm'}"
           f"{THESIS_TWIN if is_thesis_arm(arm) else ''}; sha256 "
           f"{arm_fingerprint(arm)[:16]}"
           f"{f'; {n} note' + ('s' if n > 1 else '') + ' on stderr' if n else ''})")
     print("\n".join(summary.lines()))
-    _print_notes(arm, args.file)
+    _print_notes(arm, args.file, notes)
     if not summary.pose_holdable:
         print("ppamsafety: warning: the static pressures at the stiffness pose leave "
               "[0, max_pressure]: the Delta-p approach cannot hold the arm there with these "

@@ -24,7 +24,6 @@ from .params import ArmParameters
 from .params.arm_file import ArmFileError
 from .params.effects import Effects
 from .params.inertia import LINK_PRIORS, RADIUS_OF_GYRATION, LinkInertia
-from .params.pneumatics import PneumaticParams
 from .plant import geometry as geo
 from .plant import pneumatics as pn
 from .plant import ppam_theory, torque
@@ -660,12 +659,12 @@ def arm_notes(arm) -> tuple:
     for j in (1, 2):
         lo, hi = getattr(g, f"q{j}_min"), getattr(g, f"q{j}_max")
         if hi - lo < NARROW_RANGE:
-            as_rad = (-np.pi < np.radians(np.degrees(lo)) and np.degrees(hi) < np.pi)
-            hint = (f"; if {np.degrees(lo):.4g} and {np.degrees(hi):.4g} are radians, write "
-                    f"unit = \"rad\"" if as_rad and np.degrees(hi - lo) >= NARROW_RANGE else "")
+            dlo, dhi = np.degrees(lo), np.degrees(hi)      # the numbers the file gave in deg
+            as_rad = -np.pi < dlo and dhi < np.pi and dhi - dlo >= NARROW_RANGE
+            hint = (f"; if {dlo:.4g} and {dhi:.4g} are radians, write unit = \"rad\""
+                    if as_rad else "")
             notes.append(f"geometry.q{j}_min, geometry.q{j}_max: joint {j} moves over only "
-                         f"{np.degrees(hi - lo):.3g} deg ({np.degrees(lo):.4g} to "
-                         f"{np.degrees(hi):.4g} deg){hint}")
+                         f"{dhi - dlo:.3g} deg ({dlo:.4g} to {dhi:.4g} deg){hint}")
     return tuple(notes)
 
 

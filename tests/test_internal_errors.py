@@ -17,6 +17,7 @@ from ppamsafety._commandline import (EXIT_FAILURE, EXIT_USAGE, InternalFailure, 
 from ppamsafety._validation import check_int
 from ppamsafety.cli import main
 from ppamsafety.sections import Section, SectionInfo
+from ppamsafety.sweep import run_sweep
 
 
 def _run(func):
@@ -130,3 +131,22 @@ def test_a_bug_in_a_section_is_an_internal_failure_not_bad_input(tmp_path, monke
     assert "unexpected keyword argument 'b'" in err
     if processes > 1:
         assert "report section 'design'" in err
+
+
+def _sweep_case(kind):
+    if kind == "bug":
+        return _takes_a(b=1)
+    if kind == "bad":
+        check_int("n", "three", 0, 1)
+    return {"x": 1.0}
+
+
+@pytest.mark.parametrize("processes", [1, 2])
+def test_a_sweep_case_that_meets_a_bug_says_so(processes):
+    df = run_sweep(_sweep_case, [{"kind": "bug"}, {"kind": "bad"}, {"kind": "ok"}, {"kind": "ok"}],
+                   processes=processes, progress=False)
+    err = dict(zip(df["kind"], df["error"]))
+    assert err["bug"].startswith("InternalFailure: sweep case: TypeError: ") and \
+        "unexpected keyword argument 'b'" in err["bug"]
+    assert err["bad"].startswith("InvalidTypeError: n must be a")
+    assert list(df["status"]) == ["failed", "failed", "ok", "ok"]
