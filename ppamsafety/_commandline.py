@@ -31,7 +31,7 @@ import traceback
 import warnings
 
 from ._interrupt import install as install_interrupt, restore as restore_interrupt
-from ._validation import InternalFailure, is_internal_error, mark_internal
+from ._errors import InternalFailure, is_internal_error, mark_internal
 
 EXIT_OK, EXIT_FAILURE, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
 

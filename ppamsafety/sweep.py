@@ -58,7 +58,7 @@ from tqdm.auto import tqdm
 from ._interrupt import deferred as interrupt_deferred
 from ._interrupt import requested as interrupt_requested
 from ._sourcehash import source_hash
-from ._validation import mark_internal
+from ._errors import mark_internal
 
 _STATUS_COLUMNS = ("status", "error")
 #: How often [s] a pooled sweep looks for Ctrl-C while its cases run.
@@ -234,7 +234,7 @@ def _assemble(cases, results, failures, on_error, name) -> pd.DataFrame:
 
 def _call(func, case):
     """``func(**case)``; a bug's ``TypeError`` is raised as an ``InternalFailure`` (read from
-    the traceback, which a worker's exception loses: ``_validation.is_internal_error``), so
+    the traceback, which a worker's exception loses: ``_errors.is_internal_error``), so
     that a failed case is never put down to bad input."""
     try:
         return func(**case)

@@ -35,7 +35,8 @@ from pathlib import Path
 
 from threadpoolctl import threadpool_limits
 
-from .._validation import check_int, did_you_mean, mark_internal
+from .._errors import mark_internal
+from .._validation import check_int, did_you_mean
 from ..impact.head import head_model, resolve_head
 from ..output import OutputFolder
 from ..params import ArmParameters, is_thesis_arm, thesis_arm
@@ -48,7 +49,7 @@ from .html import report_page
 def _timed_section(name: str, stage, quick: bool, arm=None, head=None):
     """Run one section into ``stage``; (SectionResult, wall time [s]).  Top level: picklable.
 
-    A bug (:func:`ppamsafety._validation.is_internal_error`, read from the traceback, which
+    A bug (:func:`ppamsafety._errors.is_internal_error`, read from the traceback, which
     a worker's exception loses on its way to the parent) is raised as an
     ``InternalFailure`` naming the section, so that it is never reported as bad input.
     """
