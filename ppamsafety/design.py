@@ -443,6 +443,12 @@ FORCE_LAW_FACTOR = 30.0
 MODEL_GAP = 0.10
 MODEL_GAP_FLOOR = 0.01
 
+#: The controllers' identified inertias (theta3 = I_zO,1 + m2 L1^2, theta6 = I_zS,2) are not
+#: physically consistent (Table 3.5 is 8 times below its plant on theta3, params.inertia), but
+#: one more than this factor from the plant's is noted: an inertia in g m^2 written as kg m^2
+#: is 1000 times off.
+INERTIA_GAP_FACTOR = 30.0
+
 #: A valve time constant at or above this [s] gets a note: the thesis' valves take 45-60 ms
 #: (Table B.2, §4.2.5); 2-10 ms written with unit "s" land here.
 SLOW_VALVE = 1.0
@@ -450,6 +456,14 @@ SLOW_VALVE = 1.0
 #: A joint working range narrower than this [rad] gets a note: the thesis arm's are 85 and
 #: 100 deg (2.6)-(2.7); radian values written with unit "deg" (0.35 to 1.83 deg) land here.
 NARROW_RANGE = 5.0 * DEG
+
+#: An encoder coarser than this per count [rad] gets a note: the thesis arm's counts 2 pi/8000
+#: (0.045 deg, §2.4.5); a resolution in degrees written with unit "rad" lands here.
+COARSE_ENCODER = 1.0 * DEG
+
+#: A timing-board clock slower than this [Hz] gets a note: the board times encoder pulses to
+#: well below the 1 ms control period (the thesis': 2 MHz, §2.4.5); "2" meant in MHz lands here.
+SLOW_CLOCK = 1.0e4
 
 #: Unit slips of a pressure: the factor to the value meant, and the slip.
 _PRESSURE_SLIPS = ((BAR, "bar written as Pa"), (1.0e3, "kPa written as Pa, or bar as mbar"))
@@ -598,6 +612,17 @@ def _model_note(arm):
         if off:
             listed = " and ".join(f"{v:.4g} kg m ({t}.{attr})" for t, v in off)
             gaps.append(f"{label} = {mine:.4g} kg m (links) against {listed}")
+    for label, attr in (("I_zO,1 + m2 L1^2", "IO1_m2L1sq"), ("I_zS,2", "IS2")):
+        mine = getattr(plant, attr)
+        off = [(t, getattr(getattr(arm, t), attr)) for t in ("model", "model_gravity")]
+        off = [(t, v) for t, v in off
+               if not 1.0 / INERTIA_GAP_FACTOR <= v / mine <= INERTIA_GAP_FACTOR]
+        if off:
+            listed = " and ".join(f"{v:.4g} kg m^2 ({t}.{attr}, {v / mine:.3g} times)"
+                                  for t, v in off)
+            gaps.append(f"{label} = {mine:.4g} kg m^2 (links) against {listed}: more than "
+                        f"{INERTIA_GAP_FACTOR:g} times off (an inertia in g m^2 written as "
+                        f"kg m^2?)")
     if not gaps:
         return None
     d = arm.model.m2LG2
@@ -609,20 +634,23 @@ def _model_note(arm):
                    f" than the controllers believe)")
     return (f"the plant's links differ from the controllers' identified model: "
             f"{'; '.join(gaps)}{heavier}.  The model-based controllers (gravity compensation "
-            f"(3.18)-(3.19), SMC) compensate the model's weight, not the plant's: a "
-            f"re-identification of this arm would find the plant's values.  Update [model] and "
-            f"[model_gravity], or keep the gap on purpose to study a model error.")
+            f"(3.18)-(3.19), the SMC's feedback linearisation) act on the model, not on the "
+            f"plant: a re-identification of this arm would find the plant's values.  Update "
+            f"[model] and [model_gravity], or keep the gap on purpose to study a model error.")
 
 
 def arm_notes(arm) -> tuple:
     """What is physically possible in an arm but likely a slip: one line each.
 
     * the plant's gravity moments (links) differ from the controllers' identified model
-      (``model``, ``model_gravity``) by more than :data:`MODEL_GAP` (one note: a warning,
-      not an error; it is what a re-identification would find);
+      (``model``, ``model_gravity``) by more than :data:`MODEL_GAP`, or its inertias by more
+      than :data:`INERTIA_GAP_FACTOR` times (one note: a warning, not an error; it is what a
+      re-identification would find);
     * with its plant effects (a payload ...) the arm holds itself nowhere in its working area;
     * a valve time constant of :data:`SLOW_VALVE` or more (milliseconds written as seconds?);
-    * a joint working range narrower than :data:`NARROW_RANGE` (radians written as degrees?).
+    * a joint working range narrower than :data:`NARROW_RANGE` (radians written as degrees?);
+    * an encoder coarser than :data:`COARSE_ENCODER` per count (degrees written as radians?),
+      a timing clock slower than :data:`SLOW_CLOCK` (MHz written as Hz?).
 
     Parameters
     ----------
@@ -655,6 +683,16 @@ def arm_notes(arm) -> tuple:
         notes.append(f"{', '.join(f'{k} = {t:g} s' for k, t in slow)}: a valve this slow takes "
                      f"seconds to reach a set pressure (the thesis' valves: 45-60 ms); if these "
                      f"are milliseconds, write unit = \"ms\"")
+    sen = arm.sensors
+    if sen.encoder_resolution > COARSE_ENCODER:
+        notes.append(f"sensors.encoder_resolution = {sen.encoder_resolution:.4g} rad "
+                     f"({np.degrees(sen.encoder_resolution):.3g} deg per count) is coarser than "
+                     f"a degree (the thesis' encoders: 0.045 deg); if {sen.encoder_resolution:g} "
+                     f"is in degrees, write unit = \"deg\"")
+    if sen.clock_hz < SLOW_CLOCK:
+        notes.append(f"sensors.timing_clock = {sen.clock_hz:g} Hz is too slow to time encoder "
+                     f"pulses within a 1 ms control period (the thesis' board: 2 MHz); if "
+                     f"{sen.clock_hz:g} is in kHz or MHz, write that unit")
     g = arm.geometry
     for j in (1, 2):
         lo, hi = getattr(g, f"q{j}_min"), getattr(g, f"q{j}_max")

@@ -111,6 +111,15 @@ NOTED = {
         lambda t: _set(_set(t, "m2LG2", '{ value = 0.3028, unit = "kg m" }', "model"),
                        "m2LG2", '{ value = 0.2943, unit = "kg m" }', "model_gravity"),
         ["model.m2LG2", "model_gravity.m2LG2", "links", "heavier", "re-identification"]),
+    "model inertia in g m^2": (
+        lambda t: _set(t, "IO1_m2L1sq", '{ value = 59.9, unit = "kg m^2" }', "model"),
+        ["model.IO1_m2L1sq", "320 times", "g m^2"]),
+    "encoder resolution in deg written as rad": (
+        lambda t: _set(t, "encoder_resolution", '{ value = 0.045, unit = "rad" }'),
+        ["sensors.encoder_resolution = 0.045 rad", "2.58 deg per count", 'unit = "deg"']),
+    "timing clock in MHz written as Hz": (
+        lambda t: _set(t, "timing_clock", '{ value = 2, unit = "Hz" }'),
+        ["sensors.timing_clock = 2 Hz", "MHz"]),
 }
 
 
