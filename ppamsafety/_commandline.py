@@ -162,7 +162,8 @@ def run_guarded(parser: argparse.ArgumentParser, func, argv=None) -> int:
     and gives 2, and so does a ``MemoryError`` (a request too large for the machine:
     the library refuses the sizes it can estimate before allocating, this is the net);
     any other exception, and a ``TypeError`` that is a bug (:func:`is_internal_error`),
-    prints one line asking to report it and gives 1.  No traceback unless the environment sets ``PPAMSAFETY_DEBUG=1``.
+    prints one line asking to report it and gives 1.  No traceback unless the environment
+    sets ``PPAMSAFETY_DEBUG=1``.
     Every warning raised while ``func`` runs is printed once as one line
     ``ppamsafety: warning: ...`` (no Python source line).
 

@@ -13,11 +13,10 @@ in :mod:`ppamsafety.plots.design` (``result.plot()`` delegates there).
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
+from functools import lru_cache
 
 import numpy as np
 import pandas as pd
-
-from functools import lru_cache
 
 from ._validation import check_instance, check_int, check_range
 from .params import ArmParameters
@@ -608,7 +607,8 @@ def _model_note(arm):
     for label, attr in (("m2 L_G2", "m2LG2"), ("m1 L_G1 + m2 L1", "m1LG1_m2L1")):
         mine = getattr(plant, attr)
         theirs = [(t, getattr(getattr(arm, t), attr)) for t in ("model", "model_gravity")]
-        off = [(t, v) for t, v in theirs if abs(v - mine) > MODEL_GAP * abs(mine) + MODEL_GAP_FLOOR]
+        off = [(t, v) for t, v in theirs
+               if abs(v - mine) > MODEL_GAP * abs(mine) + MODEL_GAP_FLOOR]
         if off:
             listed = " and ".join(f"{v:.4g} kg m ({t}.{attr})" for t, v in off)
             gaps.append(f"{label} = {mine:.4g} kg m (links) against {listed}")
@@ -625,13 +625,13 @@ def _model_note(arm):
                         f"kg m^2?)")
     if not gaps:
         return None
-    d = arm.model.m2LG2
-    lg2 = arm.links.LG2
+    believed, lg2 = arm.model.m2LG2, arm.links.LG2
     heavier = ""
-    if abs(lg2) > 0.01 and abs(plant.m2LG2 - d) > MODEL_GAP * abs(plant.m2LG2) + MODEL_GAP_FLOOR:
-        dm = (plant.m2LG2 - d) / lg2
-        heavier = (f" (as if the forearm were {abs(dm):.3g} kg {'heavier' if dm > 0 else 'lighter'}"
-                   f" than the controllers believe)")
+    if abs(lg2) > 0.01 and (abs(plant.m2LG2 - believed)
+                            > MODEL_GAP * abs(plant.m2LG2) + MODEL_GAP_FLOOR):
+        dm = (plant.m2LG2 - believed) / lg2          # the forearm's mass at its own L_G2
+        heavier = (f" (as if the forearm were {abs(dm):.3g} kg "
+                   f"{'heavier' if dm > 0 else 'lighter'} than the controllers believe)")
     return (f"the plant's links differ from the controllers' identified model: "
             f"{'; '.join(gaps)}{heavier}.  The model-based controllers (gravity compensation "
             f"(3.18)-(3.19), the SMC's feedback linearisation) act on the model, not on the "
@@ -671,7 +671,8 @@ def arm_notes(arm) -> tuple:
         share, q, p, _ = _hold_share(arm)
         bare = arm.replace(effects=Effects())
         if share == 0 and _hold_share(bare)[0] > 0:
-            notes.append(f"with its plant effects ({', '.join(arm.effects.enabled())}) the arm "
+            on = ", ".join(f"effects.{e}" for e in arm.effects.enabled())
+            notes.append(f"with its plant effects ({on}) the arm "
                          f"cannot hold itself anywhere in its working area "
                          f"({_closest_pose(arm, q, p)}); without them it can")
     slow = [(f"valves.valve{i}.time_constant", v.time_constant)

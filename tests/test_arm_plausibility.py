@@ -64,8 +64,9 @@ REFUSED = {
     "upper arm length in mm for cm": (lambda t: _set(t, "L1", '{ value = 30, unit = "mm" }'),
                                       ["geometry.L1 = 0.03 m", "geometry.L32",
                                        "Did you mean geometry.L1 = 0.3 m"]),
-    "centre of gravity beyond the forearm": (lambda t: _set(t, "LG2", '{ value = 1.5, unit = "m" }'),
-                                             ["links.LG2 = 1.5 m", "geometry.L2 = 0.31 m"]),
+    "centre of gravity beyond the forearm": (
+        lambda t: _set(t, "LG2", '{ value = 1.5, unit = "m" }'),
+        ["links.LG2 = 1.5 m", "geometry.L2 = 0.31 m"]),
     "mean pressure in Pa for bar": (
         lambda t: _set(t, "mean_pressure", '{ value = [1.4, 1.5], unit = "Pa" }'),
         ["pneumatics.mean_pressure = [1.4, 1.5] Pa", "pneumatics.max_pressure",
@@ -230,7 +231,8 @@ def _unusual_arm(seed: int) -> ArmParameters:
                    for grp, f in zip(base.muscles.groups, rng.uniform(0.5, 1.5, 4)))
     muscles = replace(base.muscles, groups=groups)
     ln = (geometry.L1, geometry.L2)
-    m = [base.links.m1 * s * s * rng.uniform(0.3, 1.6), base.links.m2 * s * s * rng.uniform(0.3, 1.6)]
+    m = [base.links.m1 * s * s * rng.uniform(0.3, 1.6),
+         base.links.m2 * s * s * rng.uniform(0.3, 1.6)]
     lg = [rng.uniform(-0.2, 0.9) * ln[0], rng.uniform(-0.2, 1.0) * ln[1]]      # counterweights too
     dg = [rng.uniform(-0.1, 0.1) * ln[0], rng.uniform(-0.1, 0.1) * ln[1]]
     ig = [m[k] * (rng.uniform(0.5, 1.3) * ln[k]) ** 2 / 12.0 for k in range(2)]
@@ -296,3 +298,13 @@ def test_unusual_valid_arms_stay_valid_without_a_note_many_seeds(tmp_path):
         assert arm_notes(arm) == (), (arm.name, arm_notes(arm))
     f = _write(tmp_path, arms[0].to_toml(), "unusual.toml")
     assert main(["arm", "check", str(f)]) == 0
+
+
+def test_the_package_reads_arm_files_only_through_the_checked_front_door():
+    """``ppamsafety.params.load_arm`` (the former path, data checks only) is for old scripts:
+    no module of the package may read an arm file with it."""
+    pkg = ROOT / "ppamsafety"
+    pattern = re.compile(r"from \.+params(?:\.arm)? import [^\n]*\bload_arm\b|params\.load_arm\(")
+    users = [str(f.relative_to(ROOT)) for f in pkg.rglob("*.py")
+             if f.parent.name != "params" and pattern.search(f.read_text())]
+    assert not users, users

@@ -451,6 +451,26 @@ def thesis_arm() -> ArmParameters:
         name="thesis arm", sources=THESIS_SOURCES)
 
 
+def load_arm(path) -> ArmParameters:
+    """Read an arm file with the data checks only (the former front door, kept for scripts).
+
+    Commands and new code read arm files with :func:`ppamsafety.design.load_arm`, which adds
+    the checks that need the arm's physics (it holds itself somewhere in its working area,
+    its force laws are a PPAM's; this layer cannot compute them).
+
+    Parameters
+    ----------
+    path : path-like
+        The ``.toml`` file.
+
+    Returns
+    -------
+    ArmParameters
+        ``ArmParameters.from_file(path)``.
+    """
+    return ArmParameters.from_file(path)
+
+
 def is_thesis_arm(arm) -> bool:
     """True if ``arm`` has the physics of :func:`thesis_arm` (names and sources aside).
 
@@ -465,5 +485,5 @@ def is_thesis_arm(arm) -> bool:
     return arm == thesis_arm()
 
 
-__all__ = ["ArmParameters", "thesis_arm", "is_thesis_arm", "THESIS_SOURCES",
+__all__ = ["ArmParameters", "thesis_arm", "is_thesis_arm", "load_arm", "THESIS_SOURCES",
            "SOURCE_PARTS", "LINK_EXTENT_FACTOR"]
