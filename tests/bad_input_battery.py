@@ -24,8 +24,9 @@ A case that expects an *interrupt* gets Ctrl-C (SIGINT to its process group, as 
 sends it) after ``interrupt`` seconds, or as soon as its stderr shows ``interrupt_on`` (a line
 the command prints once its work has started, on an input long enough that the work cannot
 end in the moment between that line and the signal: no dependence on how fast the work is),
-and is clear when it exits 130 with ``ppamsafety: interrupted`` within
-:data:`INTERRUPT_GRACE` seconds (else "hang"; "not-interrupted" if it finished first).
+and is clear when it exits 130 with ``ppamsafety: interrupted`` having spent at most
+:data:`INTERRUPT_GRACE` seconds of CPU after it (else "hang"; "not-interrupted" if it finished
+first).
 
 The classes of the first pass (``synth-effect``, ``data-file``, ``study-file``,
 ``output-folder`` ...) were joined in the second pass by ``campaign-file`` (bench campaign
@@ -1632,8 +1633,30 @@ def _rmtree(d: Path) -> None:
     shutil.rmtree(d, ignore_errors=True)
 
 
-#: Seconds a command may take to exit after Ctrl-C before it counts as a hang.
+#: CPU seconds a command (its whole process group) may spend after Ctrl-C before it counts as
+#: a hang: the work it does after being told to stop, whatever the machine's load (a wall-clock
+#: grace would blame the command for a busy machine: a compiled 600 s simulation call, which
+#: Ctrl-C cannot cut, ends 2-5 s of CPU after it on 2 cores).
 INTERRUPT_GRACE = 10.0
+#: Wall seconds after Ctrl-C at which a command that still runs (e.g. blocked) counts as a hang.
+INTERRUPT_WALL = 120.0
+
+
+def _group_cpu(pgid: int) -> float:
+    """CPU seconds (user + system, with reaped children) of the live processes of a group."""
+    total = 0
+    for d in os.listdir("/proc"):
+        if not d.isdigit():
+            continue
+        try:
+            with open(f"/proc/{d}/stat") as fh:
+                stat = fh.read()
+        except OSError:
+            continue
+        fields = stat[stat.rindex(")") + 2:].split()       # from field 3 (state) on
+        if int(fields[2]) == pgid:                         # field 5: the process group
+            total += sum(int(x) for x in fields[11:15])    # fields 14-17: utime .. cstime
+    return total / os.sysconf("SC_CLK_TCK")
 
 
 def _wait(pid: int, timeout: float, interrupt: float | None = None, interrupt_on=None,
@@ -1641,10 +1664,11 @@ def _wait(pid: int, timeout: float, interrupt: float | None = None, interrupt_on
     """(status, rusage, verdict_override, peak, seconds from Ctrl-C to exit) of a child,
     killing it on timeout or memory; with ``interrupt``, SIGINT goes to its process group
     after that many seconds (what Ctrl-C in a terminal does); with ``interrupt_on``, as soon
-    as ``err_file`` (its stderr) holds that text."""
+    as ``err_file`` (its stderr) holds that text.  After Ctrl-C it is a hang once its process
+    group has spent :data:`INTERRUPT_GRACE` s of CPU or :data:`INTERRUPT_WALL` s have passed."""
     t0 = time.monotonic()
     peak = 0
-    t_int = None
+    t_int = cpu_int = None
 
     def kill(verdict):
         os.killpg(pid, signal.SIGKILL)
@@ -1669,8 +1693,12 @@ def _wait(pid: int, timeout: float, interrupt: float | None = None, interrupt_on
                 os.killpg(pid, signal.SIGINT)
             except ProcessLookupError:
                 pass
-            t_int = now
-        if (t_int is not None and now - t_int > INTERRUPT_GRACE) or now - t0 > timeout:
+            t_int, cpu_int = now, _group_cpu(pid)
+        if t_int is None:
+            if now - t0 > timeout:
+                return kill("hang")
+        elif (now - t_int > INTERRUPT_WALL
+              or _group_cpu(pid) - cpu_int > INTERRUPT_GRACE):
             return kill("hang")
         time.sleep(0.02)
 
@@ -1803,9 +1831,10 @@ def _classify_cli(c: Case, rc, over, out: str, err: str):
 
 
 def _classify_interrupt(rc, over, err, after):
-    """Ctrl-C: exit 130 within :data:`INTERRUPT_GRACE` s with one line, no traceback."""
+    """Ctrl-C: exit 130 within :data:`INTERRUPT_GRACE` s of CPU with one line, no traceback."""
     if over:
-        return over, f"still running {INTERRUPT_GRACE:g} s after Ctrl-C; " + err[-300:]
+        return over, (f"still running after Ctrl-C ({INTERRUPT_GRACE:g} s of CPU or "
+                      f"{INTERRUPT_WALL:g} s); " + err[-300:])
     if "Traceback (most recent call last)" in err:
         return "traceback", err[-600:]
     if after is None:
