@@ -208,6 +208,8 @@ def test_sweeps_name_every_key_of_a_cross_field_check_as_they_write_it():
     msg = str(info.value)
     assert msg.startswith("arm.geometry.L2 = 0.05 m") and "arm.links.LG2" in msg
     assert " links.LG2" not in msg
+    with pytest.raises(ArmFileError, match=r"^arm\.gravity = -1 m/s\^2: must be in"):
+        apply_arm_changes(thesis_arm(), {"gravity": -1.0})          # a root key too
 
 
 # ---- physically valid unusual arms stay valid -------------------------------------------------

@@ -983,6 +983,8 @@ def apply_arm_changes(arm, changes):
                 what = ", ".join(f"arm.{k[4:] if k.startswith('arm.') else k} = {_fmt(v)}"
                                  for k, v in changes.items())
                 msg = f"{what}: {msg}"
+            elif "." not in base:          # a root key ("gravity"): _ARM_KEY leaves those
+                msg = "arm." + msg
         raise ArmFileError(_ARM_KEY.sub(r"arm.\1", msg)) from None
 
 
