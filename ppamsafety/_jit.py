@@ -31,18 +31,13 @@ module constant it reads from there, such as a layout offset), so a stale
 cache could silently run old physics after an edit.  The cache therefore
 lives in a folder named after :func:`~ppamsafety._sourcehash.kernel_source_hash`
 (``~/.cache/ppamsafety/numba-<key>``, or ``$PPAMSAFETY_CACHE_DIR/numba-<key>``):
-a hash of every file holding something compiled code depends on (the compiled
-functions, what they call and read, what those values are computed with, the
-module-level statements of those modules and of their parent packages --
-found name by name from the source tree, see :mod:`ppamsafety._sourcehash`),
-of the Python, numba, llvmlite, numpy and other used package versions, and of
-the numba settings that change machine code (``NUMBA_BOUNDSCHECK``,
+a hash of the files compiled code depends on (the explicit list
+:data:`~ppamsafety._sourcehash.KERNEL_FILES`; both decorators refuse a function
+defined in a file outside it), of the Python, numba, llvmlite and numpy versions,
+and of the numba settings that change machine code (``NUMBA_BOUNDSCHECK``,
 ``NUMBA_OPT`` ...).  An edit of any of those files gives a fresh folder, and
-every kernel compiles again; an edit of a plot (even one a kernel module
-imports for its ``.plot()`` methods), a report section, the report, the
-command line, the sweeps or the docs keeps the folder.  The analysis of the
-source tree is stored next to the folders (``kernel-deps``), so a process only
-parses the files edited since (a whole-tree lookup takes about 10 ms).
+every kernel compiles again; an edit of a plot, a report section, the report,
+the command line, the sweeps or the docs keeps the folder.
 
 Each process holds a shared lock on its folder (``.ppamsafety-in-use``) and
 touches it, and then deletes the folders of other keys beyond the
@@ -68,7 +63,7 @@ import numba
 import numpy as np
 from numba import njit
 
-from ._sourcehash import kernel_source_hash
+from ._sourcehash import check_kernel_file, kernel_source_hash
 
 try:
     import fcntl
@@ -107,7 +102,7 @@ def _configure_cache() -> None:
         os.makedirs(base, exist_ok=True)
     except OSError:          # read-only home: fall back to numba's default locations
         return
-    key = kernel_source_hash(cache_dir=os.path.join(base, "kernel-deps"))
+    key = kernel_source_hash()
     path = os.path.join(base, f"numba-{key}")
     try:
         _use_folder(path)
@@ -302,10 +297,60 @@ def _prune_caches(base: str, current: str, keep: int = KEEP_CACHES,
 
 _configure_cache()
 
-kernel = njit(cache=True, error_model="numpy")
-nogil_kernel = njit(cache=True, error_model="numpy", nogil=True)
-step_kernel = njit(cache=True, error_model="numpy", _nrt=False)
-leaf = njit(cache=True, error_model="numpy", inline="always")
+_compile = njit(cache=True, error_model="numpy")
+_compile_inline = njit(cache=True, error_model="numpy", inline="always")
+_compile_nogil = njit(cache=True, error_model="numpy", nogil=True)
+_compile_step = njit(cache=True, error_model="numpy", _nrt=False)
+
+
+def kernel(func):
+    """Compile ``func`` with numba, cached on disk, numpy's error model (module docstring).
+
+    Parameters
+    ----------
+    func : function
+        Defined in a file of :data:`~ppamsafety._sourcehash.KERNEL_FILES` (else ImportError).
+    """
+    check_kernel_file(func)
+    return _compile(func)
+
+
+def leaf(func):
+    """:func:`kernel`, and inlined into every compiled caller at the numba IR level.
+
+    Parameters
+    ----------
+    func : function
+        Defined in a file of :data:`~ppamsafety._sourcehash.KERNEL_FILES` (else ImportError).
+    """
+    check_kernel_file(func)
+    return _compile_inline(func)
+
+
+def nogil_kernel(func):
+    """:func:`kernel` that releases the GIL, so that :func:`run_threaded` runs it on every core.
+
+    Parameters
+    ----------
+    func : function
+        Defined in a file of :data:`~ppamsafety._sourcehash.KERNEL_FILES` (else ImportError).
+    """
+    check_kernel_file(func)
+    return _compile_nogil(func)
+
+
+def step_kernel(func):
+    """:func:`kernel` without numba's reference counting (no array is made or freed inside).
+
+    For the per-step kernels of the closed loop, called millions of times.
+
+    Parameters
+    ----------
+    func : function
+        Defined in a file of :data:`~ppamsafety._sourcehash.KERNEL_FILES` (else ImportError).
+    """
+    check_kernel_file(func)
+    return _compile_step(func)
 
 #: Parts per thread a batch is cut into by :func:`run_threaded`: a thread that finishes its
 #: part early takes the next, so rows of unequal cost still share the cores evenly.

@@ -42,6 +42,7 @@ from ._commandline import EXIT_FAILURE, EXIT_OK, EXIT_USAGE
 from ._commandline import Parser as _Parser
 from ._commandline import _split_multi_value, run_guarded  # noqa: F401  (tests use both)
 from ._validation import SEED_MAX, did_you_mean
+from ._version import __version__
 from .output import atomic_write, check_new_file, inspect_output_folder
 from .units import BAR, DEG
 
@@ -204,13 +205,25 @@ def _section_names(text: str) -> list[str]:
 
 
 def _arm_of(args):
-    """The arm of ``--arm FILE`` (None: the thesis arm), loaded and validated."""
+    """The arm of ``--arm FILE`` (None: the thesis arm), loaded and checked; its notes
+    (:func:`ppamsafety.design.arm_notes`) go to stderr."""
     if getattr(args, "arm", None) is None:
         return None
-    from .params import load_arm
+    from .design import load_arm
 
     with _named("--arm", args.arm):
-        return load_arm(args.arm)
+        arm = load_arm(args.arm)
+    _print_notes(arm, args.arm)
+    return arm
+
+
+def _print_notes(arm, where, notes=None) -> None:
+    """Print the arm's notes (default :func:`ppamsafety.design.arm_notes`) as
+    ``ppamsafety: note: <file>: ...`` lines on stderr."""
+    from .design import arm_notes
+
+    for note in arm_notes(arm) if notes is None else notes:
+        print(f"ppamsafety: note: {where}: {note}", file=sys.stderr)
 
 
 def _head_of(args):
@@ -233,12 +246,15 @@ def _head_unused(args, command: str) -> None:
 def _cmd_report(args) -> int:
     from .report.build import build_report
 
-    with _options(outdir="--outdir", processes="--processes",
-                  replace_kind="--replace-other-kind"):
+    if args.only is not None and (args.include is not None or args.exclude is not None):
+        raise ValueError("--only names every section to run; give --include/--exclude "
+                         "without it")
+    with _options(outdir="--outdir", processes="--processes", include="--include",
+                  exclude="--exclude", replace_kind="--replace-other-kind"):
         index = build_report(args.outdir, quick=args.quick, only=args.only,
                              overwrite=args.overwrite, processes=args.processes,
                              replace_kind=args.replace_other_kind, arm=_arm_of(args),
-                             head=_head_of(args))
+                             head=_head_of(args), include=args.include, exclude=args.exclude)
     print(f"report written to {index}")
     return EXIT_OK
 
@@ -304,7 +320,10 @@ def _cmd_sweep(args) -> int:
     if args.resume and args.overwrite:
         raise ValueError("--resume and --overwrite exclude each other: --resume continues the "
                          "sweep in --out, --overwrite recomputes it from scratch")
-    study = load_study(args.study, arm=_arm_of(args), head=_head_of(args))   # checked first
+    arm = _arm_of(args)
+    study = load_study(args.study, arm=arm, head=_head_of(args))   # checked first
+    if arm is None and study.arm is not None:       # the study file's own [arm] file
+        _print_notes(study.arm, f"{args.study} [arm]")
     n = len(study.cases) if args.max_cases is None else min(args.max_cases, len(study.cases))
     est = study.estimate(processes=args.processes, max_cases=n)
     with _options(max_cases="--max-cases", confirm="--yes"):           # refused before it runs
@@ -322,6 +341,8 @@ def _cmd_sweep(args) -> int:
                             overwrite=args.overwrite, max_cases=args.max_cases,
                             progress=not args.no_progress, confirm=args.yes,
                             replace_kind=args.replace_other_kind)
+    for line in df.attrs.get("envelope_lines", ()):
+        print(line)
     failed = int((df["status"] == "failed").sum()) if "status" in df.columns else 0
     print(f"results written to {args.out}/{study.csv} ({len(df) - failed} ok, {failed} failed); "
           f"summary: {args.out}/summary.html")
@@ -345,6 +366,7 @@ def _cmd_diagnose(args) -> int:
 
     from .data import MeasuredDataWarning, load_campaign, load_measured
     from .diagnose import diagnose
+    from .diagnose.diagnosis import other_arm
 
     with _options(outdir="--out"):
         inspect_output_folder(args.out, overwrite=args.overwrite, kind="diagnose",
@@ -374,21 +396,34 @@ def _cmd_diagnose(args) -> int:
             raise ValueError(f"{', '.join(given)}: option(s) of an arm record; {args.data} is a "
                              f"test-bench (actuator) record, diagnosed against its nominal force "
                              f"law without them")
+    mismatch = other_arm(data, arm)
+    if mismatch is not None and not args.allow_other_arm:
+        # refused before computing: a forgotten --arm would name every difference between
+        # the two arms as a missing effect
+        raise ValueError(f"{args.data}: {mismatch}; give the record's arm file with --arm FILE "
+                         f"(the file whose fingerprint starts "
+                         f"{data.meta['arm']['sha256'][:16]}: `ppamsafety arm check FILE` prints "
+                         f"it), or --allow-other-arm to compare the two arms on purpose")
+    if args.allow_other_arm and mismatch is None:
+        raise ValueError(f"--allow-other-arm: {args.data} names no other arm than the one it is "
+                         f"diagnosed against; leave it out")
     with _options(experiment="--experiment", alpha="--alpha", rho_max="--rho-max",
                   block_seconds="--block", seed="--seed", bootstrap="--bootstrap",
                   stability="--stability", arm="--arm"):
         dg = diagnose(data, experiment=args.experiment, alpha=args.alpha, rho_max=args.rho_max,
                       block_seconds=0.05 if args.block is None else args.block,
                       seed=0 if args.seed is None else args.seed, bootstrap=args.bootstrap,
-                      stability=args.stability, arm=arm)
-    for note in dg.notes:
-        if note.startswith("arm: ") and "diagnosed against arm" in note:
-            print(f"ppamsafety: warning: {note[5:]}", file=sys.stderr)
+                      stability=args.stability, arm=arm, allow_other_arm=args.allow_other_arm)
+    for w in dg.warnings:
+        print(f"ppamsafety: warning: {w}", file=sys.stderr)
     with _options(outdir="--out"):
         dg.write(args.out, overwrite=args.overwrite, replace_kind=args.replace_other_kind)
+    for w in dg.warnings:
+        print(f"WARNING: {w}")
     for e in dg.effects:
         ps = ", ".join(f"{n} = {p['value']:.4g} [{p['ci_low']:.4g}, {p['ci_high']:.4g}] "
-                       f"{p['unit']}" for n, p in e["parameters"].items())
+                       f"{p['unit']} (declared {p['nominal']:.4g})"
+                       for n, p in e["parameters"].items())
         print(f"effect {e['name']} (confidence {e['confidence']:.3f}, "
               f"{e['confidence_level']}): {ps}")
     if not dg.effects:
@@ -472,17 +507,31 @@ def _cmd_synthesize(args) -> int:
 
 
 def _cmd_impact(args) -> int:
+    from .design import rest_stiffness
     from .impact.head import head_model
     from .impact.model import simulate_impacts
+    from .impact.verdicts import impact_verdicts
+    from .params.iso_ts_15066 import resolve_region
     from .params import thesis_arm
 
     if args.history is not None:        # fail before simulating, not after
         check_new_file(args.history, overwrite=args.overwrite, name="--history")
     arm = _arm_of(args) or thesis_arm()
     head = _head_of(args) or head_model()
+    with _named("--region", args.region):
+        region = resolve_region(args.region)
     q = np.array(args.q, dtype=float) * DEG
     with _options(q="--q", qd="--qd", stiffness="--stiffness", head="--head", dt="--dt"):
-        res = simulate_impacts(arm, q, args.qd, args.stiffness, head=head, dt=args.dt,
+        if args.stiffness is None:      # the arm's own stiffness at rest in this pose
+            rest = rest_stiffness(arm, q)
+            stiffness = rest.stiffness
+            origin = ("the arm's own at rest in this pose: (2.18) with the static pressures "
+                      + ", ".join(f"{v / BAR:.3f}" for v in rest.pressures) + " bar"
+                      + ("" if rest.holdable else ", clipped to [0, max_pressure]: the arm "
+                                                  "cannot hold this pose"))
+        else:
+            stiffness, origin = tuple(args.stiffness), "given by --stiffness"
+        res = simulate_impacts(arm, q, args.qd, stiffness, head=head, dt=args.dt,
                                history=args.history is not None)
     s = res.summary.iloc[0]
     if not s.tcp_speed >= 1e-3:
@@ -490,14 +539,24 @@ def _cmd_impact(args) -> int:
                          f"{args.q[1]:g} deg gives a tool speed of {s.tcp_speed:.3g} m/s: the "
                          f"arm does not move, so nothing hits the head; give joint speeds "
                          f"(e.g. --qd 1 0)")
+    h = res.head
     print(f"arm             {arm.name or args.arm}")
-    print(f"head model      {res.head.name}")
+    print(f"pose            q = {args.q[0]:g}, {args.q[1]:g} deg, qd = {args.qd[0]:g}, "
+          f"{args.qd[1]:g} rad/s")
+    print(f"joint stiffness K1 = {stiffness[0]:.4g}, K2 = {stiffness[1]:.4g} N m/rad ({origin})")
+    print(f"head model      {h.name}: m = {h.mass:g} kg, R = {h.radius:g} m, Hunt-Crossley "
+          f"k = {h.stiffness:.4g} N/m^n, n = {h.exponent:g}, lambda = {h.damping:.4g} "
+          f"N s/m^(n+1)")
     print(f"tool speed      {s.tcp_speed:.4g} m/s")
     print(f"F_max           {s.F_max:.4g} N at {1e3 * s.t_Fmax:.3g} ms")
     print(f"HIC36           {s.HIC36:.4g}  window [{1e3 * s.HIC36_t1:.3g}, {1e3 * s.HIC36_t2:.3g}] ms")
     print(f"HIC15           {s.HIC15:.4g}  window [{1e3 * s.HIC15_t1:.3g}, {1e3 * s.HIC15_t2:.3g}] ms")
     print(f"max penetration {1e3 * s.delta_max:.4g} mm, peak head acceleration {s.a_max_g:.4g} g")
     print(f"energy to head  {s.E_head_final:.4g} J of {s.E_initial:.4g} J")
+    verdicts = impact_verdicts(arm, q, args.qd, stiffness, head=head, dt=args.dt,
+                               region=region)
+    for line in verdicts.lines():
+        print(line)
     if args.history is not None:
         hist = res.histories[0]
         atomic_write(args.history, lambda tmp: hist.to_csv(tmp, index=False),
@@ -517,8 +576,10 @@ def _cmd_info(args) -> int:
     label = arm.name or "unnamed arm"
     print(f"{label}{' (the thesis arm)' if is_thesis_arm(arm) else ''} (plant):")
     print(f"  link masses m1 = {L.m1:.3f} kg, m2 = {L.m2:.3f} kg")
-    print(f"  mean pressures p_m = {np.array(arm.pneumatics.p_mean) / BAR} bar")
-    print(f"  valve time constants = {[v.time_constant for v in arm.valves.valves]} s")
+    print("  mean pressures p_m = " + ", ".join(f"{p / BAR:.4g}" for p in arm.pneumatics.p_mean)
+          + " bar")
+    print("  valve time constants = "
+          + ", ".join(f"{1e3 * v.time_constant:.4g}" for v in arm.valves.valves) + " ms")
     print(f"  muscles per group = {[g.n_muscles for g in arm.muscles.groups]}")
     print(f"  effects on: {', '.join(arm.effects.enabled()) or 'none'}")
     print(f"  fingerprint (sha256 of its arm file) {arm_fingerprint(arm)}")
@@ -565,18 +626,21 @@ THESIS_TWIN = ", the thesis arm's parameters"
 
 
 def _cmd_arm_check(args) -> int:
-    from .design import arm_summary
+    from .design import arm_notes, arm_summary, load_arm
     from .params import is_thesis_arm
-    from .params import load_arm
     from .params.arm_file import arm_fingerprint
 
     arm = load_arm(args.file)
     q = None if args.q is None else np.array(args.q, dtype=float) * DEG
     summary = arm_summary(arm, q=q)
+    notes = arm_notes(arm)
+    n = len(notes)
     print(f"{args.file}: valid arm file ({arm.name or 'unnamed arm'}"
           f"{THESIS_TWIN if is_thesis_arm(arm) else ''}; sha256 "
-          f"{arm_fingerprint(arm)[:16]})")
+          f"{arm_fingerprint(arm)[:16]}"
+          f"{f'; {n} note' + ('s' if n > 1 else '') + ' on stderr' if n else ''})")
     print("\n".join(summary.lines()))
+    _print_notes(arm, args.file, notes)
     if not summary.pose_holdable:
         print("ppamsafety: warning: the static pressures at the stiffness pose leave "
               "[0, max_pressure]: the Delta-p approach cannot hold the arm there with these "
@@ -603,13 +667,21 @@ def build_parser() -> argparse.ArgumentParser:
         description="Safety and impact analysis of a 2-DOF arm driven by pleated pneumatic "
                     "artificial muscles (PPAMs).",
         epilog=_EPILOG)
+    p.add_argument("--version", action="version", version=f"ppamsafety {__version__}")
     sub = p.add_subparsers(dest="command", required=True)
     r = sub.add_parser("report", help="regenerate the report folder from scratch", epilog=_EPILOG)
     r.add_argument("--outdir", type=_path, default="reports",
                    help="output folder (default: reports)")
     r.add_argument("--quick", action="store_true", help="coarse grids and short sweeps")
     r.add_argument("--only", type=_section_names, default=None, metavar="NAMES",
-                   help="comma-separated report section names to run (default: all)")
+                   help="comma-separated report section names to run, and no other (default: "
+                        "every section that concerns the arm: all of them for the thesis arm)")
+    r.add_argument("--include", type=_section_names, default=None, metavar="NAMES",
+                   help="sections to add to the arm's default selection (e.g. "
+                        "cylinder_friction, the bench case study, which is left out of the "
+                        "report for another arm)")
+    r.add_argument("--exclude", type=_section_names, default=None, metavar="NAMES",
+                   help="sections to leave out of the default selection")
     r.add_argument("--overwrite", action="store_true",
                    help="replace a previous ppamsafety report in OUTDIR (never other files)")
     r.add_argument("--replace-other-kind", action="store_true",
@@ -719,6 +791,11 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
     g.add_argument("--overwrite", action="store_true",
                    help="replace a previous ppamsafety diagnosis in DIR (never other files)")
     _add_arm_head(g, head_used=False)
+    g.add_argument("--allow-other-arm", action="store_true",
+                   help="arm records: diagnose a record that names another arm (metadata "
+                        "[arm], as synthesize writes it) against this one on purpose; "
+                        "refused otherwise (every difference between the two arms would be "
+                        "named as a missing effect)")
     g.add_argument("--replace-other-kind", action="store_true",
                    help="with --overwrite: also replace a ppamsafety output of another kind")
     g.set_defaults(func=_cmd_diagnose)
@@ -776,11 +853,17 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
                    help="link angles at impact [deg], each in [-360, 360]")
     m.add_argument("--qd", nargs=2, type=_finite, required=True, metavar=("QD1", "QD2"),
                    help="link angular velocities at impact [rad/s]")
-    m.add_argument("--stiffness", nargs=2, type=_nonnegative, default=(43.0, 27.0),
-                   metavar=("K1", "K2"), help="joint stiffnesses [Nm/rad], >= 0 (default 43 27)")
+    m.add_argument("--stiffness", nargs=2, type=_nonnegative, default=None,
+                   metavar=("K1", "K2"),
+                   help="joint stiffnesses [Nm/rad], >= 0 (default: the arm's own at rest in "
+                        "the pose --q, (2.18) with its static pressures)")
     m.add_argument("--dt", type=_positive, default=2e-5, help="integration step [s], > 0")
     m.add_argument("--history", type=_path, default=None, metavar="FILE",
                    help="write the time history to this new CSV file")
+    m.add_argument("--region", default="skull/forehead", metavar="NAME|FILE",
+                   help="body region of the verdicts: an ISO/TS 15066 Annex A location "
+                        "(skull/forehead, face, chest/sternum ...; docs/body_regions.md), its "
+                        "number 1-29, or a region file (TOML); default skull/forehead")
     m.add_argument("--overwrite", action="store_true",
                    help="allow --history to replace an existing file")
     _add_arm_head(m)

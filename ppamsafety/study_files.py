@@ -54,10 +54,16 @@ A safety envelope instead of a grid (:func:`ppamsafety.envelope.safety_envelope`
     [envelope]
     parameter = "arm.pneumatics.mean_pressure"    # or "lam", "speed", any numeric key
     range = [1.2e5, 2.0e5]
-    limit = "F_max"                    # "F_max" (660 N), "HIC36" (650), "iso_ts_15066"
-    tolerance = 0.01                   # relative width of the final bracket
-    # pose = [50.0, -80.0]             # "speed" only: pose [deg] and joint direction
-    # direction = [1.0, 0.0]
+    # range = { values = [1.2, 2.0], unit = "bar" }   # the same, with a unit
+    limit = "F_max"                    # a criterion: "F_max" (maxilla 660 N), "HIC36" (650),
+                                       # "iso_ts_15066" (transient), "iso_ts_15066_qs" ...
+    # limit_value = 200.0              # another value of that limit [N] (or {value, unit})
+    # region = "skull/forehead"        # body region of the criteria (or a region file)
+    tolerance = 0.01                   # relative width of a final bracket
+    scan = 9                           # values evaluated first (every crossing bracketed)
+    # pose = [50.0, -80.0]             # "speed" only: link angles q1, q2 at impact [deg]
+    # direction = [1.0, 0.0]           # "speed" only: joint-space direction (qd1, qd2),
+                                       #   scaled so that the tool moves at the speed
 
 The cases are every ``[[variants]]`` entry (or one empty entry) combined with
 every grid point, merged over ``[case]`` and ``[impact]``; a parameter may be
@@ -107,18 +113,20 @@ import pandas as pd
 from ._inputfiles import check_input_path, read_text
 from ._jit import available_cores
 from ._validation import MAX_BYTES, check_int
-from .envelope import LIMITS, check_bounds, safety_envelope
+from .envelope import LIMITS, SCAN, check_bounds, resolve_limit, safety_envelope
 from .experiments.catalog import DEFAULT_DURATIONS
 from .impact.head import HeadContactModel, load_head
 from .output import OutputError, OutputFolder, check_output_path, read_marker
+from .design import load_arm
 from .params import ArmParameters
-from .params import load_arm
 from .params.arm_file import ArmFileError, arm_key, arm_to_toml, read_value
 from .plots.figure import save as save_figure
-from .plots.sweep import plot_sweep
+from .plots.sweep import limit_lines, plot_sweep
 from .sweep import BACKENDS, run_sweep
-from .sweep_cases import (DEFAULTS, IMPACT_POSE_DEG, PARAMETERS, case_arm, case_function,
-                          check_case, is_dotted)
+from .sweep_cases import (DEFAULTS, IMPACT_POSE_DEG, PARAMETERS, SPEED_MAX, add_verdicts,
+                          case_arm, case_function, check_case, check_impact_case, column_unit,
+                          is_dotted)
+from .units import si_factor
 
 #: Allowed keys per table of a study file.
 SCHEMA = {
@@ -130,7 +138,8 @@ SCHEMA = {
     "output": ("csv", "histories"),
     "arm": ("file",),
     "head": ("file",),
-    "envelope": ("parameter", "range", "limit", "tolerance", "pose", "direction"),
+    "envelope": ("parameter", "range", "limit", "limit_value", "region", "tolerance", "scan",
+                 "pose", "direction"),
 }
 #: Generators allowed as a grid value: ``{geomspace = [start, stop, num]}`` and ``linspace``.
 GENERATORS = ("geomspace", "linspace")
@@ -156,6 +165,9 @@ class Axis(Sequence):
     materialised: its i-th value is computed from the formula (equal to NumPy's up to
     rounding), so a grid of 10^9 points costs nothing until it runs.
 
+    The values are in SI units; ``unit`` and ``factor`` say in which unit the study file
+    gave them (shown so in the table and figure of the sweep).
+
     Parameters
     ----------
     values : list, optional
@@ -172,6 +184,9 @@ class Axis(Sequence):
         self.gen, self.start, self.stop, self.num = gen, start, stop, num
         self._values = None if values is None else list(values)
         self._reps = None
+        #: The unit the study file wrote the values in and its factor to SI (``value_si =
+        #: value * factor``); None: SI.
+        self.unit, self.factor = None, 1.0
         if gen is not None and num <= MATERIALISE:
             f = np.geomspace if gen == "geomspace" else np.linspace
             self._values = [float(x) for x in f(start, stop, num)]
@@ -370,6 +385,23 @@ class Study:
         keys = list(dict.fromkeys(k for case in c for k in case if k != "histories"))
         return [k for k in keys if len({repr(case.get(k)) for case in c}) > 1]
 
+    def unit_of(self, key: str) -> tuple:
+        """(unit, factor to SI) a parameter or result column is shown in: the unit the study
+        file gave a grid key in, else its SI unit (:func:`ppamsafety.sweep_cases.column_unit`;
+        ``"-"`` dimensionless; None: text, a flag or a list).
+
+        Parameters
+        ----------
+        key : str
+            A case parameter or result column.
+        """
+        axis = self.cases.axes.get(key) if isinstance(self.cases, CaseGrid) else None
+        if axis is not None and axis.unit is not None:
+            return axis.unit, axis.factor
+        if self.envelope is not None and key == "value":
+            return column_unit(self.envelope["parameter"]), 1.0
+        return column_unit(key), 1.0
+
     @property
     def origins(self) -> list:
         """Per case, the index of the ``[[variants]]`` entry it came from."""
@@ -406,14 +438,15 @@ def _grid_values(where: str, key: str, v) -> Axis:
                 args = [_dotted_si(where, f"grid.{key}.{gen}[{i}]", key,
                                    {"value": x, "unit": unit}) for i, x in enumerate(args[:2])
                         ] + args[2:]
-            return _grid_values(where, key, {gen: args})
+            return _with_unit(_grid_values(where, key, {gen: args}), key, unit)
         vals = v.pop("values") if set(v) == {"values"} else None
         if not isinstance(vals, list) or not vals:
             raise _err(where, f"grid.{key} = {v!r}: with a unit give {{values = [...], unit = "
                               f"...}} (a non-empty list) or a generator {{linspace = [start, "
                               f"stop, num], unit = ...}}")
-        return Axis([_dotted_si(where, f"grid.{key}[{i}]", key, {"value": x, "unit": unit})
-                     for i, x in enumerate(vals)])
+        return _with_unit(Axis([_dotted_si(where, f"grid.{key}[{i}]", key,
+                                           {"value": x, "unit": unit})
+                                for i, x in enumerate(vals)]), key, unit)
     if isinstance(v, dict):
         if len(v) != 1 or next(iter(v)) not in GENERATORS:
             raise _err(where, f"grid.{key} = {v!r}: an inline table must be one of "
@@ -437,6 +470,14 @@ def _grid_values(where: str, key: str, v) -> Axis:
     if not v:
         raise _err(where, f"grid.{key} is an empty list; give at least one value")
     return Axis(v)
+
+
+def _with_unit(axis: Axis, key: str, unit: str) -> Axis:
+    """``axis`` with the unit the study file gave its values in (already checked)."""
+    si = arm_key(key).unit
+    if si is not None:
+        axis.unit, axis.factor = unit, si_factor(unit, si, name=f"grid.{key}.unit")
+    return axis
 
 
 def _dotted_si(where: str, path: str, key: str, v):
@@ -541,8 +582,79 @@ def _arm_and_head(where: str, data: dict, base_dir, arm, head) -> tuple:
     return tuple(out)
 
 
-def _envelope(where: str, data: dict, base: dict, arm) -> dict | None:
-    """The checked ``[envelope]`` table: parameter, bounds, limit, tolerance and base case."""
+#: SI units of the envelope parameters that are not dotted arm keys (``range`` may give
+#: another unit of the same quantity, ``{ values = [low, high], unit = "mm/s" }``).
+ENVELOPE_UNITS = {"speed": "m/s", "lam": "s", "duration": "s", "stiffness": "N m/rad",
+                  "task_kp": "N/m", "task_ki": "N/(m s)", "task_kd": "N s/m",
+                  "kp_bar": "bar/rad", "ki_bar": "bar/(rad s)", "kd_bar": "bar s/rad"}
+
+
+def _envelope_range(where: str, par: str, rng) -> list:
+    """``envelope.range`` in SI units: ``[low, high]`` or ``{values = [low, high], unit}``."""
+    unit = None
+    if isinstance(rng, dict):
+        if set(rng) != {"values", "unit"}:
+            raise _err(where, f"envelope.range = {rng!r}: with a unit give {{ values = [low, "
+                              f"high], unit = \"...\" }}")
+        unit, rng = rng["unit"], rng["values"]
+    if not (isinstance(rng, list) and len(rng) == 2 and all(
+            isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
+            for x in rng) and rng[0] < rng[1]):
+        si = ENVELOPE_UNITS.get(par, "SI units")
+        raise _err(where, f"envelope.range = {rng!r} must be [low, high], finite, low < high "
+                          f"(in {si} of {par}, or {{ values = [low, high], unit = \"...\" }})")
+    if unit is None:
+        return [float(x) for x in rng]
+    if is_dotted(par):
+        return [_dotted_si(where, f"envelope.range[{i}]", par, {"value": x, "unit": unit})
+                for i, x in enumerate(rng)]
+    si = ENVELOPE_UNITS.get(par)
+    try:
+        f = si_factor(unit, si or "-", name="envelope.range unit")
+    except (TypeError, ValueError) as exc:
+        raise _err(where, f"envelope.range = {{values = {rng!r}, unit = {unit!r}}}: {exc} "
+                          f"({par} is in {si or 'its SI unit'})") from None
+    return [float(x) * f for x in rng]
+
+
+def _envelope_pose(where: str, pose, direction, case: dict, arm) -> None:
+    """Blame a pose or a direction the speed search cannot use on the pose, not the range."""
+    try:
+        check_impact_case(0.5 * SPEED_MAX, q1_deg=float(pose[0]), q2_deg=float(pose[1]),
+                          direction=[float(x) for x in direction], arm=arm,
+                          **{k: v for k, v in case.items()
+                             if k not in ("q1_deg", "q2_deg", "direction")})
+    except (TypeError, ValueError) as exc:
+        msg = str(exc)
+        if "direction" in msg:
+            raise _err(where, f"envelope.direction = {direction!r}: {msg} (the joint-space "
+                              f"velocity direction (qd1, qd2), scaled to the speed)") from None
+        if "working area" in msg or "q1_deg" in msg or "q2_deg" in msg:
+            hint = ""
+            if all(abs(float(x)) <= 2 * math.pi for x in pose):
+                deg = [round(math.degrees(float(x)), 1) for x in pose]
+                hint = (f"; the pose is in degrees: {list(pose)!r} looks like radians "
+                        f"({deg} deg)")
+            raise _err(where, f"envelope.pose = {list(pose)!r} [deg]: {msg}{hint}") from None
+        raise _err(where, f"envelope.pose = {list(pose)!r}: {msg}") from None
+
+
+def _envelope(where: str, data: dict, base: dict, arm, base_dir=None) -> dict | None:
+    """The checked ``[envelope]`` table: parameter, bounds, limit, tolerance and base case.
+
+    Keys: ``parameter`` (the searched case parameter: ``"speed"`` [m/s], ``"lam"`` [s], a
+    gain, ``"stiffness"`` [N m/rad], ``"duration"`` [s] or a dotted arm key such as
+    ``"arm.pneumatics.mean_pressure"`` [Pa]); ``range`` ([low, high] in the parameter's SI
+    unit, or ``{values = [low, high], unit = "bar"}``); ``limit`` (a criterion name of
+    :func:`ppamsafety.impact.verdicts.criterion_names`, default ``"F_max"``);
+    ``limit_value`` (another value of that limit, a number in its SI unit or ``{value,
+    unit}``); ``region`` (the body region of the criteria: a name, an Annex A number or a
+    region file); ``tolerance`` (relative width of a final bracket); ``scan`` (values
+    evaluated first, ends included); for ``parameter = "speed"`` only: ``pose`` ([q1, q2]
+    link angles at impact in degrees, default [50, -80], thesis §6.3.3) and ``direction``
+    ([qd1, qd2], the joint-space direction of the velocity, scaled so that the tool moves
+    at the searched speed; default [1, 0], the arm swinging about joint 1).
+    """
     env = data.get("envelope")
     if env is None:
         return None
@@ -554,18 +666,40 @@ def _envelope(where: str, data: dict, base: dict, arm) -> dict | None:
     if not isinstance(par, str):
         raise _err(where, f"envelope.parameter = {par!r} must be a parameter name such as "
                           f"'lam', 'speed' or 'arm.pneumatics.mean_pressure'")
-    rng = env.get("range")
-    if not (isinstance(rng, list) and len(rng) == 2 and all(
-            isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x)
-            for x in rng) and rng[0] < rng[1]):
-        raise _err(where, f"envelope.range = {rng!r} must be [low, high], finite, low < high "
-                          f"(SI units of {par})")
+    rng = _envelope_range(where, par, env.get("range"))
+    region = env.get("region")
+    if region is not None:
+        if not isinstance(region, (str, int)) or isinstance(region, bool):
+            raise _err(where, f"envelope.region = {region!r} must be a body region name, an "
+                              f"Annex A number or a region file (.toml)")
+        if isinstance(region, str) and region.endswith(".toml") and not os.path.isabs(region):
+            region = str(Path(base_dir or ".") / region)
     lim = env.get("limit", "F_max")
-    if lim not in LIMITS:
-        raise _err(where, f"envelope.limit = {lim!r} is not one of {list(LIMITS)}")
+    lval = env.get("limit_value")
+    if isinstance(lval, dict):
+        if set(lval) != {"value", "unit"}:
+            raise _err(where, f"envelope.limit_value = {lval!r}: give a number or {{ value = "
+                              f"..., unit = \"N\" }}")
+        try:
+            lval = float(lval["value"]) * si_factor(lval["unit"], "N",
+                                                    name="envelope.limit_value unit")
+        except (TypeError, ValueError) as exc:
+            raise _err(where, f"envelope.limit_value: {exc}") from None
+    if lval is not None and (isinstance(lval, bool) or not isinstance(lval, (int, float))):
+        raise _err(where, f"envelope.limit_value = {lval!r} must be a number (the limit in "
+                          f"its SI unit: N for a force)")
+    try:
+        resolve_limit(lim, lval, region)
+    except (TypeError, ValueError) as exc:
+        raise _err(where, f"envelope.{'limit_value' if 'limit_value' in str(exc) else 'limit'}"
+                          f" = {lval if 'limit_value' in str(exc) else lim!r}: {exc}") from None
     tol = env.get("tolerance", 0.01)
     if isinstance(tol, bool) or not isinstance(tol, (int, float)) or not 1e-6 <= tol <= 0.5:
         raise _err(where, f"envelope.tolerance = {tol!r} must be a number in [1e-6, 0.5]")
+    scan = env.get("scan", SCAN)
+    if isinstance(scan, bool) or not isinstance(scan, int) or not 2 <= scan <= 1000:
+        raise _err(where, f"envelope.scan = {scan!r} must be an integer in [2, 1000] (values "
+                          f"evaluated before bisecting, ends included)")
     case = dict(base)
     if par == "speed":
         extra = [k for k in case if not (is_dotted(k) or k in ("stiffness", "head", "effects"))]
@@ -578,7 +712,10 @@ def _envelope(where: str, data: dict, base: dict, arm) -> dict | None:
         for k, v in (("pose", pose), ("direction", direction)):
             if not (isinstance(v, list) and len(v) == 2 and all(
                     isinstance(x, (int, float)) and not isinstance(x, bool) for x in v)):
-                raise _err(where, f"envelope.{k} = {v!r} must be a pair of numbers")
+                raise _err(where, f"envelope.{k} = {v!r} must be a pair of numbers"
+                                  + (" [q1, q2] in degrees" if k == "pose" else
+                                     " [qd1, qd2] (a joint-space direction)"))
+        _envelope_pose(where, pose, direction, case, arm)
         case.update(q1_deg=float(pose[0]), q2_deg=float(pose[1]),
                     direction=[float(x) for x in direction])
     else:
@@ -597,9 +734,10 @@ def _envelope(where: str, data: dict, base: dict, arm) -> dict | None:
     try:                                  # both ends of the range, as the search will run them
         check_bounds(par, (float(rng[0]), float(rng[1])), case, arm=arm)
     except ValueError as exc:
-        raise _err(where, f"envelope.range = {rng!r}: {exc}") from None
+        raise _err(where, f"envelope.range = {env.get('range')!r}: {exc}") from None
     return {"parameter": par, "bounds": (float(rng[0]), float(rng[1])), "limit": lim,
-            "tolerance": float(tol), "case": case}
+            "limit_value": None if lval is None else float(lval), "region": region,
+            "tolerance": float(tol), "scan": int(scan), "case": case}
 
 
 def parse_study(text: str, *, where: str = "study file", default_name: str = "study",
@@ -670,7 +808,7 @@ def parse_study(text: str, *, where: str = "study file", default_name: str = "st
             v = _dotted_si(where, f"{table}.{k}", k, v) if is_dotted(k) else v
             _check_value(where, f"{table}.{k}", k, v, arm)
             origin[k], base[k] = f"{table}.{k}", v
-    envelope = _envelope(where, data, base, arm)
+    envelope = _envelope(where, data, base, arm, base_dir)
     grid = data.get("grid", {})
     _check_keys(where, "grid", grid)
     gvals = {}
@@ -1016,16 +1154,18 @@ def run_study_file(study, outdir, *, backend: str = "local", scheduler=None,
         if st.envelope is not None:
             env = _run_envelope(st, cache, processes, progress)
             df = env.to_pandas()
+            df.attrs["envelope_lines"] = env.lines()
         else:
             env = None
             df = run_sweep(case_function(st.arm, st.head), cases, name=st.name, cache_dir=cache,
                            processes=processes, progress=progress, on_error="record",
                            backend=backend, scheduler=scheduler)
+            df = add_verdicts(df, head=st.head)
         if "time_histories" in df.columns:
             _write_histories(df, stage / "histories")
             # the frames are in histories/; the flag is [output], not a parameter of the cases
             df = df.drop(columns=[c for c in ("time_histories", "histories") if c in df.columns])
-        df.to_csv(stage / st.csv, index=False)
+        display_table(st, df).to_csv(stage / st.csv, index=False)   # units in the header
         (stage / "study.toml").write_text(st.source, encoding="utf-8")
         _write_summary(st, df, stage, env)
     return df
@@ -1034,8 +1174,9 @@ def run_study_file(study, outdir, *, backend: str = "local", scheduler=None,
 def _run_envelope(st: Study, cache, processes, progress):
     """The ``[envelope]`` search of a study (:func:`ppamsafety.envelope.safety_envelope`)."""
     e = st.envelope
-    return safety_envelope(e["parameter"], e["bounds"], limit=e["limit"], case=e["case"],
-                           arm=st.arm, head=st.head, tolerance=e["tolerance"],
+    return safety_envelope(e["parameter"], e["bounds"], limit=e["limit"],
+                           limit_value=e["limit_value"], region=e["region"], case=e["case"],
+                           arm=st.arm, head=st.head, tolerance=e["tolerance"], scan=e["scan"],
                            processes=processes, progress=progress, cache_dir=cache,
                            name=st.name)
 
@@ -1043,6 +1184,56 @@ def _run_envelope(st: Study, cache, processes, progress):
 #: Files of a sweep folder besides the result CSV and ``study.toml``.
 SUMMARY_FIGURE, SUMMARY_PAGE, ARM_COPY, HEAD_COPY = ("summary.png", "summary.html", "arm.toml",
                                                      "head.toml")
+
+
+def _in_unit(v, factor: float):
+    """A value shown in a unit of SI factor ``factor`` (numbers and lists of numbers)."""
+    if factor == 1.0:
+        return v
+    if isinstance(v, (list, tuple)):
+        return [_in_unit(x, factor) for x in v]
+    if isinstance(v, (int, float, np.integer, np.floating)) and not isinstance(v, bool):
+        return float(v) / factor
+    return v
+
+
+def unit_label(name: str, unit) -> str:
+    """A column or axis name with its unit: ``F_max [N]``, ``HIC36 [-]``; a text column as is.
+
+    Parameters
+    ----------
+    name : str
+        The name.
+    unit : str or None
+        Its unit (``"-"``: dimensionless; None: none).
+    """
+    return name if unit is None else f"{name} [{unit}]"
+
+
+def display_table(st: Study, df: pd.DataFrame) -> pd.DataFrame:
+    """The result table as a person reads it (the CSV, the HTML page): every column named with
+    its unit (``[-]`` dimensionless), a grid key's values in the unit the study file gave them
+    in (a mean pressure written in bar, in bar).
+
+    Parameters
+    ----------
+    st : Study
+        The study.
+    df : pandas.DataFrame
+        Its result table in SI units (:func:`run_study_file`'s).
+
+    Returns
+    -------
+    pandas.DataFrame
+    """
+    out = {}
+    for col in df.columns:
+        unit, factor = st.unit_of(col)
+        label = (f"{st.envelope['parameter']} [{unit}]" if col == "value" and st.envelope
+                 else unit_label(col, unit))
+        out[label] = df[col].map(lambda v, f=factor: _in_unit(v, f)) if factor != 1.0 else \
+            df[col]
+    return pd.DataFrame(out)
 
 
 def _write_summary(st: Study, df: pd.DataFrame, stage: Path, envelope=None) -> None:
@@ -1053,15 +1244,48 @@ def _write_summary(st: Study, df: pd.DataFrame, stage: Path, envelope=None) -> N
         (stage / HEAD_COPY).write_text(st.head.to_toml(), encoding="utf-8")
     title = f"{st.name}: {st.description}" if st.description else st.name
     if envelope is not None:
-        fig = envelope.plot(title=title)
-        swept, what = [envelope.parameter], envelope.description
+        fig = envelope.plot(title=title, unit=st.unit_of(envelope.parameter)[0])
+        swept, what = [envelope.parameter], " ".join(envelope.lines())
     else:       # what varies among the cases run (--max-cases may run fewer)
         swept = [k for k in st.swept if k in df.columns and df[k].map(repr).nunique() > 1]
-        fig = plot_sweep(df, swept, title=title)
+        shown = df.copy()
+        for k in swept:                        # the swept values in the study file's unit
+            shown[k] = df[k].map(lambda v, f=st.unit_of(k)[1]: _in_unit(v, f))
+        fig = plot_sweep(shown, swept, title=title,
+                         units={k: st.unit_of(k)[0] for k in [*swept, *shown.columns]})
         what = (f"{len(df)} cases, {int((df.get('status') == 'ok').sum())} ok"
                 if "status" in df.columns else f"{len(df)} cases")
     save_figure(fig, stage / SUMMARY_FIGURE)
     (stage / SUMMARY_PAGE).write_text(summary_page(st, df, what, swept), encoding="utf-8")
+
+
+def _mark_above(shown: pd.DataFrame) -> tuple:
+    """The displayed table as HTML cell texts, the values above a limit line of the figure
+    marked (red, ``▲``, the limits exceeded in the tooltip); and the sentence that says so."""
+    out = shown.copy()
+    count = [0]
+
+    def cell(v, lines):
+        if v is None or isinstance(v, (bool, np.bool_, str)):
+            return html.escape("" if v is None else str(v))
+        if not isinstance(v, (int, float, np.integer, np.floating)):
+            return html.escape(str(v))
+        if not np.isfinite(v):
+            return ""
+        over = [text for lim, text, *_ in lines if v > lim]
+        if not over:
+            return f"{v:.4g}"
+        count[0] += 1
+        return (f'<span class="above" title="above: {html.escape("; ".join(over))}">{v:.4g} '
+                f"▲</span>")
+
+    for col in shown.columns:
+        lines = limit_lines(col.split(" [")[0])
+        out[col] = shown[col].map(lambda v, lines=lines: cell(v, lines))
+    note = (f'<p><span class="above">▲</span> {count[0]} values above a limit line of the '
+            f"figure (hover over a value for the limit).</p>" if count[0] else
+            "<p>No value above a limit line of the figure.</p>")
+    return out, note
 
 
 def summary_page(st: Study, df: pd.DataFrame, what: str, swept) -> str:
@@ -1088,25 +1312,29 @@ def summary_page(st: Study, df: pd.DataFrame, what: str, swept) -> str:
     limits = ("660 N maxilla fracture (Haddadin et al. 2007a, thesis §6.3.3); HIC36 650 (5 % "
               "risk of AIS 3+, thesis §6.3.3); ISO/TS 15066 skull/forehead transient contact "
               f"{LIMITS['iso_ts_15066'].value:g} N (Annex A)")
-    shown = df.drop(columns=[c for c in ("error",) if c in df.columns and not df[c].any()])
+    shown = display_table(st, df.drop(columns=[c for c in ("error",) if c in df.columns
+                                               and not df[c].any()]))
     rows = [("study", st.name), ("description", st.description or "-"),
             ("arm", arm + (" (arm.toml)" if st.arm is not None else "")),
             ("head", head + (" (head.toml)" if st.head is not None else "")),
-            ("swept", ", ".join(swept) or "-"), ("result", what), ("limits drawn", limits)]
+            ("swept", ", ".join(unit_label(k, st.unit_of(k)[0]) for k in swept) or "-"),
+            ("result", what), ("limits drawn", limits)]
     meta = "".join(f"<tr><th>{html.escape(k)}</th><td>{html.escape(str(v))}</td></tr>"
                    for k, v in rows)
-    table = shown.to_html(index=False, na_rep="", float_format=lambda x: f"{x:.4g}",
-                          border=0, classes="results")
+    marked, note = _mark_above(shown)
+    table = marked.to_html(index=False, na_rep="", escape=False, border=0, classes="results")
     return f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>{html.escape(st.name)}: ppamsafety sweep</title>
 <style>body{{font-family:sans-serif;max-width:80em;margin:1em auto;padding:0 1em}}
 table{{border-collapse:collapse;font-size:0.85em}}td,th{{border:1px solid #ccc;padding:2px 6px}}
-th{{background:#f3f3f3;text-align:left}}img{{max-width:100%}}</style></head>
+th{{background:#f3f3f3;text-align:left}}img{{max-width:100%}}
+.above{{color:#b00;font-weight:bold}}</style></head>
 <body><h1>{html.escape(st.name)}</h1>
 <table>{meta}</table>
 <p><img src="{SUMMARY_FIGURE}" alt="results against the swept parameters"></p>
 <p>Files: the table <a href="{html.escape(st.csv)}">{html.escape(st.csv)}</a>, the study
 <a href="study.toml">study.toml</a>.</p>
+{note}
 {table}
 </body></html>
 """
@@ -1115,4 +1343,4 @@ th{{background:#f3f3f3;text-align:left}}img{{max-width:100%}}</style></head>
 __all__ = ["SCHEMA", "GENERATORS", "KIND", "MATERIALISE", "CHECK_ALL", "COST", "CONFIRM_HOURS",
            "Axis", "CaseGrid", "Study", "StudyFileError", "parse_study", "load_study",
            "estimate_cases", "describe_estimate", "check_run_size", "history_format",
-           "run_study_file", "summary_page"]
+           "run_study_file", "summary_page", "display_table", "unit_label"]

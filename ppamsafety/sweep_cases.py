@@ -32,6 +32,7 @@ import functools
 import inspect
 import math
 from collections.abc import Mapping
+from dataclasses import fields
 
 import numpy as np
 import pandas as pd
@@ -40,17 +41,22 @@ from ._validation import did_you_mean
 from .control import PID, JointPSMC, TaskPSMC, SensorConfig
 from .control.pid import GAIN_MAX
 from .control.psmc import LAMBDA_MAX, TASK_GAIN_MAX
+from .design import rest_stiffness
 from .experiments.catalog import (CIRCLE_PERIODS, CIRCLE_WARMUP, DEFAULT_DURATIONS, STEP_TIMES,
                                   SWITCH_TIME, run_thesis_experiment, ControllerVariant)
 from .experiments.metrics import tracking_stats
+from .impact.anywhere import simulate_contacts
 from .impact.head import HeadContactModel, head_model_names, head_model
 from .impact.instants import HEURISTICS, evaluate_experiment, heuristic_instants, impact_states
 from .impact.engine import FREE_STRIDE
+from .impact.verdicts import METRICS, criteria_for, criterion, evaluate
 from .impact.model import simulate_impacts, stiffness_limit
 from .params import ArmParameters, thesis_arm
-from .params.arm_file import ArmFileError, apply_arm_changes, effects_from_dict
+from .params.arm_file import ArmFileError, apply_arm_changes, arm_key, effects_from_dict
+from .params.contact import arm_contact_points, body_contact, body_contact_names, covering_names
+from .params.contact import covering as named_covering
+from .params.effects import Effects
 from .plant import geometry as geo
-from .plant import pneumatics as pn
 from .sweep import _check_cases, grid_cases, run_sweep
 from .units import BAR
 
@@ -184,6 +190,35 @@ def _check_head(v):
         raise ValueError(f"head = {v!r} is not a head model name; allowed: {names} (a head "
                          f"file: the study file's [head] file, or a HeadContactModel)")
     return v
+
+
+#: Contact points a case can name (the defaults of every arm,
+#: :func:`ppamsafety.params.contact.arm_contact_points`); ``"all"``: the worst of them.
+CONTACT_POINTS = ("tool point", "elbow", "forearm", "upper arm", "all")
+#: Keys that route a case through the contact-point engine (covering and body in series).
+CONTACT_KEYS = ("contact", "body", "covering", "covering_thickness", "covering_modulus",
+                "covering_hysteresis")
+#: Ranges of the covering keys (SI): thickness [m], modulus [Pa], hysteresis [s/m].
+COVERING_RANGES = {"covering_thickness": (1e-4, 0.2, "m"),
+                   "covering_modulus": (1e3, 1e10, "Pa"),
+                   "covering_hysteresis": (0.0, 100.0, "s/m")}
+
+
+def _check_named(name, v, names):
+    if v is None:
+        return v
+    if not isinstance(v, str) or v not in names:
+        raise ValueError(f"{name} = {v!r}{did_you_mean(v, names) if isinstance(v, str) else ''}"
+                         f" is not allowed; choose from {list(names)}")
+    return v
+
+
+def _check_covering_value(name):
+    lo, hi, unit = COVERING_RANGES[name]
+
+    def check(v):
+        return None if v is None else _number(name, v, lo=lo, unit=unit, hi=hi)
+    return check
 
 
 def _check_effects(v):
@@ -332,9 +367,82 @@ PARAMETERS = {
     "duration": (_check_duration,
                  "experiment length [s] (default: the catalog's), in [1, 1800] s and longer "
                  "than the experiment's events (step: 2 s, switch: 7.5 s)"),
+    "contact": (lambda v: _check_named("contact", v, CONTACT_POINTS),
+                "contact point of the arm hitting the body: None = the tool point with the head "
+                f"model (thesis path); one of {list(CONTACT_POINTS)} (contact-point engine)"),
+    "body": (lambda v: _check_named("body", v, body_contact_names()),
+             "body region contact model (ppamsafety.params.contact.body_contact_names); "
+             "default with a contact key: the head that passes the Hybrid III drop"),
+    "covering": (lambda v: _check_named("covering", v, covering_names()),
+                 "robot covering (ppamsafety.params.contact.covering_names); default with a "
+                 "contact key: bare metal, or 'thesis-implied' when a covering_* key is given"),
+    "covering_thickness": (_check_covering_value("covering_thickness"),
+                           "thickness of the covering's layer [m]"),
+    "covering_modulus": (_check_covering_value("covering_modulus"),
+                         "modulus (stiffness) of the covering's layer [Pa]"),
+    "covering_hysteresis": (_check_covering_value("covering_hysteresis"),
+                            "Hunt-Crossley hysteresis factor of the covering's layer [s/m]"),
     "histories": (lambda v: _check_bool("histories", v),
                   "return the full time histories (closed loop and worst impact)"),
 }
+
+
+#: Units of the case parameters and result columns of a sweep (what a CSV header, an axis or
+#: a table shows beside the name): SI unless the name says otherwise; "-" dimensionless; None
+#: text, flags or lists (no unit).  Dotted arm and effect keys carry the unit of their
+#: declaration (:func:`column_unit`).
+COLUMN_UNITS = {
+    "lam": "s", "kp_bar": "bar/rad", "ki_bar": "bar/(rad s)", "kd_bar": "bar s/rad",
+    "task_kp": "N/m", "task_ki": "N/(m s)", "task_kd": "N s/m", "stiffness": "Nm/rad",
+    "every": "ms", "duration": "s", "noise_seed": "-", "speed": "m/s", "q1_deg": "deg",
+    "q2_deg": "deg", "direction": None, "experiment": None, "controller": None, "head": None,
+    "instants": None, "effects": None, "histories": None,
+    "label": None, "F_max": "N", "HIC36": "-", "HIC15": "-", "t0_F_max": "s", "t0_HIC36": "s",
+    "instant_HIC36": None, "tcp_speed": "m/s", "K1": "Nm/rad", "K2": "Nm/rad",
+    "n_impacts": "-", "track_mean": "m", "track_max": "m", "track_rms": "m", "diverged": None,
+    "status": None, "error": None, "value": None,
+    "contact": None, "body": None, "covering": None, "covering_thickness": "m",
+    "covering_modulus": "Pa", "covering_hysteresis": "s/m", "contact_point": None,
+    "body_region": None, "covering_name": None, "p_max": "Pa", "covering_use": "-",
+}
+
+
+def column_unit(name: str):
+    """The unit of a sweep column or case parameter, as shown to a reader.
+
+    Parameters
+    ----------
+    name : str
+        A case parameter (``lam``, ``arm.pneumatics.mean_pressure``, ``effects.payload_mass``)
+        or a result column (``F_max`` ...).
+
+    Returns
+    -------
+    str or None
+        The SI unit (``"N"``, ``"Nm/rad"``, ``"-"`` for a dimensionless number), or None for a
+        text, flag or list column and an unknown name.
+    """
+    if not isinstance(name, str):
+        return None
+    if name == "governing_margin_pct":
+        return "%"
+    if name.endswith("_margin"):                 # a verdict column: the criterion's own unit
+        try:
+            return METRICS[criterion(name.removesuffix("_margin")).metric] or "-"
+        except ValueError:
+            return None
+    if name.startswith("arm.effects.") or name.startswith("effects."):
+        f = {f.name: f for f in fields(Effects)}.get(name.rsplit(".", 1)[-1])
+        if f is None or isinstance(f.default, bool) or f.name == "hysteresis_initial":
+            return None
+        return f.metadata["unit"] or "-"
+    if name.startswith("arm."):
+        try:
+            k = arm_key(name)
+        except ArmFileError:
+            return None
+        return k.unit if k.unit else ("-" if k.kind in ("float", "int") else None)
+    return COLUMN_UNITS.get(name)
 
 
 def _checked(case: dict) -> tuple:
@@ -366,6 +474,12 @@ def _checked(case: dict) -> tuple:
         given = [k for k in _TASK_GAINS if full[k] is not None]
         if given:
             raise ValueError(f"{given} apply only to controller = 'PSMC task', not {ctrl!r}")
+    if any(full[k] is not None for k in CONTACT_KEYS):
+        contact_covering(full)                       # the covering can be built
+        if full["head"] != DEFAULTS["head"]:
+            raise ValueError(f"head = {full['head']!r} with a contact key "
+                             f"({[k for k in CONTACT_KEYS if full[k] is not None]}): the body "
+                             f"is set by body (a body contact model), not head")
     if full["every"] is not None and full["instants"] != "all":
         raise ValueError(f"every = {full['every']} applies only to instants = 'all', not "
                          f"{full['instants']!r}")
@@ -419,7 +533,8 @@ DEFAULTS = {"experiment": "step", "controller": "PID", "lam": None, "kp_bar": No
             "ki_bar": None, "kd_bar": None, "task_kp": None, "task_ki": None, "task_kd": None,
             "stiffness": None, "head": "thesis-frontal", "effects": None,
             "instants": "heuristic", "every": None, "noise_seed": None, "duration": None,
-            "histories": False}
+            "contact": None, "body": None, "covering": None, "covering_thickness": None,
+            "covering_modulus": None, "covering_hysteresis": None, "histories": False}
 """Default parameters of :func:`safety_case`."""
 
 
@@ -464,6 +579,66 @@ def make_controller(controller: str = "PID", *, lam=None, kp_bar=None, ki_bar=No
     return JointPSMC(**kw)
 
 
+def contact_covering(p: dict):
+    """The covering of a case with contact keys: the named covering (default bare metal, or
+    ``"thesis-implied"`` when a ``covering_*`` key is given) with its first layer's
+    thickness, modulus and hysteresis replaced by the case's ``covering_*`` values.
+
+    Parameters
+    ----------
+    p : dict
+        The case's parameters (``covering`` and ``covering_*``).
+    """
+    changes = {k[len("covering_"):]: p[k] for k in COVERING_RANGES if p.get(k) is not None}
+    name = p.get("covering") or ("thesis-implied" if changes else "bare metal")
+    cov = named_covering(name)
+    if not changes:
+        return cov
+    if cov.bare:
+        raise ValueError(f"{sorted('covering_' + k for k in changes)} change a covering layer; "
+                         f"covering = {name!r} has none (give a covering with a layer, e.g. "
+                         f"'thesis-implied')")
+    lay = cov.layers[0]
+    if lay.law == "power" and "modulus" in changes:
+        raise ValueError(f"covering_modulus: the layer of covering {name!r} is a 'power' law "
+                         f"(no modulus)")
+    label = ", ".join(f"{k} {v:g}" for k, v in changes.items())
+    return cov.replace(name=f"{name} ({label})",
+                       layers=(lay.replace(**changes),) + cov.layers[1:])
+
+
+def _contact_impacts(result, arm, p):
+    """Impacts of a record at a contact point through a covering and a body (contact keys);
+    ``contact = "all"``: at every contact point, the point with the largest F_max kept."""
+    pts = {c.name: c for c in arm_contact_points(arm)}
+    if p["contact"] == "all":
+        runs = [_contact_impacts(result, arm, {**p, "contact": name}) for name in pts]
+        return max(runs, key=lambda r: float(r[0].summary["F_max"].max()))
+    point = pts[p["contact"] or "tool point"]
+    body = body_contact(p["body"]) if p["body"] else body_contact()
+    st = impact_states(result, arm)
+    if p["instants"] == "all":
+        idx = np.arange(0, len(st), p["every"] or 1)
+        idx = idx[st["tcp_speed"].to_numpy()[idx] >= MIN_SPEED]
+        names = None
+    else:
+        h = heuristic_instants(st)
+        names = list(h) if p["instants"] == "heuristic" else [p["instants"]]
+        idx = np.array([h[n] for n in names])
+    sub = st.iloc[idx]
+    K = sub[["K1", "K2"]].to_numpy()
+    if p["stiffness"] is not None:
+        K = np.broadcast_to(np.asarray(p["stiffness"], float), K.shape).copy()
+    res = simulate_contacts(arm, sub[["q1", "q2"]].to_numpy(), sub[["qd1", "qd2"]].to_numpy(),
+                            K, point=point, body=body, covering=contact_covering(p))
+    s = res.summary
+    s.insert(0, "t0", sub["t"].to_numpy())
+    if names is not None:
+        s.insert(0, "instant", names)
+    s["tcp_speed"] = s["point_speed"]
+    return res, body, point
+
+
 def _impacts(result, arm, instants, every, head, stiffness):
     """Impacts of a record; the same calls as the safety study without a stiffness override."""
     if stiffness is None and instants in ("heuristic", "all"):
@@ -494,7 +669,9 @@ def safety_case(experiment: str = "step", controller: str = "PID", *, lam=None, 
                 ki_bar=None, kd_bar=None, task_kp=None, task_ki=None, task_kd=None,
                 stiffness=None, head="thesis-frontal", effects=None,
                 instants: str = "heuristic", every: int | None = None, noise_seed=None,
-                duration=None, histories: bool = False, arm=None, **dotted) -> dict:
+                duration=None, contact=None, body=None, covering=None,
+                covering_thickness=None, covering_modulus=None, covering_hysteresis=None,
+                histories: bool = False, arm=None, **dotted) -> dict:
     """One experiment with one controller, crashed into a head: a compact result row.
 
     Parameters
@@ -531,6 +708,22 @@ def safety_case(experiment: str = "step", controller: str = "PID", *, lam=None, 
         sensor noise of Table 3.2 with this seed.
     duration : float, optional
         Experiment length [s] (default: the catalog's, e.g. 12 s for the step).
+    contact : str, optional
+        A contact point of the arm (:data:`CONTACT_POINTS`; ``"all"``: every one, the
+        results of the point with the largest F_max).  With any of ``contact``,
+        ``body``, ``covering`` and ``covering_*`` the impacts go through the contact-point
+        engine (:func:`ppamsafety.impact.anywhere.simulate_contacts`): the point (default the
+        tool point) hits the body (default the head that passes the Hybrid III drop) through
+        the covering in series; ``head`` is then not used.
+    body : str, optional
+        A body contact model (:func:`ppamsafety.params.contact.body_contact_names`).
+    covering : str, optional
+        A named covering (:func:`ppamsafety.params.contact.covering_names`; default bare
+        metal, or ``"thesis-implied"`` when a ``covering_*`` value is given).
+    covering_thickness, covering_modulus, covering_hysteresis : float, optional
+        Replace the thickness [m], modulus [Pa] and hysteresis factor [s/m] of the
+        covering's (first) layer (:func:`contact_covering`): the covering as a design
+        parameter, in sweeps and envelopes.
     histories : bool
         Also return the full time histories under the key ``"time_histories"`` (a result
         may not take a parameter's name, :func:`ppamsafety.sweep.run_sweep`):
@@ -554,13 +747,19 @@ def safety_case(experiment: str = "step", controller: str = "PID", *, lam=None, 
         at impact), ``K1``, ``K2`` [Nm/rad] (stiffness of the worst-HIC
         impact), ``n_impacts``; ``track_mean``, ``track_max``, ``track_rms``
         [m] (task-space tracking error; circles after the 5 s warm-up, NaN if
-        the run diverged) and ``diverged``.
+        the run diverged) and ``diverged``; with contact keys also ``contact_point``,
+        ``body_region``, ``covering_name``, ``p_max`` [Pa] (peak mean contact pressure) and
+        ``covering_use`` (largest compression of the covering over its limit; 1: bottomed
+        out), and ``tcp_speed`` is the contact point's speed.
     """
     p, arm = _checked(dict(experiment=experiment, controller=controller, lam=lam,
                            kp_bar=kp_bar, ki_bar=ki_bar, kd_bar=kd_bar, task_kp=task_kp,
                            task_ki=task_ki, task_kd=task_kd, stiffness=stiffness, head=head,
                            effects=effects, instants=instants, every=every,
-                           noise_seed=noise_seed, duration=duration, histories=histories,
+                           noise_seed=noise_seed, duration=duration, contact=contact,
+                           body=body, covering=covering, covering_thickness=covering_thickness,
+                           covering_modulus=covering_modulus,
+                           covering_hysteresis=covering_hysteresis, histories=histories,
                            arm=arm, **dotted))
     hm = p["head"] if isinstance(p["head"], HeadContactModel) else head_model(p["head"])
     ctrl = make_controller(p["controller"], lam=p["lam"], kp_bar=p["kp_bar"], ki_bar=p["ki_bar"],
@@ -571,7 +770,11 @@ def safety_case(experiment: str = "step", controller: str = "PID", *, lam=None, 
                else SensorConfig.for_arm(arm, noise=True, seed=p["noise_seed"]))
     res = run_thesis_experiment(arm, p["experiment"], [variant], sensors=sensors,
                                 duration=p["duration"])[0]
-    ev = _impacts(res, arm, p["instants"], p["every"] or 1, hm, p["stiffness"])
+    contact = any(p[k] is not None for k in CONTACT_KEYS)
+    if contact:
+        ev, body, point = _contact_impacts(res, arm, p)
+    else:
+        ev = _impacts(res, arm, p["instants"], p["every"] or 1, hm, p["stiffness"])
     s = ev.summary
     if len(s) == 0:
         raise ValueError(f"no impact instant: the TCP never moves faster than {MIN_SPEED} m/s")
@@ -585,6 +788,15 @@ def safety_case(experiment: str = "step", controller: str = "PID", *, lam=None, 
            "tcp_speed": float(s["tcp_speed"].max()), "K1": float(w.K1), "K2": float(w.K2),
            "n_impacts": int(len(s)), "track_mean": tr["mean"], "track_max": tr["max"],
            "track_rms": tr["rms"], "diverged": bool(res.diverged)}
+    if contact:
+        out.update({"contact_point": point.name, "body_region": body.name,
+                    "covering_name": ev.point.covering.name,
+                    "p_max": float(s["p_max"].max()),
+                    "covering_use": float(s["covering_use"].max()) if "covering_use" in s
+                    else 0.0})
+    if histories and contact:
+        raise ValueError("histories with a contact key: use ppamsafety.impact.anywhere."
+                         "simulate_contacts(history=True) for the impact's history")
     if histories:
         worst = int(s["HIC36"].idxmax())
         ev_w = _impacts_one(res, arm, s.iloc[worst], hm)
@@ -647,8 +859,7 @@ def impact_case(speed: float, *, q1_deg: float = IMPACT_POSE_DEG[0],
     tcp = geo.jacobian(q, arm) @ d
     qd = d * (v / float(np.hypot(*tcp)))
     if st is None:
-        p = np.clip(pn.static_pressures(q, arm), 0.0, arm.pneumatics.p_max)
-        K = pn.joint_stiffness(q, p, arm)
+        K = np.array(rest_stiffness(arm, q).stiffness)
     else:
         K = np.broadcast_to(np.asarray(st, float), (2,)).copy()
     s = simulate_impacts(arm, q, qd, K, head=hm).summary.iloc[0]
@@ -752,6 +963,61 @@ def case_function(arm=None, head=None, *, kind: str = "safety"):
     return functools.partial(func, **kw) if kw else func
 
 
+def add_verdicts(df: pd.DataFrame, criteria=None, *, region=None, head=None) -> pd.DataFrame:
+    """A sweep's result table with the verdict of every case against the criteria.
+
+    The same verdicts as ``ppamsafety impact``, the envelopes and the report
+    (:func:`ppamsafety.impact.verdicts.evaluate`).
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        Result rows with ``F_max``/``HIC36``/``HIC15`` (failed rows get no verdict).
+    criteria : sequence of Criterion, optional
+        Default :func:`~ppamsafety.impact.verdicts.criteria_for` the region.
+    region : optional
+        The body region of the criteria (default ``"skull/forehead"``).
+    head : str or HeadContactModel, optional
+        The head model of cases without a ``head`` column (default ``"thesis-frontal"``).
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``df`` with ``head_model``, ``verdict`` (``"pass"``/``"fail"``), ``governing`` (the
+        criterion with the smallest relative margin), ``governing_margin_pct`` and per
+        criterion ``<name>_margin`` (limit - value, in the limit's unit: N or HIC) and
+        ``<name>_pass``.
+    """
+    crit = criteria_for(region) if criteria is None else tuple(criteria)
+    out = df.copy()
+    default = head.name if isinstance(head, HeadContactModel) else (head or "thesis-frontal")
+    names = (out["head"].map(lambda h: h.name if isinstance(h, HeadContactModel) else str(h))
+             if "head" in out.columns else pd.Series(default, index=out.index))
+    cols = {"head_model": [], "verdict": [], "governing": [], "governing_margin_pct": []}
+    for c in crit:
+        cols[f"{c.name}_margin"], cols[f"{c.name}_pass"] = [], []
+    for i, r in out.iterrows():
+        ok = r.get("status", "ok") == "ok" and all(
+            m in r and pd.notna(r[m]) for m in {c.metric for c in crit})
+        t = evaluate({c.metric: r[c.metric] for c in crit}, crit, head=names[i]) if ok else None
+        cols["head_model"].append(names[i])
+        if t is None or not len(t):
+            for k in cols:
+                if k != "head_model":
+                    cols[k].append(None)
+            continue
+        g = t.loc[t["margin_pct"].idxmin()]
+        cols["verdict"].append("pass" if t["passed"].all() else "fail")
+        cols["governing"].append(g.criterion)
+        cols["governing_margin_pct"].append(float(g.margin_pct))
+        for row in t.itertuples():
+            cols[f"{row.criterion}_margin"].append(float(row.margin))
+            cols[f"{row.criterion}_pass"].append(bool(row.passed))
+    for k, v in cols.items():
+        out[k] = v
+    return out
+
+
 def safety_sweep(cases=None, *, grid=None, name: str = "safety", cache_dir=None,
                  processes: int | None = None, progress: bool = True, on_error: str = "record",
                  backend: str = "local", scheduler=None, arm=None, head=None) -> pd.DataFrame:
@@ -787,7 +1053,8 @@ def safety_sweep(cases=None, *, grid=None, name: str = "safety", cache_dir=None,
     Returns
     -------
     pandas.DataFrame
-        Case parameters, ``status``, ``error`` and the :func:`safety_case` results.
+        Case parameters, ``status``, ``error``, the :func:`safety_case` results and their
+        verdicts against the criteria of the skull/forehead (:func:`add_verdicts`).
     """
     all_cases = _check_cases([{}] if cases is None else cases)
     if grid is not None:
@@ -803,11 +1070,14 @@ def safety_sweep(cases=None, *, grid=None, name: str = "safety", cache_dir=None,
             check_case(**c, arm=arm)
         except (TypeError, ValueError) as exc:
             raise type(exc)(f"case {i} {c!r}: {exc}") from None
-    return run_sweep(func, all_cases, name=name, cache_dir=cache_dir, processes=processes,
-                     progress=progress, on_error=on_error, backend=backend, scheduler=scheduler)
+    df = run_sweep(func, all_cases, name=name, cache_dir=cache_dir, processes=processes,
+                   progress=progress, on_error=on_error, backend=backend, scheduler=scheduler)
+    return add_verdicts(df, head=head)
 
 
 __all__ = ["EXPERIMENTS", "CONTROLLERS", "INSTANTS", "MIN_SPEED", "PARAMETERS", "DEFAULTS",
            "DOTTED", "RESULT_COLUMNS", "check_case", "make_controller", "safety_case",
+           "CONTACT_KEYS", "CONTACT_POINTS", "contact_covering",
            "safety_sweep", "case_arm", "case_function", "is_dotted", "impact_case",
-           "check_impact_case", "SPEED_MAX", "IMPACT_POSE_DEG"]
+           "check_impact_case", "SPEED_MAX", "IMPACT_POSE_DEG", "add_verdicts", "COLUMN_UNITS",
+           "column_unit"]

@@ -7,7 +7,8 @@ import pytest
 from ppamsafety.cli import build_parser, main
 from ppamsafety.data import load_measured, read_metadata
 from ppamsafety.impact.head import head_model
-from ppamsafety.params import load_arm, thesis_arm
+from ppamsafety.design import load_arm
+from ppamsafety.params import thesis_arm
 from ppamsafety.params.arm_file import arm_fingerprint
 
 ROOT = Path(__file__).parent.parent
@@ -68,17 +69,22 @@ def test_info_and_impact_use_the_given_arm_and_head(tmp_path, capsys):
     assert main(["impact", "--q", "50", "-80", "--qd", "1", "0", "--head", "nobody"]) == 2
 
 
-def test_a_synthesized_record_names_its_arm_and_diagnose_says_when_it_differs(tmp_path, capsys):
+def test_a_synthesized_record_names_its_arm_and_diagnose_refuses_another(tmp_path, capsys):
     rec = tmp_path / "rec.csv"
     assert main(["synthesize", "--arm", str(EXAMPLE), "--duration", "2", "--seed", "3",
                  "--out", str(rec)]) == 0
     meta = read_metadata(rec)
-    assert meta["arm"] == {"name": "40-fibre muscles, heavier forearm",
-                           "sha256": arm_fingerprint(load_arm(EXAMPLE))}
+    fp = arm_fingerprint(load_arm(EXAMPLE))
+    assert meta["arm"] == {"name": "40-fibre muscles, heavier forearm", "sha256": fp}
     assert load_measured(rec).meta["arm"]["sha256"] == meta["arm"]["sha256"]
+    # the forgotten --arm: refused before computing, the record's arm named
     assert main(["diagnose", str(rec), "--out", str(tmp_path / "dg"), "--bootstrap", "0",
-                 "--head", "thesis-frontal"]) == 0
+                 "--head", "thesis-frontal"]) == 2
     err = capsys.readouterr().err
     assert "--head has no effect on diagnose" in err
-    assert "the record came from arm '40-fibre muscles, heavier forearm'" in err
-    assert "diagnosed against arm 'thesis arm'" in err
+    line = err.strip().splitlines()[-1]
+    assert line.startswith("ppamsafety: error: ")
+    assert "the record came from arm '40-fibre muscles, heavier forearm'" in line
+    assert fp[:16] in line and "--arm FILE" in line and "diagnosed against arm 'thesis arm'" in line
+    assert not (tmp_path / "dg").exists()
+    assert main(["diagnose", str(rec), "--out", str(tmp_path / "dg"), "--arm", str(EXAMPLE)]) == 0

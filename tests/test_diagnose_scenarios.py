@@ -12,9 +12,14 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from ppamsafety.diagnose.scenarios import (HIGH_PRECISION, MEASURE_SEEDS, TUNING_SEEDS,
-                                           calibration_table, failures, load_results,
-                                           random_scenario, run_battery, save_results, scores)
+from ppamsafety.diagnose.scenarios import (DECLARED_MEASURE_COUNT, DECLARED_MEASURE_SEEDS,
+                                           DECLARED_RESULTS_FILE, DECLARED_TUNING_SEEDS,
+                                           HIGH_PRECISION, MEASURE_SEEDS, TUNING_SEEDS,
+                                           calibration_table, declared_arm, failures,
+                                           load_results, random_scenario, replay_limits,
+                                           replay_null, run_battery, save_results, scores,
+                                           REPLAY_TUNING_FILE)
+from ppamsafety.diagnose.arm.pipeline import REPLAY_RHO, REPLAY_RHO_STATIC
 from ppamsafety.sections import diagnose_trust
 
 #: Scenarios of the shipped battery (issue 19: ">= 1000").
@@ -24,6 +29,11 @@ MIN_SCENARIOS = 1000
 @pytest.fixture(scope="module")
 def shipped():
     return load_results()
+
+
+@pytest.fixture(scope="module")
+def shipped_declared():
+    return load_results(DECLARED_RESULTS_FILE)
 
 
 def _claims(row):
@@ -119,6 +129,74 @@ def test_results_file_round_trip_and_refuses_to_overwrite(tmp_path, shipped):
         load_results(tmp_path / "none.jsonl.xz")
 
 
+def test_declared_battery_is_a_measurement_on_its_own_unseen_seeds(shipped_declared):
+    df = shipped_declared
+    assert len(df) >= DECLARED_MEASURE_COUNT
+    seeds = set(df.seed.astype(int))
+    assert seeds <= set(DECLARED_MEASURE_SEEDS) and len(seeds) == len(df)
+    for other in (DECLARED_TUNING_SEEDS, TUNING_SEEDS, MEASURE_SEEDS):
+        assert not seeds & set(other)
+    assert {"open-loop", "closed-loop", "static-sawtooth"} <= set(df.kind)
+    fail = failures(df)
+    assert fail["diagnose"] == 0 and fail["battery"] == 0, fail
+    ok = df[df.error == ""]
+    # every arm declares effects, of every kind; some scenarios hide a change of one
+    assert (ok.declared != "").all()
+    kinds = {k.split("=")[0] for d in ok.declared for k in d.split(";")}
+    assert {"payload_mass", "friction_coulomb", "valve_offset", "valve_gain",
+            "valve_time_constant", "polytropic_n", "hysteresis_delta", "valve_dead_time",
+            "joint_torque_bias"} <= kinds
+    # "high" keeps its promise on arms with declared effects (measured, not stored)
+    cal = calibration_table(df).set_index("claimed")
+    assert cal.loc["high", "names"] > 100 and cal.loc["high", "precision"] >= HIGH_PRECISION
+    # with nothing hidden the declared effects are the model: (almost) nothing is named,
+    # never with high confidence (the battery's target: at most 2 % of the records)
+    none = ok[(ok.hidden.map(len) == 0) & (ok.perturbation == "")]
+    assert len(none) > 50 and sum(len(n) > 0 for n in none.named) <= 0.02 * len(none)
+    assert sum(len(h) for h in none.high) == 0
+
+
+def test_replay_thresholds_come_from_the_tuning_rows():
+    """The replay gate's thresholds are the rule applied to shipped tuning rows only."""
+    rows = load_results(REPLAY_TUNING_FILE)
+    seeds = set(rows.seed.astype(int))
+    assert seeds <= set(TUNING_SEEDS) | set(DECLARED_TUNING_SEEDS)
+    assert seeds & set(TUNING_SEEDS) and seeds & set(DECLARED_TUNING_SEEDS)
+    assert replay_limits(rows) == (REPLAY_RHO, REPLAY_RHO_STATIC)
+    null = replay_null(rows).set_index("records")
+    # enough right models of both record classes, and every one of them below the limit
+    assert null.loc["dynamic", "models"] > 200 and null.loc["static", "models"] > 50
+    assert null.loc["dynamic", "max"] < REPLAY_RHO and null.loc["static", "max"] < \
+        REPLAY_RHO_STATIC
+
+
+def test_declared_scenarios_are_seeded_and_draw_the_arm():
+    a, b = random_scenario(20001, declared=True), random_scenario(20001, declared=True)
+    assert a == b and a.declared
+    arm = declared_arm(a)
+    for k, v in a.declared.items():
+        assert getattr(arm.effects, k) == pytest.approx(v)
+    # the thesis battery draws no declared effects, and its draws did not change
+    assert random_scenario(3000).declared == {}
+    changes = [random_scenario(s, declared=True) for s in range(20000, 20060)]
+    # sometimes a change of a declared effect is hidden on top
+    assert any(set(sc.hidden) & {"hysteresis", "valve_dead_time", "payload",
+                                 "joint_friction", "valve_lag", "valve_offset_gain",
+                                 "polytropic_exponent"} for sc in changes)
+
+
+def test_first_declared_measurement_seeds_reproduce_the_shipped_rows(shipped_declared):
+    seeds = list(DECLARED_MEASURE_SEEDS)[:2]
+    live = run_battery(seeds, processes=1, declared=True)
+    by_seed = {int(r.seed): r for _, r in shipped_declared.iterrows()}
+    for _, r in live.iterrows():
+        s = by_seed[int(r.seed)]
+        assert r.error == s.error, (r.seed, r.error)
+        if not r.error:
+            assert _claims(r) == _claims(s), r.seed
+            assert r.unexplained == s.unexplained, r.seed
+
+
 def test_report_section_quick(tmp_path):
     st = diagnose_trust.compute(quick=True, live_runs=1)
     m = st.metrics
@@ -127,13 +205,16 @@ def test_report_section_quick(tmp_path):
     cal = st.calibration
     high = cal[(cal.battery == "all") & (cal.claimed == "high")].iloc[0]
     arm = cal[(cal.battery == "arm") & (cal.claimed == "high")].iloc[0]
+    declared = cal[(cal.battery == "declared") & (cal.claimed == "high")].iloc[0]
     bench = cal[(cal.battery == "bench") & (cal.claimed == "high")].iloc[0]
-    assert m["high_names"] == high["names"] == arm["names"] + bench["names"]
-    assert m["high_right"] == high["right"] == arm["right"] + bench["right"]
+    assert m["high_names"] == high["names"] == arm["names"] + declared["names"] + bench["names"]
+    assert m["high_right"] == high["right"] == arm["right"] + declared["right"] + bench["right"]
     assert m["bench_scenarios"] >= 300
+    assert m["declared_scenarios"] >= DECLARED_MEASURE_COUNT
+    assert m["declared_live_reproduced"] == "1 of 1"
     # every measure is given over all records and per battery
-    assert {"arm", "bench"} <= set(st.scores.columns)
-    assert set(st.outcomes.battery) == {"arm", "bench"}
+    assert {"arm", "declared", "bench"} <= set(st.scores.columns)
+    assert set(st.outcomes.battery) == {"arm", "declared", "bench"}
     # detection limits of the three standard records, positive and finite
     assert set(st.limits.record.str.split(",").str[0]) == {"open loop", "closed loop",
                                                            "static sawtooth of §3.5.1.6"}
@@ -143,9 +224,22 @@ def test_report_section_quick(tmp_path):
     names = [a for a, _ in sec.artifacts]
     assert "diagnose_trust_calibration.png" in names and "diagnose_trust_scores.csv" in names
     assert f"{m['stored_scenarios']} arm scenarios" in sec.markdown
+    assert f"{m['declared_scenarios']} scenarios of arms that declare effects" in sec.markdown
 
 
 @pytest.mark.slow
+def test_full_declared_battery_reproduces_the_shipped_file(shipped_declared):
+    """About 15-30 min on 2 cores: the battery of arms with declared effects, re-run."""
+    seeds = sorted(int(s) for s in shipped_declared.seed)
+    live = run_battery(seeds, processes=2, declared=True)
+    by_seed = {int(r.seed): r for _, r in shipped_declared.iterrows()}
+    differ = [int(r.seed) for _, r in live.iterrows()
+              if not r.error and _claims(r) != _claims(by_seed[int(r.seed)])]
+    assert not differ, differ[:20]
+
+
+@pytest.mark.slow
+@pytest.mark.battery
 def test_full_measurement_battery_reproduces_the_shipped_file(shipped):
     """About 25-45 min on 2 cores: the whole battery, re-run, claims equal row by row."""
     seeds = sorted(int(s) for s in shipped.seed)

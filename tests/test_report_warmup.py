@@ -145,7 +145,7 @@ def _scheduled(monkeypatch, tasks, studies=("s1", "s2"), processes=2):
         run.__name__ = name
         return run
 
-    def fake_study(name, stage, quick):
+    def fake_study(name, stage, quick, arm=None, head=None, processes=None):
         with lock:
             log.append(("start", name))
         return name, 0.0, 0.0

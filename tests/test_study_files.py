@@ -113,10 +113,10 @@ def test_cli_runs_table_6_1_reduced_and_reproduces_the_safety_study(tmp_path, ca
     arm = thesis_arm()
     r = run_thesis_experiment(arm, "step")[0]                  # all ten variants in one batch
     ev = evaluate_experiment(r, arm, head=head_model(), history=True).summary
-    assert df.F_max[0] == ev.F_max.max() and df.HIC36[0] == ev.HIC36.max()   # identical
+    assert df["F_max [N]"][0] == ev.F_max.max() and df["HIC36 [-]"][0] == ev.HIC36.max()
     ref = pd.read_csv(ROOT / "reports" / "safety_table_6_1.csv")
     row = ref[(ref.experiment == "step") & (ref.label == "PID")].iloc[0]
-    assert df.F_max[0] == row.F_max and df.HIC36[0] == row.HIC36
+    assert df["F_max [N]"][0] == row.F_max and df["HIC36 [-]"][0] == row.HIC36
     marker = json.loads((out / MARKER).read_text())
     assert marker["kind"] == "sweep" and marker["dirs"] == ["cache"]
     assert (out / "study.toml").read_text() == (STUDIES / "table_6_1.toml").read_text()
@@ -128,7 +128,8 @@ def test_cli_runs_table_6_1_reduced_and_reproduces_the_safety_study(tmp_path, ca
     assert "--resume" in capsys.readouterr().err
     assert main(argv(2, "--resume")) == 0
     df2 = pd.read_csv(out / "table_6_1.csv")
-    assert list(df2.experiment) == ["step", "switch"] and df2.F_max[0] == df.F_max[0]
+    assert list(df2.experiment) == ["step", "switch"]
+    assert df2["F_max [N]"][0] == df["F_max [N]"][0]
     now = {f.name: f.stat().st_mtime_ns for f in (out / "cache").glob("*.pkl")}
     assert len(now) == 2 and all(now[k] == v for k, v in cached.items())   # not recomputed
 

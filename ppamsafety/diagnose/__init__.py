@@ -13,8 +13,25 @@ is missing, its fitted parameters, and the gap shrinking.
 Documentation: ``docs/diagnose.md``.
 """
 
+import inspect
+import sys
+import types
+
 from .core.result import Diagnosis  # noqa: F401
 from .diagnosis import diagnose
 from .synthesize import synthesize
 
 __all__ = ["Diagnosis", "diagnose", "synthesize"]
+
+
+class _FrontDoorPackage(types.ModuleType):
+    """This package, callable as its front door: ``ppamsafety.diagnose(data, ...)`` is
+    :func:`diagnose` whether the name resolves to the package (once it is imported, the import
+    system binds it in ``ppamsafety``) or to the function."""
+
+    def __call__(self, *args, **kwargs):
+        return diagnose(*args, **kwargs)
+
+
+sys.modules[__name__].__class__ = _FrontDoorPackage
+__signature__ = inspect.signature(diagnose)

@@ -20,9 +20,10 @@ from dataclasses import replace
 from threadpoolctl import threadpool_limits
 
 from ..data.campaign import Campaign
-from .._validation import check_instance, check_int, check_seed, did_you_mean
+from .._validation import check_bool, check_instance, check_int, check_seed, did_you_mean
 from ..data.measured import MeasuredData
 from ..params import thesis_arm
+from ..params.arm import ArmParameters
 from ..params.arm_file import arm_fingerprint
 from .arm.pipeline import diagnose_arm
 from .bench.campaign import diagnose_campaign
@@ -33,7 +34,7 @@ from .core.result import HIGH_CONFIDENCE, JSON_NAME, SCHEMA_VERSION, Diagnosis
 def diagnose(data, *, arm=None, candidates=None, block_seconds: float = 0.05,
              alpha: float = 0.01, rho_max: float = 1.5, experiment: str | None = None,
              seed: int = 0, bootstrap: int | None = None,
-             stability: int | None = None) -> Diagnosis:
+             stability: int | None = None, allow_other_arm: bool = False) -> Diagnosis:
     """Diagnose a measured record against the model: which effect is missing, and where.
 
     Parameters
@@ -47,7 +48,10 @@ def diagnose(data, *, arm=None, candidates=None, block_seconds: float = 0.05,
         An actuator record (``data.kind == "actuator"``, a test bench) is
         diagnosed against its nominal force law.
     arm : ArmParameters, optional, keyword-only
-        The current model (default the thesis arm; arm records only).
+        The model under test, its declared effects included (default the thesis arm; arm
+        records only).  A record that names the arm it came from (metadata ``[arm]``, as
+        :func:`~ppamsafety.diagnose.synthesize` writes it) must be diagnosed against that
+        arm, or with ``allow_other_arm``.
     candidates : sequence of str, optional, keyword-only
         Library subset (default all registered; for an actuator record, from the
         tester vocabulary).
@@ -73,13 +77,22 @@ def diagnose(data, *, arm=None, candidates=None, block_seconds: float = 0.05,
         effect reaches "high").  Each named effect's evidence carries
         ``stability_frequency``; ``diagnosis.json`` key ``stability`` holds the bound on
         the expected number of false selections.
+    allow_other_arm : bool, keyword-only
+        Diagnose a record against another arm than the one it names, on purpose: every
+        difference between the two arms is then reported as a missing effect, and the
+        mismatch stands first in ``Diagnosis.warnings`` (the top of ``diagnosis.md``).
 
     Returns
     -------
     Diagnosis
-        When an arm record names the arm it came from (metadata ``[arm]``, written by
-        :func:`~ppamsafety.diagnose.synthesize`), ``settings["arm"]`` holds both
+        When an arm record names the arm it came from, ``settings["arm"]`` holds both
         fingerprints and a note starting ``"arm: "`` says whether they agree.
+
+    Raises
+    ------
+    ValueError
+        When the record names another arm (name and fingerprint, :func:`other_arm`) than
+        ``arm`` and ``allow_other_arm`` is not given.
 
     Notes
     -----
@@ -91,12 +104,48 @@ def diagnose(data, *, arm=None, candidates=None, block_seconds: float = 0.05,
         # its threads than computing (measured: 4.3 s instead of 8.4 s for a 23 s record)
         return _diagnose(data, arm=arm, candidates=candidates, block_seconds=block_seconds,
                          alpha=alpha, rho_max=rho_max, experiment=experiment, seed=seed,
-                         bootstrap=bootstrap, stability=stability)
+                         bootstrap=bootstrap, stability=stability,
+                         allow_other_arm=allow_other_arm)
+
+
+def _label(name, sha256) -> str:
+    return f"'{name or 'unnamed arm'}' (sha256 {sha256[:16]})"
+
+
+def other_arm(data, arm) -> str | None:
+    """The mismatch between the arm a record names and the arm it is diagnosed against.
+
+    Parameters
+    ----------
+    data : MeasuredData or Campaign
+        The record; an arm record may name the arm it came from (metadata ``[arm]``: its
+        ``name`` and ``sha256``, :func:`ppamsafety.params.arm_file.arm_fingerprint`).
+    arm : ArmParameters or None
+        The model under test (None: the thesis arm).
+
+    Returns
+    -------
+    str or None
+        None when the record names no arm or the same one; else a sentence naming both
+        arms (name and fingerprint).
+    """
+    made = data.meta.get("arm") if isinstance(data, MeasuredData) else None
+    if made is None:
+        return None
+    used = thesis_arm() if arm is None else arm
+    fp = arm_fingerprint(used)
+    if made["sha256"] == fp:
+        return None
+    return (f"the record came from arm {_label(made.get('name'), made['sha256'])} but is "
+            f"diagnosed against arm {_label(used.name, fp)}")
 
 
 def _diagnose(data, *, arm, candidates, block_seconds, alpha, rho_max, experiment, seed,
-              bootstrap, stability):
+              bootstrap, stability, allow_other_arm):
     check_instance("data", data, (MeasuredData, Campaign))
+    allow_other_arm = check_bool("allow_other_arm", allow_other_arm)
+    if arm is not None:
+        check_instance("arm", arm, ArmParameters)
     seed = check_seed("seed", seed)
     if bootstrap is not None:
         check_int("bootstrap", bootstrap, 0, 10000)
@@ -114,6 +163,11 @@ def _diagnose(data, *, arm, candidates, block_seconds, alpha, rho_max, experimen
         if arm is not None:
             raise ValueError("arm applies to arm records; an actuator record (a test bench) is "
                              "diagnosed against its own nominal force law (leave arm out)")
+    mismatch = other_arm(data, arm)
+    if mismatch is not None and not allow_other_arm:
+        raise ValueError(f"{mismatch}: diagnose the record against the arm it came from "
+                         f"(arm=load_arm(FILE), the arm file whose fingerprint it names), or "
+                         f"give allow_other_arm=True to compare the two arms on purpose")
     if isinstance(data, Campaign) or data.actuator_type == "cylinder":
         return diagnose_campaign(data, candidates=candidates, alpha=alpha, rho_max=rho_max)
     if data.kind == "actuator":
@@ -127,15 +181,17 @@ def _diagnose(data, *, arm, candidates, block_seconds, alpha, rho_max, experimen
         return dg
     used = thesis_arm() if arm is None else arm
     fp = arm_fingerprint(used)
-    label = f"'{used.name or 'unnamed arm'}' (sha256 {fp[:12]})"
-    rec = f"'{made.get('name') or 'unnamed arm'}' (sha256 {made['sha256'][:12]})"
-    note = (f"arm: the record came from the arm it is diagnosed against, {label}"
-            if made["sha256"] == fp else
-            f"arm: the record came from arm {rec} but is diagnosed against arm {label}: a "
-            f"difference between the two arms is reported as a missing effect")
-    return replace(dg, notes=(*dg.notes, note),
+    warnings = dg.warnings
+    if mismatch is None:
+        note = f"arm: the record came from the arm it is diagnosed against, {_label(used.name, fp)}"
+    else:
+        note = (f"arm: {mismatch} (allowed on purpose): every difference between the two arms "
+                f"is reported as a missing effect")
+        warnings = (note[5:],) + tuple(warnings)
+    return replace(dg, notes=(*dg.notes, note), warnings=warnings,
                    settings={**dg.settings, "arm": {"record": dict(made), "model": {
-                       "name": used.name, "sha256": fp}}})
+                       "name": used.name, "sha256": fp}, "same": mismatch is None}})
 
 
-__all__ = ["Diagnosis", "diagnose", "SCHEMA_VERSION", "HIGH_CONFIDENCE", "JSON_NAME"]
+__all__ = ["Diagnosis", "diagnose", "other_arm", "SCHEMA_VERSION", "HIGH_CONFIDENCE",
+           "JSON_NAME"]

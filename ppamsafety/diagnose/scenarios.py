@@ -12,6 +12,15 @@ diagnoses it blind (default options) and scores every claim against the truth;
 :func:`run_battery` runs many, in parallel processes; :func:`scores` and
 :func:`calibration_table` summarise them.
 
+A second battery (``random_scenario(seed, declared=True)``) draws arms that declare
+effects of their own in their ``[effects]`` (:data:`DECLARED_DRAWS`: a payload,
+friction, valve offsets/gains, valve time constants, a polytropic exponent, muscle
+hysteresis, a valve dead time, a joint torque bias; 1-4 kinds), and with probability
+:data:`P_DECLARED_CHANGE` hides a change of one of them; the record is made with that arm
+and diagnosed against it, so a declared effect is the nominal model and only a change of
+it is a right name.  Its seeds (:data:`DECLARED_TUNING_SEEDS`,
+:data:`DECLARED_MEASURE_SEEDS`) are its own.
+
 Scoring (what the targets of ``docs/diagnose.md`` count)
 --------------------------------------------------------
 * A named effect (any confidence) is *right* when the scenario hid it.  A
@@ -43,7 +52,7 @@ import os
 import time
 import traceback
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from functools import partial
 from pathlib import Path
 
@@ -61,6 +70,7 @@ from .bench import scenarios as bench_scenarios
 from .core.battery import coverage_entry, run_seeds
 from .arm.residuals import arm_record, block_system, model_vector
 from .arm.selection import _directions, make_problem
+from .arm.synthesize import plant_vector
 from .arm.static import static_record, static_system
 from .diagnosis import diagnose
 from .synthesize import synthesize
@@ -75,6 +85,13 @@ from .synthesize import synthesize
 TUNING_SEEDS = range(0, 3000)
 #: Seeds of the measurement (the report and ``docs/diagnose.md``).
 MEASURE_SEEDS = range(3000, 5000)
+#: Seeds of the battery of arms that declare effects of their own
+#: (``random_scenario(seed, declared=True)``): tuning (the replay's threshold and any rule
+#: set for declared effects) and measurement, never overlapping each other or the above.
+DECLARED_TUNING_SEEDS = range(10000, 11000)
+DECLARED_MEASURE_SEEDS = range(20000, 22000)
+#: Scenarios of the shipped measurement of that battery (its first seeds).
+DECLARED_MEASURE_COUNT = 1600
 #: Required precision of "high" (issue 19).
 HIGH_PRECISION = 0.97
 #: Residual/noise ratio that the irreducible part of an out-of-library perturbation must
@@ -110,15 +127,27 @@ def _some(rng, n):
 # ----------------------------------------------------------------------------- library draws
 # Each draw returns (synthesize effects, true parameter values of the candidate).
 
-def _payload(rng, arm):
-    m = _logu(rng, 0.01, 2.0)
+def _changed(rng, declared, lo, hi, small, large):
+    """A hidden change of a declared value: ``declared`` +- a magnitude log-uniform in
+    [small, large], kept inside [lo, hi] (the sign that fits when one does not)."""
+    step = _logu(rng, small, large)
+    up = _sgn(rng) > 0
+    if declared + step > hi:
+        up = False
+    elif declared - step < lo:
+        up = True
+    return float(min(max(declared + step if up else declared - step, lo), hi))
+
+
+def _payload(rng, arm, dt=1e-3):
+    m0 = arm.effects.payload_mass
+    m = _logu(rng, 0.01, 2.0) if m0 == 0.0 else _changed(rng, m0, 0.0, 2.5, 0.01, 1.0)
     return {"payload_mass": m}, {"M": m}
 
 
-def _friction(rng, arm):
-    base = arm.plant_base
-    c = np.array(base.coulomb, float)
-    b = np.array(base.viscous, float)
+def _friction(rng, arm, dt=1e-3):
+    c = plant_vector(arm, "friction_coulomb")
+    b = plant_vector(arm, "friction_viscous")
     on = _some(rng, 2)
     c[on] = [_logu(rng, 0.02, 1.5) for _ in range(int(on.sum()))]
     fx = {"friction_coulomb": tuple(c)}
@@ -129,10 +158,9 @@ def _friction(rng, arm):
     return fx, {"c1": c[0], "c2": c[1], "b1": b[0], "b2": b[1]}
 
 
-def _valve_offset_gain(rng, arm):
-    vs = arm.valves.valves
-    v1 = np.array([v.v1 for v in vs])
-    v2 = np.array([v.v2 for v in vs])
+def _valve_offset_gain(rng, arm, dt=1e-3):
+    v1 = plant_vector(arm, "valve_offset")
+    v2 = plant_vector(arm, "valve_gain")
     on = _some(rng, 4)
     v1[on] += [_sgn(rng) * _logu(rng, 200.0, 3.0e4) for _ in range(int(on.sum()))]
     fx = {"valve_offset": tuple(v1)}
@@ -144,8 +172,8 @@ def _valve_offset_gain(rng, arm):
                 **{f"v2_{i + 1}": v2[i] for i in range(4)}}
 
 
-def _valve_lag(rng, arm):
-    T = np.array([v.time_constant for v in arm.valves.valves])
+def _valve_lag(rng, arm, dt=1e-3):
+    T = plant_vector(arm, "valve_time_constant")
     on = _some(rng, 4)
     f = [(_logu(rng, 1.05, 3.0) if rng.random() < 0.7 else 1.0 / _logu(rng, 1.05, 2.0))
          for _ in range(int(on.sum()))]
@@ -153,43 +181,58 @@ def _valve_lag(rng, arm):
     return {"valve_time_constant": tuple(T)}, {f"T_{i + 1}": T[i] for i in range(4)}
 
 
-def _dead_time(rng, arm):
-    d = _logu(rng, 0.002, 0.05)
+def _dead_time(rng, arm, dt=1e-3):
+    # a declared dead time counts control periods, one per sample of the record (dt)
+    d0 = arm.effects.valve_dead_time
+    if d0 is None:
+        d = _logu(rng, 0.002, 0.05)
+    else:
+        d = _changed(rng, dt * float(np.mean(d0)), 0.0, 0.08, 0.002, 0.03)
     return {"valve_dead_time": d}, {"d": d}
 
 
-def _polytropic(rng, arm):
-    n = float(rng.uniform(1.0, 1.38))
+def _polytropic(rng, arm, dt=1e-3):
+    if arm.effects.polytropic_n is None:
+        n = float(rng.uniform(1.0, 1.38))
+    else:
+        n = _changed(rng, arm.effects.polytropic_n, 1.0, 1.4, 0.02, 0.3)
     return {"polytropic_n": n}, {"n": n}
 
 
-def _hysteresis(rng, arm):
-    d = _logu(rng, 0.005, 0.3)
-    return {"hysteresis_delta": d}, {"delta": d}
+def _hysteresis(rng, arm, dt=1e-3):
+    d0 = arm.effects.hysteresis_delta
+    if d0 is None:
+        d = _logu(rng, 0.005, 0.3)
+        return {"hysteresis_delta": d}, {"delta": d}
+    # a change common to the groups (the candidate's hypothesis), from their declared mean
+    m0 = float(np.mean(d0))
+    d = _changed(rng, m0, max(m0 - min(d0), 0.0), min(0.8, 1.0 - max(d0) + m0), 0.005, 0.2)
+    return {"hysteresis_delta": tuple(float(x) + d - m0 for x in d0)}, {"delta": d}
 
 
-def _torque_bias(rng, arm):
-    b = np.zeros(2)
+def _torque_bias(rng, arm, dt=1e-3):
+    b = np.zeros(2) if arm.effects.joint_torque_bias is None else np.array(
+        arm.effects.joint_torque_bias, float)
     on = _some(rng, 2)
     b[on] = [_sgn(rng) * _logu(rng, 0.01, 2.0) for _ in range(int(on.sum()))]
     return {"joint_torque_bias": tuple(b)}, {"b1": b[0], "b2": b[1]}
 
 
-def _p_offset(rng, arm):
+def _p_offset(rng, arm, dt=1e-3):
     o = np.zeros(4)
     on = _some(rng, 4)
     o[on] = [_sgn(rng) * _logu(rng, 100.0, 2.0e4) for _ in range(int(on.sum()))]
     return {"pressure_sensor_offset": tuple(o)}, {f"o_{i + 1}": o[i] for i in range(4)}
 
 
-def _p_gain(rng, arm):
+def _p_gain(rng, arm, dt=1e-3):
     g = np.zeros(4)
     on = _some(rng, 4)
     g[on] = [_sgn(rng) * _logu(rng, 5e-4, 0.1) for _ in range(int(on.sum()))]
     return {"pressure_sensor_gain": tuple(g)}, {f"g_{i + 1}": g[i] for i in range(4)}
 
 
-def _encoder_offset(rng, arm):
+def _encoder_offset(rng, arm, dt=1e-3):
     o = np.zeros(2)
     on = _some(rng, 2)
     o[on] = [_sgn(rng) * _logu(rng, 2e-4, 0.08) for _ in range(int(on.sum()))]
@@ -204,6 +247,102 @@ LIBRARY_DRAWS = {"payload": _payload, "joint_friction": _friction,
                  "hysteresis": _hysteresis, "joint_torque_bias": _torque_bias,
                  "pressure_sensor_offset": _p_offset, "pressure_sensor_gain": _p_gain,
                  "encoder_offset": _encoder_offset}
+
+
+# ----------------------------------------------------------------------------- declared effects
+# An arm of the declared-effect battery declares some effects in its [effects] (what an arm
+# file can hold); each draw returns the Effects overrides, over the ranges an arm file
+# accepts (params.effects) where an arm can still make its records: a payload the valves can
+# hold, friction up to a stiff bearing, valves within the Table B.2 spread and twice slower,
+# any polytropic exponent, the 25/40-fibre hysteresis and beyond, a dead time up to three
+# 10 ms frames, a cable's drag.
+
+def _declare_payload(rng, arm):
+    return {"payload_mass": _logu(rng, 0.05, 1.5)}
+
+
+def _declare_friction(rng, arm):
+    fx = {"friction_coulomb": tuple(_logu(rng, 0.02, 1.0) for _ in range(2))}
+    if rng.random() < 0.5:
+        fx["friction_viscous"] = tuple(b * _logu(rng, 1.0, 3.0)
+                                       for b in plant_vector(arm, "friction_viscous"))
+    return fx
+
+
+def _declare_valves(rng, arm):
+    fx = {}
+    if rng.random() < 0.6:
+        fx["valve_offset"] = tuple(v + _sgn(rng) * _logu(rng, 200.0, 1.0e4)
+                                   for v in plant_vector(arm, "valve_offset"))
+    if rng.random() < 0.6 or not fx:
+        fx["valve_gain"] = tuple(v * (1.0 + _sgn(rng) * _logu(rng, 0.005, 0.1))
+                                 for v in plant_vector(arm, "valve_gain"))
+    return fx
+
+
+def _declare_lag(rng, arm):
+    f = _logu(rng, 0.6, 2.0)
+    return {"valve_time_constant": tuple(T * f * _logu(rng, 0.9, 1.1)
+                                         for T in plant_vector(arm, "valve_time_constant"))}
+
+
+def _declare_polytropic(rng, arm):
+    return {"polytropic_n": float(rng.uniform(1.0, 1.4))}
+
+
+def _declare_hysteresis(rng, arm):
+    d = _logu(rng, 0.03, 0.5)
+    if rng.random() < 0.25:                         # groups of different muscles
+        return {"hysteresis_delta": tuple(d * _logu(rng, 0.7, 1.3) for _ in range(4))}
+    return {"hysteresis_delta": (d,) * 4}
+
+
+def _declare_dead_time(rng, arm):
+    return {"valve_dead_time": (int(rng.integers(1, 31)),) * 4}
+
+
+def _declare_torque_bias(rng, arm):
+    return {"joint_torque_bias": tuple(_sgn(rng) * _logu(rng, 0.02, 1.0) for _ in range(2))}
+
+
+#: Declarable effect (kind) -> its draw, and the library candidate a hidden change of it is
+#: named as (None: outside the default library).
+DECLARED_DRAWS = {"payload": (_declare_payload, "payload"),
+                  "friction": (_declare_friction, "joint_friction"),
+                  "valves": (_declare_valves, "valve_offset_gain"),
+                  "valve_lag": (_declare_lag, "valve_lag"),
+                  "polytropic": (_declare_polytropic, "polytropic_exponent"),
+                  "hysteresis": (_declare_hysteresis, "hysteresis"),
+                  "dead_time": (_declare_dead_time, "valve_dead_time"),
+                  "torque_bias": (_declare_torque_bias, None)}
+#: ``Effects`` field an arm declares -> the library candidate that names a change of it.
+DECLARED_CANDIDATE = {"payload_mass": "payload", "friction_coulomb": "joint_friction",
+                      "friction_viscous": "joint_friction", "valve_offset": "valve_offset_gain",
+                      "valve_gain": "valve_offset_gain", "valve_time_constant": "valve_lag",
+                      "polytropic_n": "polytropic_exponent", "hysteresis_delta": "hysteresis",
+                      "valve_dead_time": "valve_dead_time",
+                      "joint_torque_bias": "joint_torque_bias"}
+#: Probabilities of 1, 2, 3, 4 declared effect kinds in an arm of that battery.
+P_DECLARED_COUNT = (0.35, 0.35, 0.2, 0.1)
+#: Probability that a scenario of that battery hides a change of one of its declared effects.
+P_DECLARED_CHANGE = 0.4
+
+
+def declared_arm(sc, arm=None):
+    """The arm of a scenario: ``arm`` (default the thesis arm) with the scenario's declared
+    effects (:attr:`Scenario.declared`).
+
+    Parameters
+    ----------
+    sc : Scenario
+    arm : ArmParameters, optional
+    """
+    arm = _arm_of(arm)
+    if not sc.declared:
+        return arm
+    fx = {k: tuple(v) if isinstance(v, list) else v for k, v in sc.declared.items()}
+    return arm.replace(effects=replace(arm.effects, **fx),
+                       name=f"{arm.name or 'arm'} with declared {', '.join(sorted(fx))}")
 
 
 # ----------------------------------------------------------------------------- perturbations
@@ -264,6 +403,9 @@ class Scenario:
         Library candidate -> {parameter: true value}.
     perturbation : dict
         Out-of-library ``synthesize`` effects (empty for none).
+    declared : dict
+        Effects the scenario's arm declares (``Effects`` field -> value; empty: the arm as
+        given), :func:`declared_arm`.
     """
 
     seed: int
@@ -275,6 +417,7 @@ class Scenario:
     hidden: dict = field(default_factory=dict)
     truth: dict = field(default_factory=dict)
     perturbation: dict = field(default_factory=dict)
+    declared: dict = field(default_factory=dict)
 
     @property
     def effects(self) -> dict:
@@ -286,7 +429,7 @@ class Scenario:
         return out
 
 
-def random_scenario(seed: int, *, arm=None) -> Scenario:
+def random_scenario(seed: int, *, arm=None, declared: bool = False) -> Scenario:
     """A random scenario (module docstring), fully determined by ``seed`` (and the arm).
 
     Parameters
@@ -295,9 +438,22 @@ def random_scenario(seed: int, *, arm=None) -> Scenario:
     arm : ArmParameters, optional, keyword-only
         The nominal arm (default the thesis arm): hidden magnitudes are drawn around its
         values.
+    declared : bool, keyword-only
+        Draw an arm that declares effects of its own (:data:`DECLARED_DRAWS`: 1-4 kinds,
+        :data:`P_DECLARED_COUNT`) on top of ``arm``, and with probability
+        :data:`P_DECLARED_CHANGE` hide a change of one of them; the diagnosis is run
+        against that arm.
     """
     seed = check_int("seed", seed, 0)
     arm = _arm_of(arm)
+    decl = {}
+    if declared:
+        rd = np.random.default_rng([seed, 28])
+        count = 1 + int(rd.choice(len(P_DECLARED_COUNT), p=P_DECLARED_COUNT))
+        kinds = [str(k) for k in rd.choice(list(DECLARED_DRAWS), size=count, replace=False)]
+        for k in kinds:
+            decl.update(DECLARED_DRAWS[k][0](rd, arm))
+        arm = arm.replace(effects=replace(arm.effects, **decl))
     rng = np.random.default_rng([seed, 19])
     kind = str(rng.choice(list(KINDS), p=list(KINDS.values())))
     reference = controller = None
@@ -315,13 +471,21 @@ def random_scenario(seed: int, *, arm=None) -> Scenario:
     pool = [n for n in default_candidates(static=kind == "static-sawtooth") if n in LIBRARY_DRAWS]
     count = int(rng.choice(len(P_COUNT), p=P_COUNT))
     names = [str(x) for x in rng.choice(pool, size=count, replace=False)]
+    if declared and rd.random() < P_DECLARED_CHANGE:
+        # a hidden change of a declared effect on top (one the record can show)
+        own = [DECLARED_DRAWS[k][1] for k in kinds if DECLARED_DRAWS[k][1] in pool]
+        if own:
+            n = str(rd.choice(own))
+            if n not in names:
+                names = [n] + names[1:] if names else [n]
     hidden, truth = {}, {}
     for n in names:
-        fx, tr = LIBRARY_DRAWS[n](rng, arm)
+        fx, tr = LIBRARY_DRAWS[n](rng, arm, dt)
         hidden[n], truth[n] = fx, tr
     pert = _perturbation(rng, arm) if rng.random() < P_PERTURBATION else {}
     return Scenario(seed=seed, kind=kind, duration=duration, dt=dt, reference=reference,
-                    controller=controller, hidden=hidden, truth=truth, perturbation=pert)
+                    controller=controller, hidden=hidden, truth=truth, perturbation=pert,
+                    declared=decl)
 
 
 def record_of(sc: Scenario, *, with_perturbation: bool = True, arm=None):
@@ -342,7 +506,7 @@ def record_of(sc: Scenario, *, with_perturbation: bool = True, arm=None):
     if with_perturbation:
         fx.update(sc.perturbation)
     kw = dict(experiment=sc.kind, effects=fx, seed=sc.seed, duration=sc.duration, dt=sc.dt,
-              arm=_arm_of(arm))
+              arm=declared_arm(sc, arm))
     if sc.kind == "closed-loop":
         kw.update(reference=sc.reference, controller=sc.controller)
     return synthesize(**kw)
@@ -372,8 +536,8 @@ def irreducible_gap(sc: Scenario, record, noise_levels, *, arm=None) -> float:
     arm : ArmParameters, optional, keyword-only
         The nominal arm (default the thesis arm).
     """
-    arm = _arm_of(arm)
     twin = record_of(sc, with_perturbation=False, arm=arm)
+    arm = declared_arm(sc, arm)
     mu0 = model_vector(packing.pack(arm))
 
     def system(data):
@@ -441,6 +605,8 @@ def run_scenario(sc: Scenario, *, gap: bool = True, arm=None) -> dict:
            "hidden": tuple(sorted(sc.hidden)), "perturbation": ";".join(
                f"{k}={v}" for k, v in sc.perturbation.items()), "error": "",
            "stage": ""}
+    if sc.declared:
+        row["declared"] = ";".join(f"{k}={v}" for k, v in sc.declared.items())
     t0 = time.perf_counter()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", MeasuredDataWarning)
@@ -453,7 +619,7 @@ def run_scenario(sc: Scenario, *, gap: bool = True, arm=None) -> dict:
                        seconds=time.perf_counter() - t0)
             return row
         try:
-            dg = diagnose(rec, seed=sc.seed, arm=_arm_of(arm))
+            dg = diagnose(rec, seed=sc.seed, arm=declared_arm(sc, arm))
         except Exception as exc:      # a diagnosis that fails on a valid record is scored
             row.update(error=f"{type(exc).__name__}: {exc}", stage="diagnose",
                        seconds=time.perf_counter() - t0)
@@ -477,6 +643,7 @@ def run_scenario(sc: Scenario, *, gap: bool = True, arm=None) -> dict:
         "gates": {e["name"]: e.get("gates", {}) for e in dg.effects},
         "named_ratios": {e["name"]: e["evidence"].get("limit_ratio") for e in dg.effects},
         "stability_bound": (dg.stability or {}).get("expected_false_selections_bound"),
+        "replay_rho": dict(dg.settings.get("replay", {}).get("rho", {})),
     })
     cover = []
     for e in dg.effects:
@@ -494,17 +661,17 @@ def run_scenario(sc: Scenario, *, gap: bool = True, arm=None) -> dict:
     return row
 
 
-def _worker(seed, arm=None):
+def _worker(seed, arm=None, declared=False):
     try:
-        return run_scenario(random_scenario(seed, arm=arm), arm=arm)
+        return run_scenario(random_scenario(seed, arm=arm, declared=declared), arm=arm)
     except Exception as exc:                     # a failure is a result of the battery
         return {"seed": seed, "error": f"{type(exc).__name__}: {exc}", "stage": "battery",
                 "traceback": traceback.format_exc()}
 
 
 def run_battery(seeds, *, processes: int | None = None, progress: bool = False,
-                arm=None) -> pd.DataFrame:
-    """Run :func:`run_scenario` on ``random_scenario(seed)`` for every seed.
+                arm=None, declared: bool = False) -> pd.DataFrame:
+    """Run :func:`run_scenario` on ``random_scenario(seed, declared=declared)`` for every seed.
 
     Parameters
     ----------
@@ -515,6 +682,8 @@ def run_battery(seeds, *, processes: int | None = None, progress: bool = False,
         Print one line per finished scenario.
     arm : ArmParameters, optional, keyword-only
         The nominal arm (default the thesis arm).
+    declared : bool, keyword-only
+        Arms that declare effects of their own (:func:`random_scenario`).
 
     Returns
     -------
@@ -524,8 +693,8 @@ def run_battery(seeds, *, processes: int | None = None, progress: bool = False,
     seeds = [check_int("seed", s, 0) for s in seeds]
     processes = os.cpu_count() or 1 if processes is None else check_int("processes",
                                                                           processes, 1, 256)
-    return run_seeds(partial(_worker, arm=arm), seeds, processes=processes,
-                     progress=progress)
+    return run_seeds(partial(_worker, arm=arm, declared=bool(declared)), seeds,
+                     processes=processes, progress=progress)
 
 
 # ----------------------------------------------------------------------------- stored results
@@ -536,9 +705,17 @@ RESULTS_FILE = Path(__file__).resolve().parent / "calibration_data" / "arm_batte
 #: The muscle bench battery's measured results (:mod:`.bench.scenarios`, same row keys):
 #: ``python -m ppamsafety.diagnose.scenarios --kind bench``.
 BENCH_RESULTS_FILE = RESULTS_FILE.with_name("bench_battery.jsonl.xz")
+#: The battery of arms with declared effects (``--kind declared``).
+DECLARED_RESULTS_FILE = RESULTS_FILE.with_name("arm_declared_battery.jsonl.xz")
+#: Tuning rows the replay's thresholds were set on (:func:`replay_limits`): thesis-arm seeds
+#: 0-299 and declared-effect seeds 10000-10299, run with the replay gate off.
+REPLAY_TUNING_FILE = RESULTS_FILE.with_name("replay_tuning.jsonl.xz")
+#: The replay threshold is this multiple of the largest replay ratio of a right model on the
+#: tuning rows (:func:`replay_limits`).
+REPLAY_MARGIN = 1.25
 #: Columns that hold Python containers (tuples, dicts, lists) in a results table.
 _CONTAINERS = ("hidden", "named", "high", "low", "partial", "confounded", "ratios",
-               "ratios_detected", "gates", "named_ratios", "coverage")
+               "ratios_detected", "gates", "named_ratios", "coverage", "replay_rho")
 
 
 def _jsonable(v):
@@ -605,15 +782,16 @@ def load_results(path=None) -> pd.DataFrame:
     if "confounded" in df:
         df["confounded"] = df["confounded"].map(
             lambda v: tuple(tuple(g) for g in v) if isinstance(v, list) else ())
-    for c in ("ratios", "ratios_detected", "gates", "named_ratios"):
+    for c in ("ratios", "ratios_detected", "gates", "named_ratios", "replay_rho"):
         if c in df:
             df[c] = df[c].map(lambda v: v if isinstance(v, dict) else {})
     if "coverage" in df:
         df["coverage"] = df["coverage"].map(lambda v: v if isinstance(v, list) else [])
     if "error" in df:
         df["error"] = df["error"].fillna("")
-    if "perturbation" in df:
-        df["perturbation"] = df["perturbation"].fillna("")
+    for c in ("perturbation", "declared"):
+        if c in df:
+            df[c] = df[c].fillna("")
     return df
 
 
@@ -680,7 +858,7 @@ def scores(results: pd.DataFrame) -> pd.DataFrame:
     pandas.DataFrame
         One row per measure: ``measure``, ``count`` (scenarios or names it is
         measured on), ``hits``, ``value``, ``wilson_low``/``high`` bound, ``target``,
-        ``met``.
+        ``met`` (None where there is no target, or no scenario or name to score it on).
     """
     df = _ok(results)
     rows = []
@@ -691,11 +869,13 @@ def scores(results: pd.DataFrame) -> pd.DataFrame:
         if better == "info":
             met, kind = None, ""
         elif upper is not None:
-            met, kind = bool(n and target <= v <= upper), f"in [{target:g}, {upper:g}]"
+            met, kind = bool(target <= v <= upper), f"in [{target:g}, {upper:g}]"
         elif better == "higher":
-            met, kind = bool(n and v >= target), ">="
+            met, kind = bool(v >= target), ">="
         else:
-            met, kind = bool(n and v <= target), "<="
+            met, kind = bool(v <= target), "<="
+        if not n:                   # nothing to score (e.g. a short battery): not "not met"
+            met = None
         rows.append({"measure": name, "count": int(n), "hits": int(hits), "value": v,
                      "wilson_low": _wilson_low(hits, n),
                      "target": math.nan if better == "info" else target,
@@ -713,6 +893,11 @@ def scores(results: pd.DataFrame) -> pd.DataFrame:
     p_det = pair[pair.apply(_detectable, axis=1)]
     add("two effects above their limits: both named, nothing else",
         int(sum(set(r.named) == set(r.hidden) for r in p_det.itertuples())), len(p_det), 0.85)
+    right = clean[np.array([set(r.named) == set(r.hidden) for r in clean.itertuples()],
+                           dtype=bool)]
+    add("model right (exactly the hidden effects named, nothing out of library): flagged "
+        "unexplained", int(sum(bool(r.unexplained) for r in right.itertuples())), len(right),
+        0.02, better="lower")
     ool = df[df["perturbation"] != ""]
     ool0 = ool[ool["hidden"].map(len) == 0]
     add("out of library (nothing else hidden): no high-confidence name",
@@ -740,6 +925,101 @@ def scores(results: pd.DataFrame) -> pd.DataFrame:
     add("valid records on which the diagnosis raised an error", fail["diagnose"] +
         fail["battery"], made, 0.0, better="lower")
     return pd.DataFrame(rows)
+
+
+def declared_names(results: pd.DataFrame) -> dict:
+    """What became of the effects the scenarios' arms declare (the battery of arms with
+    declared effects).
+
+    Parameters
+    ----------
+    results : pandas.DataFrame
+        Rows of ``random_scenario(seed, declared=True)`` (``declared`` column).
+
+    Returns
+    -------
+    dict
+        ``changes``: hidden changes of a declared effect (no out-of-library perturbation),
+        ``changes_above``: of those above their detection limit, ``changes_named``: of those
+        named; ``high``: "high" names of an effect the arm declares, ``high_right``: of
+        those a change the scenario hid; ``unchanged_named``: names (any level) of a
+        declared effect the scenario did not change.
+    """
+    out = dict.fromkeys(("changes", "changes_above", "changes_named", "high", "high_right",
+                         "unchanged_named"), 0)
+    df = _ok(results)
+    if "declared" not in df:
+        return out
+    for r in df.itertuples():
+        decl = {DECLARED_CANDIDATE[k.split("=")[0]] for k in (r.declared or "").split(";")
+                if k.split("=")[0] in DECLARED_CANDIDATE}
+        out["high"] += sum(n in decl for n in r.high)
+        out["high_right"] += sum(n in decl and n in r.hidden for n in r.high)
+        out["unchanged_named"] += sum(n in decl and n not in r.hidden for n in r.named)
+        if not r.perturbation:
+            for h in r.hidden:
+                if h in decl:
+                    out["changes"] += 1
+                    above = r.ratios.get(h, 0.0) >= 1.0
+                    out["changes_above"] += above
+                    out["changes_named"] += above and h in r.named
+    return out
+
+
+def replay_null(results: pd.DataFrame) -> pd.DataFrame:
+    """The replay statistic of the models the diagnosis got right: its null distribution.
+
+    A model is right when the scenario holds no out-of-library perturbation and exactly
+    the hidden effects were named; its statistic is the largest replay RMS over the sample
+    noise over the record's channels (``replay_rho``), what a correct model replayed on a
+    noisy record leaves.
+
+    Parameters
+    ----------
+    results : pandas.DataFrame
+        Battery rows with ``replay_rho``.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per record class (``dynamic``: open and closed loop; ``static``: the
+        sawtooth): ``models`` (right models), ``median``, ``p95``, ``p99``, ``max``.
+    """
+    df = _ok(results)
+    right = np.array([set(n) == set(h) for n, h in zip(df["named"], df["hidden"])], bool)
+    df = df[(df["perturbation"] == "").to_numpy() & right]
+    stat = df["replay_rho"].map(lambda d: max(d.values()) if isinstance(d, dict) and d
+                                else math.nan)
+    rows = []
+    for cls, sel in (("dynamic", df["kind"] != "static-sawtooth"),
+                     ("static", df["kind"] == "static-sawtooth")):
+        x = stat[sel].dropna().to_numpy(float)
+        q = np.quantile(x, [0.5, 0.95, 0.99]) if x.size else [math.nan] * 3
+        rows.append({"records": cls, "models": int(x.size), "median": float(q[0]),
+                     "p95": float(q[1]), "p99": float(q[2]),
+                     "max": float(x.max()) if x.size else math.nan})
+    return pd.DataFrame(rows)
+
+
+def replay_limits(results: pd.DataFrame, *, margin: float = REPLAY_MARGIN) -> tuple:
+    """The replay thresholds the rule gives on tuning rows: ``margin`` x the largest
+    statistic of a right model (:func:`replay_null`), rounded down to 0.1.
+
+    Parameters
+    ----------
+    results : pandas.DataFrame
+        Tuning rows (:data:`REPLAY_TUNING_FILE`).
+    margin : float, keyword-only
+
+    Returns
+    -------
+    tuple of float
+        (open and closed loop, static sawtooth): the values of
+        :data:`ppamsafety.diagnose.arm.pipeline.REPLAY_RHO` and ``REPLAY_RHO_STATIC``.
+    """
+    null = replay_null(results).set_index("records")
+    return tuple(math.floor(10 * margin * null.loc[c, "max"] + 1e-9) / 10
+                 for c in ("dynamic", "static"))
 
 
 def interval_widening(results: pd.DataFrame) -> dict:
@@ -866,12 +1146,13 @@ def detection_curve(results: pd.DataFrame, *, key: str = "ratios") -> pd.DataFra
 def main(argv=None) -> int:
     """Run the battery on a range of seeds, write its rows, print its scores.
 
-    ``python -m ppamsafety.diagnose.scenarios [--kind arm|bench] [--seeds 2000:3000]
-    [--processes N] [--out FILE] [--overwrite]``; the default writes :data:`RESULTS_FILE`
-    (``--kind bench``: the muscle bench battery of :mod:`.bench.scenarios` on its
-    measurement seeds into :data:`BENCH_RESULTS_FILE`), refused if it exists unless
-    ``--overwrite``.  About 35 min for the 1000 arm scenarios on 2 cores, 5 min for the
-    300 bench scenarios.
+    ``python -m ppamsafety.diagnose.scenarios [--kind arm|declared|bench] [--seeds
+    2000:3000] [--processes N] [--out FILE] [--overwrite]``; the default writes
+    :data:`RESULTS_FILE` (``--kind declared``: arms with declared effects on
+    :data:`DECLARED_MEASURE_SEEDS` into :data:`DECLARED_RESULTS_FILE`; ``--kind bench``: the
+    muscle bench battery of :mod:`.bench.scenarios` on its measurement seeds into
+    :data:`BENCH_RESULTS_FILE`), refused if it exists unless ``--overwrite``.  About 35 min
+    for the 1000 arm scenarios on 2 cores, 5 min for the 300 bench scenarios.
 
     Parameters
     ----------
@@ -879,11 +1160,14 @@ def main(argv=None) -> int:
     """
     ap = argparse.ArgumentParser(prog="python -m ppamsafety.diagnose.scenarios",
                                  description="the randomized scenario battery of the diagnosis")
-    ap.add_argument("--kind", choices=("arm", "bench"), default="arm",
-                    help="arm records (default) or muscle test-bench records")
+    ap.add_argument("--kind", choices=("arm", "declared", "bench"), default="arm",
+                    help="arm records (default), arm records of arms that declare effects, "
+                         "or muscle test-bench records")
     ap.add_argument("--seeds", default=None,
                     help="first:last+1 (default the measurement seeds: arm "
-                         f"{MEASURE_SEEDS.start}:{MEASURE_SEEDS.start + 1000}, bench "
+                         f"{MEASURE_SEEDS.start}:{MEASURE_SEEDS.start + 1000}, declared "
+                         f"{DECLARED_MEASURE_SEEDS.start}:"
+                         f"{DECLARED_MEASURE_SEEDS.start + DECLARED_MEASURE_COUNT}, bench "
                          f"{bench_scenarios.MEASURE_SEEDS.start}:"
                          f"{bench_scenarios.MEASURE_SEEDS.stop})")
     ap.add_argument("--processes", type=int, default=None,
@@ -894,10 +1178,12 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     bench = args.kind == "bench"
     if args.seeds is None:
-        seeds = bench_scenarios.MEASURE_SEEDS if bench else MEASURE_SEEDS[:1000]
+        seeds = {"bench": bench_scenarios.MEASURE_SEEDS, "arm": MEASURE_SEEDS[:1000],
+                 "declared": DECLARED_MEASURE_SEEDS[:DECLARED_MEASURE_COUNT]}[args.kind]
         args.seeds = f"{seeds.start}:{seeds.stop}"
     if args.out is None:
-        args.out = str(BENCH_RESULTS_FILE if bench else RESULTS_FILE)
+        args.out = str({"bench": BENCH_RESULTS_FILE, "arm": RESULTS_FILE,
+                        "declared": DECLARED_RESULTS_FILE}[args.kind])
     try:
         a, b = (int(x) for x in args.seeds.split(":"))
     except ValueError:
@@ -908,7 +1194,8 @@ def main(argv=None) -> int:
         df = bench_scenarios.run_battery(range(a, b), processes=args.processes or
                                          (os.cpu_count() or 1), progress=True)
     else:
-        df = run_battery(range(a, b), processes=args.processes, progress=True)
+        df = run_battery(range(a, b), processes=args.processes, progress=True,
+                         declared=args.kind == "declared")
     wall = time.time() - t0
     save_results(df, args.out, overwrite=args.overwrite)
     pd.set_option("display.width", 200)
@@ -925,8 +1212,12 @@ def main(argv=None) -> int:
 __all__ = ["Scenario", "random_scenario", "record_of", "run_scenario", "run_battery",
            "detection_curve", "RATIO_BINS",
            "save_results", "load_results", "RESULTS_FILE", "BENCH_RESULTS_FILE",
+           "DECLARED_RESULTS_FILE", "DECLARED_TUNING_SEEDS", "DECLARED_MEASURE_SEEDS",
+           "DECLARED_MEASURE_COUNT", "DECLARED_DRAWS", "declared_arm",
            "irreducible_gap", "scores", "failures", "calibration_table", "by_effect",
-           "interval_widening", "LIBRARY_DRAWS",
+           "interval_widening", "LIBRARY_DRAWS", "replay_null", "replay_limits",
+           "declared_names", "DECLARED_CANDIDATE",
+           "REPLAY_TUNING_FILE", "REPLAY_MARGIN",
            "TUNING_SEEDS", "MEASURE_SEEDS", "HIGH_PRECISION", "GAP_ABOVE_NOISE"]
 
 

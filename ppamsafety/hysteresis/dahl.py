@@ -2,9 +2,9 @@
 
 The compiled recursion behind the synthetic cylinder campaigns
 (:mod:`ppamsafety.diagnose.bench.cylinder_synth`). It is physics, not statistics,
-so it lives here, below the diagnosis: the compiled-kernel cache key
-(:mod:`ppamsafety._sourcehash`) then depends on this file and not on the
-diagnosis package it serves.
+so it lives here, below the diagnosis, among the kernel files of the compiled-kernel
+cache key (:data:`ppamsafety._sourcehash.KERNEL_FILES`), not in the diagnosis package it
+serves.
 """
 
 from __future__ import annotations

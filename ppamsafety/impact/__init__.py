@@ -3,6 +3,14 @@
 Modules (one concept each):
 
 * :mod:`.contact` -- Hunt-Crossley contact law and its closed-form solution;
+* :mod:`.layers` -- layers in series (covering, soft tissue, bone): one shared force, the
+  compiled law, its two-body impact and phase-plane closed form;
+* :mod:`.bodies` -- body regions as contacts (a head model, an ISO/TS 15066 Annex A region),
+  the Hybrid III head drop of 49 CFR 572.32;
+* :mod:`.covering_fit` -- the covering Table 6.1 implies in front of the validated head;
+* :mod:`.points` -- the compiled engine of any contact point of the arm against a body;
+* :mod:`.anywhere` -- :func:`simulate_contacts`, bounds, and :func:`worst_contact` (the worst
+  over contact point x body region x instant);
 * :mod:`.engine` -- the compiled batch kernel: flexible-joint arm against a free head;
 * :mod:`.model` -- :func:`simulate_impacts`, :class:`ImpactResults`, :func:`effective_mass`;
 * :mod:`.instants` -- impact cases from a closed-loop experiment (four instants or all;
@@ -19,9 +27,10 @@ Modules (one concept each):
 * :mod:`.thesis_data` -- Table 6.1 and fig. 6.3 reference values.
 """
 
+from .anywhere import simulate_contacts, worst_contact
 from .engine import JointModel
 from .hic import hic
 from .instants import evaluate_experiment, worst_instant
 from .model import ImpactResults, effective_mass, simulate_impacts
 
-__all__ = ["JointModel", "hic", "evaluate_experiment", "worst_instant", "ImpactResults", "effective_mass", "simulate_impacts"]
+__all__ = ["JointModel", "hic", "evaluate_experiment", "worst_instant", "ImpactResults", "effective_mass", "simulate_impacts", "simulate_contacts", "worst_contact"]

@@ -467,8 +467,9 @@ class DirectionOptimum:
         Placements [rad from the TCP velocity] maximising F_max and HIC36.
     F_max, HIC36 : float
         Their engine values [N], [-].
-    F_thesis, HIC_thesis : float
-        Engine values at psi = 0 (thesis placement) [N], [-].
+    F_along_velocity, HIC_along_velocity : float
+        Engine values at psi = 0, the head along the TCP velocity (the thesis' placement)
+        [N], [-].
     velocity_deg : float
         Absolute direction of the TCP velocity [deg].
     evaluations : int
@@ -479,8 +480,8 @@ class DirectionOptimum:
     psi_HIC: float
     F_max: float
     HIC36: float
-    F_thesis: float
-    HIC_thesis: float
+    F_along_velocity: float
+    HIC_along_velocity: float
     velocity_deg: float
     evaluations: int
 
@@ -604,12 +605,13 @@ class WorstDirection:
     label : str
         Name of the experiment (``result.name``).
     summary : dict
-        Per metric m in ("F_max", "HIC36"): ``m + "_thesis"`` (worst over
-        instants at psi = 0) with ``t0_...``; ``m + "_worst"`` (worst over
+        Per metric m in ("F_max", "HIC36"): ``m + "_along_velocity"`` (worst over
+        instants at psi = 0: the head along the TCP velocity, the thesis' placement) with
+        ``t0_...``; ``m + "_worst"`` (worst over
         instants and placements), ``psi_...`` [deg], ``phi_...`` [deg, base
         frame], ``t0_...`` [s]; ``m + "_same_instant"`` (worst placement at
         the thesis' worst instant) with its ``psi``; ratios
-        ``ratio_...`` = worst / thesis and ``ratio_..._same_instant``.
+        ``ratio_...`` = worst / along the velocity and ``ratio_..._same_instant``.
     candidates : pandas.DataFrame
         Instants simulated: ``t0`` [s], ``tcp_speed`` [m/s], predictions,
         bounds and engine values (NaN where not simulated) at psi = 0 and at
@@ -859,7 +861,7 @@ def worst_direction(result, arm, *, every: int = 1, head=None, dt: float = 2e-5,
             wi, wpsi, wv = ti, ps, sv
         u = _placement(e[wi:wi + 1], ep[wi:wi + 1], np.array([wpsi]))[0]
         summary.update({
-            f"{m}_thesis": tv, f"t0_{m}_thesis": float(st["t"].iloc[ti]),
+            f"{m}_along_velocity": tv, f"t0_{m}_along_velocity": float(st["t"].iloc[ti]),
             f"{m}_worst": wv, f"psi_{m}_deg": math.degrees(wpsi),
             f"phi_{m}_deg": math.degrees(math.atan2(u[1], u[0])),
             f"t0_{m}_worst": float(st["t"].iloc[wi]), f"ratio_{m}": wv / tv,
@@ -882,14 +884,14 @@ def worst_direction(result, arm, *, every: int = 1, head=None, dt: float = 2e-5,
         d = cand_rows[ci]
         row = {"t0": float(st["t"].iloc[ci]), "tcp_speed": float(speed[ci]),
                "F_bound": float(bound["F_max"][ci]), "HIC36_bound": float(bound["HIC36"][ci]),
-               "F_pred_thesis": float(pred["F_max"][ci, i0]),
+               "F_pred_along_velocity": float(pred["F_max"][ci, i0]),
                "F_pred_worst": float(pred["F_max"][ci].max()),
-               "HIC_pred_thesis": float(pred["HIC36"][ci, i0]),
+               "HIC_pred_along_velocity": float(pred["HIC36"][ci, i0]),
                "HIC_pred_worst": float(pred["HIC36"][ci].max()),
                "searched": ci in searched}
         for m, col in _COL.items():
             r = d.get(f"{m}@thesis")
-            row[f"{m}_thesis"] = float(r[col]) if r is not None else np.nan
+            row[f"{m}_along_velocity"] = float(r[col]) if r is not None else np.nan
             w = d.get(f"{m}@worst")
             row[f"{m}_worst"] = w[1] if w is not None else np.nan
             row[f"psi_{m}_deg"] = math.degrees(w[0]) if w is not None else np.nan

@@ -33,7 +33,6 @@ a file or a model, as every ``head=`` argument and ``--head`` option do.
 from __future__ import annotations
 
 import functools
-import tomllib
 import types
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -42,7 +41,7 @@ import numpy as np
 
 from .._inputfiles import read_text
 from .._validation import check_range, check_str, did_you_mean
-from ..params.arm_file import ArmFileError, Key, _literal, read_value
+from ..params.arm_file import ArmFileError, Key, _literal, parse_document, read_value
 from .contact import hunt_crossley_force_batch, hunt_crossley_max_penetration
 
 #: Approach speed [m/s] at which a head model is checked on construction: the
@@ -205,17 +204,7 @@ class HeadContactModel:
         ArmFileError
             A ``ValueError`` naming the key, its value and what is allowed.
         """
-        if not isinstance(text, str):
-            raise TypeError(f"text must be the TOML text (a str), got {type(text).__name__}")
-        pre = f"{where}: " if where else ""
-        try:
-            data = tomllib.loads(text)
-        except tomllib.TOMLDecodeError as exc:
-            raise ArmFileError(f"{pre}not valid TOML ({exc})") from None
-        try:
-            return _head_from_dict(data)
-        except ArmFileError as exc:
-            raise ArmFileError(f"{pre}{exc}") from None
+        return parse_document(text, _head_from_dict, where=where)
 
     def force(self, delta, delta_dot=0.0):
         """Hunt-Crossley contact force [N] (thesis eq. 6.2), element-wise.

@@ -215,14 +215,41 @@ class HeadFit:
     iso_spring: float
 
 
-def _model_hic_at(F, k, n, b, arm_mass, head_mass):
-    c = hic_curve(k, n, b, arm_mass=arm_mass, head_mass=head_mass)
-    ok = (c["F_max"] > 0) & (c["HIC36"] > 0)      # trial parameters may give empty points
+def hic_at_force(F, curve: pd.DataFrame) -> np.ndarray:
+    """HIC36 of a model's (F_max, HIC36) curve at the forces ``F`` [N] (log-log interpolation).
+
+    Parameters
+    ----------
+    F : array_like
+        Peak forces [N], > 0.
+    curve : pandas.DataFrame
+        Columns ``F_max`` [N] and ``HIC36`` over impact speeds (:func:`hic_curve`); points
+        with a zero value (trial parameters may give some) are left out; fewer than two
+        points give 1e-15 (an unusable model, far from every pair).
+    """
+    ok = (curve["F_max"] > 0) & (curve["HIC36"] > 0)
     if ok.sum() < 2:
         return np.full(np.shape(F), 1e-15)
-    c = c[ok]
+    c = curve[ok]
     return np.exp(np.interp(np.log(F), np.log(c["F_max"].to_numpy()),
                             np.log(c["HIC36"].to_numpy())))
+
+
+def pair_sigma(hic) -> np.ndarray:
+    """Log-space standard deviation of Table 6.1 HIC values: max(0.15, 0.005/HIC) (module
+    docstring: rounding of two printed decimals, plus 15 % for the configuration-dependent
+    effective mass).
+
+    Parameters
+    ----------
+    hic : array_like
+        Printed HIC values (> 0).
+    """
+    return np.maximum(0.15, 0.005 / np.asarray(hic, dtype=float))
+
+
+def _model_hic_at(F, k, n, b, arm_mass, head_mass):
+    return hic_at_force(F, hic_curve(k, n, b, arm_mass=arm_mass, head_mass=head_mass))
 
 
 def fit_thesis_head(arm, *, exponent: float = 1.5, arm_mass: float | None = None,
@@ -249,7 +276,7 @@ def fit_thesis_head(arm, *, exponent: float = 1.5, arm_mass: float | None = None
         "arm_mass", arm_mass, 0.0, 1e3, lo_open=True, unit="kg")
     pairs = table_6_1_pairs()
     H, F = pairs["HIC"].to_numpy(), pairs["F_max"].to_numpy()
-    sigma = np.maximum(0.15, 0.005 / H)
+    sigma = pair_sigma(H)
 
     def residual(p):
         k, b = math.exp(p[0]), math.exp(p[1])
@@ -327,7 +354,7 @@ def head_checks(head, *, arm=None) -> pd.DataFrame:
                  "met": bool(abs(rel) <= ISO_SPRING_TOLERANCE)})
     pairs = table_6_1_pairs()
     H, F = pairs["HIC"].to_numpy(), pairs["F_max"].to_numpy()
-    sigma = np.maximum(0.15, 0.005 / H)
+    sigma = pair_sigma(H)
     model = _model_hic_at(F, k, n, b, default_arm_mass(arm), hm.mass)
     rms = float(np.sqrt(np.mean((np.log(model / H) / sigma) ** 2)))
     rows.append({"check": "table_6_1", "value": f"RMS residual {rms:.2f} sd",

@@ -42,6 +42,11 @@ velocities v_k (pre_solve of the *first* constraint runs before any spring
 preStep has touched the velocities).  The velocity lag makes the coupling
 first order in dt; see :func:`simulate_impact_pymunk`.
 
+The same construction serves any contact point of the arm (a point of link 1 or 2 at a
+distance from its joint, ``point=``) and layers in series (``contact=``: the covering and the
+body's tissue and bone, their compiled law :func:`~ppamsafety.impact.layers.stack_eval`
+called from the callback), the cross-check of :mod:`ppamsafety.impact.anywhere`.
+
 pymunk is an optional dependency (``pip install pymunk``); it is imported when
 the function is called.
 """
@@ -57,11 +62,13 @@ import pandas as pd
 
 from .._validation import as_float_array, check_finite_result, check_int, check_range
 from ..layouts import Field, Layout
+from ..params.contact import ContactPoint
 from ..units import G0
 from .contact import hunt_crossley_elastic, hunt_crossley_force
 from .engine import HIST as _HIST
 from .head import HeadContactModel
 from .hic import hic
+from .layers import NWORK, SeriesContact, stack_eval
 from .model import check_angles, check_arm, check_pass_through, check_stiffness, resolve_head
 
 #: Columns of :attr:`PymunkImpact.history`: the main engine's history fields of the same
@@ -146,7 +153,8 @@ def _tcp(q1, q2, L1, L2):
 
 def simulate_impact_pymunk(arm, q, qd, stiffness, *, head: HeadContactModel | str | None = None,
                            direction=None, gap: float = 0.0, dt: float = 1e-6,
-                           duration: float = 0.05, iterations: int = 100) -> PymunkImpact:
+                           duration: float = 0.05, iterations: int = 100, point=None,
+                           contact=None) -> PymunkImpact:
     """Simulate one arm-head impact (thesis §6.3.2) with pymunk bodies and joints.
 
     Same physics as :func:`ppamsafety.impact.model.simulate_impacts`: an
@@ -193,6 +201,15 @@ def simulate_impact_pymunk(arm, q, qd, stiffness, *, head: HeadContactModel | st
         Simulated time [s], in [1e-4, 1].
     iterations : int
         Iterations of pymunk's joint solver per step, in [1, 10000].
+    point : ContactPoint, optional
+        A contact point of the arm (:class:`ppamsafety.params.contact.ContactPoint`: link 1
+        or 2 at a distance from its joint) instead of the tool point: the contact force acts
+        on that body at that point (the columns ``v_tcp_n`` then hold the point's velocity).
+    contact : SeriesContact, optional
+        Layers in series (:func:`ppamsafety.impact.layers.series_contact`) instead of the
+        head model's law: the body's mass and radius, and the compiled law of the layers
+        (:func:`~ppamsafety.impact.layers.stack_eval`), called from the step callback; the
+        energy's contact term is the stack's potential.
 
     Returns
     -------
@@ -212,6 +229,10 @@ def simulate_impact_pymunk(arm, q, qd, stiffness, *, head: HeadContactModel | st
         raise ValueError(f"q, qd and stiffness must each have shape (2,) (one impact), got "
                          f"shapes {q.shape}, {qd.shape}, {K.shape}")
     hm = resolve_head(head)
+    if point is not None and not isinstance(point, ContactPoint):
+        raise TypeError(f"point must be a ContactPoint, got {type(point).__name__}")
+    if contact is not None and not isinstance(contact, SeriesContact):
+        raise TypeError(f"contact must be a SeriesContact, got {type(contact).__name__}")
     if np.any(K < 0):
         raise ValueError(f"stiffness = {K.tolist()} must be non-negative [N m/rad]")
     if np.any(np.abs(qd) > 1e3):
@@ -231,13 +252,21 @@ def simulate_impact_pymunk(arm, q, qd, stiffness, *, head: HeadContactModel | st
     w1, w2 = float(qd[0]), float(qd[1])
     K1, K2 = float(K[0]), float(K[1])
     mh, R, kc, nc, bc = hm.mass, hm.radius, hm.stiffness, hm.exponent, hm.damping
+    plink, s_pt = (2, L2) if point is None else (point.link, point.position)
+    if contact is not None:
+        mh, R = contact.body.mass, contact.body.radius
 
-    r_tcp, J = _tcp(q1, q2, L1, L2)
+    if plink == 2:
+        r_tcp, J = _tcp(q1, q2, L1, s_pt)
+    else:                             # a point of link 1: joint 1 only
+        c1, s1 = math.cos(q1), math.sin(q1)
+        r_tcp, J = (s_pt * c1, s_pt * s1), ((-s_pt * s1, 0.0), (s_pt * c1, 0.0))
     v_tcp = (J[0][0] * w1 + J[0][1] * w2, J[1][0] * w1 + J[1][1] * w2)
     if direction is None:
         sp = math.hypot(*v_tcp)
         if sp == 0.0:
-            raise ValueError("the TCP is at rest: give the impact direction explicitly")
+            raise ValueError("the contact point is at rest: give the impact direction "
+                             "explicitly")
         u = (v_tcp[0] / sp, v_tcp[1] / sp)
     else:
         d = as_float_array("direction", direction, shape_tail=(2,))
@@ -247,7 +276,8 @@ def simulate_impact_pymunk(arm, q, qd, stiffness, *, head: HeadContactModel | st
         if nd == 0.0 or not math.isfinite(nd):
             raise ValueError(f"direction = {d.tolist()} must be a non-zero finite vector")
         u = (float(d[0]) / nd, float(d[1]) / nd)
-    check_pass_through(hm, [max(v_tcp[0] * u[0] + v_tcp[1] * u[1], 0.0)])
+    if contact is None:
+        check_pass_through(hm, [max(v_tcp[0] * u[0] + v_tcp[1] * u[1], 0.0)])
 
     # ---- bodies ---------------------------------------------------------------------------
     space = pymunk.Space()
@@ -290,15 +320,26 @@ def simulate_impact_pymunk(arm, q, qd, stiffness, *, head: HeadContactModel | st
     D = np.zeros(n + 1)
     Ediss = np.zeros(n + 1)
     state = {"k": 0, "diss": 0.0, "delta": 0.0}
-    tcp_local = (L2, 0.0)
+    tcp_local = (s_pt, 0.0)
+    bp = b2 if plink == 2 else b1         # the body carrying the contact point
 
-    # the contact law is the engine's compiled one (one definition, see impact.contact);
-    # bound to locals for the per-step Python callback
-    hc_force, hc_elastic = hunt_crossley_force, hunt_crossley_elastic
+    # the contact law is the engine's compiled one (one definition, see impact.contact and
+    # impact.layers); bound to locals for the per-step Python callback
+    if contact is None:
+        hc_force, hc_elastic = hunt_crossley_force, hunt_crossley_elastic
+    else:
+        work = np.full(NWORK, np.nan)
+        row = contact.row
 
-    def contact(constraint, sp):
+        def hc_force(d, dd, k, n, b):
+            return stack_eval(d, dd, row, work)[0]
+
+        def hc_elastic(d, k, n):
+            return stack_eval(d, 0.0, row, work)[1]
+
+    def contact_force(constraint, sp):
         k = state["k"] + 1
-        p_tcp = b2.local_to_world(tcp_local)
+        p_tcp = bp.local_to_world(tcp_local)
         ph = bh.position
         dx, dy = ph.x - p_tcp.x, ph.y - p_tcp.y
         dist = math.sqrt(dx * dx + dy * dy)
@@ -306,13 +347,13 @@ def simulate_impact_pymunk(arm, q, qd, stiffness, *, head: HeadContactModel | st
         f = 0.0
         if delta > 0.0:
             nx, ny = dx / dist, dy / dist
-            vt = b2.velocity_at_world_point(p_tcp)
+            vt = bp.velocity_at_world_point(p_tcp)
             vh = bh.velocity
             ddelta = -(nx * (vh.x - vt.x) + ny * (vh.y - vt.y))
             f = hc_force(delta, ddelta, kc, nc, bc)
             if f > 0.0:
                 bh.apply_force_at_world_point((f * nx, f * ny), ph)
-                b2.apply_force_at_world_point((-f * nx, -f * ny), p_tcp)
+                bp.apply_force_at_world_point((-f * nx, -f * ny), p_tcp)
         # dissipation: (F - k delta^n) d(delta), trapezoid over the step
         d_old = state["delta"]
         if delta > 0.0 or d_old > 0.0:
@@ -323,15 +364,15 @@ def simulate_impact_pymunk(arm, q, qd, stiffness, *, head: HeadContactModel | st
         F[k], D[k], Ediss[k] = f, delta, state["diss"]
         state["k"] = k
 
-    pivot_o.pre_solve = contact
+    pivot_o.pre_solve = contact_force
 
     # ---- run ---------------------------------------------------------------------------
     REC = RECORD.empty(n + 1)   # one RECORD row per step
 
     def record(i):
         v1, v2, vh, ph = b1.velocity, b2.velocity, bh.velocity, bh.position
-        p_tcp = b2.local_to_world(tcp_local)
-        vt = b2.velocity_at_world_point(p_tcp)
+        p_tcp = bp.local_to_world(tcp_local)
+        vt = bp.velocity_at_world_point(p_tcp)
         REC[i] = (b1.angle, b2.angle, b1.angular_velocity, b2.angular_velocity,   # RECORD order
                   v1.x, v1.y, v2.x, v2.y, ph.x, ph.y, vh.x, vh.y, p_tcp.x, p_tcp.y, vt.x, vt.y)
 
@@ -360,12 +401,19 @@ def simulate_impact_pymunk(arm, q, qd, stiffness, *, head: HeadContactModel | st
     dq2 = (ang2 - ang1) - q2
     dist = np.hypot(xh - xt, yh - yt)
     dpos = np.maximum(R - dist, 0.0)
-    e_tot = ke + 0.5 * K1 * dq1 ** 2 + 0.5 * K2 * dq2 ** 2 + kc * dpos ** (nc + 1) / (nc + 1)
+    if contact is None:
+        e_con = kc * dpos ** (nc + 1) / (nc + 1)
+    else:
+        e_con = contact.evaluate(dpos)["V"].to_numpy()
+    e_tot = ke + 0.5 * K1 * dq1 ** 2 + 0.5 * K2 * dq2 ** 2 + e_con
     a_g = F / (mh * G0)
     # joint solver check: TCP of the link-2 body vs forward kinematics of the body angles
     # (a pivot that opens by e moves the body TCP by e)
     c1, s1, c12, s12 = np.cos(ang1), np.sin(ang1), np.cos(ang2), np.sin(ang2)
-    joint_err = np.hypot(xt - L1 * c1 - L2 * c12, yt - L1 * s1 - L2 * s12)
+    if plink == 2:
+        joint_err = np.hypot(xt - L1 * c1 - s_pt * c12, yt - L1 * s1 - s_pt * s12)
+    else:
+        joint_err = np.hypot(xt - s_pt * c1, yt - s_pt * s1)
     t = np.arange(n + 1) * dt
     hist = pd.DataFrame({"t": t, "F": F, "delta": D, "a_head_g": a_g, "dq1": dq1, "dq2": dq2,
                          "v_head_n": vhx * u[0] + vhy * u[1],

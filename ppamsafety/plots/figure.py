@@ -72,6 +72,7 @@ def save(fig, path) -> str:
     import matplotlib as mpl
     from matplotlib.layout_engine import PlaceHolderLayoutEngine
 
+    fit_titles(fig)
     engine = fig.get_layout_engine()
     if not isinstance(engine, PlaceHolderLayoutEngine):
         fig.savefig(path, dpi=150)
@@ -86,4 +87,44 @@ def save(fig, path) -> str:
     return str(path)
 
 
-__all__ = ["GROUP_COLORS", "new_figure", "save"]
+def _wrap(text, width_px: float, renderer) -> None:
+    """Wrap a Text artist's string at word boundaries until every line fits ``width_px``."""
+    import textwrap
+
+    s = text.get_text()
+    w = text.get_window_extent(renderer).width if s else 0.0
+    if w <= width_px:
+        return
+    longest = max(len(line) for line in s.split("\n"))
+    for chars in range(max(int(longest * width_px / w), 10), 9, -1):
+        text.set_text("\n".join(textwrap.fill(line, chars) for line in s.split("\n")))
+        if text.get_window_extent(renderer).width <= width_px:
+            return
+
+
+def fit_titles(fig) -> None:
+    """Wrap a figure's title and its axes' titles that are wider than the figure or their axes
+    (a title that does not fit is never cut off).
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure; its titles are changed in place.
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    titles = [ax.title for ax in fig.axes if ax.title.get_text()]
+    sup = getattr(fig, "_suptitle", None)
+    if not titles and (sup is None or not sup.get_text()):
+        return
+    canvas = fig.canvas if hasattr(fig.canvas, "get_renderer") else FigureCanvasAgg(fig)
+    renderer = canvas.get_renderer()
+    width = fig.get_figwidth() * fig.dpi
+    if sup is not None:
+        _wrap(sup, 0.96 * width, renderer)
+    for t in titles:
+        ax_w = t.axes.get_window_extent(renderer).width
+        _wrap(t, min(0.96 * width, max(1.1 * ax_w, 0.2 * width)), renderer)
+
+
+__all__ = ["GROUP_COLORS", "new_figure", "save", "fit_titles"]

@@ -36,7 +36,7 @@ def plot_fit(fit, *, max_points: int = 20000):
     ax1.set_ylabel(f"predicted {fit.quantity}")
     ax1.set_title(fit.method)
     ax2.plot(np.arange(y.size) * stride, y - yh, lw=0.6)
-    ax2.set_xlabel("equation index")
+    ax2.set_xlabel("equation index [-]")
     ax2.set_ylabel(f"residual {fit.quantity}")
     ax2.set_title(f"RMS {fit.residual_rms:.3g}, cond {fit.condition_number:.3g}")
     fig.tight_layout()

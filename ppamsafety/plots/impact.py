@@ -9,6 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..params.head import MAXILLA_FRACTURE_N
+from ..params.iso_ts_15066 import SKULL_FOREHEAD
 from .figure import new_figure
 
 FAMILY_COLORS = {"PID": "tab:red", "PSMC joint Ki=2": "tab:blue", "PSMC joint Ki=12": "tab:green",
@@ -88,7 +89,10 @@ def plot_worst_histories(items, *, title: str = ""):
 
 
 def plot_safety_table(table, *, experiments=("step", "switch")):
-    """F_max and HIC per controller variant with the thesis values and the 660 N line.
+    """F_max and HIC per controller variant with the thesis values and the limit lines.
+
+    F_max panels carry the 660 N maxilla line and the ISO/TS 15066 forehead lines (transient
+    2 x 130 N, quasi-static 130 N).
 
     Parameters
     ----------
@@ -111,13 +115,19 @@ def plot_safety_table(table, *, experiments=("step", "switch")):
         x = np.arange(len(sub))
         colors = [FAMILY_COLORS.get(f, "gray") for f in sub["family"]]
         for i, (col, thcol, ylab) in enumerate((("F_max", "Fmax_thesis", "F_max [N]"),
-                                                  ("HIC36", "HIC_thesis", "HIC36"))):
+                                                  ("HIC36", "HIC_thesis", "HIC36 [-]"))):
             a = axes[i, j]
             a.bar(x, sub[col], color=colors, alpha=0.8, label="toolkit")
             if thcol in sub.columns:
                 a.plot(x, sub[thcol], "k_", ms=18, mew=2, label="thesis Table 6.1")
             if col == "F_max":
                 a.axhline(MAXILLA_FRACTURE_N, color="r", ls="--", lw=1.2, label="maxilla 660 N")
+                a.axhline(SKULL_FOREHEAD.force_transient, color="darkorange", ls=":", lw=1.2,
+                          label=f"ISO/TS 15066 forehead transient "
+                                f"{SKULL_FOREHEAD.force_transient:g} N (not in the TS)")
+                a.axhline(SKULL_FOREHEAD.force_quasi_static, color="darkorange", ls="-.",
+                          lw=1.0, label=f"ISO/TS 15066 forehead quasi-static "
+                                        f"{SKULL_FOREHEAD.force_quasi_static:g} N")
             else:
                 a.set_yscale("log")
             a.set_ylabel(ylab)
@@ -294,7 +304,7 @@ def plot_head_fit(pairs, curve, *, drop=None, title: str = ""):
         ax.loglog(sub["F_max"], sub["HIC"], marker, ls="none", label=f"Table 6.1, {exp}")
     ax.loglog(curve["F_max"], curve["HIC36"], "k-", label="fitted Hunt-Crossley model")
     ax.set_xlabel("F_max [N]")
-    ax.set_ylabel("HIC36")
+    ax.set_ylabel("HIC36 [-]")
     ax.grid(alpha=0.3, which="both")
     ax.legend(fontsize=8)
     ax.set_title(title or "one contact model: HIC vs F_max")
@@ -380,7 +390,7 @@ def plot_direction_polar(sweeps, *, metric: str = "F_max", title: str = ""):
                 label="two-body prediction")
         rmax = float(max(t[metric].max(), t[pred].max()))
         v = np.radians(sw.velocity_deg)
-        ax.plot([v, v], [0, rmax], "k-", lw=1.2, label="TCP velocity (thesis)")
+        ax.plot([v, v], [0, rmax], "k-", lw=1.2, label="TCP velocity (thesis' placement)")
         i = int(np.argmax(t[metric].to_numpy()))
         ax.plot([th[i]], [t[metric].iloc[i]], "o", color="tab:red",
                 label=f"grid max: {t[metric].iloc[i]:.4g}{unit} at psi = {t['psi_deg'].iloc[i]:+.1f} deg")
@@ -415,7 +425,7 @@ def plot_direction_ratios(table):
     ax.set_xticks(x)
     ax.set_xticklabels([f"{e}: {lab}" for e, lab in zip(t["experiment"], t["label"])],
                        rotation=75, fontsize=6)
-    ax.set_ylabel("worst placement vs thesis placement [%]")
+    ax.set_ylabel("worst placement vs head along the TCP velocity [%]")
     ax.set_title("how much worse the worst head placement is (every instant)")
     ax.legend()
     fig.tight_layout()

@@ -14,8 +14,12 @@ from ..params.iso_ts_15066 import SKULL_FOREHEAD
 from .figure import new_figure
 
 #: Result columns a sweep figure draws, with their axis labels (the ones present are drawn).
-RESULTS = (("F_max", "F_max [N]"), ("HIC36", "HIC36"), ("HIC15", "HIC15"),
-           ("tcp_speed", "TCP speed at impact [m/s]"), ("track_rms", "tracking error RMS [m]"))
+RESULTS = (("F_max", "F_max [N]"), ("HIC36", "HIC36 [-]"), ("HIC15", "HIC15 [-]"),
+           ("tcp_speed", "TCP speed at impact [m/s]"), ("track_rms", "tracking error RMS [m]"),
+           ("p_max", "peak contact pressure [Pa]"),
+           ("covering_use", "covering compression / its limit [-]"))
+#: Marker of the points above a limit line.
+ABOVE = dict(marker="o", ms=8, mfc="none", mec="r", mew=1.2, ls="none")
 #: Most lines per panel: beyond, the other swept parameters are drawn as points.
 MAX_LINES = 8
 
@@ -42,29 +46,70 @@ def limit_lines(column: str) -> list:
     return []
 
 
-def _label(v) -> str:
-    return f"{v:g}" if isinstance(v, (int, float, np.integer, np.floating)) else str(v)
+def _label(v, unit=None) -> str:
+    if isinstance(v, (int, float, np.integer, np.floating)):
+        return f"{v:g}" + ("" if unit in (None, "-") else f" {unit}")
+    return str(v)
 
 
-def plot_sweep(df: pd.DataFrame, swept, *, title: str = ""):
+def _with_unit(name: str, unit) -> str:
+    return name if unit is None else f"{name} [{unit}]"
+
+
+def mark_above(ax, x, y, column: str) -> bool:
+    """Ring the points of ``column`` above its lowest limit line; whether there were any.
+
+    Parameters
+    ----------
+    ax : matplotlib.axes.Axes
+        The panel.
+    x, y : array_like
+        The points.
+    column : str
+        The result column (its limits: :func:`limit_lines`).
+    """
+    lines = limit_lines(column)
+    if not lines:
+        return False
+    lo = min(v for v, *_ in lines)
+    y = np.asarray(y, dtype=float)
+    above = np.isfinite(y) & (y > lo)
+    if above.any():
+        ax.plot(np.asarray(x)[above], y[above], **ABOVE)
+    return bool(above.any())
+
+
+def plot_sweep(df: pd.DataFrame, swept, *, title: str = "", units=None,
+               region_limits=None):
     """Each result of a sweep against each swept parameter, with the safety limits.
 
     Parameters
     ----------
     df : pandas.DataFrame
-        The sweep's result table (case parameters, ``status``, the results).
+        The sweep's result table (case parameters, ``status``, the results), the swept
+        values in the units of ``units``.
     swept : sequence of str
         The case parameters that vary (one column of panels each).
     title : str
-        Figure title.
+        Figure title (wrapped when it is wider than the figure).
+    units : dict, optional
+        Column -> unit shown on the axes and in the legends (``"-"`` dimensionless, None
+        none); default: the SI units of :data:`RESULTS` only.
+    region_limits : dict, optional
+        Body region name -> {result column: limit} (e.g. ``{"face": {"F_max": 130.0}}``):
+        each region that appears in the table's ``body_region`` column gets its limit line
+        on the panels of that result.
 
     Returns
     -------
     matplotlib.figure.Figure
         One row of panels per result of :data:`RESULTS` present, one column per swept
         parameter; F_max panels carry the 660 N maxilla line and the ISO/TS 15066
-        transient forehead limit, HIC panels the HIC 650 line (log scale).
+        transient forehead limit, HIC panels the HIC 650 line (log scale), and the limits
+        of the body regions present (``region_limits``), each labelled in the panel's legend;
+        points above the lowest limit of their panel are ringed red.
     """
+    units = dict(units or {})
     ok = df[df["status"] == "ok"] if "status" in df.columns else df
     results = [(c, lab) for c, lab in RESULTS if c in ok.columns and ok[c].notna().any()]
     swept = list(swept) or ["case"]
@@ -86,27 +131,38 @@ def plot_sweep(df: pd.DataFrame, swept, *, title: str = ""):
             lines = len(groups) <= MAX_LINES
             for key, g in groups:
                 g = g.sort_values("_x")
-                name = ", ".join(f"{o} = {k}" for o, k in zip(others, key if isinstance(
-                    key, tuple) else (key,))) if others else None
+                name = ", ".join(f"{o} = {_label(k, units.get(o))}" for o, k in zip(
+                    others, key if isinstance(key, tuple) else (key,))) if others else None
                 ax.plot(g["_x"], g[col], "o-" if lines else "o", ms=3, lw=1,
                         label=name if lines else None)
             for v, text, color, style in limit_lines(col):
                 ax.axhline(v, color=color, ls=style, lw=1, label=text)
+            if mark_above(ax, xv, ok[col], col):
+                ax.plot([], [], label="above a limit", **ABOVE)
+            present = set(ok["body_region"]) if "body_region" in ok.columns else set()
+            for k, (region, lims) in enumerate(sorted((region_limits or {}).items())):
+                if region in present and col in lims:
+                    ax.axhline(lims[col], color=f"C{(k + 3) % 10}", ls="-.", lw=1,
+                               label=f"{region}: {lims[col]:g}")
             if col.startswith("HIC") and (ok[col] > 0).all():
                 ax.set_yscale("log")
             ax.set_ylabel(lab)
-            ax.set_xlabel(x)
+            ax.set_xlabel(_with_unit(x, units.get(x)))
             if cats is not None:
                 ax.set_xticks(range(len(cats)), cats, rotation=20, fontsize=7)
             ax.grid(alpha=0.3)
-            if i == 0 or col == "F_max":
+            if i == 0 or limit_lines(col):
                 ax.legend(fontsize=6)
     if title:
         fig.suptitle(title)
     return fig
 
 
-def plot_envelope(envelope, *, title: str = ""):
+#: Units of the results an envelope limits (its ``metric``).
+METRIC_UNITS = {"F_max": "N", "HIC36": "-", "HIC15": "-"}
+
+
+def plot_envelope(envelope, *, title: str = "", unit=None):
     """A safety envelope: the limited result against the parameter, and the boundary.
 
     Parameters
@@ -115,26 +171,42 @@ def plot_envelope(envelope, *, title: str = ""):
         Result of :func:`ppamsafety.envelope.safety_envelope` (``evaluations``,
         ``parameter``, ``metric``, ``limit_value``, ``limit_label``, ``safe_value``).
     title : str
-        Figure title (default: the envelope's description).
+        Figure title (default: the envelope's description); wrapped to the figure.
+    unit : str, optional
+        Unit of the parameter (its values are SI).
 
     Returns
     -------
     matplotlib.figure.Figure
+        The evaluations (points above the limit ringed red), the labelled limit line and the
+        envelope's boundary.
     """
     ev = envelope.evaluations.sort_values("value")
     fig, ax = new_figure(figsize=(6.5, 4.0), layout="constrained")
     ok = ev[ev["status"] == "ok"]
     ax.plot(ok["value"], ok[envelope.metric], "o-", ms=4, lw=1, label="evaluated")
     ax.axhline(envelope.limit_value, color="r", ls="--", lw=1, label=envelope.limit_label)
+    y = ok[envelope.metric].to_numpy(float)
+    above = np.isfinite(y) & (y > envelope.limit_value)
+    if above.any():
+        ax.plot(ok["value"].to_numpy(float)[above], y[above], label="above the limit", **ABOVE)
     if envelope.safe_value is not None:
         ax.axvline(envelope.safe_value, color="g", lw=1.2,
-                   label=f"envelope: {envelope.parameter} = {envelope.safe_value:.4g}")
-    ax.set_xlabel(envelope.parameter)
-    ax.set_ylabel(envelope.metric)
+                   label=f"envelope: {envelope.parameter} = "
+                         f"{_label(envelope.safe_value, unit)}")
+    for i, c in enumerate(getattr(envelope, "crossings", ())):
+        ax.axvspan(min(c["safe_value"], c["unsafe_value"]), max(c["safe_value"],
+                                                                c["unsafe_value"]),
+                   color="tab:orange" if c["flat"] else "tab:gray", alpha=0.3,
+                   label=("crossing bracket" + (" (flat)" if c["flat"] else "")) if i == 0
+                   else None)
+    ax.set_xlabel(_with_unit(envelope.parameter, unit))
+    ax.set_ylabel(_with_unit(envelope.metric, METRIC_UNITS.get(envelope.metric)))
     ax.grid(alpha=0.3)
     ax.legend(fontsize=7)
     ax.set_title(title or envelope.description, fontsize=9)
     return fig
 
 
-__all__ = ["plot_sweep", "plot_envelope", "limit_lines", "RESULTS"]
+__all__ = ["plot_sweep", "plot_envelope", "limit_lines", "mark_above", "RESULTS",
+           "METRIC_UNITS"]

@@ -20,11 +20,18 @@ start, the workers compile the large kernels between them
 (:mod:`ppamsafety.report.warmup`; a task starts once the tasks whose kernels it
 calls are done, and the sections once every task has started), so that a cold
 kernel cache is not filled by every worker at once.  Each worker runs one BLAS
-thread.  Sections that start their own worker processes (the safety scan, the
-lambda sweep) still do, and the closed-loop batches of a section run in threads on every
-core (:func:`~ppamsafety.experiments.run_batch`), so that the last sections of a report,
-when the other workers are idle, still use the whole machine; the operating system shares
-the cores.  ``metrics.json`` records each section's wall and CPU time.
+thread.  A section that starts worker processes of its own (the safety scan, the lambda
+sweep) gets its worker's share of the processes, so the report never runs more than
+``processes`` at once (``--processes 1``: everything in this process), and the closed-loop
+batches of a section run in threads on every core (:func:`~ppamsafety.experiments.run_batch`),
+so that the last sections of a report, when the other workers are idle, still use the whole
+machine.  A section's warnings are raised again in the main process, naming the section.
+``metrics.json`` records each section's wall and CPU time.
+
+**Which sections.**  The thesis report runs every section.  The report for another arm leaves
+out the sections that do not concern it (:func:`select_sections`: the bench case study, the
+fit of the thesis' own measurements, the hysteresis studies of an arm without hysteresis) and
+says so in its header; ``include`` / ``exclude`` change that selection, ``only`` replaces it.
 """
 
 from __future__ import annotations
@@ -37,15 +44,18 @@ import warnings
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from pathlib import Path
 
+import pandas as pd
 from threadpoolctl import threadpool_limits
 
+from .._errors import mark_internal
 from .._validation import check_int, did_you_mean
 from ..impact.head import head_model, resolve_head
 from ..output import OutputFolder
 from ..params import ArmParameters, is_thesis_arm, thesis_arm
 from ..params.arm_file import arm_fingerprint, arm_to_toml
-from ..sections import REGISTRY, run_section, section_infos
+from ..sections import REGISTRY, concerns, run_section, section_infos
 from . import warmup
+from .columns import unit_of, with_header_units
 from .html import report_page
 
 
@@ -56,19 +66,34 @@ def _cpu_seconds() -> float:
     return me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime
 
 
-def _timed_section(name: str, stage, quick: bool, arm=None, head=None):
-    """Run one section into ``stage``; (SectionResult, wall time [s], CPU time [s]).
+def _timed_section(name: str, stage, quick: bool, arm=None, head=None, processes=None):
+    """Run one section into ``stage``; (SectionResult, wall time [s], CPU time [s], warnings).
 
     The CPU time counts every thread of the process that ran the section and the worker
-    processes the section started and ended.  Top level: picklable.
+    processes the section started and ended.  The warnings are (message, category) pairs
+    naming the section, raised again by the report in the main process (a worker's own
+    warnings would print unformatted).  A bug (:func:`ppamsafety._errors.is_internal_error`,
+    read from the traceback, which a worker's exception loses on its way to the parent) is
+    raised as an ``InternalFailure`` naming the section, so that it is never reported as bad
+    input.  Top level: picklable.
     """
     t0, c0 = time.perf_counter(), _cpu_seconds()
-    res = run_section(name, stage, quick=quick, arm=arm, head=head)   # compute, render, write
-    return res, time.perf_counter() - t0, _cpu_seconds() - c0
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            res = run_section(name, stage, quick=quick, arm=arm, head=head,  # compute,
+                              processes=processes)                          # render, write
+        except TypeError as exc:
+            marked = mark_internal(exc, f"report section {name!r}")
+            if marked is exc:
+                raise
+            raise marked from exc
+    return (res, time.perf_counter() - t0, _cpu_seconds() - c0,
+            [(str(w.message), w.category) for w in caught])
 
 
 def _run_in_pool(pool, processes: int, order, stage, quick: bool, warm: bool, report,
-                 arm=None, head=None) -> None:
+                 arm=None, head=None, inner=None) -> None:
     """Run the warm-up tasks (if ``warm``) and the sections ``order`` in ``pool``.
 
     At most ``processes`` jobs run at a time, so that every job submitted starts
@@ -82,7 +107,7 @@ def _run_in_pool(pool, processes: int, order, stage, quick: bool, warm: bool, re
     finished).
     """
     tasks = warmup.TASKS if warm else ()
-    subject = () if arm is None and head is None else (arm, head)   # the thesis report: none
+    subject = (arm, head)
     finished_tasks, started_tasks = set(), set()
     queue = list(order)
     running = {}                 # future -> ("task", index) or ("section", name)
@@ -95,8 +120,8 @@ def _run_in_pool(pool, processes: int, order, stage, quick: bool, warm: bool, re
                 running[pool.submit(warmup.run_task, ready[0])] = ("task", ready[0])
             elif len(started_tasks) == len(tasks) and queue:
                 name = queue.pop(0)
-                running[pool.submit(_timed_section, name, stage, quick, *subject)] = (
-                    "section", name)
+                running[pool.submit(_timed_section, name, stage, quick, *subject,
+                                    processes=inner)] = ("section", name)
             else:
                 break
         if not running:          # tasks waiting for tasks that never run: a bad TASKS table
@@ -159,9 +184,116 @@ def _subject_header(quick: bool, arm, head) -> str:
                "shown.\n\n"))
 
 
+#: The report's data dictionary: every column of every CSV it wrote, with its unit.
+COLUMNS_FILE = "columns.csv"
+
+
+def column_table(names, results) -> pd.DataFrame:
+    """Every column of the CSV files the sections wrote, with its unit and kind.
+
+    Parameters
+    ----------
+    names : list of str
+        The sections, in report order.
+    results : dict
+        Section -> :class:`~ppamsafety.sections.SectionResult` (its written artifacts).
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``section``, ``file``, ``column``, ``kind`` (``number``, ``text`` or ``flag``) and
+        ``unit`` (``-`` dimensionless; empty for text and flags, and where no unit is
+        declared: :mod:`ppamsafety.report.columns`).
+    """
+    rows = []
+    for name in names:
+        for path in results[name].artifacts:
+            if not str(path).endswith(".csv"):
+                continue
+            try:
+                df = pd.read_csv(path)
+            except pd.errors.EmptyDataError:       # a table with no rows and no columns
+                continue
+            for col in df.columns:
+                s = df[col]
+                kind = ("flag" if pd.api.types.is_bool_dtype(s) else "number"
+                        if pd.api.types.is_numeric_dtype(s) and s.notna().any() else "text")
+                unit = unit_of(col, name) if kind == "number" else None
+                rows.append({"section": name, "file": Path(path).name, "column": col,
+                             "kind": kind, "unit": unit or ""})
+    return pd.DataFrame(rows, columns=["section", "file", "column", "kind", "unit"])
+
+
+def _names(option: str, names) -> list:
+    """A checked list of section names given to ``option`` (None: [])."""
+    if names is None:
+        return []
+    if isinstance(names, str):
+        raise TypeError(f"{option} must be a list of section names, got the str {names!r}")
+    names = list(names)
+    bad = [n for n in names if not isinstance(n, str)]
+    if bad:
+        raise TypeError(f"{option} must hold section names (str), got {bad[0]!r}")
+    unknown = [n for n in names if n not in REGISTRY]
+    if unknown:
+        raise ValueError(f"unknown report sections {unknown}"
+                         f"{did_you_mean(unknown[0], list(REGISTRY))}; choose from {REGISTRY}")
+    twice = sorted({n for n in names if names.count(n) > 1})
+    if twice:
+        raise ValueError(f"{option} = {names!r} names {twice} more than once; name each "
+                         f"section once")
+    return names
+
+
+def select_sections(arm=None, *, only=None, include=None, exclude=None) -> tuple:
+    """The sections a report runs for an arm, and those it leaves out with the reason.
+
+    Without ``only``: every section that concerns the arm (:func:`ppamsafety.sections.
+    concerns`: all of them for the thesis arm; for another arm not the bench case study, nor
+    the fit of the thesis' own measurements, nor the hysteresis studies of an arm without
+    hysteresis), plus ``include``, minus ``exclude``, in report order.  ``only`` runs exactly
+    the sections it names (whether they concern the arm or not).
+
+    Parameters
+    ----------
+    arm : ArmParameters, optional
+        The arm (None: the thesis arm).
+    only, include, exclude : list of str, optional, keyword-only
+        Section names (:data:`~ppamsafety.sections.REGISTRY`); ``only`` excludes the others.
+
+    Returns
+    -------
+    (list of str, dict)
+        The sections to run; section -> why it was left out (not asked for).
+    """
+    if only is not None and (include is not None or exclude is not None):
+        raise ValueError("only names every section to run; give include/exclude without it")
+    if only is not None:
+        names = _names("only", only)
+        if not names:
+            raise ValueError(f"only = {only!r} names no report section; choose from {REGISTRY}")
+        return names, {}
+    include, exclude = _names("include", include), _names("exclude", exclude)
+    both = sorted(set(include) & set(exclude))
+    if both:
+        raise ValueError(f"{both} both included and excluded; name each section once")
+    names, left = [], {}
+    for name in REGISTRY:
+        ok, why = concerns(name, arm)
+        if name in exclude:
+            continue
+        if ok or name in include:
+            names.append(name)
+        else:
+            left[name] = why
+    if not names:
+        raise ValueError(f"exclude = {exclude!r} leaves no report section to run")
+    return names, left
+
+
 def build_report(outdir="reports", *, quick: bool = False, only=None, progress: bool = True,
                  overwrite: bool = False, processes: int | None = None, arm=None,
-                 head=None, replace_kind: bool = False) -> Path:
+                 head=None, replace_kind: bool = False, include=None, exclude=None) -> Path:
     """Run the sections and write ``outdir/index.md``, ``index.html``, figures and tables.
 
     ``index.html`` is the same report as one page with section navigation
@@ -176,53 +308,47 @@ def build_report(outdir="reports", *, quick: bool = False, only=None, progress: 
     quick : bool
         Coarser grids and shorter sweeps (for smoke tests).
     only : iterable of str, optional
-        Run only these section names (see :data:`ppamsafety.sections.REGISTRY`).
+        Run only these section names (see :data:`ppamsafety.sections.REGISTRY`), whether
+        they concern the arm or not.
     progress : bool
         Print one line per section.
     overwrite : bool
         Replace a previous ppamsafety output in ``outdir`` (its toolkit-written
         files only).  If a section fails, the previous report is left untouched.
     processes : int, optional
-        Studies run at the same time, each in its own worker process (default:
-        the CPU count, at most the number of sections); 1 runs them one after
-        the other in this process.  The report is the same either way.
+        Worker processes of the report (default: the CPU count).  Sections run at the same
+        time, each in its own worker, at most one per section; a section that runs a sweep
+        of its own (the every-instant scan, the lambda sweep) gets the share of the
+        processes its worker has (``processes // workers``, at least 1), so that the report
+        never runs more than ``processes`` at once.  1 runs the sections one after the other
+        in this process.  The report is the same either way.
     arm : ArmParameters, optional
         The arm of every section (default the thesis arm): any valid arm, e.g. from an
-        arm file (:func:`ppamsafety.params.arm_file.load_arm`).  Thesis values and
-        ratios appear only for the thesis arm.
+        arm file (:func:`ppamsafety.design.load_arm`).  Thesis values and
+        ratios appear only for the thesis arm; the sections that do not concern the arm
+        are left out unless asked for (:func:`select_sections`).
     head : HeadContactModel, str or path-like, optional
         The head model of the impacts (default ``thesis-frontal``): a model, a name or
         a head file.
     replace_kind : bool
         Allow replacing a previous ppamsafety output of another kind than a report or a
         section (e.g. a sweep folder); refused by default, even with ``overwrite``.
+    include, exclude : iterable of str, optional
+        Sections added to or removed from the arm's default selection (not with ``only``).
 
     Returns
     -------
     pathlib.Path
         Path of the written ``index.md``.
     """
-    if isinstance(only, str):
-        raise TypeError(f"only must be a list of section names, got the str {only!r}")
-    names = list(REGISTRY if only is None else only)
-    if not names:
-        raise ValueError(f"only = {only!r} names no report section; choose from {REGISTRY}")
-    bad = [n for n in names if not isinstance(n, str)]
-    if bad:
-        raise TypeError(f"only must hold section names (str), got {bad[0]!r}")
-    unknown = [n for n in names if n not in REGISTRY]
-    if unknown:
-        raise ValueError(f"unknown report sections {unknown}"
-                         f"{did_you_mean(unknown[0], list(REGISTRY))}; choose from {REGISTRY}")
-    twice = sorted({n for n in names if names.count(n) > 1})
-    if twice:
-        raise ValueError(f"only = {names!r} names {twice} more than once; name each section "
-                         f"once")
-    if processes is None:
-        processes = os.cpu_count() or 1
-    processes = min(check_int("processes", processes, 1, 1024), len(names))
     if arm is not None and not isinstance(arm, ArmParameters):
         raise TypeError(f"arm must be an ArmParameters or None, got {type(arm).__name__}")
+    names, left_out = select_sections(arm, only=only, include=include, exclude=exclude)
+    if processes is None:
+        processes = os.cpu_count() or 1
+    budget = check_int("processes", processes, 1, 1024)
+    processes = min(budget, len(names))
+    inner = max(1, budget // processes)     # a section's own sweep: its worker's share
     head = None if head is None else resolve_head(head)
     out = Path(outdir)
     previous = _previous_times(out)
@@ -230,16 +356,17 @@ def build_report(outdir="reports", *, quick: bool = False, only=None, progress: 
                       replace_kind=replace_kind) as stage:
         done = {}
 
-        def report(name, res, dt, cpu):
+        def report(name, res, dt, cpu, caught=()):
             done[name] = (res, dt, cpu)
+            for message, category in caught:     # a section's warnings, named (in this process)
+                warnings.warn(message, category, stacklevel=2)
             if progress:
                 print(f"[report] {name}: {dt:.1f} s ({cpu:.1f} s of CPU), "
                       f"{len(res.artifacts)} artifacts", flush=True)
 
         if processes == 1:
             for name in names:
-                subject = () if arm is None and head is None else (arm, head)
-                report(name, *_timed_section(name, stage, quick, *subject))
+                report(name, *_timed_section(name, stage, quick, arm, head, processes=inner))
         else:
             # longest first (never timed: first), so the last to finish is a short one;
             # without a previous report, by the typical times
@@ -250,7 +377,7 @@ def build_report(outdir="reports", *, quick: bool = False, only=None, progress: 
                 # the full report first compiles the large kernels once, split between the
                 # workers (report.warmup)
                 _run_in_pool(pool, processes, order, stage, quick, only is None, report,
-                             arm, head)
+                             arm, head, inner)
             except BaseException:
                 # Ctrl-C or a failed section: stop the other sections now instead of waiting
                 # for them (the previous report is left untouched either way)
@@ -266,8 +393,11 @@ def build_report(outdir="reports", *, quick: bool = False, only=None, progress: 
             res, dt, cpu = done[name]
             metrics[name] = {**res.metrics, "wall_time_s": round(dt, 2),
                              "cpu_time_s": round(cpu, 2)}
-            sections.append(f"## {res.title}\n\n{res.markdown.strip()}\n\n*Study `{name}` ran in "
+            body = with_header_units(res.markdown.strip(), name)
+            sections.append(f"## {res.title}\n\n{body}\n\n*Study `{name}` ran in "
                             f"{dt:.1f} s.*\n")
+        column_table(names, {n: done[n][0] for n in names}).to_csv(stage / COLUMNS_FILE,
+                                                                    index=False)
         header = ("# ppamsafety report\n\nGenerated by `ppamsafety report`"
                   f"{' --quick' if quick else ''}. Every number below was computed by the code in "
                   "this repository; thesis values are quoted for comparison with their table or "
@@ -277,6 +407,10 @@ def build_report(outdir="reports", *, quick: bool = False, only=None, progress: 
             (stage / "arm.toml").write_text(arm_to_toml(arm or thesis_arm()), encoding="utf-8")
             if head is not None:
                 (stage / "head.toml").write_text(head.to_toml(), encoding="utf-8")
+        if left_out:
+            header += ("Left out, as they do not concern this arm (run them with `--include "
+                       "NAMES`): " + "; ".join(f"`{n}` ({why})" for n, why in left_out.items())
+                       + ".\n\n")
         md = header + "\n".join(sections)
         (stage / "index.md").write_text(md)
         (stage / "index.html").write_text(report_page(md), encoding="utf-8")

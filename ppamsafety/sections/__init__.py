@@ -30,6 +30,7 @@ from __future__ import annotations
 import functools
 import importlib
 import inspect
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -40,7 +41,8 @@ from .._validation import check_bool
 from ..output import OutputFolder
 # the impact.head module by its own name: ``head_model`` is a section module here
 from ..impact import head as _head
-from ..params import ArmParameters, is_thesis_arm, load_arm, thesis_arm
+from ..design import load_arm
+from ..params import ArmParameters, is_thesis_arm, thesis_arm
 from ..plots.figure import save
 
 
@@ -57,11 +59,19 @@ class SectionInfo:
     typical_seconds : float
         Its wall time [s] in a full report on 2 cores with a cold kernel cache; a
         first report (no previous ``metrics.json``) starts the longest sections first.
+    scope : str
+        Which arms it concerns (:data:`SCOPES`): ``"arm"`` (any arm, the default),
+        ``"hysteresis"`` (the arm's muscle hysteresis: an arm that declares
+        ``hysteresis_delta``), ``"thesis"`` (the thesis arm's own measurements) or
+        ``"bench"`` (a bench case study, not about an arm).  The report for an arm that is
+        not the thesis arm leaves out the sections that do not concern it unless asked for
+        (:func:`concerns`).
     """
 
     summary: str
     thesis: str
     typical_seconds: float
+    scope: str = "arm"
 
     def __post_init__(self):
         for name in ("summary", "thesis"):
@@ -71,6 +81,19 @@ class SectionInfo:
         if not (isinstance(self.typical_seconds, (int, float)) and self.typical_seconds > 0):
             raise ValueError(f"SectionInfo.typical_seconds = {self.typical_seconds!r} must be a "
                              f"positive number [s]")
+        if self.scope not in SCOPES:
+            raise ValueError(f"SectionInfo.scope = {self.scope!r} must be one of {list(SCOPES)}")
+
+
+#: What each :attr:`SectionInfo.scope` concerns, as the report says it when it leaves a
+#: section out.
+SCOPES = {
+    "arm": "computed for any arm",
+    "hysteresis": "it studies the arm's muscle hysteresis, and the arm declares none "
+                  "(effects.hysteresis_delta)",
+    "thesis": "it fits the thesis arm's own published measurements",
+    "bench": "a bench case study of real cylinders, not about an arm",
+}
 
 
 @dataclass
@@ -152,6 +175,33 @@ def readme_table() -> str:
     lines += [f"| `{name}` | {info.summary} | {info.thesis} |"
               for name, info in section_infos().items()]
     return "\n".join(lines)
+
+
+def concerns(name: str, arm=None) -> tuple:
+    """Whether a section concerns an arm, and if not, why.
+
+    Every section concerns the thesis arm (the thesis report runs them all).  For another
+    arm, a section of scope ``"arm"`` always does, ``"hysteresis"`` if the arm declares a
+    muscle hysteresis, ``"thesis"`` and ``"bench"`` never.
+
+    Parameters
+    ----------
+    name : str
+        A section of :data:`REGISTRY`.
+    arm : ArmParameters or None
+        The arm (None: the thesis arm).
+
+    Returns
+    -------
+    (bool, str)
+        Whether it concerns the arm; the reason when it does not (else "").
+    """
+    scope = section_module(name).SECTION.scope
+    if arm is None or is_thesis_arm(resolve_arm(arm)) or scope == "arm":
+        return True, ""
+    if scope == "hysteresis" and resolve_arm(arm).effects.hysteresis_delta is not None:
+        return True, ""
+    return False, SCOPES[scope]
 
 
 def resolve_arm(arm):
@@ -321,8 +371,11 @@ def section_module(name: str):
 
 
 def run_section(name: str, outdir, *, quick: bool = False, arm=None,
-                head=None) -> SectionResult:
+                head=None, processes: int | None = None) -> SectionResult:
     """Compute, render and write one section: ``write_section(render(compute(...)), outdir)``.
+
+    Every warning the section raises is raised again naming the section
+    (``section NAME: ...``), after it finished.
 
     Parameters
     ----------
@@ -335,7 +388,12 @@ def run_section(name: str, outdir, *, quick: bool = False, arm=None,
     arm : ArmParameters, optional
         The arm (default the thesis arm).
     head : HeadContactModel, optional
-        The head model of the impacts (default ``thesis-frontal``).
+        The head model of the impacts (default ``thesis-frontal``).  A section whose
+        ``compute`` takes no ``head`` (it crashes into none) runs without it: the report
+        passes each section only the options it takes (:func:`section_options`).
+    processes : int, optional
+        Worker processes a section that runs a sweep of its own may start (its
+        ``compute(processes=...)``; default the section's own choice).
 
     Returns
     -------
@@ -348,7 +406,65 @@ def run_section(name: str, outdir, *, quick: bool = False, arm=None,
         kw["arm"] = resolve_arm(arm)
     if head is not None:
         kw["head"] = _head.resolve_head(head)
-    return write_section(mod.render(mod.compute(quick=quick, **kw)), outdir)
+    if processes is not None:
+        kw["processes"] = processes
+    taken = section_options(name)
+    kw = {k: v for k, v in kw.items() if k in taken}
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        res = write_section(mod.render(mod.compute(quick=quick, **kw)), outdir)
+    for w in named_warnings(name, caught):
+        warnings.warn(w.message, w.category, stacklevel=2)
+    return res
+
+
+class _Named:
+    def __init__(self, message, category):
+        self.message, self.category = message, category
+
+
+def named_warnings(name: str, caught) -> list:
+    """The warnings a section raised, each once, with the section's name in front.
+
+    Parameters
+    ----------
+    name : str
+        The section.
+    caught : list of warnings.WarningMessage
+        What ``warnings.catch_warnings(record=True)`` recorded.
+
+    Returns
+    -------
+    list
+        Objects with ``message`` (str, ``"section NAME: ..."``) and ``category``.
+    """
+    out, seen = [], set()
+    for w in caught:
+        text = " ".join(str(w.message).split())
+        if text in seen:
+            continue
+        seen.add(text)
+        out.append(_Named(f"section {name}: {text}", w.category))
+    return out
+
+
+def section_options(name: str) -> frozenset:
+    """The keyword options a section's ``compute`` takes (``quick``, ``arm``, ``head`` ...).
+
+    Parameters
+    ----------
+    name : str
+        Section name (see :data:`REGISTRY`).
+
+    Returns
+    -------
+    frozenset of str
+        Names of the keyword parameters of ``compute`` (read from its signature, through
+        the :func:`checked_compute` wrapper).
+    """
+    params = inspect.signature(section_module(name).compute).parameters.values()
+    return frozenset(p.name for p in params
+                     if p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD))
 
 
 def main(name: str, argv=None) -> int:

@@ -42,7 +42,7 @@ SECTION = SectionInfo(
     summary=("the as-built arm: effects and sensor faults fitted jointly to Tables 5.2 and 6.1, "
              "the fig. 3.1 RMS and the §5.3.5 statements; identifiability, the remaining gap, "
              "the conclusions re-tested"),
-    thesis="Tables 5.2, 6.1, §3.5.1.6, §5.3.5 (issue 20)", typical_seconds=60.0)
+    thesis="Tables 5.2, 6.1, §3.5.1.6, §5.3.5 (issue 20)", typical_seconds=60.0, scope="thesis")
 
 #: Quick mode: three variants, short runs, two candidates, a budget of three points.
 QUICK_VARIANTS = ("PID", "PSMC joint Ki=12 λ=0.4", "PSMC task λ=0.4")
@@ -247,7 +247,7 @@ def render(study: AsBuiltStudy) -> Section:
     study : AsBuiltStudy
         Output of :func:`compute`.
     """
-    title = "The as-built arm: the library fitted to the thesis' own measurements (issue 20)"
+    title = "The as-built arm: the library fitted to the thesis' own measurements"
     if study.fit is None:
         return Section(title, study.note + "\n\nThe as-built fit uses the thesis' printed "
                        "measurements of its own arm and head; it is not run for this arm.",

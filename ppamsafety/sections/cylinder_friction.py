@@ -40,7 +40,7 @@ SECTION = SectionInfo(
     summary=("bench case study: friction of three real 3D-printed cylinders (campaigns over "
              "pressure), loops before/after, named effects, laws vs pressure; confidence "
              "calibration"),
-    thesis="(new)", typical_seconds=35.0)
+    thesis="(new)", typical_seconds=35.0, scope="bench")
 
 #: Synthetic campaigns of the calibration in the report: none by default (the report's time
 #: budget; the full measurement, >= 200 campaigns, is ``tests/test_bench_calibration.py``
@@ -184,8 +184,7 @@ def compute(*, quick: bool = False, arm=None, calibration_runs: int | None = Non
                 laws.append(row)
     t1 = time.perf_counter()
     seeds = list(MEASURE_SEEDS)[:n_cal]
-    names, runs = run_calibration(seeds) if seeds else (
-        pd.DataFrame(columns=["seed", "kind", "name", "level", "right"]), pd.DataFrame())
+    names, runs = run_calibration(seeds)            # no seeds: the two tables, empty
     cal = calibration_table(names)
     records = pd.concat(recs, ignore_index=True)
     m = {"seals": len(dgs), "diagnosis_seconds": t1 - t0,

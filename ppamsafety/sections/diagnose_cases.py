@@ -494,8 +494,7 @@ def render(study: DiagnoseCasesStudy) -> Section:
                  ("diagnose_table_5_2_cosines.csv", fit.cosines.reset_index().rename(
                      columns={"index": "effect"}))]
     arts += [("diagnose_battery.csv", study.battery)]
-    return Section(title="Discrepancy diagnosis: closed-loop records, Table 5.2, blind battery "
-                         "(issue 10)",
+    return Section(title="Discrepancy diagnosis: closed-loop records, Table 5.2, blind battery",
                    markdown="\n".join(L), artifacts=arts, metrics=dict(study.metrics))
 
 

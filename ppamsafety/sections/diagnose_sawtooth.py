@@ -35,7 +35,7 @@ from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_
 SECTION = SectionInfo(
     summary=("discrepancy diagnosis (a): the sawtooth with hysteresis hidden, localised in the "
              "muscle forces, delta fitted"),
-    thesis="§3.5.1.6, figs. 3.1-3.2", typical_seconds=3.4)
+    thesis="§3.5.1.6, figs. 3.1-3.2", typical_seconds=3.4, scope="hysteresis")
 
 #: Hidden hysteresis scale delta of every muscle group [-] (thesis §3.6.5, 25-fibre muscles).
 HIDDEN_DELTA = DELTA_25_FIBRES
@@ -74,6 +74,8 @@ class DiagnoseSawtoothStudy:
         Thesis values apply: the thesis arm.
     note : str
         The other-arm note ("" for the thesis arm).
+    delta_source : str
+        Where the hidden delta comes from, as the report says it.
     """
 
     quick: bool
@@ -85,6 +87,7 @@ class DiagnoseSawtoothStudy:
     metrics: dict = field(default_factory=dict)
     thesis: bool = True
     note: str = ""
+    delta_source: str = "§3.6.5"
 
     def to_pandas(self) -> pd.DataFrame:
         """The rest-point table."""
@@ -126,9 +129,14 @@ def compute(*, quick: bool = False, arm=None, delta: float = HIDDEN_DELTA,
     thesis = compares_to_thesis(arm)
     arm = resolve_arm(arm)
     own = arm.effects.hysteresis_delta
+    source = "§3.6.5" if thesis else "the value given to compute()"
     if own is not None:
         arm = arm.replace(effects=replace(arm.effects, hysteresis_delta=None))
         delta = max(own)
+        source = "the arm's own, from its [effects]"
+    elif not thesis and delta == HIDDEN_DELTA:
+        source = ("ASSUMED: the arm declares no hysteresis, so the value fitted for the "
+                  "thesis' 25-fibre muscles (§3.6.5) stands in")
     delta = check_range("delta", delta, 0.0, 1.0, lo_open=True)
     seed = check_seed("seed", seed)
     t0 = time.perf_counter()
@@ -186,7 +194,8 @@ def compute(*, quick: bool = False, arm=None, delta: float = HIDDEN_DELTA,
             m.pop(k)
     return DiagnoseSawtoothStudy(quick=quick, hidden_delta=delta, diagnosis=dg,
                                  rest_points=rest, localisation=loc, wall_time=wall, metrics=m,
-                                 thesis=thesis, note="" if thesis else other_arm_note(arm))
+                                 thesis=thesis, note="" if thesis else other_arm_note(arm),
+                                 delta_source=source)
 
 
 def render(study: DiagnoseSawtoothStudy) -> Section:
@@ -216,10 +225,13 @@ def render(study: DiagnoseSawtoothStudy) -> Section:
     md = ([study.note, ""] if study.note else []) + [
         "The static gravity-compensation sawtooth of §3.5.1.6 (figs. 3.1-3.2), synthesized "
         f"with the muscle-force hysteresis (3.35) hidden in the plant at delta = "
-        f"{m['delta_hidden']:.3f} (§3.6.5), {m['rest_points']} rest points, Table 3.2 noise, "
+        f"{m['delta_hidden']:.3f} "
+        f"({study.delta_source}), "
+        f"{m['rest_points']} rest points, Table 3.2 noise, "
         "muscle forces recorded; the diagnosis sees only the record "
-        "(`ppamsafety synthesize --experiment static-sawtooth --effect hysteresis_delta=0.139`, "
-        "`ppamsafety diagnose`).",
+        f"(`ppamsafety synthesize --experiment static-sawtooth --effect "
+        f"hysteresis_delta={study.hidden_delta:g}{'' if study.thesis else ' --arm FILE'}`, "
+        f"`ppamsafety diagnose{'' if study.thesis else ' --arm FILE'}`).",
         "",
         "Localisation (residual / noise RMS per subsystem channel, before and after the "
         "named effect; the valves are fine, the muscle forces and the torque balance are not):",

@@ -56,7 +56,7 @@ from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_
 SECTION = SectionInfo(
     summary=("the gravity-compensation sawtooth with and without Preisach hysteresis, Tables 5.2 "
              "and 6.1 regenerated with hysteresis"),
-    thesis="§3.5.1.6, §3.6, figs. 3.1-3.2", typical_seconds=14.0)
+    thesis="§3.5.1.6, §3.6, figs. 3.1-3.2", typical_seconds=14.0, scope="hysteresis")
 
 #: Hysteresis scale delta per muscle group (25-fibre muscles, thesis §3.6.5) [-].
 HYSTERESIS_DELTA = DELTA_25_FIBRES
@@ -392,6 +392,8 @@ class EffectsStudy:
         The hysteresis plant (the arm with its hysteresis).
     head : HeadContactModel or None
         The head model of Table 6.1.
+    delta_assumed : bool
+        The arm (not the thesis arm) declares no hysteresis: ``delta`` stands in for it.
     """
 
     quick: bool
@@ -414,6 +416,7 @@ class EffectsStudy:
     thesis: bool = True
     arm: object = None
     head: object = None
+    delta_assumed: bool = False
 
     def to_pandas(self) -> pd.DataFrame:
         """The sawtooth summary (RMS errors and pattern counts per plant)."""
@@ -527,8 +530,10 @@ def compute(*, quick: bool = False, arm=None, delta: float = HYSTERESIS_DELTA,
             a, head, runs={"step": resp.step, "switch": resp.switch}, thesis=thesis)
         walls[f"responses + table_6_1 {lab}"] = time.perf_counter() - t0
     if not thesis:
-        return _compute_other(quick, delta, arms, runs, windows, saw, summ, warmup, evaluate,
-                              errs, cmps, concl, t61, walls, head)
+        study = _compute_other(quick, delta, arms, runs, windows, saw, summ, warmup, evaluate,
+                               errs, cmps, concl, t61, walls, head)
+        study.delta_assumed = arm.effects.hysteresis_delta is None
+        return study
 
     rows = []
     for lab in arms:
@@ -773,6 +778,12 @@ def _render_other(study: EffectsStudy) -> Section:
     """The effects section for another arm or head: with and without hysteresis, no thesis."""
     sm = study.sawtooth_summary.set_index("plant")
     hd = study.arm.effects.hysteresis_delta
+    delta_text = (f"δ = {', '.join(f'{v:g}' for v in hd)} per muscle group, the arm's own"
+                  if not study.delta_assumed else
+                  f"δ = {study.delta:g} in every muscle group, ASSUMED: the arm declares no "
+                  f"hysteresis, so the value fitted for the thesis' 25-fibre muscles (§3.6.5) "
+                  f"stands in; declare `hysteresis_delta` in the arm file's [effects] for its "
+                  f"own muscles")
     saw_tab = pd.DataFrame({
         "plant": list(sm.index),
         "RMS q1 [deg]": [f"{v:.2f}" for v in sm.rms_q1_deg],
@@ -798,7 +809,7 @@ def _render_other(study: EffectsStudy) -> Section:
     md = f"""{other_arm_note(study.arm, study.head)}
 
 The plant truth with and without the muscle-force hysteresis of §3.6 ((3.35), Preisach weight
-(3.33), δ = {', '.join(f'{v:g}' for v in hd)} per muscle group); the controllers keep the nominal
+(3.33), {delta_text}); the controllers keep the nominal
 model. Every experiment runs on both plants.{' (quick mode)' if study.quick else ''}
 
 ### Gravity-compensation sawtooth (§3.5.1.6)

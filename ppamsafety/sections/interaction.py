@@ -39,6 +39,7 @@ from ..experiments import ExperimentCase, run_batch
 from ..experiments import trajectories as tr
 from ..experiments.closed_loop import ExperimentResult
 from ..experiments.interaction import Hand, piecewise_targets
+from ..identify.consistent import identify_dynamic_consistent
 from ..identify.dynamic import identify_dynamic
 from ..identify.excitation import design_excitation, simulate_excitation
 from ..impact.instants import evaluate_experiment
@@ -84,7 +85,10 @@ def identify_model(plant_arm, *, quick: bool = False):
     BaseParameters
         LS estimate with friction (smooth Coulomb law of the plant).  A negative friction
         estimate (an effect the rigid-body model lacks, such as muscle hysteresis, aliased
-        into friction) is set to 0: the estimators need a dissipative model.
+        into friction) is set to 0: the estimators need a dissipative model.  Where that
+        aliasing also makes an inertia estimate (theta3, theta6) non-positive -- a strong
+        hysteresis -- the physically consistent estimate of the same data is used
+        (:func:`~ppamsafety.identify.consistent.identify_dynamic_consistent`).
     """
     d = design_excitation(plant_arm, n_random=4 if quick else 8, maxfev=4 if quick else 24,
                           seed=1)
@@ -92,6 +96,10 @@ def identify_model(plant_arm, *, quick: bool = False):
     res = identify_dynamic(data, plant_arm, friction=True,
                            sign_velocity=plant_arm.friction_velocity)
     t = res.theta
+    if not (t[2] > 0.0 and t[5] > 0.0):
+        res = identify_dynamic_consistent(data, plant_arm, friction=True,
+                                          sign_velocity=plant_arm.friction_velocity)
+        t = res.theta
     if np.all(t[6:10] >= 0.0):
         return res.to_base_parameters()
     return BaseParameters(*[float(v) for v in t[:6]],

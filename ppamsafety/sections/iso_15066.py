@@ -48,6 +48,7 @@ from ..impact.instants import heuristic_instants, impact_states
 from ..impact.model import effective_mass, simulate_impacts
 from ..impact.pfl import (linear_peak_force, reduced_mass, region_limits,
                           robot_effective_mass_annex_a)
+from ..impact.verdicts import annex_a_head, criteria_for, describe_head, evaluate
 from ..impact.thesis_data import table_6_1
 from ..impact.twobody import two_body_impact
 from ..markdown import markdown_table
@@ -90,23 +91,59 @@ ASSUMPTIONS = (
     "Transient limit = 2 x quasi-static (Table A.2 multiplier of the other regions, as the brief "
     "asks). Our reading of the TS is that it gives no transient allowance for the head; every "
     "verdict is also stated against the quasi-static force (factor 1).",
-    "Robot effective mass: Annex A.4 m_R = M/2 + m_L with M = 2.5 kg (thesis §6.3.5), m_L = 0; "
+    "Robot effective mass: Annex A.4 m_R = M/2 + m_L with M = {mass}, m_L = 0; "
     "and the arm's own apparent mass 1/(u^T J H^-1 J^T u) along the impact direction.",
     "Free transient contact: the thesis impact model (flexible joints, horizontal plane, 50 ms) "
     "at the four instants of §6.3.3 (worst reported); ISO head = linear undamped spring K with "
     "a 4.4 kg free head.",
     "Transient clamping: the head's back touches a rigid frictionless wall perpendicular to the "
     "tool velocity (worst orientation); wall contact = skull spring 150 N/mm (ISO heads) or the "
-    "thesis Hunt-Crossley fit (checked on the Hybrid III drop onto a rigid plate).",
+    "{head}.",
     "Quasi-static clamping, closed loop: the tool is held where it passes at its largest speed in "
     "the 30->70 deg step by an isotropic spring-damper (75 N/mm = two 150 N/mm skull springs in "
     "series, 300 N s/m; head mass neglected) until the end of the 12 s run; the contact force is its magnitude "
     "(normal and tangential parts listed). Transient peaks of this run are not used (massless "
     "head, 1 ms zero-order hold of the force).",
     "Quasi-static bound: exact maximum of the static tool force over muscle pressures in "
-    "[0, 3 bar] (or the Delta-p approach at the calibrated mean pressures), gravity of the "
+    "[0, {p_max}] (or the Delta-p approach at the {mean_pressures}), gravity of the "
     "vertical plane included, over a 25 x 25 grid of the working area and 72 directions.",
 )
+
+
+def assumptions(arm=None, head=None) -> list:
+    """The :data:`ASSUMPTIONS` for an arm and head: the robot mass, the largest muscle
+    pressure, the mean pressures and the Hunt-Crossley head are the arm's and head's own.
+
+    Parameters
+    ----------
+    arm : ArmParameters, optional
+        The arm (default the thesis arm).
+    head : HeadContactModel, optional
+        The Hunt-Crossley head beside the ISO heads (default ``thesis-frontal``).
+
+    Returns
+    -------
+    list of str
+    """
+    a = resolve_arm(arm)
+    hc = resolve_head_model(head)
+    if compares_to_thesis(a):
+        mass = f"{THESIS_ARM_MASS:g} kg (thesis §6.3.5)"
+        means = "calibrated mean pressures"
+    else:
+        mass = f"{_robot_mass(a):.3g} kg (the arm's link masses plus payload)"
+        means = ("arm's mean pressures " + ", ".join(f"{p / BAR:.4g}" for p in
+                                                     a.pneumatics.p_mean) + " bar")
+    hd = ("thesis Hunt-Crossley fit (checked on the Hybrid III drop onto a rigid plate)"
+          if hc == head_model() else f"Hunt-Crossley contact of head model `{hc.name}`")
+    return [t.format(mass=mass, head=hd, p_max=f"{a.pneumatics.p_max / BAR:g} bar",
+                     mean_pressures=means) for t in ASSUMPTIONS]
+
+
+def _robot_mass(arm) -> float:
+    """Annex A's total robot mass M of an arm that is not the thesis arm [kg]: its link masses
+    plus payload."""
+    return arm.links.m1 + arm.links.m2 + arm.effects.payload_mass
 
 
 def _variants(lams):
@@ -117,11 +154,8 @@ def _variants(lams):
 
 
 def _iso_head(region):
-    return head_model("iso15066-forehead").replace(
-        name=f"iso15066-{region.name.split('/')[0]}-4.4kg", mass=region.effective_mass,
-        stiffness=region.spring_constant,
-        source=f"{region.source}: K = {region.spring_constant / 1e3:g} N/mm, m_H = "
-               f"{region.effective_mass:g} kg, linear undamped")
+    """The Annex A body model of a region (the verdicts' own, :func:`annex_a_head`)."""
+    return annex_a_head(region)
 
 
 #: Label of the Hunt-Crossley head beside the ISO heads: the thesis head, or the report's.
@@ -154,6 +188,31 @@ def _free_impacts(arm, lams, hc=None, hc_label=HC_LABEL):
                              "t0": float(s.t), "q1": s.q1, "q2": s.q2, "qd1": s.qd1,
                              "qd2": s.qd2, "K1": s.K1, "K2": s.K2})
     return pd.DataFrame(rows), step_runs
+
+
+def _question(free, hc, hc_label=HC_LABEL):
+    """Verdicts of every free impact against the ISO/TS 15066 criteria of its region.
+
+    The forehead criteria for the forehead's Annex A body model and for the Hunt-Crossley
+    head (the same question with two head models), the face criteria for the face's body
+    model; the rows are :func:`ppamsafety.impact.verdicts.evaluate`'s, as in ``impact``,
+    the sweeps and the envelopes.
+    """
+    heads = {"skull/forehead": (_iso_head(SKULL_FOREHEAD), SKULL_FOREHEAD),
+             "face": (_iso_head(FACE), FACE), hc_label: (hc, SKULL_FOREHEAD)}
+    rows = []
+    for (exp, label, hname), g in free.groupby(["experiment", "label", "head_model"],
+                                               sort=False):
+        model, region = heads[hname]
+        crit = [c for c in criteria_for(region) if c.name.startswith("iso_ts_15066")]
+        r = g.iloc[0]
+        t = evaluate({"F_max": r.F_max}, crit, head=model.name, region=region.name)
+        for v in t.itertuples():
+            rows.append({"experiment": exp, "label": label, "family": r.family,
+                         "lambda": r["lambda"], "head_model": model.name, "region": v.region,
+                         "criterion": v.criterion, "F_max": v.value, "limit": v.limit,
+                         "margin": v.margin, "margin_pct": v.margin_pct, "passed": v.passed})
+    return pd.DataFrame(rows)
 
 
 def _worst_per_variant(free):
@@ -340,6 +399,9 @@ class IsoStudy:
         Engine and formula forces at the thesis variants' worst states.
     verdict : pandas.DataFrame
         The thesis's "safe side" claim checked per controller.
+    question : pandas.DataFrame
+        Every free impact's verdicts against the ISO/TS 15066 criteria of its region, with
+        the head model (:func:`_question`).
     lambdas : tuple of float
         The lambda grid of the PSMC families [s].
     metrics : dict
@@ -364,6 +426,7 @@ class IsoStudy:
     hc_curve: pd.DataFrame
     hc_states: pd.DataFrame
     verdict: pd.DataFrame
+    question: pd.DataFrame = field(default_factory=pd.DataFrame)
     lambdas: tuple = ()
     metrics: dict = field(default_factory=dict)
     thesis: bool = True
@@ -408,8 +471,7 @@ def compute(*, quick: bool = False, arm=None, head=None) -> IsoStudy:
     hc = resolve_head_model(head)
     hc_label = HC_LABEL if hc == head_model() else "head HC"
     lams = LAMBDAS_QUICK if quick else LAMBDAS_FULL
-    mass = (THESIS_ARM_MASS if compares_to_thesis(arm) else
-            arm.links.m1 + arm.links.m2 + arm.effects.payload_mass)
+    mass = THESIS_ARM_MASS if compares_to_thesis(arm) else _robot_mass(arm)
     m_r = robot_effective_mass_annex_a(mass)
     free, step_runs = _free_impacts(arm, lams, hc, hc_label)
     worst = _worst_per_variant(free)
@@ -430,10 +492,19 @@ def compute(*, quick: bool = False, arm=None, head=None) -> IsoStudy:
                 lam_f, below, adm = _lambda_min(w["lambda"], w["F_max"], lim)
                 vmax = region_limits(region, m_r, transient_factor=fac)["v_max"]
                 lam_v, _, _ = _lambda_min(w["lambda"], w["tcp_speed"], vmax)
+                wh = worst[(worst.family == fam) & (worst["head_model"] == hc_label)
+                           ].sort_values("lambda")
+                lam_h, below_h, adm_h = _lambda_min(wh["lambda"], wh["F_max"], lim)
                 lrows.append({"family": fam, "region": hn, "factor": fac, "F_limit": lim,
                               "lambda_min_force": lam_f, "at_grid_min": below, "admissible_grid": adm,
                               "v_max_annex": vmax, "lambda_min_speed": lam_v,
-                              "F_at_lambda_0.4": float(np.interp(0.4, w["lambda"], w["F_max"]))})
+                              "F_at_lambda_0.4": float(np.interp(0.4, w["lambda"], w["F_max"])),
+                              "head_model": _iso_head(region).name,
+                              "lambda_min_force_hc": lam_h, "at_grid_min_hc": below_h,
+                              "admissible_grid_hc": adm_h,
+                              "hc_head_model": hc.name,
+                              "F_at_lambda_0.4_hc": float(np.interp(0.4, wh["lambda"],
+                                                                    wh["F_max"]))})
     lambda_table = pd.DataFrame(lrows)
     clamp_tr, clamp_hist = _clamping_transient(arm, worst, hc, hc_label)
     static_tab, static_map = _static_bounds(arm, 9 if quick else 25, 24 if quick else 72)
@@ -505,8 +576,57 @@ def compute(*, quick: bool = False, arm=None, head=None) -> IsoStudy:
                     clamp_transient=clamp_tr, clamp_histories=clamp_hist,
                     static_bounds=static_tab, static_map=static_map, quasi_static=qs,
                     qs_histories=qs_hist, hc_curve=hc_curve, hc_states=hc_states,
-                    verdict=verdict, lambdas=tuple(lams), metrics=metrics, thesis=thesis,
+                    verdict=verdict, question=_question(free, hc, hc_label),
+                    lambdas=tuple(lams), metrics=metrics, thesis=thesis,
                     arm=arm, head=hc)
+
+
+def _fmt_lam(lam, at_min, adm, lams):
+    """The answer on the lambda grid: the bracket of grid values, then the interpolation."""
+    if lam != lam:
+        return "no lambda of the grid meets it"
+    if at_min:
+        return f"already the smallest grid lambda {lam:.3g} s meets it (grid values: {adm})"
+    ok = [float(x) for x in str(adm).split()]
+    below = [x for x in lams if x < ok[0]]
+    return (f"the crossing lies between the grid values {below[-1]:g} s (fails) and {ok[0]:g} s "
+            f"(passes), log-linear interpolation {lam:.3g} s (grid values that meet it: {adm})")
+
+
+def _two_heads(study: IsoStudy) -> list:
+    """The same question answered with both head models, and why they differ (Markdown)."""
+    lt = study.lambda_table
+    rows = lt[(lt.region == "skull/forehead")]
+    if not len(rows) or "lambda_min_force_hc" not in rows.columns:
+        return []
+    iso = _iso_head(SKULL_FOREHEAD)
+    hc = study.head if study.head is not None else head_model()
+    lams = sorted(study.lambdas)
+    out = ["**The same question with two head models.** Is a PSMC family safe against the "
+           "forehead limits? The answer depends on the head model, so both are given (the "
+           "same verdicts as `ppamsafety impact`, the sweeps and the envelopes, "
+           "`iso_question.csv`): the Annex A body model "
+           f"`{iso.name}` ({describe_head(iso)}), under which ISO/TS 15066 states its limits, "
+           f"and the Hunt-Crossley head `{hc.name}` ({describe_head(hc)}).", ""]
+    for _, r in rows.iterrows():
+        which = ("transient contact" if r.factor > 1 else "quasi-static force, the TS reading "
+                 "for the head")
+        out.append(f"* {r.family}, {r.F_limit:g} N ({which}): with `{r.head_model}` "
+                   f"{_fmt_lam(r.lambda_min_force, r.at_grid_min, r.admissible_grid, lams)}; "
+                   f"with `{r.hc_head_model}` "
+                   f"{_fmt_lam(r.lambda_min_force_hc, r.at_grid_min_hc, r.admissible_grid_hc, lams)}"
+                   f".")
+    out += ["", "The two answers differ because the contact law and the struck mass set the "
+            "force at a given speed: at these speeds the Hunt-Crossley head (fitted to Table "
+            "6.1) is softer than the 150 N/mm spring with 4.4 kg (the crossover speed is in the "
+            "next paragraph). The transient forehead limit 2 x 130 N is not in the TS (it gives "
+            "no transient value for the skull and face, see `ppamsafety.params.iso_ts_15066`); "
+            "the quasi-static 130 N rows are the TS reading. The grid brackets each answer; a "
+            "safety envelope brackets the crossing of one experiment to any tolerance with "
+            "the same verdicts (e.g. `ppamsafety sweep studies/psmc_forehead_envelope.toml`; "
+            "for the Annex A body model `safety_envelope(..., "
+            "head=ppamsafety.impact.verdicts.annex_a_head())`).", ""]
+    return out
 
 
 def render(study: IsoStudy) -> Section:
@@ -534,7 +654,7 @@ def render(study: IsoStudy) -> Section:
         "pain-onset study at the University of Mainz, its force limits from a literature review).",
         "",
         "**Assumptions**", "",
-        *[f"{i + 1}. {a}" for i, a in enumerate(ASSUMPTIONS)], "",
+        *[f"{i + 1}. {a}" for i, a in enumerate(assumptions(study.arm, study.head))], "",
         "**ISO/TS 15066 limits, transfer energy and permissible relative speed** "
         f"(m_R = M/2 = {m['m_R_annex_kg']:g} kg; E = F^2/(2K), v_max = F/sqrt(mu K)):", "",
         markdown_table(lim, digits=4), "",
@@ -561,6 +681,7 @@ def render(study: IsoStudy) -> Section:
         "`admissible_grid`: the grid lambdas that meet the force limit (F(lambda) need not be "
         "monotonic: check the list, not only the bound):", "",
         markdown_table(study.lambda_table, digits=4), "",
+        *_two_heads(study),
         "**Linear spring (ISO) vs Hunt-Crossley (thesis head).** At equal speeds (two-body, "
         "m_R = M/2, m_H = 4.4 kg, figure below) the Hunt-Crossley head gives less force than "
         "the 150 N/mm spring at low speed and more at high speed (n = 1.5 stiffens with "
@@ -607,7 +728,7 @@ def render(study: IsoStudy) -> Section:
         ("iso_limits.csv", study.limits), ("iso_clamping_transient.csv", study.clamp_transient),
         ("iso_quasi_static.csv", study.quasi_static), ("iso_lambda.csv", study.lambda_table),
         ("iso_free_impacts.csv", study.free), ("iso_hc_vs_linear.csv", study.hc_states),
-        ("iso_verdict.csv", study.verdict)]
+        ("iso_verdict.csv", study.verdict), ("iso_question.csv", study.question)]
     return Section("Clamping and ISO/TS 15066 power and force limiting (head)", "\n".join(md),
                    arts, dict(m))
 
@@ -621,7 +742,7 @@ def _render_other(study: IsoStudy) -> Section:
         f"{m['robot_mass_kg']:.3g} kg: link masses plus payload; m_R = M/2 = "
         f"{m['m_R_annex_kg']:.3g} kg) and head model `{study.head.name}` beside the ISO heads.", "",
         "**Assumptions**", "",
-        *[f"{i + 1}. {a}" for i, a in enumerate(ASSUMPTIONS)], "",
+        *[f"{i + 1}. {a}" for i, a in enumerate(assumptions(study.arm, study.head))], "",
         "**Limits, transfer energy and permissible relative speed:**", "",
         markdown_table(study.limits.drop(columns=["m_H"]), digits=4), "",
         "**Transient clamping** (worst free-impact state of each controller; F in N):", "",
@@ -633,6 +754,7 @@ def _render_other(study: IsoStudy) -> Section:
         "**Smallest admissible lambda per PSMC family** (NaN: not reached on the grid "
         f"{list(study.lambdas)} s):", "",
         markdown_table(study.lambda_table, digits=4), "",
+        *_two_heads(study),
         "**Linear spring (ISO) vs Hunt-Crossley** at the worst states:", "",
         markdown_table(study.hc_states, digits=4), "",
         "**Verdict per controller** (transient limits 2 x F_qs: forehead "
@@ -648,9 +770,9 @@ def _render_other(study: IsoStudy) -> Section:
         ("iso_limits.csv", study.limits), ("iso_clamping_transient.csv", study.clamp_transient),
         ("iso_quasi_static.csv", study.quasi_static), ("iso_lambda.csv", study.lambda_table),
         ("iso_free_impacts.csv", study.free), ("iso_hc_vs_linear.csv", study.hc_states),
-        ("iso_verdict.csv", study.verdict)]
+        ("iso_verdict.csv", study.verdict), ("iso_question.csv", study.question)]
     return Section("Clamping and ISO/TS 15066 power and force limiting (head)", "\n".join(md),
                    arts, dict(m))
 
 
-__all__ = ["IsoStudy", "compute", "render", "ASSUMPTIONS"]
+__all__ = ["IsoStudy", "compute", "render", "ASSUMPTIONS", "assumptions"]

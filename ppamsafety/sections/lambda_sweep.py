@@ -23,6 +23,7 @@ from ..markdown import markdown_table
 from ..params import thesis_arm
 from ..plots.impact import plot_lambda_sweep
 from ..sweep import run_sweep
+from ..sweep_cases import add_verdicts
 from ..units import BAR
 from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
                resolve_arm, resolve_head_model)
@@ -88,7 +89,8 @@ class LambdaSweepStudy:
     table : pandas.DataFrame
         One row per case: ``lam``, ``Ki_bar``, ``circle_duration``, ``F_max``
         [N], ``HIC36``, ``tcp_speed`` [m/s], ``circle_err_mean``,
-        ``circle_err_max`` [m].
+        ``circle_err_max`` [m], and the verdicts against the forehead criteria
+        (:func:`ppamsafety.sweep_cases.add_verdicts`).
     metrics : dict
         Headline numbers.
     head_name : str
@@ -147,7 +149,7 @@ def compute(*, quick: bool = False, arm=None, processes: int | None = None,
     procs = processes or min(2, os.cpu_count() or 1)
     df = run_sweep(case, cases, name="lambda-sweep", processes=procs, progress=False,
                    on_error="raise")
-    df = df.rename(columns={"ki_bar": "Ki_bar"})
+    df = add_verdicts(df.rename(columns={"ki_bar": "Ki_bar"}), head=resolve_head_model(head))
     return LambdaSweepStudy(lambdas=lams, kis=kis, circle_duration=dur, processes=procs,
                             table=df, metrics={"cases": len(df)}, head_name=head_name,
                             note=note)
@@ -168,9 +170,13 @@ def render(study: LambdaSweepStudy) -> Section:
     """
     df, lams, kis, dur, procs = (study.table, study.lambdas, study.kis, study.circle_duration,
                                  study.processes)
-    show = df.drop(columns=["circle_duration"])
+    show = df[[c for c in df.columns if c not in ("circle_duration", "head_model")
+               and not c.endswith(("_margin", "_pass"))] + ["iso_ts_15066_margin"]]
     safe = df[df.F_max < 660.0]
     best = safe.loc[safe.circle_err_mean.idxmin()] if len(safe) else None
+    iso = df[df["iso_ts_15066_pass"].astype(bool)]
+    best_iso = iso.loc[iso.circle_err_mean.idxmin()] if len(iso) else None
+    lim_iso = float((df["F_max"] + df["iso_ts_15066_margin"]).iloc[0])
     md = (study.note + "\n\n" if study.note else "") + f"""Joint-space PSMC (Table 5.1 gains otherwise) for lambda in {list(lams)} s and Ki in {list(kis)}
 bar/(rad s): worst step-response impact (four instants, head `{study.head_name}`) and circle tracking
 (P = 10 s, {dur - min(CIRCLE_WARMUP, dur / 2):.0f} s evaluated). {len(df)} cases via `ppamsafety.sweep.run_sweep`
@@ -179,6 +185,7 @@ on {procs} processes.
 {markdown_table(show, digits=4)}
 
 {'' if best is None else f"Below the 660 N maxilla line, the best tracking is lambda = {best.lam:g} s with Ki = {best.Ki_bar:g} bar/(rad s): mean error {1e3 * best.circle_err_mean:.2f} mm, F_max {best.F_max:.0f} N."}
+{'No case stays below' if best_iso is None else f"Below the ISO/TS 15066 forehead transient limit {lim_iso:g} N (2 x 130 N, not in the TS for the head), the best tracking is lambda = {best_iso.lam:g} s with Ki = {best_iso.Ki_bar:g} bar/(rad s): mean error {1e3 * best_iso.circle_err_mean:.2f} mm, F_max {best_iso.F_max:.0f} N (margin {best_iso.iso_ts_15066_margin:.0f} N)."}{f' the ISO/TS 15066 forehead transient limit {lim_iso:g} N.' if best_iso is None else ''} Every case's verdicts against the forehead criteria (margins, governing criterion, head model `{study.head_name}`) are columns of `lambda_sweep.csv`.
 
 ![lambda sweep](lambda_sweep.png)
 """

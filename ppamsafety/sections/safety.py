@@ -14,6 +14,7 @@ from ..experiments.catalog import run_thesis_experiment, thesis_variants, varian
 from ..impact.instants import (HEURISTICS, evaluate_experiment, heuristic_instants, impact_states,
                                worst_instant)
 from ..impact.thesis_data import join_table_6_1
+from ..impact.verdicts import criteria_for, evaluate
 from ..markdown import markdown_table
 from ..params import thesis_arm
 from ..params.head import MAXILLA_FRACTURE_N
@@ -127,6 +128,18 @@ def _conclusions(df) -> pd.DataFrame:
     return pd.DataFrame(out)
 
 
+def _verdicts(df, head) -> pd.DataFrame:
+    """Every Table 6.1 row's verdicts against the forehead criteria (as ``impact`` gives)."""
+    crit = criteria_for()
+    rows = []
+    for r in df.itertuples():
+        t = evaluate({"F_max": r.F_max, "HIC36": r.HIC36}, crit, head=head.name)
+        rows.append(t.assign(experiment=r.experiment, label=r.label))
+    out = pd.concat(rows, ignore_index=True)
+    return out[["experiment", "label", "head_model", "region", "criterion", "metric", "value",
+                "limit", "margin", "margin_pct", "passed", "confirmed"]]
+
+
 #: Variants whose worst step-response impact histories are plotted.
 WORST_HISTORY_VARIANTS = ("PID", "PSMC joint Ki=2 λ=0.4", "PSMC joint Ki=12 λ=0.4",
                           "PSMC task λ=0.4")
@@ -163,6 +176,9 @@ class SafetyStudy:
         Worker processes of the scan.
     metrics : dict
         Headline numbers (including the wall times of the table and the scan).
+    verdicts : pandas.DataFrame
+        Every row of the table against the forehead criteria (ISO/TS 15066, fractures, HIC):
+        value, limit, margin, pass, with the head model.
     thesis : bool
         Thesis values and ratios apply: the thesis arm and head.
     arm : ArmParameters or None
@@ -181,6 +197,7 @@ class SafetyStudy:
     metrics: dict = field(default_factory=dict)
     thesis: bool = True
     arm: object = None
+    verdicts: pd.DataFrame = field(default_factory=pd.DataFrame)
 
     def to_pandas(self) -> pd.DataFrame:
         """Table 6.1 reproduced (toolkit, thesis, ratios, impact instant and stiffness)."""
@@ -287,7 +304,29 @@ def compute(*, quick: bool = False, arm=None, processes: int | None = None,
                "pid_step_HIC": float(df[(df.experiment == "step") & (df.family == "PID")].HIC36.iloc[0])}
     return SafetyStudy(quick=quick, head=head, table=df, conclusions=concl, worst=worst,
                        heuristic_marks=marks, scan=scan, miss=miss, processes=procs,
-                       metrics=metrics, thesis=thesis, arm=arm)
+                       metrics=metrics, thesis=thesis, arm=arm, verdicts=_verdicts(df, head))
+
+
+def _verdict_text(study) -> str:
+    """The thesis judges against 660 N only; the verdicts against every forehead criterion."""
+    v = study.verdicts
+    if not len(v):
+        return ""
+    lines = [f"**Verdicts against every forehead criterion** (head model `{study.head.name}`; "
+             "value, limit, margin and pass per row in `safety_verdicts.csv`; the same verdicts "
+             "as `ppamsafety impact`, the sweeps and the envelopes). The thesis judges only "
+             "against the 660 N maxilla line:", ""]
+    for crit, g in v.groupby("criterion", sort=False):
+        fails = g[~g.passed]
+        c = g.iloc[0]
+        unit = " N" if c.metric == "F_max" else ""
+        names = ", ".join(f"{r.experiment} {r.label} ({r.value:.0f}{unit})"
+                          for r in fails.itertuples())
+        lines.append(f"* `{crit}` ({c.limit:g}{unit}{'' if c.confirmed else ', unconfirmed'}): "
+                     f"{len(fails)} of {len(g)} experiments exceed it"
+                     + (f": {names}" if len(fails) else "")
+                     + f"; smallest margin {g.margin.min():.4g}{unit}.")
+    return "\n".join(lines)
 
 
 def render(study: SafetyStudy) -> Section:
@@ -324,6 +363,8 @@ thesis (largest TCP speed, |qd1|, |qd2|, ||qd||); the worst is kept.
 
 {markdown_table(concl)}
 
+{_verdict_text(study)}
+
 **Worst step-response impacts:** ![histories](safety_worst_histories.png)
 
 **Every instant** ({'every 20 ms (quick mode)' if quick else 'every 1 ms'}; instants with a TCP slower than
@@ -341,6 +382,7 @@ The heuristic finds the worst HIC and F_max (within 0.05 %) in {found} of {len(m
 ![F_max over time](safety_fmax_over_time.png)
 """
     arts = [("safety_table_6_1.csv", show), ("safety_conclusions.csv", concl),
+            ("safety_verdicts.csv", study.verdicts),
             *study.plot().items(), ("safety_every_instant.csv", miss)]
     return Section("Collision safety: Table 6.1 and every impact instant (thesis §6.3.3)", md,
                    arts, dict(study.metrics))

@@ -173,8 +173,9 @@ class StiffnessStudy:
     contact : float
         Contact duration at the experiment's stiffness (frozen equilibrium) [s].
     periods : dict
-        Joint stiffness [Nm/rad] -> shortest vibration period of the links on
-        frozen springs [s].
+        Joint stiffness [Nm/rad] (the sweep's largest, 1e6) or ``"experiment"`` (the larger
+        of the experiment's own K1, K2 at the impact instant) -> shortest vibration period of
+        the links on frozen springs [s].
     metrics : dict
         Headline numbers.
     thesis : bool
@@ -328,7 +329,10 @@ def compute(*, quick: bool = False, arm=None, head=None) -> StiffnessStudy:
     m_link2 = float(1.0 / (u @ np.outer(J[:, 1], J[:, 1]) @ u / H[1, 1]))
     contact = float(own.summary.contact_time.iloc[0])
     lam = float(min(np.linalg.eigvalsh(H)))
-    periods = {kk: 2 * math.pi * math.sqrt(lam / kk) for kk in (43.0, kmax, 1e6)}
+    # the experiment's own stiffness at the impact instant (the arm's pressures, (2.18))
+    k_exp = float(max(row.K1, row.K2))
+    periods = {kk: 2 * math.pi * math.sqrt(lam / kk) for kk in (kmax, 1e6)}
+    periods["experiment"] = 2 * math.pi * math.sqrt(lam / k_exp)
 
     def at(conv, label, k):
         s = sweep[(sweep.convention == conv) & (sweep.B_label == label) & (sweep.k == k)]
@@ -450,8 +454,9 @@ difference) and the flexible joint at the largest k:
 {markdown_table(study.rigid.drop(columns=["B2"]), digits=4)}
 
 * **Why the change is small at PPAM stiffnesses:** the impact lasts {1e3 * study.contact:.1f} ms, far
-  shorter than the arm's vibration on its joint springs (smallest period {1e3 * per[43.0]:.0f} ms at the
-  experiment's 43 Nm/rad), so the tool behaves like the links' effective mass at the tool,
+  shorter than the arm's vibration on its joint springs (smallest period
+  {1e3 * per["experiment"]:.0f} ms at the experiment's K = {row.K1:.4g}/{row.K2:.4g} Nm/rad at the impact
+  instant), so the tool behaves like the links' effective mass at the tool,
   m_eff = 1/(u^T J H^-1 J^T u) = {study.m_eff:.3f} kg (forearm alone: {study.m_link2:.3f} kg); a two-body
   impact of that mass gives {study.f_two_body:.1f} N, against {m['F_k1_N']:.1f} N for the full model at
   k = 1 Nm/rad, and {m['F_k1_N'] / F_ref:.3f} of the thesis' {F_ref:.0f} N.
@@ -490,7 +495,8 @@ F_max [N] against k (last column: largest |energy-balance error| of the row):
   {m['dF_flexible_Bppam_6000_N']:.2f} N up to 6000 Nm/rad; it saturates at {m['rise_saturation_N']:.2f} N
   for a large motor-side inertia (90 % from B = {m['B_90_kgm2']:.2g} kg m^2).
 * The impact lasts {1e3 * study.contact:.1f} ms, against the arm's shortest vibration period on its
-  joint springs of {1e3 * per[43.0]:.0f} ms at 43 Nm/rad: the tool behaves like the links' effective
+  joint springs of {1e3 * per["experiment"]:.0f} ms at the experiment's K = {row.K1:.4g}/{row.K2:.4g} Nm/rad
+  at the impact instant: the tool behaves like the links' effective
   mass m_eff = {study.m_eff:.3f} kg (two-body impact {study.f_two_body:.1f} N, full model at k = 1 Nm/rad
   {m['F_k1_N']:.1f} N).
 

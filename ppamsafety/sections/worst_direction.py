@@ -57,13 +57,14 @@ class WorstDirectionStudy:
     head : HeadContactModel
         Head model.
     table : pandas.DataFrame
-        One row per (experiment, variant): thesis placement (psi = 0) worst
-        over every instant ``F_max_thesis`` [N], ``HIC36_thesis``; worst over
+        One row per (experiment, variant): the head along the TCP velocity (psi = 0, the
+        thesis' placement) worst over every instant ``F_max_along_velocity`` [N],
+        ``HIC36_along_velocity``; worst over
         every instant and placement ``F_max_worst`` [N], ``HIC36_worst``, their
         placement ``psi_*_deg`` (from the TCP velocity, counter-clockwise) and
         ``phi_*_deg`` (base frame) [deg], instants ``t0_*`` [s], ratios
-        ``ratio_*`` (worst / thesis placement) and ``ratio_*_same_instant``
-        (placement only, at the thesis placement's worst instant); Table 6.1
+        ``ratio_*`` (worst / along the velocity) and ``ratio_*_same_instant``
+        (placement only, at the worst instant along the velocity); Table 6.1
         values ``Fmax_table_6_1`` [N], ``HIC_table_6_1`` (the thesis arm only); search
         counts.
     results : list of WorstDirection
@@ -212,8 +213,9 @@ def render(study: WorstDirectionStudy) -> Section:
     """
     t = study.table
     m = study.metrics
-    cols = ["experiment", "label", "F_max_thesis", "F_max_worst", "ratio_F_max", "psi_F_max_deg",
-            "t0_F_max_worst", "ratio_F_max_same_instant", "HIC36_thesis", "HIC36_worst",
+    cols = ["experiment", "label", "F_max_along_velocity", "F_max_worst", "ratio_F_max",
+            "psi_F_max_deg", "t0_F_max_worst", "ratio_F_max_same_instant", "HIC36_along_velocity",
+            "HIC36_worst",
             "ratio_HIC36", "psi_HIC36_deg", "ratio_HIC36_same_instant"]
     if study.thesis:
         show = t[cols + ["Fmax_table_6_1", "HIC_table_6_1"]].copy()
@@ -247,9 +249,9 @@ simulated value; the best candidates are refined with the full flexible-joint en
 Brent search over psi. The rigorous bounds alone exclude {m["bound_pruned"]} of the {m["instants"]}
 instants (in every placement); the rest are excluded by the predictor, which is physics, not proof.
 
-"thesis" columns: head along the TCP velocity, worst over every instant (not only the four
-instants of Table 6.1); "worst": worst placement and instant; "same instant": worst placement at the thesis
-placement's worst instant.{t61}
+"along_velocity" columns: the head along the TCP velocity (the thesis' placement), worst over every
+instant (not only the four instants of Table 6.1); "worst": worst placement and instant; "same instant":
+worst placement at the worst instant along the velocity.{t61}
 
 {markdown_table(show, digits=4)}
 
@@ -272,7 +274,7 @@ F_max over every placement and instant is {m["psmc_max_F_max_worst"]:.0f} N
 ![ratios](worst_direction_ratios.png)
 """
     arts = [("worst_direction.csv", t), *study.plot().items()]
-    return Section("Worst head placement around the tool point (issue 12 item 6)", md, arts,
+    return Section("Worst head placement around the tool point", md, arts,
                    dict(study.metrics))
 
 

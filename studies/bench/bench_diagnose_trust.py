@@ -23,11 +23,22 @@ straightforward
 
 Times are wall times (time.perf_counter) after a warm-up that compiles / loads the kernels.
 
-Run:  python studies/bench/bench_diagnose_trust.py [--duration SECONDS]
+``--against DIR`` compares two versions of the toolkit instead, side by side in one run:
+the record is written once, and each version (``DIR``, a checkout of another revision, and
+this one) diagnoses it in child processes, alternately, ``--repeats`` times each; the
+medians and their ratio are printed.
+
+Run:  python studies/bench/bench_diagnose_trust.py [--duration SECONDS] [--against DIR]
 """
 
 import argparse
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 from threadpoolctl import threadpool_limits
@@ -74,10 +85,50 @@ def straightforward_selection(prob, names, mask=None):
     return selected
 
 
+#: The child of ``--against``: diagnose the record (after a warm-up), print the wall time.
+CHILD = """
+import sys, time
+from ppamsafety.data import load_measured
+from ppamsafety.diagnose import diagnose, synthesize
+diagnose(synthesize(experiment="closed-loop", effects={hidden!r}, seed=3, duration=2.0))
+data = load_measured(sys.argv[1])
+t0 = time.perf_counter()
+dg = diagnose(data)
+print(time.perf_counter() - t0, "+".join(dg.names))
+"""
+
+
+def against(other, duration, repeats):
+    """Time the diagnosis of one record with the toolkit in ``other`` and with this one."""
+    here = Path(__file__).resolve().parents[2]
+    trees = {"other": Path(other).resolve(), "this": here}
+    times = {k: [] for k in trees}
+    with tempfile.TemporaryDirectory() as tmp:
+        rec = Path(tmp) / "record.csv"
+        synthesize(experiment="closed-loop", effects=HIDDEN, seed=3, duration=duration).save(rec)
+        for _ in range(repeats):
+            for name, tree in trees.items():
+                env = {**os.environ, "PYTHONPATH": str(tree)}
+                out = subprocess.run([sys.executable, "-c", CHILD.format(hidden=HIDDEN),
+                                      str(rec)], env=env, capture_output=True, text=True,
+                                     check=True).stdout.split()
+                times[name].append(float(out[0]))
+                print(f"{name} ({tree}): {float(out[0]):.2f} s, named {out[1:]}", flush=True)
+    med = {k: statistics.median(v) for k, v in times.items()}
+    print(f"median over {repeats}: this {med['this']:.2f} s, other {med['other']:.2f} s; "
+          f"ratio this / other {med['this'] / med['other']:.3f}")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--duration", type=float, default=60.0)
+    ap.add_argument("--against", default=None, metavar="DIR",
+                    help="a checkout of another revision: time both, side by side")
+    ap.add_argument("--repeats", type=int, default=3)
     args = ap.parse_args()
+    if args.against is not None:
+        against(args.against, args.duration, args.repeats)
+        return
     arm = thesis_arm()
     data = synthesize(experiment="closed-loop", effects=HIDDEN, seed=3, duration=args.duration)
     diagnose(synthesize(experiment="closed-loop", effects=HIDDEN, seed=3, duration=2.0))  # warm

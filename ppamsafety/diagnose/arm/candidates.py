@@ -24,7 +24,8 @@ name                   subsystem   parameters
 =====================  ==========  =================================================
 valve_offset_gain      pressure    v1_1..v1_4 [Pa], v2_1..v2_4 [-]  (3.12)
 valve_lag              pressure    T_1..T_4 [s]  (3.2)
-valve_dead_time        pressure    d [s], common to the four valves
+valve_dead_time        pressure    d [s], common to the four valves (or the change
+                                   of the declared one per valve)
 polytropic_exponent    pressure    n [-]  (3.3)
 joint_friction         torque      c1, c2 [N m], b1, b2 [N m s/rad]  (3.30)
 payload                torque      M [kg] at the load point A_L (2.19), (A.21)
@@ -48,6 +49,17 @@ from a plant effect, the selection reports them as confounded
 Every parameter has a plausible range (the naming rule's bounds) and a physical range
 (``Parameter.phys_lo``/``phys_hi``: a fit outside it is a symptom, not an effect).
 
+Declared effects.  The nominal model is the arm under test with its declared
+``[effects]`` (:mod:`ppamsafety.diagnose.arm.residuals`).  A candidate's
+coefficients are the *change* from the declared value, and its reported
+parameters are absolute with the declared value as ``nominal``
+(:meth:`Candidate.values`): a declared delta of 0.3 fitted to 0.2 reports
+``delta = 0.2`` (nominal 0.3); friction on top of a declared friction reports
+the total; a dead time other than the declared one reports the new dead time.
+A candidate is therefore named only where the record asks for a change from
+the declared value.  With four declared deltas that differ, the hysteresis
+candidate changes them by one common amount and reports their mean.
+
 Names on a tester (actuator records) have their own vocabulary and library:
 :mod:`ppamsafety.diagnose.bench.candidates`.
 """
@@ -65,7 +77,8 @@ from ...plant.packing import payload_theta
 from ..core.parameter import Parameter
 from .residuals import (ENCODER_OFFSET_COLUMNS, HYSTERESIS_COLUMNS, MU_A, MU_B, MU_COUL, MU_K,
                         MU_N, MU_THETA, MU_VISC, NMU, PRESSURE_GAIN_COLUMNS,
-                        PRESSURE_OFFSET_COLUMNS, TORQUE_BIAS_COLUMNS)
+                        PRESSURE_OFFSET_COLUMNS, TORQUE_BIAS_COLUMNS, declared_delays,
+                        declared_hysteresis, declared_torque_bias)
 
 #: Fixed vocabulary of effect names on an arm (the ``name`` field of ``diagnosis.json``).
 VOCABULARY = ("hysteresis", "joint_friction", "valve_offset_gain", "valve_lag",
@@ -117,6 +130,14 @@ class Candidate:
         lag, dead time or volume term).
     default : bool
         In the default library (:func:`default_candidates`); False: opt in by name.
+    declared : callable or None
+        ``declared(arm, dt) -> (len(parameters),)``: the values the arm declares for the
+        parameters that the model vector mu does not carry (a payload, the hysteresis
+        delta, a torque bias, the dead time [s] at sample time ``dt``).  The fitted
+        coefficients are the *change* from them, and the reported values are
+        ``physical(...) + declared(arm, dt)`` (:meth:`values`); None: the model vector
+        carries the declared value already (valves, friction, polytropic exponent) or the
+        arm cannot declare it (sensor faults).
     """
 
     name: str
@@ -131,6 +152,26 @@ class Candidate:
     sensor_effect: object = field(default=None, repr=False)
     at_rest: bool = False
     default: bool = True
+    declared: object = field(default=None, repr=False)
+
+    def values(self, mu, phi, shift_seconds, arm, dt) -> np.ndarray:
+        """The reported parameter values: :attr:`physical` plus what the arm declares.
+
+        Parameters
+        ----------
+        mu : numpy.ndarray
+            Fitted model vector.
+        phi : numpy.ndarray
+            This candidate's coefficients (the change from the declared model).
+        shift_seconds : float
+            Change of the dead time [s].
+        arm : ArmParameters
+            The model under test.
+        dt : float
+            Sample time of the record [s].
+        """
+        v = np.asarray(self.physical(mu, phi, shift_seconds), dtype=float)
+        return v if self.declared is None else v + np.asarray(self.declared(arm, dt), float)
 
     @property
     def is_sensor_fault(self) -> bool:
@@ -298,7 +339,8 @@ register(Candidate(
     "pressure residual like a lag but with the shape of the set value's derivative "
     "delayed: the set value acts d later on all valves",
     lambda mu, phi, shift: np.array([shift]), None, grid=True,
-    plant_effect=None))
+    plant_effect=None,
+    declared=lambda arm, dt: np.array([float(np.mean(declared_delays(arm))) * dt])))
 
 register(Candidate(
     "polytropic_exponent", "pressure",
@@ -334,7 +376,8 @@ def _payload_candidate():
         "torque residual of both joints with the gravity shape (cos of the link angles, "
         "largest with the forearm horizontal) plus inertia; independent of the velocity sign",
         identity_values, _dirs_payload,
-        plant_effect=lambda v, arm: {"payload_mass": float(v[0])}, at_rest=True)
+        plant_effect=lambda v, arm: {"payload_mass": float(v[0])}, at_rest=True,
+        declared=lambda arm, dt: np.array([arm.effects.payload_mass]))
 
 
 register(_payload_candidate())
@@ -374,8 +417,17 @@ def _maybe_register_hysteresis():
         "contraction change: force below the model while a muscle contracts, above while it "
         "extends (§3.5.1.6, fig. 3.2); rising angles settle low, falling ones high",
         identity_values, None, columns=HYSTERESIS_COLUMNS,
-        plant_effect=lambda v, arm: {"hysteresis_delta": (float(min(max(v[0], 0.0), 1.0)),)
-                                     * 4}, at_rest=True))
+        plant_effect=_hysteresis_effect, at_rest=True,
+        declared=lambda arm, dt: np.array([float(np.mean(declared_hysteresis(arm)))])))
+
+
+def _hysteresis_effect(v, arm) -> dict:
+    """The plant's hysteresis of a fitted delta ``v[0]``: the change from the arm's declared
+    mean added to every group's declared delta, each clipped to the plant's [0, 1]; none
+    when every group comes out at or below 0."""
+    d = np.clip(declared_hysteresis(arm) + (float(v[0]) - float(np.mean(
+        declared_hysteresis(arm)))), 0.0, 1.0)
+    return {"hysteresis_delta": None if np.all(d <= 0.0) else tuple(float(x) for x in d)}
 
 
 _maybe_register_hysteresis()
@@ -479,7 +531,7 @@ register(Candidate(
     "velocity and the pressures",
     identity_values, None, columns=TORQUE_BIAS_COLUMNS,
     plant_effect=lambda v, arm: {"joint_torque_bias": (float(v[0]), float(v[1]))},
-    at_rest=True, default=False))
+    at_rest=True, default=False, declared=lambda arm, dt: declared_torque_bias(arm)))
 
 register(Candidate(
     "pressure_sensor_offset", "both",

@@ -41,6 +41,23 @@ Both block residuals are linear in the *model vector* mu (:data:`MU_NAMES`,
 b2), ``prediction = X mu``; every candidate effect of
 :mod:`ppamsafety.diagnose.candidates` is a direction (or a change of X) in
 that space, which is why they can be fitted by linear regression.
+
+The model under test is the arm *as declared*, its ``[effects]`` included
+(:class:`ppamsafety.params.effects.Effects`):
+
+* parameter effects (payload, friction, valve offset/gain/lag, polytropic
+  exponent) are folded into the plant row (:func:`ppamsafety.plant.packing.pack`),
+  so the model vector mu of that row carries them;
+* a declared joint torque bias and muscle hysteresis (3.35) -- the arm's delta
+  per group, its initial memory -- are torques beside the muscles' at every
+  sample (:func:`declared_torque`), moved to the measured side of the torque
+  equations;
+* a declared valve dead time delays the set values in the design
+  (:attr:`BlockSystem.delay0`, :func:`declared_delays`); the dead-time
+  candidate profiles *changes* of it.
+
+An arm cannot declare a sensor fault (``[sensors]`` describes the hardware,
+not its faults), so the sensor-fault columns always start from none.
 """
 
 from __future__ import annotations
@@ -252,18 +269,73 @@ def _cumzoh(u, dt):
     return c
 
 
-def delayed(u, shift: int) -> np.ndarray:
+def delayed(u, shift) -> np.ndarray:
     """``u`` delayed by ``shift`` samples (the first value held before the start).
 
     Parameters
     ----------
     u : numpy.ndarray, shape (N, k)
-    shift : int
-        Delay in samples, >= 0.
+    shift : int or sequence of k int
+        Delay in samples, >= 0: one for every column, or one per column.
     """
+    if np.ndim(shift):
+        shifts = [int(s) for s in shift]
+        if len(set(shifts)) > 1:
+            return np.stack([delayed(u[:, [i]], s)[:, 0] for i, s in enumerate(shifts)], 1)
+        shift = shifts[0]
     if shift == 0:
         return u
     return np.concatenate([np.repeat(u[:1], shift, axis=0), u[:-shift]])
+
+
+def declared_delays(arm) -> np.ndarray:
+    """The valve dead time the arm declares, per valve, in samples of a record (4,) int.
+
+    ``Effects.valve_dead_time`` counts control periods; the plant takes one input sample per
+    control period (:func:`ppamsafety.plant.model.simulate`), so a record is replayed with
+    that many samples of delay.  Zeros when the arm declares none.
+
+    Parameters
+    ----------
+    arm : ArmParameters
+    """
+    d = arm.effects.valve_dead_time
+    return np.zeros(4, dtype=int) if d is None else np.array(d, dtype=int)
+
+
+def changed_delays(delay0, shift: int) -> tuple:
+    """Per-valve delays [samples] ``delay0`` changed by ``shift`` samples, at least 0.
+
+    Parameters
+    ----------
+    delay0 : sequence of 4 int
+        The model's dead time per valve (:func:`declared_delays`).
+    shift : int
+        The change (the dead-time candidate's profiled shift).
+    """
+    return tuple(max(int(d) + int(shift), 0) for d in delay0)
+
+
+def declared_torque_bias(arm) -> np.ndarray:
+    """The constant joint torque the arm declares (``Effects.joint_torque_bias``) [N m] (2,).
+
+    Parameters
+    ----------
+    arm : ArmParameters
+    """
+    b = arm.effects.joint_torque_bias
+    return np.zeros(2) if b is None else np.array(b, dtype=float)
+
+
+def declared_hysteresis(arm) -> np.ndarray:
+    """The hysteresis scale delta the arm declares per muscle group (3.35) [-] (4,).
+
+    Parameters
+    ----------
+    arm : ArmParameters
+    """
+    d = arm.effects.hysteresis_delta
+    return np.zeros(4) if d is None else np.array(d, dtype=float)
 
 
 @dataclass(frozen=True, eq=False)
@@ -329,6 +401,9 @@ class BlockSystem:
         The set values (to build the dead-time variants).
     dt : float
         Sample time [s].
+    delay0 : tuple of 4 int
+        The valve dead time of the model under test per valve [samples]
+        (:func:`declared_delays`): the design ``X`` holds the set values delayed by it.
     features : dict
         Per-block operating-region descriptors (mean q, qd, p, time).
     extra : dict
@@ -344,6 +419,7 @@ class BlockSystem:
     stops: np.ndarray
     u: np.ndarray = field(repr=False)
     dt: float = 0.0
+    delay0: tuple = (0, 0, 0, 0)
     features: dict = field(default_factory=dict, repr=False)
     extra: dict = field(default_factory=dict, repr=False)
 
@@ -351,24 +427,46 @@ class BlockSystem:
     def nb(self) -> int:
         return self.y.shape[0]
 
-    def with_dead_time(self, shift: int) -> np.ndarray:
-        """X with the valve input delayed by ``shift`` samples (dead time ``shift dt``).
+    def delays(self, shift: int) -> tuple:
+        """Per-valve delay [samples] of the model's dead time changed by ``shift`` samples
+        (:func:`changed_delays` of :attr:`delay0`).
 
         Parameters
         ----------
         shift : int
-            Delay in samples (0: X itself, copied).
+        """
+        return changed_delays(self.delay0, shift)
+
+    def shift_grid(self, max_shift: int) -> tuple:
+        """The changes of the dead time a profile tries: every whole sample from no delay
+        at all to ``max_shift`` samples more than the model's, except no change.
+
+        Parameters
+        ----------
+        max_shift : int
+            Largest increase [samples].
+        """
+        return tuple(s for s in range(-max(self.delay0), max_shift + 1) if s != 0)
+
+    def with_dead_time(self, shift: int) -> np.ndarray:
+        """X with the valve dead time changed by ``shift`` samples from the model's
+        (:meth:`delays`; a dead time changed by ``shift dt``).
+
+        Parameters
+        ----------
+        shift : int
+            Change of the delay in samples (0: X itself, copied).
         """
         X = self.X.copy()
         if shift:
-            c = _cumzoh(delayed(self.u, shift), self.dt)
+            c = _cumzoh(delayed(self.u, self.delays(shift)), self.dt)
             iu = c[self.stops] - c[self.starts]
             for i in range(4):
                 X[:, i, MU_B + 3 * i] = iu[:, i]
         return X
 
 
-def hysteresis_signature(q, p, arm, *, initial="negative") -> tuple:
+def hysteresis_signature(q, p, arm, *, initial=None) -> tuple:
     """Muscle forces and joint torques of the hysteresis (3.35) per unit delta along measured data.
 
     The plant's force of group k is ``p_k f_k(eps_k) (1 + delta_k (W_k -
@@ -390,8 +488,8 @@ def hysteresis_signature(q, p, arm, *, initial="negative") -> tuple:
         Geometry and muscles of the model.
     initial : str or sequence, keyword-only
         Preisach memory before the first sample (``Effects.hysteresis_initial``;
-        default ``"negative"``: every muscle brought to its smallest
-        contraction first, thesis §3.6.6).
+        default the arm's own, whose default is ``"negative"``: every muscle brought to its
+        smallest contraction first, thesis §3.6.6).
 
     Returns
     -------
@@ -404,6 +502,7 @@ def hysteresis_signature(q, p, arm, *, initial="negative") -> tuple:
     """
     q = np.asarray(q, dtype=float)
     p = np.asarray(p, dtype=float)
+    initial = arm.effects.hysteresis_initial if initial is None else initial
     unit = arm.replace(effects=Effects(hysteresis_delta=(1.0,) * 4, hysteresis_initial=initial))
     states = np.zeros((q.shape[0], 8))
     states[:, :2] = q
@@ -506,8 +605,45 @@ def block_bounds(n: int, dt: float, block_seconds: float, source: str = "<data>"
     return starts, stops
 
 
-def _blocks(rec: ArmRecord, arm, starts, stops, velocity_noise=None) -> tuple:
-    """y (nb, 6), X (nb, 6, NMU) of the block equations and the running integrals they use."""
+def declared_torque(q, p, arm, h=None) -> np.ndarray | None:
+    """The joint torques of the effects the arm declares that are columns, not parameters,
+    of the model (``Effects.joint_torque_bias``, ``Effects.hysteresis_delta``) [N m] (N, 2).
+
+    The model under test is the arm as declared: its hysteresis (3.35) adds ``sum_k delta_k
+    p_k m_tau,k (W_k - W_fit)`` at joint j (over the groups k of joint j, with the arm's own
+    delta per group and initial memory) and its torque bias a constant torque; the block and
+    rest-point equations move them to the measured side.
+
+    Parameters
+    ----------
+    q : numpy.ndarray, shape (N, 2)
+        Angles [rad] (smoothed as for :func:`hysteresis_signature`).
+    p : numpy.ndarray, shape (N, 4)
+        Pressures [Pa].
+    arm : ArmParameters
+    h : numpy.ndarray, shape (N, 4), optional
+        W_k - W_fit of :func:`hysteresis_signature` along ``q`` (computed when needed).
+
+    Returns
+    -------
+    numpy.ndarray or None
+        None when the arm declares neither.
+    """
+    fx = arm.effects
+    if fx.hysteresis_delta is None and fx.joint_torque_bias is None:
+        return None
+    out = np.zeros((np.shape(q)[0], 2)) + declared_torque_bias(arm)[None, :]
+    if fx.hysteresis_delta is not None:
+        if h is None:
+            h, _, _ = hysteresis_signature(q, p, arm)
+        ph = np.asarray(p, float) * torque_functions(q, arm) * h * declared_hysteresis(arm)
+        out += np.stack([ph[:, 0] + ph[:, 1], ph[:, 2] + ph[:, 3]], axis=1)
+    return out
+
+
+def _blocks(rec: ArmRecord, arm, starts, stops, velocity_noise=None, h=None) -> tuple:
+    """y (nb, 6), X (nb, 6, NMU) of the block equations of the model under test (the arm with
+    its declared effects) and the running integrals they use."""
     dt = rec.dt
     mt = torque_functions(rec.q, arm)
     vol = group_volumes(rec.q, arm)
@@ -516,7 +652,7 @@ def _blocks(rec: ArmRecord, arm, starts, stops, velocity_noise=None) -> tuple:
     g = mt * w / vol
     c_p = _cumtrapz(rec.p, dt)
     c_h = _cumtrapz((patm + rec.p) * g, dt)
-    c_u = _cumzoh(rec.u, dt)
+    c_u = _cumzoh(delayed(rec.u, declared_delays(arm)), dt)
     nb = starts.size
     X = np.zeros((nb, 6, NMU))
     y = np.zeros((nb, 6))
@@ -541,6 +677,10 @@ def _blocks(rec: ArmRecord, arm, starts, stops, velocity_noise=None) -> tuple:
     c_w = _cumtrapz(W3 - W2, dt)
     tau = np.stack([rec.p[:, 0] * mt[:, 0] + rec.p[:, 1] * mt[:, 1],
                     rec.p[:, 2] * mt[:, 2] + rec.p[:, 3] * mt[:, 3]], axis=1)
+    decl = declared_torque(smooth(rec.q, smoothing_samples(dt)), rec.p, arm, h)
+    if decl is not None:
+        # the declared torques act beside the muscles': tau + tau_declared = X theta
+        tau = tau + decl
     c_tau = _cumtrapz(tau, dt)
     X[:, 4:6, MU_THETA:] = (W1[stops] - W1[starts]) + (c_w[stops] - c_w[starts])
     y[:, 4:6] = c_tau[stops] - c_tau[starts]
@@ -573,7 +713,12 @@ def block_system(rec: ArmRecord, arm, *, block_seconds: float = BLOCK_SECONDS,
     """
     dt = rec.dt
     starts, stops = block_bounds(len(rec), dt, block_seconds, rec.source)
-    y, X, parts = _blocks(rec, arm, starts, stops, velocity_noise)
+    h = None
+    if extra or arm.effects.hysteresis_delta is not None:
+        # the Preisach memory of the *measured* angles would see a reversal in every noise
+        # wiggle: the signature uses the smoothed angles
+        h, h_tau, _ = hysteresis_signature(smooth(rec.q, smoothing_samples(dt)), rec.p, arm)
+    y, X, parts = _blocks(rec, arm, starts, stops, velocity_noise, h)
     span = parts["span"]
     nb = starts.size
 
@@ -585,9 +730,6 @@ def block_system(rec: ArmRecord, arm, *, block_seconds: float = BLOCK_SECONDS,
              "qd": bint(rec.qd) / span[:, None], "p": bint(rec.p) / span[:, None]}
     ext = {}
     if extra:
-        # the Preisach memory of the *measured* angles would see a reversal in every noise
-        # wiggle: the signature uses the smoothed angles
-        _, h_tau, _ = hysteresis_signature(smooth(rec.q, smoothing_samples(dt)), rec.p, arm)
         c_h = _cumtrapz(h_tau, dt)
         E = np.zeros((nb, 6, 1))
         # the measured torque is tau(p) + delta h_tau = X theta, so the block residual
@@ -605,7 +747,8 @@ def block_system(rec: ArmRecord, arm, *, block_seconds: float = BLOCK_SECONDS,
             return yq, Xq
 
         ext[ENCODER_OFFSET_COLUMNS] = encoder_columns(residual_of, rec.q, y, X)
-    return BlockSystem(y=y, X=X, starts=starts, stops=stops, u=rec.u, dt=dt, features=feats,
+    return BlockSystem(y=y, X=X, starts=starts, stops=stops, u=rec.u, dt=dt,
+                       delay0=tuple(int(d) for d in declared_delays(arm)), features=feats,
                        extra=ext)
 
 
@@ -830,5 +973,6 @@ __all__ = ["ArmRecord", "arm_record", "Columns", "BlockSystem", "smooth", "smoot
            "coulomb_velocity", "sensor_columns", "encoder_columns", "PRESSURE_OFFSET_COLUMNS",
            "PRESSURE_GAIN_COLUMNS", "ENCODER_OFFSET_COLUMNS", "TORQUE_BIAS_COLUMNS",
            "block_noise", "channel_noise", "noise_draws", "replay", "hysteresis_signature",
-           "model_vector", "row_from_mu", "delayed", "MU_NAMES",
+           "model_vector", "row_from_mu", "delayed", "declared_delays", "changed_delays",
+           "declared_torque", "declared_torque_bias", "declared_hysteresis", "MU_NAMES",
            "MU_UNITS", "NMU", "CHANNELS", "CHANNEL_UNITS", "SUBSYSTEM", "BLOCK_SECONDS"]

@@ -108,15 +108,16 @@ class Problem:
     fold : numpy.ndarray of int
         Cross-validation fold (0/1) of every block (that of its chunk).
     max_shift : int
-        Largest dead time searched [samples].
+        Largest increase of the dead time searched [samples].
     noise : tuple
         Noise draws (dY, dX) of :func:`~ppamsafety.diagnose.residuals.noise_draws`.
     floor : numpy.ndarray or None
         Lower bound of the noise level per channel (rest-point records:
         :data:`ppamsafety.diagnose.static.RESOLUTION`), None for none.
     shift_grid : tuple of int or None
-        Dead-time shifts profiled (None: 1 .. ``max_shift``; the resampling
-        schemes fix the full record's best shift).
+        Changes of the dead time from the model's profiled [samples] (None:
+        ``bs.shift_grid(max_shift)``, every one from no delay to ``max_shift`` more;
+        the resampling schemes fix the full record's best shift).
     chunk : numpy.ndarray of int
         Chunk (run of consecutive blocks, :func:`~.gram.chunk_layout`) of every block.
     chunk_fold : numpy.ndarray of int
@@ -399,8 +400,8 @@ def fit_model(prob: Problem, names, mask=None) -> Fit:
     nb = prob.bs.nb
     mask = np.ones(nb, bool) if mask is None else np.asarray(mask, bool)
     D, slices, grid, E = _directions(prob, names)
-    shifts = ((range(1, prob.max_shift + 1) if prob.shift_grid is None else prob.shift_grid)
-              if grid else (0,))
+    shifts = ((prob.bs.shift_grid(prob.max_shift) if prob.shift_grid is None
+               else prob.shift_grid) if grid else (0,))
     best, prof = None, []
     for s in shifts:
         phi, chi2, A, base, Z = _solve(prob, D, s, mask, E)
@@ -1297,17 +1298,17 @@ def parameter_table(prob: Problem, fit: Fit, confidence: float = 0.95, *,
         c = REGISTRY[n]
         sl = slices[n]
 
-        def val(phi):
+        def val(phi, shift=fit.shift):
             mu = prob.mu0 + D @ phi
-            return np.asarray(c.physical(mu, phi[sl], fit.shift * dt), float)
+            return c.values(mu, phi[sl], shift * dt, prob.arm, dt)
 
         v = val(fit.phi)
-        v_nom = val(nominal_fit_phi)
+        v_nom = val(nominal_fit_phi, 0)
         if c.grid:
             # the profile interval on the one-sample grid, widened by half a sample on each
             # side: a true delay between two grid points is profiled to the nearer one
-            lo = np.array([max(fit.shift_ci[0] - 0.5, 0.0) * dt])
-            hi = np.array([(fit.shift_ci[1] + 0.5) * dt])
+            lo = np.maximum(val(nominal_fit_phi, fit.shift_ci[0] - 0.5), 0.0)
+            hi = val(nominal_fit_phi, fit.shift_ci[1] + 0.5)
             se = (hi - lo) / (2 * z)
         elif c.physical is identity_values:
             # the values are the coefficients themselves
@@ -1329,7 +1330,7 @@ def parameter_table(prob: Problem, fit: Fit, confidence: float = 0.95, *,
         for i, p in enumerate(c.parameters):
             d = {"value": float(v[i]), "unit": p.unit, "ci_low": float(lo[i]),
                  "ci_high": float(hi[i]), "std_error": float(se[i]),
-                 "nominal": float(v_nom[i]) if not c.grid else 0.0}
+                 "nominal": float(v_nom[i])}
             if omitted is not None:
                 d["ci_low_noise"], d["ci_high_noise"], d["widened_by"] = lo[i], hi[i], []
                 if not c.grid:          # the dead time: its profile interval, as it is

@@ -52,8 +52,9 @@ from ...plant.torque import torque_functions, group_contraction, torque_kernel
 from ..core.noise import noise_floor, second_difference_sigma
 from .candidates import default_candidates
 from .residuals import (ENCODER_OFFSET_COLUMNS, HYSTERESIS_COLUMNS, MU_A, MU_B, MU_K,
-                        MU_THETA, NMU, BlockSystem, Columns, encoder_columns,
-                        hysteresis_signature, sensor_columns)
+                        MU_THETA, NMU, BlockSystem, Columns, declared_hysteresis,
+                        declared_torque, encoder_columns, hysteresis_signature,
+                        sensor_columns)
 
 #: An interval of ``t`` longer than this many median intervals separates two rest points.
 WINDOW_GAP_FACTOR = 1.5
@@ -199,8 +200,10 @@ def static_noise(rec: StaticRecord) -> dict:
             "F": None if rec.F is None else est(rec.F, np.ptp(rec.F, axis=0) + 1.0)}
 
 
-def _equations(qm, pm, um, arm):
-    """y (m, 6) and X (m, 6, NMU) of the rest-point balances from window means."""
+def _equations(qm, pm, um, arm, declared=None):
+    """y (m, 6) and X (m, 6, NMU) of the rest-point balances from window means; ``declared``
+    (m, 2): the window means of the torques of the arm's declared column effects
+    (:func:`~.residuals.declared_torque`), moved to the measured side."""
     m = qm.shape[0]
     X = np.zeros((m, 6, NMU))
     y = np.zeros((m, 6))
@@ -212,6 +215,8 @@ def _equations(qm, pm, um, arm):
     mt = torque_functions(qm, arm)
     y[:, 4] = pm[:, 0] * mt[:, 0] + pm[:, 1] * mt[:, 1]
     y[:, 5] = pm[:, 2] * mt[:, 2] + pm[:, 3] * mt[:, 3]
+    if declared is not None:
+        y[:, 4:6] += declared
     _, _, W3 = w_matrices(qm, np.zeros_like(qm), arm, friction=True,
                           sign_velocity=arm.friction_velocity)
     X[:, 4:6, MU_THETA:] = W3
@@ -237,8 +242,8 @@ def static_system(rec: StaticRecord, arm) -> BlockSystem:
     """
     qm, pm = rec.means(rec.q), rec.means(rec.p)
     um = None if rec.u is None else rec.means(rec.u)
-    y, X = _equations(qm, pm, um, arm)
-    _, h_tau, _ = hysteresis_signature(rec.q, rec.p, arm)
+    h, h_tau, _ = hysteresis_signature(rec.q, rec.p, arm)
+    y, X = _equations(qm, pm, um, arm, _declared_means(rec, rec.q, arm, h))
     E = np.zeros((rec.m, 6, 1))
     E[:, 4:6, 0] = -rec.means(h_tau)
     E = Columns(E)
@@ -251,10 +256,18 @@ def static_system(rec: StaticRecord, arm) -> BlockSystem:
                            int_pmt=pm * mt, patm=arm.pneumatics.p_atm)
     extra[HYSTERESIS_COLUMNS] = E
     extra[ENCODER_OFFSET_COLUMNS] = encoder_columns(
-        lambda q: _equations(rec.means(q), pm, um, arm), rec.q, y, X)
+        lambda q: _equations(rec.means(q), pm, um, arm, _declared_means(rec, q, arm)),
+        rec.q, y, X)
     return BlockSystem(y=y, X=X, starts=rec.windows[:, 0], stops=rec.windows[:, 1] - 1,
                        u=np.zeros((rec.m, 4)) if um is None else um, dt=1.0, features=feats,
                        extra=extra)
+
+
+def _declared_means(rec: StaticRecord, q, arm, h=None):
+    """Window means of the torques of the arm's declared column effects along the sample
+    angles ``q`` (None when it declares none)."""
+    d = declared_torque(q, rec.p, arm, h)
+    return None if d is None else rec.means(d)
 
 
 def static_floor(rec: StaticRecord, arm) -> np.ndarray:
@@ -301,25 +314,26 @@ def static_noise_draws(rec: StaticRecord, arm, noise: dict, *, draws: int = 8,
     """
     qm, pm = rec.means(rec.q), rec.means(rec.p)
     um = None if rec.u is None else rec.means(rec.u)
-    y0, X0 = _equations(qm, pm, um, arm)
+    decl = _declared_means(rec, rec.q, arm)
+    y0, X0 = _equations(qm, pm, um, arm, decl)
     s = 1.0 / np.sqrt(rec.counts())[:, None]
     rng = np.random.default_rng(seed)
     dY, dX = [], []
     for _ in range(draws):
         y, X = _equations(qm + rng.normal(size=qm.shape) * noise["q"] * s,
-                          pm + rng.normal(size=pm.shape) * noise["p"] * s, um, arm)
+                          pm + rng.normal(size=pm.shape) * noise["p"] * s, um, arm, decl)
         dY.append(y - y0)
         dX.append(X - X0)
     return np.array(dY), np.array(dX)
 
 
-def force_residuals(rec: StaticRecord, arm, noise: dict, delta: float = 0.0) -> dict | None:
+def force_residuals(rec: StaticRecord, arm, noise: dict, delta=0.0) -> dict | None:
     """The force subsystem of §3.5.1.6: measured minus predicted muscle forces at the rest points.
 
     Predicted: (3.9) at the measured pressure and contraction (window
-    means of the sample-wise forces), times ``1 + delta (W - W_fit)`` when a
-    hysteresis delta is given.  Also fits delta on the forces alone (least
-    squares over the four muscles, one delta).
+    means of the sample-wise forces), times ``1 + delta_k (W_k - W_fit)``: "before" with the
+    arm's declared delta (none: the force law alone), "after" with ``delta``.  Also fits
+    delta on the forces alone (least squares over the four muscles, one delta).
 
     Parameters
     ----------
@@ -327,8 +341,8 @@ def force_residuals(rec: StaticRecord, arm, noise: dict, delta: float = 0.0) -> 
     arm : ArmParameters
     noise : dict
         :func:`static_noise` (its ``"F"`` entry).
-    delta : float
-        Hysteresis scale of the "after" model [-].
+    delta : float or array_like, shape (4,)
+        Hysteresis scale of the "after" model [-] (one value, or one per muscle group).
 
     Returns
     -------
@@ -344,17 +358,18 @@ def force_residuals(rec: StaticRecord, arm, noise: dict, delta: float = 0.0) -> 
         return None
     h, _, eps = hysteresis_signature(rec.q, rec.p, arm)
     fm = np.stack([muscle_force(k + 1, eps[:, k], rec.p[:, k], arm) for k in range(4)], 1)
-    r0 = rec.means(rec.F - fm)
+    r_law = rec.means(rec.F - fm)
     sig_cols = rec.means(fm * h)
     sigma = np.maximum(noise["F"] / np.sqrt(np.mean(rec.counts())),
                        RESOLUTION * np.sqrt(np.mean(rec.means(fm) ** 2, axis=0)))
-    r1 = r0 - delta * sig_cols
+    r0 = r_law - declared_hysteresis(arm)[None, :] * sig_cols
+    r1 = r_law - np.broadcast_to(np.asarray(delta, float), (4,))[None, :] * sig_cols
     a = (sig_cols / sigma).ravel()
-    b = (r0 / sigma).ravel()
+    b = (r_law / sigma).ravel()
     d_all = float(a @ b / (a @ a)) if a @ a > 0 else 0.0
     res = b - d_all * a
     se = float(np.sqrt(res @ res / max(b.size - 1, 1) / (a @ a))) if a @ a > 0 else np.inf
-    per = [float(sig_cols[:, k] @ r0[:, k] / (sig_cols[:, k] @ sig_cols[:, k]))
+    per = [float(sig_cols[:, k] @ r_law[:, k] / (sig_cols[:, k] @ sig_cols[:, k]))
            if sig_cols[:, k] @ sig_cols[:, k] > 0 else 0.0 for k in range(4)]
     return {"residual_before": r0, "residual_after": r1, "sigma": sigma,
             "rho_before": np.sqrt(np.mean((r0 / sigma) ** 2, axis=0)),
@@ -369,9 +384,9 @@ def static_equilibria(rec: StaticRecord, rows, *, steps: int = CONTINUATION_STEP
     valve model p = v1 + v2 u (3.12) (measured pressures when the record
     has no u); then, from the first measured rest angles, every next rest
     point is reached in ``steps`` linear steps of the pressures, each an
-    equilibrium ``sum_k p_k m_tau,k(q) (1 + delta_k (W_k - W_fit)) = G(q)``
+    equilibrium ``sum_k p_k m_tau,k(q) (1 + delta_k (W_k - W_fit)) + b = G(q)``
     solved by Newton's method with the Preisach memories peeked, then
-    committed (the plant's hysteresis when the row has it on).
+    committed (the plant's hysteresis and joint torque bias b when the row has them on).
 
     Parameters
     ----------
@@ -405,6 +420,8 @@ def static_equilibria(rec: StaticRecord, rows, *, steps: int = CONTINUATION_STEP
             pres = v1 + v2 * um
         hyst = int(P[lay.HYST_MODE]) == lay.Switch.ON
         z = initial_effect_state(P)[0].copy() if hyst else None
+        bias = ((P[lay.TORQUE_BIAS], P[lay.TORQUE_BIAS + 1])
+                if int(P[lay.TORQUE_BIAS_MODE]) == lay.Switch.ON else (0.0, 0.0))
 
         def es_of(q):
             c1, s1 = np.cos(q[0]), np.sin(q[0])
@@ -422,8 +439,8 @@ def static_equilibria(rec: StaticRecord, rows, *, steps: int = CONTINUATION_STEP
                     f[k] = hysteresis_factor(P[lay.HYST_DELTA + k], w, es[k],
                                              P[lay.HYST_WFIT_SLOPE], P[lay.HYST_WFIT_INTERCEPT])
             g1, g2 = gravity_torque(q[0], q[1], P)
-            return np.array([p[0] * mt[0] * f[0] + p[1] * mt[1] * f[1] - g1,
-                             p[2] * mt[2] * f[2] + p[3] * mt[3] * f[3] - g2])
+            return np.array([p[0] * mt[0] * f[0] + p[1] * mt[1] * f[1] + bias[0] - g1,
+                             p[2] * mt[2] * f[2] + p[3] * mt[3] * f[3] + bias[1] - g2])
 
         q = qm[0].copy()
         prev = pres[0]

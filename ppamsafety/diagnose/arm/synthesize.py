@@ -9,7 +9,11 @@ generic description and the seed), the set values are those the experimenter
 computed with the *nominal* arm, and nothing else is written.
 
 Effects (``NAME=VALUE``; vectors as comma-separated values, a single value
-is used for every joint/valve):
+is used for every joint/valve) act on top of the effects the arm declares
+(its ``[effects]``): a hidden value of a field the arm declares replaces the
+declared one (a hidden change of it), a relative form multiplies or shifts
+the arm's value with its declared effects, and a hidden ``valve_dead_time``
+replaces a declared dead time:
 
 * every field of :class:`ppamsafety.params.effects.Effects` (absolute values
   in SI units): ``payload_mass`` [kg], ``friction_coulomb`` [N m],
@@ -146,7 +150,20 @@ def _option(name, value):
     return value
 
 
-def _nominal_vector(arm, field):
+def plant_vector(arm, field) -> np.ndarray:
+    """The plant's value of a vector effect field: the arm's declared effect, else its
+    nominal parameter (a relative effect form multiplies or shifts it).
+
+    Parameters
+    ----------
+    arm : ArmParameters
+    field : str
+        ``"friction_coulomb"``, ``"friction_viscous"``, ``"valve_offset"``, ``"valve_gain"``
+        or ``"valve_time_constant"``.
+    """
+    declared = getattr(arm.effects, field)
+    if declared is not None:
+        return np.array(declared, dtype=float)
     if field == "friction_coulomb":
         return np.array(arm.plant_base.coulomb)
     if field == "friction_viscous":
@@ -364,13 +381,14 @@ def plant_with(arm, effects: dict):
             raise InvalidTypeError(f"effects: an effect name must be a str, got {name!r}")
         if name in RELATIVE:
             f, n = RELATIVE[name]
-            fx[f] = tuple(_nominal_vector(arm, f) * np.array(_as_list(name, value, n)))
+            fx[f] = tuple(plant_vector(arm, f) * np.array(_as_list(name, value, n)))
         elif name == "valve_offset_delta":
-            fx["valve_offset"] = tuple(_nominal_vector(arm, "valve_offset")
+            fx["valve_offset"] = tuple(plant_vector(arm, "valve_offset")
                                        + np.array(_as_list(name, value, 4)))
         elif name == "valve_dead_time":
             dead = check_range("effect valve_dead_time", _as_list(name, value, 1)[0], 0.0, 1.0,
                                unit="s")
+            fx["valve_dead_time"] = None        # the hidden one replaces what the arm declares
         elif name == "pressure_sensor_offset":
             offset = np.array([check_range(f"effect pressure_sensor_offset[{i}]", v,
                                            -PRESSURE_OFFSET_MAX, PRESSURE_OFFSET_MAX, unit="Pa")
@@ -405,7 +423,9 @@ def plant_with(arm, effects: dict):
         if links:
             plant = plant.replace(links=replace(plant.links, **links))
         if fx:
-            plant = plant.replace(effects=Effects(**fx))
+            # on top of the arm's declared effects (a hidden value of a declared effect
+            # replaces it)
+            plant = plant.replace(effects=replace(plant.effects, **fx))
     except (TypeError, ValueError) as exc:   # the parameter sets' own ranges: name the effect
         given = ", ".join(f"{k}={v!r}" for k, v in effects.items())
         raise type(exc)(f"effect(s) {given}: {exc}") from None
@@ -754,7 +774,7 @@ def _closed_loop(arm, plant, dead, meas, *, noise, seed, duration, dt, controlle
     return _record(meta, t, q, qd, p, u)
 
 
-__all__ = ["synthesize_arm", "plant_with", "hidden_effects", "Measurement", "MEASUREMENT_EFFECTS",
-           "closed_loop_case", "sawtooth_set_angles",
+__all__ = ["synthesize_arm", "plant_with", "plant_vector", "hidden_effects", "Measurement",
+           "MEASUREMENT_EFFECTS", "closed_loop_case", "sawtooth_set_angles",
            "gravity_compensation_set_values", "EXPERIMENTS", "NOISES", "FORCE_NOISE_STD",
            "DEFAULT_CONTROLLER", "DEFAULT_REFERENCE"]

@@ -37,6 +37,9 @@ class BenchDiagnosis(Diagnosis):
     confounded : list of dict
         As :class:`~ppamsafety.diagnose.core.result.Diagnosis`: groups selected as one
         (their terms coincide on this campaign).  Never named.
+    warnings : tuple of str
+        As :class:`~ppamsafety.diagnose.core.result.Diagnosis` (empty: a bench record
+        names no arm).
     records : pandas.DataFrame
         One row per record: ``label``, ``pressure_Pa``, ``samples``,
         ``strokes``, ``sigma_sensor_N``, ``sigma_repeat_N``, ``rms_before_N``,

@@ -105,6 +105,10 @@ class Diagnosis:
     detection_limits : dict
         Per candidate and parameter, the smallest change this record would detect
         (:mod:`ppamsafety.diagnose.arm.detection`); empty when not computed.
+    warnings : tuple of str
+        What a reader must know before reading the names (a record diagnosed on purpose
+        against another arm than the one it came from); first in ``diagnosis.md`` and in
+        the command's summary.
     """
 
     source: str
@@ -125,6 +129,7 @@ class Diagnosis:
     confounded: list = field(default_factory=list)
     stability: dict = field(default_factory=dict, repr=False)
     detection_limits: dict = field(default_factory=dict, repr=False)
+    warnings: tuple = ()
 
     @property
     def names(self) -> tuple:
@@ -162,7 +167,7 @@ class Diagnosis:
 
         return _clean({
             "schema_version": SCHEMA_VERSION, "tool": "ppamsafety", "version": __version__,
-            "source": self.source, "kind": self.kind,
+            "source": self.source, "kind": self.kind, "warnings": list(self.warnings),
             "effects": [eff(e) for e in self.effects],
             "partial": [eff(e) for e in self.partial],
             "unexplained": self.unexplained,
@@ -205,6 +210,8 @@ class Diagnosis:
     def report_markdown(self) -> str:
         """The readable report (Markdown) that :meth:`write` saves as ``diagnosis.md``."""
         L = [f"# Diagnosis of `{self.source}`", ""]
+        for w in self.warnings:
+            L += [f"> **Warning:** {w}", ""]
         if self.effects:
             L.append("Named effects, in the order found:")
             L.append("")
