@@ -47,7 +47,7 @@ from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_
 SECTION = SectionInfo(
     summary=("discrepancy diagnosis: two hidden effects in a closed-loop record, Table 5.2 against"
              " every library effect (fit and identifiability), a blind closed-loop battery"),
-    thesis="§5.3.5, Table 5.2 (issue 10)", typical_seconds=23.5)
+    thesis="§5.3.5, Table 5.2", typical_seconds=23.5)
 
 #: Case (c): hidden effects, experiment, controller, record length [s], seed.
 CASE_C = {"effects": {"friction_coulomb_factor": 3.0, "valve_dead_time": 0.02},
