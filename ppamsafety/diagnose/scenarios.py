@@ -92,7 +92,7 @@ DECLARED_TUNING_SEEDS = range(10000, 11000)
 DECLARED_MEASURE_SEEDS = range(20000, 22000)
 #: Scenarios of the shipped measurement of that battery (its first seeds).
 DECLARED_MEASURE_COUNT = 1600
-#: Required precision of "high" (issue 19).
+#: Required precision of "high": at least 97 % of the names given "high" are right.
 HIGH_PRECISION = 0.97
 #: Residual/noise ratio that the irreducible part of an out-of-library perturbation must
 #: leave on some channel to count as "above noise" (the diagnosis flags a channel above its
@@ -846,7 +846,7 @@ def _detectable(row) -> bool:
 
 
 def scores(results: pd.DataFrame) -> pd.DataFrame:
-    """The battery's measures against the targets of issue 19.
+    """The battery's measures against their targets (``HIGH_PRECISION`` and the coverage band).
 
     Parameters
     ----------

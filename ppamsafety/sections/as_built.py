@@ -1,5 +1,5 @@
 """The as-built arm: the library fitted jointly to the thesis' own printed measurements
-(issue 20, part 2).
+(Tables 5.2, 6.1, fig. 3.1, §5.3.5).
 
 Part of ``ppamsafety report`` (section "as_built"); run alone with
 ``python studies/as_built.py [outdir] [--quick] [--overwrite]``.

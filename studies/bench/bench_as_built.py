@@ -1,4 +1,4 @@
-"""Speed of the as-built fit (issue 20 part 2): one batched evaluation of many plants.
+"""Speed of the as-built fit: one batched evaluation of many plants.
 
 What is compared
 ----------------

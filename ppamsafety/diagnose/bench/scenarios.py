@@ -1,4 +1,4 @@
-"""The randomized scenario battery of muscle test-bench records (issue 19 items 2-3, kind "actuator").
+"""The randomized scenario battery of muscle test-bench records (kind "actuator").
 
 The muscle counterpart of :mod:`ppamsafety.diagnose.scenarios` (the arm's
 battery), whose scoring it follows: :func:`run_scenario` returns a row with the
