@@ -50,8 +50,9 @@ def test_the_readme_examples_run(tmp_path, monkeypatch):
     assert namespace["diagnosis"].names == ("payload",)
     assert (tmp_path / "diagnosis" / "diagnosis.json").is_file()
     assert len(namespace["df"]) == 2 and (namespace["df"]["status"] == "ok").all()
-    # Nothing was written outside the temporary folder.
+    # The examples ran in the temporary folder (none changed directory), and wrote there.
     assert os.getcwd() == str(tmp_path)
+    assert (tmp_path / "my_arm.toml").is_file() and (tmp_path / "sweep_cache").is_dir()
 
 
 def test_the_readme_is_a_users_guide_in_its_order():
