@@ -70,3 +70,13 @@ def test_every_document_the_readme_links_exists():
     assert links
     for link in links:
         assert (ROOT / link).exists(), link
+
+
+def test_ci_runs_the_test_command_the_readme_states():
+    """The README promises that its test command is exactly what CI runs (``.ci/run``)."""
+    text = README.read_text(encoding="utf-8")
+    section = text[text.index("Run the test suite"):]
+    command = re.search(r"```bash\n(.+?)\n```", section, re.S).group(1).strip()
+    assert "pytest" in command
+    ci = (ROOT / ".ci" / "run").read_text(encoding="utf-8").splitlines()
+    assert command in [line.strip() for line in ci], command
