@@ -15,7 +15,8 @@ must move with it.  The rules:
   the package (Sphinx's fuzzy search finds it); the test accepts it only if exactly one
   module of the package defines it, so that the reader's search finds one object.
 
-Markdown pages use fully qualified references only (they have no enclosing module).
+Markdown pages and the scripts of ``studies/`` use fully qualified references only (they have
+no enclosing package module).
 """
 
 import importlib
@@ -112,7 +113,8 @@ def _references():
     for path in sorted(PACKAGE.rglob("*.py")):
         for m in ROLE.finditer(path.read_text(encoding="utf-8")):
             out.append((path.relative_to(ROOT).as_posix(), _module_name(path), *m.groups()))
-    for path in [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]:
+    for path in [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md")),
+                 *sorted((ROOT / "studies").rglob("*.py"))]:
         for m in ROLE.finditer(path.read_text(encoding="utf-8")):
             out.append((path.relative_to(ROOT).as_posix(), None, *m.groups()))
     return out
