@@ -80,3 +80,17 @@ def test_ci_runs_the_test_command_the_readme_states():
     assert "pytest" in command
     ci = (ROOT / ".ci" / "run").read_text(encoding="utf-8").splitlines()
     assert command in [line.strip() for line in ci], command
+
+
+def test_every_relative_link_of_the_readme_and_the_docs_exists():
+    """A moved or renamed page breaks no link of README.md or docs/*.md."""
+    broken, checked = [], 0
+    for page in [README, *sorted((ROOT / "docs").glob("*.md"))]:
+        text = page.read_text(encoding="utf-8")
+        for target in re.findall(r"\]\(([^)#\s]+)(?:#[^)]*)?\)", text):
+            if "://" in target or target.startswith("mailto:"):
+                continue
+            checked += 1
+            if not (page.parent / target).exists():
+                broken.append(f"{page.relative_to(ROOT)}: {target}")
+    assert checked > 20 and not broken, broken
