@@ -36,7 +36,7 @@ from ._version import __version__
 #: Public name -> (module, attribute) of the lazily loaded entry points.
 _ENTRY_POINTS = {
     "thesis_arm": ("ppamsafety.params", "thesis_arm"),
-    "load_arm": ("ppamsafety.params", "load_arm"),
+    "load_arm": ("ppamsafety.design", "load_arm"),  # data and physics checked, as the commands
     "ArmParameters": ("ppamsafety.params", "ArmParameters"),
     "simulate": ("ppamsafety.experiments", "run"),
     "run_batch": ("ppamsafety.experiments", "run_batch"),

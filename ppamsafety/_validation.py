@@ -49,8 +49,8 @@ Conventions
 * Python ints, floats, ``fractions.Fraction``, ``decimal.Decimal`` and numpy
   real scalars (or 0-d real arrays) are accepted as real numbers.
 
-Policy on loose types, choices and magnitudes (issue 22)
----------------------------------------------------------
+Policy on loose types, choices and magnitudes
+---------------------------------------------
 One rule per kind of looseness, the same in every public function, parameter
 set, study file and command-line option:
 

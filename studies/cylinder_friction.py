@@ -1,4 +1,4 @@
-"""The bench case study: real 3D-printed pneumatic cylinders, campaigns over pressure (issue 20).
+"""The bench case study: real 3D-printed pneumatic cylinders, campaigns over pressure.
 
 Regenerates the report section ``cylinder_friction`` (:mod:`ppamsafety.sections.cylinder_friction`) alone:
     python studies/cylinder_friction.py [outdir] [--quick] [--overwrite]

@@ -1,4 +1,4 @@
-"""Clamping and ISO/TS 15066 power and force limiting for the head (issue 12 items 4, 5).
+"""Clamping and ISO/TS 15066 power and force limiting for the head.
 
 Regenerates the report section ``iso_15066`` (:mod:`ppamsafety.sections.iso_15066`) alone:
     python studies/iso_15066.py [outdir] [--quick] [--overwrite]

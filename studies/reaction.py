@@ -1,4 +1,4 @@
-"""Collision detection and reaction in the closed loop (issue 12 item 7, beyond thesis §6.3.5).
+"""Collision detection and reaction in the closed loop (beyond thesis §6.3.5).
 
 Regenerates the report section ``reaction`` (:mod:`ppamsafety.sections.reaction`) alone:
     python studies/reaction.py [outdir] [--quick] [--overwrite]

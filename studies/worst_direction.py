@@ -1,4 +1,4 @@
-"""Worst head placement around the tool point, over every instant (issue 12 item 6).
+"""Worst head placement around the tool point, over every instant.
 
 Regenerates the report section ``worst_direction`` (:mod:`ppamsafety.sections.worst_direction`) alone:
     python studies/worst_direction.py [outdir] [--quick] [--overwrite]

@@ -55,3 +55,10 @@ def test_version_on_the_command_line():
     out = subprocess.run([sys.executable, "-m", "ppamsafety.cli", "--version"],
                          capture_output=True, text=True, check=True).stdout
     assert out.strip() == f"ppamsafety {ppamsafety.__version__}"
+
+
+def test_load_arm_is_the_front_door_every_command_uses():
+    """``ps.load_arm`` checks an arm's physics too (the likely unit slip named), as the
+    commands do, not only its data."""
+    import ppamsafety.design
+    assert ppamsafety.load_arm is ppamsafety.design.load_arm

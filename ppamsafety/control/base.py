@@ -9,7 +9,7 @@ exactly the same width, so a controller behaves identically in a single step
 and inside a batched simulation.
 
 Each controller class declares its flat arrays once, as
-:class:`~ppamsafety.layouts.Layout` s (issue 7):
+:class:`~ppamsafety.layouts.Layout` s:
 
 * ``PARAMS`` -- the packed parameter row (gains, limits, flag codes);
 * ``STATE`` -- the state carried from one sample to the next;

@@ -98,7 +98,7 @@ def controller_step(kind, C, S, Pm, k, dt, qm, qdm, pm, ref, fest, dp, internals
     Parameters
     ----------
     kind : int
-        :class:`~ppamsafety.control.base.ControllerKind` code selecting the
+        :class:`~ppamsafety.control.kinds.ControllerKind` code selecting the
         step function; an unknown code gives Delta p = 0.
     C : numpy.ndarray, shape (>= PARAMS.size,)
         The controller's packed parameter row (layout ``PARAMS`` of the

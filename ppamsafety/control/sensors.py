@@ -13,7 +13,7 @@ Thesis §2.4.5:
   held until the next edge arrives.
 * Optional measurement noise with the variances of Table 3.2 (first
   excitation signal), drawn from a seeded generator so runs are repeatable.
-* Optional sensor faults (issue 9), errors of the measurement, not of the
+* Optional sensor faults, errors of the measurement, not of the
   plant: an encoder offset per joint (a wrong absolute reference: the
   incremental encoders only know angles relative to the index pulse passed
   in the initialisation procedure, §2.4.5.1), so the measured angle is

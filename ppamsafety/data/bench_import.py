@@ -1,4 +1,4 @@
-"""Import a raw test-bench file into the measured-data format (issue 20 item 1).
+"""Import a raw test-bench file into the measured-data format.
 
 A bench logger writes what it writes: no header, tabs, milliseconds, mm, bar,
 a position that grows when the rod is pushed *in*, a load cell zeroed by hand,

@@ -1,4 +1,4 @@
-"""Campaigns: several records of one actuator on a bench, diagnosed together (issue 20 item 2).
+"""Campaigns: several records of one actuator on a bench, diagnosed together.
 
 A bench campaign is what an experimenter's logbook holds: one actuator, one
 set-up, records at several pressures (and repeats).  :class:`Campaign` keeps

@@ -1,4 +1,4 @@
-"""Identification from a measured record (``ppamsafety identify``, issue 9 item 7).
+"""Identification from a measured record (``ppamsafety identify``).
 
 :func:`identify_measured` runs the estimators of :mod:`ppamsafety.identify` on
 a :class:`~ppamsafety.data.measured.MeasuredData`:

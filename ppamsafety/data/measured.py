@@ -1,4 +1,4 @@
-"""Measured data: the file format, its loader and its validation (issue 10 item 1).
+"""Measured data: the file format, its loader and its validation.
 
 A record is one table of samples (CSV, or Parquet when ``pyarrow`` is
 installed) plus a small TOML metadata block, either as a sidecar file next to
@@ -600,7 +600,7 @@ def _check_time(t: np.ndarray, meta: dict, exp: str, ctx: _Ctx, allow_gaps, orig
     return segments, gaps, med
 
 
-#: Physical plausibility per column (issue 22): values outside ``impossible`` are refused
+#: Physical plausibility per column: values outside ``impossible`` are refused
 #: whatever ``strict_units`` says; values outside ``plausible`` give a one-line warning.
 #: Ranges [SI], per kind: ``(impossible_lo, impossible_hi, plausible_lo, plausible_hi)``.
 #: Gauge pressures cannot be below -1 atm (vacuum); a pneumatic muscle works below 8 bar

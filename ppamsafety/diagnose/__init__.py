@@ -1,4 +1,4 @@
-"""The discrepancy workflow (issue 10): where measurement and model disagree, which effect
+"""The discrepancy workflow: where measurement and model disagree, which effect
 is missing, its fitted parameters, and the gap shrinking.
 
 * :mod:`.diagnosis` -- the front door :func:`diagnose` (an arm record, a muscle record

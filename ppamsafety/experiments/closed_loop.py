@@ -69,7 +69,7 @@ _UNNAMED = frozenset(LOG.field("internals").column_names())
 INTERNAL_NAMES = {kind: cls.INTERNALS.columns() for kind, cls in CONTROLLER_CLASSES.items()
                   if cls.INTERNALS.size}
 
-#: The interaction log (issue 12), one row per control period beside :data:`LOG` (which keeps
+#: The interaction log, one row per control period beside :data:`LOG` (which keeps
 #: its nominal width): the applied external TCP force and the force estimators' internals.
 #: Only cases with an external input or an estimator carry it (``ExperimentResult.interaction``).
 INTERACTION_LOG = Layout("closed-loop interaction log", [
@@ -103,7 +103,7 @@ def _run_batch(first, last, X0, REFS, ref_idx, PP, PM, KIND, CP, CSIZE, SCFG, NO
     (params, state, internals, scratch).  Releases the GIL: :func:`run_batch` runs parts
     of a batch side by side in threads (every case writes only its own rows).
 
-    Interaction (issue 12): EXT[ext_idx[b]] holds case b's external-input rows
+    Interaction: EXT[ext_idx[b]] holds case b's external-input rows
     (``EXTERNAL_INPUT``; ext_idx < 0: none, the plant gets the zero torque as
     before); est_on[b] runs the force estimator with parameters EP[b] and
     model row PE[b]; ILOG (``INTERACTION_LOG``) receives both.

@@ -1,4 +1,4 @@
-"""Physically consistent dynamic identification: least squares under LMIs (issue 9).
+"""Physically consistent dynamic identification: least squares under LMIs.
 
 The unconstrained estimate of :func:`~ppamsafety.identify.dynamic.identify_dynamic`
 need not belong to any rigid body: the thesis' Table 3.5 has

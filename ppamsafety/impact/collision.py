@@ -1,4 +1,4 @@
-"""A head collision inside the full closed loop: detection and reaction (issue 12, item 7).
+"""A head collision inside the full closed loop: detection and reaction.
 
 The impact engine (:mod:`ppamsafety.impact.engine`, thesis §6.3.2) freezes the
 arm on constant joint springs and ignores controller and valves: valid for the

@@ -1,4 +1,4 @@
-"""Worst head placement around the tool point (issue 12 item 6).
+"""Worst head placement around the tool point.
 
 The thesis (§6.3.2, fig. 6.2) puts the head centre along the TCP velocity at
 the impact instant, "in order to obtain the highest possible HIC value".  This

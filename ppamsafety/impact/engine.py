@@ -1,6 +1,6 @@
 """Impact of the flexible-joint arm with a free head (thesis §6.3.2).
 
-Model (SPEC §4): the arm is unactuated, in the horizontal plane (no gravity),
+Model (thesis §6.3.2): the arm is unactuated, in the horizontal plane (no gravity),
 with rigid links and torsional joint springs of constant stiffness K
 (2.18), unloaded at the impact instant t0.  What holds the springs' far
 (motor) side is the case's :class:`JointModel`; by default (frozen

@@ -30,7 +30,7 @@ from . import engine as eng
 from .contact import max_penetration
 from .head import HeadContactModel, head_model, head_model_names
 
-# ---- plausibility thresholds (issue 8) -----------------------------------------------------
+# ---- plausibility thresholds ---------------------------------------------------------------
 #: Joint angles beyond this magnitude [rad] are refused: no revolute joint of a planar
 #: arm needs more than one turn, and such values are almost always degrees.
 MAX_ANGLE = 2.0 * math.pi
@@ -110,7 +110,7 @@ def _fmt_cases(idx, limit: int = 5) -> str:
 def check_angles(name: str, q: np.ndarray, arm, *, stacklevel: int = 3) -> np.ndarray:
     """Refuse joint angles that cannot be radians; warn outside the working area.
 
-    Rules (issue 8): any |q| > :data:`MAX_ANGLE` (2 pi) raises ``ValueError``
+    Rules: any |q| > :data:`MAX_ANGLE` (2 pi) raises ``ValueError``
     -- with the hint "did you mean np.radians(...)?" when the values read as
     degrees lie inside the working area (2.6)-(2.7); angles outside the
     working area ``arm.geometry.q1_min..q1_max``, ``q2_min..q2_max`` but

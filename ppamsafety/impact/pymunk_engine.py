@@ -6,7 +6,7 @@ the *same* physical system from rigid bodies and joints in pymunk, whose
 integrator (semi-implicit Euler) and iterative impulse-based joint solver
 share no code with ours, so agreement of the two is evidence that the
 equations of motion, the initial conditions and the contact coupling of the
-main engine are right (issue 4, item 5).
+main engine are right.
 
 The pymunk model (horizontal plane: gravity 0, ``space.damping = 1``):
 

@@ -452,7 +452,7 @@ def thesis_arm() -> ArmParameters:
 
 
 def load_arm(path) -> ArmParameters:
-    """Read an arm file with the data checks only (the former front door, kept for scripts).
+    """Read an arm file with the data checks only (``ArmParameters.from_file``).
 
     Commands and new code read arm files with :func:`ppamsafety.design.load_arm`, which adds
     the checks that need the arm's physics (it holds itself somewhere in its working area,

@@ -249,7 +249,7 @@ class BodyContact:
         Where the values come from.
     checks : tuple of (str, bool, str)
         What the model is claimed to meet, ``(check, met, note)`` (e.g. the Hybrid III drop;
-        recomputed by :func:`ppamsafety.impact.layers.hybrid3_drop`).
+        recomputed by :func:`ppamsafety.impact.bodies.hybrid3_drop`).
     """
 
     name: str

@@ -79,13 +79,13 @@ class Switch(enum.IntEnum):
 
 #: Effect parameters at the end of the plant row (all effects off by default).
 #: The ``*_mode`` fields hold :class:`Switch` codes.  The pack-time effects
-#: (payload and the truth overrides, see :func:`pack`) are folded into the
-#: nominal slots of the row, so no kernel reads their flags: the flags record
+#: (payload and the truth overrides, see :func:`ppamsafety.plant.packing.pack`) are folded
+#: into the nominal slots of the row, so no kernel reads their flags: the flags record
 #: which slots of the row differ from the nominal arm the controllers know.
 EFFECT_FIELDS = (
     Field("effect_state_length", 1, "-",
-          "length of the effect-state vector z this row needs (0: no effect with state), "
-          "issue 7 item 2", default=0.0),
+          "length of the effect-state vector z this row needs (0: no effect with state)",
+          default=0.0),
     Field("payload_mode", 1, "code", "Switch: a point mass at A_L is folded into theta, "
           "(2.19), (A.21)", default=0.0),
     Field("payload_mass", 1, "kg", "payload mass M at A_L folded into theta (0 when off), "

@@ -13,8 +13,8 @@ for a 1 kHz digital control loop: one control period is ``substeps`` RK4
 steps.  Everything is a numba kernel; :func:`simulate` also accepts a leading
 batch axis (one row of parameters, initial state and inputs per variant).
 
-Effect state (issue 7, item 2)
-------------------------------
+Effect state
+------------
 Beside the 8 physical states every plant kernel carries an **effect-state
 vector** ``z`` (float64, length ``effect_state_length`` of the parameter
 row, read with :func:`effect_state_length`; zero-length when no effect with
@@ -208,7 +208,7 @@ def effect_state_length(P):
     P : float64[:]
         Plant row (layout :data:`~ppamsafety.plant.layout.PLANT`); its
         ``effect_state_length`` slot is read (not validated; see
-        :func:`~ppamsafety.plant.layout.effect_state_lengths`).
+        :func:`~ppamsafety.plant.packing.effect_state_lengths`).
 
     Returns
     -------

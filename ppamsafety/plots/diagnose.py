@@ -184,7 +184,7 @@ def plot_summary_profiles(fit, *, rank_tol: float):
     Parameters
     ----------
     fit : ppamsafety.diagnose.summary_fit.SummaryFit
-        Result of :func:`~ppamsafety.diagnose.summary_fit.fit_summary`.
+        Result of :func:`~ppamsafety.diagnose.arm.summary_fit.fit_summary`.
     rank_tol : float, keyword-only
         Singular values below this fraction of the largest do not count towards the rank
         (drawn as a dotted line; ``summary_fit.RANK_TOL``).

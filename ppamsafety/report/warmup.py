@@ -8,7 +8,7 @@ the command line keeps the cache) -- the report's worker processes would
 otherwise start sections that need the same kernels at the same moment and
 compile them side by side: on 2 cores both workers spent their first 31 s
 compiling the same closed loop, and the safety scan's own workers compiled
-the dense impact engine twice more (measured with numba's compile events, issue 11).
+the dense impact engine twice more (measured with numba's compile events).
 
 For the full report :func:`~ppamsafety.report.build.build_report` therefore
 first runs the tasks of :data:`TASKS` in its worker pool, each as soon as the
@@ -97,7 +97,7 @@ def _compile(dispatcher, codes: str) -> None:
     One letter per argument: ``A`` a float64, C-contiguous, writable 1-d array
     (:func:`~ppamsafety._jit.kernel_array`, and every row the compiled loops
     slice), ``i`` an int64, ``f`` a float64.  These are the types the closed
-    loop passes (numba's compile events, issue 11).  ``compile`` also writes
+    loop passes (numba's compile events).  ``compile`` also writes
     the result to the on-disk cache, where the calling kernels find it.
     """
     kinds = {"A": types.Array(types.float64, 1, "C"), "i": types.int64, "f": types.float64}

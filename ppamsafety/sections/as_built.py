@@ -1,5 +1,5 @@
 """The as-built arm: the library fitted jointly to the thesis' own printed measurements
-(issue 20, part 2).
+(Tables 5.2, 6.1, fig. 3.1, §5.3.5).
 
 Part of ``ppamsafety report`` (section "as_built"); run alone with
 ``python studies/as_built.py [outdir] [--quick] [--overwrite]``.
@@ -42,7 +42,7 @@ SECTION = SectionInfo(
     summary=("the as-built arm: effects and sensor faults fitted jointly to Tables 5.2 and 6.1, "
              "the fig. 3.1 RMS and the §5.3.5 statements; identifiability, the remaining gap, "
              "the conclusions re-tested"),
-    thesis="Tables 5.2, 6.1, §3.5.1.6, §5.3.5 (issue 20)", typical_seconds=60.0, scope="thesis")
+    thesis="Tables 5.2, 6.1, §3.5.1.6, §5.3.5", typical_seconds=60.0, scope="thesis")
 
 #: Quick mode: three variants, short runs, two candidates, a budget of three points.
 QUICK_VARIANTS = ("PID", "PSMC joint Ki=12 λ=0.4", "PSMC task λ=0.4")

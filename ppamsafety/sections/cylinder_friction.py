@@ -1,4 +1,4 @@
-"""The bench case study: friction of real 3D-printed pneumatic cylinders (issue 20 section 3).
+"""The bench case study: friction of real 3D-printed pneumatic cylinders.
 
 The shipped bench data (``ppamsafety.data.datasets``, Zillen 2021, CC0): three
 seals -- O-ring257, X-ring257 (25.7 mm bore), Kidney_lc (kidney-shaped bore) --

@@ -1,5 +1,5 @@
 """Discrepancy diagnosis: a two-effect closed-loop case, Table 5.2 against the library, a blind
-battery (issue 10, case studies (b) and (c)).
+battery (case studies (b) and (c) of docs/diagnose.md).
 
 Part of ``ppamsafety report`` (section "diagnose_cases"); run alone with
 ``python studies/diagnose_cases.py [outdir] [--quick] [--overwrite]``.
@@ -16,8 +16,8 @@ Part of ``ppamsafety report`` (section "diagnose_cases"); run alone with
 2. *Case (b), Table 5.2.*  The thesis publishes only summary statistics of
    its tracking errors; every library effect is fitted to them one at a
    time and the identifiability of the effects from such data is assessed
-   (:mod:`ppamsafety.diagnose.summary_fit`).  The report runs a reduced
-   design (:data:`REPORT_DESIGN`: three variants, two periods, 10 s windows)
+   (:mod:`ppamsafety.diagnose.arm.summary_fit`).  The report runs a reduced
+   design (three variants, two periods, 10 s windows)
    to stay within the report's time budget.
 3. *A small blind battery* (:data:`BATTERY`): each library effect alone,
    nothing hidden, two together, one closed-loop record each; the confusion
@@ -43,11 +43,11 @@ from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
-#: (2026-11-23, issue 11), the order a first report starts the sections in.
+#: (measured 2026-11-23), the order a first report starts the sections in.
 SECTION = SectionInfo(
     summary=("discrepancy diagnosis: two hidden effects in a closed-loop record, Table 5.2 against"
              " every library effect (fit and identifiability), a blind closed-loop battery"),
-    thesis="§5.3.5, Table 5.2 (issue 10)", typical_seconds=23.5)
+    thesis="§5.3.5, Table 5.2", typical_seconds=23.5)
 
 #: Case (c): hidden effects, experiment, controller, record length [s], seed.
 CASE_C = {"effects": {"friction_coulomb_factor": 3.0, "valve_dead_time": 0.02},

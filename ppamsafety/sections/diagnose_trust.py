@@ -1,4 +1,4 @@
-"""Trust in the diagnosis (issue 19): does "high" mean what it says, on data it never saw?
+"""Trust in the diagnosis: does "high" mean what it says, on data it never saw?
 
 Three things a user needs before trusting a name the discrepancy workflow
 prints:

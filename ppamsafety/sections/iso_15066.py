@@ -1,4 +1,5 @@
-"""Clamping and ISO/TS 15066 power and force limiting for the head (issue 12 items 4, 5).
+"""Clamping and ISO/TS 15066 power and force limiting for the head (thesis §6.3.5,
+ISO/TS 15066:2016 Annex A).
 
 What a safety assessor preparing an ISO/TS 15066 argument for this arm needs:
 
@@ -61,7 +62,7 @@ from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
-#: (2026-11-23, issue 11), the order a first report starts the sections in.
+#: (measured 2026-11-23), the order a first report starts the sections in.
 SECTION = SectionInfo(
     summary=("clamping and ISO/TS 15066: head pinned against a wall (transient, quasi-static), "
              "Annex A limits, transfer energy, maximum speed and lambda per PSMC family"),
@@ -88,9 +89,9 @@ ASSUMPTIONS = (
     "Limits are ISO/TS 15066:2016 Annex A values for skull/forehead (130 N, 150 N/mm) and face "
     "(65 N, 75 N/mm), head effective mass 4.4 kg; the force limits, pressures and 4.4 kg could "
     "not be confirmed against a stored copy of the TS (see ppamsafety.params.iso_ts_15066).",
-    "Transient limit = 2 x quasi-static (Table A.2 multiplier of the other regions, as the brief "
-    "asks). Our reading of the TS is that it gives no transient allowance for the head; every "
-    "verdict is also stated against the quasi-static force (factor 1).",
+    "Transient limit = 2 x quasi-static (the Table A.2 multiplier of the other regions, applied "
+    "to the head too). Our reading of the TS is that it gives no transient allowance for the "
+    "head; every verdict is also stated against the quasi-static force (factor 1).",
     "Robot effective mass: Annex A.4 m_R = M/2 + m_L with M = {mass}, m_L = 0; "
     "and the arm's own apparent mass 1/(u^T J H^-1 J^T u) along the impact direction.",
     "Free transient contact: the thesis impact model (flexible joints, horizontal plane, 50 ms) "
@@ -674,7 +675,7 @@ def render(study: IsoStudy) -> Section:
         markdown_table(study.quasi_static.drop(columns=["family", "diverged"]), digits=4), "",
         "**Smallest admissible lambda per PSMC family** (worst free impact over step and "
         "switch, four instants; F_max falls with lambda, so the limit bounds lambda from below: "
-        "the \"maximum lambda\" of the issue is read as this bound on the aggressiveness "
+        "the \"maximum lambda\" of a family is this bound on its aggressiveness "
         "1/lambda). `lambda_min_force` from the simulated forces, `lambda_min_speed` from the "
         "Annex A speed criterion with m_R = M/2; NaN: not reached on the grid "
         f"{list(study.lambdas)} s; `at_grid_min`: already met at the smallest lambda; "

@@ -1,4 +1,4 @@
-"""Collision detection and reaction in the closed loop (issue 12, item 7; beyond thesis §6.3.5).
+"""Collision detection and reaction in the closed loop (beyond thesis §6.3.5).
 
 Part of ``ppamsafety report`` (section "reaction"); run alone with
 ``python studies/reaction.py [outdir] [--quick] [--overwrite]``.
@@ -56,7 +56,7 @@ from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
-#: (2026-11-23, issue 11), the order a first report starts the sections in.
+#: (measured 2026-11-23), the order a first report starts the sections in.
 SECTION = SectionInfo(
     summary=("detection and reaction: the head coupled to the full closed loop, momentum-observer "
              "detection, stop / retract / vent, the second impact"),

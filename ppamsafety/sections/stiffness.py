@@ -43,7 +43,7 @@ from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
-#: (2026-11-23, issue 11), the order a first report starts the sections in.
+#: (measured 2026-11-23), the order a first report starts the sections in.
 SECTION = SectionInfo(
     summary=("joint stiffness sweep: the motor-side conventions (frozen equilibrium, Spong "
              "flexible joint, rigid limit) against fig. 6.3"),

@@ -1,4 +1,4 @@
-"""Worst head placement around the tool point, over every instant (issue 12 item 6).
+"""Worst head placement around the tool point, over every instant.
 
 The thesis (§6.3.2, fig. 6.2) places the head along the TCP velocity at the
 impact instant and evaluates four instants per experiment (§6.3.3).  This
@@ -29,7 +29,7 @@ from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
-#: (2026-11-23, issue 11), the order a first report starts the sections in.
+#: (measured 2026-11-23), the order a first report starts the sections in.
 SECTION = SectionInfo(
     summary=("worst impact direction: every head placement around the tool at every instant, "
              "against the thesis's choice"),

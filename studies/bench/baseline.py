@@ -67,7 +67,7 @@ def run(tree: Path, args: list, *, env: dict | None = None, timeout: float = 720
     Parameters
     ----------
     tree : Path
-        Root of a source tree (``HERE`` or a :func:`checkout`).
+        Root of a source tree (``HERE`` or a ``checkout()``).
     args : list of str
         Arguments of the Python interpreter; the last line of output is a JSON object.
     env : dict, optional

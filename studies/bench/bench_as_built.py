@@ -15,7 +15,7 @@ the fit (``--fit``)
     the full design) to convergence: its steps, Jacobians, criterion, chi2 and CPU time.
 
 ``--baseline REV`` measures the evaluation in the git revision REV and in the working tree,
-alternately (:mod:`baseline`), and prints the ratios (REV / now; above 1: faster now).
+alternately (``baseline.py``), and prints the ratios (REV / now; above 1: faster now).
 
 Run:  python studies/bench/bench_as_built.py [--baseline REV] [--rounds N] [--quick]
       [--per-plant] [--fit]

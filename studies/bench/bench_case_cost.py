@@ -1,4 +1,4 @@
-"""The cost model of a sweep case beside the measured cost (issue 22: estimate before running).
+"""The cost model of a sweep case beside the measured cost (a sweep estimates before it runs).
 
 ``ppamsafety sweep`` estimates the time and memory of a study before anything runs
 (:func:`ppamsafety.study_files.estimate_cases`, constants

@@ -15,7 +15,7 @@ one ``run_batch`` call, and of the same 100 runs one by one.  Each also prints a
 the logs, so that two versions can be checked to compute the same bits.
 
 ``--baseline REV`` runs both measurements for the git revision REV and for the working
-tree, alternately, ``--rounds`` times (:mod:`baseline`), and prints the ratios (REV /
+tree, alternately, ``--rounds`` times (``baseline.py``), and prints the ratios (REV /
 working tree; above 1 means faster now) with the load average.
 
 Run:  python studies/bench/bench_closed_loop.py [--baseline REV] [--rounds N]

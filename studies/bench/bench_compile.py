@@ -11,7 +11,7 @@ per argument type, and once per distinct *constant* int or bool argument at a ca
 The quick sections call the same kernels with the same types as the full report.
 
 ``--baseline REV`` measures the git revision REV and the working tree, one after the other
-(:mod:`baseline`), and prints the totals side by side.
+(``baseline.py``), and prints the totals side by side.
 
 Run:  python studies/bench/bench_compile.py [--baseline REV] [--top N]
 """

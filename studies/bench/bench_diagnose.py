@@ -1,4 +1,4 @@
-"""Speed of the discrepancy diagnosis (issue 10 item 9): a 60 s closed-loop record at 1 kHz.
+"""Speed of the discrepancy diagnosis: a 60 s closed-loop record at 1 kHz.
 
 Target: ``diagnose`` of a 60 s closed-loop record sampled at 1 kHz against the
 whole candidate library in <= 60 s on 2 cores.

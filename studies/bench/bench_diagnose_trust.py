@@ -1,4 +1,4 @@
-"""Speed of the trusted diagnosis (issue 19): a 60 s arm record, full library, every gate.
+"""Speed of the trusted diagnosis: a 60 s arm record, full library, every gate.
 
 Target: ``diagnose`` of a 60 s closed-loop record at 1 kHz against the full library (the
 sensor faults included) with every gate before "high" (the subset search, the stability
@@ -53,7 +53,7 @@ from ppamsafety.diagnose.core.criteria import _chi2_sf
 from ppamsafety.params import thesis_arm
 from ppamsafety.plant import packing
 
-TARGET_S = 10.0          #: issue 19 target for a 60 s record [s]
+TARGET_S = 10.0          #: target for a 60 s record [s]
 HIDDEN = {"payload_mass": 0.4, "valve_dead_time": 0.02}
 PAIRS = 25               #: complementary pairs of the stability selection
 

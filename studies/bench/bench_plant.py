@@ -1,4 +1,4 @@
-"""Benchmark of the open-loop plant (issue 2, item 7).
+"""Benchmark of the open-loop plant.
 
 Time to simulate 10 s of open-loop motion at a 1 kHz input rate (one RK4 step
 per period, the default), for one state and for a batch of 100 parameter

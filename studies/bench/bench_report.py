@@ -1,6 +1,6 @@
 """The README's main job, side by side with an earlier version: install, report, quick report.
 
-For the git revision ``--baseline REV`` and for the working tree, alternately (:mod:`baseline`):
+For the git revision ``--baseline REV`` and for the working tree, alternately (``baseline.py``):
 
 * *install*: ``python -m pip install --no-deps --target <temporary folder> <tree>`` (the
   package's own build and install; the dependencies are already installed here, so a fresh

@@ -1,4 +1,4 @@
-"""Benchmark of the every-instant impact scan (issue 11, item 4).
+"""Benchmark of the every-instant impact scan.
 
 For each of the 20 Table 6.1 experiments (step and switch, 10 controller
 variants each), interleaved in one run: the straightforward scan

@@ -21,8 +21,8 @@ A physics case (:func:`ppamsafety.sweep_cases.safety_case`, one 12 s
 closed-loop experiment and four impacts) takes about 0.05-0.1 s of compiled
 work on one core, so the engine's overhead matters only for trivial cases.
 
-Physics cases with an arm of their own (issue 21, ``--physics N``): the per-case cost of
-:func:`~ppamsafety.sweep_cases.safety_case` as today (the thesis arm) against the same cases
+Physics cases with an arm of their own (``--physics N``): the per-case cost of
+:func:`~ppamsafety.sweep_cases.safety_case` of the thesis arm against the same cases
 with a plant effect and dotted-path arm parameters (``effects={"payload_mass": ...}``,
 ``"arm.links.m2"``, ``"arm.pneumatics.mean_pressure"``), whose values differ per case by
 1e-12 relative so that every case builds, validates and packs a new arm (no cache hit), on the

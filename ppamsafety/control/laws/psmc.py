@@ -122,7 +122,7 @@ def proxy_state(f, a, da, kp, ki, kd, T):
         Nabla a[k-1] = a[k-1] - a[k-2] [rad s].
     kp, ki, kd : float
         Virtual-coupling gains [Pa/rad, Pa/(rad s), Pa s/rad]; A = Ki T^2 +
-        Kp T + Kd must not be zero (:func:`check_proxy_gains`).
+        Kp T + Kd must not be zero (:func:`ppamsafety.control.psmc.check_proxy_gains`).
     T : float
         Control period [s], > 0.
 

@@ -1,5 +1,5 @@
 """The as-built arm: the library fitted jointly to every printed measurement of the thesis
-(issue 20, part 2).
+(Tables 5.2, 6.1, fig. 3.1, §5.3.5).
 
 The thesis prints few numbers about its real arm, but they are real data:
 

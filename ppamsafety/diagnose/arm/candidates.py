@@ -3,13 +3,13 @@
 Each :class:`Candidate` is one physical effect the model may be missing,
 with a fixed name from :data:`VOCABULARY` (the ``name`` written in
 ``diagnosis.json``), its parameters (unit, bounds, meaning), the signature
-it leaves (which subsystem residual of :mod:`ppamsafety.diagnose.residuals`
+it leaves (which subsystem residual of :mod:`ppamsafety.diagnose.arm.residuals`
 it shows in, and the operating-region pattern), and a **model extension**
 fitted by regression: either directions in the model vector mu (the
 extension is ``mu = mu0 + D phi``, so the block residual changes by
 ``X D phi``, linear in phi) or a profiled grid parameter (dead time) that
 changes X itself.  Every extension maps back to a plant row
-(:func:`ppamsafety.diagnose.residuals.row_from_mu`) so that its effect on
+(:func:`ppamsafety.diagnose.arm.residuals.row_from_mu`) so that its effect on
 the full simulation can be shown by a batched rollout.
 
 Adding a candidate = one :func:`register` call (see the entries at the end
@@ -116,7 +116,7 @@ class Candidate:
         ``plant_effect(values, arm) -> dict`` of :class:`~ppamsafety.params.effects.Effects`
         overrides reproducing the effect (for rehearsal), None if not a plant effect.
     columns : str or None
-        Key of :attr:`ppamsafety.diagnose.residuals.BlockSystem.extra`: regression
+        Key of :attr:`ppamsafety.diagnose.arm.residuals.BlockSystem.extra`: regression
         columns (nb, 6, k) added to the *prediction* of the block residual
         (prediction = X mu + columns phi), for an effect that is not a
         direction of mu (hysteresis: a torque proportional to the Preisach
@@ -392,7 +392,7 @@ def _maybe_register_hysteresis():
     linear in delta given the Preisach output W_k of the *measured*
     contraction history (contractions from the measured q through the
     geometry).  The columns are built by
-    :func:`ppamsafety.diagnose.residuals.hysteresis_signature` with the
+    :func:`ppamsafety.diagnose.arm.residuals.hysteresis_signature` with the
     plant's own operator (:func:`ppamsafety.plant.model.hysteresis_factors`
     with delta = 1).
 

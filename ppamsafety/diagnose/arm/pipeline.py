@@ -1,7 +1,7 @@
-"""The diagnosis of an arm record, :func:`diagnose_arm` (issue 10 items 2-5).
+"""The diagnosis of an arm record, :func:`diagnose_arm`.
 
 Pipeline for an arm record (open loop, or closed loop with the set values
-logged): noise level from the data (:mod:`.noise`), block residuals per
+logged): noise level from the data (:mod:`ppamsafety.diagnose.core.noise`), block residuals per
 subsystem (:mod:`.residuals`), forward selection over the candidate library
 with refit (:mod:`.selection`), then the rollout of the nominal model and of
 the fitted one (the gap shrinking, as RMS per channel and as figures).  The
@@ -112,7 +112,7 @@ def after_row(arm, fit, params) -> np.ndarray:
     It is the model whose block residuals the selection and the gates judged: the arm under
     test with its declared effects, changed by the fit.  Effects that are directions of the
     model vector are written back with
-    :func:`~ppamsafety.diagnose.residuals.row_from_mu`; effects with their
+    :func:`~ppamsafety.diagnose.arm.residuals.row_from_mu`; effects with their
     own regression columns (hysteresis, a torque bias) through their ``plant_effect``
     (:class:`~ppamsafety.params.effects.Effects` overrides of the declared ones, e.g. the
     fitted delta, clipped to the plant's range [0, 1]); a changed dead time as the plant's
@@ -127,7 +127,7 @@ def after_row(arm, fit, params) -> np.ndarray:
     fit : ppamsafety.diagnose.selection.Fit
         The final fit.
     params : dict
-        :func:`~ppamsafety.diagnose.selection.parameter_table` of ``fit``.
+        :func:`~ppamsafety.diagnose.arm.selection.parameter_table` of ``fit``.
 
     Returns
     -------
@@ -159,7 +159,7 @@ def sensor_fault(fit, params) -> SensorFault:
     ----------
     fit : ppamsafety.diagnose.selection.Fit
     params : dict
-        :func:`~ppamsafety.diagnose.selection.parameter_table` of ``fit``.
+        :func:`~ppamsafety.diagnose.arm.selection.parameter_table` of ``fit``.
     """
     out = SensorFault()
     for n in fit.names:
@@ -260,7 +260,7 @@ def diagnose_arm(data, *, arm=None, candidates=None, block_seconds: float = 0.05
     data : MeasuredData
         Arm record (:func:`ppamsafety.data.load_measured`): open or closed
         loop with q, qd, p, u; or a static sawtooth (§3.5.1.6) with q, p
-        (u and F1..F4 optional), see :mod:`ppamsafety.diagnose.static`.
+        (u and F1..F4 optional), see :mod:`ppamsafety.diagnose.arm.static`.
     arm : ArmParameters, optional, keyword-only
         The model under test, its declared effects included (default the thesis arm).
     candidates : sequence of str, optional, keyword-only

@@ -29,7 +29,7 @@ torque vs the rigid-body model (channels ``tau1, tau2``, N m s)
     signal is taken, and -- unlike the first-order filter, whose outputs are
     correlated over ~1/omega -- non-overlapping blocks with distinct end
     samples give residuals that are *independent* under white measurement
-    noise, which the statistics of :mod:`ppamsafety.diagnose.selection` need.
+    noise, which the statistics of :mod:`ppamsafety.diagnose.arm.selection` need.
 angles vs the full simulation (channels ``q1, q2``, rad; also qd, p)
     :func:`replay`: the plant model (:func:`ppamsafety.plant.model.simulate`,
     batched over parameter variants) from the measured first state with the
@@ -39,7 +39,7 @@ angles vs the full simulation (channels ``q1, q2``, rad; also qd, p)
 Both block residuals are linear in the *model vector* mu (:data:`MU_NAMES`,
 23 entries: a, b, kappa of the four valves, n, theta1..theta6, c1, c2, b1,
 b2), ``prediction = X mu``; every candidate effect of
-:mod:`ppamsafety.diagnose.candidates` is a direction (or a change of X) in
+:mod:`ppamsafety.diagnose.arm.candidates` is a direction (or a change of X) in
 that space, which is why they can be fitted by linear regression.
 
 The model under test is the arm *as declared*, its ``[effects]`` included
@@ -852,7 +852,7 @@ def encoder_columns(residual_of, q, y, X) -> Columns:
 def channel_noise(rec: ArmRecord) -> dict:
     """Measurement-noise standard deviations of q, qd, p estimated from the data.
 
-    See :mod:`ppamsafety.diagnose.noise`; floored for noise-free records.
+    See :mod:`ppamsafety.diagnose.core.noise`; floored for noise-free records.
 
     Parameters
     ----------

@@ -1,11 +1,11 @@
-"""Ranking, evidence and forward selection with refit (issue 10 items 3-4).
+"""Ranking, evidence and forward selection with refit.
 
 Statistics (the choices a reviewer will ask about)
 --------------------------------------------------
-*Data.*  The block residuals of :mod:`ppamsafety.diagnose.residuals`
+*Data.*  The block residuals of :mod:`ppamsafety.diagnose.arm.residuals`
 (channels p1..p4, tau1, tau2), each divided by its **noise level** sigma_c:
 the standard deviation the measurement noise alone gives that channel
-(:func:`~ppamsafety.diagnose.residuals.block_noise`, from the noise
+(:func:`~ppamsafety.diagnose.arm.residuals.block_noise`, from the noise
 estimated in the data).  Blocks do not share samples, so under a correct
 model the whitened residuals e are approximately independent N(0, 1) and
 -2 log L = chi2 = sum e^2 (+ const) with the noise level *known*.
@@ -110,10 +110,10 @@ class Problem:
     max_shift : int
         Largest increase of the dead time searched [samples].
     noise : tuple
-        Noise draws (dY, dX) of :func:`~ppamsafety.diagnose.residuals.noise_draws`.
+        Noise draws (dY, dX) of :func:`~ppamsafety.diagnose.arm.residuals.noise_draws`.
     floor : numpy.ndarray or None
         Lower bound of the noise level per channel (rest-point records:
-        :data:`ppamsafety.diagnose.static.RESOLUTION`), None for none.
+        :data:`ppamsafety.diagnose.arm.static.RESOLUTION`), None for none.
     shift_grid : tuple of int or None
         Changes of the dead time from the model's profiled [samples] (None:
         ``bs.shift_grid(max_shift)``, every one from no delay to ``max_shift`` more;
@@ -183,7 +183,7 @@ def make_problem(bs: BlockSystem, mu0, noise, arm, *, floor=None) -> Problem:
     mu0 : numpy.ndarray, shape (NMU,)
         Nominal model vector.
     noise : tuple (dY, dX)
-        Noise draws of :func:`~ppamsafety.diagnose.residuals.noise_draws`; the
+        Noise draws of :func:`~ppamsafety.diagnose.arm.residuals.noise_draws`; the
         noise level of each channel is evaluated at the current model.
     arm : ArmParameters
     floor : array_like, shape (6,), optional, keyword-only

@@ -11,7 +11,7 @@ torque balance (channels ``tau1, tau2``, N m)
     ``tau(p, q) = sum_k p_k m_tau,k(q)`` against ``G(q) = W3(q, 0) theta``
     (the rigid-body regressor at zero velocity: gravity only) -- linear in
     the model vector mu like the block equations of
-    :mod:`ppamsafety.diagnose.residuals`, so the same candidates and the
+    :mod:`ppamsafety.diagnose.arm.residuals`, so the same candidates and the
     same selection apply (payload: a gravity direction; hysteresis: the
     column ``-mean(h_tau)`` of :func:`~.residuals.hysteresis_signature`,
     whose Preisach memory runs over every recorded sample in order: between

@@ -1,4 +1,4 @@
-"""Fitting plant effects to summary statistics: the thesis' Table 5.2 (issue 10, case b).
+"""Fitting plant effects to summary statistics: the thesis' Table 5.2.
 
 The thesis does not publish its tracking records, only Table 5.2: the mean
 and the maximum of the task-space error ||r_d - r|| per controller variant
@@ -33,7 +33,7 @@ closed-loop run of all variants, periods and grid points,
 piecewise linearly in theta, and chi2 is profiled on a fine theta grid:
 best theta, chi2_min, and the interval where chi2 - chi2_min <= s2 (the
 profile interval scaled by the residual variance s2 = chi2_min/(m - 1),
-as in :mod:`ppamsafety.diagnose.selection`).
+as in :mod:`ppamsafety.diagnose.arm.selection`).
 
 Identifiability
 ---------------

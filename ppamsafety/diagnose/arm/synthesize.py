@@ -1,4 +1,4 @@
-"""The generator of hidden-effect data (issue 10 item 6): rehearse the diagnosis.
+"""The generator of hidden-effect data: rehearse the diagnosis.
 
 :func:`synthesize` simulates an experiment on a plant that differs from the
 nominal arm by the given effects, adds seeded measurement noise and returns a

@@ -1,7 +1,7 @@
-"""Blind battery of the tester diagnosis and its confusion matrix (issue 10, test bench).
+"""Blind battery of the tester diagnosis and its confusion matrix (test bench).
 
 Each case hides effects in
-:func:`~ppamsafety.diagnose.actuator_synthesize.synthesize_actuator` (the
+:func:`~ppamsafety.diagnose.bench.synthesize.synthesize_actuator` (the
 default sawtooth: 1, 1.5 and 2.5 bar, three loops each between 5 % and
 25 % contraction, 50 Hz, tester noise) and records what
 :func:`~ppamsafety.diagnose.diagnose` names, never telling it what was hidden.
@@ -17,14 +17,14 @@ Magnitudes (why):
   l0/R known only roughly (§3.6.1 finds the N = 25/40 difference too large
   for the theory and blames the slenderness);
   A *uniform* scale of the force function is exactly a load-cell gain on a
-  muscle record (both multiply p f(eps)): since the sensor faults joined the
-  library (issue 19) the right answer is the confounded pair
+  muscle record (both multiply p f(eps)): with the sensor faults in the
+  library the right answer is the confounded pair
   ``force_law_refit`` / ``force_sensor_gain`` with the experiment that
   separates them, never one of them (:data:`CONFOUNDED`);
   ``force_law_shape`` hides a force function whose error grows with the
   contraction (5 % per 10 % of contraction, no mean change at eps = 0.15),
   which a gain cannot mimic: ``force_law_refit`` is named;
-* sensor faults (library since issue 19): a force-sensor offset of 20 N (2 %
+* sensor faults (in the library): a force-sensor offset of 20 N (2 %
   of the largest force) and a pressure-sensor offset of 5 kPa (0.05 bar, half
   the valve deviations of §3.5.1.2);
 * outside the library: 0.5 mm of backlash between crosshead and muscle
@@ -185,7 +185,7 @@ def run_battery(cases=None, seeds=(1, 2, 3, 4, 5), **options) -> pd.DataFrame:
         Seeds of the records.
     **options
         Keyword options of
-        :func:`~ppamsafety.diagnose.actuator_synthesize.synthesize_actuator`
+        :func:`~ppamsafety.diagnose.bench.synthesize.synthesize_actuator`
         (e.g. ``cycles``, ``sample_rate``).
 
     Returns

@@ -1,6 +1,6 @@
-"""Calibration of the campaign diagnosis' confidence on synthetic campaigns (issue 20 item 6).
+"""Calibration of the campaign diagnosis' confidence on synthetic campaigns.
 
-Issue 19's principle: a printed confidence is a promise, so ``"high"`` must
+The principle: a printed confidence is a promise, so ``"high"`` must
 mean that at least 97 % of the effects named "high" are really there.  This
 module measures it for bench campaigns of a cylinder: :func:`random_scenario`
 draws a campaign from a seed (a Coulomb friction always -- a real seal has

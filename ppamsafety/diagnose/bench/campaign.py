@@ -1,4 +1,4 @@
-"""The discrepancy workflow on a bench campaign of a pneumatic cylinder (issue 20 items 2-4).
+"""The discrepancy workflow on a bench campaign of a pneumatic cylinder.
 
 :func:`diagnose_campaign` diagnoses several records of one cylinder together
 (a :class:`~ppamsafety.data.campaign.Campaign`, or one record): shared

@@ -5,7 +5,8 @@ candidate extends the nominal force law (3.9)
 ``F_nom = p (a0/eps + a1 + a2 eps + a3 eps^2 + a4 eps^3)`` by a term linear
 in its parameters, ``F = F_nom + C phi`` with columns C [N per unit of phi]
 computed from the *measured* pressure and contraction history, so it is
-fitted by linear regression on the force residual (:mod:`.linear_selection`).
+fitted by linear regression on the force residual
+(:mod:`~ppamsafety.diagnose.core.linear_selection`).
 The columns that hold the force function are computed on the contraction made
 monotone between reversals (``eps_monotone``, the Preisach input of
 :func:`~.design.monotone_contraction`) and on a smoothed pressure
@@ -37,7 +38,7 @@ pressure_sensor_offset  ``-o f(eps)``: the transducer reads p + o, so   o [Pa]
                         the law is evaluated at a pressure o too high
 ======================  ==============================================  ============================
 
-Sensor faults (issue 19 item 3) are the first thing an experimenter checks.
+Sensor faults are the first thing an experimenter checks.
 A **pressure-sensor gain** is not a candidate of its own: reading (1 + g_p) p
 makes the nominal force p f(eps) (1 + g_p) x too large, exactly the column of a
 force-sensor gain g = -g_p / (1 + g_p) (both scale p f(eps)); the separating
@@ -92,12 +93,12 @@ from .friction import separating_experiment as friction_separating
 #: Fixed vocabulary of effect names on a tester (actuator records).
 ACTUATOR_VOCABULARY = ("actuator_friction", "hysteresis", "force_law_refit",
                        "force_sensor_offset", "force_sensor_gain", "pressure_sensor_offset")
-#: The sensor faults of the library (issue 19 item 3).
+#: The sensor faults of the library.
 SENSOR_FAULTS = ("force_sensor_offset", "force_sensor_gain", "pressure_sensor_offset")
 #: Largest hysteresis scale that keeps the factor 1 + delta (W - W_fit) of (3.35) positive.
 DELTA_PHYSICAL_MAX = 1.0
 #: The experiment that separates the members of a confounded group on a muscle record
-#: (issue 19 item 3; looked up by :func:`separating_experiment`).
+#: (looked up by :func:`separating_experiment`).
 SEPARATING = {
     frozenset({"force_sensor_gain", "force_law_refit"}):
         "a dead-weight check of the load cell (known masses hung from it: a gain error scales "

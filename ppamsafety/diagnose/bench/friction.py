@@ -67,7 +67,7 @@ XD_GRID = (0.05e-3, 0.1e-3, 0.2e-3, 0.3e-3, 0.5e-3, 0.8e-3, 1.2e-3, 2.0e-3)
 VS_FRACTIONS = (0.05, 0.1, 0.2, 0.35)
 K_GRID = (8, 16, 32)
 K2_GRID = (4, 8, 16)
-#: The experiment that separates the members of a confounded group (issue 19 item 3).
+#: The experiment that separates the members of a confounded group.
 SEPARATING = {
     frozenset({"force_sensor_offset", "pressure_sensor_offset"}):
         "read both sensors at rest with the rod free and the cylinder vented (p = 0, F = 0): "

@@ -1,4 +1,4 @@
-"""The randomized scenario battery of muscle test-bench records (issue 19 items 2-3, kind "actuator").
+"""The randomized scenario battery of muscle test-bench records (kind "actuator").
 
 The muscle counterpart of :mod:`ppamsafety.diagnose.scenarios` (the arm's
 battery), whose scoring it follows: :func:`run_scenario` returns a row with the
@@ -66,9 +66,9 @@ from .synthesize import synthesize_actuator
 #: Seeds the bench gates were set on (the ``clear`` ratio) and the widened intervals were
 #: checked on (:mod:`..core.omitted`); never used to measure them.
 TUNING_SEEDS = range(0, 200)
-#: Seeds of the bench battery's measurement (shipped in ``calibration_data``).  1000-1299
-#: measured the gates before the intervals were widened; the measurement since runs on
-#: seeds no earlier run has seen.
+#: Seeds of the bench battery's measurement (shipped in ``calibration_data``), on which no
+#: rule was set (1000-1299 measured the gates with the fit's own intervals, which showed the
+#: intervals needed widening; ``docs/diagnose.md``).
 MEASURE_SEEDS = range(1300, 1600)
 #: Probabilities of 0, 1, 2, 3 hidden library effects (as the arm's battery).
 P_COUNT = (0.2, 0.4, 0.28, 0.12)

@@ -35,7 +35,7 @@ in the tester library (:mod:`.candidates`)
     the sign kept through rests); ``force_law_scale`` [-]: the true law is
     (1 + s) x the nominal one (a slenderness l0/R known only roughly,
     §3.6.1); ``force_law_delta`` [N/Pa]: five values added to a0..a4;
-    sensor faults (issue 19): ``force_sensor_offset`` [N] (added to the
+    sensor faults: ``force_sensor_offset`` [N] (added to the
     recorded force), ``force_sensor_gain`` [-] (the recorded force is
     (1 + g) x the force), ``pressure_sensor_offset`` [Pa] (added to the
     recorded pressure) and ``pressure_sensor_gain`` [-] (the recorded

@@ -1,12 +1,14 @@
-"""The naming rule of :mod:`ppamsafety.diagnose.selection` for any residual linear in its parameters.
+"""The naming rule of :mod:`~ppamsafety.diagnose.arm.selection` for any residual linear in
+its parameters.
 
 The arm workflow ranks candidates on a block system (``y = X mu``) with its
 own model vector; a test-bench record (one actuator) has one residual
 channel and candidates that each add *columns* to it.  This module applies
 the same statistics to that simpler structure, so both workflows name an
-effect under identical rules (constants :data:`~.selection.ALPHA`,
-:data:`~.selection.RHO_MAX`, :data:`~.selection.CV_SEGMENTS`; rows of
-:class:`~.selection.Step` with the same keys, so
+effect under identical rules (constants :data:`~ppamsafety.diagnose.core.criteria.ALPHA`,
+:data:`~ppamsafety.diagnose.core.criteria.RHO_MAX`,
+:data:`~ppamsafety.diagnose.core.criteria.CV_SEGMENTS`; rows of
+:class:`~ppamsafety.diagnose.core.criteria.Step` with the same keys, so
 :meth:`~ppamsafety.diagnose.diagnosis.Diagnosis.ranking` and
 ``diagnosis.json`` read them unchanged):
 
@@ -76,12 +78,12 @@ class LinearFit:
 
     @property
     def bic(self) -> float:
-        """chi2 + k ln m (:func:`~ppamsafety.diagnose.selection.bic`)."""
+        """chi2 + k ln m (:func:`~ppamsafety.diagnose.core.criteria.bic`)."""
         return bic(self.chi2, self.k, self.m)
 
     @property
     def aicc(self) -> float:
-        """Small-sample AIC (:func:`~ppamsafety.diagnose.selection.aicc`)."""
+        """Small-sample AIC (:func:`~ppamsafety.diagnose.core.criteria.aicc`)."""
         return aicc(self.chi2, self.k, self.m)
 
     def rho(self) -> float:
@@ -268,7 +270,8 @@ def cv_chi2_linear(e0, columns: dict, names, fold) -> float:
 def forward_selection_linear(e0, columns: dict, admissible, *, alpha: float = ALPHA,
                              max_effects: int = 3, fold=None,
                              min_gain_per_equation: float = 0.0) -> tuple:
-    """Forward selection with refit under the naming rule of :mod:`.selection`.
+    """Forward selection with refit under the naming rule of
+    :mod:`~ppamsafety.diagnose.core.criteria`.
 
     Parameters
     ----------

@@ -1,4 +1,4 @@
-"""Noise level of measured channels, estimated from the data (issue 10 item 2).
+"""Noise level of measured channels, estimated from the data.
 
 Estimator: the **second difference** of a sampled channel,
 ``d[k] = x[k+1] - 2 x[k] + x[k-1]``, removes a smooth signal (its contribution
