@@ -32,17 +32,19 @@ from __future__ import annotations
 import time
 from dataclasses import dataclass, field
 
+import numpy as np
 import pandas as pd
 
 from .._validation import check_instance, check_int
 from ..experiments.catalog import run_thesis_experiment
 from ..params import ArmParameters, thesis_arm
-from ..params.contact import FOREHEAD, BodyContact, Covering
+from ..params.contact import FOREHEAD, BodyContact, Covering, arm_contact_points
 from ..params.contact import covering as named_covering
 from ..params.iso_ts_15066 import LOCATIONS, body_region
 from .anywhere import simulate_contacts, worst_contact
 from .bodies import body_from_head, body_from_region
 from .head import resolve_head
+from .instants import heuristic_instants, impact_states
 from .verdicts import annex_a_head, criteria_for, evaluate
 
 #: The experiments of Table 6.1.
@@ -277,5 +279,76 @@ def safety_summary(arm=None, *, head=None, covering=None, experiments=EXPERIMENT
                          arm.name, every, metrics)
 
 
-__all__ = ["safety_summary", "SafetySummary", "region_bodies", "ranking_limit", "EXPERIMENTS",
+def region_point_verdicts(arm=None, *, covering=None, experiments=EXPERIMENTS,
+                          runs=None) -> pd.DataFrame:
+    """The verdict of every body region at every contact point over Table 6.1's impacts.
+
+    Every experiment and controller variant is crashed, as Table 6.1 is, at its four
+    heuristic impact instants (thesis §6.3.3:
+    :func:`~ppamsafety.impact.instants.heuristic_instants`), at each of the arm's contact
+    points, into each body region of :func:`region_bodies`; each impact is judged on every
+    criterion of its region; per (region, contact point) the row of the worst impact (the
+    smallest governing margin).
+
+    Parameters
+    ----------
+    arm : ArmParameters, optional
+        The arm (default the thesis arm).
+    covering : Covering or str, optional
+        The covering of every contact point (default bare metal).
+    experiments : sequence of {"step", "switch"}
+        The experiments.
+    runs : dict, optional
+        ``{experiment: list of ExperimentResult}`` to reuse.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per (body region, contact point): ``body_region``, ``contact_point``,
+        ``covering``, the worst impact's ``experiment``, ``variant``, governing ``criterion``,
+        ``value``, ``limit``, ``unit``, ``margin``, ``margin [%]``, ``passed``, ``F_max [N]``,
+        ``HIC36``, and ``passing`` / ``impacts`` (experiments x variants whose worst instant
+        passes every criterion of the region).
+    """
+    arm = thesis_arm() if arm is None else check_instance("arm", arm, ArmParameters)
+    cov = None if covering is None else (named_covering(covering) if isinstance(covering, str)
+                                         else check_instance("covering", covering, Covering))
+    states = []
+    for exp in experiments:
+        for res in (run_thesis_experiment(arm, exp) if runs is None else runs[exp]):
+            st = impact_states(res, arm)
+            sub = st.iloc[list(heuristic_instants(st).values())]
+            states.append((exp, res.meta["label"], sub))
+    q = np.concatenate([s[["q1", "q2"]].to_numpy() for *_, s in states])
+    qd = np.concatenate([s[["qd1", "qd2"]].to_numpy() for *_, s in states])
+    K = np.concatenate([s[["K1", "K2"]].to_numpy() for *_, s in states])
+    n_inst = [len(s) for *_, s in states]
+    owner = np.repeat(np.arange(len(states)), n_inst)
+    rows = []
+    for reg, body in region_bodies():
+        crit = criteria_for(reg)
+        for p in arm_contact_points(arm):
+            s = simulate_contacts(arm, q, qd, K, point=p, body=body, covering=cov).summary
+            best, npass = None, 0
+            for j, (exp, label, _) in enumerate(states):
+                g = s[owner == j]
+                i = g["F_max"].idxmax()
+                v = evaluate({"F_max": g.loc[i, "F_max"], "HIC36": g["HIC36"].max()}, crit,
+                             contact_point=p.name, region=reg.name)
+                gov = v.loc[v["margin_pct"].idxmin()]
+                npass += bool(v["passed"].all())
+                if best is None or gov["margin_pct"] < best[2]["margin_pct"]:
+                    best = (exp, label, gov, g.loc[i, "F_max"], g["HIC36"].max())
+            exp, label, gov, fmax, hic = best
+            rows.append({"body_region": reg.name, "contact_point": p.name,
+                         "covering": (cov or p.covering).name, "experiment": exp,
+                         "variant": label, "criterion": gov["criterion"], "value": gov["value"],
+                         "limit": gov["limit"], "unit": gov["unit"], "margin": gov["margin"],
+                         "margin [%]": gov["margin_pct"], "passed": bool(gov["passed"]),
+                         "F_max [N]": fmax, "HIC36": hic, "passing": npass,
+                         "impacts": len(states)})
+    return pd.DataFrame(rows)
+
+
+__all__ = ["safety_summary", "region_point_verdicts", "SafetySummary", "region_bodies", "ranking_limit", "EXPERIMENTS",
            "CASE_COLUMNS", "WHAT_IF_COVERING"]

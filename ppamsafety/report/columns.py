@@ -111,6 +111,10 @@ BY_SECTION = {
         "energy_error": "-", "valve_fraction_by_contact_end": "-",
         "span_over_contact_torque": "-", "Fmax_1_spread_rel": "-",
     },
+    "safety_summary": {"margin": PER_ROW, "covered_value": PER_ROW, "variants": "-",
+                       "variants_passing": "-"},
+    "person": {"margin": PER_ROW, "variants": "-", "impacts": "-", "rms_sigma": "-",
+               "restitution": "-", "after_pulse_share": "-", "covering_strain": "-"},
     "safety": {
         "HIC36 4 instants": "-", "HIC36 every instant": "-", "HIC miss %": "%",
         "F_max 4 instants": "N", "F_max every instant": "N", "F_max miss %": "%",
