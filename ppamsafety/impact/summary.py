@@ -40,7 +40,7 @@ from ..experiments.catalog import run_thesis_experiment
 from ..params import ArmParameters, thesis_arm
 from ..params.contact import FOREHEAD, BodyContact, Covering, arm_contact_points
 from ..params.contact import covering as named_covering
-from ..params.iso_ts_15066 import LOCATIONS, body_region
+from ..params.iso_ts_15066 import LOCATIONS, body_region, resolve_region
 from .anywhere import simulate_contacts, worst_contact
 from .bodies import body_from_head, body_from_region
 from .head import resolve_head
@@ -77,12 +77,34 @@ def region_bodies(head_body: BodyContact = FOREHEAD) -> tuple:
             continue
         seen.add(region)
         r = body_region(number)
-        if r.name == "skull/forehead":
-            b = head_body.replace(name=r.name)
-        else:
-            b = body_from_region(r, radius=annex_a_head(r).radius)
-        out.append((r, b))
+        out.append((r, region_body(r, head_body=head_body)))
     return tuple(out)
+
+
+def region_body(region, *, head_body: BodyContact = FOREHEAD, head=None) -> BodyContact:
+    """The body a region is hit as (module docstring), named after the region.
+
+    Parameters
+    ----------
+    region : BodyRegion, str, int or path-like
+        The region (:func:`~ppamsafety.params.iso_ts_15066.resolve_region`).
+    head_body : BodyContact
+        The skull and forehead's body (default the head that passes the Hybrid III drop).
+    head : HeadContactModel, str or path-like, optional
+        A head model to hit a head region with instead (its one-layer body).
+
+    Returns
+    -------
+    BodyContact
+        ``head`` for a head region when given; ``head_body`` for the skull and forehead;
+        else the region's Annex A two-body model.
+    """
+    r = resolve_region(region)
+    if head is not None and r.head:
+        return body_from_head(head).replace(name=r.name)
+    if r.name == "skull/forehead":
+        return check_instance("head_body", head_body, BodyContact).replace(name=r.name)
+    return body_from_region(r, radius=annex_a_head(r).radius)
 
 
 def ranking_limit(region):
@@ -350,5 +372,5 @@ def region_point_verdicts(arm=None, *, covering=None, experiments=EXPERIMENTS,
     return pd.DataFrame(rows)
 
 
-__all__ = ["safety_summary", "region_point_verdicts", "SafetySummary", "region_bodies", "ranking_limit", "EXPERIMENTS",
+__all__ = ["safety_summary", "region_point_verdicts", "region_body", "SafetySummary", "region_bodies", "ranking_limit", "EXPERIMENTS",
            "CASE_COLUMNS", "WHAT_IF_COVERING"]
