@@ -113,7 +113,7 @@ BY_SECTION = {
     },
     "safety_summary": {"margin": PER_ROW, "covered_value": PER_ROW, "variants": "-",
                        "variants_passing": "-"},
-    "person": {"margin": PER_ROW, "variants": "-", "impacts": "-", "rms_sigma": "-",
+    "person": {"margin": PER_ROW, "passing": "-", "impacts": "-", "rms_sigma": "-",
                "restitution": "-", "after_pulse_share": "-", "covering_strain": "-"},
     "safety": {
         "HIC36 4 instants": "-", "HIC36 every instant": "-", "HIC miss %": "%",
