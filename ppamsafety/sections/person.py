@@ -11,13 +11,14 @@ import pandas as pd
 from ..envelope import safety_envelope
 from ..experiments.catalog import run_thesis_experiment
 from ..impact.bodies import body_from_head, hybrid3_drop
-from ..impact.covering_fit import THESIS_HEAD_MASS, fit_covering, table_6_1_residuals
+from ..impact import covering_fit as cf
 from ..impact.layers import series_contact
 from ..impact.summary import EXPERIMENTS, region_point_verdicts
 from ..markdown import markdown_table
 from ..params.contact import BARE, FOREHEAD, THESIS_COVERING, arm_contact_points
 from ..params.iso_ts_15066 import SKULL_FOREHEAD
-from . import Section, SectionInfo, checked_compute, resolve_arm
+from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
+               resolve_arm)
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores.
@@ -56,6 +57,9 @@ class PersonStudy:
         The fit was not run again.
     metrics : dict
         Headline numbers.
+    note : str
+        For another arm than the thesis arm: what is not shown (Table 6.1 is the thesis arm's;
+        no covering is fitted to it), else "".
     """
 
     drop: pd.DataFrame
@@ -64,6 +68,7 @@ class PersonStudy:
     envelope: pd.DataFrame
     quick: bool
     metrics: dict = field(default_factory=dict)
+    note: str = ""
 
     def to_pandas(self) -> pd.DataFrame:
         """The verdicts of every region and contact point (:attr:`regions`)."""
@@ -86,6 +91,7 @@ def compute(*, quick: bool = False, arm=None) -> PersonStudy:
     PersonStudy
     """
     cpu0 = time.process_time()
+    thesis = compares_to_thesis(arm)
     arm = resolve_arm(arm)
     drops = [("head (forehead), validated", hybrid3_drop(FOREHEAD)),
              ("thesis-frontal", hybrid3_drop(body_from_head("thesis-frontal")))]
@@ -93,19 +99,20 @@ def compute(*, quick: bool = False, arm=None) -> PersonStudy:
         "head model": n, "mass [kg]": d.body.mass, "impact speed [m/s]": d.speed,
         "peak [g]": d.peak_g, "peak CFC 1000 [g]": d.peak_g_cfc, "restitution": d.restitution,
         "after_pulse_share": d.unimodal, "passed": d.passed} for n, d in drops])
-    head5 = FOREHEAD.replace(mass=THESIS_HEAD_MASS)
+    head5 = FOREHEAD.replace(mass=cf.THESIS_HEAD_MASS)
     tool = arm_contact_points(arm)[0]
     cov_rows = []
-    for name, cov in (("bare metal", BARE), (THESIS_COVERING.name, THESIS_COVERING)):
-        rms, _ = table_6_1_residuals(series_contact(cov, head5, point=tool), arm=arm)
+    coverings = (("bare metal", BARE), (THESIS_COVERING.name, THESIS_COVERING)) if thesis else ()
+    for name, cov in coverings:
+        rms, _ = cf.table_6_1_residuals(series_contact(cov, head5, point=tool), arm=arm)
         lay = cov.layers[0] if cov.layers else None
         cov_rows.append({"covering": name,
                          "thickness [mm]": 1e3 * cov.thickness,
                          "modulus [MPa]": lay.modulus / 1e6 if lay else float("nan"),
                          "hysteresis [s/m]": lay.hysteresis if lay else float("nan"),
                          "rms_sigma": rms, "reproduced": bool(rms <= 1.0)})
-    if not quick:
-        fit = fit_covering(arm)
+    if thesis and not quick:
+        fit = cf.fit_covering(arm)
         cov_rows.append({"covering": "fitted again (fit_covering)",
                          "thickness [mm]": 1e3 * fit.covering.thickness,
                          "modulus [MPa]": fit.modulus / 1e6,
@@ -133,11 +140,13 @@ def compute(*, quick: bool = False, arm=None) -> PersonStudy:
     metrics = {"drop_peak_g": float(drops[0][1].peak_g_cfc),
                "drop_passed": bool(drops[0][1].passed),
                "thesis_frontal_drop_g": float(drops[1][1].peak_g_cfc),
-               "covering_rms_sigma": float(cov_rows[1]["rms_sigma"]),
-               "bare_rms_sigma": float(cov_rows[0]["rms_sigma"]),
+               **({"covering_rms_sigma": float(cov_rows[1]["rms_sigma"]),
+                   "bare_rms_sigma": float(cov_rows[0]["rms_sigma"])} if thesis else {}),
                "pairs_failing_bare": int((~bare.passed).sum()), "pairs": len(bare),
                "cpu_seconds": time.process_time() - cpu0}
-    return PersonStudy(drop, pd.DataFrame(cov_rows), regions, envelope, quick, metrics)
+    note = "" if thesis else (other_arm_note(arm) + " Table 6.1 and the covering it implies "
+                              "belong to the thesis arm: the covering is not fitted again.")
+    return PersonStudy(drop, pd.DataFrame(cov_rows), regions, envelope, quick, metrics, note)
 
 
 def render(study: PersonStudy) -> Section:
@@ -163,7 +172,18 @@ def render(study: PersonStudy) -> Section:
                             values="margin [%]", sort=False)
     grid.columns = [f"{cp}, {cv} [% margin]" for cv, cp in grid.columns]
     grid = grid.round(0).reset_index()
-    md = f"""The head every other section hits is the thesis' lumped contact (`thesis-frontal`,
+    if len(c):
+        covering_text = f"""**The covering Table 6.1 implies** (in front of the validated head with the thesis' 5 kg,
+at the tool point): the 20 (HIC, F_max) pairs are reproduced (RMS residual at most 1 standard
+deviation) only with a soft, lossy covering; on bare metal they are not:
+
+{markdown_table(c, digits=3)}
+
+The thesis arm's links are bare aluminium (§2.3.3.4): such a covering is what the thesis'
+numbers need, not what the arm has."""
+    else:
+        covering_text = ""
+    md = ("" if not study.note else study.note + "\n\n") + f"""The head every other section hits is the thesis' lumped contact (`thesis-frontal`,
 fitted to Table 6.1). Here the person is modelled in layers: the robot's covering (or bare
 metal) in series with the body's soft tissue and bone (docs/impact_models.md).
 
@@ -172,14 +192,7 @@ a rigid plate, 225-275 g required); thesis-frontal does not:
 
 {markdown_table(d, digits=3)}
 
-**The covering Table 6.1 implies** (in front of the validated head with the thesis' 5 kg, at the
-tool point): the 20 (HIC, F_max) pairs are reproduced (RMS residual at most 1 standard deviation)
-only with a soft, lossy covering; on bare metal they are not:
-
-{markdown_table(c, digits=3)}
-
-The thesis arm's links are bare aluminium (§2.3.3.4): such a covering is what the thesis'
-numbers need, not what the arm has.
+{covering_text}
 
 **Every body region at every contact point** on the Table 6.1 experiments (the four impact
 instants of §6.3.3 per run, each of the 12 ISO/TS 15066 Annex A body regions -- the skull and
