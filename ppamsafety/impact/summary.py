@@ -372,5 +372,5 @@ def region_point_verdicts(arm=None, *, covering=None, experiments=EXPERIMENTS,
     return pd.DataFrame(rows)
 
 
-__all__ = ["safety_summary", "region_point_verdicts", "region_body", "SafetySummary", "region_bodies", "ranking_limit", "EXPERIMENTS",
-           "CASE_COLUMNS", "WHAT_IF_COVERING"]
+__all__ = ["safety_summary", "region_point_verdicts", "region_body", "SafetySummary",
+           "region_bodies", "ranking_limit", "EXPERIMENTS", "CASE_COLUMNS", "WHAT_IF_COVERING"]
