@@ -81,7 +81,10 @@ def test_summary_section_formats_and_the_report_opens_with_it(quick_summary):
     o = quick_summary.overall
     assert f"{o['value']:.4g} N" in sec.markdown and o["criterion"] in sec.markdown
     assert {n for n, _ in sec.artifacts} == {"safety_summary.csv", "safety_summary_cases.csv",
-                                             "safety_summary_verdicts.csv"}
+                                             "safety_summary_verdicts.csv",
+                                             "safety_summary_worst.png"}
+    pts = quick_summary.worst_scan.worst
+    assert len(pts) == 4 and pts["margin_pct"].min() == pytest.approx(o["margin [%]"])
     assert REGISTRY[0] == "safety_summary"
     assert first_screen(["design", "safety", "safety_summary"])[0] == "safety_summary"
     assert first_screen(["design", "safety"]) == ["design", "safety"]

@@ -159,6 +159,10 @@ class SafetySummary:
         Instant stride (1: every control period).
     metrics : dict
         Headline numbers: candidates, simulations, the process time [s].
+    worst_scan : WorstContact or None
+        The scan of the run with the smallest margin (every contact point's worst region).
+    arm : ArmParameters or None
+        The arm (its figure).
     """
 
     table: pd.DataFrame
@@ -169,10 +173,21 @@ class SafetySummary:
     arm_name: str
     every: int
     metrics: dict = field(default_factory=dict)
+    worst_scan: object = None
+    arm: object = None
 
     def to_pandas(self) -> pd.DataFrame:
         """The one-screen table (:attr:`table`)."""
         return self.table.copy()
+
+    def plot(self) -> dict:
+        """The arm at the worst instant of the worst run, each contact point with its worst
+        region and margin (:meth:`~ppamsafety.impact.anywhere.WorstContact.plot`),
+        ``{file name: Figure}``."""
+        o = self.overall
+        return {"safety_summary_worst.png": self.worst_scan.plot(
+            self.arm, title=f"{o['experiment']}, {o['variant']}: worst region per contact point "
+                            f"(margin to its smallest force limit)")}
 
     @property
     def overall(self) -> pd.Series:
@@ -237,6 +252,7 @@ def safety_summary(arm=None, *, head=None, covering=None, experiments=EXPERIMENT
     bodies = [b for _, b in pairs]
     limits = {b.name: ranking_limit(r).limit for r, b in pairs}
     rows, verdicts, n_cand, n_sim = [], [], 0, 0
+    worst_scan, worst_margin = None, float("inf")
     for exp in experiments:
         res_list = run_thesis_experiment(arm, exp) if runs is None else runs[exp]
         for res in res_list:
@@ -253,6 +269,8 @@ def safety_summary(arm=None, *, head=None, covering=None, experiments=EXPERIMENT
                 if best is None or gov["margin_pct"] < best[2]["margin_pct"]:
                     best = (o, v, gov)
             o, v, gov = best
+            if gov["margin_pct"] < worst_margin:
+                worst_scan, worst_margin = w, gov["margin_pct"]
             label, fam = res.meta["label"], res.meta["family"]
             verdicts.append(v.assign(experiment=exp, variant=label))
             rows.append({"experiment": exp, "family": fam, "variant": label,
@@ -298,7 +316,7 @@ def safety_summary(arm=None, *, head=None, covering=None, experiments=EXPERIMENT
                "worst_margin_pct": float(table["margin [%]"].min()),
                "cases_passing": int(cases["all_passed"].sum()), "cases": len(cases)}
     return SafetySummary(table, cases, pd.concat(verdicts, ignore_index=True), hm.name, cov,
-                         arm.name, every, metrics)
+                         arm.name, every, metrics, worst_scan, arm)
 
 
 def region_point_verdicts(arm=None, *, covering=None, experiments=EXPERIMENTS,

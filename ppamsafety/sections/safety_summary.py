@@ -106,12 +106,14 @@ with the smallest margin ({s.metrics['candidates']} candidates, {s.metrics['simu
 exactly). Every verdict is in `safety_summary_verdicts.csv`, every variant in
 `safety_summary_cases.csv`.
 
+![the worst run: each contact point's worst region](safety_summary_worst.png)
+
 *Where the answer depends on the model.* The governing impact of each row simulated again with
 the other models of a head region's body (the Annex A spring, the head model `{s.head}`):
 {head_text}{'' if len(heads) else ' (no row is governed by a head region)'}. With the covering
 `{s.covering.name}` on the contact point: {cov_text}.
 """
-    arts = [("safety_summary.csv", s.to_pandas()), ("safety_summary_cases.csv", s.cases),
+    arts = [*s.plot().items(), ("safety_summary.csv", s.to_pandas()), ("safety_summary_cases.csv", s.cases),
             ("safety_summary_verdicts.csv", s.verdicts)]
     return Section("Safety summary", md, arts, dict(s.metrics))
 
