@@ -4,6 +4,7 @@ with covering and contact point files."""
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from ppamsafety.cli import main
@@ -218,3 +219,20 @@ def test_impact_contact_refuses_a_point_that_does_not_move(capsys):
     rc = main(["impact", "--q", "50", "-80", "--qd", "0", "1", "--contact", "elbow"])
     err = capsys.readouterr().err
     assert rc == 2 and "elbow" in err and "does not move" in err
+
+
+@pytest.mark.slow
+def test_the_whole_person_section_on_the_thesis_arm(tmp_path):
+    from ppamsafety.sections import run_section
+
+    res = run_section("person", tmp_path, quick=True)
+    m = res.metrics
+    assert m["drop_passed"] and 225.0 <= m["drop_peak_g"] <= 275.0
+    assert not 225.0 <= m["thesis_frontal_drop_g"] <= 275.0      # the lumped law fails it
+    assert m["covering_rms_sigma"] <= 1.0 < m["bare_rms_sigma"]     # Table 6.1 needs a covering
+    env = pd.read_csv(tmp_path / "person_envelope.csv")
+    assert env.monotone.all()
+    assert (env["thinnest safe [mm]"] > env["thickest unsafe [mm]"]).all()
+    assert (env["margin [N]"] >= 0).all()
+    reg = pd.read_csv(tmp_path / "person_regions.csv")
+    assert len(reg) == 2 * 12 * 4 and set(reg.covering) == {"bare metal", "thesis-implied"}
