@@ -243,6 +243,9 @@ def safety_summary(arm=None, *, head=None, covering=None, experiments=EXPERIMENT
         named_covering(covering) if isinstance(covering, str) else
         check_instance("covering", covering, Covering))
     every = check_int("every", every, 1, 10 ** 6)
+    if isinstance(experiments, str):
+        raise TypeError(f"experiments must be a sequence of experiment names, got the str "
+                        f"{experiments!r} (write ({experiments!r},))")
     experiments = tuple(experiments)
     for e in experiments:
         if e not in EXPERIMENTS:

@@ -55,7 +55,7 @@ def _screen(s: SafetySummary):
             "worst variant": r["variant"], "body region": r["body_region"],
             "contact point": r["contact_point"], "governing criterion": r["criterion"],
             "worst case": f"{r['value']:.4g}{u} vs {r['limit']:.4g}{u}",
-            "margin": f"{r['margin [%]']:+.0f} %",
+            "margin to the limit": f"{r['margin [%]']:+.0f} %",
             "variants passing": f"{r['variants_passing']} of {r['variants']}",
             "best variant (margin)": f"{r['best_variant']} ({r['best_margin [%]']:+.0f} %)",
             "head model": ("verdict changes" if r["depends_on_head"] else "same verdict")
