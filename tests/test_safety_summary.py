@@ -236,3 +236,14 @@ def test_the_whole_person_section_on_the_thesis_arm(tmp_path):
     assert (env["margin [N]"] >= 0).all()
     reg = pd.read_csv(tmp_path / "person_regions.csv")
     assert len(reg) == 2 * 12 * 4 and set(reg.covering) == {"bare metal", "thesis-implied"}
+
+
+def test_summary_inputs_are_checked():
+    with pytest.raises(TypeError, match="experiments"):
+        safety_summary(experiments="step")
+    with pytest.raises(ValueError, match="circle10"):
+        region_point_verdicts(experiments=("circle10",))
+    with pytest.raises(TypeError, match="arm"):
+        safety_summary("thesis arm")
+    with pytest.raises(ValueError, match="covering"):
+        safety_summary(covering="foam")

@@ -211,6 +211,18 @@ def _again(arm, row, body, covering, criterion):
     return float(s[criterion.metric])
 
 
+def _experiments(experiments) -> tuple:
+    """The experiments checked: a non-empty sequence of :data:`EXPERIMENTS`."""
+    if isinstance(experiments, str):
+        raise TypeError(f"experiments must be a sequence of experiment names, got the str "
+                        f"{experiments!r} (write ({experiments!r},))")
+    out = tuple(experiments)
+    bad = [e for e in out if e not in EXPERIMENTS]
+    if bad or not out:
+        raise ValueError(f"experiments = {out!r}: give one or more of {list(EXPERIMENTS)}")
+    return out
+
+
 def safety_summary(arm=None, *, head=None, covering=None, experiments=EXPERIMENTS,
                    every: int = 1, runs=None) -> SafetySummary:
     """The governing verdict per controller family and experiment (module docstring).
@@ -243,13 +255,7 @@ def safety_summary(arm=None, *, head=None, covering=None, experiments=EXPERIMENT
         named_covering(covering) if isinstance(covering, str) else
         check_instance("covering", covering, Covering))
     every = check_int("every", every, 1, 10 ** 6)
-    if isinstance(experiments, str):
-        raise TypeError(f"experiments must be a sequence of experiment names, got the str "
-                        f"{experiments!r} (write ({experiments!r},))")
-    experiments = tuple(experiments)
-    for e in experiments:
-        if e not in EXPERIMENTS:
-            raise ValueError(f"experiments: {e!r} is not one of {list(EXPERIMENTS)}")
+    experiments = _experiments(experiments)
     pairs = region_bodies()
     regions = {b.name: r for r, b in pairs}
     bodies = [b for _, b in pairs]
@@ -356,6 +362,7 @@ def region_point_verdicts(arm=None, *, covering=None, experiments=EXPERIMENTS,
     arm = thesis_arm() if arm is None else check_instance("arm", arm, ArmParameters)
     cov = None if covering is None else (named_covering(covering) if isinstance(covering, str)
                                          else check_instance("covering", covering, Covering))
+    experiments = _experiments(experiments)
     states = []
     for exp in experiments:
         for res in (run_thesis_experiment(arm, exp) if runs is None else runs[exp]):
