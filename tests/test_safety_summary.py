@@ -247,3 +247,15 @@ def test_summary_inputs_are_checked():
         safety_summary("thesis arm")
     with pytest.raises(ValueError, match="covering"):
         safety_summary(covering="foam")
+
+
+def test_the_report_opens_with_the_summary_whatever_the_order(tmp_path):
+    out = tmp_path / "rep"
+    assert main(["report", "--quick", "--only", "design,safety_summary", "--outdir", str(out),
+                 "--processes", "1"]) == 0
+    md = (out / "index.md").read_text()
+    titles = [line for line in md.splitlines() if line.startswith("## ")]
+    assert titles[0] == "## Safety summary" and len(titles) == 2
+    cols = pd.read_csv(out / "columns.csv", keep_default_na=False)
+    num = cols[(cols.kind == "number") & (cols.section == "safety_summary")]
+    assert len(num) > 10 and (num.unit != "").all(), num[num.unit == ""]
