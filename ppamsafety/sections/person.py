@@ -183,7 +183,7 @@ The thesis arm's links are bare aluminium (§2.3.3.4): such a covering is what t
 numbers need, not what the arm has."""
     else:
         covering_text = ""
-    md = ("" if not study.note else study.note + "\n\n") + f"""The head every other section hits is the thesis' lumped contact (`thesis-frontal`,
+    md = ("" if not study.note else study.note + "\n\n") + f"""The head the other impact sections hit by default is the thesis' lumped contact (`thesis-frontal`,
 fitted to Table 6.1). Here the person is modelled in layers: the robot's covering (or bare
 metal) in series with the body's soft tissue and bone (docs/impact_models.md).
 
