@@ -531,6 +531,9 @@ def _cmd_impact(args) -> int:
                                                   "cannot hold this pose"))
         else:
             stiffness, origin = tuple(args.stiffness), "given by --stiffness"
+    if args.contact is not None or args.covering is not None:
+        return _impact_at_point(args, arm, region, q, stiffness, origin)
+    with _options(q="--q", qd="--qd", stiffness="--stiffness", head="--head", dt="--dt"):
         res = simulate_impacts(arm, q, args.qd, stiffness, head=head, dt=args.dt,
                                history=args.history is not None)
     s = res.summary.iloc[0]
@@ -556,6 +559,84 @@ def _cmd_impact(args) -> int:
     verdicts = impact_verdicts(arm, q, args.qd, stiffness, head=head, dt=args.dt,
                                region=region)
     for line in verdicts.lines():
+        print(line)
+    if args.history is not None:
+        hist = res.histories[0]
+        atomic_write(args.history, lambda tmp: hist.to_csv(tmp, index=False),
+                     overwrite=args.overwrite, name="--history")
+        print(f"time history written to {args.history}")
+    return EXIT_OK
+
+
+def _layers_text(layers) -> str:
+    """One phrase per layer: name, law and its numbers (SI)."""
+    out = []
+    for lay in layers:
+        if lay.law == "power":
+            law = f"k = {lay.stiffness:.4g} N/m^{lay.exponent:g}, b = {lay.damping:.4g}"
+        else:
+            law = f"E = {lay.modulus / 1e6:.4g} MPa" + (
+                f", {1e3 * lay.thickness:.4g} mm" if math.isfinite(lay.thickness) else "")
+            if lay.hysteresis:
+                law += f", alpha = {lay.hysteresis:g} s/m"
+        out.append(f"{lay.name} ({lay.law}: {law})")
+    return "; ".join(out)
+
+
+def _impact_at_point(args, arm, region, q, stiffness, origin) -> int:
+    """``impact --contact POINT --covering NAME|FILE``: one impact of any contact point through
+    a covering into the body region, judged against the region's limits."""
+    from .impact.anywhere import simulate_contacts
+    from .impact.summary import region_body
+    from .impact.verdicts import Verdicts, ais_risk_table, criteria_for, evaluate
+    from .params.contact_files import resolve_contact_point, resolve_covering
+
+    with _named("--contact", args.contact):
+        point = resolve_contact_point("tool point" if args.contact is None else args.contact,
+                                      arm)
+    cov = None
+    if args.covering is not None:
+        with _named("--covering", args.covering):
+            cov = resolve_covering(args.covering)
+    head = _head_of(args)
+    body = region_body(region, head=head)
+    model = (head.name if head is not None and region.head else
+             "validated head" if region.name == "skull/forehead" else "Annex A two-body model")
+    with _options(q="--q", qd="--qd", stiffness="--stiffness", dt="--dt", point="--contact",
+                  covering="--covering"):
+        res = simulate_contacts(arm, q, args.qd, stiffness, point=point, body=body,
+                                covering=cov, dt=args.dt, history=args.history is not None)
+    s = res.summary.iloc[0]
+    if not s.point_speed >= 1e-3:
+        raise ValueError(f"--qd {args.qd[0]:g} {args.qd[1]:g} rad/s at --q {args.q[0]:g} "
+                         f"{args.q[1]:g} deg gives the {point.name} a speed of "
+                         f"{s.point_speed:.3g} m/s: it does not move, so nothing is hit; give "
+                         f"joint speeds that move it")
+    c = res.contact
+    print(f"arm             {arm.name or args.arm}")
+    print(f"pose            q = {args.q[0]:g}, {args.q[1]:g} deg, qd = {args.qd[0]:g}, "
+          f"{args.qd[1]:g} rad/s")
+    print(f"joint stiffness K1 = {stiffness[0]:.4g}, K2 = {stiffness[1]:.4g} N m/rad ({origin})")
+    radius = "" if point.shape == "flat" else f", radius {1e3 * point.radius:.4g} mm"
+    print(f"contact point   {point.name}: link {point.link} at {1e3 * point.position:.4g} mm, "
+          f"{point.shape}{radius}")
+    print(f"covering        {c.covering.name}"
+          + (f": {_layers_text(c.covering.layers)}" if c.covering.layers else ""))
+    print(f"body region     {region.name} ({model}): m = {body.mass:g} kg, R = {1e3 * body.radius:.4g} mm, "
+          f"{_layers_text(body.layers)}")
+    print(f"point speed     {s.point_speed:.4g} m/s (effective mass {s.m_eff:.4g} kg)")
+    print(f"F_max           {s.F_max:.4g} N at {1e3 * s.t_Fmax:.3g} ms")
+    print(f"HIC36           {s.HIC36:.4g}, HIC15 {s.HIC15:.4g}")
+    if math.isfinite(s.p_max):
+        print(f"p_max           {s.p_max / 1e4:.4g} N/cm^2 (mean pressure over the contact area)")
+    print(f"max compression {1e3 * s.delta_max:.4g} mm, peak body acceleration "
+          f"{s.a_max_g:.4g} g")
+    vals = {"F_max": float(s.F_max), "HIC36": float(s.HIC36), "HIC15": float(s.HIC15)}
+    table = evaluate(vals, criteria_for(region), head=model, contact_point=point.name,
+                     region=region.name)
+    risk = ais_risk_table(vals["HIC15"], head=model, hic_name="HIC15") if region.head \
+        else None
+    for line in (Verdicts(table) if risk is None else Verdicts(table, risk)).lines():
         print(line)
     if args.history is not None:
         hist = res.histories[0]
@@ -864,6 +945,16 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
                    help="body region of the verdicts: an ISO/TS 15066 Annex A location "
                         "(skull/forehead, face, chest/sternum ...; docs/body_regions.md), its "
                         "number 1-29, or a region file (TOML); default skull/forehead")
+    m.add_argument("--contact", default=None, metavar="POINT|FILE",
+                   help="contact point of the arm: tool point, elbow, forearm, upper arm, or a "
+                        "contact point file (TOML, docs/impact_models.md); the body region is "
+                        "then hit in layers (the skull/forehead as the head that passes the "
+                        "Hybrid III drop, another region as its Annex A two-body model, a head "
+                        "region as --head when given); default: the tool point against --head")
+    m.add_argument("--covering", default=None, metavar="NAME|FILE",
+                   help="covering of the contact point: bare metal, thesis-implied, or a "
+                        "covering file (TOML); default bare metal (implies --contact tool point "
+                        "when --contact is not given)")
     m.add_argument("--overwrite", action="store_true",
                    help="allow --history to replace an existing file")
     _add_arm_head(m)

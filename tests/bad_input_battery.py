@@ -321,6 +321,32 @@ def _cli_cases():
         case("choice", f"impact-head-{v.strip() or 'empty'}{'-space' if v.startswith(' ') else ''}",
              IMPACT + ["--head", v], names=["--head", "head", "thesis-frontal"],
              expect="error")
+    for v in ("elbo", "", "Tool Point", "gripper"):
+        case("choice", f"impact-contact-{v.replace(' ', '-') or 'empty'}",
+             IMPACT + ["--contact", v], names=["--contact", "tool point", "elbow"],
+             expect="error")
+    for v in ("foam", "", "Bare Metal"):
+        case("choice", f"impact-covering-{v.replace(' ', '-') or 'empty'}",
+             IMPACT + ["--covering", v], names=["--covering", "bare metal", "thesis-implied"],
+             expect="error")
+    case("input-file", "impact-covering-missing", IMPACT + ["--covering", "c.toml"],
+         names=["--covering", "c.toml", "does not exist"])
+    case("input-file", "impact-covering-region-file", IMPACT + ["--covering", "c.toml"],
+         setup=files(**{"c.toml": 'format = "ppamsafety-region/1"\nname = "x"\n'}),
+         names=["--covering", "format", "ppamsafety-covering/1"])
+    case("input-file", "impact-covering-bad-unit", IMPACT + ["--covering", "c.toml"],
+         setup=files(**{"c.toml": 'format = "ppamsafety-covering/1"\nname = "x"\n[[layer]]\n'
+                                  'name = "a"\nlaw = "thin-layer"\n'
+                                  'modulus = { value = 1, unit = "MPa" }\n'
+                                  'thickness = { value = 5, unit = "parsec" }\n'}),
+         names=["--covering", "thickness.unit", "parsec"])
+    case("input-file", "impact-contact-no-radius", IMPACT + ["--contact", "p.toml"],
+         setup=files(**{"p.toml": 'format = "ppamsafety-contact/1"\nname = "x"\nlink = 2\n'
+                                  'position = { value = 0.1, unit = "m" }\nshape = "edge"\n'}),
+         names=["--contact", "radius"])
+    case("impact-domain", "contact-elbow-at-rest", ["impact", "--q", "30", "-80", "--qd", "0",
+                                                     "1", "--contact", "elbow"],
+         names=["elbow", "does not move"])
     # ---- output files (impact --history) ---------------------------------------------------
     case("output-file", "history-empty", IMPACT + ["--history", ""], names=["--history"])
     case("output-file", "history-existing", IMPACT + ["--history", "h.csv"],

@@ -131,7 +131,8 @@ def test_display_table_declares_every_unit():
 
 #: Report CSV file -> its section, by the file names the sections write.
 PREFIXES = (("design_", "design"), ("tracking_", "tracking"), ("responses_", "responses"),
-            ("smc_", "smc"), ("head_model_", "head_model"), ("safety_", "safety"),
+            ("smc_", "smc"), ("head_model_", "head_model"),
+            ("safety_summary", "safety_summary"), ("safety_", "safety"), ("person_", "person"),
             ("worst_direction", "worst_direction"), ("stiffness_", "stiffness"),
             ("lambda_sweep", "lambda_sweep"), ("effects_", "effects"),
             ("interaction_", "interaction"), ("iso_", "iso_15066"), ("reaction_", "reaction"),

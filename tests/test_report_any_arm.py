@@ -85,7 +85,7 @@ def test_the_report_for_another_arm_leaves_out_what_does_not_concern_it():
 
     arm = load_arm(EXAMPLE)                         # declares hysteresis: its studies run
     names, left = select_sections(arm)
-    assert set(left) == {"cylinder_friction", "as_built"}
+    assert set(left) == {"cylinder_friction", "as_built", "person"}
     assert "effects" in names and "diagnose_sawtooth" in names
     assert "bench case study" in left["cylinder_friction"]
     bare = arm.replace(effects=Effects())

@@ -11,7 +11,7 @@ from ppamsafety.sections import REGISTRY, Section, SectionResult, run_section
 
 
 def test_registry_order():
-    assert REGISTRY[:4] == ["design", "tracking", "responses", "smc"]
+    assert REGISTRY[:5] == ["safety_summary", "design", "tracking", "responses", "smc"]
 
 
 @pytest.mark.parametrize("name, files", [

@@ -202,7 +202,8 @@ def test_every_subcommand_shows_the_arms_own_values(which, tmp_path, capsys):
 # ------------------------------------------------------------------------------ the report
 
 #: Sections of the default suite's report: fast, and where the leaks were.
-QUICK_SECTIONS = ("design", "stiffness", "diagnose_sawtooth", "iso_15066", "head_model")
+QUICK_SECTIONS = ("safety_summary", "design", "stiffness", "diagnose_sawtooth", "iso_15066",
+                  "head_model")
 
 
 def _report(tmp_path, arm, *extra, processes=2):
@@ -226,7 +227,7 @@ def test_a_quick_report_of_a_random_arm_has_no_thesis_value(tmp_path, capsys):
 def test_the_whole_quick_report_for_another_arm_has_no_thesis_value(which, tmp_path):
     arm = (load_arm(tl.EXAMPLE) if which == "example" else tl.user_variant()
            if which == "variant" else tl.random_arm(int(which.split()[1])))
-    out = _report(tmp_path, arm, "--include", "as_built,cylinder_friction")
+    out = _report(tmp_path, arm, "--include", "as_built,cylinder_friction,person")
     md = (out / "index.md").read_text()
     assert all(f"*Study `{name}` ran in" in md for name in REGISTRY)
     leaks = tl.scan_folder(out, arm)

@@ -28,7 +28,9 @@ so that the last sections of a report, when the other workers are idle, still us
 machine.  A section's warnings are raised again in the main process, naming the section.
 ``metrics.json`` records each section's wall and CPU time.
 
-**Which sections.**  The thesis report runs every section.  The report for another arm leaves
+**Which sections.**  The report opens with the safety summary (:data:`LEADING`: the arm's
+governing verdict per controller family and experiment, on one screen), then the sections in
+the order asked for.  The thesis report runs every section.  The report for another arm leaves
 out the sections that do not concern it (:func:`select_sections`: the bench case study, the
 fit of the thesis' own measurements, the hysteresis studies of an arm without hysteresis) and
 says so in its header; ``include`` / ``exclude`` change that selection, ``only`` replaces it.
@@ -182,6 +184,22 @@ def _subject_header(quick: bool, arm, head) -> str:
                "comparison with their table or equation.\n\n" if thesis else
                "; thesis values and ratios belong to the thesis arm and head and are not "
                "shown.\n\n"))
+
+
+#: Sections the report opens with, whatever the order asked for: the safety verdict of the arm
+#: on one screen.
+LEADING = ("safety_summary",)
+
+
+def first_screen(names) -> list:
+    """The sections in report order: :data:`LEADING` first, the others in the order given.
+
+    Parameters
+    ----------
+    names : list of str
+        The sections run.
+    """
+    return [n for n in LEADING if n in names] + [n for n in names if n not in LEADING]
 
 
 #: The report's data dictionary: every column of every CSV it wrote, with its unit.
@@ -389,7 +407,7 @@ def build_report(outdir="reports", *, quick: bool = False, only=None, progress: 
                 raise
             pool.shutdown(wait=True)
         sections, metrics = [], {}
-        for name in names:                                  # the order asked for
+        for name in first_screen(names):     # the order asked for, the summary first
             res, dt, cpu = done[name]
             metrics[name] = {**res.metrics, "wall_time_s": round(dt, 2),
                              "cpu_time_s": round(cpu, 2)}

@@ -16,6 +16,8 @@ from __future__ import annotations
 
 import re
 
+from ..sweep_cases import column_unit as sweep_column_unit
+
 #: The unit of a column whose rows are in different units: the row's ``unit`` column.
 PER_ROW = "see column unit"
 
@@ -103,7 +105,9 @@ BY_SECTION = {
         "F_2s_earlier": "N", "bound_same_dir": "N", "tensile_fraction": "-",
         "F_clamped_forehead": "N", "F_clamped_face": "N", "F_clamped_thesis_HC": "N",
         "F_clamped_head_HC": "N", "Fmax_thesis_free": "N", "clamped_HC_over_thesis": "-",
-        "F_quasi_static": "N",
+        "F_quasi_static": "N", "lambda_min_force_hc": "s", "F_at_lambda_0.4_hc": "N",
+        # iso_question.csv: force criteria only (the ISO/TS 15066 transient and quasi-static)
+        "limit": "N", "margin": "N",
     },
     "reaction": {
         "F_max_rel_diff": "-", "max_dF_over_Fmax": "-", "HIC36_closed_loop": "-",
@@ -111,7 +115,12 @@ BY_SECTION = {
         "energy_error": "-", "valve_fraction_by_contact_end": "-",
         "span_over_contact_torque": "-", "Fmax_1_spread_rel": "-",
     },
+    "safety_summary": {"margin": PER_ROW, "covered_value": PER_ROW, "variants": "-",
+                       "variants_passing": "-"},
+    "person": {"margin": PER_ROW, "passing": "-", "impacts": "-", "rms_sigma": "-",
+               "restitution": "-", "after_pulse_share": "-", "covering_strain": "-"},
     "safety": {
+        "margin": PER_ROW,
         "HIC36 4 instants": "-", "HIC36 every instant": "-", "HIC miss %": "%",
         "F_max 4 instants": "N", "F_max every instant": "N", "F_max miss %": "%",
         "t0 of worst": "s",
@@ -137,6 +146,10 @@ BY_SECTION = {
         "HIC_table_6_1": "-", "Fmax_table_6_1": "N",
     },
 }
+
+#: Sections whose tables are safety sweeps: a column no table here declares takes the unit the
+#: sweep gives it (:func:`ppamsafety.sweep_cases.column_unit`).
+SWEEP_SECTIONS = ("lambda_sweep",)
 
 _BRACKET = re.compile(r"\[([^\]]+)\]")
 
@@ -184,6 +197,8 @@ def unit_of(column: str, section: str | None = None):
     own = BY_SECTION.get(section, {})
     if column in own:
         return own[column]
+    if column not in COMMON and section in SWEEP_SECTIONS:
+        return sweep_column_unit(column)         # a sweep's verdict columns (<criterion>_margin)
     return COMMON.get(column)
 
 

@@ -142,9 +142,9 @@ class SectionResult:
 
 
 #: Section modules in report order (module names inside ppamsafety.sections).
-REGISTRY = ["design", "tracking", "responses", "smc", "head_model", "safety", "worst_direction",
-            "stiffness", "lambda_sweep", "effects", "interaction", "iso_15066", "reaction",
-            "diagnose_sawtooth", "diagnose_cases", "diagnose_trust", "as_built", "cylinder_friction"]
+REGISTRY = ["safety_summary", "design", "tracking", "responses", "smc", "head_model", "safety",
+            "worst_direction", "stiffness", "lambda_sweep", "effects", "interaction", "iso_15066",
+            "person", "reaction", "diagnose_sawtooth", "diagnose_cases", "diagnose_trust", "as_built", "cylinder_friction"]
 
 
 def section_infos() -> dict:
