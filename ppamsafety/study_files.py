@@ -400,6 +400,8 @@ class Study:
             return axis.unit, axis.factor
         if self.envelope is not None and key == "value":
             return column_unit(self.envelope["parameter"]), 1.0
+        if self.envelope is not None and key == "margin":        # limit - metric: its unit
+            return column_unit(f"{self.envelope.get('limit', 'F_max')}_margin"), 1.0
         return column_unit(key), 1.0
 
     @property

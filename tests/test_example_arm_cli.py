@@ -107,9 +107,10 @@ arm.pneumatics.mean_pressure = {{ values = [1.4, 1.8], unit = "bar" }}
                   "--no-progress")
     assert "2 ok, 0 failed" in out
     folder = work / "grid"
-    df = _finite_csv(folder / "results.csv", ("F_max", "HIC36"))
-    assert list(df["status"]) == ["ok", "ok"] and (df["F_max"] > 0).all()
-    assert sorted(df["arm.pneumatics.mean_pressure"]) == [1.4e5, 1.8e5]
+    df = _finite_csv(folder / "results.csv", ("F_max [N]", "HIC36 [-]"))
+    assert list(df["status"]) == ["ok", "ok"] and (df["F_max [N]"] > 0).all()
+    # the swept key in the unit the study file wrote it in
+    assert sorted(df["arm.pneumatics.mean_pressure [bar]"]) == [1.4, 1.8]
     assert load_arm(folder / "arm.toml") == load_arm(EXAMPLE)
     assert NAME in (folder / "summary.html").read_text()
 
@@ -128,11 +129,12 @@ tolerance = 0.05
 pose = [50.0, -80.0]
 """)
     _run(work, "sweep", "env.toml", "--out", "env", "--processes", "1", "--no-progress")
-    df = _finite_csv(work / "env" / "results.csv", ("value", "F_max"))
+    df = _finite_csv(work / "env" / "results.csv", ("speed [m/s]", "F_max [N]", "margin [N]"))
     assert set(df["status"]) == {"ok"} and df["safe"].any() and not df["safe"].all()
     safe, unsafe = df[df["safe"]], df[~df["safe"]]
-    assert safe["value"].max() < unsafe["value"].min()           # one boundary, bracketed
-    assert (safe["F_max"] < 660).all() and (unsafe["F_max"] >= 660).all()
+    assert safe["speed [m/s]"].max() < unsafe["speed [m/s]"].min()   # one boundary, bracketed
+    assert (safe["F_max [N]"] < 660).all() and (unsafe["F_max [N]"] >= 660).all()
+    assert np.allclose(df["margin [N]"], 660 - df["F_max [N]"])
     assert "safe for speed &lt;=" in (work / "env" / "summary.html").read_text()
 
 
