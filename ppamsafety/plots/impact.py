@@ -410,7 +410,7 @@ def plot_direction_ratios(table):
     table : pandas.DataFrame
         One row per experiment and controller, with columns ``experiment``, ``label``,
         ``ratio_F_max`` and ``ratio_HIC36`` (worst placement / thesis placement, every
-        instant), e.g. ``WorstDirectionStudy.table``.
+        instant), e.g. ``WorstDirectionFindings.table``.
 
     Returns
     -------

@@ -2,13 +2,15 @@
 
 Every section module ``ppamsafety.sections.<name>`` defines
 
-* ``compute(*, quick=False, arm=None, head=None, ...) -> <Name>Study``: runs
+* ``compute(*, quick=False, arm=None, head=None, ...) -> <Name>Findings``: runs
   the simulations for ``arm`` (any valid arm; default the thesis arm) and
   ``head`` (a head model; default ``thesis-frontal``) and returns a dataclass
   holding DataFrames, arrays, result objects and a ``metrics`` dict.  It writes
-  no file, makes no figure and formats no Markdown.  The result object has
-  ``to_pandas()`` (its main table) and ``plot()`` (its figures, ``{file name:
-  Figure}``, composed from the plot functions of :mod:`ppamsafety.plots`).
+  no file, makes no figure and formats no Markdown.  The result object follows
+  the result protocol (:mod:`ppamsafety.results`): ``to_pandas()`` (its main
+  table), ``figures()`` (its figures, ``{file name: Figure}``, composed from the
+  plot functions of :mod:`ppamsafety.plots`), ``plot()`` (the first of them),
+  ``to_dict()`` and ``write(folder)``.
   Thesis values and ratios are joined only when :func:`compares_to_thesis` holds
   (the thesis arm, and for impacts the thesis head): every other number is
   computed for the arm given.

@@ -32,6 +32,7 @@ from ..experiments.conclusions import conclusions_table
 from ..hysteresis import DELTA_25_FIBRES
 from ..markdown import markdown_table
 from . import Section, SectionInfo, compares_to_thesis, other_arm_note, resolve_arm
+from ..results import Result
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -58,7 +59,7 @@ def quick_design() -> Design:
 
 
 @dataclass
-class AsBuiltStudy:
+class AsBuiltFindings(Result):
     """Result of :func:`compute`.
 
     Attributes
@@ -82,12 +83,12 @@ class AsBuiltStudy:
         """The fitted effects (empty for another arm)."""
         return self.fit.to_pandas() if self.fit is not None else pd.DataFrame()
 
-    def plot(self) -> dict:
+    def figures(self) -> dict:
         """Figures ``{file name: Figure}``."""
         return {} if self.fit is None else {"as_built.png": self.fit.plot()}
 
 
-def compute(*, quick: bool = False, arm=None, head=None) -> AsBuiltStudy:
+def compute(*, quick: bool = False, arm=None, head=None) -> AsBuiltFindings:
     """Fit the as-built arm to the thesis' printed measurements (module docstring).
 
     Parameters
@@ -102,11 +103,11 @@ def compute(*, quick: bool = False, arm=None, head=None) -> AsBuiltStudy:
 
     Returns
     -------
-    AsBuiltStudy
+    AsBuiltFindings
     """
     t0 = time.perf_counter()
     if not compares_to_thesis(arm, head):
-        return AsBuiltStudy(fit=None, quick=quick, metrics={"fitted": False},
+        return AsBuiltFindings(fit=None, quick=quick, metrics={"fitted": False},
                             note=other_arm_note(resolve_arm(arm), head))
     arm = resolve_arm(arm)
     if quick:
@@ -116,7 +117,7 @@ def compute(*, quick: bool = False, arm=None, head=None) -> AsBuiltStudy:
         fit = fit_as_built(arm, candidates=CANDIDATES, design=Design(), iterations=ITERATIONS)
     wall = time.perf_counter() - t0
     metrics = {**fit.metrics, "quick": quick, "wall_time_s": wall}
-    return AsBuiltStudy(fit=fit, quick=quick, wall_time_s=wall, metrics=metrics)
+    return AsBuiltFindings(fit=fit, quick=quick, wall_time_s=wall, metrics=metrics)
 
 
 def _num(v, unit):
@@ -236,12 +237,12 @@ def _tug_text(pull: pd.DataFrame) -> list:
                    "directions by two sources."]
 
 
-def render(study: AsBuiltStudy) -> Section:
+def render(study: AsBuiltFindings) -> Section:
     """Markdown of the section and its artifacts.
 
     Parameters
     ----------
-    study : AsBuiltStudy
+    study : AsBuiltFindings
         Output of :func:`compute`.
     """
     title = "The as-built arm: the library fitted to the thesis' own measurements"
@@ -407,7 +408,7 @@ def render(study: AsBuiltStudy) -> Section:
         L.append("")
     L.append(f"Compute: {study.wall_time_s:.1f} s ({m['evaluations']} batched evaluations of "
              f"every experiment).")
-    arts = list(study.plot().items()) + [
+    arts = list(study.figures().items()) + [
         ("as_built_effects.csv", fit.effects),
         ("as_built_identifiability.csv", idf.to_pandas()),
         ("as_built_cells.csv", fit.cells),
@@ -421,5 +422,5 @@ def render(study: AsBuiltStudy) -> Section:
     return Section(title, "\n".join(L), arts, dict(study.metrics))
 
 
-__all__ = ["compute", "render", "AsBuiltStudy", "SECTION", "quick_design", "QUICK_VARIANTS",
+__all__ = ["compute", "render", "AsBuiltFindings", "SECTION", "quick_design", "QUICK_VARIANTS",
            "QUICK_CANDIDATES", "ITERATIONS"]

@@ -16,6 +16,7 @@ from ..plant.ppam_theory import theoretical_muscles
 from ..units import BAR, DEG, MM
 from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
                resolve_arm)
+from ..results import Result
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -42,7 +43,7 @@ def _table_a1(arm, thesis: bool = True) -> pd.DataFrame:
 
 
 @dataclass
-class DesignStudy:
+class DesignFindings(Result):
     """Result of :func:`compute`: the chapter-2 design maps and Table A.1.
 
     Attributes
@@ -97,7 +98,7 @@ class DesignStudy:
         """Table A.1 (computed vs thesis muscle lengths [mm])."""
         return self.table_a1.copy()
 
-    def plot(self) -> dict:
+    def figures(self) -> dict:
         """The section's figures, ``{file name: Figure}``."""
         return {"design_torque_functions.png": self.torque_functions.plot(),
                 "design_stiffness_map.png": self.stiffness.plot(),
@@ -105,7 +106,7 @@ class DesignStudy:
 
 
 @checked_compute
-def compute(*, quick: bool = False, arm=None, head=None) -> DesignStudy:
+def compute(*, quick: bool = False, arm=None, head=None) -> DesignFindings:
     """Torque functions, stiffness and maximum-load maps, Table A.1.
 
     Parameters
@@ -119,7 +120,7 @@ def compute(*, quick: bool = False, arm=None, head=None) -> DesignStudy:
 
     Returns
     -------
-    DesignStudy
+    DesignFindings
         Maps, tables and metrics.
     """
     arm = resolve_arm(arm)
@@ -159,7 +160,7 @@ def compute(*, quick: bool = False, arm=None, head=None) -> DesignStudy:
         metrics = {"K_step": K_step.tolist(), "max_load_min_kg": ml.minimum,
                    "max_load_interior_min_kg": float(inner.M_max_kg.min()
                                                      if len(inner) else ml.minimum)}
-    return DesignStudy(quick=quick, torque_functions=tf, stiffness=sm, max_load=ml,
+    return DesignFindings(quick=quick, torque_functions=tf, stiffness=sm, max_load=ml,
                        max_load_cad=ml_cad, table_a1=ta1, K_step=K_step,
                        p_mean=np.array(arm.pneumatics.p_mean),
                        edge={"e1max": e1max, "e4max": e4max, "f1_edge": f1_edge,
@@ -167,12 +168,12 @@ def compute(*, quick: bool = False, arm=None, head=None) -> DesignStudy:
                        max_load_theory=ml_theory, metrics=metrics, thesis=thesis, arm=arm)
 
 
-def render(study: DesignStudy) -> Section:
+def render(study: DesignFindings) -> Section:
     """The report section of the design study (formatting only).
 
     Parameters
     ----------
-    study : DesignStudy
+    study : DesignFindings
         Output of :func:`compute`.
 
     Returns
@@ -241,11 +242,11 @@ fitted as (2.3)) and the CAD links, the minimum is {ml_th.minimum:.2f} kg, the t
 
 ![max load](design_max_load.png)
 """
-    arts = [*study.plot().items(), ("design_table_A1.csv", ta1)]
+    arts = [*study.figures().items(), ("design_table_A1.csv", ta1)]
     return Section("Design of the arm (thesis chapter 2)", md, arts, dict(study.metrics))
 
 
-def _render_other(study: DesignStudy) -> Section:
+def _render_other(study: DesignFindings) -> Section:
     """The design section for an arm other than the thesis arm: its own numbers only."""
     sm, ml, ta1, K, quick = (study.stiffness, study.max_load, study.table_a1, study.K_step,
                              study.quick)
@@ -279,5 +280,5 @@ minimum over the working area {ml.minimum:.2f} kg at ({qmin[0]:.0f}, {qmin[1]:.0
 
 ![max load](design_max_load.png)
 """
-    arts = [*study.plot().items(), ("design_table_A1.csv", ta1)]
+    arts = [*study.figures().items(), ("design_table_A1.csv", ta1)]
     return Section("Design of the arm (thesis chapter 2)", md, arts, dict(study.metrics))

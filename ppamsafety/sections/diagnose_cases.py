@@ -40,6 +40,7 @@ from ..markdown import markdown_table
 from ..plots.diagnose import plot_confusion, plot_gap
 from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
                resolve_arm)
+from ..results import Result
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -81,7 +82,7 @@ def _quick_design():
 
 
 @dataclass
-class DiagnoseCasesStudy:
+class DiagnoseCasesFindings(Result):
     """Result of :func:`compute`.
 
     Attributes
@@ -122,7 +123,7 @@ class DiagnoseCasesStudy:
         """Case (c)'s parameter table."""
         return self.case_c_table
 
-    def plot(self) -> dict:
+    def figures(self) -> dict:
         """Figures ``{file name: Figure}``."""
         figs = {"diagnose_case_c_replay.png": self.case_c.plot(),
                 "diagnose_case_c_gap.png": plot_gap(
@@ -234,7 +235,7 @@ def confusion_matrix(battery: pd.DataFrame) -> pd.DataFrame:
 
 
 @checked_compute
-def compute(*, quick: bool = False, arm=None, head=None) -> DiagnoseCasesStudy:
+def compute(*, quick: bool = False, arm=None, head=None) -> DiagnoseCasesFindings:
     """Run case (c), case (b) and the battery (module docstring).
 
     Parameters
@@ -249,7 +250,7 @@ def compute(*, quick: bool = False, arm=None, head=None) -> DiagnoseCasesStudy:
 
     Returns
     -------
-    DiagnoseCasesStudy
+    DiagnoseCasesFindings
     """
     thesis = compares_to_thesis(arm)
     arm = resolve_arm(arm)
@@ -303,7 +304,7 @@ def compute(*, quick: bool = False, arm=None, head=None) -> DiagnoseCasesStudy:
         metrics["table_5_2_pair"] = {"effects": list(pair.names),
                                      "values": list(pair.best_value),
                                      "chi2_per_stat": pair.chi2_per_stat}
-    return DiagnoseCasesStudy(case_c=dg, case_c_table=table, case_c_gap=gap, summary=fit,
+    return DiagnoseCasesFindings(case_c=dg, case_c_table=table, case_c_gap=gap, summary=fit,
                               pair=pair, battery=battery, confusion=confusion_matrix(battery),
                               timings=timings, metrics=metrics,
                               note="" if thesis else other_arm_note(arm))
@@ -325,16 +326,16 @@ def _fmt_effects(eff: dict) -> str:
     return ", ".join(f"`{k}={v:g}`" for k, v in eff.items())
 
 
-def render(study: DiagnoseCasesStudy) -> Section:
+def render(study: DiagnoseCasesFindings) -> Section:
     """Markdown of the section and its artifacts.
 
     Parameters
     ----------
-    study : DiagnoseCasesStudy
+    study : DiagnoseCasesFindings
         Output of :func:`compute`.
     """
     dg, fit = study.case_c, study.summary
-    figs = study.plot()
+    figs = study.figures()
     L = [study.note, ""] if study.note else []
     L.append("The discrepancy workflow (`ppamsafety diagnose`, `docs/diagnose.md`) on "
              "closed-loop records, on the thesis's own summary statistics, and on a blind "
@@ -498,5 +499,5 @@ def render(study: DiagnoseCasesStudy) -> Section:
                    markdown="\n".join(L), artifacts=arts, metrics=dict(study.metrics))
 
 
-__all__ = ["compute", "render", "DiagnoseCasesStudy", "CASE_C", "BATTERY", "BATTERY_RECORD",
+__all__ = ["compute", "render", "DiagnoseCasesFindings", "CASE_C", "BATTERY", "BATTERY_RECORD",
            "parameter_comparison", "run_battery", "confusion_matrix"]

@@ -49,6 +49,7 @@ from ..plots.effects import (plot_ratio_shift, plot_sawtooth_angles, plot_sawtoo
                              plot_sawtooth_forces)
 from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
                resolve_arm, resolve_head_model, responses, safety, tracking)
+from ..results import Result
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -348,7 +349,7 @@ def _log_ratio_median(r) -> float:
 
 
 @dataclass
-class EffectsStudy:
+class EffectsFindings(Result):
     """Result of :func:`compute`: the thesis' experiments with and without muscle hysteresis.
 
     Attributes
@@ -422,7 +423,7 @@ class EffectsStudy:
         """The sawtooth summary (RMS errors and pattern counts per plant)."""
         return self.sawtooth_summary.copy()
 
-    def plot(self) -> dict:
+    def figures(self) -> dict:
         """The section's figures, ``{file name: Figure}``."""
         return _figures(self)
 
@@ -432,7 +433,7 @@ def _figures(study) -> dict:
 
     Parameters
     ----------
-    study : ppamsafety.sections.effects.EffectsStudy
+    study : ppamsafety.sections.effects.EffectsFindings
         Output of :func:`ppamsafety.sections.effects.compute`.
 
     Returns
@@ -474,7 +475,7 @@ def plants(arm, delta: float = HYSTERESIS_DELTA) -> dict:
 
 @checked_compute
 def compute(*, quick: bool = False, arm=None, delta: float = HYSTERESIS_DELTA,
-            head=None) -> EffectsStudy:
+            head=None) -> EffectsFindings:
     """Sawtooth validation, Table 5.2, conclusions and Table 6.1 with and without hysteresis.
 
     Parameters
@@ -494,7 +495,7 @@ def compute(*, quick: bool = False, arm=None, delta: float = HYSTERESIS_DELTA,
 
     Returns
     -------
-    EffectsStudy
+    EffectsFindings
         Tables, runs and metrics.
     """
     thesis = compares_to_thesis(arm, head)
@@ -575,7 +576,7 @@ def compute(*, quick: bool = False, arm=None, delta: float = HYSTERESIS_DELTA,
         "conclusions": {lab: {c.key: bool(c.holds) for c in concl[lab]} for lab in arms},
         "wall_times_s": {k: round(v, 2) for k, v in walls.items()},
     }
-    return EffectsStudy(quick=quick, delta=float(delta), cases=tuple(arms), sawtooth_runs=runs,
+    return EffectsFindings(quick=quick, delta=float(delta), cases=tuple(arms), sawtooth_runs=runs,
                         sawtooth_windows=windows, sawtooth=saw, sawtooth_summary=summ,
                         warmup=warmup, evaluate=evaluate, circle_errors=errs, comparison=cmps,
                         conclusions=concl, table_6_1=t61, ratios=ratios, limit_cycle=lc,
@@ -583,7 +584,7 @@ def compute(*, quick: bool = False, arm=None, delta: float = HYSTERESIS_DELTA,
 
 
 def _compute_other(quick, delta, arms, runs, windows, saw, summ, warmup, evaluate, errs, cmps,
-                   concl, t61, walls, head) -> EffectsStudy:
+                   concl, t61, walls, head) -> EffectsFindings:
     """The rest of :func:`compute` for another arm or head: hysteresis / nominal, no thesis."""
     n_err, h_err = errs["nominal"], errs["hysteresis"]
     n_61, h_61 = t61["nominal"], t61["hysteresis"]
@@ -615,7 +616,7 @@ def _compute_other(quick, delta, arms, runs, windows, saw, summ, warmup, evaluat
         "conclusions": {lab: {c.key: bool(c.holds) for c in concl[lab]} for lab in arms},
         "wall_times_s": {k: round(v, 2) for k, v in walls.items()},
     }
-    return EffectsStudy(quick=quick, delta=float(delta), cases=tuple(arms), sawtooth_runs=runs,
+    return EffectsFindings(quick=quick, delta=float(delta), cases=tuple(arms), sawtooth_runs=runs,
                         sawtooth_windows=windows, sawtooth=saw, sawtooth_summary=summ,
                         warmup=warmup, evaluate=evaluate, circle_errors=errs, comparison=cmps,
                         conclusions=concl, table_6_1=t61, ratios=ratios, limit_cycle=lc,
@@ -627,12 +628,12 @@ def _yes(b) -> str:
     return "holds" if b else "does not hold"
 
 
-def render(study: EffectsStudy) -> Section:
+def render(study: EffectsFindings) -> Section:
     """The report section of the effects study (formatting only).
 
     Parameters
     ----------
-    study : EffectsStudy
+    study : EffectsFindings
         Output of :func:`compute`.
 
     Returns
@@ -769,12 +770,12 @@ Wall time of this section: {sum(walls.values()):.1f} s ({', '.join(f'{k} {v:.1f}
             ("effects_table_6_1.csv", pd.concat([t.assign(plant=lab) for lab, t in
                                                  study.table_6_1.items()], ignore_index=True)),
             ("effects_conclusions.csv", ct),
-            *study.plot().items()]
+            *study.figures().items()]
     return Section("Effects: the thesis revisited with muscle hysteresis (§3.5.1.6, §3.6)", md,
                    arts, dict(study.metrics))
 
 
-def _render_other(study: EffectsStudy) -> Section:
+def _render_other(study: EffectsFindings) -> Section:
     """The effects section for another arm or head: with and without hysteresis, no thesis."""
     sm = study.sawtooth_summary.set_index("plant")
     hd = study.arm.effects.hysteresis_delta
@@ -851,6 +852,6 @@ Worst impacts per variant (the Table 6.1 setup) on both plants:
                                                  study.comparison.items()], ignore_index=True)),
             ("effects_table_6_1.csv", t61),
             ("effects_conclusions.csv", ct),
-            *study.plot().items()]
+            *study.figures().items()]
     return Section("Effects: the thesis revisited with muscle hysteresis (§3.5.1.6, §3.6)", md,
                    arts, dict(study.metrics))

@@ -58,6 +58,7 @@ from ..plots import iso as f
 from ..units import BAR, DEG
 from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
                resolve_arm, resolve_head_model)
+from ..results import Result
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -369,7 +370,7 @@ def _hc_vs_linear(arm, worst, m_r_annex, hc=None, hc_label=HC_LABEL):
 
 
 @dataclass
-class IsoStudy:
+class IsoFindings(Result):
     """Result of :func:`compute` (all forces in N, speeds in m/s, masses in kg).
 
     Attributes
@@ -437,7 +438,7 @@ class IsoStudy:
         """The verdict table (one row per thesis controller variant)."""
         return self.verdict.copy()
 
-    def plot(self) -> dict:
+    def figures(self) -> dict:
         """The section's figures, ``{file name: Figure}``."""
         return {"iso_clamping_transient.png": f.plot_clamping_vs_limits(self),
                 "iso_quasi_static.png": f.plot_quasi_static(self),
@@ -446,7 +447,7 @@ class IsoStudy:
 
 
 @checked_compute
-def compute(*, quick: bool = False, arm=None, head=None) -> IsoStudy:
+def compute(*, quick: bool = False, arm=None, head=None) -> IsoFindings:
     """Clamping and ISO/TS 15066 power and force limiting for the head.
 
     Parameters
@@ -462,7 +463,7 @@ def compute(*, quick: bool = False, arm=None, head=None) -> IsoStudy:
 
     Returns
     -------
-    IsoStudy
+    IsoFindings
     """
     if not isinstance(quick, bool):
         raise TypeError(f"quick must be a bool, got {quick!r}")
@@ -572,7 +573,7 @@ def compute(*, quick: bool = False, arm=None, head=None) -> IsoStudy:
             np.interp(vmax_f, hc_curve.speed, hc_curve.F_hunt_crossley)
             / np.interp(vmax_f, hc_curve.speed, hc_curve.F_linear_forehead)),
     }
-    return IsoStudy(limits=limits, free=free, lambda_table=lambda_table,
+    return IsoFindings(limits=limits, free=free, lambda_table=lambda_table,
                     clamp_transient=clamp_tr, clamp_histories=clamp_hist,
                     static_bounds=static_tab, static_map=static_map, quasi_static=qs,
                     qs_histories=qs_hist, hc_curve=hc_curve, hc_states=hc_states,
@@ -593,7 +594,7 @@ def _fmt_lam(lam, at_min, adm, lams):
             f"(passes), log-linear interpolation {lam:.3g} s (grid values that meet it: {adm})")
 
 
-def _two_heads(study: IsoStudy) -> list:
+def _two_heads(study: IsoFindings) -> list:
     """The same question answered with both head models, and why they differ (Markdown)."""
     lt = study.lambda_table
     rows = lt[(lt.region == "skull/forehead")]
@@ -629,12 +630,12 @@ def _two_heads(study: IsoStudy) -> list:
     return out
 
 
-def render(study: IsoStudy) -> Section:
+def render(study: IsoFindings) -> Section:
     """The report section (formatting only).
 
     Parameters
     ----------
-    study : IsoStudy
+    study : IsoFindings
         Output of :func:`compute`.
 
     Returns
@@ -724,7 +725,7 @@ def render(study: IsoStudy) -> Section:
         "![lambda limits](iso_lambda.png)", "",
         "![linear vs Hunt-Crossley](iso_hc_vs_linear.png)", "",
     ]
-    arts = list(study.plot().items()) + [
+    arts = list(study.figures().items()) + [
         ("iso_limits.csv", study.limits), ("iso_clamping_transient.csv", study.clamp_transient),
         ("iso_quasi_static.csv", study.quasi_static), ("iso_lambda.csv", study.lambda_table),
         ("iso_free_impacts.csv", study.free), ("iso_hc_vs_linear.csv", study.hc_states),
@@ -733,7 +734,7 @@ def render(study: IsoStudy) -> Section:
                    arts, dict(m))
 
 
-def _render_other(study: IsoStudy) -> Section:
+def _render_other(study: IsoFindings) -> Section:
     """The ISO/TS 15066 section for another arm or head: its own numbers, no thesis values."""
     m = study.metrics
     md = [
@@ -766,7 +767,7 @@ def _render_other(study: IsoStudy) -> Section:
         "![lambda limits](iso_lambda.png)", "",
         "![linear vs Hunt-Crossley](iso_hc_vs_linear.png)", "",
     ]
-    arts = list(study.plot().items()) + [
+    arts = list(study.figures().items()) + [
         ("iso_limits.csv", study.limits), ("iso_clamping_transient.csv", study.clamp_transient),
         ("iso_quasi_static.csv", study.quasi_static), ("iso_lambda.csv", study.lambda_table),
         ("iso_free_impacts.csv", study.free), ("iso_hc_vs_linear.csv", study.hc_states),
@@ -775,4 +776,4 @@ def _render_other(study: IsoStudy) -> Section:
                    arts, dict(m))
 
 
-__all__ = ["IsoStudy", "compute", "render", "ASSUMPTIONS", "assumptions"]
+__all__ = ["IsoFindings", "compute", "render", "ASSUMPTIONS", "assumptions"]

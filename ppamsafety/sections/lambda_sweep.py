@@ -27,6 +27,7 @@ from ..sweep_cases import add_verdicts
 from ..units import BAR
 from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
                resolve_arm, resolve_head_model)
+from ..results import Result
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -73,7 +74,7 @@ def lambda_case(lam: float, ki_bar: float, circle_duration: float, *, arm=None,
 
 
 @dataclass
-class LambdaSweepStudy:
+class LambdaSweepFindings(Result):
     """Result of :func:`compute`: step-impact safety and circle tracking per (lambda, Ki).
 
     Attributes
@@ -112,14 +113,14 @@ class LambdaSweepStudy:
         """The sweep table."""
         return self.table.copy()
 
-    def plot(self) -> dict:
+    def figures(self) -> dict:
         """The section's figures, ``{file name: Figure}``."""
         return {"lambda_sweep.png": plot_lambda_sweep(self.table, tracking="circle_err_mean")}
 
 
 @checked_compute
 def compute(*, quick: bool = False, arm=None, processes: int | None = None,
-            head=None) -> LambdaSweepStudy:
+            head=None) -> LambdaSweepFindings:
     """Sweep lambda x Ki of joint PSMC: step-impact safety against circle tracking.
 
     Parameters
@@ -135,7 +136,7 @@ def compute(*, quick: bool = False, arm=None, processes: int | None = None,
 
     Returns
     -------
-    LambdaSweepStudy
+    LambdaSweepFindings
         The sweep table and metrics.
     """
     note = "" if compares_to_thesis(arm, head) else other_arm_note(arm, head)
@@ -150,17 +151,17 @@ def compute(*, quick: bool = False, arm=None, processes: int | None = None,
     df = run_sweep(case, cases, name="lambda-sweep", processes=procs, progress=False,
                    on_error="raise")
     df = add_verdicts(df.rename(columns={"ki_bar": "Ki_bar"}), head=resolve_head_model(head))
-    return LambdaSweepStudy(lambdas=lams, kis=kis, circle_duration=dur, processes=procs,
+    return LambdaSweepFindings(lambdas=lams, kis=kis, circle_duration=dur, processes=procs,
                             table=df, metrics={"cases": len(df)}, head_name=head_name,
                             note=note)
 
 
-def render(study: LambdaSweepStudy) -> Section:
+def render(study: LambdaSweepFindings) -> Section:
     """The report section of the lambda sweep (formatting only).
 
     Parameters
     ----------
-    study : LambdaSweepStudy
+    study : LambdaSweepFindings
         Output of :func:`compute`.
 
     Returns
@@ -189,5 +190,5 @@ on {procs} processes.
 
 ![lambda sweep](lambda_sweep.png)
 """
-    arts = [("lambda_sweep.csv", df), *study.plot().items()]
+    arts = [("lambda_sweep.csv", df), *study.figures().items()]
     return Section("Safety against tracking: a lambda x Ki sweep", md, arts, dict(study.metrics))

@@ -22,6 +22,7 @@ from ..plots.impact import plot_fmax_over_time, plot_safety_table, plot_worst_hi
 from ..sweep import run_sweep
 from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
                resolve_arm, resolve_head_model)
+from ..results import Result
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -149,7 +150,7 @@ FMAX_OVER_TIME_RUNS = (("step", "PID"), ("step", "PSMC joint Ki=2 λ=0.4"), ("sw
 
 
 @dataclass
-class SafetyStudy:
+class SafetyFindings(Result):
     """Result of :func:`compute`: Table 6.1 and the every-instant scan.
 
     Attributes
@@ -208,7 +209,7 @@ class SafetyStudy:
                            "Fmax_thesis", "Fmax_ratio", "instant_HIC", "tcp_speed", "K1",
                            "K2"]].copy()
 
-    def plot(self) -> dict:
+    def figures(self) -> dict:
         """The section's figures, ``{file name: Figure}``."""
         return _figures(self)
 
@@ -218,7 +219,7 @@ def _figures(study) -> dict:
 
     Parameters
     ----------
-    study : ppamsafety.sections.safety.SafetyStudy
+    study : ppamsafety.sections.safety.SafetyFindings
         Output of :func:`ppamsafety.sections.safety.compute`.
 
     Returns
@@ -238,7 +239,7 @@ def _figures(study) -> dict:
 
 @checked_compute
 def compute(*, quick: bool = False, arm=None, processes: int | None = None,
-            head=None) -> SafetyStudy:
+            head=None) -> SafetyFindings:
     """Reproduce Table 6.1 and scan every impact instant of the step and switch experiments.
 
     Parameters
@@ -256,7 +257,7 @@ def compute(*, quick: bool = False, arm=None, processes: int | None = None,
 
     Returns
     -------
-    SafetyStudy
+    SafetyFindings
         Tables, histories, scan and metrics.
     """
     thesis = compares_to_thesis(arm, head)
@@ -302,7 +303,7 @@ def compute(*, quick: bool = False, arm=None, processes: int | None = None,
                "conclusions_hold": int(concl.holds.sum()), "conclusions": len(concl),
                "pid_step_F_max": float(df[(df.experiment == "step") & (df.family == "PID")].F_max.iloc[0]),
                "pid_step_HIC": float(df[(df.experiment == "step") & (df.family == "PID")].HIC36.iloc[0])}
-    return SafetyStudy(quick=quick, head=head, table=df, conclusions=concl, worst=worst,
+    return SafetyFindings(quick=quick, head=head, table=df, conclusions=concl, worst=worst,
                        heuristic_marks=marks, scan=scan, miss=miss, processes=procs,
                        metrics=metrics, thesis=thesis, arm=arm, verdicts=_verdicts(df, head))
 
@@ -329,12 +330,12 @@ def _verdict_text(study) -> str:
     return "\n".join(lines)
 
 
-def render(study: SafetyStudy) -> Section:
+def render(study: SafetyFindings) -> Section:
     """The report section of the safety study (formatting only).
 
     Parameters
     ----------
-    study : SafetyStudy
+    study : SafetyFindings
         Output of :func:`compute`.
 
     Returns
@@ -383,8 +384,8 @@ The heuristic finds the worst HIC and F_max (within 0.05 %) in {found} of {len(m
 """
     arts = [("safety_table_6_1.csv", show), ("safety_conclusions.csv", concl),
             ("safety_verdicts.csv", study.verdicts),
-            *study.plot().items(), ("safety_every_instant.csv", miss)]
+            *study.figures().items(), ("safety_every_instant.csv", miss)]
     return Section("Collision safety: Table 6.1 and every impact instant (thesis §6.3.3)", md,
                    arts, dict(study.metrics))
 
-__all__ = ["compute", "render", "SafetyStudy", "every_instant_case", "HEURISTICS", "variant_family"]
+__all__ = ["compute", "render", "SafetyFindings", "every_instant_case", "HEURISTICS", "variant_family"]

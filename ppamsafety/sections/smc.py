@@ -42,6 +42,7 @@ from ..plots.control import plot_smc_chattering, plot_smc_commands
 from ..units import BAR
 from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
                resolve_arm)
+from ..results import Result
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -276,7 +277,7 @@ NOMINAL_MODEL = "model T = plant T"
 
 
 @dataclass
-class SmcStudy:
+class SmcFindings(Result):
     """Result of :func:`compute`: SMC tuning, chattering sweep, PSMC reference.
 
     Attributes
@@ -330,7 +331,7 @@ class SmcStudy:
         """The chattering sweep (one row per run, SI units)."""
         return self.sweep.copy()
 
-    def plot(self) -> dict:
+    def figures(self) -> dict:
         """The section's figures, ``{file name: Figure}``."""
         return _figures(self)
 
@@ -346,7 +347,7 @@ def _figures(study) -> dict:
 
     Parameters
     ----------
-    study : ppamsafety.sections.smc.SmcStudy
+    study : ppamsafety.sections.smc.SmcFindings
         Output of :func:`ppamsafety.sections.smc.compute`.
 
     Returns
@@ -372,7 +373,7 @@ def _figures(study) -> dict:
 
 
 @checked_compute
-def compute(*, quick: bool = False, arm=None, head=None) -> SmcStudy:
+def compute(*, quick: bool = False, arm=None, head=None) -> SmcFindings:
     """SMC defaults (grid search), chattering vs boundary layer and valve time constant.
 
     Parameters
@@ -386,7 +387,7 @@ def compute(*, quick: bool = False, arm=None, head=None) -> SmcStudy:
 
     Returns
     -------
-    SmcStudy
+    SmcFindings
         Tables, kept runs and metrics.
     """
     arm = resolve_arm(arm)
@@ -429,18 +430,18 @@ def compute(*, quick: bool = False, arm=None, head=None) -> SmcStudy:
                "chattering_at_best_bar": float(gb.chattering_Pa / BAR),
                "psmc_chattering_bar": float(ps["chattering_Pa"] / BAR),
                "diverged_runs": int(sw.diverged.sum())}
-    return SmcStudy(quick=quick, warmup=warmup, evaluate=evaluate, default=default,
+    return SmcFindings(quick=quick, warmup=warmup, evaluate=evaluate, default=default,
                     tuning=tuning, defaults_are_best=defaults_are_best, gammas=gammas,
                     sweep=sw, kept=kept, psmc=ps, sensor_table=sens_tab, metrics=metrics,
                     thesis=compares_to_thesis(arm), arm=arm)
 
 
-def render(study: SmcStudy) -> Section:
+def render(study: SmcFindings) -> Section:
     """The report section of the SMC study (formatting only).
 
     Parameters
     ----------
-    study : SmcStudy
+    study : SmcFindings
         Output of :func:`compute`.
 
     Returns
@@ -558,6 +559,6 @@ wall on hardware (§4.4.2) and moved to PSMC, whose Δp stays smooth: the measur
 through a proxy whose output is limited and integrated.
 """
     arts = [("smc_tuning.csv", tuning), ("smc_chattering_sweep.csv", sw),
-            *study.plot().items()]
+            *study.figures().items()]
     return Section("Sliding mode control: chattering vs boundary layer and valve time constant "
                    "(thesis §4.3-4.5)", md, arts, dict(study.metrics))

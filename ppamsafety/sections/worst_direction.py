@@ -26,6 +26,7 @@ from ..params.head import MAXILLA_FRACTURE_N
 from ..plots.impact import plot_direction_polar, plot_direction_ratios
 from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
                resolve_arm, resolve_head_model)
+from ..results import Result
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -45,7 +46,7 @@ POLAR_RUNS = (("step", "PID"), ("switch", "PID"), ("step", "PSMC joint Ki=2 λ=0
 
 
 @dataclass
-class WorstDirectionStudy:
+class WorstDirectionFindings(Result):
     """Result of :func:`compute`.
 
     Attributes
@@ -95,7 +96,7 @@ class WorstDirectionStudy:
         """
         return self.table.copy()
 
-    def plot(self) -> dict:
+    def figures(self) -> dict:
         """The section's figures, ``{file name: Figure}``.
 
         Returns
@@ -110,7 +111,7 @@ def _figures(study) -> dict:
 
     Parameters
     ----------
-    study : ppamsafety.sections.worst_direction.WorstDirectionStudy
+    study : ppamsafety.sections.worst_direction.WorstDirectionFindings
         Output of :func:`ppamsafety.sections.worst_direction.compute`.
 
     Returns
@@ -127,7 +128,7 @@ def _figures(study) -> dict:
 
 
 @checked_compute
-def compute(*, quick: bool = False, arm=None, head=None) -> WorstDirectionStudy:
+def compute(*, quick: bool = False, arm=None, head=None) -> WorstDirectionFindings:
     """Worst head placement and instant for the experiments of Table 6.1.
 
     Parameters
@@ -142,7 +143,7 @@ def compute(*, quick: bool = False, arm=None, head=None) -> WorstDirectionStudy:
 
     Returns
     -------
-    WorstDirectionStudy
+    WorstDirectionFindings
     """
     if not isinstance(quick, (bool, np.bool_)):
         raise TypeError(f"quick must be a bool, got {type(quick).__name__}")
@@ -195,16 +196,16 @@ def compute(*, quick: bool = False, arm=None, head=None) -> WorstDirectionStudy:
         "rho_max": float(df["rho"].max()),
         "runs_wall_time_s": t_runs, "search_wall_time_s": t_search,
     }
-    return WorstDirectionStudy(quick, every, head, df.reset_index(drop=True), results, metrics,
+    return WorstDirectionFindings(quick, every, head, df.reset_index(drop=True), results, metrics,
                                thesis=thesis, arm=arm)
 
 
-def render(study: WorstDirectionStudy) -> Section:
+def render(study: WorstDirectionFindings) -> Section:
     """The report section (formatting only).
 
     Parameters
     ----------
-    study : WorstDirectionStudy
+    study : WorstDirectionFindings
         Output of :func:`compute`.
 
     Returns
@@ -273,9 +274,9 @@ F_max over every placement and instant is {m["psmc_max_F_max_worst"]:.0f} N
 
 ![ratios](worst_direction_ratios.png)
 """
-    arts = [("worst_direction.csv", t), *study.plot().items()]
+    arts = [("worst_direction.csv", t), *study.figures().items()]
     return Section("Worst head placement around the tool point", md, arts,
                    dict(study.metrics))
 
 
-__all__ = ["compute", "render", "WorstDirectionStudy"]
+__all__ = ["compute", "render", "WorstDirectionFindings"]
