@@ -18,6 +18,7 @@ from functools import lru_cache
 import numpy as np
 import pandas as pd
 
+from .results import Result
 from ._validation import check_instance, check_int, check_range
 from .params import ArmParameters
 from .params.arm_file import ArmFileError
@@ -46,7 +47,7 @@ def _grid(arm, n1: int, n2: int):
 
 
 @dataclass(frozen=True)
-class TorqueFunctions:
+class TorqueFunctions(Result):
     """Torque functions along the driven joint (fig. 2.11).
 
     Made by :func:`torque_function_curves`.
@@ -67,7 +68,7 @@ class TorqueFunctions:
         return self.data.copy()
 
     def plot(self, **kwargs):
-        """Plot with :mod:`ppamsafety.report`; returns a matplotlib Figure.
+        """The figure (drawn by :mod:`ppamsafety.plots`), a matplotlib Figure.
 
         Parameters
         ----------
@@ -104,7 +105,7 @@ def torque_function_curves(arm, *, n: int = 201) -> TorqueFunctions:
 
 
 @dataclass(frozen=True)
-class StiffnessMap:
+class StiffnessMap(Result):
     """Joint stiffness (2.18) over the working area.
 
     Made by :func:`stiffness_map`.
@@ -127,7 +128,7 @@ class StiffnessMap:
         return self.data.copy()
 
     def plot(self, **kwargs):
-        """Plot with :mod:`ppamsafety.report`; returns a matplotlib Figure.
+        """The figure (drawn by :mod:`ppamsafety.plots`), a matplotlib Figure.
 
         Parameters
         ----------
@@ -180,7 +181,7 @@ def cad_links() -> LinkInertia:
 
 
 @dataclass(frozen=True)
-class MaxLoadMap:
+class MaxLoadMap(Result):
     """Maximum load (A.43)-(A.45) over the working area.
 
     Made by :func:`max_load_map`.
@@ -216,7 +217,7 @@ class MaxLoadMap:
         return float(r["q1_rad"]), float(r["q2_rad"])
 
     def plot(self, **kwargs):
-        """Plot with :mod:`ppamsafety.report`; returns a matplotlib Figure.
+        """The figure (drawn by :mod:`ppamsafety.plots`), a matplotlib Figure.
 
         Parameters
         ----------
@@ -353,7 +354,7 @@ SUMMARY_POSE = (50.0 * DEG, -80.0 * DEG)
 
 
 @dataclass(frozen=True)
-class ArmSummary:
+class ArmSummary(Result):
     """What ``ppamsafety arm check`` prints: an arm's key design numbers.
 
     Made by :func:`arm_summary`.

@@ -20,7 +20,8 @@ Every public result class (what a public function or a report section returns) d
     folder holding files the toolkit did not write is refused and a previous result is
     replaced only with ``overwrite=True``.
 
-A class implements ``to_pandas()`` and one of ``plot()`` / ``figures()``; the rest comes from
+A class implements ``to_pandas()`` (a result of scalars only need not: its table is one row of
+them) and one of ``plot()`` / ``figures()``; the rest comes from
 here.  A result with further tables (a section's several CSVs) names them in
 :meth:`Result.tables`; the default holds the main table and every :class:`pandas.DataFrame`
 attribute.  A result with a schema of its own (the diagnosis, the identification) overrides
@@ -139,8 +140,11 @@ class Result:
     table = _MainTable()
 
     def to_pandas(self) -> pd.DataFrame:
-        """The main table."""
-        raise NotImplementedError(f"{type(self).__name__} does not define to_pandas()")
+        """The main table; by default one row of the scalar attributes (a result of numbers)."""
+        row = {k: v for k, v in _attributes(self).items() if _scalar(v) is not _SKIP}
+        if not row:
+            raise NotImplementedError(f"{type(self).__name__} does not define to_pandas()")
+        return pd.DataFrame([row])
 
     def figure_name(self) -> str:
         """Name of the figure :meth:`plot` draws, in :meth:`figures` (the class name, snake case)."""

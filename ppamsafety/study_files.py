@@ -1166,7 +1166,7 @@ def run_study_file(study, outdir, *, backend: str = "local", scheduler=None,
             env = None
             df = run_sweep(case_function(st.arm, st.head), cases, name=st.name, cache_dir=cache,
                            processes=processes, progress=progress, on_error="record",
-                           backend=backend, scheduler=scheduler)
+                           backend=backend, scheduler=scheduler).table
             df = add_verdicts(df, head=st.head)
         if "time_histories" in df.columns:
             _write_histories(df, stage / "histories")

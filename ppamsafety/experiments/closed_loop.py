@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from ..results import Result
 from .._jit import kernel
 from .._validation import UnknownNameError, check_int, check_range, check_size, did_you_mean
 from ..control import CONTROLLER_CLASSES
@@ -196,7 +197,7 @@ def _run_batch(X0, REFS, ref_idx, PP, PM, KIND, CP, CSIZE, SCFG, NOISE, noise_id
 
 
 @dataclass
-class ExperimentResult:
+class ExperimentResult(Result):
     """One closed-loop run.
 
     Attributes
@@ -345,7 +346,7 @@ class ExperimentResult:
         return np.hypot(self.signal("xd"), self.signal("yd"))
 
     def plot(self, **kwargs):
-        """Plot with :mod:`ppamsafety.report`; returns a matplotlib Figure.
+        """The figure (drawn by :mod:`ppamsafety.plots`), a matplotlib Figure.
 
         Parameters
         ----------

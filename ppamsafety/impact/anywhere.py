@@ -46,6 +46,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from ..results import Result
 from .._validation import (as_float_array, check_bool, check_choice, check_instance, check_int,
                            check_nonnegative, check_range, check_range_array, describe)
 from ..params.contact import (BARE, FOREHEAD, BodyContact, ContactPoint, Covering,
@@ -300,7 +301,7 @@ _TABLES: dict = {}
 
 # ---- simulation ------------------------------------------------------------------------------
 @dataclass
-class ContactResults:
+class ContactResult(Result):
     """Results of a batch of contact-point impacts (:func:`simulate_contacts`).
 
     Attributes
@@ -640,7 +641,7 @@ def _frame(prep: _PointPrep, rows, SUM, *, stacklevel) -> pd.DataFrame:
 
 def simulate_contacts(arm, q, qd, stiffness, *, point="tool point", body=None, covering=None,
                       direction=None, body_velocity=None, fixed_arm: bool = False,
-                      dt: float = 2e-5, duration: float = 0.05, history=False) -> ContactResults:
+                      dt: float = 2e-5, duration: float = 0.05, history=False) -> ContactResult:
     """Impacts of a contact point of the flexible-joint arm with a free body region.
 
     Parameters
@@ -676,7 +677,7 @@ def simulate_contacts(arm, q, qd, stiffness, *, point="tool point", body=None, c
 
     Returns
     -------
-    ContactResults
+    ContactResult
     """
     prep = _prepare(arm, q, qd, stiffness, point=point, body=body, covering=covering,
                     direction=direction, body_velocity=body_velocity, fixed_arm=fixed_arm,
@@ -690,7 +691,7 @@ def simulate_contacts(arm, q, qd, stiffness, *, point="tool point", body=None, c
     keep = [c for c in pt.PHIST_COLUMNS if not (c.startswith("delta") and c[5:].isdigit()
                                                  and int(c[5:]) > nl)]
     hists = {int(i): pt.PHIST.frame(HIST[j])[keep] for j, i in enumerate(prep.hist_idx)}
-    return ContactResults(df, hists, prep.point, prep.contact, prep.dt, prep.duration)
+    return ContactResult(df, hists, prep.point, prep.contact, prep.dt, prep.duration)
 
 
 # ---- bounds ------------------------------------------------------------------------------------
@@ -758,7 +759,7 @@ def _bounds(arm, point, contact, e0_arm, vb, duration, window):
 
 # ---- the worst case over contact point x body region x instant ----------------------------
 @dataclass
-class WorstContact:
+class WorstContact(Result):
     """Result of :func:`worst_contact`.
 
     Attributes
@@ -1035,7 +1036,7 @@ def worst_contact(result, arm, *, points=None, bodies=None, limits=None,
                         n_scr, n_sim, tuple(pts))
 
 
-__all__ = ["simulate_contacts", "ContactResults", "point_effective_mass", "point_jacobian",
+__all__ = ["simulate_contacts", "ContactResult", "point_effective_mass", "point_jacobian",
            "point_position", "min_point_mass", "contact_bounds", "worst_contact",
            "WorstContact", "resolve_point", "resolve_body", "SCREEN_STRIDE", "SCREEN_MARGIN",
            "CRITERIA"]

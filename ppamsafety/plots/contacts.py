@@ -19,7 +19,7 @@ def plot_contact_history(hist, *, point: str = "", body: str = "", title: str = 
     ----------
     hist : pandas.DataFrame
         Columns ``t`` [s], ``F`` [N], ``a_body_g`` [g], ``delta`` [m] and ``delta1``..
-        (each layer's compression [m]) (:attr:`ContactResults.histories` entry).
+        (each layer's compression [m]) (:attr:`ContactResult.histories` entry).
     point, body : str
         Names for the title.
     title : str

@@ -1,6 +1,6 @@
 """Plots of clamping and ISO/TS 15066 power and force limiting (pyplot-free).
 
-Every function takes data computed elsewhere (:class:`~ppamsafety.impact.clamping.ClampingResults`
+Every function takes data computed elsewhere (:class:`~ppamsafety.impact.clamping.ClampingResult`
 or :class:`~ppamsafety.sections.iso_15066.IsoFindings`) and returns a Figure.
 """
 
@@ -29,7 +29,7 @@ def plot_clamping_histories(results):
 
     Parameters
     ----------
-    results : ClampingResults
+    results : ClampingResult
         Output of :func:`ppamsafety.impact.clamping.simulate_clamping`.
     """
     fig, ax = new_figure(figsize=(7.0, 4.0))

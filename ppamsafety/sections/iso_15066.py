@@ -385,7 +385,7 @@ class IsoFindings(Result):
     clamp_transient : pandas.DataFrame
         Clamped vs free F_max per thesis variant and head.
     clamp_histories : dict
-        Head name -> (ClampingResults, labels).
+        Head name -> (ClampingResult, labels).
     static_bounds : pandas.DataFrame
         Largest static force over the working area and directions, per mode.
     static_map : tuple

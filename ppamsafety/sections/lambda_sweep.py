@@ -149,7 +149,7 @@ def compute(*, quick: bool = False, arm=None, processes: int | None = None,
     cases = [{"lam": lam, "ki_bar": ki, "circle_duration": dur} for ki in kis for lam in lams]
     procs = processes or min(2, os.cpu_count() or 1)
     df = run_sweep(case, cases, name="lambda-sweep", processes=procs, progress=False,
-                   on_error="raise")
+                   on_error="raise").table
     df = add_verdicts(df.rename(columns={"ki_bar": "Ki_bar"}), head=resolve_head_model(head))
     return LambdaSweepFindings(lambdas=lams, kis=kis, circle_duration=dur, processes=procs,
                             table=df, metrics={"cases": len(df)}, head_name=head_name,

@@ -278,7 +278,7 @@ def compute(*, quick: bool = False, arm=None, processes: int | None = None,
     procs = processes or min(2, os.cpu_count() or 1)
     t1 = time.perf_counter()
     scan = run_sweep(case, cases, name="safety-every-instant", processes=procs,
-                     progress=False, on_error="raise")
+                     progress=False, on_error="raise").table
     t_scan = time.perf_counter() - t1
     n_impacts = int(len(scan))
     n_simulated = int(scan["simulated"].sum())
