@@ -892,7 +892,7 @@ def _check_combinations(where: str, cases: CaseGrid, arm=None) -> None:
 
 
 #: Rough cost model of one :func:`~ppamsafety.sweep_cases.safety_case` on one core
-#: (``studies/bench/bench_case_cost.py``; measured on the shared 2-core machine under load,
+#: (``benchmarks/bench_case_cost.py``; measured on the shared 2-core machine under load,
 #: the model is 0.8-1.7 times the measured time): a fixed part [s] (plus the circle
 #: references' inverse kinematics), the closed loop per simulated second [s/s], one impact
 #: [s]; result row and closed-loop history per second of record [bytes].

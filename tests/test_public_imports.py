@@ -42,10 +42,6 @@ def test_documented_import_works(doc, module, name):
 
 
 @pytest.mark.parametrize("module, name", [
-    ("ppamsafety.studies", "responses"),          # the report sections' former package
-    ("ppamsafety.studies", "REGISTRY"),
-    ("ppamsafety.studies", "run_study"),
-    ("ppamsafety.studies", "StudyResult"),
     ("ppamsafety.experiments", "ExperimentCase"),
     ("ppamsafety.experiments", "run_batch"),
     ("ppamsafety.experiments.trajectories", "REFERENCE_ROW"),

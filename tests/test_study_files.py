@@ -25,7 +25,7 @@ def test_the_example_study_files_load_and_expand():
     assert len(labels) == 10                                         # Table 6.1's variants
     f = load_study(STUDIES / "fig_6_3.toml")
     from ppamsafety.impact.thesis_data import FIG_6_3
-    k = np.geomspace(FIG_6_3["k_min"], FIG_6_3["k_max"], 31)          # as studies/stiffness.py
+    k = np.geomspace(FIG_6_3["k_min"], FIG_6_3["k_max"], 31)          # as the section stiffness
     assert [c["stiffness"] for c in f.cases] == list(k)
     assert all(c["instants"] == "max TCP speed" and c["controller"] == "PID" for c in f.cases)
     lk = load_study(STUDIES / "lambda_ki.toml")

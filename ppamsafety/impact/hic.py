@@ -11,7 +11,7 @@ and windows are index pairs (i, j) with 1 <= j - i <= Wn.
 
 **Single pulse** (:func:`_hic_unimodal`, chosen by :func:`hic_kernel` when the
 samples rise to one maximum and then fall, plateaus allowed: 298 of the
-first 300 impacts of ``studies/bench/bench_impact.py``, measured on their
+first 300 impacts of ``benchmarks/bench_impact.py``, measured on their
 histories).  The window of every length L with the largest area is found by
 growing it from the largest trapezoid segment towards the larger neighbour,
 so HIC is exact in O(N).

@@ -2,7 +2,7 @@
 (issue 20, part 2).
 
 Part of ``ppamsafety report`` (section "as_built"); run alone with
-``python studies/as_built.py [outdir] [--quick] [--overwrite]``.
+``ppamsafety report --only as_built [--outdir DIR] [--quick] [--overwrite]``.
 
 The thesis prints Table 5.2 (tracking means and maxima), Table 6.1 (HIC and F_max of the step
 and the switch), the RMS errors of the gravity-compensation sawtooth of fig. 3.1 and

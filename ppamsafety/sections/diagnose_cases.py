@@ -2,7 +2,7 @@
 battery (issue 10, case studies (b) and (c)).
 
 Part of ``ppamsafety report`` (section "diagnose_cases"); run alone with
-``python studies/diagnose_cases.py [outdir] [--quick] [--overwrite]``.
+``ppamsafety report --only diagnose_cases [--outdir DIR] [--quick] [--overwrite]``.
 
 1. *Case (c), two effects in a closed-loop record.*  A 20 s record of the
    10 s circle under joint PSMC (Ki = 2 bar/(rad s), lambda = 0.4 s) is

@@ -2,7 +2,7 @@
 
 Thesis §5.4 (figs. 5.21, 5.22) and the hazard of §6.3 (pushed away, released).
 Part of ``ppamsafety report`` (section "interaction"); run alone with
-``python studies/interaction.py [outdir] [--quick] [--overwrite]``.
+``ppamsafety report --only interaction [--outdir DIR] [--quick] [--overwrite]``.
 
 Experiments (all at 1 kHz, the arm held at A = FK(50 deg, -80 deg)):
 

@@ -1,7 +1,7 @@
 """Collision detection and reaction in the closed loop (issue 12, item 7; beyond thesis §6.3.5).
 
 Part of ``ppamsafety report`` (section "reaction"); run alone with
-``python studies/reaction.py [outdir] [--quick] [--overwrite]``.
+``ppamsafety report --only reaction [--outdir DIR] [--quick] [--overwrite]``.
 
 For each experiment (the thesis' step response, fig. 5.17, and, in full mode,
 the trajectory switch, fig. 5.15) and controller (PID, joint PSMC

@@ -7,7 +7,7 @@ thesis) and every instant of the 20 experiments of Table 6.1, with
 :func:`ppamsafety.impact.directions.worst_direction`, and reports how much
 worse the worst placement is than the thesis' choice.
 
-Run alone:  ``python studies/worst_direction.py [outdir] [--quick] [--overwrite]``.
+Run alone:  ``ppamsafety report --only worst_direction [--outdir DIR] [--quick] [--overwrite]``.
 """
 
 from __future__ import annotations

@@ -28,7 +28,7 @@ the record is written once, and each version (``DIR``, a checkout of another rev
 this one) diagnoses it in child processes, alternately, ``--repeats`` times each; the
 medians and their ratio are printed.
 
-Run:  python studies/bench/bench_diagnose_trust.py [--duration SECONDS] [--against DIR]
+Run:  python benchmarks/bench_diagnose_trust.py [--duration SECONDS] [--against DIR]
 """
 
 import argparse

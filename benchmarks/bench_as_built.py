@@ -14,7 +14,7 @@ straightforward
 Both compute the same numbers (checked: identical values).  Times are wall times after a
 warm-up that loads the kernels; the kernels run single-threaded.
 
-Run:  python studies/bench/bench_as_built.py [--quick]
+Run:  python benchmarks/bench_as_built.py [--quick]
 """
 
 import argparse

@@ -29,7 +29,7 @@ with a plant effect and dotted-path arm parameters (``effects={"payload_mass": .
 same physics.  Both run in this process through ``run_sweep``, interleaved in rounds (A, B,
 A, B ...) so that the load of a shared machine hits both alike; ratio = with / without.
 
-Run:  python studies/bench/bench_sweep.py [--cases 1000] [--processes 2] [--physics 40]
+Run:  python benchmarks/bench_sweep.py [--cases 1000] [--processes 2] [--physics 40]
 """
 
 from __future__ import annotations

@@ -12,7 +12,7 @@ times are the best of several repeats (time.perf_counter), single thread.
 without gravity compensation, with ideal sensors) to show where the time
 goes.
 
-Run:  python studies/bench/bench_closed_loop.py [--breakdown]
+Run:  python benchmarks/bench_closed_loop.py [--breakdown]
 """
 
 import sys
