@@ -259,7 +259,7 @@ def test_dataclass_field_named_table_is_the_table():
     assert T(df).table is df
 
 
-SECTIONS_QUICK = ["design", "stiffness", "responses", "lambda_sweep"]
+SECTIONS_QUICK = ["design", "stiffness", "responses", "lambda_sweep", "safety"]
 
 
 @pytest.mark.parametrize("name", SECTIONS_QUICK)

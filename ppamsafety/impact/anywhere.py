@@ -764,7 +764,7 @@ class WorstContact(Result):
 
     Attributes
     ----------
-    table : pandas.DataFrame
+    candidates : pandas.DataFrame
         One row per candidate (contact point x body region x instant): ``point``, ``body``,
         ``t0`` [s], ``point_speed`` [m/s], ``bound`` (rigorous bound of the criterion),
         ``screened`` with ``screen`` (screening value, NaN where not screened),
@@ -785,7 +785,7 @@ class WorstContact(Result):
         The contact points compared.
     """
 
-    table: pd.DataFrame
+    candidates: pd.DataFrame
     worst: pd.DataFrame
     criterion: str
     limits: dict | None

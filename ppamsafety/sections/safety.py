@@ -159,7 +159,7 @@ class SafetyFindings(Result):
         The scan used every 20th ms instead of every ms.
     head : HeadContactModel
         Head model of the impacts.
-    table : pandas.DataFrame
+    runs : pandas.DataFrame
         Worst impacts per (experiment, variant) at the four heuristic
         instants with the thesis values and ratios (SI units).
     conclusions : pandas.DataFrame
@@ -188,7 +188,7 @@ class SafetyFindings(Result):
 
     quick: bool
     head: object
-    table: pd.DataFrame
+    runs: pd.DataFrame
     conclusions: pd.DataFrame
     worst: dict
     heuristic_marks: dict
@@ -203,9 +203,9 @@ class SafetyFindings(Result):
     def to_pandas(self) -> pd.DataFrame:
         """Table 6.1 reproduced (toolkit, thesis, ratios, impact instant and stiffness)."""
         if not self.thesis:
-            return self.table[["experiment", "label", "HIC36", "F_max", "instant_HIC",
+            return self.runs[["experiment", "label", "HIC36", "F_max", "instant_HIC",
                                "tcp_speed", "K1", "K2"]].copy()
-        return self.table[["experiment", "label", "HIC36", "HIC_thesis", "HIC_ratio", "F_max",
+        return self.runs[["experiment", "label", "HIC36", "HIC_thesis", "HIC_ratio", "F_max",
                            "Fmax_thesis", "Fmax_ratio", "instant_HIC", "tcp_speed", "K1",
                            "K2"]].copy()
 
@@ -231,7 +231,7 @@ def _figures(study) -> dict:
     scan = study.scan
     plot_items = [(f"{exp}: {label}", scan[(scan.experiment == exp) & (scan.label == label)],
                    study.heuristic_marks[(exp, label)]) for exp, label in FMAX_OVER_TIME_RUNS]
-    return {"safety_table_6_1.png": plot_safety_table(study.table),
+    return {"safety_table_6_1.png": plot_safety_table(study.runs),
             "safety_worst_histories.png": plot_worst_histories(
                 items, title="worst step-response impacts"),
             "safety_fmax_over_time.png": plot_fmax_over_time(plot_items)}
@@ -303,7 +303,7 @@ def compute(*, quick: bool = False, arm=None, processes: int | None = None,
                "conclusions_hold": int(concl.holds.sum()), "conclusions": len(concl),
                "pid_step_F_max": float(df[(df.experiment == "step") & (df.family == "PID")].F_max.iloc[0]),
                "pid_step_HIC": float(df[(df.experiment == "step") & (df.family == "PID")].HIC36.iloc[0])}
-    return SafetyFindings(quick=quick, head=head, table=df, conclusions=concl, worst=worst,
+    return SafetyFindings(quick=quick, head=head, runs=df, conclusions=concl, worst=worst,
                        heuristic_marks=marks, scan=scan, miss=miss, processes=procs,
                        metrics=metrics, thesis=thesis, arm=arm, verdicts=_verdicts(df, head))
 

@@ -152,7 +152,7 @@ class StiffnessFindings(Result):
         ``F_max`` [N], ``HIC36``, ``E_balance_error`` [-], ``contact_time``
         [s], ``dF vs k=1 [N]``, ``F/F_thesis`` (ratio to the level of fig. 6.3,
         Table 6.1's 1524 N).
-    table : pandas.DataFrame
+    by_stiffness : pandas.DataFrame
         F_max [N] with k as rows and one column per convention / B (the
         last row, k = inf, the rigid limit), and the largest
         |E_balance_error| of the row.
@@ -191,7 +191,7 @@ class StiffnessFindings(Result):
     instant: pd.Series
     tool_speed: float
     sweep: pd.DataFrame
-    table: pd.DataFrame
+    by_stiffness: pd.DataFrame
     fit: pd.DataFrame
     B_ppam: np.ndarray
     rigid: pd.DataFrame
@@ -364,7 +364,7 @@ def compute(*, quick: bool = False, arm=None, head=None) -> StiffnessFindings:
     if not thesis:
         for k in ("B_fit_kgm2", "fit_residual_N", "fit_residual_pct_points"):
             metrics.pop(k)
-    return StiffnessFindings(quick=quick, instant=row, tool_speed=speed, sweep=sweep, table=table,
+    return StiffnessFindings(quick=quick, instant=row, tool_speed=speed, sweep=sweep, by_stiffness=table,
                           fit=fit, B_ppam=B_ppam, rigid=rigid, m_eff=m_eff, m_link2=m_link2,
                           f_two_body=f_two, contact=contact, periods=periods, metrics=metrics,
                           thesis=thesis, arm=arm, head=head)
@@ -388,7 +388,7 @@ def render(study: StiffnessFindings) -> Section:
         return _render_other(study)
     row, m, per = study.instant, study.metrics, study.periods
     F_ref = FIG_6_3["F_level_N"]
-    tab = study.table.copy()
+    tab = study.by_stiffness.copy()
     tab["k"] = [("inf (rigid)" if not np.isfinite(k) else f"{k:.4g}") for k in tab.k]
     frozen_ratio = tab["frozen"] / F_ref
     tab.insert(2, "frozen / 1524 N", frozen_ratio)
@@ -464,7 +464,7 @@ difference) and the flexible joint at the largest k:
 
 ![stiffness sweep](stiffness_sweep.png)
 """
-    arts = [("stiffness_sweep.csv", study.sweep), ("stiffness_table.csv", study.table),
+    arts = [("stiffness_sweep.csv", study.sweep), ("stiffness_table.csv", study.by_stiffness),
             ("stiffness_fit.csv", study.fit), ("stiffness_rigid.csv", study.rigid),
             *study.figures().items()]
     return Section("Joint stiffness, motor-side conventions and the rigid limit (thesis §6.3.4)",
@@ -474,7 +474,7 @@ difference) and the flexible joint at the largest k:
 def _render_other(study: StiffnessFindings) -> Section:
     """The stiffness section for another arm or head: its own numbers, no fig. 6.3 values."""
     row, m, per = study.instant, study.metrics, study.periods
-    tab = study.table.copy()
+    tab = study.by_stiffness.copy()
     tab["k"] = [("inf (rigid)" if not np.isfinite(k) else f"{k:.4g}") for k in tab.k]
     bp = study.B_ppam
     md = f"""{other_arm_note(study.arm, study.head)}
@@ -507,7 +507,7 @@ Rise of F_max from 1 to 6000 Nm/rad against B (flexible joint):
 
 ![stiffness sweep](stiffness_sweep.png)
 """
-    arts = [("stiffness_sweep.csv", study.sweep), ("stiffness_table.csv", study.table),
+    arts = [("stiffness_sweep.csv", study.sweep), ("stiffness_table.csv", study.by_stiffness),
             ("stiffness_fit.csv", study.fit), ("stiffness_rigid.csv", study.rigid),
             *study.figures().items()]
     return Section("Joint stiffness, motor-side conventions and the rigid limit (thesis §6.3.4)",
