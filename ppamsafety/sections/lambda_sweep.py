@@ -13,18 +13,13 @@ import functools
 import os
 from dataclasses import dataclass, field
 
-import numpy as np
 import pandas as pd
 
-from ..control import JointPSMC
-from ..experiments.catalog import CIRCLE_WARMUP, run_thesis_experiment
-from ..impact.instants import evaluate_experiment
+from ..experiments.catalog import CIRCLE_WARMUP
 from ..markdown import markdown_table
-from ..params import thesis_arm
 from ..plots.impact import plot_lambda_sweep
 from ..sweep import run_sweep
-from ..sweep_cases import add_verdicts
-from ..units import BAR
+from ..sweep_cases import add_verdicts, safety_case
 from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
                resolve_arm, resolve_head_model)
 from ..results import Result
@@ -40,6 +35,11 @@ SECTION = SectionInfo(
 def lambda_case(lam: float, ki_bar: float, circle_duration: float, *, arm=None,
                 head=None) -> dict:
     """Worst step impact and circle tracking error of one joint PSMC tuning (sweep case).
+
+    Two cases of :func:`ppamsafety.sweep_cases.safety_case` (the sweep engine's case, so
+    that ``ppamsafety sweep studies/lambda_ki.toml`` gives the same numbers): the step
+    response crashed into the head at the four heuristic instants, and the circle
+    (P = 10 s), whose tracking error is taken after the warm-up.
 
     Parameters
     ----------
@@ -60,17 +60,12 @@ def lambda_case(lam: float, ki_bar: float, circle_duration: float, *, arm=None,
         ``F_max`` [N], ``HIC36``, ``tcp_speed`` [m/s] of the worst step
         impact, ``circle_err_mean`` and ``circle_err_max`` [m].
     """
-    arm = thesis_arm() if arm is None else arm
-    c = JointPSMC(lam=lam, ki=ki_bar * BAR)
-    step = run_thesis_experiment(arm, "step", [("c", c)])[0]
-    ev = evaluate_experiment(step, arm, head=head).summary
-    circ = run_thesis_experiment(arm, "circle10", [("c", JointPSMC(lam=lam, ki=ki_bar * BAR))],
-                                 duration=circle_duration)[0]
-    k0 = int(round(min(CIRCLE_WARMUP, circle_duration / 2) / 1e-3))
-    err = circ.tracking_error()[k0:]
-    return {"F_max": float(ev.F_max.max()), "HIC36": float(ev.HIC36.max()),
-            "tcp_speed": float(ev.tcp_speed.max()), "circle_err_mean": float(np.nanmean(err)),
-            "circle_err_max": float(np.nanmax(err))}
+    kw = {"controller": "PSMC joint", "lam": lam, "ki_bar": ki_bar, "arm": arm,
+          "head": "thesis-frontal" if head is None else head}
+    step = safety_case("step", **kw)
+    circle = safety_case("circle10", duration=circle_duration, **kw)
+    return {"F_max": step["F_max"], "HIC36": step["HIC36"], "tcp_speed": step["tcp_speed"],
+            "circle_err_mean": circle["track_mean"], "circle_err_max": circle["track_max"]}
 
 
 @dataclass
