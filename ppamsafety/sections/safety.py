@@ -120,10 +120,11 @@ def _conclusions(df) -> pd.DataFrame:
                         f"{fam}: HIC {' > '.join(f'{v:.3g}' for v in g.sort_values('lambda').HIC36)}"
                         for fam, g in psmc.groupby("family"))})
         if exp == "step":
-            out.append({"conclusion": "step: PID crosses the 660 N maxilla line",
+            out.append({"conclusion": f"step: PID crosses the {MAXILLA_FRACTURE_N:.0f} N "
+                                      f"maxilla line",
                         "holds": bool(pid.F_max > MAXILLA_FRACTURE_N),
                         "numbers": f"PID F_max {pid.F_max:.0f} N"})
-        out.append({"conclusion": f"{exp}: every PSMC stays below 660 N",
+        out.append({"conclusion": f"{exp}: every PSMC stays below {MAXILLA_FRACTURE_N:.0f} N",
                     "holds": bool(psmc.F_max.max() < MAXILLA_FRACTURE_N),
                     "numbers": f"largest PSMC F_max {psmc.F_max.max():.0f} N"})
     return pd.DataFrame(out)
@@ -309,14 +310,15 @@ def compute(*, quick: bool = False, arm=None, processes: int | None = None,
 
 
 def _verdict_text(study) -> str:
-    """The thesis judges against 660 N only; the verdicts against every forehead criterion."""
+    """The thesis judges against the maxilla fracture force only; the verdicts against every
+    forehead criterion."""
     v = study.verdicts
     if not len(v):
         return ""
     lines = [f"**Verdicts against every forehead criterion** (head model `{study.head.name}`; "
              "value, limit, margin and pass per row in `safety_verdicts.csv`; the same verdicts "
              "as `ppamsafety impact`, the sweeps and the envelopes). The thesis judges only "
-             "against the 660 N maxilla line:", ""]
+             f"against the {MAXILLA_FRACTURE_N:.0f} N maxilla line:", ""]
     for crit, g in v.groupby("criterion", sort=False):
         fails = g[~g.passed]
         c = g.iloc[0]
