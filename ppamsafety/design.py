@@ -127,6 +127,15 @@ class StiffnessMap(Result):
         """The data as a pandas DataFrame (SI units)."""
         return self.data.copy()
 
+    @property
+    def ranges(self) -> dict:
+        """Extremes over the working area: ``K1_min``, ``K1_max``, ``K2_min``, ``K2_max``
+        [N m/rad] and ``holdable_fraction`` [-] (share of the grid the arm holds itself in)."""
+        d = self.data
+        return {"K1_min": float(d.K1_Nm_per_rad.min()), "K1_max": float(d.K1_Nm_per_rad.max()),
+                "K2_min": float(d.K2_Nm_per_rad.min()), "K2_max": float(d.K2_Nm_per_rad.max()),
+                "holdable_fraction": float(d.holdable.mean())}
+
     def plot(self, **kwargs):
         """The figure (drawn by :mod:`ppamsafety.plots`), a matplotlib Figure.
 
@@ -215,6 +224,17 @@ class MaxLoadMap(Result):
         """Configuration (q1, q2) [rad] where the minimum occurs."""
         r = self.data.loc[self.data["M_max_kg"].idxmin()]
         return float(r["q1_rad"]), float(r["q2_rad"])
+
+    @property
+    def limits(self) -> dict:
+        """Each joint's limit over the working area [kg]: ``M1_min`` (joint 1, (A.43)),
+        ``M2_min_muscle3`` and ``M2_min_muscle4`` (joint 2 with muscle 3 or 4 carrying,
+        (A.44), (A.45); NaN where that muscle never carries) and the map's ``median``."""
+        d = self.data
+        return {"M1_min": float(d["M1_kg"].min()),
+                "M2_min_muscle3": float(d[d.carrying_2 == 3]["M2_kg"].min()),
+                "M2_min_muscle4": float(d[d.carrying_2 == 4]["M2_kg"].min()),
+                "median": float(d.M_max_kg.median())}
 
     def plot(self, **kwargs):
         """The figure (drawn by :mod:`ppamsafety.plots`), a matplotlib Figure.

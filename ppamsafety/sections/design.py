@@ -13,6 +13,7 @@ from ..plant import geometry as geo
 from ..plant import pneumatics as pn
 from ..plant.muscle import force_function, force_polynomial
 from ..plant.ppam_theory import theoretical_muscles
+from ..sweep_cases import IMPACT_POSE_DEG
 from ..units import BAR, DEG, MM
 from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
                resolve_arm)
@@ -128,7 +129,7 @@ def compute(*, quick: bool = False, arm=None, head=None) -> DesignFindings:
     n = 41 if quick else 121
     tf = design.torque_function_curves(arm)
     sm = design.stiffness_map(arm, n1=n, n2=n)
-    q_step = np.array([50 * DEG, -80 * DEG])
+    q_step = np.array(IMPACT_POSE_DEG) * DEG
     K_step = pn.joint_stiffness(q_step, pn.static_pressures(q_step, arm), arm)
     ml = design.max_load_map(arm, n1=2 * n, n2=2 * n)
     if thesis:     # the thesis arm's design-time data: CAD links, theoretical force function
@@ -185,10 +186,8 @@ def render(study: DesignFindings) -> Section:
         return _render_other(study)
     sm, ml, ml_cad, ta1 = study.stiffness, study.max_load, study.max_load_cad, study.table_a1
     K_step, quick = study.K_step, study.quick
-    d = ml.data
-    m1_min = d["M1_kg"].min()
-    m2a = d[d.carrying_2 == 3]["M2_kg"].min()
-    m2b = d[d.carrying_2 == 4]["M2_kg"].min()
+    lim, kr = ml.limits, sm.ranges
+    m1_min, m2a, m2b = lim["M1_min"], lim["M2_min_muscle3"], lim["M2_min_muscle4"]
     e1max, e4max = study.edge["e1max"], study.edge["e4max"]
     f1_edge, f4_raw = study.edge["f1_edge"], study.edge["f4_raw"]
     qmin = np.array(ml.argmin) / DEG
@@ -208,9 +207,9 @@ def render(study: DesignFindings) -> Section:
 gravity-compensation pressures and the calibrated mean pressures p_m = ({pm[0]:.3f}, {pm[1]:.3f}) bar.
 At the step-response impact configuration q = (50, -80) deg: K = ({K_step[0]:.1f}, {K_step[1]:.1f}) Nm/rad
 (thesis §6.3.3: 43 and 27 Nm/rad). Over the working area K1 ranges
-{sm.data.K1_Nm_per_rad.min():.1f}-{sm.data.K1_Nm_per_rad.max():.1f} and K2
-{sm.data.K2_Nm_per_rad.min():.1f}-{sm.data.K2_Nm_per_rad.max():.1f} Nm/rad. With the Delta-p approach
-at these p_m the arm can hold itself statically in {100 * sm.data.holdable.mean():.0f} % of the working
+{kr["K1_min"]:.1f}-{kr["K1_max"]:.1f} and K2
+{kr["K2_min"]:.1f}-{kr["K2_max"]:.1f} Nm/rad. With the Delta-p approach
+at these p_m the arm can hold itself statically in {100 * kr["holdable_fraction"]:.0f} % of the working
 area (hatched: a pressure would leave [0, 3] bar).
 
 ![stiffness](design_stiffness_map.png)
@@ -235,7 +234,7 @@ The identified fits fall to about zero force near 30 % contraction: f1({100 * e1
 {f1_edge:.1f} N/bar for group 1 at q1 = 105 deg, and f4({100 * e4max:.1f} %) = {f4_raw:.2f} N/bar
 (clipped to 0) for group 4 at q2 = -130 deg, where the design puts those muscles. At those edges the arm cannot carry a load (at
 q2 = -130 deg muscle 4 cannot even hold the forearm: negative maximum load). In the interior the
-map agrees in magnitude with the thesis (median {d.M_max_kg.median():.1f} kg).
+map agrees in magnitude with the thesis (median {lim["median"]:.1f} kg).
 Recomputed with the theoretical f_t0 (Daerden's N -> inf model, `ppamsafety.plant.ppam_theory`,
 fitted as (2.3)) and the CAD links, the minimum is {ml_th.minimum:.2f} kg, the thesis' "just over 2 kg".
 {'' if not quick else '(quick mode: coarse grids)'}
@@ -250,10 +249,10 @@ def _render_other(study: DesignFindings) -> Section:
     """The design section for an arm other than the thesis arm: its own numbers only."""
     sm, ml, ta1, K, quick = (study.stiffness, study.max_load, study.table_a1, study.K_step,
                              study.quick)
-    d = ml.data
+    lim, kr = ml.limits, sm.ranges
     qmin = np.array(ml.argmin) / DEG
     pm = study.p_mean / BAR
-    q = np.array([50.0, -80.0])
+    q = IMPACT_POSE_DEG
     md = f"""{other_arm_note(study.arm)}
 
 **Muscle group lengths and connection lengths** (as Table A.1; connection lengths by the design
@@ -265,17 +264,17 @@ rule (A.35)-(A.38)):
 
 **Joint stiffness** (2.18) with static gravity-compensation pressures at the mean pressures
 p_m = ({pm[0]:.3f}, {pm[1]:.3f}) bar. At q = ({q[0]:.0f}, {q[1]:.0f}) deg: K = ({K[0]:.1f}, {K[1]:.1f})
-Nm/rad. Over the working area K1 ranges {sm.data.K1_Nm_per_rad.min():.1f}-{sm.data.K1_Nm_per_rad.max():.1f}
-and K2 {sm.data.K2_Nm_per_rad.min():.1f}-{sm.data.K2_Nm_per_rad.max():.1f} Nm/rad; the arm can hold
-itself statically in {100 * sm.data.holdable.mean():.0f} % of the working area (hatched: a pressure
+Nm/rad. Over the working area K1 ranges {kr["K1_min"]:.1f}-{kr["K1_max"]:.1f}
+and K2 {kr["K2_min"]:.1f}-{kr["K2_max"]:.1f} Nm/rad; the arm can hold
+itself statically in {100 * kr["holdable_fraction"]:.0f} % of the working area (hatched: a pressure
 would leave [0, p_max]).
 
 ![stiffness](design_stiffness_map.png)
 
 **Maximum load** (App. A.4), carrying muscle at p_max = {ml.p_max / BAR:g} bar, antagonist at 0:
 minimum over the working area {ml.minimum:.2f} kg at ({qmin[0]:.0f}, {qmin[1]:.0f}) deg; joint-1 limit
-(A.43) alone {d["M1_kg"].min():.2f} kg; 5 deg away from every edge
-{study.metrics["max_load_interior_min_kg"]:.2f} kg; median {d.M_max_kg.median():.1f} kg.
+(A.43) alone {lim["M1_min"]:.2f} kg; 5 deg away from every edge
+{study.metrics["max_load_interior_min_kg"]:.2f} kg; median {lim["median"]:.1f} kg.
 {'' if not quick else '(quick mode: coarse grids)'}
 
 ![max load](design_max_load.png)
