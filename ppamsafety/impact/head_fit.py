@@ -220,6 +220,13 @@ class HeadFit(Result):
         """The Table 6.1 pairs (:attr:`pairs`) with the model HIC and the residuals."""
         return self.pairs
 
+    def mean_residual(self) -> dict:
+        """Mean residual of the pairs per experiment [standard deviations]:
+        ``{"step": ..., "switch": ...}``."""
+        p = self.pairs
+        return {e: float(p[p.experiment == e].residual_sigma.mean())
+                for e in p.experiment.unique()}
+
     def curve(self) -> pd.DataFrame:
         """The fitted model's (F_max, HIC36) curve over impact speeds (:func:`hic_curve`)."""
         return hic_curve(self.stiffness, self.exponent, self.damping, arm_mass=self.arm_mass,

@@ -176,8 +176,7 @@ def render(study: HeadModelFindings) -> Section:
     if not study.thesis:
         return _render_other(study)
     fit, stored, evidence, sens = study.fit, study.stored, study.evidence, study.sensitivity
-    res_step = fit.pairs[fit.pairs.experiment == "step"].residual_sigma.mean()
-    res_switch = fit.pairs[fit.pairs.experiment == "switch"].residual_sigma.mean()
+    res_step, res_switch = fit.mean_residual()["step"], fit.mean_residual()["switch"]
     rel_k = stored.stiffness / fit.stiffness - 1
     rel_b = stored.damping / fit.damping - 1
     md = f"""The thesis used Hunt-Crossley parameters of Haddadin et al. (2007) without printing them.

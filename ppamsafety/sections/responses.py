@@ -181,6 +181,7 @@ def compute(*, quick: bool = False, arm=None, variants=None, sensors=None,
         metrics = {"step_pid_peak_tcp_speed": float(pid.peak_tcp_speed_m_s),
                    "step_max_psmc_peak_tcp_speed": float(ps.peak_tcp_speed_m_s.max()),
                    "step_pid_overshoot_pct": float(pid.overshoot_pct),
+                   "step_max_psmc_overshoot_pct": float(ps.overshoot_pct.max()),
                    "switch_pid_peak_tcp_speed":
                        float(sw[sw.family == "PID"].peak_tcp_speed_m_s.iloc[0])}
     return ResponsesFindings(step=out["step"], switch=out["switch"], step_table=st,
@@ -225,9 +226,8 @@ def render(study: ResponsesFindings) -> Section:
         Markdown and artifacts (figures, ``responses_step.csv``,
         ``responses_switch.csv``).
     """
-    st, sw = study.step_table, study.switch_table
+    st, sw, m = study.step_table, study.switch_table, study.metrics
     pid = st[st.family == "PID"].iloc[0]
-    ps = st[st.family != "PID"]
     osc_label = OSCILLATING_VARIANT
     osc_f = study.oscillation_hz
 
@@ -253,9 +253,9 @@ t = {catalog.SWITCH_TIME:g} s. "> x" means not within the band before the window
 
 {markdown_table(_display(st, "step"))}
 
-PID's peak TCP speed is {pid.peak_tcp_speed_m_s / ps.peak_tcp_speed_m_s.max():.1f} times the largest
+PID's peak TCP speed is {m["step_pid_peak_tcp_speed"] / m["step_max_psmc_peak_tcp_speed"]:.1f} times the largest
 PSMC peak and it overshoots by {pid.overshoot_pct:.0f} % of the step; PSMC approaches the new set
-angle at a rate set by λ (no PSMC variant overshoots more than {ps.overshoot_pct.max():.1f} %).
+angle at a rate set by λ (no PSMC variant overshoots more than {m["step_max_psmc_overshoot_pct"]:.1f} %).
 
 ![step](responses_step.png)
 

@@ -304,6 +304,8 @@ class SmcFindings(Result):
     sensor_table : pandas.DataFrame
         Chattering [bar] and mean error [mm] of the SMC defaults per sensor
         setting (:data:`SENSOR_CASES`).
+    tradeoff : dict
+        The numbers the text quotes from the sweep (:func:`_tradeoff`).
     metrics : dict
         Headline numbers.
     thesis : bool
@@ -323,6 +325,7 @@ class SmcFindings(Result):
     kept: dict
     psmc: dict
     sensor_table: pd.DataFrame
+    tradeoff: dict = field(default_factory=dict)
     metrics: dict = field(default_factory=dict)
     thesis: bool = True
     arm: object = None
@@ -340,6 +343,56 @@ def _nominal_ok(sw: pd.DataFrame) -> tuple:
     """Nominal-plant, exact-model rows sorted by Gamma, and those that did not diverge."""
     nom = sw[(sw.t_scale == 1.0) & (sw.model == NOMINAL_MODEL)].sort_values("gamma")
     return nom, nom[~nom.diverged]
+
+
+def _tradeoff(sw: pd.DataFrame, ps: dict, default, gammas) -> dict:
+    """The numbers the section's text and tables quote from the chattering sweep.
+
+    Returns
+    -------
+    dict
+        ``low``, ``high``, ``best``, ``default`` (rows of the nominal plant, exact model: the
+        smallest and largest Gamma that did not diverge, the smallest mean error, the default
+        Gamma), ``trade`` (chattering and error over Gamma), ``per_model`` (per valve time
+        constant and controller model), ``fast_ratio`` (the range of the chattering of the
+        faster controller model over the exact model's, medians over Gamma),
+        ``chattering_at_default`` (per plant time-constant scale [Pa]) and
+        ``smoothest_chattering_Pa``.
+    """
+    g_def = default.boundary_layer[0]
+    K_def = default.gain[0]
+    g_lo, g_hi = float(gammas[0]), float(gammas[-1])
+    nominal_m = NOMINAL_MODEL
+    nom, ok = _nominal_ok(sw)
+    gb = ok.loc[ok.mean_error_m.idxmin()]
+    d_row = ok.iloc[int(np.argmin(np.abs(np.log(ok.gamma / g_def))))]
+    lo, hi = ok.iloc[0], ok.iloc[-1]
+    trade = pd.DataFrame({"Γ [rad/s²]": [f"{g:.3g}" for g in nom.gamma],
+                          "K/Γ [1/s]": [f"{K_def / g:.3g}" for g in nom.gamma],
+                          "chattering [bar]": nom.chattering_Pa / BAR,
+                          "× joint PSMC": np.round(nom.chattering_Pa / ps["chattering_Pa"]),
+                          "mean error [mm]": 1e3 * nom.mean_error_m,
+                          "max error [mm]": 1e3 * nom.max_error_m})
+    per_T = []
+    for sc in T_SCALES:
+        g0 = sw[(sw.t_scale == sc) & (sw.model == nominal_m)].set_index("gamma")
+        for m in sw.model.unique():
+            g = sw[(sw.t_scale == sc) & (sw.model == m)].set_index("gamma")
+            per_T.append({"plant T [ms]": 1e3 * g.plant_T.iloc[0], "controller model": m,
+                          f"chattering, Γ = {g_lo:.3g} [bar]": g.chattering_Pa.iloc[0] / BAR,
+                          f"chattering, Γ = {g_def:g} [bar]": g.chattering_Pa.loc[g_def] / BAR,
+                          f"mean error, Γ = {g_def:g} [mm]": 1e3 * g.mean_error_m.loc[g_def],
+                          f"mean error, Γ = {g_hi:.3g} [mm]": 1e3 * g.mean_error_m.iloc[-1],
+                          "chattering / exact model (median over Γ)":
+                              float(np.nanmedian(g.chattering_Pa / g0.chattering_Pa)),
+                          "diverged (of the Γ grid)": int(g.diverged.sum())})
+    per_T = pd.DataFrame(per_T)
+    fast = per_T[per_T["controller model"] != nominal_m]["chattering / exact model (median over Γ)"]
+    ch_T = [sw[(sw.t_scale == sc) & (sw.model == nominal_m)].set_index("gamma").chattering_Pa.loc[g_def]
+            for sc in T_SCALES]
+    return {"low": lo, "high": hi, "best": gb, "default": d_row, "trade": trade,
+            "per_model": per_T, "fast_ratio": (fast.min(), fast.max()),
+            "chattering_at_default": ch_T, "smoothest_chattering_Pa": ok.chattering_Pa.min()}
 
 
 def _figures(study) -> dict:
@@ -432,7 +485,8 @@ def compute(*, quick: bool = False, arm=None, head=None) -> SmcFindings:
                "diverged_runs": int(sw.diverged.sum())}
     return SmcFindings(quick=quick, warmup=warmup, evaluate=evaluate, default=default,
                     tuning=tuning, defaults_are_best=defaults_are_best, gammas=gammas,
-                    sweep=sw, kept=kept, psmc=ps, sensor_table=sens_tab, metrics=metrics,
+                    sweep=sw, kept=kept, psmc=ps, sensor_table=sens_tab,
+                    tradeoff=_tradeoff(sw, ps, default, gammas), metrics=metrics,
                     thesis=compares_to_thesis(arm), arm=arm)
 
 
@@ -457,36 +511,10 @@ def render(study: SmcFindings) -> Section:
     K_def = default.gain[0]
     pole_def = float(np.sqrt(default.alpha0[0]))
     g_lo, g_hi = float(study.gammas[0]), float(study.gammas[-1])
-    nominal_m = NOMINAL_MODEL
-
-    # numbers for the text
-    nom, ok = _nominal_ok(sw)
-    gb = ok.loc[ok.mean_error_m.idxmin()]
-    d_row = ok.iloc[int(np.argmin(np.abs(np.log(ok.gamma / g_def))))]
-    lo, hi = ok.iloc[0], ok.iloc[-1]
-    trade = pd.DataFrame({"Γ [rad/s²]": [f"{g:.3g}" for g in nom.gamma],
-                          "K/Γ [1/s]": [f"{K_def / g:.3g}" for g in nom.gamma],
-                          "chattering [bar]": nom.chattering_Pa / BAR,
-                          "× joint PSMC": np.round(nom.chattering_Pa / ps["chattering_Pa"]),
-                          "mean error [mm]": 1e3 * nom.mean_error_m,
-                          "max error [mm]": 1e3 * nom.max_error_m})
-    per_T = []
-    for sc in T_SCALES:
-        g0 = sw[(sw.t_scale == sc) & (sw.model == nominal_m)].set_index("gamma")
-        for m in sw.model.unique():
-            g = sw[(sw.t_scale == sc) & (sw.model == m)].set_index("gamma")
-            per_T.append({"plant T [ms]": 1e3 * g.plant_T.iloc[0], "controller model": m,
-                          f"chattering, Γ = {g_lo:.3g} [bar]": g.chattering_Pa.iloc[0] / BAR,
-                          f"chattering, Γ = {g_def:g} [bar]": g.chattering_Pa.loc[g_def] / BAR,
-                          f"mean error, Γ = {g_def:g} [mm]": 1e3 * g.mean_error_m.loc[g_def],
-                          f"mean error, Γ = {g_hi:.3g} [mm]": 1e3 * g.mean_error_m.iloc[-1],
-                          "chattering / exact model (median over Γ)":
-                              float(np.nanmedian(g.chattering_Pa / g0.chattering_Pa)),
-                          "diverged (of the Γ grid)": int(g.diverged.sum())})
-    per_T = pd.DataFrame(per_T)
-    fast = per_T[per_T["controller model"] != nominal_m]["chattering / exact model (median over Γ)"]
-    ch_T = [sw[(sw.t_scale == sc) & (sw.model == nominal_m)].set_index("gamma").chattering_Pa.loc[g_def]
-            for sc in T_SCALES]
+    tr = study.tradeoff
+    lo, hi, gb, d_row = tr["low"], tr["high"], tr["best"], tr["default"]
+    trade, per_T, fast = tr["trade"], tr["per_model"], tr["fast_ratio"]
+    ch_T, ok_min = tr["chattering_at_default"], tr["smoothest_chattering_Pa"]
     tshow = tuning.head(6)[["rank", "poles_1_s", "K_rad_s3", "gamma_rad_s2",
                             "mean_error_nominal_m", "mean_error_heavy_m", "chattering_nominal_Pa",
                             "chattering_heavy_Pa", "cost"]].copy()
@@ -530,7 +558,7 @@ From Γ = {lo.gamma:.3g} to Γ = {g_def:g} rad/s² the chattering falls {lo.chat
 {1e3 * lo.mean_error_m:.2f} to {1e3 * d_row.mean_error_m:.2f} mm; widening further to Γ = {hi.gamma:.3g} gives
 {hi.chattering_Pa / BAR:.3f} bar and {1e3 * hi.mean_error_m:.2f} mm. The smallest error,
 {1e3 * gb.mean_error_m:.2f} mm at Γ = {gb.gamma:.3g}, comes with {gb.chattering_Pa / BAR:.2f} bar of chattering. Even the
-smoothest SMC setting commands {ok.chattering_Pa.min() / ps['chattering_Pa']:.0f} times the high-frequency Δp of
+smoothest SMC setting commands {ok_min / ps['chattering_Pa']:.0f} times the high-frequency Δp of
 joint PSMC ({ps['chattering_Pa'] / BAR:.4f} bar). In this simulation the first-order valve model
 filters the chattering, so SMC at the default Γ tracks the circle {'better' if d_row.mean_error_m < ps['mean_error_m'] else 'no better'} than joint
 PSMC ({1e3 * d_row.mean_error_m:.2f} vs {1e3 * ps['mean_error_m']:.2f} mm) -- like the thesis' SMC in simulation (§4.4.1); on
@@ -541,7 +569,7 @@ valve model cannot show.
 controller assumes (u = v/a with a ∝ 1/T): at Γ = {g_def:g} the chattering is
 {', '.join(f'{c / BAR:.3f}' for c in ch_T)} bar for plant T = {', '.join(f'{t * T_ms[0]:g}' for t in T_SCALES)} ms.
 A controller model {100 * (1 - MODEL_FACTOR):.0f} % faster than the plant (§4.4.2) lowers the chattering to a
-median {fast.min():.2f}-{fast.max():.2f} of the exact-model value, at the price of more tracking error where the
+median {fast[0]:.2f}-{fast[1]:.2f} of the exact-model value, at the price of more tracking error where the
 layer is wide:
 
 {markdown_table(per_T, digits=3)}

@@ -76,6 +76,9 @@ class WorstDirectionFindings(Result):
         Table 6.1 applies: the thesis arm and head.
     arm : ArmParameters or None
         The arm.
+    side : str
+        Where every worst placement lies relative to the TCP velocity: ``"counter-clockwise"``,
+        ``"clockwise"`` or ``"either"``.
     """
 
     quick: bool
@@ -86,6 +89,7 @@ class WorstDirectionFindings(Result):
     metrics: dict = field(default_factory=dict)
     thesis: bool = True
     arm: object = None
+    side: str = "either"
 
     def to_pandas(self) -> pd.DataFrame:
         """The per-experiment table (a copy).
@@ -196,8 +200,11 @@ def compute(*, quick: bool = False, arm=None, head=None) -> WorstDirectionFindin
         "rho_max": float(df["rho"].max()),
         "runs_wall_time_s": t_runs, "search_wall_time_s": t_search,
     }
+    psis = np.concatenate([df["psi_F_max_deg"].to_numpy(), df["psi_HIC36_deg"].to_numpy()])
+    side = ("counter-clockwise" if (psis > 0).all() else "clockwise" if (psis < 0).all()
+            else "either")
     return WorstDirectionFindings(quick, every, head, df.reset_index(drop=True), results, metrics,
-                               thesis=thesis, arm=arm)
+                                  thesis=thesis, arm=arm, side=side)
 
 
 def render(study: WorstDirectionFindings) -> Section:
@@ -225,9 +232,7 @@ def render(study: WorstDirectionFindings) -> Section:
     else:
         show = t[cols].copy()
     mode = "every 20th ms, two variants (quick mode)" if study.quick else "every ms"
-    psis = np.concatenate([t["psi_F_max_deg"].to_numpy(), t["psi_HIC36_deg"].to_numpy()])
-    side = ("always counter-clockwise of it" if (psis > 0).all() else
-            "always clockwise of it" if (psis < 0).all() else "on either side")
+    side = ("on either side" if study.side == "either" else f"always {study.side} of it")
     n = study.head.exponent
     aF, bF = n / (n + 1), 2 * n / (n + 1)
     aH, bH = (1 + 2.5 * n) / (n + 1), (2 + 5 * n) / (n + 1) - 1
