@@ -106,6 +106,9 @@ class DiagnoseCasesFindings(Result):
     metrics : dict
     note : str
         The other-arm note of the section ("" for the thesis arm).
+    similar_pair : tuple or None
+        Case (b): the two effects whose whitened sensitivity columns are the most alike, and
+        their |cos| (``(name, name, cos)``); None without case (b).
     """
 
     case_c: object
@@ -118,6 +121,7 @@ class DiagnoseCasesFindings(Result):
     timings: dict = field(default_factory=dict)
     metrics: dict = field(default_factory=dict)
     note: str = ""
+    similar_pair: tuple | None = None
 
     def to_pandas(self) -> pd.DataFrame:
         """Case (c)'s parameter table."""
@@ -307,7 +311,16 @@ def compute(*, quick: bool = False, arm=None, head=None) -> DiagnoseCasesFinding
     return DiagnoseCasesFindings(case_c=dg, case_c_table=table, case_c_gap=gap, summary=fit,
                               pair=pair, battery=battery, confusion=confusion_matrix(battery),
                               timings=timings, metrics=metrics,
-                              note="" if thesis else other_arm_note(arm))
+                              note="" if thesis else other_arm_note(arm),
+                              similar_pair=None if fit is None else _most_similar(fit.cosines))
+
+
+def _most_similar(cosines: pd.DataFrame) -> tuple:
+    """The two effects of the largest |cos| between sensitivity columns, and that |cos|."""
+    cos = cosines.to_numpy()
+    iu = np.triu_indices_from(cos, 1)
+    k = int(np.argmax(cos[iu]))
+    return cosines.index[iu[0][k]], cosines.columns[iu[1][k]], cos[iu][k]
 
 
 def _period_shape(cells: pd.DataFrame) -> dict:
@@ -444,10 +457,7 @@ def render(study: DiagnoseCasesFindings) -> Section:
                        "which no single speed-dependent effect of the library reproduces.")
             L.append("")
         conf = ", ".join(f"{a} ~ {b} ({c:.2f})" for a, b, c in fit.confounded) or "none"
-        cos = fit.cosines.to_numpy()
-        iu = np.triu_indices_from(cos, 1)
-        k = int(np.argmax(cos[iu]))
-        pair = (fit.cosines.index[iu[0][k]], fit.cosines.columns[iu[1][k]], cos[iu][k])
+        pair = study.similar_pair
         L.append(f"Identifiability from these statistics: the whitened sensitivity matrix "
                  f"({fit.m} statistics x {fit.sensitivity.shape[1]} effects, per unit theta at the "
                  f"first grid step) has numerical rank **{fit.rank}** (singular values above "
@@ -472,8 +482,8 @@ def render(study: DiagnoseCasesFindings) -> Section:
     bl = study.battery
     rlen = float(study.metrics.get("battery_record_s", br["duration"]))
     L.append(f"One {rlen:g} s record of `{br['reference']}` under "
-             f"`{br['controller']}` per case (seed {br['seed']}); {int(bl.correct.sum())} of "
-             f"{len(bl)} named exactly the hidden set. Magnitudes and reasons: "
+             f"`{br['controller']}` per case (seed {br['seed']}); {study.metrics['battery_correct']} of "
+             f"{study.metrics['battery_cases']} named exactly the hidden set. Magnitudes and reasons: "
              f"`tests/test_diagnose_battery.py`; the full battery (three seeds, two "
              f"experiments, two-effect cases) is the slow test "
              f"`tests/test_diagnose_closed_loop.py::test_closed_loop_battery_full`.")
