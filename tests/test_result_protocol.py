@@ -13,6 +13,7 @@ import inspect
 import json
 import pkgutil
 import re
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -264,6 +265,91 @@ SECTIONS_QUICK = ["design", "stiffness", "responses", "lambda_sweep", "safety"]
 
 @pytest.mark.parametrize("name", SECTIONS_QUICK)
 def test_section_findings_follow_the_protocol(name, tmp_path):
+    from ppamsafety.sections import section_module
+    res = section_module(name).compute(quick=True)
+    assert type(res).__name__.endswith("Findings")
+    check_protocol(res, tmp_path)
+
+
+def _slow_builders(arm, pid_step):
+    from ppamsafety.data.campaign import load_campaign
+    from ppamsafety.data.datasets import zillen2021_manifest
+    from ppamsafety.envelope import safety_envelope
+    from ppamsafety.hysteresis.tensile import fit_delta, simulate_tensile_test
+    from ppamsafety.identify import excitation as ex
+    from ppamsafety.data import identify_measured, load_measured
+    from ppamsafety.identify.consistent import identify_dynamic_consistent
+    from ppamsafety.identify.dynamic import identify_dynamic
+    from ppamsafety.impact import directions as dr
+    from ppamsafety.impact.anywhere import worst_contact
+    from ppamsafety.impact.covering_fit import fit_covering
+    from ppamsafety.impact.head_fit import fit_thesis_head
+
+    def excitation_record():
+        rng = np.random.default_rng(0)
+        k = np.arange(1, 6)[:, None]
+        exc = ex.FourierExcitation(a=rng.normal(size=(5, 2)) * 3e4 / k,
+                                   b=rng.normal(size=(5, 2)) * 3e4 / k,
+                                   offset=ex.default_offset(arm))
+        return ex.simulate_excitation(arm, exc, periods=2, dt=1e-3, name="ES")
+
+    def collision():
+        from ppamsafety.control import PID
+        from ppamsafety.control.estimation import ForceEstimator
+        from ppamsafety.experiments import ExperimentCase, run_batch
+        from ppamsafety.experiments.trajectories import Reference
+        from ppamsafety.experiments.catalog import thesis_reference
+        from ppamsafety.impact.collision import head_touching, simulate_collision
+        from ppamsafety.impact.instants import heuristic_instants, impact_states
+        ref = thesis_reference(arm, "step", duration=3.0)
+        free = run_batch([ExperimentCase(arm, PID(), ref, estimator=ForceEstimator())])[0]
+        st = impact_states(free, arm)
+        k0 = int(round(st["t"].iloc[heuristic_instants(st)["max TCP speed"]] / ref.dt))
+        xh, _ = head_touching(free, k0)
+        n = k0 + 300
+        case = ExperimentCase(arm, PID(), Reference(ref.name, ref.t[:n], ref.data[:n], ref.dt),
+                              estimator=ForceEstimator())
+        return simulate_collision(case, head_position=xh)
+
+    def delta_fit():
+        rec = simulate_tensile_test(0.3, noise_std=5.0, seed=42, periods=2)
+        return fit_delta(rec.eps, rec.force, rec.attrs["pressure"])
+
+    return {
+        "HeadFit": lambda: fit_thesis_head(arm),
+        "Campaign": lambda: load_campaign(zillen2021_manifest("O-ring257")),
+        "SafetyEnvelope": lambda: safety_envelope(
+            "covering_thickness", (0.5e-3, 30e-3), limit="iso_ts_15066",
+            case={"controller": "PSMC joint", "lam": 0.4, "contact": "tool point"},
+            tolerance=0.05, scan=3, processes=1),
+        "DirectionOptimum": lambda: dr.worst_direction_state(arm, Q, QD, K),
+        "WorstDirection": lambda: dr.worst_direction(pid_step, arm, every=20, min_speed=1e-3),
+        "WorstContact": lambda: worst_contact(pid_step, arm, limits={"face": 130.0}, every=200),
+        "CoveringFit": lambda: fit_covering(),
+        "DeltaFit": delta_fit,
+        "ExcitationDesign": lambda: ex.design_excitation(arm, n_random=4, maxfev=6, seed=1),
+        "DynamicResult": lambda: identify_dynamic(excitation_record(), arm),
+        "ConsistentResult": lambda: identify_dynamic_consistent(
+            excitation_record(), arm, sign_velocity=arm.friction_velocity),
+        "Identification": lambda: identify_measured(
+            load_measured(Path(__file__).parent / "data" / "measured" / "equilibria.csv"),
+            "static"),
+        "CollisionResult": collision,
+    }
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", sorted(SLOW_BUILT))
+def test_slow_instance_follows_the_protocol(name, arm, pid_step, tmp_path):
+    res = _slow_builders(arm, pid_step)[name]()
+    assert type(res).__name__ == name
+    check_protocol(res, tmp_path)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", sorted(set(__import__("ppamsafety.sections").sections.REGISTRY)
+                                        - set(SECTIONS_QUICK)))
+def test_slow_section_findings_follow_the_protocol(name, tmp_path):
     from ppamsafety.sections import section_module
     res = section_module(name).compute(quick=True)
     assert type(res).__name__.endswith("Findings")
