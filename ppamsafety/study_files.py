@@ -122,7 +122,7 @@ from .params import ArmParameters
 from .params.arm_file import ArmFileError, arm_key, arm_to_toml, read_value
 from .plots.figure import save as save_figure
 from .plots.sweep import limit_lines, plot_sweep
-from .sweep import BACKENDS, run_sweep
+from .sweep import BACKENDS, SweepResult, run_sweep
 from .sweep_cases import (DEFAULTS, IMPACT_POSE_DEG, PARAMETERS, SPEED_MAX, add_verdicts,
                           case_arm, case_function, check_case, check_impact_case, column_unit,
                           is_dotted)
@@ -1077,7 +1077,7 @@ def _write_histories(df: pd.DataFrame, folder: Path) -> list:
 def run_study_file(study, outdir, *, backend: str = "local", scheduler=None,
                    processes: int | None = None, resume: bool = False, overwrite: bool = False,
                    max_cases: int | None = None, progress: bool = True, confirm: bool = False,
-                   replace_kind: bool = False, arm=None, head=None) -> pd.DataFrame:
+                   replace_kind: bool = False, arm=None, head=None) -> SweepResult:
     """Run a study and write its output folder.
 
     Parameters
@@ -1119,9 +1119,10 @@ def run_study_file(study, outdir, *, backend: str = "local", scheduler=None,
 
     Returns
     -------
-    pandas.DataFrame
-        The result table as written (without the histories); for an ``[envelope]``
-        study, its evaluations.
+    SweepResult
+        Its ``.table``: the result table as written (without the histories, in SI units);
+        for an ``[envelope]`` study, its evaluations (the envelope's lines in
+        ``table.attrs["envelope_lines"]``).
     """
     if isinstance(study, Study) and (arm is not None or head is not None):
         raise ValueError("arm and head apply to a study file path; a loaded Study has them "
@@ -1175,7 +1176,7 @@ def run_study_file(study, outdir, *, backend: str = "local", scheduler=None,
         display_table(st, df).to_csv(stage / st.csv, index=False)   # units in the header
         (stage / "study.toml").write_text(st.source, encoding="utf-8")
         _write_summary(st, df, stage, env)
-    return df
+    return SweepResult(df, name=st.name)
 
 
 def _run_envelope(st: Study, cache, processes, progress):

@@ -537,7 +537,7 @@ class SweepResult(Result):
         if swept is None:
             cols = list(table.columns)
             lead = cols[:cols.index("status")] if "status" in cols else []
-            swept = [c for c in lead if table[c].nunique(dropna=False) > 1]
+            swept = [c for c in lead if table[c].map(repr).nunique() > 1]
         self.swept = tuple(swept)
 
     def to_pandas(self) -> pd.DataFrame:

@@ -58,7 +58,7 @@ def test_former_paths_still_import(module, name):
     assert _from_import(module, name) is not None
 
 
-def test_the_former_section_package_gives_the_same_modules():
-    from ppamsafety import sections, studies
-    assert studies.responses is sections.responses
-    assert studies.run_study is sections.run_section
+def test_the_former_section_package_is_gone():
+    """One way to run a section (``ppamsafety report --only NAME``); no alias package."""
+    with pytest.raises(ImportError):
+        importlib.import_module("ppamsafety.studies")

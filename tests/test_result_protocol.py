@@ -46,7 +46,7 @@ NOT_RESULTS = {
 DIAGNOSE_PENDING = "ppamsafety.diagnose."
 
 #: Results that are a table without a figure: plot() raises NotImplementedError naming it.
-TABLE_ONLY = {"ArmSummary", "Verdicts", "DropTest", "CoveringFit", "DeltaFit"}
+TABLE_ONLY = {"ArmSummary", "Verdicts", "DropTest", "CoveringFit", "DeltaFit", "DirectionOptimum"}
 
 
 def _public_modules():
@@ -324,7 +324,8 @@ def _slow_builders(arm, pid_step):
             tolerance=0.05, scan=3, processes=1),
         "DirectionOptimum": lambda: dr.worst_direction_state(arm, Q, QD, K),
         "WorstDirection": lambda: dr.worst_direction(pid_step, arm, every=20, min_speed=1e-3),
-        "WorstContact": lambda: worst_contact(pid_step, arm, limits={"face": 130.0}, every=200),
+        "WorstContact": lambda: worst_contact(pid_step, arm, limits={"head (forehead)": 260.0},
+                                              every=200),
         "CoveringFit": lambda: fit_covering(),
         "DeltaFit": delta_fit,
         "ExcitationDesign": lambda: ex.design_excitation(arm, n_random=4, maxfev=6, seed=1),

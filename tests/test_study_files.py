@@ -158,7 +158,7 @@ def test_histories_are_written_per_case_when_asked(tmp_path, monkeypatch):
     monkeypatch.setattr(importlib.util, "find_spec",
                         lambda n, *a: None if n in ("pyarrow", "fastparquet") else real(n, *a))
     assert history_format() == "csv"
-    df = run_study_file(parse_study(text), tmp_path / "h", processes=1, progress=False)
+    df = run_study_file(parse_study(text), tmp_path / "h", processes=1, progress=False).table
     assert "histories" not in df.columns and len(df) == 2
     files = sorted(p.name for p in (tmp_path / "h" / "histories").iterdir())
     assert files == ["case00000_closed_loop.csv", "case00000_impact.csv",
@@ -168,4 +168,4 @@ def test_histories_are_written_per_case_when_asked(tmp_path, monkeypatch):
     imp = pd.read_csv(tmp_path / "h" / "histories" / "case00001_impact.csv")
     assert imp.filter(like="F").max().max() == pytest.approx(df.F_max[1], rel=1e-9)
     with pytest.raises(OutputError, match="--resume"):
-        run_study_file(parse_study(text), tmp_path / "h", processes=1, progress=False)
+        run_study_file(parse_study(text), tmp_path / "h", processes=1, progress=False).table

@@ -423,6 +423,16 @@ class EffectsFindings(Result):
         """The sawtooth summary (RMS errors and pattern counts per plant)."""
         return self.sawtooth_summary.copy()
 
+    def stacked(self, name: str) -> pd.DataFrame:
+        """A per-plant table (``sawtooth``, ``comparison``, ``table_6_1``) as one table with a
+        ``plant`` column."""
+        return pd.concat([t.assign(plant=lab) for lab, t in getattr(self, name).items()],
+                         ignore_index=True)
+
+    def tables(self) -> dict:
+        return {**super().tables(), **{n: self.stacked(n)
+                                       for n in ("sawtooth", "comparison", "table_6_1")}}
+
     def figures(self) -> dict:
         """The section's figures, ``{file name: Figure}``."""
         return _figures(self)
@@ -761,14 +771,11 @@ Table 5.2 with hysteresis (toolkit / thesis (ratio), mm):
 
 Wall time of this section: {sum(walls.values()):.1f} s ({', '.join(f'{k} {v:.1f} s' for k, v in walls.items())}).
 """
-    arts = [("effects_sawtooth.csv", pd.concat([w.assign(plant=lab) for lab, w in
-                                                study.sawtooth.items()], ignore_index=True)),
+    arts = [("effects_sawtooth.csv", study.stacked("sawtooth")),
             ("effects_summary.csv", study.sawtooth_summary),
             ("effects_ratios.csv", study.ratios),
-            ("effects_table_5_2.csv", pd.concat([c.assign(plant=lab) for lab, c in
-                                                 study.comparison.items()], ignore_index=True)),
-            ("effects_table_6_1.csv", pd.concat([t.assign(plant=lab) for lab, t in
-                                                 study.table_6_1.items()], ignore_index=True)),
+            ("effects_table_5_2.csv", study.stacked("comparison")),
+            ("effects_table_6_1.csv", study.stacked("table_6_1")),
             ("effects_conclusions.csv", ct),
             *study.figures().items()]
     return Section("Effects: the thesis revisited with muscle hysteresis (§3.5.1.6, §3.6)", md,
@@ -801,8 +808,7 @@ def _render_other(study: EffectsFindings) -> Section:
                        "nominal plant": [_yes(c.holds) for c in cn.values()],
                        "with hysteresis": [_yes(ch[k].holds) for k in cn]})
     lc = study.limit_cycle.set_index("plant")
-    t61 = pd.concat([t[["experiment", "label", "HIC36", "F_max"]].assign(plant=lab)
-                     for lab, t in study.table_6_1.items()], ignore_index=True)
+    t61 = study.stacked("table_6_1")[["experiment", "label", "HIC36", "F_max", "plant"]]
     t61w = t61.pivot_table(index=["experiment", "label"], columns="plant",
                            values=["F_max", "HIC36"], sort=False)
     t61w.columns = [f"{v} {p}" for v, p in t61w.columns]
@@ -844,12 +850,10 @@ Worst impacts per variant (the Table 6.1 setup) on both plants:
 
 {markdown_table(ct)}
 """
-    arts = [("effects_sawtooth.csv", pd.concat([w.assign(plant=lab) for lab, w in
-                                                study.sawtooth.items()], ignore_index=True)),
+    arts = [("effects_sawtooth.csv", study.stacked("sawtooth")),
             ("effects_summary.csv", study.sawtooth_summary),
             ("effects_ratios.csv", study.ratios),
-            ("effects_table_5_2.csv", pd.concat([c.assign(plant=lab) for lab, c in
-                                                 study.comparison.items()], ignore_index=True)),
+            ("effects_table_5_2.csv", study.stacked("comparison")),
             ("effects_table_6_1.csv", t61),
             ("effects_conclusions.csv", ct),
             *study.figures().items()]
