@@ -151,7 +151,14 @@ class Result:
         return _snake(type(self).__name__)
 
     def plot(self, **kw):
-        """The main figure, a matplotlib Figure (the first of :meth:`figures`)."""
+        """The main figure, a matplotlib Figure (the first of :meth:`figures`).
+
+        Parameters
+        ----------
+        **kw
+            Passed to :meth:`figures` (a subclass that draws one figure takes the options
+            of its plot function instead).
+        """
         if type(self).figures is Result.figures:
             raise NotImplementedError(f"{type(self).__name__} defines neither plot() nor "
                                       f"figures()")
@@ -159,7 +166,13 @@ class Result:
         return figs[next(iter(figs))]
 
     def figures(self, **kw) -> dict:
-        """``{name: Figure}``: every figure of the result."""
+        """``{name: Figure}``: every figure of the result.
+
+        Parameters
+        ----------
+        **kw
+            Passed to :meth:`plot` (a subclass with several figures takes options of its own).
+        """
         if type(self).plot is Result.plot:
             raise NotImplementedError(f"{type(self).__name__} defines neither plot() nor "
                                       f"figures()")

@@ -424,8 +424,13 @@ class EffectsFindings(Result):
         return self.sawtooth_summary.copy()
 
     def stacked(self, name: str) -> pd.DataFrame:
-        """A per-plant table (``sawtooth``, ``comparison``, ``table_6_1``) as one table with a
-        ``plant`` column."""
+        """A per-plant table as one table with a ``plant`` column.
+
+        Parameters
+        ----------
+        name : {"sawtooth", "comparison", "table_6_1"}
+            The attribute holding ``{plant: DataFrame}``.
+        """
         return pd.concat([t.assign(plant=lab) for lab, t in getattr(self, name).items()],
                          ignore_index=True)
 
