@@ -783,6 +783,8 @@ class WorstContact(Result):
         Candidates, screened and exactly simulated.
     points : tuple of ContactPoint
         The contact points compared.
+    arm : ArmParameters or None
+        The arm of the scan (drawn by :meth:`plot`).
     """
 
     candidates: pd.DataFrame
@@ -793,6 +795,7 @@ class WorstContact(Result):
     n_screened: int
     n_simulated: int
     points: tuple = ()
+    arm: object = None
 
     def to_pandas(self) -> pd.DataFrame:
         """The worst case of each contact point (:attr:`worst`)."""
@@ -804,17 +807,20 @@ class WorstContact(Result):
         key = "utilisation" if self.limits else "value"
         return self.worst.loc[self.worst[key].idxmax()]
 
-    def plot(self, arm, **kwargs):
+    def plot(self, arm=None, **kwargs):
         """The arm at the overall worst instant, each contact point with its worst body region
         and margin (:func:`ppamsafety.plots.contacts.plot_contact_margins`).
 
         Parameters
         ----------
-        arm : ArmParameters
-            The arm of the scan (its link lengths draw it).
+        arm : ArmParameters, optional
+            The arm drawn (default: the arm of the scan, :attr:`arm`).
         **kwargs
             Passed to :func:`ppamsafety.plots.contacts.plot_contact_margins`.
         """
+        arm = self.arm if arm is None else arm
+        if arm is None:
+            raise ValueError("arm: this result holds no arm; pass the arm of the scan")
         return plot_contact_margins(_arm_drawing(arm, self), **kwargs)
 
 
@@ -1033,7 +1039,7 @@ def worst_contact(result, arm, *, points=None, bodies=None, limits=None,
     cols["point"] = pd.Categorical.from_codes(cols["point"], [t["_name"] for t in tables])
     cols["body"] = pd.Categorical.from_codes(cols["body"], names)
     return WorstContact(pd.DataFrame(cols), pd.DataFrame(worst_rows), criterion, lim, n_cand,
-                        n_scr, n_sim, tuple(pts))
+                        n_scr, n_sim, tuple(pts), arm)
 
 
 __all__ = ["simulate_contacts", "ContactResult", "point_effective_mass", "point_jacobian",
