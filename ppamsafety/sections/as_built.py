@@ -71,6 +71,13 @@ class AsBuiltFindings(Result):
     metrics : dict
     note : str
         The other-arm note ("" for the thesis arm).
+    measurements_by_source : dict
+        Number of the thesis' printed measurements per source (table or figure).
+    interval_widening : float
+        sqrt(s2): how much the intervals widen because the model does not fit to within the
+        stated uncertainty [-].
+    table_6_1_fitted : bool
+        Table 6.1 values are among the fitted measurements.
     """
 
     fit: object
@@ -78,6 +85,9 @@ class AsBuiltFindings(Result):
     wall_time_s: float = 0.0
     metrics: dict = field(default_factory=dict)
     note: str = ""
+    measurements_by_source: dict = field(default_factory=dict)
+    interval_widening: float = float("nan")
+    table_6_1_fitted: bool = False
 
     def to_pandas(self) -> pd.DataFrame:
         """The fitted effects (empty for another arm)."""
@@ -117,7 +127,11 @@ def compute(*, quick: bool = False, arm=None, head=None) -> AsBuiltFindings:
         fit = fit_as_built(arm, candidates=CANDIDATES, design=Design(), iterations=ITERATIONS)
     wall = time.perf_counter() - t0
     metrics = {**fit.metrics, "quick": quick, "wall_time_s": wall}
-    return AsBuiltFindings(fit=fit, quick=quick, wall_time_s=wall, metrics=metrics)
+    return AsBuiltFindings(
+        fit=fit, quick=quick, wall_time_s=wall, metrics=metrics,
+        measurements_by_source=fit.measurements.groupby("source", sort=False).size().to_dict(),
+        interval_widening=float(np.sqrt(fit.s2)),
+        table_6_1_fitted=bool(fit.cells.source.str.startswith("Table 6.1").any()))
 
 
 def _num(v, unit):
@@ -258,7 +272,7 @@ def render(study: AsBuiltFindings) -> Section:
     if study.quick:
         L += ["**Quick mode: three variants, short runs, two candidates, one step; the numbers "
               "are not comparable to the thesis.**", ""]
-    n_by = fit.measurements.groupby("source", sort=False).size()
+    n_by = study.measurements_by_source
     L.append(f"The thesis prints {len(fit.measurements)} numbers about its real arm that the "
              f"toolkit can simulate: " + ", ".join(f"{src} ({n_by[src]})" for src in SOURCES
                                                    if src in n_by)
@@ -302,7 +316,7 @@ def render(study: AsBuiltFindings) -> Section:
              f"N(0, {fit.prior_sd:g}^2) towards the nominal arm (an axis end is two sigma), inside the "
              f"axis ranges; {fit.path.evaluations} steps evaluated. 95 % intervals from the "
              f"posterior covariance, scaled by the residual variance s2 = {fit.s2:.3g} "
-             f"(chi2 / (m - k); the intervals widen by sqrt(s2) = {np.sqrt(fit.s2):.2f} because "
+             f"(chi2 / (m - k); the intervals widen by sqrt(s2) = {study.interval_widening:.2f} because "
              f"the model does not fit to within the stated uncertainty).")
     L.append("")
     L.append(markdown_table(_effects_display(fit.effects)))
@@ -344,7 +358,7 @@ def render(study: AsBuiltFindings) -> Section:
     L.append("")
     L.append(markdown_table(_table_5_2(fit.cells)))
     L.append("")
-    if fit.cells.source.str.startswith("Table 6.1").any():
+    if study.table_6_1_fitted:
         L.append("Table 6.1 (§6.3.3), worst of the four heuristic impact instants:")
         L.append("")
         L.append(markdown_table(_table_6_1(fit.cells)))

@@ -70,6 +70,9 @@ class BenchCaseFindings(Result):
         One row per synthetic campaign.
     metrics : dict
         Headline numbers.
+    largest_where : dict
+        Seal -> the three significant regions of the remaining residual with the largest
+        |z| (rows of the diagnosis' ``where`` table), for a seal whose residual is unexplained.
     """
 
     diagnoses: dict
@@ -79,6 +82,7 @@ class BenchCaseFindings(Result):
     calibration: pd.DataFrame
     calibration_runs: pd.DataFrame
     metrics: dict = field(default_factory=dict)
+    largest_where: dict = field(default_factory=dict)
 
     def to_pandas(self) -> pd.DataFrame:
         """The per-record table."""
@@ -208,8 +212,16 @@ def compute(*, quick: bool = False, arm=None, calibration_runs: int | None = Non
         m[f"{seal}_sensor_noise_N"] = dg.residual_rms["force"]["sensor_noise"]
         m[f"{seal}_unexplained"] = dg.unexplained
     return BenchCaseFindings(diagnoses=dgs, effects=pd.DataFrame(eff), records=records,
-                          laws=pd.DataFrame(laws), calibration=cal.reset_index(),
-                          calibration_runs=runs, metrics=m)
+                             laws=pd.DataFrame(laws), calibration=cal.reset_index(),
+                             calibration_runs=runs, metrics=m,
+                             largest_where={seal: _largest_where(dg) for seal, dg in dgs.items()
+                                            if dg.unexplained})
+
+
+def _largest_where(dg) -> pd.DataFrame:
+    """The three significant regions of a diagnosis' remaining residual with the largest |z|."""
+    sig = dg.where[dg.where["significant"]]
+    return sig.reindex(sig["z"].abs().sort_values(ascending=False).index).head(3)
 
 
 def render(study: BenchCaseFindings) -> Section:
@@ -259,10 +271,7 @@ def render(study: BenchCaseFindings) -> Section:
                   + ("explained." if not dg.unexplained else
                      "**unexplained** structure remains; largest where: "
                      + "; ".join(f"{r.region} {r.group} (mean {r.mean:+.2f}, rms {r.rms:.2f})"
-                                 for r in dg.where[dg.where["significant"]].reindex(
-                                     dg.where[dg.where["significant"]]["z"].abs()
-                                     .sort_values(ascending=False).index).head(3)
-                                 .itertuples()) + "."))
+                                 for r in study.largest_where[seal].itertuples()) + "."))
     md += ["", "Friction law against pressure (Coulomb level c(p) and presliding step h(p), "
            "95 % intervals, cluster-robust by stroke):", "",
            markdown_table(study.laws), "", "![laws](bench_laws.png)", ""]
