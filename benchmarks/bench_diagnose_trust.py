@@ -100,7 +100,7 @@ print(time.perf_counter() - t0, "+".join(dg.names))
 
 def against(other, duration, repeats):
     """Time the diagnosis of one record with the toolkit in ``other`` and with this one."""
-    here = Path(__file__).resolve().parents[2]
+    here = Path(__file__).resolve().parents[1]
     trees = {"other": Path(other).resolve(), "this": here}
     times = {k: [] for k in trees}
     with tempfile.TemporaryDirectory() as tmp:
