@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-_PATH = Path(__file__).resolve().parents[1] / "studies" / "bench" / "bench_closed_loop.py"
+_PATH = Path(__file__).resolve().parents[1] / "benchmarks" / "bench_closed_loop.py"
 
 
 @pytest.fixture(scope="module")
