@@ -373,7 +373,7 @@ def _check_processes(processes) -> int:
     cores = _available_cores()
     if processes > cores:
         warnings.warn(f"processes = {processes} exceeds the {cores} available cores; "
-                      f"using {cores} worker processes", UserWarning, stacklevel=3)
+                      f"using {cores} worker processes", UserWarning, stacklevel=4)
         processes = cores
     return processes
 
@@ -747,7 +747,7 @@ def _sweep_table(func, cases, *, name, cache_dir, processes, progress, on_error,
             except Exception as exc:
                 warnings.warn(f"sweep {name!r}: cache file {f} is unreadable "
                               f"({_error_text(exc)}); recomputing case {i}", RuntimeWarning,
-                              stacklevel=2)
+                              stacklevel=3)
         todo.append(i)
     bar = tqdm(total=len(cases), initial=len(cases) - len(todo), desc=name, disable=not progress,
                leave=False)
@@ -853,4 +853,4 @@ def _warn_failures(cases, failures, name) -> None:
                           for i in sorted(failures)[:3])
         more = " ..." if len(failures) > 3 else ""
         warnings.warn(f"sweep {name!r}: {len(failures)} of {len(cases)} cases failed (rows with "
-                      f"status='failed'): {shown}{more}", RuntimeWarning, stacklevel=3)
+                      f"status='failed'): {shown}{more}", RuntimeWarning, stacklevel=4)

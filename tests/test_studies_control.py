@@ -49,7 +49,7 @@ def test_responses_in_three_parts_compute_writes_nothing(tmp_path, monkeypatch):
     table = study.to_pandas()
     assert len(table) == 20 and set(table.experiment) == {"step", "switch"}
     assert np.isfinite(study.oscillation_hz) and study.oscillation_hz > 0
-    figs = study.plot()
+    figs = study.figures()
     assert set(figs) == {"responses_step.png", "responses_step_ki12.png",
                          "responses_step_lambda.png", "responses_switch.png",
                          "responses_switch_lambda.png"}
