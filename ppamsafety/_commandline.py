@@ -1,8 +1,7 @@
 """Running a command line safely: one parser style, one way errors become exit statuses.
 
-:func:`run_guarded` is how every ``ppamsafety`` command and every section script
-(``python studies/<section>.py``) turns errors into exit statuses, so that no user
-error ends in a Python traceback:
+:func:`run_guarded` is how every ``ppamsafety`` command turns errors into exit
+statuses, so that no user error ends in a Python traceback:
 
 0
     Success.

@@ -340,7 +340,7 @@ def _cmd_sweep(args) -> int:
                             processes=args.processes, resume=args.resume,
                             overwrite=args.overwrite, max_cases=args.max_cases,
                             progress=not args.no_progress, confirm=args.yes,
-                            replace_kind=args.replace_other_kind)
+                            replace_kind=args.replace_other_kind).table
     for line in df.attrs.get("envelope_lines", ()):
         print(line)
     failed = int((df["status"] == "failed").sum()) if "status" in df.columns else 0

@@ -18,6 +18,7 @@ from functools import lru_cache
 import numpy as np
 import pandas as pd
 
+from .results import Result
 from ._validation import check_instance, check_int, check_range
 from .params import ArmParameters
 from .params.arm_file import ArmFileError
@@ -46,7 +47,7 @@ def _grid(arm, n1: int, n2: int):
 
 
 @dataclass(frozen=True)
-class TorqueFunctions:
+class TorqueFunctions(Result):
     """Torque functions along the driven joint (fig. 2.11).
 
     Made by :func:`torque_function_curves`.
@@ -67,7 +68,7 @@ class TorqueFunctions:
         return self.data.copy()
 
     def plot(self, **kwargs):
-        """Plot with :mod:`ppamsafety.report`; returns a matplotlib Figure.
+        """The figure (drawn by :mod:`ppamsafety.plots`), a matplotlib Figure.
 
         Parameters
         ----------
@@ -104,7 +105,7 @@ def torque_function_curves(arm, *, n: int = 201) -> TorqueFunctions:
 
 
 @dataclass(frozen=True)
-class StiffnessMap:
+class StiffnessMap(Result):
     """Joint stiffness (2.18) over the working area.
 
     Made by :func:`stiffness_map`.
@@ -126,8 +127,17 @@ class StiffnessMap:
         """The data as a pandas DataFrame (SI units)."""
         return self.data.copy()
 
+    @property
+    def ranges(self) -> dict:
+        """Extremes over the working area: ``K1_min``, ``K1_max``, ``K2_min``, ``K2_max``
+        [N m/rad] and ``holdable_fraction`` [-] (share of the grid the arm holds itself in)."""
+        d = self.data
+        return {"K1_min": float(d.K1_Nm_per_rad.min()), "K1_max": float(d.K1_Nm_per_rad.max()),
+                "K2_min": float(d.K2_Nm_per_rad.min()), "K2_max": float(d.K2_Nm_per_rad.max()),
+                "holdable_fraction": float(d.holdable.mean())}
+
     def plot(self, **kwargs):
-        """Plot with :mod:`ppamsafety.report`; returns a matplotlib Figure.
+        """The figure (drawn by :mod:`ppamsafety.plots`), a matplotlib Figure.
 
         Parameters
         ----------
@@ -180,7 +190,7 @@ def cad_links() -> LinkInertia:
 
 
 @dataclass(frozen=True)
-class MaxLoadMap:
+class MaxLoadMap(Result):
     """Maximum load (A.43)-(A.45) over the working area.
 
     Made by :func:`max_load_map`.
@@ -215,8 +225,19 @@ class MaxLoadMap:
         r = self.data.loc[self.data["M_max_kg"].idxmin()]
         return float(r["q1_rad"]), float(r["q2_rad"])
 
+    @property
+    def limits(self) -> dict:
+        """Each joint's limit over the working area [kg]: ``M1_min`` (joint 1, (A.43)),
+        ``M2_min_muscle3`` and ``M2_min_muscle4`` (joint 2 with muscle 3 or 4 carrying,
+        (A.44), (A.45); NaN where that muscle never carries) and the map's ``median``."""
+        d = self.data
+        return {"M1_min": float(d["M1_kg"].min()),
+                "M2_min_muscle3": float(d[d.carrying_2 == 3]["M2_kg"].min()),
+                "M2_min_muscle4": float(d[d.carrying_2 == 4]["M2_kg"].min()),
+                "median": float(d.M_max_kg.median())}
+
     def plot(self, **kwargs):
-        """Plot with :mod:`ppamsafety.report`; returns a matplotlib Figure.
+        """The figure (drawn by :mod:`ppamsafety.plots`), a matplotlib Figure.
 
         Parameters
         ----------
@@ -353,7 +374,7 @@ SUMMARY_POSE = (50.0 * DEG, -80.0 * DEG)
 
 
 @dataclass(frozen=True)
-class ArmSummary:
+class ArmSummary(Result):
     """What ``ppamsafety arm check`` prints: an arm's key design numbers.
 
     Made by :func:`arm_summary`.

@@ -41,6 +41,7 @@ import numpy as np
 import pandas as pd
 
 from ._jit import available_cores
+from .results import Result
 from ._validation import check_int, check_range, check_str
 from .impact.head import HeadContactModel, head_model
 from .impact.verdicts import Criterion, criterion, criterion_names
@@ -118,7 +119,7 @@ NUMERIC = ("lam", "kp_bar", "ki_bar", "kd_bar", "task_kp", "task_ki", "task_kd",
 
 
 @dataclass
-class SafetyEnvelope:
+class SafetyEnvelope(Result):
     """Result of :func:`safety_envelope`.
 
     Attributes
@@ -409,7 +410,7 @@ def safety_envelope(parameter: str, bounds, *, limit: str = "F_max", limit_value
                                     category=RuntimeWarning)
             df = run_sweep(func, cases, name=f"{name}-{parameter}-{lim.metric}",
                            processes=procs, progress=progress, on_error="record",
-                           cache_dir=cache_dir)
+                           cache_dir=cache_dir).table
         return [(r.get("status", "ok"), r.get("error", ""),
                  float(r[lim.metric]) if r.get("status", "ok") == "ok" else math.nan)
                 for _, r in df.iterrows()]

@@ -122,7 +122,7 @@ from .params import ArmParameters
 from .params.arm_file import ArmFileError, arm_key, arm_to_toml, read_value
 from .plots.figure import save as save_figure
 from .plots.sweep import limit_lines, plot_sweep
-from .sweep import BACKENDS, run_sweep
+from .sweep import BACKENDS, SweepResult, run_sweep
 from .sweep_cases import (DEFAULTS, IMPACT_POSE_DEG, PARAMETERS, SPEED_MAX, add_verdicts,
                           case_arm, case_function, check_case, check_impact_case, column_unit,
                           is_dotted)
@@ -894,7 +894,7 @@ def _check_combinations(where: str, cases: CaseGrid, arm=None) -> None:
 
 
 #: Rough cost model of one :func:`~ppamsafety.sweep_cases.safety_case` on one core
-#: (``studies/bench/bench_case_cost.py``; measured on the shared 2-core machine under load,
+#: (``benchmarks/bench_case_cost.py``; measured on the shared 2-core machine under load,
 #: the model is 0.8-1.7 times the measured time): a fixed part [s] (plus the circle
 #: references' inverse kinematics), the closed loop per simulated second [s/s], one impact
 #: [s]; result row and closed-loop history per second of record [bytes].
@@ -1072,7 +1072,7 @@ def _write_histories(df: pd.DataFrame, folder: Path) -> list:
 def run_study_file(study, outdir, *, backend: str = "local", scheduler=None,
                    processes: int | None = None, resume: bool = False, overwrite: bool = False,
                    max_cases: int | None = None, progress: bool = True, confirm: bool = False,
-                   replace_kind: bool = False, arm=None, head=None) -> pd.DataFrame:
+                   replace_kind: bool = False, arm=None, head=None) -> SweepResult:
     """Run a study and write its output folder.
 
     Parameters
@@ -1114,9 +1114,10 @@ def run_study_file(study, outdir, *, backend: str = "local", scheduler=None,
 
     Returns
     -------
-    pandas.DataFrame
-        The result table as written (without the histories); for an ``[envelope]``
-        study, its evaluations.
+    SweepResult
+        Its ``.table``: the result table as written (without the histories, in SI units);
+        for an ``[envelope]`` study, its evaluations (the envelope's lines in
+        ``table.attrs["envelope_lines"]``).
     """
     if isinstance(study, Study) and (arm is not None or head is not None):
         raise ValueError("arm and head apply to a study file path; a loaded Study has them "
@@ -1161,7 +1162,7 @@ def run_study_file(study, outdir, *, backend: str = "local", scheduler=None,
             env = None
             df = run_sweep(case_function(st.arm, st.head), cases, name=st.name, cache_dir=cache,
                            processes=processes, progress=progress, on_error="record",
-                           backend=backend, scheduler=scheduler)
+                           backend=backend, scheduler=scheduler).table
             df = add_verdicts(df, head=st.head)
         if "time_histories" in df.columns:
             _write_histories(df, stage / "histories")
@@ -1170,7 +1171,7 @@ def run_study_file(study, outdir, *, backend: str = "local", scheduler=None,
         display_table(st, df).to_csv(stage / st.csv, index=False)   # units in the header
         (stage / "study.toml").write_text(st.source, encoding="utf-8")
         _write_summary(st, df, stage, env)
-    return df
+    return SweepResult(df, name=st.name)
 
 
 def _run_envelope(st: Study, cache, processes, progress):

@@ -60,6 +60,8 @@ from ._interrupt import requested as interrupt_requested
 from ._jit import available_cores
 from ._sourcehash import source_hash
 from ._errors import mark_internal
+from .plots.sweep import plot_sweep
+from .results import Result
 
 _STATUS_COLUMNS = ("status", "error")
 #: How often [s] a pooled sweep looks for Ctrl-C while its cases run.
@@ -365,7 +367,7 @@ def _check_processes(processes) -> int:
     cores = available_cores()
     if processes > cores:
         warnings.warn(f"processes = {processes} exceeds the {cores} available cores; "
-                      f"using {cores} worker processes", UserWarning, stacklevel=3)
+                      f"using {cores} worker processes", UserWarning, stacklevel=4)
         processes = cores
     return processes
 
@@ -506,10 +508,66 @@ def _run_pool(func, cases, todo, nproc, finish, on_error) -> None:
     pool.shutdown(wait=True)
 
 
+class SweepResult(Result):
+    """The result of a sweep (:func:`run_sweep`, :func:`ppamsafety.sweep_cases.safety_sweep`).
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        One row per case (or per row a case returned): the case parameters, ``status`` and
+        ``error`` (with ``on_error="record"``), then the results.
+    name : str
+        The sweep's name.
+    swept : sequence of str, optional
+        The case parameters that vary (default: the leading columns before ``status``
+        that take more than one value).
+    """
+
+    def __init__(self, table: pd.DataFrame, *, name: str = "sweep", swept=None):
+        if not isinstance(table, pd.DataFrame):
+            raise TypeError(f"table must be a pandas DataFrame, got {type(table).__name__}")
+        self._table = table
+        self.name = str(name)
+        if swept is None:
+            cols = list(table.columns)
+            lead = cols[:cols.index("status")] if "status" in cols else []
+            swept = [c for c in lead if table[c].map(repr).nunique() > 1]
+        self.swept = tuple(swept)
+
+    def to_pandas(self) -> pd.DataFrame:
+        """The sweep's table."""
+        return self._table
+
+    def tables(self) -> dict:
+        return {"table": self._table}
+
+    def plot(self, **kwargs):
+        """Each result against each swept parameter, with the safety limits; a matplotlib
+        Figure.
+
+        Parameters
+        ----------
+        **kwargs
+            Passed to :func:`ppamsafety.plots.sweep.plot_sweep` (``title``, ``units``,
+            ``region_limits``).
+        """
+        if not self.swept:
+            raise ValueError(f"sweep {self.name!r}: no case parameter varies, nothing to plot "
+                             f"against")
+        return plot_sweep(self._table, list(self.swept), **kwargs)
+
+    def __len__(self) -> int:
+        return len(self._table)
+
+    def __repr__(self) -> str:
+        return (f"SweepResult(name={self.name!r}, rows={len(self._table)}, "
+                f"swept={list(self.swept)})")
+
+
 def run_sweep(func, cases=None, *, name: str | None = None, cache_dir=None,
               processes: int | None = 1, progress: bool = True, on_error: str = "record",
               grid: Mapping | None = None, backend: str = "local",
-              scheduler=None, limit: int = MAX_CASES) -> pd.DataFrame:
+              scheduler=None, limit: int = MAX_CASES) -> SweepResult:
     """Evaluate ``func(**case)`` for every case and concatenate the results.
 
     Parameters
@@ -574,11 +632,12 @@ def run_sweep(func, cases=None, *, name: str | None = None, cache_dir=None,
 
     Returns
     -------
-    pandas.DataFrame
-        Case parameters followed by the result columns, in case order.  With
-        ``on_error="record"``, the columns ``status`` ("ok"/"failed") and ``error``
-        ("" when ok) follow the case parameters.  A result column with the name of a case
-        parameter raises :class:`ResultColumnError` (it would replace the parameter).
+    SweepResult
+        Its table (``.table``, ``.to_pandas()``): case parameters followed by the result
+        columns, in case order.  With ``on_error="record"``, the columns ``status``
+        ("ok"/"failed") and ``error`` ("" when ok) follow the case parameters.  A result
+        column with the name of a case parameter raises :class:`ResultColumnError` (it would
+        replace the parameter).
 
     Notes
     -----
@@ -586,6 +645,14 @@ def run_sweep(func, cases=None, *, name: str | None = None, cache_dir=None,
     :class:`~ppamsafety.study_files.CaseGrid`) and a ``grid`` is combined on demand: the
     cases are generated as they run, never stored as one list.
     """
+    table = _sweep_table(func, cases, name=name, cache_dir=cache_dir, processes=processes,
+                         progress=progress, on_error=on_error, grid=grid, backend=backend,
+                         scheduler=scheduler, limit=limit)
+    return SweepResult(table, name=name or getattr(func, "__qualname__", None) or "sweep")
+
+
+def _sweep_table(func, cases, *, name, cache_dir, processes, progress, on_error, grid, backend,
+                 scheduler, limit) -> pd.DataFrame:
     if not callable(func):
         raise TypeError(f"func must be callable, got {type(func).__name__} {func!r:.80}")
     if cases is None and grid is None:
@@ -674,7 +741,7 @@ def run_sweep(func, cases=None, *, name: str | None = None, cache_dir=None,
             except Exception as exc:
                 warnings.warn(f"sweep {name!r}: cache file {f} is unreadable "
                               f"({_error_text(exc)}); recomputing case {i}", RuntimeWarning,
-                              stacklevel=2)
+                              stacklevel=3)
         todo.append(i)
     bar = tqdm(total=len(cases), initial=len(cases) - len(todo), desc=name, disable=not progress,
                leave=False)
@@ -780,4 +847,4 @@ def _warn_failures(cases, failures, name) -> None:
                           for i in sorted(failures)[:3])
         more = " ..." if len(failures) > 3 else ""
         warnings.warn(f"sweep {name!r}: {len(failures)} of {len(cases)} cases failed (rows with "
-                      f"status='failed'): {shown}{more}", RuntimeWarning, stacklevel=3)
+                      f"status='failed'): {shown}{more}", RuntimeWarning, stacklevel=4)

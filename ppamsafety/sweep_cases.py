@@ -57,7 +57,7 @@ from .params.contact import arm_contact_points, body_contact, body_contact_names
 from .params.contact import covering as named_covering
 from .params.effects import Effects
 from .plant import geometry as geo
-from .sweep import _check_cases, grid_cases, run_sweep
+from .sweep import SweepResult, _check_cases, grid_cases, run_sweep
 from .units import BAR
 
 #: Experiment names (thesis catalog).
@@ -1020,7 +1020,7 @@ def add_verdicts(df: pd.DataFrame, criteria=None, *, region=None, head=None) -> 
 
 def safety_sweep(cases=None, *, grid=None, name: str = "safety", cache_dir=None,
                  processes: int | None = None, progress: bool = True, on_error: str = "record",
-                 backend: str = "local", scheduler=None, arm=None, head=None) -> pd.DataFrame:
+                 backend: str = "local", scheduler=None, arm=None, head=None) -> SweepResult:
     """Run :func:`safety_case` over a grid or a list of cases (all cores by default).
 
     Parameters
@@ -1052,9 +1052,11 @@ def safety_sweep(cases=None, *, grid=None, name: str = "safety", cache_dir=None,
 
     Returns
     -------
-    pandas.DataFrame
-        Case parameters, ``status``, ``error``, the :func:`safety_case` results and their
-        verdicts against the criteria of the skull/forehead (:func:`add_verdicts`).
+    SweepResult
+        Its table (``.table``): case parameters, ``status``, ``error``, the
+        :func:`safety_case` results and their verdicts against the criteria of the
+        skull/forehead (:func:`add_verdicts`); ``.plot()`` draws them against the swept
+        parameters.
     """
     all_cases = _check_cases([{}] if cases is None else cases)
     if grid is not None:
@@ -1072,7 +1074,7 @@ def safety_sweep(cases=None, *, grid=None, name: str = "safety", cache_dir=None,
             raise type(exc)(f"case {i} {c!r}: {exc}") from None
     df = run_sweep(func, all_cases, name=name, cache_dir=cache_dir, processes=processes,
                    progress=progress, on_error=on_error, backend=backend, scheduler=scheduler)
-    return add_verdicts(df, head=head)
+    return SweepResult(add_verdicts(df.table, head=head), name=name)
 
 
 __all__ = ["EXPERIMENTS", "CONTROLLERS", "INSTANTS", "MIN_SPEED", "PARAMETERS", "DEFAULTS",

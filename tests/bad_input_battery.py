@@ -904,7 +904,7 @@ def _api_cases():
 
     def sweep_(*a, **k):
         from ppamsafety.sweep import run_sweep
-        return run_sweep(*a, **k)
+        return run_sweep(*a, **k).table
 
     api("api-sweep", "cache-dir-empty", lambda: sweep_(_square, [{"x": 1}], cache_dir=""),
         names=["cache_dir"])
@@ -1379,7 +1379,7 @@ def _more_api_cases():
 
     def sw(**k):
         from ppamsafety.sweep import run_sweep
-        return run_sweep(_square, progress=False, **k)
+        return run_sweep(_square, progress=False, **k).table
 
     api("api-sweep", "grid-empty-dict", lambda: sw(grid={}), names=["grid"])
     api("api-sweep", "grid-list-of-lists", lambda: sw(grid=[["x", [1, 2]]]), names=["grid"])

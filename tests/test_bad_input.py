@@ -460,15 +460,15 @@ def test_run_sweep_refuses_an_empty_cache_dir_and_a_result_named_like_a_paramete
                                                                                   monkeypatch):
     monkeypatch.chdir(tmp_path)
     with pytest.raises(ValueError, match="cache_dir = '' is an empty path"):
-        run_sweep(_square, [{"x": 1}], cache_dir="", progress=False)
+        run_sweep(_square, [{"x": 1}], cache_dir="", progress=False).table
     assert list(tmp_path.iterdir()) == []
     for on_error in ("record", "raise"):
         with pytest.raises(ResultColumnError, match=r"\['x'\] have the name of a case parameter"):
-            run_sweep(_clash, [{"x": 1}], progress=False, on_error=on_error)
+            run_sweep(_clash, [{"x": 1}], progress=False, on_error=on_error).table
 
 
 def test_run_sweep_streams_a_grid():
-    df = run_sweep(_square, grid={"x": [1, 2, 3]}, progress=False)
+    df = run_sweep(_square, grid={"x": [1, 2, 3]}, progress=False).table
     assert df["sq"].tolist() == [1, 4, 9]
 
 
@@ -778,10 +778,10 @@ def test_a_cache_folder_of_user_files_is_refused_and_left_alone(tmp_path_factory
     user = [n for n in names if not (n.startswith("0123456789abcdef0123"))]
     if user:
         with pytest.raises(ValueError, match="cache_dir = .* not sweep cache files"):
-            run_sweep(_square, [{"x": 2}], cache_dir=d, progress=False)
+            run_sweep(_square, [{"x": 2}], cache_dir=d, progress=False).table
         assert sorted(p.name for p in d.iterdir()) == before
     else:
-        assert run_sweep(_square, [{"x": 2}], cache_dir=d, progress=False)["sq"].tolist() == [4]
+        assert run_sweep(_square, [{"x": 2}], cache_dir=d, progress=False).table["sq"].tolist() == [4]
 
 
 # ---- class: Ctrl-C ------------------------------------------------------------------------------

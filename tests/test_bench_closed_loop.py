@@ -2,7 +2,7 @@
 
 A 10 s experiment (full plant, 1 kHz control, realistic sensors, joint PSMC)
 in at most 0.1 s of wall time, a batch of 100 variants in at most 2 s, on
-one core.  The measurement code is ``studies/bench/bench_closed_loop.py``.
+one core.  The measurement code is ``benchmarks/bench_closed_loop.py``.
 """
 
 import importlib.util
@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-_PATH = Path(__file__).resolve().parents[1] / "studies" / "bench" / "bench_closed_loop.py"
+_PATH = Path(__file__).resolve().parents[1] / "benchmarks" / "bench_closed_loop.py"
 
 
 @pytest.fixture(scope="module")

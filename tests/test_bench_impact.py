@@ -9,7 +9,7 @@ pytestmark = pytest.mark.slow
 
 
 def _bench():
-    path = pathlib.Path(__file__).resolve().parents[1] / "studies" / "bench" / "bench_impact.py"
+    path = pathlib.Path(__file__).resolve().parents[1] / "benchmarks" / "bench_impact.py"
     spec = importlib.util.spec_from_file_location("bench_impact", path)
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)

@@ -17,7 +17,7 @@ pytestmark = pytest.mark.slow
 
 @pytest.fixture(scope="module")
 def bench():
-    path = pathlib.Path(__file__).resolve().parents[1] / "studies" / "bench" / "bench_scan.py"
+    path = pathlib.Path(__file__).resolve().parents[1] / "benchmarks" / "bench_scan.py"
     spec = importlib.util.spec_from_file_location("bench_scan", path)
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)

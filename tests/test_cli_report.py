@@ -145,7 +145,7 @@ def test_report_in_worker_processes_equals_the_serial_report(tmp_path):
     b = build_report(tmp_path / "b", quick=True, only=only, progress=False, processes=1)
     strip = lambda t: re.sub(r"ran in [0-9.]+ s", "ran in - s", t)     # noqa: E731
     ta, tb = strip(a.read_text()), strip(b.read_text())
-    assert ta == tb and ta.index("Study `stiffness`") < ta.index("Study `design`")
+    assert ta == tb and ta.index("Section `stiffness`") < ta.index("Section `design`")
     assert sorted(p.name for p in a.parent.glob("*.png")) == \
         sorted(p.name for p in b.parent.glob("*.png"))
     # a second run schedules by the recorded times and still writes the same report

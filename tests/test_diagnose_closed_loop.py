@@ -153,7 +153,7 @@ def test_closed_loop_battery_full():
 @pytest.mark.slow
 def test_sixty_second_closed_loop_record_is_diagnosed_within_a_minute():
     """Issue 10 item 9: a 60 s closed-loop record at 1 kHz against the whole library in
-    <= 60 s on 2 cores (studies/bench/bench_diagnose.py measured 9.1 s on the loaded machine)."""
+    <= 60 s on 2 cores (benchmarks/bench_diagnose.py measured 9.1 s on the loaded machine)."""
     import time
 
     rec = synthesize("closed-loop", {"payload_mass": 0.4, "valve_dead_time": 0.02}, seed=1,

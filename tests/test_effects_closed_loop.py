@@ -134,7 +134,7 @@ def test_hysteresis_slowdown_in_the_closed_loop_is_at_most_3x(arm):
     """Issue 9: a closed-loop experiment with hysteresis on costs <= 3x the nominal one.
 
     Best of 5 interleaved runs of the 10 s benchmark step experiment
-    (``studies/bench/bench_closed_loop.py``), after compilation.
+    (``benchmarks/bench_closed_loop.py``), after compilation.
     """
     r = tr.step(arm, duration=10.0)
     a = arm.replace(effects=Effects(hysteresis_delta=DELTA))

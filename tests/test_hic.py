@@ -277,7 +277,7 @@ def test_fast_is_20x_faster_than_bruteforce():
 @pytest.mark.parametrize("name", ["half-sine 1 ms at start", "half-sine 5 ms mid",
                                   "half-sine 15 ms mid", "two pulses", "pulse + small 2nd bump"])
 def test_fast_is_100x_faster_than_bruteforce(name):
-    """Realistic 50 ms records at dt = 10 us, HIC36: >= 100x (see studies/bench/bench_hic.py)."""
+    """Realistic 50 ms records at dt = 10 us, HIC36: >= 100x (see benchmarks/bench_hic.py)."""
     assert speedup(SIGNALS[name][0]) >= 100.0
 
 

@@ -15,7 +15,7 @@ from ppamsafety.impact.model import simulate_impacts
 from ppamsafety.impact.reference import simulate_impact_scipy
 from ppamsafety.params import thesis_arm
 
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "studies" / "bench"))
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parents[1] / "benchmarks"))
 from bench_impact import cases  # noqa: E402
 
 

@@ -144,7 +144,7 @@ def _sweep_case(kind):
 @pytest.mark.parametrize("processes", [1, 2])
 def test_a_sweep_case_that_meets_a_bug_says_so(processes):
     df = run_sweep(_sweep_case, [{"kind": "bug"}, {"kind": "bad"}, {"kind": "ok"}, {"kind": "ok"}],
-                   processes=processes, progress=False)
+                   processes=processes, progress=False).table
     err = dict(zip(df["kind"], df["error"]))
     assert err["bug"].startswith("InternalFailure: sweep case: TypeError: ") and \
         "unexpected keyword argument 'b'" in err["bug"]

@@ -200,7 +200,7 @@ def test_editing_plots_sections_the_cli_and_studies_keeps_the_key(tree):
         path = tree.parent / rel
         path.write_text(path.read_text() + "\n# test edit\n")
     _edit_function(_file(tree, plots_control), "plot_experiment")
-    _edit_function(_file(tree, model), "plot", cls="ImpactResults")   # a .plot() method
+    _edit_function(_file(tree, model), "plot", cls="ImpactResult")   # a .plot() method
     assert kernel_source_hash(tree) == before
     assert source_hash(tree) != sweep_before
 

@@ -223,17 +223,16 @@ def test_report_replaces_its_own_folder_only_with_the_flag(tmp_path, capsys):
     assert (out / "my_notes.md").read_text() == "mine" and (out / "index.md").exists()
 
 
-def test_study_script_uses_the_same_rules(tmp_path, capsys):
-    from ppamsafety.sections import main as study_main
-
+def test_one_section_alone_uses_the_same_rules(tmp_path, capsys):
     (tmp_path / "mine.txt").write_text("precious")
-    assert study_main("design", [str(tmp_path), "--quick", "--overwrite"]) == 2
+    one = ["report", "--only", "design", "--quick"]
+    assert main([*one, "--outdir", str(tmp_path), "--overwrite"]) == 2
     assert "mine.txt" in capsys.readouterr().err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["mine.txt"]
     out = tmp_path / "s"
-    assert study_main("design", [str(out), "--quick"]) == 0
+    assert main([*one, "--outdir", str(out)]) == 0
     assert "design_table_A1.csv" in read_marker(out)["files"]
-    assert study_main("design", [str(out), "--quick"]) == 2
+    assert main([*one, "--outdir", str(out)]) == 2
 
 
 def test_history_onto_an_existing_file_is_an_error(tmp_path, capsys):

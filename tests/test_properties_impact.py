@@ -150,13 +150,13 @@ def test_join_table_6_1(results, complete):
        metric=st.one_of(anything, st.sampled_from(["HIC36", "status", "nope"])))
 def test_impact_results_methods(index, name, metric):
     r = _RESULT
-    h = outcome("ImpactResults.history", lambda: r.history(index), "index")
+    h = outcome("ImpactResult.history", lambda: r.history(index), "index")
     if h is not None:
         assert len(h) > 0
-    s = outcome("ImpactResults.signal", lambda: r.signal(name, index), "name", "index")
+    s = outcome("ImpactResult.signal", lambda: r.signal(name, index), "name", "index")
     if s is not None:
         assert np.all(np.isfinite(s))
-    w = outcome("ImpactResults.worst", lambda: r.worst(metric), "metric")
+    w = outcome("ImpactResult.worst", lambda: r.worst(metric), "metric")
     if w is not None:
         assert math.isfinite(w[metric])
 

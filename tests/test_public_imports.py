@@ -42,10 +42,6 @@ def test_documented_import_works(doc, module, name):
 
 
 @pytest.mark.parametrize("module, name", [
-    ("ppamsafety.studies", "responses"),          # the report sections' former package
-    ("ppamsafety.studies", "REGISTRY"),
-    ("ppamsafety.studies", "run_study"),
-    ("ppamsafety.studies", "StudyResult"),
     ("ppamsafety.experiments", "ExperimentCase"),
     ("ppamsafety.experiments", "run_batch"),
     ("ppamsafety.experiments.trajectories", "REFERENCE_ROW"),
@@ -62,7 +58,7 @@ def test_former_paths_still_import(module, name):
     assert _from_import(module, name) is not None
 
 
-def test_the_former_section_package_gives_the_same_modules():
-    from ppamsafety import sections, studies
-    assert studies.responses is sections.responses
-    assert studies.run_study is sections.run_section
+def test_the_former_section_package_is_gone():
+    """One way to run a section (``ppamsafety report --only NAME``); no alias package."""
+    with pytest.raises(ImportError):
+        importlib.import_module("ppamsafety.studies")

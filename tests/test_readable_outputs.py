@@ -36,7 +36,7 @@ arm.pneumatics.mean_pressure = { values = [1.2, 1.5], unit = "bar" }
 def bar_sweep(tmp_path_factory):
     out = tmp_path_factory.mktemp("sw") / "out"
     st = parse_study(BAR_STUDY)
-    df = run_study_file(st, out, processes=1, progress=False)
+    df = run_study_file(st, out, processes=1, progress=False).table
     return st, df, out
 
 

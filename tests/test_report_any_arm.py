@@ -71,7 +71,7 @@ def test_the_example_arm_full_quick_report(tmp_path):
 
     md = _build(out, "--arm", str(EXAMPLE), "--head", "thesis-frontal")
     names, left = select_sections(load_arm(EXAMPLE))
-    assert all(f"*Study `{name}` ran in" in md for name in names)
+    assert all(f"*Section `{name}` ran in" in md for name in names)
     assert all(f"`{name}` (" in md.split("##")[0] for name in left)       # said, and why
     _no_thesis_values(out)
     assert (out / "index.html").is_file() and (out / "head.toml").is_file()
@@ -110,7 +110,7 @@ def test_the_header_says_what_was_left_out(tmp_path, capsys):
                                                            if n not in keep)]) == 0
     md = (out / "index.md").read_text()
     assert "Left out, as they do not concern this arm" in md and "`cylinder_friction`" in md
-    assert "*Study `head_model` ran in" in md and "*Study `design` ran in" not in md
+    assert "*Section `head_model` ran in" in md and "*Section `design` ran in" not in md
     assert main(["report", "--quick", "--only", "design", "--include", "smc", "--outdir",
                  str(tmp_path / "x")]) == 2
     assert "--only names every section" in capsys.readouterr().err

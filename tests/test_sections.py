@@ -1,11 +1,10 @@
 """The report sections are registered once and everything that lists them is derived or checked.
 
 A new section touches its own module (with its ``SECTION`` info), one line of
-``ppamsafety.sections.REGISTRY`` and its script ``studies/<name>.py``; the README's table is
+``ppamsafety.sections.REGISTRY`` (it runs alone with ``ppamsafety report --only NAME``); the README's table is
 the output of ``python -m ppamsafety.sections`` (issue 23).
 """
 
-import ast
 import pkgutil
 import re
 from pathlib import Path
@@ -39,19 +38,17 @@ def test_readme_holds_the_generated_section_table():
     assert counts and all(int(c) == len(REGISTRY) for c in counts)
 
 
-def test_every_section_has_its_script_named_after_it():
-    scripts = {p.stem for p in (ROOT / "studies").glob("*.py")}
-    assert scripts == set(REGISTRY), "studies/<name>.py regenerates section <name>, no other"
-    for name in REGISTRY:
-        tree = ast.parse((ROOT / "studies" / f"{name}.py").read_text(encoding="utf-8"))
-        calls = [n for n in ast.walk(tree) if isinstance(n, ast.Call)
-                 and getattr(n.func, "id", "") == "main"]
-        assert [c.args[0].value for c in calls] == [name], name
+def test_one_way_to_run_a_section():
+    """``ppamsafety report --only NAME``: no runner script per section, no alias package."""
+    assert not list((ROOT / "studies").glob("*.py")) or all(
+        "ppamsafety.sections" not in p.read_text(encoding="utf-8")
+        for p in (ROOT / "studies").glob("*.py"))
+    assert not (ROOT / "ppamsafety" / "studies").exists()
 
 
 def test_benchmarks_live_in_their_own_folder():
-    assert sorted(p.name for p in (ROOT / "studies" / "bench").glob("*.py"))
-    assert not list((ROOT / "studies").glob("bench_*.py"))
+    assert sorted(p.name for p in (ROOT / "benchmarks").glob("bench_*.py"))
+    assert not list((ROOT / "studies").rglob("bench_*.py"))
 
 
 @pytest.mark.parametrize("kwargs, match", [

@@ -45,11 +45,11 @@ def test_responses_in_three_parts_compute_writes_nothing(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     study = responses.compute(quick=True)
     assert list(tmp_path.iterdir()) == []
-    assert isinstance(study, responses.ResponsesStudy)
+    assert isinstance(study, responses.ResponsesFindings)
     table = study.to_pandas()
     assert len(table) == 20 and set(table.experiment) == {"step", "switch"}
     assert np.isfinite(study.oscillation_hz) and study.oscillation_hz > 0
-    figs = study.plot()
+    figs = study.figures()
     assert set(figs) == {"responses_step.png", "responses_step_ki12.png",
                          "responses_step_lambda.png", "responses_switch.png",
                          "responses_switch_lambda.png"}

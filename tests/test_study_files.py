@@ -25,7 +25,7 @@ def test_the_example_study_files_load_and_expand():
     assert len(labels) == 10                                         # Table 6.1's variants
     f = load_study(STUDIES / "fig_6_3.toml")
     from ppamsafety.impact.thesis_data import FIG_6_3
-    k = np.geomspace(FIG_6_3["k_min"], FIG_6_3["k_max"], 31)          # as studies/stiffness.py
+    k = np.geomspace(FIG_6_3["k_min"], FIG_6_3["k_max"], 31)          # as the section stiffness
     assert [c["stiffness"] for c in f.cases] == list(k)
     assert all(c["instants"] == "max TCP speed" and c["controller"] == "PID" for c in f.cases)
     lk = load_study(STUDIES / "lambda_ki.toml")
@@ -158,7 +158,7 @@ def test_histories_are_written_per_case_when_asked(tmp_path, monkeypatch):
     monkeypatch.setattr(importlib.util, "find_spec",
                         lambda n, *a: None if n in ("pyarrow", "fastparquet") else real(n, *a))
     assert history_format() == "csv"
-    df = run_study_file(parse_study(text), tmp_path / "h", processes=1, progress=False)
+    df = run_study_file(parse_study(text), tmp_path / "h", processes=1, progress=False).table
     assert "histories" not in df.columns and len(df) == 2
     files = sorted(p.name for p in (tmp_path / "h" / "histories").iterdir())
     assert files == ["case00000_closed_loop.csv", "case00000_impact.csv",
@@ -168,4 +168,4 @@ def test_histories_are_written_per_case_when_asked(tmp_path, monkeypatch):
     imp = pd.read_csv(tmp_path / "h" / "histories" / "case00001_impact.csv")
     assert imp.filter(like="F").max().max() == pytest.approx(df.F_max[1], rel=1e-9)
     with pytest.raises(OutputError, match="--resume"):
-        run_study_file(parse_study(text), tmp_path / "h", processes=1, progress=False)
+        run_study_file(parse_study(text), tmp_path / "h", processes=1, progress=False).table

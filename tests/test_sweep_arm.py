@@ -114,7 +114,7 @@ instants = "max TCP speed"
 arm.pneumatics.mean_pressure = [1.4e5, 1.8e5]
 """
     st = parse_study(text, arm=load_arm(EXAMPLE))
-    df = run_study_file(st, tmp_path / "out", processes=1, progress=False)
+    df = run_study_file(st, tmp_path / "out", processes=1, progress=False).table
     out = tmp_path / "out"
     assert list(df["status"]) == ["ok", "ok"]
     for name in ("results.csv", "summary.png", "summary.html", "arm.toml", "study.toml"):
@@ -176,7 +176,7 @@ tolerance = 0.05
 pose = [50.0, -80.0]
 """)
     df = run_study_file(tmp_path / "env.toml", tmp_path / "out", progress=False,
-                        head=head_model("thesis-frontal"))
+                        head=head_model("thesis-frontal")).table
     assert set(df["status"]) == {"ok"} and df["safe"].any() and not df["safe"].all()
     page = (tmp_path / "out" / "summary.html").read_text()
     assert "safe for speed &lt;=" in page and (tmp_path / "out" / "head.toml").is_file()

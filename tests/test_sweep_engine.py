@@ -40,7 +40,7 @@ def test_bad_grids_are_named(grid, exc, words):
 def test_run_sweep_combines_cases_with_a_grid(tmp_path):
     calls = tmp_path / "calls"
     calls.mkdir()
-    df = run_sweep(h.counted, [{"calls_dir": str(calls)}], grid={"x": [0, 1, 2]}, progress=False)
+    df = run_sweep(h.counted, [{"calls_dir": str(calls)}], grid={"x": [0, 1, 2]}, progress=False).table
     assert list(df.x) == [0, 1, 2] and list(df.y) == [1, 2, 3]
     assert h.calls_of(calls) == {0: 1, 1: 1, 2: 1}
 
@@ -60,7 +60,7 @@ def test_first_case_runs_in_this_process_the_rest_in_workers(tmp_path, monkeypat
     calls = tmp_path / "calls"
     calls.mkdir()
     df = run_sweep(h.counted, [{"calls_dir": str(calls)}], grid={"x": [0, 1, 2, 3, 4, 5]},
-                   processes=2, on_error="record", progress=False)
+                   processes=2, on_error="record", progress=False).table
     pids = _pids(calls)
     assert pids[0] == os.getpid()
     assert all(pids[x] != os.getpid() for x in range(1, 6))
@@ -76,7 +76,7 @@ def test_no_more_cases_than_workers_all_run_in_workers(tmp_path, monkeypatch):
     calls = tmp_path / "calls"
     calls.mkdir()
     run_sweep(h.counted, [{"calls_dir": str(calls)}], grid={"x": [0, 1]}, processes=2,
-              progress=False)
+              progress=False).table
     assert all(pid != os.getpid() for pid in _pids(calls).values())
 
 
@@ -90,7 +90,7 @@ def test_first_case_failing_with_raise_starts_no_workers(tmp_path, monkeypatch):
     calls.mkdir()
     with pytest.raises(SweepError, match=r"case 0 .*'x': 3.* failed: ValueError"):
         run_sweep(h.counted, [{"calls_dir": str(calls)}], grid={"x": [3, 0, 1, 2]},
-                  processes=2, on_error="raise", progress=False)
+                  processes=2, on_error="raise", progress=False).table
     assert h.calls_of(calls) == {3: 1}
 
 
@@ -102,7 +102,7 @@ def test_first_case_failing_with_raise_starts_no_workers(tmp_path, monkeypatch):
 def test_bad_backend_arguments_are_named(kwargs, exc, words):
     args = {"cases": [{"x": 1, "calls_dir": "."}], "progress": False, **kwargs}
     with pytest.raises(exc) as e:
-        run_sweep(h.counted, args.pop("cases"), **args)
+        run_sweep(h.counted, args.pop("cases"), **args).table
     assert all(w in str(e.value) for w in words), str(e.value)
 
 
@@ -142,7 +142,7 @@ def test_sigkill_mid_sweep_then_resume_loses_and_repeats_nothing(tmp_path):
     before = h.calls_of(calls)
     assert all(before[x] == 1 for x in finished)
 
-    df = run_sweep(h.slow_square, cases, cache_dir=cache, processes=2, progress=False)
+    df = run_sweep(h.slow_square, cases, cache_dir=cache, processes=2, progress=False).table
 
     after = h.calls_of(calls)
     for x in finished:                                      # not recomputed, file untouched
@@ -169,7 +169,7 @@ def test_dask_local_cluster_records_failures_caches_and_resumes(tmp_path):
     cases = [{"x": i, "calls_dir": str(calls)} for i in range(6)]
     with pytest.warns(RuntimeWarning, match=r"1 of 6 cases failed.*x = 3 is refused"):
         df = run_sweep(h.counted, cases, cache_dir=cache, backend="dask", processes=2,
-                       progress=False)
+                       progress=False).table
     assert list(df.status) == ["ok"] * 3 + ["failed"] + ["ok"] * 2
     assert df.error[3] == "ValueError: x = 3 is refused"
     assert list(df.y[df.status == "ok"]) == [1, 2, 3, 5, 6]
@@ -177,11 +177,11 @@ def test_dask_local_cluster_records_failures_caches_and_resumes(tmp_path):
     pids = {f.split("pid")[1].split("-")[0] for f in os.listdir(calls)}
     assert str(os.getpid()) not in pids                      # ran on the workers
     with pytest.warns(RuntimeWarning, match="1 of 6 cases failed"):
-        local = run_sweep(h.counted, cases, cache_dir=tmp_path / "local", progress=False)
+        local = run_sweep(h.counted, cases, cache_dir=tmp_path / "local", progress=False).table
     pd.testing.assert_frame_equal(df, local)                 # same table as the local back end
     n_before = sum(h.calls_of(calls).values())
     again = run_sweep(h.counted, cases[:3], cache_dir=cache, backend="dask", processes=1,
-                      progress=False)
+                      progress=False).table
     assert sum(h.calls_of(calls).values()) == n_before       # all cached: nothing submitted
     pd.testing.assert_frame_equal(again, df.iloc[:3], check_dtype=False)   # no NaN: int y
 
@@ -198,17 +198,17 @@ def test_dask_with_a_client_and_an_address(tmp_path):
     cases = [{"x": i, "calls_dir": str(calls)} for i in (0, 1, 2, 4)]
     with LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
                       dashboard_address=None) as cluster, Client(cluster) as client:
-        a = run_sweep(h.counted, cases, backend="dask", scheduler=client, progress=False)
+        a = run_sweep(h.counted, cases, backend="dask", scheduler=client, progress=False).table
         assert client.status == "running"                    # a given Client is left open
         b = run_sweep(h.counted, cases, backend="dask", scheduler=cluster.scheduler_address,
-                      cache_dir=tmp_path / "c", progress=False)
+                      cache_dir=tmp_path / "c", progress=False).table
         pd.testing.assert_frame_equal(a, b)
         with pytest.raises(SweepError, match=r"case 1 \{'x': 3"):
             run_sweep(h.counted, [cases[0], {"x": 3, "calls_dir": str(calls)}], backend="dask",
-                      scheduler=client, progress=False, on_error="raise")
+                      scheduler=client, progress=False, on_error="raise").table
 
 
 def test_dask_scheduler_of_a_wrong_type_is_named():
     with pytest.raises(TypeError, match=r"scheduler must be None, a scheduler address.*int 5"):
         run_sweep(h.counted, [{"x": 1, "calls_dir": "."}], backend="dask", scheduler=5,
-                  progress=False)
+                  progress=False).table

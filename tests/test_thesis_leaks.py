@@ -229,7 +229,7 @@ def test_the_whole_quick_report_for_another_arm_has_no_thesis_value(which, tmp_p
            if which == "variant" else tl.random_arm(int(which.split()[1])))
     out = _report(tmp_path, arm, "--include", "as_built,cylinder_friction,person")
     md = (out / "index.md").read_text()
-    assert all(f"*Study `{name}` ran in" in md for name in REGISTRY)
+    assert all(f"*Section `{name}` ran in" in md for name in REGISTRY)
     leaks = tl.scan_folder(out, arm)
     assert leaks == [], _leaks_text(leaks)
     cols = pd.read_csv(out / "columns.csv", keep_default_na=False)    # and every unit declared

@@ -15,7 +15,7 @@ import pytest
 from ppamsafety.impact import contact
 from ppamsafety.impact.engine import FREE_STRIDE
 from ppamsafety.impact.instants import evaluate_experiment, heuristic_instants, impact_states
-from ppamsafety.impact.model import (ENERGY_TOL, ImpactResults, effective_mass, simulate_impacts,
+from ppamsafety.impact.model import (ENERGY_TOL, ImpactResult, effective_mass, simulate_impacts,
                                      stiffness_limit)
 from ppamsafety.impact.reference import simulate_impact_scipy
 from ppamsafety.impact.thesis_data import FIG_6_3, join_table_6_1
@@ -196,7 +196,7 @@ def test_impact_results_methods_refuse_bad_input():
         r.worst("status")
     assert r.worst("F_max").F_max == r.summary.F_max.max()
     with pytest.raises(ValueError, match="no case has a finite value"):
-        ImpactResults(pd.DataFrame({"x": [np.nan]})).worst("x")
+        ImpactResult(pd.DataFrame({"x": [np.nan]})).worst("x")
 
 
 # --- other entry points --------------------------------------------------------------------

@@ -296,7 +296,7 @@ def test_the_same_question_gets_the_same_answer_from_envelope_sweep_and_report()
     case = {"experiment": "step", "controller": "PSMC joint", "ki_bar": 2}
     for head in (head_model("thesis-frontal"), annex_a_head("skull/forehead")):
         sweep = safety_sweep([case], grid={"lam": [0.4, 0.8]}, processes=1, progress=False,
-                             head=head)
+                             head=head).table
         env = safety_envelope("lam", (0.4, 0.8), limit="iso_ts_15066", scan=3, head=head,
                               case={k: v for k, v in case.items()}, tolerance=0.01)
         ev = env.to_pandas().set_index("value")

@@ -35,8 +35,11 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 
+from ..results import Result
 from .._inputfiles import read_text
+from ..plots.bench import plot_campaign
 from .._validation import did_you_mean
 from .bench_import import Actuator, BenchProfile, import_bench, quantity
 from .measured import (MeasuredData, MeasuredDataError, MeasuredDataWarning,
@@ -48,7 +51,7 @@ _RECORD_KEYS = ("file", "format", "pressure_nominal", "label", "run", "descripti
 
 
 @dataclass(frozen=True, eq=False)
-class Campaign:
+class Campaign(Result):
     """Records of one actuator, diagnosed together (:func:`ppamsafety.diagnose.diagnose`).
 
     Parameters
@@ -130,6 +133,31 @@ class Campaign:
             lab = r.meta.get("record", {}).get("label")
             out.append(str(lab) if lab else Path(r.source).name)
         return out
+
+    def to_pandas(self) -> pd.DataFrame:
+        """One row per record: ``label``, ``source``, ``samples``, ``duration [s]`` and the
+        nominal gauge pressure ``pressure_nominal [bar]``."""
+        return pd.DataFrame({
+            "label": self.labels(), "source": [r.source for r in self.records],
+            "samples": [len(r.frame) for r in self.records],
+            "duration [s]": [float(len(r.frame) * r.dt) for r in self.records],
+            "pressure_nominal [bar]": self.pressure_levels() / 1e5})
+
+    def plot(self, **kwargs):
+        """Measured force against contraction (a cylinder: rod position), one curve per record,
+        a matplotlib Figure.
+
+        Parameters
+        ----------
+        **kwargs
+            Passed to :func:`ppamsafety.plots.bench.plot_campaign` (``title``,
+            ``max_points``).
+        """
+        muscle = self.actuator_type == "muscle"
+        curves = [(lab, r.contraction() if muscle else r.column("position"), r.column("force"))
+                  for lab, r in zip(self.labels(), self.records)]
+        xlabel = "contraction [-]" if muscle else "rod position [m]"
+        return plot_campaign(curves, xlabel=xlabel, **kwargs)
 
 
 def load_campaign(path, *, check_signs: bool = True) -> Campaign:

@@ -36,6 +36,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from ..results import Result
 from .._validation import check_bool, check_choice, check_instance, check_int, check_range
 from .._version import __version__
 from ..identify.dynamic import DynamicData, identify_dynamic
@@ -80,7 +81,7 @@ def _lsq_dict(res) -> dict:
 
 
 @dataclass(frozen=True, eq=False)
-class Identification:
+class Identification(Result):
     """Estimates identified from one measured record.
 
     Attributes

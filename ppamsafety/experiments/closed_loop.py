@@ -19,6 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from ..results import Result
 from .._jit import nogil_kernel, run_threaded
 from .._validation import UnknownNameError, check_int, check_range, check_size, did_you_mean
 from ..control import CONTROLLER_CLASSES
@@ -200,7 +201,7 @@ def _run_batch(first, last, X0, REFS, ref_idx, PP, PM, KIND, CP, CSIZE, SCFG, NO
 
 
 @dataclass
-class ExperimentResult:
+class ExperimentResult(Result):
     """One closed-loop run.
 
     Attributes
@@ -349,7 +350,7 @@ class ExperimentResult:
         return np.hypot(self.signal("xd"), self.signal("yd"))
 
     def plot(self, **kwargs):
-        """Plot with :mod:`ppamsafety.report`; returns a matplotlib Figure.
+        """The figure (drawn by :mod:`ppamsafety.plots`), a matplotlib Figure.
 
         Parameters
         ----------

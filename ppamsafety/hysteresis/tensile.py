@@ -39,6 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from ..results import Result
 from .._jit import kernel, leaf
 from .._validation import (as_float_array, check_int, check_nonnegative, check_positive,
                            check_range)
@@ -225,7 +226,7 @@ def simulate_tensile_test(delta: float, *, pressure: float = TENSILE_PRESSURE,
 
 
 @dataclass(frozen=True)
-class DeltaFit:
+class DeltaFit(Result):
     """Result of :func:`fit_delta`.
 
     Attributes

@@ -57,6 +57,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from ..results import Result
 from .._validation import check_int, check_range
 from ..params.inertia import BaseParameters
 from ..plant.dynamics import regressor as plant_regressor
@@ -354,7 +355,7 @@ def filtered_system(data, arm, *, friction: bool = True, sign_velocity: float | 
 
 
 @dataclass(frozen=True)
-class DynamicResult:
+class DynamicResult(Result):
     """Dynamic parameter estimate (§3.5.2.6) with its statistics.
 
     Attributes

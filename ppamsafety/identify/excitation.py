@@ -30,6 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from ..results import Result
 from .._validation import check_int, check_range, check_seed, check_size
 from ..plant.model import rest_state, simulate
 from ..plant.pneumatics import delta_p_pressures, valve_set_values, gravity_compensation
@@ -280,7 +281,7 @@ def simulate_excitation(arm, excitation: FourierExcitation, *, periods: float = 
 
 
 @dataclass(frozen=True)
-class ExcitationDesign:
+class ExcitationDesign(Result):
     """Result of :func:`design_excitation`.
 
     Attributes

@@ -29,6 +29,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from ..results import Result
 from .._validation import check_range
 from ..plots.identify import plot_fit
 
@@ -86,7 +87,7 @@ def same_length(**arrays) -> int:
 
 
 @dataclass(frozen=True)
-class LSQResult:
+class LSQResult(Result):
     """Estimates of one linear least-squares identification with their statistics.
 
     Attributes

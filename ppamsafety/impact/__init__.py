@@ -12,7 +12,7 @@ Modules (one concept each):
 * :mod:`.anywhere` -- :func:`simulate_contacts`, bounds, and :func:`worst_contact` (the worst
   over contact point x body region x instant);
 * :mod:`.engine` -- the compiled batch kernel: flexible-joint arm against a free head;
-* :mod:`.model` -- :func:`simulate_impacts`, :class:`ImpactResults`, :func:`effective_mass`;
+* :mod:`.model` -- :func:`simulate_impacts`, :class:`ImpactResult`, :func:`effective_mass`;
 * :mod:`.instants` -- impact cases from a closed-loop experiment (four instants or all;
   :func:`worst_instant`: the exact worst of every instant, pruned by rigorous bounds);
 * :mod:`.bounds` -- a-priori upper bounds on F_max and HIC of an impact (energy, momentum);
@@ -31,6 +31,6 @@ from .anywhere import simulate_contacts, worst_contact
 from .engine import JointModel
 from .hic import hic
 from .instants import evaluate_experiment, worst_instant
-from .model import ImpactResults, effective_mass, simulate_impacts
+from .model import ImpactResult, effective_mass, simulate_impacts
 
-__all__ = ["JointModel", "hic", "evaluate_experiment", "worst_instant", "ImpactResults", "effective_mass", "simulate_impacts", "simulate_contacts", "worst_contact"]
+__all__ = ["JointModel", "hic", "evaluate_experiment", "worst_instant", "ImpactResult", "effective_mass", "simulate_impacts", "simulate_contacts", "worst_contact"]

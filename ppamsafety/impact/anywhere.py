@@ -46,6 +46,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from ..results import Result
 from .._validation import (as_float_array, check_bool, check_choice, check_instance, check_int,
                            check_nonnegative, check_range, check_range_array, describe)
 from ..params.contact import (BARE, FOREHEAD, BodyContact, ContactPoint, Covering,
@@ -300,7 +301,7 @@ _TABLES: dict = {}
 
 # ---- simulation ------------------------------------------------------------------------------
 @dataclass
-class ContactResults:
+class ContactResult(Result):
     """Results of a batch of contact-point impacts (:func:`simulate_contacts`).
 
     Attributes
@@ -640,7 +641,7 @@ def _frame(prep: _PointPrep, rows, SUM, *, stacklevel) -> pd.DataFrame:
 
 def simulate_contacts(arm, q, qd, stiffness, *, point="tool point", body=None, covering=None,
                       direction=None, body_velocity=None, fixed_arm: bool = False,
-                      dt: float = 2e-5, duration: float = 0.05, history=False) -> ContactResults:
+                      dt: float = 2e-5, duration: float = 0.05, history=False) -> ContactResult:
     """Impacts of a contact point of the flexible-joint arm with a free body region.
 
     Parameters
@@ -676,7 +677,7 @@ def simulate_contacts(arm, q, qd, stiffness, *, point="tool point", body=None, c
 
     Returns
     -------
-    ContactResults
+    ContactResult
     """
     prep = _prepare(arm, q, qd, stiffness, point=point, body=body, covering=covering,
                     direction=direction, body_velocity=body_velocity, fixed_arm=fixed_arm,
@@ -690,7 +691,7 @@ def simulate_contacts(arm, q, qd, stiffness, *, point="tool point", body=None, c
     keep = [c for c in pt.PHIST_COLUMNS if not (c.startswith("delta") and c[5:].isdigit()
                                                  and int(c[5:]) > nl)]
     hists = {int(i): pt.PHIST.frame(HIST[j])[keep] for j, i in enumerate(prep.hist_idx)}
-    return ContactResults(df, hists, prep.point, prep.contact, prep.dt, prep.duration)
+    return ContactResult(df, hists, prep.point, prep.contact, prep.dt, prep.duration)
 
 
 # ---- bounds ------------------------------------------------------------------------------------
@@ -758,12 +759,12 @@ def _bounds(arm, point, contact, e0_arm, vb, duration, window):
 
 # ---- the worst case over contact point x body region x instant ----------------------------
 @dataclass
-class WorstContact:
+class WorstContact(Result):
     """Result of :func:`worst_contact`.
 
     Attributes
     ----------
-    table : pandas.DataFrame
+    candidates : pandas.DataFrame
         One row per candidate (contact point x body region x instant): ``point``, ``body``,
         ``t0`` [s], ``point_speed`` [m/s], ``bound`` (rigorous bound of the criterion),
         ``screened`` with ``screen`` (screening value, NaN where not screened),
@@ -782,9 +783,11 @@ class WorstContact:
         Candidates, screened and exactly simulated.
     points : tuple of ContactPoint
         The contact points compared.
+    arm : ArmParameters or None
+        The arm of the scan (drawn by :meth:`plot`).
     """
 
-    table: pd.DataFrame
+    candidates: pd.DataFrame
     worst: pd.DataFrame
     criterion: str
     limits: dict | None
@@ -792,6 +795,7 @@ class WorstContact:
     n_screened: int
     n_simulated: int
     points: tuple = ()
+    arm: object = None
 
     def to_pandas(self) -> pd.DataFrame:
         """The worst case of each contact point (:attr:`worst`)."""
@@ -803,17 +807,20 @@ class WorstContact:
         key = "utilisation" if self.limits else "value"
         return self.worst.loc[self.worst[key].idxmax()]
 
-    def plot(self, arm, **kwargs):
+    def plot(self, arm=None, **kwargs):
         """The arm at the overall worst instant, each contact point with its worst body region
         and margin (:func:`ppamsafety.plots.contacts.plot_contact_margins`).
 
         Parameters
         ----------
-        arm : ArmParameters
-            The arm of the scan (its link lengths draw it).
+        arm : ArmParameters, optional
+            The arm drawn (default: the arm of the scan, :attr:`arm`).
         **kwargs
             Passed to :func:`ppamsafety.plots.contacts.plot_contact_margins`.
         """
+        arm = self.arm if arm is None else arm
+        if arm is None:
+            raise ValueError("arm: this result holds no arm; pass the arm of the scan")
         return plot_contact_margins(_arm_drawing(arm, self), **kwargs)
 
 
@@ -1032,10 +1039,10 @@ def worst_contact(result, arm, *, points=None, bodies=None, limits=None,
     cols["point"] = pd.Categorical.from_codes(cols["point"], [t["_name"] for t in tables])
     cols["body"] = pd.Categorical.from_codes(cols["body"], names)
     return WorstContact(pd.DataFrame(cols), pd.DataFrame(worst_rows), criterion, lim, n_cand,
-                        n_scr, n_sim, tuple(pts))
+                        n_scr, n_sim, tuple(pts), arm)
 
 
-__all__ = ["simulate_contacts", "ContactResults", "point_effective_mass", "point_jacobian",
+__all__ = ["simulate_contacts", "ContactResult", "point_effective_mass", "point_jacobian",
            "point_position", "min_point_mass", "contact_bounds", "worst_contact",
            "WorstContact", "resolve_point", "resolve_body", "SCREEN_STRIDE", "SCREEN_MARGIN",
            "CRITERIA"]

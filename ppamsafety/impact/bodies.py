@@ -30,6 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from ..results import Result
 from .._validation import check_instance, check_range
 from ..params.contact import BodyContact, Layer
 from ..units import G0
@@ -143,7 +144,7 @@ def cfc_filter(a, dt: float, cfc: float = CFC_HEAD) -> np.ndarray:
 
 
 @dataclass(frozen=True)
-class DropTest:
+class DropTest(Result):
     """Result of :func:`hybrid3_drop`: the head drop of 49 CFR 572.32.
 
     Attributes

@@ -42,6 +42,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from ..results import Result
 from .._jit import kernel, step_kernel
 from .._validation import (as_float_array, check_choice, check_finite_result, check_int,
                            check_range)
@@ -329,7 +330,7 @@ def _prepare(arm, q, qd, stiffness, head, wall, dt, duration, step_for_check):
 
 
 @dataclass
-class ClampingResults:
+class ClampingResult(Result):
     """Results of :func:`simulate_clamping`.
 
     Attributes
@@ -373,7 +374,7 @@ class ClampingResults:
 
 def simulate_clamping(arm, q, qd, stiffness, *, head=None, wall="thesis-frontal",
                       dt: float = 1e-5, duration: float = 0.05,
-                      record_every: int = 10) -> ClampingResults:
+                      record_every: int = 10) -> ClampingResult:
     """Transient clamping: the arm hits a head whose back touches a rigid wall.
 
     Same arm model and input rules as :func:`ppamsafety.impact.simulate_impacts`
@@ -405,7 +406,7 @@ def simulate_clamping(arm, q, qd, stiffness, *, head=None, wall="thesis-frontal"
 
     Returns
     -------
-    ClampingResults
+    ClampingResult
     """
     record_every = check_int("record_every", record_every, 1, 10 ** 7)
     cases, P, hp, WP, hm, wm, dt, duration = _prepare(arm, q, qd, stiffness, head, wall, dt,
@@ -419,7 +420,7 @@ def simulate_clamping(arm, q, qd, stiffness, *, head=None, wall="thesis-frontal"
     check_finite_result("simulate_clamping", SUM, f"head {hm.name!r}, wall {wm.name!r}")
     df = pd.DataFrame(SUM, columns=CLAMP_SUMMARY.columns())
     df["energy_ok"] = df["E_balance_error"] < ENERGY_TOL
-    return ClampingResults(summary=df, t=HIST[0, :, 0].copy(), force=HIST[:, :, 1].copy(),
+    return ClampingResult(summary=df, t=HIST[0, :, 0].copy(), force=HIST[:, :, 1].copy(),
                            wall_force=HIST[:, :, 2].copy(), penetration=HIST[:, :, 3].copy(),
                            head=hm.name, wall=wm.name)
 
@@ -574,6 +575,6 @@ def static_force_bound(q, direction, arm, *, mode: str = "hardware",
                          "tau1": tau[:, 0], "tau2": tau[:, 1]})
 
 
-__all__ = ["CLAMP_STATE", "WALL", "CLAMP_SUMMARY", "ClampingResults", "simulate_clamping",
+__all__ = ["CLAMP_STATE", "WALL", "CLAMP_SUMMARY", "ClampingResult", "simulate_clamping",
            "simulate_clamping_scipy", "static_force_bound", "clamp_rhs", "clamp_energy",
            "clamp_initial_state", "clamp_batch", "ENERGY_TOL", "MODES", "METHODS"]

@@ -57,6 +57,7 @@ from enum import IntEnum
 import numpy as np
 import pandas as pd
 
+from ..results import Result
 from .._jit import kernel, kernel_array, step_kernel
 from .._validation import (InvalidTypeError, as_float_array, check_int, check_range,
                            check_shape, describe)
@@ -530,7 +531,7 @@ def head_touching(free_run, k0: int, head=None) -> tuple:
 
 
 @dataclass
-class CollisionResult:
+class CollisionResult(Result):
     """One closed-loop run with a head: :func:`simulate_collision`.
 
     Attributes

@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from ..results import Result
 from .._validation import as_float_array, check_choice, check_instance, check_range
 from ..params import ArmParameters, thesis_arm
 from ..params.contact import (COVERING_STRAIN_LIMIT, FOREHEAD, THESIS_COVERING,
@@ -96,7 +97,7 @@ def table_6_1_residuals(contact: SeriesContact, *, arm=None) -> tuple:
 
 
 @dataclass(frozen=True)
-class CoveringFit:
+class CoveringFit(Result):
     """Result of :func:`fit_covering`.
 
     Attributes

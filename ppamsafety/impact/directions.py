@@ -80,6 +80,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from ..results import Result
 from .._validation import (MAX_BYTES, as_float_array, check_bool, check_int, check_range,
                            check_range_array, check_finite_result, check_size)
 from ..plant import dynamics as dyn
@@ -348,7 +349,7 @@ def _validate_states(arm, q, qd, K, hm, dt, duration, warn_area=True):
 
 # ---- one state ------------------------------------------------------------------------------
 @dataclass
-class DirectionSweep:
+class DirectionSweep(Result):
     """F_max and HIC of one impact state for head placements on a grid (:func:`direction_sweep`).
 
     Attributes
@@ -458,7 +459,7 @@ def direction_sweep(arm, q, qd, stiffness, *, head=None, angles=None, dt: float 
 
 
 @dataclass
-class DirectionOptimum:
+class DirectionOptimum(Result):
     """Worst head placement of one impact state (:func:`worst_direction_state`).
 
     Attributes
@@ -597,7 +598,7 @@ def worst_direction_state(arm, q, qd, stiffness, *, head=None, dt: float = 2e-5,
 
 # ---- every instant of an experiment -----------------------------------------------------------
 @dataclass
-class WorstDirection:
+class WorstDirection(Result):
     """Worst head placement over every instant of an experiment (:func:`worst_direction`).
 
     Attributes

@@ -138,7 +138,7 @@ Y_Q, Y_W, Y_XH, Y_VH, Y_ED, Y_TH, Y_THD = STATE.offsets(
     "q", "w", "x_head", "v_head", "E_dissipated", "theta", "theta_d")
 NY = STATE.size
 
-#: One row of the summary of an impact (columns of ImpactResults.summary).
+#: One row of the summary of an impact (columns of ImpactResult.summary).
 SUMMARY = Layout("impact summary", [
     Field("F_max", 1, "N", "peak contact force"),
     Field("t_Fmax", 1, "s", "time of the peak force after t0"),
@@ -166,7 +166,7 @@ SUMMARY = Layout("impact summary", [
 SUMMARY_COLUMNS = SUMMARY.columns()
 NSUM = SUMMARY.size
 
-#: One sample of a recorded impact history (columns of ImpactResults.histories[i]).
+#: One sample of a recorded impact history (columns of ImpactResult.histories[i]).
 HIST = Layout("impact history row", [
     Field("t", 1, "s", "time after the impact instant t0"),
     Field("F", 1, "N", "contact force (Hunt-Crossley, 6.2)"),

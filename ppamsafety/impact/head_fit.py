@@ -33,11 +33,13 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from ..results import Result
 from .._validation import (as_float_array, check_finite_result, check_instance, check_positive,
                            check_range, check_range_array, check_real)
 from ..params import ArmParameters, thesis_arm
 from ..params.iso_ts_15066 import FACE, SKULL_FOREHEAD
 from ..plant import geometry as geo
+from ..plots.impact import plot_head_fit
 from ..units import DEG, G0
 from .head import resolve_head
 from .model import effective_mass
@@ -184,7 +186,7 @@ def hic_curve(stiffness, exponent, damping, *, arm_mass, head_mass=5.0, dt=1e-5,
 
 
 @dataclass(frozen=True)
-class HeadFit:
+class HeadFit(Result):
     """Result of :func:`fit_thesis_head`.
 
     Attributes
@@ -213,6 +215,32 @@ class HeadFit:
     rms_sigma: float
     drop_peak_g: float
     iso_spring: float
+
+    def to_pandas(self) -> pd.DataFrame:
+        """The Table 6.1 pairs (:attr:`pairs`) with the model HIC and the residuals."""
+        return self.pairs
+
+    def mean_residual(self) -> dict:
+        """Mean residual of the pairs per experiment [standard deviations]:
+        ``{"step": ..., "switch": ...}``."""
+        p = self.pairs
+        return {e: float(p[p.experiment == e].residual_sigma.mean())
+                for e in p.experiment.unique()}
+
+    def curve(self) -> pd.DataFrame:
+        """The fitted model's (F_max, HIC36) curve over impact speeds (:func:`hic_curve`)."""
+        return hic_curve(self.stiffness, self.exponent, self.damping, arm_mass=self.arm_mass,
+                         head_mass=self.head_mass)
+
+    def plot(self, **kwargs):
+        """The Table 6.1 pairs against the fitted HIC(F_max) curve, a matplotlib Figure.
+
+        Parameters
+        ----------
+        **kwargs
+            Passed to :func:`ppamsafety.plots.impact.plot_head_fit` (``title``).
+        """
+        return plot_head_fit(self.pairs, self.curve(), **kwargs)
 
 
 def hic_at_force(F, curve: pd.DataFrame) -> np.ndarray:

@@ -11,7 +11,7 @@ and windows are index pairs (i, j) with 1 <= j - i <= Wn.
 
 **Single pulse** (:func:`_hic_unimodal`, chosen by :func:`hic_kernel` when the
 samples rise to one maximum and then fall, plateaus allowed: 298 of the
-first 300 impacts of ``studies/bench/bench_impact.py``, measured on their
+first 300 impacts of ``benchmarks/bench_impact.py``, measured on their
 histories).  The window of every length L with the largest area is found by
 growing it from the largest trapezoid segment towards the larger neighbour,
 so HIC is exact in O(N).
@@ -41,8 +41,11 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+import pandas as pd
 
+from ..results import Result
 from .._jit import kernel, step_kernel
+from ..plots.impact import plot_hic_windows
 from .._validation import as_float_array, check_finite_result, check_nonnegative, check_range
 
 _SLACK = 1.0 + 1e-12  # bounds are inflated by this factor against their own rounding
@@ -419,7 +422,7 @@ def _bruteforce_batch_kernel(A, dt, max_window_samples, out_value, out_i, out_j)
 
 
 @dataclass(frozen=True)
-class HICResult:
+class HICResult(Result):
     """HIC and its maximising window; arrays (one entry per record) for 2-D input.
 
     Attributes
@@ -436,6 +439,24 @@ class HICResult:
     t1: float | np.ndarray
     t2: float | np.ndarray
     window: float
+
+    def to_pandas(self) -> pd.DataFrame:
+        """One row per record: ``HIC`` [-], ``t1 [s]``, ``t2 [s]`` (the maximising window)
+        and ``window [s]`` (the limit W)."""
+        v = np.atleast_1d(self.value)
+        return pd.DataFrame({"HIC": v, "t1 [s]": np.atleast_1d(self.t1),
+                             "t2 [s]": np.atleast_1d(self.t2),
+                             "window [s]": np.full(v.shape, float(self.window))})
+
+    def plot(self, **kwargs):
+        """Each record's HIC over its maximising window, a matplotlib Figure.
+
+        Parameters
+        ----------
+        **kwargs
+            Passed to :func:`ppamsafety.plots.impact.plot_hic_windows` (``title``).
+        """
+        return plot_hic_windows(self.to_pandas(), **kwargs)
 
 
 _LOG_MAX = math.log(np.finfo(float).max)

@@ -15,15 +15,17 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from ..results import Result
 from .._validation import (InvalidTypeError, check_bool, check_choice, check_instance,
                            check_int,
                            check_nonnegative, describe)
 from ..experiments.closed_loop import ExperimentResult
 from ..plant import geometry as geo
+from ..plots.impact import plot_worst_instants
 from ..plant.pneumatics import joint_stiffness
 from . import engine as eng
 from .bounds import impact_bounds
-from .model import ImpactResults, _simulate_impacts, check_arm, resolve_head, simulate_impacts  # noqa: F401
+from .model import ImpactResult, _simulate_impacts, check_arm, resolve_head, simulate_impacts  # noqa: F401
 from .model import _prepare_impacts, _run_cases, _summary_frame
 
 HEURISTICS = ("max TCP speed", "max |qd1|", "max |qd2|", "max ||qd||")
@@ -111,7 +113,7 @@ def heuristic_instants(states: pd.DataFrame) -> dict:
 
 def evaluate_experiment(result, arm, *, instants: str = "heuristic", every: int = 1,
                         head=None, dt: float = 2e-5, duration: float = 0.05,
-                        min_speed: float = 0.0, history=False) -> ImpactResults:
+                        min_speed: float = 0.0, history=False) -> ImpactResult:
     """Simulate head impacts at instants of an experiment.
 
     Parameters
@@ -138,7 +140,7 @@ def evaluate_experiment(result, arm, *, instants: str = "heuristic", every: int 
 
     Returns
     -------
-    ImpactResults
+    ImpactResult
         Summary with an extra column ``t0`` (impact instant) and, for the
         heuristic, ``instant`` (its name).
     """
@@ -183,7 +185,7 @@ SCREEN_MARGIN = 1e-2
 
 
 @dataclass
-class WorstInstants:
+class WorstInstants(Result):
     """Result of :func:`worst_instant`: the worst impacts of an experiment, found exactly.
 
     Attributes
@@ -215,6 +217,22 @@ class WorstInstants:
     n_simulated: int
     n_pruned: int
     n_screened: int = 0
+
+    def to_pandas(self) -> pd.DataFrame:
+        """The candidate instants (:attr:`table`): bounds, screening and exact values."""
+        return self.table
+
+    def plot(self, **kwargs):
+        """F_max and HIC36 over the impact instant: bounds, screening values and the
+        simulated instants, the worst marked; a matplotlib Figure.
+
+        Parameters
+        ----------
+        **kwargs
+            Passed to :func:`ppamsafety.plots.impact.plot_worst_instants` (``title``).
+        """
+        return plot_worst_instants(self.table, worst_F=float(self.worst_F["t0"]),
+                                   worst_HIC=float(self.worst_HIC["t0"]), **kwargs)
 
 
 def worst_instant(result, arm, *, every: int = 1, head=None, dt: float = 2e-5,

@@ -2,7 +2,7 @@
 
 :func:`simulate_impacts` runs a batch of impacts of the flexible-joint arm
 with a head model in one compiled call (:mod:`ppamsafety.impact.engine`) and
-returns an :class:`ImpactResults` with a summary DataFrame (HIC36, HIC15 and
+returns an :class:`ImpactResult` with a summary DataFrame (HIC36, HIC15 and
 their windows, F_max and its time, penetration, energies) and optional time
 histories.  :func:`effective_mass` gives the arm's apparent mass at the tool
 along a direction, the quantity that decides the impact force (§6.3.4).
@@ -17,6 +17,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from ..results import Result
 from .._validation import (MAX_BYTES, InvalidTypeError, as_float_array, check_bool,
                            check_choice, check_finite_result, check_int, check_range, check_size,
                            check_range_array, check_same_rows, check_str, describe,
@@ -482,7 +483,7 @@ class MissingHistoryError(KeyError, ValueError):
 
 
 @dataclass
-class ImpactResults:
+class ImpactResult(Result):
     """Results of a batch of impacts.
 
     Attributes
@@ -622,7 +623,7 @@ class ImpactResults:
         return self.summary.loc[vals.idxmax()]
 
     def plot(self, index=None, **kwargs):
-        """Plot with :mod:`ppamsafety.report`; returns a matplotlib Figure.
+        """The figure (drawn by :mod:`ppamsafety.plots`), a matplotlib Figure.
 
         Parameters
         ----------
@@ -704,7 +705,7 @@ def simulate_impacts(arm, q, qd, stiffness, *, head: HeadContactModel | str | No
                      direction=None, head_velocity=None, fixed_arm: bool = False,
                      dt: float = 2e-5, duration: float = 0.05, history=False,
                      integrator: str = "fixed", joint_model="frozen-equilibrium",
-                     motor_inertia=None) -> ImpactResults:
+                     motor_inertia=None) -> ImpactResult:
     """Simulate impacts of the flexible-joint arm with a free head (thesis §6.3.2).
 
     Parameters
@@ -773,7 +774,7 @@ def simulate_impacts(arm, q, qd, stiffness, *, head: HeadContactModel | str | No
 
     Returns
     -------
-    ImpactResults
+    ImpactResult
         Cases whose tool and head are both at rest are skipped (zero force,
         ``status`` ``"at rest"``).
 
@@ -829,7 +830,7 @@ def _simulate_impacts(arm, q, qd, stiffness, *, head, direction, head_velocity, 
     SUM[prep.sel] = _run_cases(prep, prep.sel, integrator, HIST)
     df = _summary_frame(prep, np.arange(n), SUM, stacklevel=stacklevel)
     hists = {int(i): eng.HIST.frame(HIST[j]) for j, i in enumerate(prep.hist_idx)}
-    return ImpactResults(df, hists, prep.head, prep.dt, prep.duration)
+    return ImpactResult(df, hists, prep.head, prep.dt, prep.duration)
 
 
 @dataclass

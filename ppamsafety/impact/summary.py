@@ -35,6 +35,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from ..results import Result
 from .._validation import check_instance, check_int
 from ..experiments.catalog import run_thesis_experiment
 from ..params import ArmParameters, thesis_arm
@@ -131,7 +132,7 @@ CASE_COLUMNS = ("experiment", "family", "variant", "contact_point", "body_region
 
 
 @dataclass
-class SafetySummary:
+class SafetySummary(Result):
     """Result of :func:`safety_summary`.
 
     Attributes
@@ -180,7 +181,7 @@ class SafetySummary:
         """The one-screen table (:attr:`table`)."""
         return self.table.copy()
 
-    def plot(self) -> dict:
+    def figures(self) -> dict:
         """The arm at the worst instant of the worst run, each contact point with its worst
         region and margin (:meth:`~ppamsafety.impact.anywhere.WorstContact.plot`),
         ``{file name: Figure}``."""

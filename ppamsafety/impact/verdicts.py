@@ -42,6 +42,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from ..results import Result
 from .._validation import check_str, did_you_mean
 from ..params.injury import AIS_RISK, AIS_SOURCE, FRACTURE_FORCES, HIC36_LIMIT
 from ..params.iso_ts_15066 import SKULL_FOREHEAD, BodyRegion, resolve_region
@@ -226,7 +227,7 @@ def criterion_names(region=None) -> list:
 
 
 @dataclass
-class Verdicts:
+class Verdicts(Result):
     """Verdicts of one impact (or one case) against a set of criteria.
 
     Attributes

@@ -68,7 +68,7 @@ touches (:class:`~ppamsafety.params.effects.EffectKind`); the kernel side, in de
    if zero is not the effect's rest state, set it there (from the row).
 5. *Tests.*  With the effect off, ``tests/test_golden.py`` must still pass
    bitwise; add a test of the effect itself, and a benchmark run
-   (``studies/bench/bench_plant.py``) showing the cost of the check when off.
+   (``benchmarks/bench_plant.py``) showing the cost of the check when off.
 
 A stateless effect that the kernels read (``EffectKind.KERNEL``, e.g. the joint
 torque bias: ``torque_bias_mode`` / ``torque_bias``, added to the joint torques in
@@ -118,7 +118,7 @@ change of eps_s (~1e-3), i.e. ~1e-7 in the force factor, far below the O(h)
 turning-point registration; ``Effects.hysteresis_exact_stages`` evaluates
 ``preisach_peek`` at every stage instead (4x the Everett evaluations; the
 test suite checks the two agree to 1e-3 of the hysteresis effect).  Cost
-(measured, closed loop of ``studies/bench/bench_closed_loop.py``): 1.75x the
+(measured, closed loop of ``benchmarks/bench_closed_loop.py``): 1.75x the
 nominal run with the secant stages (3.8x with exact peeks).  The
 controllers' model rows carry no hysteresis (they do not know about it).
 

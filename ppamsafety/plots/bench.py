@@ -135,3 +135,35 @@ def seal_parameters_figure(table, *, params=("c0", "c1")):
 
 
 __all__ = ["campaign_loops_figure", "campaign_residual_figure", "seal_parameters_figure"]
+
+
+def plot_campaign(curves, *, xlabel: str, title: str = "", max_points: int = 4000):
+    """Measured force against the actuator's position variable, one curve per record.
+
+    Parameters
+    ----------
+    curves : list of (str, array_like, array_like)
+        ``(label, x, force [N])`` per record.
+    xlabel : str
+        Label of x with its unit (``"contraction [-]"``, ``"rod position [m]"``).
+    title : str
+        Axes title (default "campaign: measured force").
+    max_points : int
+        Points drawn per record at most (evenly thinned).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    fig, ax = new_figure(figsize=(6.5, 4.5))
+    for label, x, f in curves:
+        x, f = np.asarray(x, float), np.asarray(f, float)
+        step = max(1, x.size // max_points)
+        ax.plot(x[::step], f[::step], lw=0.8, label=label)
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel("force [N]")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7)
+    ax.set_title(title or "campaign: measured force")
+    fig.tight_layout()
+    return fig

@@ -19,7 +19,7 @@ def plot_contact_history(hist, *, point: str = "", body: str = "", title: str = 
     ----------
     hist : pandas.DataFrame
         Columns ``t`` [s], ``F`` [N], ``a_body_g`` [g], ``delta`` [m] and ``delta1``..
-        (each layer's compression [m]) (:attr:`ContactResults.histories` entry).
+        (each layer's compression [m]) (:attr:`ContactResult.histories` entry).
     point, body : str
         Names for the title.
     title : str
@@ -117,3 +117,46 @@ def plot_contact_margins(drawing: dict, *, title: str = ""):
 
 
 __all__ = ["plot_contact_history", "plot_contact_margins"]
+
+
+def plot_region_margins(grid, *, title: str = ""):
+    """The margin of every body region at every contact point, as a colour grid.
+
+    Parameters
+    ----------
+    grid : pandas.DataFrame
+        One row per body region: the column ``body_region`` and one column per (contact
+        point, covering) holding the governing criterion's margin to its limit [%] (negative:
+        the limit is exceeded), as :attr:`ppamsafety.sections.person.PersonFindings.margin_grid`
+        builds it.
+    title : str
+        Figure title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Red: the limit is exceeded; green: below it; each cell annotated with its margin.
+    """
+    from matplotlib import colormaps, colors
+
+    cols = [c for c in grid.columns if c != "body_region"]
+    m = grid[cols].to_numpy(dtype=float)
+    fig, ax = new_figure(1, 1, figsize=(1.4 * len(cols) + 3.0, 0.42 * len(grid) + 2.2))
+    span = max(1.0, float(np.nanmax(np.abs(m)))) if np.isfinite(m).any() else 1.0
+    norm = colors.TwoSlopeNorm(vmin=-span, vcenter=0.0, vmax=span)
+    im = ax.imshow(m, cmap=colormaps["RdYlGn"], norm=norm, aspect="auto")
+    for i in range(m.shape[0]):
+        for j in range(m.shape[1]):
+            if math.isfinite(m[i, j]):
+                ax.text(j, i, f"{m[i, j]:+.0f}", ha="center", va="center", fontsize=8)
+    ax.set_xticks(range(len(cols)))
+    ax.set_xticklabels([c.removesuffix(" [% margin]") for c in cols], rotation=35, ha="right",
+                       fontsize=8)
+    ax.set_yticks(range(len(grid)))
+    ax.set_yticklabels(grid["body_region"], fontsize=8)
+    ax.set_xlabel("contact point, covering")
+    ax.set_ylabel("body region (ISO/TS 15066 Annex A)")
+    fig.colorbar(im, ax=ax, label="margin of the governing criterion to its limit [%]")
+    if title:
+        ax.set_title(title)
+    return fig

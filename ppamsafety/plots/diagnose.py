@@ -289,7 +289,7 @@ def plot_sawtooth_diagnosis(rest, metrics):
     Parameters
     ----------
     rest : pandas.DataFrame
-        :attr:`ppamsafety.sections.diagnose_sawtooth.DiagnoseSawtoothStudy.rest_points`.
+        :attr:`ppamsafety.sections.diagnose_sawtooth.DiagnoseSawtoothFindings.rest_points`.
     metrics : dict
         The study's metrics (RMS numbers for the titles).
 

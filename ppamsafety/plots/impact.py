@@ -23,7 +23,7 @@ def plot_impact_history(hist, *, head=None, title: str = "", ax=None):
     ----------
     hist : pandas.DataFrame
         Time history with columns ``t`` [s], ``F`` [N], ``a_head_g`` [g]
-        and ``delta`` [m] (:attr:`ImpactResults.histories` entry).
+        and ``delta`` [m] (:attr:`ImpactResult.histories` entry).
     head : HeadContactModel, optional
         Head model of the impact (accepted for the caller's convenience;
         not drawn).
@@ -410,7 +410,7 @@ def plot_direction_ratios(table):
     table : pandas.DataFrame
         One row per experiment and controller, with columns ``experiment``, ``label``,
         ``ratio_F_max`` and ``ratio_HIC36`` (worst placement / thesis placement, every
-        instant), e.g. ``WorstDirectionStudy.table``.
+        instant), e.g. ``WorstDirectionFindings.table``.
 
     Returns
     -------
@@ -428,5 +428,69 @@ def plot_direction_ratios(table):
     ax.set_ylabel("worst placement vs head along the TCP velocity [%]")
     ax.set_title("how much worse the worst head placement is (every instant)")
     ax.legend()
+    fig.tight_layout()
+    return fig
+
+
+def plot_hic_windows(table, *, title: str = ""):
+    """HIC of each record drawn over its maximising window.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        Columns ``HIC`` [-], ``t1 [s]``, ``t2 [s]`` (``HICResult.to_pandas()``).
+    title : str
+        Axes title (default "HIC and its maximising window").
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    fig, ax = new_figure(figsize=(6.5, 4.0))
+    for k, row in enumerate(table.itertuples(index=False)):
+        hic, t1, t2 = row[0], row[1], row[2]
+        ax.plot([1e3 * t1, 1e3 * t2], [hic, hic], "-", lw=3, color=f"C{k % 10}")
+        ax.annotate(f"{hic:.4g}", (1e3 * (t1 + t2) / 2, hic), textcoords="offset points",
+                    xytext=(0, 4), ha="center", fontsize=7)
+    ax.set_xlabel("time [ms]")
+    ax.set_ylabel("HIC [-]")
+    ax.grid(alpha=0.3)
+    ax.set_title(title or "HIC and its maximising window")
+    fig.tight_layout()
+    return fig
+
+
+def plot_worst_instants(table, *, worst_F: float, worst_HIC: float, title: str = ""):
+    """F_max and HIC36 over the impact instant t0: the rigorous bounds, the screening values
+    and the exactly simulated instants, with the worst instants marked.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        ``WorstInstants.table``: ``t0`` [s], ``F_bound`` [N], ``HIC36_bound``, ``F_screen``,
+        ``HIC36_screen``, ``F_max`` [N], ``HIC36`` (NaN where not evaluated).
+    worst_F, worst_HIC : float
+        Instants [s] of the largest F_max and HIC36.
+    title : str
+        Figure title (default "worst impact instant").
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    fig, axes = new_figure(2, 1, figsize=(7, 5.5), sharex=True)
+    t = 1e3 * table["t0"].to_numpy()
+    for ax, (bound, screen, exact, worst, unit) in zip(axes, (
+            ("F_bound", "F_screen", "F_max", worst_F, "F_max [N]"),
+            ("HIC36_bound", "HIC36_screen", "HIC36", worst_HIC, "HIC36 [-]"))):
+        ax.plot(t, table[bound], "-", color="0.6", lw=0.8, label="upper bound")
+        ax.plot(t, table[screen], ".", ms=3, color="tab:blue", label="screened")
+        ax.plot(t, table[exact], "o", ms=4, color="tab:red", label="simulated")
+        ax.axvline(1e3 * worst, color="k", ls="--", lw=0.8, label="worst instant")
+        ax.set_ylabel(unit)
+        ax.grid(alpha=0.3)
+    axes[0].legend(fontsize=7)
+    axes[1].set_xlabel("impact instant t0 [ms]")
+    axes[0].set_title(title or "worst impact instant")
     fig.tight_layout()
     return fig

@@ -1,7 +1,7 @@
 """Plots of clamping and ISO/TS 15066 power and force limiting (pyplot-free).
 
-Every function takes data computed elsewhere (:class:`~ppamsafety.impact.clamping.ClampingResults`
-or :class:`~ppamsafety.sections.iso_15066.IsoStudy`) and returns a Figure.
+Every function takes data computed elsewhere (:class:`~ppamsafety.impact.clamping.ClampingResult`
+or :class:`~ppamsafety.sections.iso_15066.IsoFindings`) and returns a Figure.
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ def plot_clamping_histories(results):
 
     Parameters
     ----------
-    results : ClampingResults
+    results : ClampingResult
         Output of :func:`ppamsafety.impact.clamping.simulate_clamping`.
     """
     fig, ax = new_figure(figsize=(7.0, 4.0))
@@ -48,7 +48,7 @@ def plot_clamping_vs_limits(study):
 
     Parameters
     ----------
-    study : IsoStudy
+    study : IsoFindings
         Output of :func:`ppamsafety.sections.iso_15066.compute`.
     """
     ct = study.clamp_transient
@@ -79,7 +79,7 @@ def plot_quasi_static(study):
 
     Parameters
     ----------
-    study : IsoStudy
+    study : IsoFindings
         Output of :func:`ppamsafety.sections.iso_15066.compute`.
     """
     fig, ax = new_figure(figsize=(8.0, 4.5))
@@ -103,7 +103,7 @@ def plot_lambda_limits(study):
 
     Parameters
     ----------
-    study : IsoStudy
+    study : IsoFindings
         Output of :func:`ppamsafety.sections.iso_15066.compute`.
     """
     fig, axes = new_figure(1, 2, figsize=(10.0, 4.2))
@@ -142,7 +142,7 @@ def plot_hc_vs_linear(study):
 
     Parameters
     ----------
-    study : IsoStudy
+    study : IsoFindings
         Output of :func:`ppamsafety.sections.iso_15066.compute`.
     """
     c = study.hc_curve

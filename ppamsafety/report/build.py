@@ -412,7 +412,7 @@ def build_report(outdir="reports", *, quick: bool = False, only=None, progress: 
             metrics[name] = {**res.metrics, "wall_time_s": round(dt, 2),
                              "cpu_time_s": round(cpu, 2)}
             body = with_header_units(res.markdown.strip(), name)
-            sections.append(f"## {res.title}\n\n{body}\n\n*Study `{name}` ran in "
+            sections.append(f"## {res.title}\n\n{body}\n\n*Section `{name}` ran in "
                             f"{dt:.1f} s.*\n")
         column_table(names, {n: done[n][0] for n in names}).to_csv(stage / COLUMNS_FILE,
                                                                     index=False)

@@ -2,13 +2,15 @@
 
 Every section module ``ppamsafety.sections.<name>`` defines
 
-* ``compute(*, quick=False, arm=None, head=None, ...) -> <Name>Study``: runs
+* ``compute(*, quick=False, arm=None, head=None, ...) -> <Name>Findings``: runs
   the simulations for ``arm`` (any valid arm; default the thesis arm) and
   ``head`` (a head model; default ``thesis-frontal``) and returns a dataclass
   holding DataFrames, arrays, result objects and a ``metrics`` dict.  It writes
-  no file, makes no figure and formats no Markdown.  The result object has
-  ``to_pandas()`` (its main table) and ``plot()`` (its figures, ``{file name:
-  Figure}``, composed from the plot functions of :mod:`ppamsafety.plots`).
+  no file, makes no figure and formats no Markdown.  The result object follows
+  the result protocol (:mod:`ppamsafety.results`): ``to_pandas()`` (its main
+  table), ``figures()`` (its figures, ``{file name: Figure}``, composed from the
+  plot functions of :mod:`ppamsafety.plots`), ``plot()`` (the first of them),
+  ``to_dict()`` and ``write(folder)``.
   Thesis values and ratios are joined only when :func:`compares_to_thesis` holds
   (the thesis arm, and for impacts the thesis head): every other number is
   computed for the arm given.
@@ -18,8 +20,8 @@ Every section module ``ppamsafety.sections.<name>`` defines
 
 :func:`write_section` writes the artifacts of a :class:`Section` to a folder
 and :func:`run_section` chains the three steps; the report builder
-(:func:`ppamsafety.report.build.build_report`) and :func:`main` (one section
-alone, ``python studies/<name>.py [outdir] [--quick]``) use it.
+(:func:`ppamsafety.report.build.build_report`) uses it, for the whole report and
+for one section alone (``ppamsafety report --only NAME``).
 
 "Section" is a part of the report; "study" means a sweep study (a TOML study
 file run by ``ppamsafety sweep``, :mod:`ppamsafety.study_files`).
@@ -36,12 +38,9 @@ from pathlib import Path
 
 import pandas as pd
 
-from .._commandline import Parser, run_guarded
 from .._validation import check_bool
-from ..output import OutputFolder
 # the impact.head module by its own name: ``head_model`` is a section module here
 from ..impact import head as _head
-from ..design import load_arm
 from ..params import ArmParameters, is_thesis_arm, thesis_arm
 from ..plots.figure import save
 
@@ -465,56 +464,3 @@ def section_options(name: str) -> frozenset:
     params = inspect.signature(section_module(name).compute).parameters.values()
     return frozenset(p.name for p in params
                      if p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD))
-
-
-def main(name: str, argv=None) -> int:
-    """Run one section alone: ``python studies/<name>.py [outdir] [--quick] [--overwrite]``.
-
-    The section writes into ``outdir`` (default ``reports``) under the rules of
-    :mod:`ppamsafety.output`: a missing or empty folder is used; a previous
-    ppamsafety output is updated only with ``--overwrite`` (files of the same
-    name are replaced, the other toolkit files are kept); a folder holding
-    files ppamsafety did not write is refused.
-
-    Parameters
-    ----------
-    name : str
-        Section name (see :data:`REGISTRY`).
-    argv : list of str, optional
-        Command-line arguments (default ``sys.argv[1:]``).
-
-    Returns
-    -------
-    int
-        Exit status: 0 success, 2 bad usage or input, 1 failure (see
-        :func:`ppamsafety.cli.main`).
-    """
-    if name not in REGISTRY:
-        raise ValueError(f"unknown report section {name!r}; choose from {REGISTRY}")
-    p = Parser(prog=f"studies/{name}.py", description=f"Run the report section {name!r} alone.")
-    p.add_argument("outdir", nargs="?", default="reports",
-                   help="output folder (default: reports)")
-    p.add_argument("--quick", action="store_true", help="coarse grids and short sweeps")
-    p.add_argument("--overwrite", action="store_true",
-                   help="replace files of a previous ppamsafety output in OUTDIR")
-    p.add_argument("--arm", default=None, metavar="FILE",
-                   help="arm file (TOML; default: the thesis arm)")
-    p.add_argument("--head", default=None, metavar="NAME|FILE",
-                   help="head model name or head file (default: thesis-frontal)")
-
-    def named(option, value, load):
-        try:
-            return load(value)
-        except (ValueError, TypeError, OSError) as exc:     # the option, then why
-            raise ValueError(f"{option} {value!r}: {exc}") from None
-
-    def run(args):
-        arm = None if args.arm is None else named("--arm", args.arm, load_arm)
-        head = None if args.head is None else named("--head", args.head, _head.resolve_head)
-        with OutputFolder(args.outdir, kind="section", overwrite=args.overwrite,
-                          clean=False, kinds=("section", "report")) as stage:
-            res = run_section(name, stage, quick=args.quick, arm=arm, head=head)
-        print(f"# {res.title}\n\n{res.markdown}")
-        return 0
-
-    return run_guarded(p, run, argv)

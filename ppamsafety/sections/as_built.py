@@ -2,7 +2,7 @@
 (Tables 5.2, 6.1, fig. 3.1, §5.3.5).
 
 Part of ``ppamsafety report`` (section "as_built"); run alone with
-``python studies/as_built.py [outdir] [--quick] [--overwrite]``.
+``ppamsafety report --only as_built [--outdir DIR] [--quick] [--overwrite]``.
 
 The thesis prints Table 5.2 (tracking means and maxima), Table 6.1 (HIC and F_max of the step
 and the switch), the RMS errors of the gravity-compensation sawtooth of fig. 3.1 and
@@ -33,6 +33,7 @@ from ..experiments.conclusions import conclusions_table
 from ..hysteresis import DELTA_25_FIBRES
 from ..markdown import markdown_table
 from . import Section, SectionInfo, compares_to_thesis, other_arm_note, resolve_arm
+from ..results import Result
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -57,7 +58,7 @@ def quick_design() -> Design:
 
 
 @dataclass
-class AsBuiltStudy:
+class AsBuiltFindings(Result):
     """Result of :func:`compute`.
 
     Attributes
@@ -69,6 +70,13 @@ class AsBuiltStudy:
     metrics : dict
     note : str
         The other-arm note ("" for the thesis arm).
+    measurements_by_source : dict
+        Number of the thesis' printed measurements per source (table or figure).
+    interval_widening : float
+        sqrt(s2): how much the intervals widen because the model does not fit to within the
+        stated uncertainty [-].
+    table_6_1_fitted : bool
+        Table 6.1 values are among the fitted measurements.
     """
 
     fit: object
@@ -76,17 +84,20 @@ class AsBuiltStudy:
     wall_time_s: float = 0.0
     metrics: dict = field(default_factory=dict)
     note: str = ""
+    measurements_by_source: dict = field(default_factory=dict)
+    interval_widening: float = float("nan")
+    table_6_1_fitted: bool = False
 
     def to_pandas(self) -> pd.DataFrame:
         """The fitted effects (empty for another arm)."""
         return self.fit.to_pandas() if self.fit is not None else pd.DataFrame()
 
-    def plot(self) -> dict:
+    def figures(self) -> dict:
         """Figures ``{file name: Figure}``."""
         return {} if self.fit is None else {"as_built.png": self.fit.plot()}
 
 
-def compute(*, quick: bool = False, arm=None, head=None) -> AsBuiltStudy:
+def compute(*, quick: bool = False, arm=None, head=None) -> AsBuiltFindings:
     """Fit the as-built arm to the thesis' printed measurements (module docstring).
 
     Parameters
@@ -102,11 +113,11 @@ def compute(*, quick: bool = False, arm=None, head=None) -> AsBuiltStudy:
 
     Returns
     -------
-    AsBuiltStudy
+    AsBuiltFindings
     """
     t0 = time.perf_counter()
     if not compares_to_thesis(arm, head):
-        return AsBuiltStudy(fit=None, quick=quick, metrics={"fitted": False},
+        return AsBuiltFindings(fit=None, quick=quick, metrics={"fitted": False},
                             note=other_arm_note(resolve_arm(arm), head))
     arm = resolve_arm(arm)
     if quick:
@@ -116,7 +127,11 @@ def compute(*, quick: bool = False, arm=None, head=None) -> AsBuiltStudy:
         fit = fit_as_built(arm, candidates=CANDIDATES, design=Design())
     wall = time.perf_counter() - t0
     metrics = {**fit.metrics, "quick": quick, "wall_time_s": wall}
-    return AsBuiltStudy(fit=fit, quick=quick, wall_time_s=wall, metrics=metrics)
+    return AsBuiltFindings(
+        fit=fit, quick=quick, wall_time_s=wall, metrics=metrics,
+        measurements_by_source=fit.measurements.groupby("source", sort=False).size().to_dict(),
+        interval_widening=float(np.sqrt(fit.s2)),
+        table_6_1_fitted=bool(fit.cells.source.str.startswith("Table 6.1").any()))
 
 
 def _num(v, unit):
@@ -239,12 +254,12 @@ def _tug_text(pull: pd.DataFrame) -> list:
                    "directions by two sources."]
 
 
-def render(study: AsBuiltStudy) -> Section:
+def render(study: AsBuiltFindings) -> Section:
     """Markdown of the section and its artifacts.
 
     Parameters
     ----------
-    study : AsBuiltStudy
+    study : AsBuiltFindings
         Output of :func:`compute`.
     """
     title = "The as-built arm: the library fitted to the thesis' own measurements"
@@ -260,7 +275,7 @@ def render(study: AsBuiltStudy) -> Section:
     if study.quick:
         L += ["**Quick mode: three variants, short runs, two candidates, one step; the numbers "
               "are not comparable to the thesis.**", ""]
-    n_by = fit.measurements.groupby("source", sort=False).size()
+    n_by = study.measurements_by_source
     L.append(f"The thesis prints {len(fit.measurements)} numbers about its real arm that the "
              f"toolkit can simulate: " + ", ".join(f"{src} ({n_by[src]})" for src in SOURCES
                                                    if src in n_by)
@@ -311,7 +326,7 @@ def render(study: AsBuiltStudy) -> Section:
              f"{fit.path.evaluations} points evaluated after the sensitivities. 95 % intervals "
              f"from the "
              f"posterior covariance, scaled by the residual variance s2 = {fit.s2:.3g} "
-             f"(chi2 / (m - k); the intervals widen by sqrt(s2) = {np.sqrt(fit.s2):.2f} because "
+             f"(chi2 / (m - k); the intervals widen by sqrt(s2) = {study.interval_widening:.2f} because "
              f"the model does not fit to within the stated uncertainty).")
     L.append("")
     L.append(markdown_table(_effects_display(fit.effects)))
@@ -353,7 +368,7 @@ def render(study: AsBuiltStudy) -> Section:
     L.append("")
     L.append(markdown_table(_table_5_2(fit.cells)))
     L.append("")
-    if fit.cells.source.str.startswith("Table 6.1").any():
+    if study.table_6_1_fitted:
         L.append("Table 6.1 (§6.3.3), worst of the four heuristic impact instants:")
         L.append("")
         L.append(markdown_table(_table_6_1(fit.cells)))
@@ -417,7 +432,7 @@ def render(study: AsBuiltStudy) -> Section:
         L.append("")
     L.append(f"Compute: {study.wall_time_s:.1f} s ({m['evaluations']} plants, each simulated "
              f"in every experiment).")
-    arts = list(study.plot().items()) + [
+    arts = list(study.figures().items()) + [
         ("as_built_effects.csv", fit.effects),
         ("as_built_identifiability.csv", idf.to_pandas()),
         ("as_built_cells.csv", fit.cells),
@@ -431,5 +446,5 @@ def render(study: AsBuiltStudy) -> Section:
     return Section(title, "\n".join(L), arts, dict(study.metrics))
 
 
-__all__ = ["compute", "render", "AsBuiltStudy", "SECTION", "quick_design", "QUICK_VARIANTS",
+__all__ = ["compute", "render", "AsBuiltFindings", "SECTION", "quick_design", "QUICK_VARIANTS",
            "QUICK_CANDIDATES", "QUICK_EVALUATIONS"]

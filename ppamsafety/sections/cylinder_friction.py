@@ -35,6 +35,7 @@ from ..diagnose.bench.calibration import (HIGH_PRECISION, MEASURE_SEEDS, calibra
 from ..markdown import markdown_table
 from ..plots.bench import seal_parameters_figure
 from . import Section, SectionInfo, checked_compute
+from ..results import Result
 
 SECTION = SectionInfo(
     summary=("bench case study: friction of three real 3D-printed cylinders (campaigns over "
@@ -50,7 +51,7 @@ CALIBRATION_RUNS, CALIBRATION_RUNS_QUICK = 0, 0
 
 
 @dataclass
-class BenchCaseStudy:
+class BenchCaseFindings(Result):
     """Result of :func:`compute`.
 
     Attributes
@@ -69,6 +70,9 @@ class BenchCaseStudy:
         One row per synthetic campaign.
     metrics : dict
         Headline numbers.
+    largest_where : dict
+        Seal -> the three significant regions of the remaining residual with the largest
+        |z| (rows of the diagnosis' ``where`` table), for a seal whose residual is unexplained.
     """
 
     diagnoses: dict
@@ -78,12 +82,13 @@ class BenchCaseStudy:
     calibration: pd.DataFrame
     calibration_runs: pd.DataFrame
     metrics: dict = field(default_factory=dict)
+    largest_where: dict = field(default_factory=dict)
 
     def to_pandas(self) -> pd.DataFrame:
         """The per-record table."""
         return self.records.copy()
 
-    def plot(self) -> dict:
+    def figures(self) -> dict:
         """``{file name: Figure}``: loops and residuals per seal, laws against pressure."""
         figs = {"bench_laws.png": seal_parameters_figure(self.laws)}
         for seal, dg in self.diagnoses.items():
@@ -121,7 +126,7 @@ def _fmt_params(params: dict) -> str:
 
 @checked_compute
 def compute(*, quick: bool = False, arm=None, calibration_runs: int | None = None,
-            seals=ZILLEN2021_SEALS) -> BenchCaseStudy:
+            seals=ZILLEN2021_SEALS) -> BenchCaseFindings:
     """Diagnose the shipped seals as campaigns and calibrate the confidence.
 
     Parameters
@@ -138,7 +143,7 @@ def compute(*, quick: bool = False, arm=None, calibration_runs: int | None = Non
 
     Returns
     -------
-    BenchCaseStudy
+    BenchCaseFindings
     """
     n_cal = (CALIBRATION_RUNS_QUICK if quick else CALIBRATION_RUNS) if calibration_runs is None \
         else check_int("calibration_runs", calibration_runs, 0, 1000)
@@ -206,17 +211,25 @@ def compute(*, quick: bool = False, arm=None, calibration_runs: int | None = Non
         m[f"{seal}_repeatability_N"] = dg.residual_rms["force"]["noise"]
         m[f"{seal}_sensor_noise_N"] = dg.residual_rms["force"]["sensor_noise"]
         m[f"{seal}_unexplained"] = dg.unexplained
-    return BenchCaseStudy(diagnoses=dgs, effects=pd.DataFrame(eff), records=records,
-                          laws=pd.DataFrame(laws), calibration=cal.reset_index(),
-                          calibration_runs=runs, metrics=m)
+    return BenchCaseFindings(diagnoses=dgs, effects=pd.DataFrame(eff), records=records,
+                             laws=pd.DataFrame(laws), calibration=cal.reset_index(),
+                             calibration_runs=runs, metrics=m,
+                             largest_where={seal: _largest_where(dg) for seal, dg in dgs.items()
+                                            if dg.unexplained})
 
 
-def render(study: BenchCaseStudy) -> Section:
+def _largest_where(dg) -> pd.DataFrame:
+    """The three significant regions of a diagnosis' remaining residual with the largest |z|."""
+    sig = dg.where[dg.where["significant"]]
+    return sig.reindex(sig["z"].abs().sort_values(ascending=False).index).head(3)
+
+
+def render(study: BenchCaseFindings) -> Section:
     """Markdown section and artifacts of the bench case study.
 
     Parameters
     ----------
-    study : BenchCaseStudy
+    study : BenchCaseFindings
         Output of :func:`compute`.
     """
     m = study.metrics
@@ -258,10 +271,7 @@ def render(study: BenchCaseStudy) -> Section:
                   + ("explained." if not dg.unexplained else
                      "**unexplained** structure remains; largest where: "
                      + "; ".join(f"{r.region} {r.group} (mean {r.mean:+.2f}, rms {r.rms:.2f})"
-                                 for r in dg.where[dg.where["significant"]].reindex(
-                                     dg.where[dg.where["significant"]]["z"].abs()
-                                     .sort_values(ascending=False).index).head(3)
-                                 .itertuples()) + "."))
+                                 for r in study.largest_where[seal].itertuples()) + "."))
     md += ["", "Friction law against pressure (Coulomb level c(p) and presliding step h(p), "
            "95 % intervals, cluster-robust by stroke):", "",
            markdown_table(study.laws), "", "![laws](bench_laws.png)", ""]
@@ -280,7 +290,7 @@ def render(study: BenchCaseStudy) -> Section:
         md += ["The confidence levels are calibrated on synthetic campaigns "
                "(`ppamsafety.diagnose.bench.calibration`; table and command in "
                "`docs/diagnose.md`); `compute(calibration_runs=N)` adds N of them here.", ""]
-    arts = list(study.plot().items()) + [
+    arts = list(study.figures().items()) + [
         ("bench_records.csv", study.records), ("bench_effects.csv", study.effects),
         ("bench_laws.csv", study.laws), ("bench_calibration.csv", cal),
         ("bench_calibration_runs.csv", study.calibration_runs)]
@@ -288,4 +298,4 @@ def render(study: BenchCaseStudy) -> Section:
                    "\n".join(md), arts, dict(m))
 
 
-__all__ = ["BenchCaseStudy", "compute", "render", "CALIBRATION_RUNS"]
+__all__ = ["BenchCaseFindings", "compute", "render", "CALIBRATION_RUNS"]

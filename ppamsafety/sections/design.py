@@ -13,9 +13,11 @@ from ..plant import geometry as geo
 from ..plant import pneumatics as pn
 from ..plant.muscle import force_function, force_polynomial
 from ..plant.ppam_theory import theoretical_muscles
+from ..sweep_cases import IMPACT_POSE_DEG
 from ..units import BAR, DEG, MM
 from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
                resolve_arm)
+from ..results import Result
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -42,7 +44,7 @@ def _table_a1(arm, thesis: bool = True) -> pd.DataFrame:
 
 
 @dataclass
-class DesignStudy:
+class DesignFindings(Result):
     """Result of :func:`compute`: the chapter-2 design maps and Table A.1.
 
     Attributes
@@ -97,7 +99,7 @@ class DesignStudy:
         """Table A.1 (computed vs thesis muscle lengths [mm])."""
         return self.table_a1.copy()
 
-    def plot(self) -> dict:
+    def figures(self) -> dict:
         """The section's figures, ``{file name: Figure}``."""
         return {"design_torque_functions.png": self.torque_functions.plot(),
                 "design_stiffness_map.png": self.stiffness.plot(),
@@ -105,7 +107,7 @@ class DesignStudy:
 
 
 @checked_compute
-def compute(*, quick: bool = False, arm=None, head=None) -> DesignStudy:
+def compute(*, quick: bool = False, arm=None, head=None) -> DesignFindings:
     """Torque functions, stiffness and maximum-load maps, Table A.1.
 
     Parameters
@@ -119,7 +121,7 @@ def compute(*, quick: bool = False, arm=None, head=None) -> DesignStudy:
 
     Returns
     -------
-    DesignStudy
+    DesignFindings
         Maps, tables and metrics.
     """
     arm = resolve_arm(arm)
@@ -127,7 +129,7 @@ def compute(*, quick: bool = False, arm=None, head=None) -> DesignStudy:
     n = 41 if quick else 121
     tf = design.torque_function_curves(arm)
     sm = design.stiffness_map(arm, n1=n, n2=n)
-    q_step = np.array([50 * DEG, -80 * DEG])
+    q_step = np.array(IMPACT_POSE_DEG) * DEG
     K_step = pn.joint_stiffness(q_step, pn.static_pressures(q_step, arm), arm)
     ml = design.max_load_map(arm, n1=2 * n, n2=2 * n)
     if thesis:     # the thesis arm's design-time data: CAD links, theoretical force function
@@ -159,7 +161,7 @@ def compute(*, quick: bool = False, arm=None, head=None) -> DesignStudy:
         metrics = {"K_step": K_step.tolist(), "max_load_min_kg": ml.minimum,
                    "max_load_interior_min_kg": float(inner.M_max_kg.min()
                                                      if len(inner) else ml.minimum)}
-    return DesignStudy(quick=quick, torque_functions=tf, stiffness=sm, max_load=ml,
+    return DesignFindings(quick=quick, torque_functions=tf, stiffness=sm, max_load=ml,
                        max_load_cad=ml_cad, table_a1=ta1, K_step=K_step,
                        p_mean=np.array(arm.pneumatics.p_mean),
                        edge={"e1max": e1max, "e4max": e4max, "f1_edge": f1_edge,
@@ -167,12 +169,12 @@ def compute(*, quick: bool = False, arm=None, head=None) -> DesignStudy:
                        max_load_theory=ml_theory, metrics=metrics, thesis=thesis, arm=arm)
 
 
-def render(study: DesignStudy) -> Section:
+def render(study: DesignFindings) -> Section:
     """The report section of the design study (formatting only).
 
     Parameters
     ----------
-    study : DesignStudy
+    study : DesignFindings
         Output of :func:`compute`.
 
     Returns
@@ -184,10 +186,8 @@ def render(study: DesignStudy) -> Section:
         return _render_other(study)
     sm, ml, ml_cad, ta1 = study.stiffness, study.max_load, study.max_load_cad, study.table_a1
     K_step, quick = study.K_step, study.quick
-    d = ml.data
-    m1_min = d["M1_kg"].min()
-    m2a = d[d.carrying_2 == 3]["M2_kg"].min()
-    m2b = d[d.carrying_2 == 4]["M2_kg"].min()
+    lim, kr = ml.limits, sm.ranges
+    m1_min, m2a, m2b = lim["M1_min"], lim["M2_min_muscle3"], lim["M2_min_muscle4"]
     e1max, e4max = study.edge["e1max"], study.edge["e4max"]
     f1_edge, f4_raw = study.edge["f1_edge"], study.edge["f4_raw"]
     qmin = np.array(ml.argmin) / DEG
@@ -207,9 +207,9 @@ def render(study: DesignStudy) -> Section:
 gravity-compensation pressures and the calibrated mean pressures p_m = ({pm[0]:.3f}, {pm[1]:.3f}) bar.
 At the step-response impact configuration q = (50, -80) deg: K = ({K_step[0]:.1f}, {K_step[1]:.1f}) Nm/rad
 (thesis §6.3.3: 43 and 27 Nm/rad). Over the working area K1 ranges
-{sm.data.K1_Nm_per_rad.min():.1f}-{sm.data.K1_Nm_per_rad.max():.1f} and K2
-{sm.data.K2_Nm_per_rad.min():.1f}-{sm.data.K2_Nm_per_rad.max():.1f} Nm/rad. With the Delta-p approach
-at these p_m the arm can hold itself statically in {100 * sm.data.holdable.mean():.0f} % of the working
+{kr["K1_min"]:.1f}-{kr["K1_max"]:.1f} and K2
+{kr["K2_min"]:.1f}-{kr["K2_max"]:.1f} Nm/rad. With the Delta-p approach
+at these p_m the arm can hold itself statically in {100 * kr["holdable_fraction"]:.0f} % of the working
 area (hatched: a pressure would leave [0, 3] bar).
 
 ![stiffness](design_stiffness_map.png)
@@ -234,25 +234,25 @@ The identified fits fall to about zero force near 30 % contraction: f1({100 * e1
 {f1_edge:.1f} N/bar for group 1 at q1 = 105 deg, and f4({100 * e4max:.1f} %) = {f4_raw:.2f} N/bar
 (clipped to 0) for group 4 at q2 = -130 deg, where the design puts those muscles. At those edges the arm cannot carry a load (at
 q2 = -130 deg muscle 4 cannot even hold the forearm: negative maximum load). In the interior the
-map agrees in magnitude with the thesis (median {d.M_max_kg.median():.1f} kg).
+map agrees in magnitude with the thesis (median {lim["median"]:.1f} kg).
 Recomputed with the theoretical f_t0 (Daerden's N -> inf model, `ppamsafety.plant.ppam_theory`,
 fitted as (2.3)) and the CAD links, the minimum is {ml_th.minimum:.2f} kg, the thesis' "just over 2 kg".
 {'' if not quick else '(quick mode: coarse grids)'}
 
 ![max load](design_max_load.png)
 """
-    arts = [*study.plot().items(), ("design_table_A1.csv", ta1)]
+    arts = [*study.figures().items(), ("design_table_A1.csv", ta1)]
     return Section("Design of the arm (thesis chapter 2)", md, arts, dict(study.metrics))
 
 
-def _render_other(study: DesignStudy) -> Section:
+def _render_other(study: DesignFindings) -> Section:
     """The design section for an arm other than the thesis arm: its own numbers only."""
     sm, ml, ta1, K, quick = (study.stiffness, study.max_load, study.table_a1, study.K_step,
                              study.quick)
-    d = ml.data
+    lim, kr = ml.limits, sm.ranges
     qmin = np.array(ml.argmin) / DEG
     pm = study.p_mean / BAR
-    q = np.array([50.0, -80.0])
+    q = IMPACT_POSE_DEG
     md = f"""{other_arm_note(study.arm)}
 
 **Muscle group lengths and connection lengths** (as Table A.1; connection lengths by the design
@@ -264,20 +264,20 @@ rule (A.35)-(A.38)):
 
 **Joint stiffness** (2.18) with static gravity-compensation pressures at the mean pressures
 p_m = ({pm[0]:.3f}, {pm[1]:.3f}) bar. At q = ({q[0]:.0f}, {q[1]:.0f}) deg: K = ({K[0]:.1f}, {K[1]:.1f})
-Nm/rad. Over the working area K1 ranges {sm.data.K1_Nm_per_rad.min():.1f}-{sm.data.K1_Nm_per_rad.max():.1f}
-and K2 {sm.data.K2_Nm_per_rad.min():.1f}-{sm.data.K2_Nm_per_rad.max():.1f} Nm/rad; the arm can hold
-itself statically in {100 * sm.data.holdable.mean():.0f} % of the working area (hatched: a pressure
+Nm/rad. Over the working area K1 ranges {kr["K1_min"]:.1f}-{kr["K1_max"]:.1f}
+and K2 {kr["K2_min"]:.1f}-{kr["K2_max"]:.1f} Nm/rad; the arm can hold
+itself statically in {100 * kr["holdable_fraction"]:.0f} % of the working area (hatched: a pressure
 would leave [0, p_max]).
 
 ![stiffness](design_stiffness_map.png)
 
 **Maximum load** (App. A.4), carrying muscle at p_max = {ml.p_max / BAR:g} bar, antagonist at 0:
 minimum over the working area {ml.minimum:.2f} kg at ({qmin[0]:.0f}, {qmin[1]:.0f}) deg; joint-1 limit
-(A.43) alone {d["M1_kg"].min():.2f} kg; 5 deg away from every edge
-{study.metrics["max_load_interior_min_kg"]:.2f} kg; median {d.M_max_kg.median():.1f} kg.
+(A.43) alone {lim["M1_min"]:.2f} kg; 5 deg away from every edge
+{study.metrics["max_load_interior_min_kg"]:.2f} kg; median {lim["median"]:.1f} kg.
 {'' if not quick else '(quick mode: coarse grids)'}
 
 ![max load](design_max_load.png)
 """
-    arts = [*study.plot().items(), ("design_table_A1.csv", ta1)]
+    arts = [*study.figures().items(), ("design_table_A1.csv", ta1)]
     return Section("Design of the arm (thesis chapter 2)", md, arts, dict(study.metrics))

@@ -2,7 +2,7 @@
 battery (case studies (b) and (c) of docs/diagnose.md).
 
 Part of ``ppamsafety report`` (section "diagnose_cases"); run alone with
-``python studies/diagnose_cases.py [outdir] [--quick] [--overwrite]``.
+``ppamsafety report --only diagnose_cases [--outdir DIR] [--quick] [--overwrite]``.
 
 1. *Case (c), two effects in a closed-loop record.*  A 20 s record of the
    10 s circle under joint PSMC (Ki = 2 bar/(rad s), lambda = 0.4 s) is
@@ -40,6 +40,7 @@ from ..markdown import markdown_table
 from ..plots.diagnose import plot_confusion, plot_gap
 from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
                resolve_arm)
+from ..results import Result
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -81,7 +82,7 @@ def _quick_design():
 
 
 @dataclass
-class DiagnoseCasesStudy:
+class DiagnoseCasesFindings(Result):
     """Result of :func:`compute`.
 
     Attributes
@@ -105,6 +106,9 @@ class DiagnoseCasesStudy:
     metrics : dict
     note : str
         The other-arm note of the section ("" for the thesis arm).
+    similar_pair : tuple or None
+        Case (b): the two effects whose whitened sensitivity columns are the most alike, and
+        their |cos| (``(name, name, cos)``); None without case (b).
     """
 
     case_c: object
@@ -117,12 +121,13 @@ class DiagnoseCasesStudy:
     timings: dict = field(default_factory=dict)
     metrics: dict = field(default_factory=dict)
     note: str = ""
+    similar_pair: tuple | None = None
 
     def to_pandas(self) -> pd.DataFrame:
         """Case (c)'s parameter table."""
         return self.case_c_table
 
-    def plot(self) -> dict:
+    def figures(self) -> dict:
         """Figures ``{file name: Figure}``."""
         figs = {"diagnose_case_c_replay.png": self.case_c.plot(),
                 "diagnose_case_c_gap.png": plot_gap(
@@ -234,7 +239,7 @@ def confusion_matrix(battery: pd.DataFrame) -> pd.DataFrame:
 
 
 @checked_compute
-def compute(*, quick: bool = False, arm=None, head=None) -> DiagnoseCasesStudy:
+def compute(*, quick: bool = False, arm=None, head=None) -> DiagnoseCasesFindings:
     """Run case (c), case (b) and the battery (module docstring).
 
     Parameters
@@ -249,7 +254,7 @@ def compute(*, quick: bool = False, arm=None, head=None) -> DiagnoseCasesStudy:
 
     Returns
     -------
-    DiagnoseCasesStudy
+    DiagnoseCasesFindings
     """
     thesis = compares_to_thesis(arm)
     arm = resolve_arm(arm)
@@ -303,10 +308,19 @@ def compute(*, quick: bool = False, arm=None, head=None) -> DiagnoseCasesStudy:
         metrics["table_5_2_pair"] = {"effects": list(pair.names),
                                      "values": list(pair.best_value),
                                      "chi2_per_stat": pair.chi2_per_stat}
-    return DiagnoseCasesStudy(case_c=dg, case_c_table=table, case_c_gap=gap, summary=fit,
+    return DiagnoseCasesFindings(case_c=dg, case_c_table=table, case_c_gap=gap, summary=fit,
                               pair=pair, battery=battery, confusion=confusion_matrix(battery),
                               timings=timings, metrics=metrics,
-                              note="" if thesis else other_arm_note(arm))
+                              note="" if thesis else other_arm_note(arm),
+                              similar_pair=None if fit is None else _most_similar(fit.cosines))
+
+
+def _most_similar(cosines: pd.DataFrame) -> tuple:
+    """The two effects of the largest |cos| between sensitivity columns, and that |cos|."""
+    cos = cosines.to_numpy()
+    iu = np.triu_indices_from(cos, 1)
+    k = int(np.argmax(cos[iu]))
+    return cosines.index[iu[0][k]], cosines.columns[iu[1][k]], cos[iu][k]
 
 
 def _period_shape(cells: pd.DataFrame) -> dict:
@@ -325,16 +339,16 @@ def _fmt_effects(eff: dict) -> str:
     return ", ".join(f"`{k}={v:g}`" for k, v in eff.items())
 
 
-def render(study: DiagnoseCasesStudy) -> Section:
+def render(study: DiagnoseCasesFindings) -> Section:
     """Markdown of the section and its artifacts.
 
     Parameters
     ----------
-    study : DiagnoseCasesStudy
+    study : DiagnoseCasesFindings
         Output of :func:`compute`.
     """
     dg, fit = study.case_c, study.summary
-    figs = study.plot()
+    figs = study.figures()
     L = [study.note, ""] if study.note else []
     L.append("The discrepancy workflow (`ppamsafety diagnose`, `docs/diagnose.md`) on "
              "closed-loop records, on the thesis's own summary statistics, and on a blind "
@@ -443,10 +457,7 @@ def render(study: DiagnoseCasesStudy) -> Section:
                        "which no single speed-dependent effect of the library reproduces.")
             L.append("")
         conf = ", ".join(f"{a} ~ {b} ({c:.2f})" for a, b, c in fit.confounded) or "none"
-        cos = fit.cosines.to_numpy()
-        iu = np.triu_indices_from(cos, 1)
-        k = int(np.argmax(cos[iu]))
-        pair = (fit.cosines.index[iu[0][k]], fit.cosines.columns[iu[1][k]], cos[iu][k])
+        pair = study.similar_pair
         L.append(f"Identifiability from these statistics: the whitened sensitivity matrix "
                  f"({fit.m} statistics x {fit.sensitivity.shape[1]} effects, per unit theta at the "
                  f"first grid step) has numerical rank **{fit.rank}** (singular values above "
@@ -471,8 +482,8 @@ def render(study: DiagnoseCasesStudy) -> Section:
     bl = study.battery
     rlen = float(study.metrics.get("battery_record_s", br["duration"]))
     L.append(f"One {rlen:g} s record of `{br['reference']}` under "
-             f"`{br['controller']}` per case (seed {br['seed']}); {int(bl.correct.sum())} of "
-             f"{len(bl)} named exactly the hidden set. Magnitudes and reasons: "
+             f"`{br['controller']}` per case (seed {br['seed']}); {study.metrics['battery_correct']} of "
+             f"{study.metrics['battery_cases']} named exactly the hidden set. Magnitudes and reasons: "
              f"`tests/test_diagnose_battery.py`; the full battery (three seeds, two "
              f"experiments, two-effect cases) is the slow test "
              f"`tests/test_diagnose_closed_loop.py::test_closed_loop_battery_full`.")
@@ -498,5 +509,5 @@ def render(study: DiagnoseCasesStudy) -> Section:
                    markdown="\n".join(L), artifacts=arts, metrics=dict(study.metrics))
 
 
-__all__ = ["compute", "render", "DiagnoseCasesStudy", "CASE_C", "BATTERY", "BATTERY_RECORD",
+__all__ = ["compute", "render", "DiagnoseCasesFindings", "CASE_C", "BATTERY", "BATTERY_RECORD",
            "parameter_comparison", "run_battery", "confusion_matrix"]

@@ -28,6 +28,7 @@ from ..markdown import markdown_table
 from ..plots.diagnose import plot_sawtooth_diagnosis
 from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
                resolve_arm)
+from ..results import Result
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -50,7 +51,7 @@ SEED = 7
 
 
 @dataclass
-class DiagnoseSawtoothStudy:
+class DiagnoseSawtoothFindings(Result):
     """Result of :func:`compute`.
 
     Attributes
@@ -93,7 +94,7 @@ class DiagnoseSawtoothStudy:
         """The rest-point table."""
         return self.rest_points.copy()
 
-    def plot(self) -> dict:
+    def figures(self) -> dict:
         """The section's figures, ``{file name: Figure}``."""
         return {"diagnose_sawtooth.png": plot_sawtooth_diagnosis(self.rest_points,
                                                                  self.metrics)}
@@ -101,7 +102,7 @@ class DiagnoseSawtoothStudy:
 
 @checked_compute
 def compute(*, quick: bool = False, arm=None, delta: float = HIDDEN_DELTA,
-            seed: int = SEED, head=None) -> DiagnoseSawtoothStudy:
+            seed: int = SEED, head=None) -> DiagnoseSawtoothFindings:
     """Synthesize the sawtooth with hidden hysteresis and diagnose it.
 
     Parameters
@@ -119,7 +120,7 @@ def compute(*, quick: bool = False, arm=None, delta: float = HIDDEN_DELTA,
 
     Returns
     -------
-    DiagnoseSawtoothStudy
+    DiagnoseSawtoothFindings
 
     Notes
     -----
@@ -192,18 +193,18 @@ def compute(*, quick: bool = False, arm=None, delta: float = HIDDEN_DELTA,
     if not thesis:
         for k in ("delta_thesis", "thesis_rms_q1_deg", "thesis_rms_q2_deg"):
             m.pop(k)
-    return DiagnoseSawtoothStudy(quick=quick, hidden_delta=delta, diagnosis=dg,
+    return DiagnoseSawtoothFindings(quick=quick, hidden_delta=delta, diagnosis=dg,
                                  rest_points=rest, localisation=loc, wall_time=wall, metrics=m,
                                  thesis=thesis, note="" if thesis else other_arm_note(arm),
                                  delta_source=source)
 
 
-def render(study: DiagnoseSawtoothStudy) -> Section:
+def render(study: DiagnoseSawtoothFindings) -> Section:
     """Markdown section and artifacts of the case study.
 
     Parameters
     ----------
-    study : DiagnoseSawtoothStudy
+    study : DiagnoseSawtoothFindings
         Output of :func:`compute`.
     """
     m = study.metrics
@@ -251,7 +252,7 @@ def render(study: DiagnoseSawtoothStudy) -> Section:
         "",
         "![sawtooth diagnosis](diagnose_sawtooth.png)",
     ]
-    arts = list(study.plot().items()) + [("diagnose_sawtooth.csv", study.rest_points),
+    arts = list(study.figures().items()) + [("diagnose_sawtooth.csv", study.rest_points),
                                          ("diagnose_sawtooth_localisation.csv",
                                           study.localisation)]
     return Section("Discrepancy workflow, case (a): hidden hysteresis in the static sawtooth "
@@ -271,5 +272,5 @@ def _summary_other(m: dict) -> pd.DataFrame:
          "hidden": ""}])
 
 
-__all__ = ["DiagnoseSawtoothStudy", "compute", "render", "HIDDEN_DELTA", "THESIS_DELTA",
+__all__ = ["DiagnoseSawtoothFindings", "compute", "render", "HIDDEN_DELTA", "THESIS_DELTA",
            "THESIS_RMS_DEG"]

@@ -62,6 +62,7 @@ from ..diagnose.scenarios import (BENCH_RESULTS_FILE, DECLARED_MEASURE_SEEDS,
 from ..markdown import markdown_table
 from ..plots.diagnose import plot_calibration, plot_detection_curve
 from . import Section, SectionInfo, compares_to_thesis, other_arm_note, resolve_arm
+from ..results import Result
 
 #: This section in the report: what it shows, the thesis parts, its wall time [s] in a full
 #: report on 2 cores with a cold kernel cache.
@@ -84,7 +85,7 @@ SEED = 3
 
 
 @dataclass
-class DiagnoseTrustStudy:
+class DiagnoseTrustFindings(Result):
     """Result of :func:`compute`.
 
     Attributes
@@ -132,7 +133,7 @@ class DiagnoseTrustStudy:
         """The scores table."""
         return self.scores.copy()
 
-    def plot(self) -> dict:
+    def figures(self) -> dict:
         """The section's figures, ``{file name: Figure}``."""
         return {"diagnose_trust_calibration.png": plot_calibration(
                     self.calibration, required=HIGH_PRECISION),
@@ -167,7 +168,7 @@ def standard_limits(*, arm=None, quick: bool = False) -> pd.DataFrame:
 
 
 def compute(*, quick: bool = False, arm=None, head=None,
-            live_runs: int | None = None) -> DiagnoseTrustStudy:
+            live_runs: int | None = None) -> DiagnoseTrustFindings:
     """Scores of the battery, the calibration of "high" and the detection limits.
 
     Parameters
@@ -183,7 +184,7 @@ def compute(*, quick: bool = False, arm=None, head=None,
 
     Returns
     -------
-    DiagnoseTrustStudy
+    DiagnoseTrustFindings
     """
     thesis = compares_to_thesis(arm)
     arm = resolve_arm(arm)
@@ -252,7 +253,7 @@ def compute(*, quick: bool = False, arm=None, head=None,
     if len(live_declared):
         live = pd.concat([live.assign(battery="arm"), live_declared.assign(battery="declared")],
                          ignore_index=True)
-    return DiagnoseTrustStudy(scores=sc, calibration=cal, outcomes=outcomes,
+    return DiagnoseTrustFindings(scores=sc, calibration=cal, outcomes=outcomes,
                               by_effect=by_effect(every),
                               curve=detection_curve(every), limits=limits, live=live,
                               stored=thesis, metrics=m,
@@ -298,12 +299,12 @@ def _fmt(df: pd.DataFrame) -> pd.DataFrame:
     return out
 
 
-def render(study: DiagnoseTrustStudy) -> Section:
+def render(study: DiagnoseTrustFindings) -> Section:
     """Markdown section and artifacts.
 
     Parameters
     ----------
-    study : DiagnoseTrustStudy
+    study : DiagnoseTrustFindings
         Output of :func:`compute`.
     """
     m = study.metrics
@@ -405,7 +406,7 @@ def render(study: DiagnoseTrustStudy) -> Section:
         "",
         "![detection](diagnose_trust_detection.png)",
     ]
-    arts = list(study.plot().items()) + [
+    arts = list(study.figures().items()) + [
         ("diagnose_trust_scores.csv", study.scores),
         ("diagnose_trust_calibration.csv", study.calibration),
         ("diagnose_trust_outcomes.csv", study.outcomes),
@@ -416,5 +417,5 @@ def render(study: DiagnoseTrustStudy) -> Section:
                    "\n".join(md), arts, dict(m))
 
 
-__all__ = ["DiagnoseTrustStudy", "compute", "render", "standard_limits", "LIVE_RUNS",
+__all__ = ["DiagnoseTrustFindings", "compute", "render", "standard_limits", "LIVE_RUNS",
            "STANDARD_RECORDS"]

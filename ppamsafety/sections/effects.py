@@ -49,6 +49,7 @@ from ..plots.effects import (plot_ratio_shift, plot_sawtooth_angles, plot_sawtoo
                              plot_sawtooth_forces)
 from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
                resolve_arm, resolve_head_model, responses, safety, tracking)
+from ..results import Result
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -348,7 +349,7 @@ def _log_ratio_median(r) -> float:
 
 
 @dataclass
-class EffectsStudy:
+class EffectsFindings(Result):
     """Result of :func:`compute`: the thesis' experiments with and without muscle hysteresis.
 
     Attributes
@@ -422,7 +423,22 @@ class EffectsStudy:
         """The sawtooth summary (RMS errors and pattern counts per plant)."""
         return self.sawtooth_summary.copy()
 
-    def plot(self) -> dict:
+    def stacked(self, name: str) -> pd.DataFrame:
+        """A per-plant table as one table with a ``plant`` column.
+
+        Parameters
+        ----------
+        name : {"sawtooth", "comparison", "table_6_1"}
+            The attribute holding ``{plant: DataFrame}``.
+        """
+        return pd.concat([t.assign(plant=lab) for lab, t in getattr(self, name).items()],
+                         ignore_index=True)
+
+    def tables(self) -> dict:
+        return {**super().tables(), **{n: self.stacked(n)
+                                       for n in ("sawtooth", "comparison", "table_6_1")}}
+
+    def figures(self) -> dict:
         """The section's figures, ``{file name: Figure}``."""
         return _figures(self)
 
@@ -432,7 +448,7 @@ def _figures(study) -> dict:
 
     Parameters
     ----------
-    study : ppamsafety.sections.effects.EffectsStudy
+    study : ppamsafety.sections.effects.EffectsFindings
         Output of :func:`ppamsafety.sections.effects.compute`.
 
     Returns
@@ -474,7 +490,7 @@ def plants(arm, delta: float = HYSTERESIS_DELTA) -> dict:
 
 @checked_compute
 def compute(*, quick: bool = False, arm=None, delta: float = HYSTERESIS_DELTA,
-            head=None) -> EffectsStudy:
+            head=None) -> EffectsFindings:
     """Sawtooth validation, Table 5.2, conclusions and Table 6.1 with and without hysteresis.
 
     Parameters
@@ -494,7 +510,7 @@ def compute(*, quick: bool = False, arm=None, delta: float = HYSTERESIS_DELTA,
 
     Returns
     -------
-    EffectsStudy
+    EffectsFindings
         Tables, runs and metrics.
     """
     thesis = compares_to_thesis(arm, head)
@@ -575,7 +591,7 @@ def compute(*, quick: bool = False, arm=None, delta: float = HYSTERESIS_DELTA,
         "conclusions": {lab: {c.key: bool(c.holds) for c in concl[lab]} for lab in arms},
         "wall_times_s": {k: round(v, 2) for k, v in walls.items()},
     }
-    return EffectsStudy(quick=quick, delta=float(delta), cases=tuple(arms), sawtooth_runs=runs,
+    return EffectsFindings(quick=quick, delta=float(delta), cases=tuple(arms), sawtooth_runs=runs,
                         sawtooth_windows=windows, sawtooth=saw, sawtooth_summary=summ,
                         warmup=warmup, evaluate=evaluate, circle_errors=errs, comparison=cmps,
                         conclusions=concl, table_6_1=t61, ratios=ratios, limit_cycle=lc,
@@ -583,7 +599,7 @@ def compute(*, quick: bool = False, arm=None, delta: float = HYSTERESIS_DELTA,
 
 
 def _compute_other(quick, delta, arms, runs, windows, saw, summ, warmup, evaluate, errs, cmps,
-                   concl, t61, walls, head) -> EffectsStudy:
+                   concl, t61, walls, head) -> EffectsFindings:
     """The rest of :func:`compute` for another arm or head: hysteresis / nominal, no thesis."""
     n_err, h_err = errs["nominal"], errs["hysteresis"]
     n_61, h_61 = t61["nominal"], t61["hysteresis"]
@@ -615,7 +631,7 @@ def _compute_other(quick, delta, arms, runs, windows, saw, summ, warmup, evaluat
         "conclusions": {lab: {c.key: bool(c.holds) for c in concl[lab]} for lab in arms},
         "wall_times_s": {k: round(v, 2) for k, v in walls.items()},
     }
-    return EffectsStudy(quick=quick, delta=float(delta), cases=tuple(arms), sawtooth_runs=runs,
+    return EffectsFindings(quick=quick, delta=float(delta), cases=tuple(arms), sawtooth_runs=runs,
                         sawtooth_windows=windows, sawtooth=saw, sawtooth_summary=summ,
                         warmup=warmup, evaluate=evaluate, circle_errors=errs, comparison=cmps,
                         conclusions=concl, table_6_1=t61, ratios=ratios, limit_cycle=lc,
@@ -627,12 +643,12 @@ def _yes(b) -> str:
     return "holds" if b else "does not hold"
 
 
-def render(study: EffectsStudy) -> Section:
+def render(study: EffectsFindings) -> Section:
     """The report section of the effects study (formatting only).
 
     Parameters
     ----------
-    study : EffectsStudy
+    study : EffectsFindings
         Output of :func:`compute`.
 
     Returns
@@ -760,21 +776,18 @@ Table 5.2 with hysteresis (toolkit / thesis (ratio), mm):
 
 Wall time of this section: {sum(walls.values()):.1f} s ({', '.join(f'{k} {v:.1f} s' for k, v in walls.items())}).
 """
-    arts = [("effects_sawtooth.csv", pd.concat([w.assign(plant=lab) for lab, w in
-                                                study.sawtooth.items()], ignore_index=True)),
+    arts = [("effects_sawtooth.csv", study.stacked("sawtooth")),
             ("effects_summary.csv", study.sawtooth_summary),
             ("effects_ratios.csv", study.ratios),
-            ("effects_table_5_2.csv", pd.concat([c.assign(plant=lab) for lab, c in
-                                                 study.comparison.items()], ignore_index=True)),
-            ("effects_table_6_1.csv", pd.concat([t.assign(plant=lab) for lab, t in
-                                                 study.table_6_1.items()], ignore_index=True)),
+            ("effects_table_5_2.csv", study.stacked("comparison")),
+            ("effects_table_6_1.csv", study.stacked("table_6_1")),
             ("effects_conclusions.csv", ct),
-            *study.plot().items()]
+            *study.figures().items()]
     return Section("Effects: the thesis revisited with muscle hysteresis (§3.5.1.6, §3.6)", md,
                    arts, dict(study.metrics))
 
 
-def _render_other(study: EffectsStudy) -> Section:
+def _render_other(study: EffectsFindings) -> Section:
     """The effects section for another arm or head: with and without hysteresis, no thesis."""
     sm = study.sawtooth_summary.set_index("plant")
     hd = study.arm.effects.hysteresis_delta
@@ -800,8 +813,7 @@ def _render_other(study: EffectsStudy) -> Section:
                        "nominal plant": [_yes(c.holds) for c in cn.values()],
                        "with hysteresis": [_yes(ch[k].holds) for k in cn]})
     lc = study.limit_cycle.set_index("plant")
-    t61 = pd.concat([t[["experiment", "label", "HIC36", "F_max"]].assign(plant=lab)
-                     for lab, t in study.table_6_1.items()], ignore_index=True)
+    t61 = study.stacked("table_6_1")[["experiment", "label", "HIC36", "F_max", "plant"]]
     t61w = t61.pivot_table(index=["experiment", "label"], columns="plant",
                            values=["F_max", "HIC36"], sort=False)
     t61w.columns = [f"{v} {p}" for v, p in t61w.columns]
@@ -843,14 +855,12 @@ Worst impacts per variant (the Table 6.1 setup) on both plants:
 
 {markdown_table(ct)}
 """
-    arts = [("effects_sawtooth.csv", pd.concat([w.assign(plant=lab) for lab, w in
-                                                study.sawtooth.items()], ignore_index=True)),
+    arts = [("effects_sawtooth.csv", study.stacked("sawtooth")),
             ("effects_summary.csv", study.sawtooth_summary),
             ("effects_ratios.csv", study.ratios),
-            ("effects_table_5_2.csv", pd.concat([c.assign(plant=lab) for lab, c in
-                                                 study.comparison.items()], ignore_index=True)),
+            ("effects_table_5_2.csv", study.stacked("comparison")),
             ("effects_table_6_1.csv", t61),
             ("effects_conclusions.csv", ct),
-            *study.plot().items()]
+            *study.figures().items()]
     return Section("Effects: the thesis revisited with muscle hysteresis (§3.5.1.6, §3.6)", md,
                    arts, dict(study.metrics))

@@ -15,6 +15,7 @@ from ..markdown import markdown_table
 from ..plots.impact import plot_head_fit
 from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
                resolve_arm, resolve_head_model)
+from ..results import Result
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -25,7 +26,7 @@ SECTION = SectionInfo(
 
 
 @dataclass
-class HeadModelStudy:
+class HeadModelFindings(Result):
     """Result of :func:`compute`: the head-model fits and their checks.
 
     Attributes
@@ -74,7 +75,7 @@ class HeadModelStudy:
         """The fits table (one row per exponent)."""
         return self.evidence.copy()
 
-    def plot(self) -> dict:
+    def figures(self) -> dict:
         """The section's figures, ``{file name: Figure}`` (none for another arm or head)."""
         if not self.fits:
             return {}
@@ -94,7 +95,7 @@ def _sensitivity(arm, heads) -> pd.DataFrame:
 
 
 @checked_compute
-def compute(*, quick: bool = False, arm=None, head=None) -> HeadModelStudy:
+def compute(*, quick: bool = False, arm=None, head=None) -> HeadModelFindings:
     """Fit the head model to Table 6.1 and check it against the drop test and ISO/TS 15066.
 
     Parameters
@@ -110,7 +111,7 @@ def compute(*, quick: bool = False, arm=None, head=None) -> HeadModelStudy:
 
     Returns
     -------
-    HeadModelStudy
+    HeadModelFindings
         Fits, tables and metrics.
     """
     arm = resolve_arm(arm)
@@ -142,11 +143,11 @@ def compute(*, quick: bool = False, arm=None, head=None) -> HeadModelStudy:
     metrics = {"k": fit.stiffness, "n": fit.exponent, "b": fit.damping, "rms_sigma": fit.rms_sigma,
                "drop_peak_g": fit.drop_peak_g, "iso_spring_N_per_mm": fit.iso_spring / 1e3,
                "arm_mass": fit.arm_mass}
-    return HeadModelStudy(fits=fits, stored=stored, evidence=evidence, curve=curve,
+    return HeadModelFindings(fits=fits, stored=stored, evidence=evidence, curve=curve,
                           sensitivity=sens, metrics=metrics)
 
 
-def _compute_other(arm, head) -> HeadModelStudy:
+def _compute_other(arm, head) -> HeadModelFindings:
     """The head section for another arm or head: the head's checks and its impacts."""
     checks = hf.head_checks(head)
     names = head_model_names()
@@ -154,17 +155,17 @@ def _compute_other(arm, head) -> HeadModelStudy:
     sens = _sensitivity(arm, heads)
     metrics = {"checks_met": {r.check: bool(r.met) for r in checks.itertuples()},
                "F_max_N": float(sens["F_max [N]"].iloc[0]), "HIC36": float(sens.HIC36.iloc[0])}
-    return HeadModelStudy(fits={}, stored=head, evidence=checks, curve=pd.DataFrame(),
+    return HeadModelFindings(fits={}, stored=head, evidence=checks, curve=pd.DataFrame(),
                           sensitivity=sens, metrics=metrics, thesis=False, arm=arm, head=head,
                           checks=checks)
 
 
-def render(study: HeadModelStudy) -> Section:
+def render(study: HeadModelFindings) -> Section:
     """The report section of the head-model study (formatting only).
 
     Parameters
     ----------
-    study : HeadModelStudy
+    study : HeadModelFindings
         Output of :func:`compute`.
 
     Returns
@@ -175,8 +176,7 @@ def render(study: HeadModelStudy) -> Section:
     if not study.thesis:
         return _render_other(study)
     fit, stored, evidence, sens = study.fit, study.stored, study.evidence, study.sensitivity
-    res_step = fit.pairs[fit.pairs.experiment == "step"].residual_sigma.mean()
-    res_switch = fit.pairs[fit.pairs.experiment == "switch"].residual_sigma.mean()
+    res_step, res_switch = fit.mean_residual()["step"], fit.mean_residual()["switch"]
     rel_k = stored.stiffness / fit.stiffness - 1
     rel_b = stored.damping / fit.damping - 1
     md = f"""The thesis used Hunt-Crossley parameters of Haddadin et al. (2007) without printing them.
@@ -215,12 +215,12 @@ Other head models are one argument away (`simulate_impacts(..., head="iso15066-f
 
 ![head model fit](head_model_fit.png)
 """
-    arts = [("head_model_fits.csv", evidence), *study.plot().items(),
+    arts = [("head_model_fits.csv", evidence), *study.figures().items(),
             ("head_model_pairs.csv", fit.pairs), ("head_model_sensitivity.csv", sens)]
     return Section("Head contact model (thesis §6.3.1)", md, arts, dict(study.metrics))
 
 
-def _render_other(study: HeadModelStudy) -> Section:
+def _render_other(study: HeadModelFindings) -> Section:
     """The head section for another arm or head: its provenance, its checks, its impacts."""
     h, checks, sens = study.head, study.checks, study.sensitivity
     show = checks[["check", "value", "target", "met", "claimed", "claim_holds"]]

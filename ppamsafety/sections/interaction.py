@@ -2,7 +2,7 @@
 
 Thesis §5.4 (figs. 5.21, 5.22) and the hazard of §6.3 (pushed away, released).
 Part of ``ppamsafety report`` (section "interaction"); run alone with
-``python studies/interaction.py [outdir] [--quick] [--overwrite]``.
+``ppamsafety report --only interaction [--outdir DIR] [--quick] [--overwrite]``.
 
 Experiments (all at 1 kHz, the arm held at A = FK(50 deg, -80 deg)):
 
@@ -50,6 +50,7 @@ from ..plots.interaction import (plot_force_estimates, plot_interaction_path, pl
                                  plot_release)
 from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
                resolve_arm, resolve_head_model)
+from ..results import Result
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -112,7 +113,7 @@ def _steady(res, name, k0, k1):
 
 
 @dataclass
-class InteractionStudy:
+class InteractionFindings(Result):
     """Result of :func:`compute`.
 
     Attributes
@@ -158,7 +159,7 @@ class InteractionStudy:
         """The estimation table."""
         return self.estimation_table
 
-    def plot(self) -> dict:
+    def figures(self) -> dict:
         """Figures ``{file name: Figure}``."""
         s = self.step_response
         return {
@@ -176,7 +177,7 @@ class InteractionStudy:
 
 
 @checked_compute
-def compute(*, quick: bool = False, arm=None, head=None) -> InteractionStudy:
+def compute(*, quick: bool = False, arm=None, head=None) -> InteractionFindings:
     """Run the five interaction experiments (see the module docstring).
 
     Parameters
@@ -305,17 +306,17 @@ def compute(*, quick: bool = False, arm=None, head=None) -> InteractionStudy:
         "release_HIC36_PID": float(rel_table.iloc[0]["HIC36"]),
         "release_HIC36_PSMC": float(rel_table.iloc[1]["HIC36"]),
     }
-    return InteractionStudy(clean, realistic, phantom, adm, release, est_table, ph_table,
+    return InteractionFindings(clean, realistic, phantom, adm, release, est_table, ph_table,
                             rel_table, wp, t_rel, step, metrics,
                             note="" if thesis else other_arm_note(arm, head))
 
 
-def render(study: InteractionStudy) -> Section:
+def render(study: InteractionFindings) -> Section:
     """Markdown section and artifacts of the interaction study.
 
     Parameters
     ----------
-    study : InteractionStudy
+    study : InteractionFindings
         Output of :func:`compute`.
     """
     m = study.metrics
@@ -345,7 +346,7 @@ def render(study: InteractionStudy) -> Section:
         "",
         markdown_table(study.release_table),
     ]
-    arts = list(study.plot().items()) + [
+    arts = list(study.figures().items()) + [
         ("interaction_estimation.csv", study.estimation_table),
         ("interaction_phantom.csv", study.phantom_table),
         ("interaction_release.csv", study.release_table)]
@@ -353,4 +354,4 @@ def render(study: InteractionStudy) -> Section:
                    "\n".join(md), arts, dict(m))
 
 
-__all__ = ["InteractionStudy", "compute", "render", "identify_model"]
+__all__ = ["InteractionFindings", "compute", "render", "identify_model"]

@@ -59,6 +59,7 @@ from ..plots import iso as f
 from ..units import BAR, DEG
 from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
                resolve_arm, resolve_head_model)
+from ..results import Result
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -370,7 +371,7 @@ def _hc_vs_linear(arm, worst, m_r_annex, hc=None, hc_label=HC_LABEL):
 
 
 @dataclass
-class IsoStudy:
+class IsoFindings(Result):
     """Result of :func:`compute` (all forces in N, speeds in m/s, masses in kg).
 
     Attributes
@@ -385,7 +386,7 @@ class IsoStudy:
     clamp_transient : pandas.DataFrame
         Clamped vs free F_max per thesis variant and head.
     clamp_histories : dict
-        Head name -> (ClampingResults, labels).
+        Head name -> (ClampingResult, labels).
     static_bounds : pandas.DataFrame
         Largest static force over the working area and directions, per mode.
     static_map : tuple
@@ -438,7 +439,7 @@ class IsoStudy:
         """The verdict table (one row per thesis controller variant)."""
         return self.verdict.copy()
 
-    def plot(self) -> dict:
+    def figures(self) -> dict:
         """The section's figures, ``{file name: Figure}``."""
         return {"iso_clamping_transient.png": f.plot_clamping_vs_limits(self),
                 "iso_quasi_static.png": f.plot_quasi_static(self),
@@ -447,7 +448,7 @@ class IsoStudy:
 
 
 @checked_compute
-def compute(*, quick: bool = False, arm=None, head=None) -> IsoStudy:
+def compute(*, quick: bool = False, arm=None, head=None) -> IsoFindings:
     """Clamping and ISO/TS 15066 power and force limiting for the head.
 
     Parameters
@@ -463,7 +464,7 @@ def compute(*, quick: bool = False, arm=None, head=None) -> IsoStudy:
 
     Returns
     -------
-    IsoStudy
+    IsoFindings
     """
     if not isinstance(quick, bool):
         raise TypeError(f"quick must be a bool, got {quick!r}")
@@ -573,7 +574,7 @@ def compute(*, quick: bool = False, arm=None, head=None) -> IsoStudy:
             np.interp(vmax_f, hc_curve.speed, hc_curve.F_hunt_crossley)
             / np.interp(vmax_f, hc_curve.speed, hc_curve.F_linear_forehead)),
     }
-    return IsoStudy(limits=limits, free=free, lambda_table=lambda_table,
+    return IsoFindings(limits=limits, free=free, lambda_table=lambda_table,
                     clamp_transient=clamp_tr, clamp_histories=clamp_hist,
                     static_bounds=static_tab, static_map=static_map, quasi_static=qs,
                     qs_histories=qs_hist, hc_curve=hc_curve, hc_states=hc_states,
@@ -594,7 +595,7 @@ def _fmt_lam(lam, at_min, adm, lams):
             f"(passes), log-linear interpolation {lam:.3g} s (grid values that meet it: {adm})")
 
 
-def _two_heads(study: IsoStudy) -> list:
+def _two_heads(study: IsoFindings) -> list:
     """The same question answered with both head models, and why they differ (Markdown)."""
     lt = study.lambda_table
     rows = lt[(lt.region == "skull/forehead")]
@@ -630,12 +631,12 @@ def _two_heads(study: IsoStudy) -> list:
     return out
 
 
-def render(study: IsoStudy) -> Section:
+def render(study: IsoFindings) -> Section:
     """The report section (formatting only).
 
     Parameters
     ----------
-    study : IsoStudy
+    study : IsoFindings
         Output of :func:`compute`.
 
     Returns
@@ -725,7 +726,7 @@ def render(study: IsoStudy) -> Section:
         "![lambda limits](iso_lambda.png)", "",
         "![linear vs Hunt-Crossley](iso_hc_vs_linear.png)", "",
     ]
-    arts = list(study.plot().items()) + [
+    arts = list(study.figures().items()) + [
         ("iso_limits.csv", study.limits), ("iso_clamping_transient.csv", study.clamp_transient),
         ("iso_quasi_static.csv", study.quasi_static), ("iso_lambda.csv", study.lambda_table),
         ("iso_free_impacts.csv", study.free), ("iso_hc_vs_linear.csv", study.hc_states),
@@ -734,7 +735,7 @@ def render(study: IsoStudy) -> Section:
                    arts, dict(m))
 
 
-def _render_other(study: IsoStudy) -> Section:
+def _render_other(study: IsoFindings) -> Section:
     """The ISO/TS 15066 section for another arm or head: its own numbers, no thesis values."""
     m = study.metrics
     md = [
@@ -767,7 +768,7 @@ def _render_other(study: IsoStudy) -> Section:
         "![lambda limits](iso_lambda.png)", "",
         "![linear vs Hunt-Crossley](iso_hc_vs_linear.png)", "",
     ]
-    arts = list(study.plot().items()) + [
+    arts = list(study.figures().items()) + [
         ("iso_limits.csv", study.limits), ("iso_clamping_transient.csv", study.clamp_transient),
         ("iso_quasi_static.csv", study.quasi_static), ("iso_lambda.csv", study.lambda_table),
         ("iso_free_impacts.csv", study.free), ("iso_hc_vs_linear.csv", study.hc_states),
@@ -776,4 +777,4 @@ def _render_other(study: IsoStudy) -> Section:
                    arts, dict(m))
 
 
-__all__ = ["IsoStudy", "compute", "render", "ASSUMPTIONS", "assumptions"]
+__all__ = ["IsoFindings", "compute", "render", "ASSUMPTIONS", "assumptions"]

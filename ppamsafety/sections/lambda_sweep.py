@@ -13,20 +13,17 @@ import functools
 import os
 from dataclasses import dataclass, field
 
-import numpy as np
 import pandas as pd
 
-from ..control import JointPSMC
-from ..experiments.catalog import CIRCLE_WARMUP, run_thesis_experiment
-from ..impact.instants import evaluate_experiment
+from ..experiments.catalog import CIRCLE_WARMUP
 from ..markdown import markdown_table
-from ..params import thesis_arm
 from ..plots.impact import plot_lambda_sweep
 from ..sweep import run_sweep
-from ..sweep_cases import add_verdicts
-from ..units import BAR
+from ..params.head import MAXILLA_FRACTURE_N
+from ..sweep_cases import add_verdicts, safety_case
 from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
                resolve_arm, resolve_head_model)
+from ..results import Result
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -39,6 +36,11 @@ SECTION = SectionInfo(
 def lambda_case(lam: float, ki_bar: float, circle_duration: float, *, arm=None,
                 head=None) -> dict:
     """Worst step impact and circle tracking error of one joint PSMC tuning (sweep case).
+
+    Two cases of :func:`ppamsafety.sweep_cases.safety_case` (the sweep engine's case, so
+    that ``ppamsafety sweep studies/lambda_ki.toml`` gives the same numbers): the step
+    response crashed into the head at the four heuristic instants, and the circle
+    (P = 10 s), whose tracking error is taken after the warm-up.
 
     Parameters
     ----------
@@ -59,21 +61,16 @@ def lambda_case(lam: float, ki_bar: float, circle_duration: float, *, arm=None,
         ``F_max`` [N], ``HIC36``, ``tcp_speed`` [m/s] of the worst step
         impact, ``circle_err_mean`` and ``circle_err_max`` [m].
     """
-    arm = thesis_arm() if arm is None else arm
-    c = JointPSMC(lam=lam, ki=ki_bar * BAR)
-    step = run_thesis_experiment(arm, "step", [("c", c)])[0]
-    ev = evaluate_experiment(step, arm, head=head).summary
-    circ = run_thesis_experiment(arm, "circle10", [("c", JointPSMC(lam=lam, ki=ki_bar * BAR))],
-                                 duration=circle_duration)[0]
-    k0 = int(round(min(CIRCLE_WARMUP, circle_duration / 2) / 1e-3))
-    err = circ.tracking_error()[k0:]
-    return {"F_max": float(ev.F_max.max()), "HIC36": float(ev.HIC36.max()),
-            "tcp_speed": float(ev.tcp_speed.max()), "circle_err_mean": float(np.nanmean(err)),
-            "circle_err_max": float(np.nanmax(err))}
+    kw = {"controller": "PSMC joint", "lam": lam, "ki_bar": ki_bar, "arm": arm,
+          "head": "thesis-frontal" if head is None else head}
+    step = safety_case("step", **kw)
+    circle = safety_case("circle10", duration=circle_duration, **kw)
+    return {"F_max": step["F_max"], "HIC36": step["HIC36"], "tcp_speed": step["tcp_speed"],
+            "circle_err_mean": circle["track_mean"], "circle_err_max": circle["track_max"]}
 
 
 @dataclass
-class LambdaSweepStudy:
+class LambdaSweepFindings(Result):
     """Result of :func:`compute`: step-impact safety and circle tracking per (lambda, Ki).
 
     Attributes
@@ -93,6 +90,15 @@ class LambdaSweepStudy:
         (:func:`ppamsafety.sweep_cases.add_verdicts`).
     metrics : dict
         Headline numbers.
+    best_below_maxilla : pandas.Series or None
+        The row of the best mean circle tracking among the cases whose F_max stays below the
+        maxilla fracture force (:data:`~ppamsafety.params.head.MAXILLA_FRACTURE_N`); None if
+        no case does.
+    best_passing_iso : pandas.Series or None
+        The row of the best mean circle tracking among the cases that pass the ISO/TS 15066
+        transient limit of the head model's region; None if no case does.
+    iso_limit : float
+        That limit [N].
     head_name : str
         Name of the head model of the impacts.
     note : str
@@ -105,6 +111,9 @@ class LambdaSweepStudy:
     processes: int
     table: pd.DataFrame
     metrics: dict = field(default_factory=dict)
+    best_below_maxilla: pd.Series | None = None
+    best_passing_iso: pd.Series | None = None
+    iso_limit: float = float("nan")
     head_name: str = "thesis-frontal"
     note: str = ""
 
@@ -112,14 +121,14 @@ class LambdaSweepStudy:
         """The sweep table."""
         return self.table.copy()
 
-    def plot(self) -> dict:
+    def figures(self) -> dict:
         """The section's figures, ``{file name: Figure}``."""
         return {"lambda_sweep.png": plot_lambda_sweep(self.table, tracking="circle_err_mean")}
 
 
 @checked_compute
 def compute(*, quick: bool = False, arm=None, processes: int | None = None,
-            head=None) -> LambdaSweepStudy:
+            head=None) -> LambdaSweepFindings:
     """Sweep lambda x Ki of joint PSMC: step-impact safety against circle tracking.
 
     Parameters
@@ -135,7 +144,7 @@ def compute(*, quick: bool = False, arm=None, processes: int | None = None,
 
     Returns
     -------
-    LambdaSweepStudy
+    LambdaSweepFindings
         The sweep table and metrics.
     """
     note = "" if compares_to_thesis(arm, head) else other_arm_note(arm, head)
@@ -148,19 +157,29 @@ def compute(*, quick: bool = False, arm=None, processes: int | None = None,
     cases = [{"lam": lam, "ki_bar": ki, "circle_duration": dur} for ki in kis for lam in lams]
     procs = processes or min(2, os.cpu_count() or 1)
     df = run_sweep(case, cases, name="lambda-sweep", processes=procs, progress=False,
-                   on_error="raise")
+                   on_error="raise").table
     df = add_verdicts(df.rename(columns={"ki_bar": "Ki_bar"}), head=resolve_head_model(head))
-    return LambdaSweepStudy(lambdas=lams, kis=kis, circle_duration=dur, processes=procs,
-                            table=df, metrics={"cases": len(df)}, head_name=head_name,
-                            note=note)
+    return LambdaSweepFindings(lambdas=lams, kis=kis, circle_duration=dur, processes=procs,
+                               table=df, metrics={"cases": len(df)},
+                               best_below_maxilla=_best_tracking(df[df.F_max <
+                                                                    MAXILLA_FRACTURE_N]),
+                               best_passing_iso=_best_tracking(
+                                   df[df["iso_ts_15066_pass"].astype(bool)]),
+                               iso_limit=float((df["F_max"] + df["iso_ts_15066_margin"]).iloc[0]),
+                               head_name=head_name, note=note)
 
 
-def render(study: LambdaSweepStudy) -> Section:
+def _best_tracking(cases: pd.DataFrame):
+    """The case of the smallest mean circle tracking error, or None without cases."""
+    return cases.loc[cases.circle_err_mean.idxmin()] if len(cases) else None
+
+
+def render(study: LambdaSweepFindings) -> Section:
     """The report section of the lambda sweep (formatting only).
 
     Parameters
     ----------
-    study : LambdaSweepStudy
+    study : LambdaSweepFindings
         Output of :func:`compute`.
 
     Returns
@@ -172,11 +191,7 @@ def render(study: LambdaSweepStudy) -> Section:
                                  study.processes)
     show = df[[c for c in df.columns if c not in ("circle_duration", "head_model")
                and not c.endswith(("_margin", "_pass"))] + ["iso_ts_15066_margin"]]
-    safe = df[df.F_max < 660.0]
-    best = safe.loc[safe.circle_err_mean.idxmin()] if len(safe) else None
-    iso = df[df["iso_ts_15066_pass"].astype(bool)]
-    best_iso = iso.loc[iso.circle_err_mean.idxmin()] if len(iso) else None
-    lim_iso = float((df["F_max"] + df["iso_ts_15066_margin"]).iloc[0])
+    best, best_iso, lim_iso = study.best_below_maxilla, study.best_passing_iso, study.iso_limit
     md = (study.note + "\n\n" if study.note else "") + f"""Joint-space PSMC (Table 5.1 gains otherwise) for lambda in {list(lams)} s and Ki in {list(kis)}
 bar/(rad s): worst step-response impact (four instants, head `{study.head_name}`) and circle tracking
 (P = 10 s, {dur - min(CIRCLE_WARMUP, dur / 2):.0f} s evaluated). {len(df)} cases via `ppamsafety.sweep.run_sweep`
@@ -184,10 +199,10 @@ on {procs} processes.
 
 {markdown_table(show, digits=4)}
 
-{'' if best is None else f"Below the 660 N maxilla line, the best tracking is lambda = {best.lam:g} s with Ki = {best.Ki_bar:g} bar/(rad s): mean error {1e3 * best.circle_err_mean:.2f} mm, F_max {best.F_max:.0f} N."}
+{'' if best is None else f"Below the {MAXILLA_FRACTURE_N:.0f} N maxilla line, the best tracking is lambda = {best.lam:g} s with Ki = {best.Ki_bar:g} bar/(rad s): mean error {1e3 * best.circle_err_mean:.2f} mm, F_max {best.F_max:.0f} N."}
 {'No case stays below' if best_iso is None else f"Below the ISO/TS 15066 forehead transient limit {lim_iso:g} N (2 x 130 N, not in the TS for the head), the best tracking is lambda = {best_iso.lam:g} s with Ki = {best_iso.Ki_bar:g} bar/(rad s): mean error {1e3 * best_iso.circle_err_mean:.2f} mm, F_max {best_iso.F_max:.0f} N (margin {best_iso.iso_ts_15066_margin:.0f} N)."}{f' the ISO/TS 15066 forehead transient limit {lim_iso:g} N.' if best_iso is None else ''} Every case's verdicts against the forehead criteria (margins, governing criterion, head model `{study.head_name}`) are columns of `lambda_sweep.csv`.
 
 ![lambda sweep](lambda_sweep.png)
 """
-    arts = [("lambda_sweep.csv", df), *study.plot().items()]
+    arts = [("lambda_sweep.csv", df), *study.figures().items()]
     return Section("Safety against tracking: a lambda x Ki sweep", md, arts, dict(study.metrics))

@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 
 import pandas as pd
 
+from ..results import Result
 from ..envelope import safety_envelope
 from ..experiments.catalog import run_thesis_experiment
 from ..impact.bodies import body_from_head, hybrid3_drop
@@ -17,6 +18,7 @@ from ..impact.summary import EXPERIMENTS, region_point_verdicts
 from ..markdown import markdown_table
 from ..params.contact import BARE, FOREHEAD, THESIS_COVERING, arm_contact_points
 from ..params.iso_ts_15066 import SKULL_FOREHEAD
+from ..plots.contacts import plot_region_margins
 from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
                resolve_arm)
 
@@ -37,7 +39,7 @@ ENVELOPE_RANGE = (0.5e-3, 30e-3)
 
 
 @dataclass
-class PersonStudy:
+class PersonFindings(Result):
     """Result of :func:`compute`.
 
     Attributes
@@ -74,9 +76,26 @@ class PersonStudy:
         """The verdicts of every region and contact point (:attr:`regions`)."""
         return self.regions.copy()
 
+    @property
+    def margin_grid(self) -> pd.DataFrame:
+        """One row per body region, one column per (contact point, covering): the governing
+        criterion's margin to its limit [%], rounded to 1 %."""
+        grid = self.regions.pivot_table(index="body_region", columns=["covering",
+                                                                      "contact_point"],
+                                        values="margin [%]", sort=False)
+        grid.columns = [f"{cp}, {cv} [% margin]" for cv, cp in grid.columns]
+        return grid.round(0).reset_index()
+
+    def figures(self) -> dict:
+        """``{"person_regions.png": Figure}``: :attr:`margin_grid` as a colour grid
+        (:func:`ppamsafety.plots.contacts.plot_region_margins`)."""
+        return {"person_regions.png": plot_region_margins(
+            self.margin_grid, title="Every body region at every contact point, Table 6.1 "
+                                    "experiments: margin of the governing criterion")}
+
 
 @checked_compute
-def compute(*, quick: bool = False, arm=None) -> PersonStudy:
+def compute(*, quick: bool = False, arm=None) -> PersonFindings:
     """The drop test, the implied covering, every region and point, the covering envelope.
 
     Parameters
@@ -88,7 +107,7 @@ def compute(*, quick: bool = False, arm=None) -> PersonStudy:
 
     Returns
     -------
-    PersonStudy
+    PersonFindings
     """
     cpu0 = time.process_time()
     thesis = compares_to_thesis(arm)
@@ -146,15 +165,15 @@ def compute(*, quick: bool = False, arm=None) -> PersonStudy:
                "cpu_seconds": time.process_time() - cpu0}
     note = "" if thesis else (other_arm_note(arm) + " Table 6.1 and the covering it implies "
                               "belong to the thesis arm: the covering is not fitted again.")
-    return PersonStudy(drop, pd.DataFrame(cov_rows), regions, envelope, quick, metrics, note)
+    return PersonFindings(drop, pd.DataFrame(cov_rows), regions, envelope, quick, metrics, note)
 
 
-def render(study: PersonStudy) -> Section:
+def render(study: PersonFindings) -> Section:
     """The section (formatting only).
 
     Parameters
     ----------
-    study : PersonStudy
+    study : PersonFindings
         Output of :func:`compute`.
 
     Returns
@@ -163,15 +182,7 @@ def render(study: PersonStudy) -> Section:
     """
     d, c, m = study.drop, study.covering, study.metrics
     r = study.regions
-    show = r.assign(**{"worst case": [f"{v:.4g} {u}".rstrip() + f" vs {lim:.4g} {u}".rstrip()
-                                      for v, lim, u in zip(r["value"], r["limit"],
-                                                           r["unit"].fillna(""))],
-                       "runs passing": [f"{a} of {b}" for a, b in zip(r["passing"],
-                                                                      r["impacts"])]})
-    grid = show.pivot_table(index="body_region", columns=["covering", "contact_point"],
-                            values="margin [%]", sort=False)
-    grid.columns = [f"{cp}, {cv} [% margin]" for cv, cp in grid.columns]
-    grid = grid.round(0).reset_index()
+    grid = study.margin_grid
     if len(c):
         covering_text = f"""**The covering Table 6.1 implies** (in front of the validated head with the thesis' 5 kg,
 at the tool point): the 20 (HIC, F_max) pairs are reproduced (RMS residual at most 1 standard
@@ -210,10 +221,10 @@ at every contact point (the worst of the four, heuristic instants, tolerance 2 %
 
 {markdown_table(study.envelope, digits=3)}
 """
-    arts = [("person_drop.csv", d), ("person_covering.csv", c),
+    arts = [*study.figures().items(), ("person_drop.csv", d), ("person_covering.csv", c),
             ("person_regions.csv", r), ("person_envelope.csv", study.envelope)]
     return Section("The whole person: validated head, implied covering, every region and "
                    "contact point", md, arts, dict(m))
 
 
-__all__ = ["compute", "render", "PersonStudy"]
+__all__ = ["compute", "render", "PersonFindings"]

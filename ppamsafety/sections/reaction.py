@@ -1,7 +1,7 @@
 """Collision detection and reaction in the closed loop (beyond thesis §6.3.5).
 
 Part of ``ppamsafety report`` (section "reaction"); run alone with
-``python studies/reaction.py [outdir] [--quick] [--overwrite]``.
+``ppamsafety report --only reaction [--outdir DIR] [--quick] [--overwrite]``.
 
 For each experiment (the thesis' step response, fig. 5.17, and, in full mode,
 the trajectory switch, fig. 5.15) and controller (PID, joint PSMC
@@ -53,6 +53,7 @@ from ..plots.reaction import plot_collision, plot_reactions
 from ..units import BAR
 from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
                resolve_arm, resolve_head_model)
+from ..results import Result
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -83,7 +84,7 @@ def _controllers(quick: bool) -> dict:
 
 
 @dataclass
-class ReactionStudy:
+class ReactionFindings(Result):
     """Result of :func:`compute`.
 
     Attributes
@@ -132,7 +133,7 @@ class ReactionStudy:
         """The results table (one row per run)."""
         return self.table
 
-    def plot(self) -> dict:
+    def figures(self) -> dict:
         """Figures ``{file name: Figure}``: reactions per case and one detailed run per controller."""
         figs = {}
         for (exp, ctrl) in self.free:
@@ -164,7 +165,7 @@ def _row(exp, ctrl, margin, res):
 
 
 @checked_compute
-def compute(*, quick: bool = False, arm=None, head=None) -> ReactionStudy:
+def compute(*, quick: bool = False, arm=None, head=None) -> ReactionFindings:
     """Run the collision-detection and reaction study (see the module docstring).
 
     Parameters
@@ -289,16 +290,16 @@ def compute(*, quick: bool = False, arm=None, head=None) -> ReactionStudy:
         "first_impact_Fmax_spread_max": float(timing["Fmax_1_spread_rel"].max()),
         "energy_error_max": float(table["energy_error"].abs().max()),
     }
-    return ReactionStudy(quick, table, timing, engine, runs, free, secs, metrics, note=note,
+    return ReactionFindings(quick, table, timing, engine, runs, free, secs, metrics, note=note,
                          head_name=head.name)
 
 
-def render(study: ReactionStudy) -> Section:
+def render(study: ReactionFindings) -> Section:
     """Markdown section and artifacts of the reaction study.
 
     Parameters
     ----------
-    study : ReactionStudy
+    study : ReactionFindings
         Output of :func:`compute`.
     """
     m = study.metrics
@@ -360,11 +361,11 @@ def render(study: ReactionStudy) -> Section:
         f"contact energy balance error: {m['energy_error_max']:.1e}.  "
         f"Compute time {study.compute_seconds:.1f} s.",
     ]
-    arts = list(study.plot().items()) + [
+    arts = list(study.figures().items()) + [
         ("reaction_results.csv", study.table), ("reaction_timing.csv", study.timing),
         ("reaction_engine_check.csv", study.engine)]
     return Section("Collision detection and reaction in the closed loop (beyond §6.3.5)",
                    "\n".join(md), arts, dict(m))
 
 
-__all__ = ["ReactionStudy", "compute", "render", "HORIZON", "TIGHT_MARGIN", "ENGINE_WINDOW"]
+__all__ = ["ReactionFindings", "compute", "render", "HORIZON", "TIGHT_MARGIN", "ENGINE_WINDOW"]

@@ -20,6 +20,7 @@ from ..markdown import markdown_table
 from ..plots.control import plot_lambda_recovery, plot_step_comparison, plot_switch
 from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
                resolve_arm)
+from ..results import Result
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -46,7 +47,7 @@ OSCILLATING_VARIANT = "PSMC joint Ki=12 λ=0.4"
 
 
 @dataclass
-class ResponsesStudy:
+class ResponsesFindings(Result):
     """Result of :func:`compute`: step and switch runs of the thesis variants.
 
     Attributes
@@ -81,7 +82,7 @@ class ResponsesStudy:
         return pd.concat([self.step_table.assign(experiment="step"),
                           self.switch_table.assign(experiment="switch")], ignore_index=True)
 
-    def plot(self) -> dict:
+    def figures(self) -> dict:
         """The section's figures, ``{file name: Figure}``."""
         return _figures(self)
 
@@ -104,7 +105,7 @@ def _figures(study) -> dict:
 
     Parameters
     ----------
-    study : ppamsafety.sections.responses.ResponsesStudy
+    study : ppamsafety.sections.responses.ResponsesFindings
         Output of :func:`ppamsafety.sections.responses.compute`.
 
     Returns
@@ -143,7 +144,7 @@ def _figures(study) -> dict:
 
 @checked_compute
 def compute(*, quick: bool = False, arm=None, variants=None, sensors=None,
-            head=None) -> ResponsesStudy:
+            head=None) -> ResponsesFindings:
     """Run step and switch for the thesis variants and tabulate their responses.
 
     Parameters
@@ -162,7 +163,7 @@ def compute(*, quick: bool = False, arm=None, variants=None, sensors=None,
 
     Returns
     -------
-    ResponsesStudy
+    ResponsesFindings
         Runs, response tables and metrics.
     """
     arm = resolve_arm(arm)
@@ -180,9 +181,10 @@ def compute(*, quick: bool = False, arm=None, variants=None, sensors=None,
         metrics = {"step_pid_peak_tcp_speed": float(pid.peak_tcp_speed_m_s),
                    "step_max_psmc_peak_tcp_speed": float(ps.peak_tcp_speed_m_s.max()),
                    "step_pid_overshoot_pct": float(pid.overshoot_pct),
+                   "step_max_psmc_overshoot_pct": float(ps.overshoot_pct.max()),
                    "switch_pid_peak_tcp_speed":
                        float(sw[sw.family == "PID"].peak_tcp_speed_m_s.iloc[0])}
-    return ResponsesStudy(step=out["step"], switch=out["switch"], step_table=st,
+    return ResponsesFindings(step=out["step"], switch=out["switch"], step_table=st,
                           switch_table=sw, oscillation_hz=_oscillation_frequency(out["switch"]),
                           metrics=metrics, thesis=compares_to_thesis(arm), arm=arm)
 
@@ -210,12 +212,12 @@ def _display(table: pd.DataFrame, experiment: str) -> pd.DataFrame:
     return d
 
 
-def render(study: ResponsesStudy) -> Section:
+def render(study: ResponsesFindings) -> Section:
     """The report section of the responses study (formatting only).
 
     Parameters
     ----------
-    study : ResponsesStudy
+    study : ResponsesFindings
         Output of :func:`compute` (with the ten thesis variants).
 
     Returns
@@ -224,9 +226,8 @@ def render(study: ResponsesStudy) -> Section:
         Markdown and artifacts (figures, ``responses_step.csv``,
         ``responses_switch.csv``).
     """
-    st, sw = study.step_table, study.switch_table
+    st, sw, m = study.step_table, study.switch_table, study.metrics
     pid = st[st.family == "PID"].iloc[0]
-    ps = st[st.family != "PID"]
     osc_label = OSCILLATING_VARIANT
     osc_f = study.oscillation_hz
 
@@ -252,9 +253,9 @@ t = {catalog.SWITCH_TIME:g} s. "> x" means not within the band before the window
 
 {markdown_table(_display(st, "step"))}
 
-PID's peak TCP speed is {pid.peak_tcp_speed_m_s / ps.peak_tcp_speed_m_s.max():.1f} times the largest
+PID's peak TCP speed is {m["step_pid_peak_tcp_speed"] / m["step_max_psmc_peak_tcp_speed"]:.1f} times the largest
 PSMC peak and it overshoots by {pid.overshoot_pct:.0f} % of the step; PSMC approaches the new set
-angle at a rate set by λ (no PSMC variant overshoots more than {ps.overshoot_pct.max():.1f} %).
+angle at a rate set by λ (no PSMC variant overshoots more than {m["step_max_psmc_overshoot_pct"]:.1f} %).
 
 ![step](responses_step.png)
 
@@ -275,6 +276,6 @@ After the switch the Ki = 12 variants ring: the TCP error of {osc_label} oscilla
 
 ![switch lambda](responses_switch_lambda.png)
 """
-    arts = [*study.plot().items(), ("responses_step.csv", st), ("responses_switch.csv", sw)]
+    arts = [*study.figures().items(), ("responses_step.csv", st), ("responses_switch.csv", sw)]
     return Section("Step and trajectory-switch responses (thesis figs. 5.15-5.19)", md, arts,
                    dict(study.metrics))

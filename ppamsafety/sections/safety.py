@@ -22,6 +22,7 @@ from ..plots.impact import plot_fmax_over_time, plot_safety_table, plot_worst_hi
 from ..sweep import run_sweep
 from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
                resolve_arm, resolve_head_model)
+from ..results import Result
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -119,10 +120,11 @@ def _conclusions(df) -> pd.DataFrame:
                         f"{fam}: HIC {' > '.join(f'{v:.3g}' for v in g.sort_values('lambda').HIC36)}"
                         for fam, g in psmc.groupby("family"))})
         if exp == "step":
-            out.append({"conclusion": "step: PID crosses the 660 N maxilla line",
+            out.append({"conclusion": f"step: PID crosses the {MAXILLA_FRACTURE_N:.0f} N "
+                                      f"maxilla line",
                         "holds": bool(pid.F_max > MAXILLA_FRACTURE_N),
                         "numbers": f"PID F_max {pid.F_max:.0f} N"})
-        out.append({"conclusion": f"{exp}: every PSMC stays below 660 N",
+        out.append({"conclusion": f"{exp}: every PSMC stays below {MAXILLA_FRACTURE_N:.0f} N",
                     "holds": bool(psmc.F_max.max() < MAXILLA_FRACTURE_N),
                     "numbers": f"largest PSMC F_max {psmc.F_max.max():.0f} N"})
     return pd.DataFrame(out)
@@ -149,7 +151,7 @@ FMAX_OVER_TIME_RUNS = (("step", "PID"), ("step", "PSMC joint Ki=2 λ=0.4"), ("sw
 
 
 @dataclass
-class SafetyStudy:
+class SafetyFindings(Result):
     """Result of :func:`compute`: Table 6.1 and the every-instant scan.
 
     Attributes
@@ -158,7 +160,7 @@ class SafetyStudy:
         The scan used every 20th ms instead of every ms.
     head : HeadContactModel
         Head model of the impacts.
-    table : pandas.DataFrame
+    runs : pandas.DataFrame
         Worst impacts per (experiment, variant) at the four heuristic
         instants with the thesis values and ratios (SI units).
     conclusions : pandas.DataFrame
@@ -187,7 +189,7 @@ class SafetyStudy:
 
     quick: bool
     head: object
-    table: pd.DataFrame
+    runs: pd.DataFrame
     conclusions: pd.DataFrame
     worst: dict
     heuristic_marks: dict
@@ -202,13 +204,13 @@ class SafetyStudy:
     def to_pandas(self) -> pd.DataFrame:
         """Table 6.1 reproduced (toolkit, thesis, ratios, impact instant and stiffness)."""
         if not self.thesis:
-            return self.table[["experiment", "label", "HIC36", "F_max", "instant_HIC",
+            return self.runs[["experiment", "label", "HIC36", "F_max", "instant_HIC",
                                "tcp_speed", "K1", "K2"]].copy()
-        return self.table[["experiment", "label", "HIC36", "HIC_thesis", "HIC_ratio", "F_max",
+        return self.runs[["experiment", "label", "HIC36", "HIC_thesis", "HIC_ratio", "F_max",
                            "Fmax_thesis", "Fmax_ratio", "instant_HIC", "tcp_speed", "K1",
                            "K2"]].copy()
 
-    def plot(self) -> dict:
+    def figures(self) -> dict:
         """The section's figures, ``{file name: Figure}``."""
         return _figures(self)
 
@@ -218,7 +220,7 @@ def _figures(study) -> dict:
 
     Parameters
     ----------
-    study : ppamsafety.sections.safety.SafetyStudy
+    study : ppamsafety.sections.safety.SafetyFindings
         Output of :func:`ppamsafety.sections.safety.compute`.
 
     Returns
@@ -230,7 +232,7 @@ def _figures(study) -> dict:
     scan = study.scan
     plot_items = [(f"{exp}: {label}", scan[(scan.experiment == exp) & (scan.label == label)],
                    study.heuristic_marks[(exp, label)]) for exp, label in FMAX_OVER_TIME_RUNS]
-    return {"safety_table_6_1.png": plot_safety_table(study.table),
+    return {"safety_table_6_1.png": plot_safety_table(study.runs),
             "safety_worst_histories.png": plot_worst_histories(
                 items, title="worst step-response impacts"),
             "safety_fmax_over_time.png": plot_fmax_over_time(plot_items)}
@@ -238,7 +240,7 @@ def _figures(study) -> dict:
 
 @checked_compute
 def compute(*, quick: bool = False, arm=None, processes: int | None = None,
-            head=None) -> SafetyStudy:
+            head=None) -> SafetyFindings:
     """Reproduce Table 6.1 and scan every impact instant of the step and switch experiments.
 
     Parameters
@@ -256,7 +258,7 @@ def compute(*, quick: bool = False, arm=None, processes: int | None = None,
 
     Returns
     -------
-    SafetyStudy
+    SafetyFindings
         Tables, histories, scan and metrics.
     """
     thesis = compares_to_thesis(arm, head)
@@ -277,7 +279,7 @@ def compute(*, quick: bool = False, arm=None, processes: int | None = None,
     procs = processes or min(2, os.cpu_count() or 1)
     t1 = time.perf_counter()
     scan = run_sweep(case, cases, name="safety-every-instant", processes=procs,
-                     progress=False, on_error="raise")
+                     progress=False, on_error="raise").table
     t_scan = time.perf_counter() - t1
     n_impacts = int(len(scan))
     n_simulated = int(scan["simulated"].sum())
@@ -302,20 +304,21 @@ def compute(*, quick: bool = False, arm=None, processes: int | None = None,
                "conclusions_hold": int(concl.holds.sum()), "conclusions": len(concl),
                "pid_step_F_max": float(df[(df.experiment == "step") & (df.family == "PID")].F_max.iloc[0]),
                "pid_step_HIC": float(df[(df.experiment == "step") & (df.family == "PID")].HIC36.iloc[0])}
-    return SafetyStudy(quick=quick, head=head, table=df, conclusions=concl, worst=worst,
+    return SafetyFindings(quick=quick, head=head, runs=df, conclusions=concl, worst=worst,
                        heuristic_marks=marks, scan=scan, miss=miss, processes=procs,
                        metrics=metrics, thesis=thesis, arm=arm, verdicts=_verdicts(df, head))
 
 
 def _verdict_text(study) -> str:
-    """The thesis judges against 660 N only; the verdicts against every forehead criterion."""
+    """The thesis judges against the maxilla fracture force only; the verdicts against every
+    forehead criterion."""
     v = study.verdicts
     if not len(v):
         return ""
     lines = [f"**Verdicts against every forehead criterion** (head model `{study.head.name}`; "
              "value, limit, margin and pass per row in `safety_verdicts.csv`; the same verdicts "
              "as `ppamsafety impact`, the sweeps and the envelopes). The thesis judges only "
-             "against the 660 N maxilla line:", ""]
+             f"against the {MAXILLA_FRACTURE_N:.0f} N maxilla line:", ""]
     for crit, g in v.groupby("criterion", sort=False):
         fails = g[~g.passed]
         c = g.iloc[0]
@@ -329,12 +332,12 @@ def _verdict_text(study) -> str:
     return "\n".join(lines)
 
 
-def render(study: SafetyStudy) -> Section:
+def render(study: SafetyFindings) -> Section:
     """The report section of the safety study (formatting only).
 
     Parameters
     ----------
-    study : SafetyStudy
+    study : SafetyFindings
         Output of :func:`compute`.
 
     Returns
@@ -383,8 +386,8 @@ The heuristic finds the worst HIC and F_max (within 0.05 %) in {found} of {len(m
 """
     arts = [("safety_table_6_1.csv", show), ("safety_conclusions.csv", concl),
             ("safety_verdicts.csv", study.verdicts),
-            *study.plot().items(), ("safety_every_instant.csv", miss)]
+            *study.figures().items(), ("safety_every_instant.csv", miss)]
     return Section("Collision safety: Table 6.1 and every impact instant (thesis §6.3.3)", md,
                    arts, dict(study.metrics))
 
-__all__ = ["compute", "render", "SafetyStudy", "every_instant_case", "HEURISTICS", "variant_family"]
+__all__ = ["compute", "render", "SafetyFindings", "every_instant_case", "HEURISTICS", "variant_family"]

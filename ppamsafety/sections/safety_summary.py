@@ -113,7 +113,7 @@ the other models of a head region's body (the Annex A spring, the head model `{s
 {head_text}{'' if len(heads) else ' (no row is governed by a head region)'}. With the covering
 `{s.covering.name}` on the contact point: {cov_text}.
 """
-    arts = [*s.plot().items(), ("safety_summary.csv", s.to_pandas()), ("safety_summary_cases.csv", s.cases),
+    arts = [*s.figures().items(), ("safety_summary.csv", s.to_pandas()), ("safety_summary_cases.csv", s.cases),
             ("safety_summary_verdicts.csv", s.verdicts)]
     return Section("Safety summary", md, arts, dict(s.metrics))
 

@@ -42,6 +42,7 @@ from ..plots.control import plot_smc_chattering, plot_smc_commands
 from ..units import BAR
 from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
                resolve_arm)
+from ..results import Result
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -276,7 +277,7 @@ NOMINAL_MODEL = "model T = plant T"
 
 
 @dataclass
-class SmcStudy:
+class SmcFindings(Result):
     """Result of :func:`compute`: SMC tuning, chattering sweep, PSMC reference.
 
     Attributes
@@ -303,6 +304,8 @@ class SmcStudy:
     sensor_table : pandas.DataFrame
         Chattering [bar] and mean error [mm] of the SMC defaults per sensor
         setting (:data:`SENSOR_CASES`).
+    tradeoff : dict
+        The numbers the text quotes from the sweep (:func:`_tradeoff`).
     metrics : dict
         Headline numbers.
     thesis : bool
@@ -322,6 +325,7 @@ class SmcStudy:
     kept: dict
     psmc: dict
     sensor_table: pd.DataFrame
+    tradeoff: dict = field(default_factory=dict)
     metrics: dict = field(default_factory=dict)
     thesis: bool = True
     arm: object = None
@@ -330,7 +334,7 @@ class SmcStudy:
         """The chattering sweep (one row per run, SI units)."""
         return self.sweep.copy()
 
-    def plot(self) -> dict:
+    def figures(self) -> dict:
         """The section's figures, ``{file name: Figure}``."""
         return _figures(self)
 
@@ -341,12 +345,62 @@ def _nominal_ok(sw: pd.DataFrame) -> tuple:
     return nom, nom[~nom.diverged]
 
 
+def _tradeoff(sw: pd.DataFrame, ps: dict, default, gammas) -> dict:
+    """The numbers the section's text and tables quote from the chattering sweep.
+
+    Returns
+    -------
+    dict
+        ``low``, ``high``, ``best``, ``default`` (rows of the nominal plant, exact model: the
+        smallest and largest Gamma that did not diverge, the smallest mean error, the default
+        Gamma), ``trade`` (chattering and error over Gamma), ``per_model`` (per valve time
+        constant and controller model), ``fast_ratio`` (the range of the chattering of the
+        faster controller model over the exact model's, medians over Gamma),
+        ``chattering_at_default`` (per plant time-constant scale [Pa]) and
+        ``smoothest_chattering_Pa``.
+    """
+    g_def = default.boundary_layer[0]
+    K_def = default.gain[0]
+    g_lo, g_hi = float(gammas[0]), float(gammas[-1])
+    nominal_m = NOMINAL_MODEL
+    nom, ok = _nominal_ok(sw)
+    gb = ok.loc[ok.mean_error_m.idxmin()]
+    d_row = ok.iloc[int(np.argmin(np.abs(np.log(ok.gamma / g_def))))]
+    lo, hi = ok.iloc[0], ok.iloc[-1]
+    trade = pd.DataFrame({"Γ [rad/s²]": [f"{g:.3g}" for g in nom.gamma],
+                          "K/Γ [1/s]": [f"{K_def / g:.3g}" for g in nom.gamma],
+                          "chattering [bar]": nom.chattering_Pa / BAR,
+                          "× joint PSMC": np.round(nom.chattering_Pa / ps["chattering_Pa"]),
+                          "mean error [mm]": 1e3 * nom.mean_error_m,
+                          "max error [mm]": 1e3 * nom.max_error_m})
+    per_T = []
+    for sc in T_SCALES:
+        g0 = sw[(sw.t_scale == sc) & (sw.model == nominal_m)].set_index("gamma")
+        for m in sw.model.unique():
+            g = sw[(sw.t_scale == sc) & (sw.model == m)].set_index("gamma")
+            per_T.append({"plant T [ms]": 1e3 * g.plant_T.iloc[0], "controller model": m,
+                          f"chattering, Γ = {g_lo:.3g} [bar]": g.chattering_Pa.iloc[0] / BAR,
+                          f"chattering, Γ = {g_def:g} [bar]": g.chattering_Pa.loc[g_def] / BAR,
+                          f"mean error, Γ = {g_def:g} [mm]": 1e3 * g.mean_error_m.loc[g_def],
+                          f"mean error, Γ = {g_hi:.3g} [mm]": 1e3 * g.mean_error_m.iloc[-1],
+                          "chattering / exact model (median over Γ)":
+                              float(np.nanmedian(g.chattering_Pa / g0.chattering_Pa)),
+                          "diverged (of the Γ grid)": int(g.diverged.sum())})
+    per_T = pd.DataFrame(per_T)
+    fast = per_T[per_T["controller model"] != nominal_m]["chattering / exact model (median over Γ)"]
+    ch_T = [sw[(sw.t_scale == sc) & (sw.model == nominal_m)].set_index("gamma").chattering_Pa.loc[g_def]
+            for sc in T_SCALES]
+    return {"low": lo, "high": hi, "best": gb, "default": d_row, "trade": trade,
+            "per_model": per_T, "fast_ratio": (fast.min(), fast.max()),
+            "chattering_at_default": ch_T, "smoothest_chattering_Pa": ok.chattering_Pa.min()}
+
+
 def _figures(study) -> dict:
     """Figures of the sliding-mode-control study (chattering sweep, command traces).
 
     Parameters
     ----------
-    study : ppamsafety.sections.smc.SmcStudy
+    study : ppamsafety.sections.smc.SmcFindings
         Output of :func:`ppamsafety.sections.smc.compute`.
 
     Returns
@@ -372,7 +426,7 @@ def _figures(study) -> dict:
 
 
 @checked_compute
-def compute(*, quick: bool = False, arm=None, head=None) -> SmcStudy:
+def compute(*, quick: bool = False, arm=None, head=None) -> SmcFindings:
     """SMC defaults (grid search), chattering vs boundary layer and valve time constant.
 
     Parameters
@@ -386,7 +440,7 @@ def compute(*, quick: bool = False, arm=None, head=None) -> SmcStudy:
 
     Returns
     -------
-    SmcStudy
+    SmcFindings
         Tables, kept runs and metrics.
     """
     arm = resolve_arm(arm)
@@ -429,18 +483,19 @@ def compute(*, quick: bool = False, arm=None, head=None) -> SmcStudy:
                "chattering_at_best_bar": float(gb.chattering_Pa / BAR),
                "psmc_chattering_bar": float(ps["chattering_Pa"] / BAR),
                "diverged_runs": int(sw.diverged.sum())}
-    return SmcStudy(quick=quick, warmup=warmup, evaluate=evaluate, default=default,
+    return SmcFindings(quick=quick, warmup=warmup, evaluate=evaluate, default=default,
                     tuning=tuning, defaults_are_best=defaults_are_best, gammas=gammas,
-                    sweep=sw, kept=kept, psmc=ps, sensor_table=sens_tab, metrics=metrics,
+                    sweep=sw, kept=kept, psmc=ps, sensor_table=sens_tab,
+                    tradeoff=_tradeoff(sw, ps, default, gammas), metrics=metrics,
                     thesis=compares_to_thesis(arm), arm=arm)
 
 
-def render(study: SmcStudy) -> Section:
+def render(study: SmcFindings) -> Section:
     """The report section of the SMC study (formatting only).
 
     Parameters
     ----------
-    study : SmcStudy
+    study : SmcFindings
         Output of :func:`compute`.
 
     Returns
@@ -456,36 +511,10 @@ def render(study: SmcStudy) -> Section:
     K_def = default.gain[0]
     pole_def = float(np.sqrt(default.alpha0[0]))
     g_lo, g_hi = float(study.gammas[0]), float(study.gammas[-1])
-    nominal_m = NOMINAL_MODEL
-
-    # numbers for the text
-    nom, ok = _nominal_ok(sw)
-    gb = ok.loc[ok.mean_error_m.idxmin()]
-    d_row = ok.iloc[int(np.argmin(np.abs(np.log(ok.gamma / g_def))))]
-    lo, hi = ok.iloc[0], ok.iloc[-1]
-    trade = pd.DataFrame({"Γ [rad/s²]": [f"{g:.3g}" for g in nom.gamma],
-                          "K/Γ [1/s]": [f"{K_def / g:.3g}" for g in nom.gamma],
-                          "chattering [bar]": nom.chattering_Pa / BAR,
-                          "× joint PSMC": np.round(nom.chattering_Pa / ps["chattering_Pa"]),
-                          "mean error [mm]": 1e3 * nom.mean_error_m,
-                          "max error [mm]": 1e3 * nom.max_error_m})
-    per_T = []
-    for sc in T_SCALES:
-        g0 = sw[(sw.t_scale == sc) & (sw.model == nominal_m)].set_index("gamma")
-        for m in sw.model.unique():
-            g = sw[(sw.t_scale == sc) & (sw.model == m)].set_index("gamma")
-            per_T.append({"plant T [ms]": 1e3 * g.plant_T.iloc[0], "controller model": m,
-                          f"chattering, Γ = {g_lo:.3g} [bar]": g.chattering_Pa.iloc[0] / BAR,
-                          f"chattering, Γ = {g_def:g} [bar]": g.chattering_Pa.loc[g_def] / BAR,
-                          f"mean error, Γ = {g_def:g} [mm]": 1e3 * g.mean_error_m.loc[g_def],
-                          f"mean error, Γ = {g_hi:.3g} [mm]": 1e3 * g.mean_error_m.iloc[-1],
-                          "chattering / exact model (median over Γ)":
-                              float(np.nanmedian(g.chattering_Pa / g0.chattering_Pa)),
-                          "diverged (of the Γ grid)": int(g.diverged.sum())})
-    per_T = pd.DataFrame(per_T)
-    fast = per_T[per_T["controller model"] != nominal_m]["chattering / exact model (median over Γ)"]
-    ch_T = [sw[(sw.t_scale == sc) & (sw.model == nominal_m)].set_index("gamma").chattering_Pa.loc[g_def]
-            for sc in T_SCALES]
+    tr = study.tradeoff
+    lo, hi, gb, d_row = tr["low"], tr["high"], tr["best"], tr["default"]
+    trade, per_T, fast = tr["trade"], tr["per_model"], tr["fast_ratio"]
+    ch_T, ok_min = tr["chattering_at_default"], tr["smoothest_chattering_Pa"]
     tshow = tuning.head(6)[["rank", "poles_1_s", "K_rad_s3", "gamma_rad_s2",
                             "mean_error_nominal_m", "mean_error_heavy_m", "chattering_nominal_Pa",
                             "chattering_heavy_Pa", "cost"]].copy()
@@ -529,7 +558,7 @@ From Γ = {lo.gamma:.3g} to Γ = {g_def:g} rad/s² the chattering falls {lo.chat
 {1e3 * lo.mean_error_m:.2f} to {1e3 * d_row.mean_error_m:.2f} mm; widening further to Γ = {hi.gamma:.3g} gives
 {hi.chattering_Pa / BAR:.3f} bar and {1e3 * hi.mean_error_m:.2f} mm. The smallest error,
 {1e3 * gb.mean_error_m:.2f} mm at Γ = {gb.gamma:.3g}, comes with {gb.chattering_Pa / BAR:.2f} bar of chattering. Even the
-smoothest SMC setting commands {ok.chattering_Pa.min() / ps['chattering_Pa']:.0f} times the high-frequency Δp of
+smoothest SMC setting commands {ok_min / ps['chattering_Pa']:.0f} times the high-frequency Δp of
 joint PSMC ({ps['chattering_Pa'] / BAR:.4f} bar). In this simulation the first-order valve model
 filters the chattering, so SMC at the default Γ tracks the circle {'better' if d_row.mean_error_m < ps['mean_error_m'] else 'no better'} than joint
 PSMC ({1e3 * d_row.mean_error_m:.2f} vs {1e3 * ps['mean_error_m']:.2f} mm) -- like the thesis' SMC in simulation (§4.4.1); on
@@ -540,7 +569,7 @@ valve model cannot show.
 controller assumes (u = v/a with a ∝ 1/T): at Γ = {g_def:g} the chattering is
 {', '.join(f'{c / BAR:.3f}' for c in ch_T)} bar for plant T = {', '.join(f'{t * T_ms[0]:g}' for t in T_SCALES)} ms.
 A controller model {100 * (1 - MODEL_FACTOR):.0f} % faster than the plant (§4.4.2) lowers the chattering to a
-median {fast.min():.2f}-{fast.max():.2f} of the exact-model value, at the price of more tracking error where the
+median {fast[0]:.2f}-{fast[1]:.2f} of the exact-model value, at the price of more tracking error where the
 layer is wide:
 
 {markdown_table(per_T, digits=3)}
@@ -558,6 +587,6 @@ wall on hardware (§4.4.2) and moved to PSMC, whose Δp stays smooth: the measur
 through a proxy whose output is limited and integrated.
 """
     arts = [("smc_tuning.csv", tuning), ("smc_chattering_sweep.csv", sw),
-            *study.plot().items()]
+            *study.figures().items()]
     return Section("Sliding mode control: chattering vs boundary layer and valve time constant "
                    "(thesis §4.3-4.5)", md, arts, dict(study.metrics))

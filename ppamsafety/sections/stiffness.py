@@ -40,6 +40,7 @@ from ..plant import geometry as geo
 from ..plots.impact import plot_stiffness_conventions
 from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
                resolve_arm, resolve_head_model)
+from ..results import Result
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -131,7 +132,7 @@ def _sweep(arm, q, qd, head, ks, joint_model, B=None, integrator=None) -> pd.Dat
 
 
 @dataclass
-class StiffnessStudy:
+class StiffnessFindings(Result):
     """Result of :func:`compute`: F_max of one impact against the joint stiffness.
 
     Attributes
@@ -151,7 +152,7 @@ class StiffnessStudy:
         ``F_max`` [N], ``HIC36``, ``E_balance_error`` [-], ``contact_time``
         [s], ``dF vs k=1 [N]``, ``F/F_thesis`` (ratio to the level of fig. 6.3,
         Table 6.1's 1524 N).
-    table : pandas.DataFrame
+    by_stiffness : pandas.DataFrame
         F_max [N] with k as rows and one column per convention / B (the
         last row, k = inf, the rigid limit), and the largest
         |E_balance_error| of the row.
@@ -190,7 +191,7 @@ class StiffnessStudy:
     instant: pd.Series
     tool_speed: float
     sweep: pd.DataFrame
-    table: pd.DataFrame
+    by_stiffness: pd.DataFrame
     fit: pd.DataFrame
     B_ppam: np.ndarray
     rigid: pd.DataFrame
@@ -208,7 +209,7 @@ class StiffnessStudy:
         """The stiffness sweep (long table, one row per convention, B and k)."""
         return self.sweep.copy()
 
-    def plot(self) -> dict:
+    def figures(self) -> dict:
         """The section's figures, ``{file name: Figure}``."""
         return {"stiffness_sweep.png": plot_stiffness_conventions(
             self.sweep, thesis=FIG_6_3 if self.thesis else None,
@@ -216,7 +217,7 @@ class StiffnessStudy:
 
 
 @checked_compute
-def compute(*, quick: bool = False, arm=None, head=None) -> StiffnessStudy:
+def compute(*, quick: bool = False, arm=None, head=None) -> StiffnessFindings:
     """Sweep both joint stiffnesses for the step-response impact, for each motor-side convention.
 
     Parameters
@@ -233,7 +234,7 @@ def compute(*, quick: bool = False, arm=None, head=None) -> StiffnessStudy:
 
     Returns
     -------
-    StiffnessStudy
+    StiffnessFindings
         Sweep tables, fit of B, rigid limits, effective masses and metrics.
     """
     thesis = compares_to_thesis(arm, head)
@@ -363,18 +364,18 @@ def compute(*, quick: bool = False, arm=None, head=None) -> StiffnessStudy:
     if not thesis:
         for k in ("B_fit_kgm2", "fit_residual_N", "fit_residual_pct_points"):
             metrics.pop(k)
-    return StiffnessStudy(quick=quick, instant=row, tool_speed=speed, sweep=sweep, table=table,
+    return StiffnessFindings(quick=quick, instant=row, tool_speed=speed, sweep=sweep, by_stiffness=table,
                           fit=fit, B_ppam=B_ppam, rigid=rigid, m_eff=m_eff, m_link2=m_link2,
                           f_two_body=f_two, contact=contact, periods=periods, metrics=metrics,
                           thesis=thesis, arm=arm, head=head)
 
 
-def render(study: StiffnessStudy) -> Section:
+def render(study: StiffnessFindings) -> Section:
     """The report section of the stiffness study (formatting only).
 
     Parameters
     ----------
-    study : StiffnessStudy
+    study : StiffnessFindings
         Output of :func:`compute`.
 
     Returns
@@ -387,7 +388,7 @@ def render(study: StiffnessStudy) -> Section:
         return _render_other(study)
     row, m, per = study.instant, study.metrics, study.periods
     F_ref = FIG_6_3["F_level_N"]
-    tab = study.table.copy()
+    tab = study.by_stiffness.copy()
     tab["k"] = [("inf (rigid)" if not np.isfinite(k) else f"{k:.4g}") for k in tab.k]
     frozen_ratio = tab["frozen"] / F_ref
     tab.insert(2, "frozen / 1524 N", frozen_ratio)
@@ -463,17 +464,17 @@ difference) and the flexible joint at the largest k:
 
 ![stiffness sweep](stiffness_sweep.png)
 """
-    arts = [("stiffness_sweep.csv", study.sweep), ("stiffness_table.csv", study.table),
+    arts = [("stiffness_sweep.csv", study.sweep), ("stiffness_table.csv", study.by_stiffness),
             ("stiffness_fit.csv", study.fit), ("stiffness_rigid.csv", study.rigid),
-            *study.plot().items()]
+            *study.figures().items()]
     return Section("Joint stiffness, motor-side conventions and the rigid limit (thesis §6.3.4)",
                    md, arts, dict(m))
 
 
-def _render_other(study: StiffnessStudy) -> Section:
+def _render_other(study: StiffnessFindings) -> Section:
     """The stiffness section for another arm or head: its own numbers, no fig. 6.3 values."""
     row, m, per = study.instant, study.metrics, study.periods
-    tab = study.table.copy()
+    tab = study.by_stiffness.copy()
     tab["k"] = [("inf (rigid)" if not np.isfinite(k) else f"{k:.4g}") for k in tab.k]
     bp = study.B_ppam
     md = f"""{other_arm_note(study.arm, study.head)}
@@ -506,8 +507,8 @@ Rise of F_max from 1 to 6000 Nm/rad against B (flexible joint):
 
 ![stiffness sweep](stiffness_sweep.png)
 """
-    arts = [("stiffness_sweep.csv", study.sweep), ("stiffness_table.csv", study.table),
+    arts = [("stiffness_sweep.csv", study.sweep), ("stiffness_table.csv", study.by_stiffness),
             ("stiffness_fit.csv", study.fit), ("stiffness_rigid.csv", study.rigid),
-            *study.plot().items()]
+            *study.figures().items()]
     return Section("Joint stiffness, motor-side conventions and the rigid limit (thesis §6.3.4)",
                    md, arts, dict(m))

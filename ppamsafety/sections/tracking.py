@@ -30,6 +30,7 @@ from ..plots.control import plot_error_traces, plot_experiment, plot_tracking_co
 from ..units import BAR
 from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
                resolve_arm, responses)
+from ..results import Result
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -304,7 +305,7 @@ def _cell(errors, variant, P, stat="mean"):
 
 
 @dataclass
-class TrackingStudy:
+class TrackingFindings(Result):
     """Result of :func:`compute`: circle errors, Table 5.2, conclusions, ablations.
 
     Attributes
@@ -364,7 +365,7 @@ class TrackingStudy:
         """Table 5.2 comparison (toolkit vs thesis, long format, SI units)."""
         return self.comparison.copy()
 
-    def plot(self) -> dict:
+    def figures(self) -> dict:
         """The section's figures, ``{file name: Figure}``."""
         return _figures(self)
 
@@ -374,7 +375,7 @@ def _figures(study) -> dict:
 
     Parameters
     ----------
-    study : ppamsafety.sections.tracking.TrackingStudy
+    study : ppamsafety.sections.tracking.TrackingFindings
         Output of :func:`ppamsafety.sections.tracking.compute`.
 
     Returns
@@ -415,7 +416,7 @@ def _figures(study) -> dict:
 
 
 @checked_compute
-def compute(*, quick: bool = False, arm=None, head=None) -> TrackingStudy:
+def compute(*, quick: bool = False, arm=None, head=None) -> TrackingFindings:
     """Table 5.2, conclusions (a)-(f), sensor and gravity-compensation ablations.
 
     Parameters
@@ -429,7 +430,7 @@ def compute(*, quick: bool = False, arm=None, head=None) -> TrackingStudy:
 
     Returns
     -------
-    TrackingStudy
+    TrackingFindings
         Tables, runs, conclusions and metrics.
     """
     arm = resolve_arm(arm)
@@ -471,20 +472,20 @@ def compute(*, quick: bool = False, arm=None, head=None) -> TrackingStudy:
     if thesis:
         r_mean = cmp.ratio_mean
         metrics = {"ratio_mean_min": float(r_mean.min()), "ratio_mean_max": float(r_mean.max()),
-                   **metrics}
-    return TrackingStudy(quick=quick, warmup=warmup, evaluate=evaluate, periods=PERIODS,
+                   "ratio_mean_median": float(r_mean.median()), **metrics}
+    return TrackingFindings(quick=quick, warmup=warmup, evaluate=evaluate, periods=PERIODS,
                          errors=errs, runs=runs, comparison=cmp, comparison_ideal=cmp_ideal,
                          conclusions=concl, conclusions_ideal=concl_ideal,
                          sensor_ablation=sab, gc_periods=gcp, gc_ablation=gc,
                          pid_equivalence=eq_dev, metrics=metrics, thesis=thesis, arm=arm)
 
 
-def render(study: TrackingStudy) -> Section:
+def render(study: TrackingFindings) -> Section:
     """The report section of the tracking study (formatting only).
 
     Parameters
     ----------
-    study : TrackingStudy
+    study : TrackingFindings
         Output of :func:`compute`.
 
     Returns
@@ -501,7 +502,6 @@ def render(study: TrackingStudy) -> Section:
 
     # numbers for the diagnosis
     e_ipt, e_id = study.errors["timing board"], study.errors["ideal velocity"]
-    r_mean = cmp.ratio_mean
     eq_dev = study.pid_equivalence
     k12 = "PSMC joint Ki=12 λ=0.4"
     kd0, kp0, lam0 = (TABLE_5_1_PID["kd"][0], TABLE_5_1_PID["kp"][0], TABLE_5_1_JOINT["lambda"])
@@ -543,7 +543,7 @@ Each cell: toolkit / thesis (ratio toolkit/thesis), in mm. Thesis values typed i
 {markdown_table(comparison_markdown(cmp))}
 
 The simulated arm mostly tracks better than the hardware did: the ratio toolkit/thesis of the
-mean error has median {r_mean.median():.2f} and lies between {r_mean.min():.2f} and {r_mean.max():.2f};
+mean error has median {study.metrics["ratio_mean_median"]:.2f} and lies between {study.metrics["ratio_mean_min"]:.2f} and {study.metrics["ratio_mean_max"]:.2f};
 {worse_txt}. The plant has no muscle hysteresis and no valve dynamics beyond first order, so what
 remains is the dynamic lag of the loop, the error of the identified model in the gravity
 compensation and the sensor effects.
@@ -624,7 +624,7 @@ price is the stronger Ki = 12 limit cycle with the timing board.
 """
     arts = [("tracking_table_5_2.csv", cmp),
             ("tracking_table_5_2_ideal_velocity.csv", study.comparison_ideal),
-            *study.plot().items(),
+            *study.figures().items(),
             ("tracking_conclusions.csv", ct),
             ("tracking_sensor_ablation.csv", sab),
             ("tracking_gc_ablation.csv", gc)]
@@ -638,7 +638,7 @@ def _errors_display(errors: pd.DataFrame) -> pd.DataFrame:
         columns=["sensors"])
 
 
-def _render_other(study: TrackingStudy) -> Section:
+def _render_other(study: TrackingFindings) -> Section:
     """The tracking section for an arm other than the thesis arm: its own numbers only."""
     quick, warmup, evaluate = study.quick, study.warmup, study.evaluate
     cmp, sab, gc, gcp = study.comparison, study.sensor_ablation, study.gc_ablation, study.gc_periods
@@ -682,7 +682,7 @@ the velocity measurement).
 """
     arts = [("tracking_table_5_2.csv", cmp),
             ("tracking_table_5_2_ideal_velocity.csv", study.comparison_ideal),
-            *study.plot().items(),
+            *study.figures().items(),
             ("tracking_conclusions.csv", ct),
             ("tracking_sensor_ablation.csv", sab),
             ("tracking_gc_ablation.csv", gc)]

@@ -7,7 +7,7 @@ thesis) and every instant of the 20 experiments of Table 6.1, with
 :func:`ppamsafety.impact.directions.worst_direction`, and reports how much
 worse the worst placement is than the thesis' choice.
 
-Run alone:  ``python studies/worst_direction.py [outdir] [--quick] [--overwrite]``.
+Run alone:  ``ppamsafety report --only worst_direction [--outdir DIR] [--quick] [--overwrite]``.
 """
 
 from __future__ import annotations
@@ -26,6 +26,7 @@ from ..params.head import MAXILLA_FRACTURE_N
 from ..plots.impact import plot_direction_polar, plot_direction_ratios
 from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
                resolve_arm, resolve_head_model)
+from ..results import Result
 
 #: This section in the report: what it shows (the README table), the thesis parts it
 #: reproduces, and its wall time [s] in a full report on 2 cores with a cold kernel cache
@@ -45,7 +46,7 @@ POLAR_RUNS = (("step", "PID"), ("switch", "PID"), ("step", "PSMC joint Ki=2 λ=0
 
 
 @dataclass
-class WorstDirectionStudy:
+class WorstDirectionFindings(Result):
     """Result of :func:`compute`.
 
     Attributes
@@ -75,6 +76,9 @@ class WorstDirectionStudy:
         Table 6.1 applies: the thesis arm and head.
     arm : ArmParameters or None
         The arm.
+    side : str
+        Where every worst placement lies relative to the TCP velocity: ``"counter-clockwise"``,
+        ``"clockwise"`` or ``"either"``.
     """
 
     quick: bool
@@ -85,6 +89,7 @@ class WorstDirectionStudy:
     metrics: dict = field(default_factory=dict)
     thesis: bool = True
     arm: object = None
+    side: str = "either"
 
     def to_pandas(self) -> pd.DataFrame:
         """The per-experiment table (a copy).
@@ -95,7 +100,7 @@ class WorstDirectionStudy:
         """
         return self.table.copy()
 
-    def plot(self) -> dict:
+    def figures(self) -> dict:
         """The section's figures, ``{file name: Figure}``.
 
         Returns
@@ -110,7 +115,7 @@ def _figures(study) -> dict:
 
     Parameters
     ----------
-    study : ppamsafety.sections.worst_direction.WorstDirectionStudy
+    study : ppamsafety.sections.worst_direction.WorstDirectionFindings
         Output of :func:`ppamsafety.sections.worst_direction.compute`.
 
     Returns
@@ -127,7 +132,7 @@ def _figures(study) -> dict:
 
 
 @checked_compute
-def compute(*, quick: bool = False, arm=None, head=None) -> WorstDirectionStudy:
+def compute(*, quick: bool = False, arm=None, head=None) -> WorstDirectionFindings:
     """Worst head placement and instant for the experiments of Table 6.1.
 
     Parameters
@@ -142,7 +147,7 @@ def compute(*, quick: bool = False, arm=None, head=None) -> WorstDirectionStudy:
 
     Returns
     -------
-    WorstDirectionStudy
+    WorstDirectionFindings
     """
     if not isinstance(quick, (bool, np.bool_)):
         raise TypeError(f"quick must be a bool, got {type(quick).__name__}")
@@ -195,16 +200,19 @@ def compute(*, quick: bool = False, arm=None, head=None) -> WorstDirectionStudy:
         "rho_max": float(df["rho"].max()),
         "runs_wall_time_s": t_runs, "search_wall_time_s": t_search,
     }
-    return WorstDirectionStudy(quick, every, head, df.reset_index(drop=True), results, metrics,
-                               thesis=thesis, arm=arm)
+    psis = np.concatenate([df["psi_F_max_deg"].to_numpy(), df["psi_HIC36_deg"].to_numpy()])
+    side = ("counter-clockwise" if (psis > 0).all() else "clockwise" if (psis < 0).all()
+            else "either")
+    return WorstDirectionFindings(quick, every, head, df.reset_index(drop=True), results, metrics,
+                                  thesis=thesis, arm=arm, side=side)
 
 
-def render(study: WorstDirectionStudy) -> Section:
+def render(study: WorstDirectionFindings) -> Section:
     """The report section (formatting only).
 
     Parameters
     ----------
-    study : WorstDirectionStudy
+    study : WorstDirectionFindings
         Output of :func:`compute`.
 
     Returns
@@ -224,9 +232,7 @@ def render(study: WorstDirectionStudy) -> Section:
     else:
         show = t[cols].copy()
     mode = "every 20th ms, two variants (quick mode)" if study.quick else "every ms"
-    psis = np.concatenate([t["psi_F_max_deg"].to_numpy(), t["psi_HIC36_deg"].to_numpy()])
-    side = ("always counter-clockwise of it" if (psis > 0).all() else
-            "always clockwise of it" if (psis < 0).all() else "on either side")
+    side = ("on either side" if study.side == "either" else f"always {study.side} of it")
     n = study.head.exponent
     aF, bF = n / (n + 1), 2 * n / (n + 1)
     aH, bH = (1 + 2.5 * n) / (n + 1), (2 + 5 * n) / (n + 1) - 1
@@ -273,9 +279,9 @@ F_max over every placement and instant is {m["psmc_max_F_max_worst"]:.0f} N
 
 ![ratios](worst_direction_ratios.png)
 """
-    arts = [("worst_direction.csv", t), *study.plot().items()]
+    arts = [("worst_direction.csv", t), *study.figures().items()]
     return Section("Worst head placement around the tool point", md, arts,
                    dict(study.metrics))
 
 
-__all__ = ["compute", "render", "WorstDirectionStudy"]
+__all__ = ["compute", "render", "WorstDirectionFindings"]

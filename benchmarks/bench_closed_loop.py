@@ -18,7 +18,7 @@ the logs, so that two versions can be checked to compute the same bits.
 tree, alternately, ``--rounds`` times (``baseline.py``), and prints the ratios (REV /
 working tree; above 1 means faster now) with the load average.
 
-Run:  python studies/bench/bench_closed_loop.py [--baseline REV] [--rounds N]
+Run:  python benchmarks/bench_closed_loop.py [--baseline REV] [--rounds N]
 """
 
 import argparse

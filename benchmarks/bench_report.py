@@ -21,8 +21,8 @@ relative difference per numeric column (a timing column is expected to differ).
 Absolute times mean something only on a quiet machine (the load averages are printed before
 and after each run); the ratios are measured side by side.
 
-Run:  python studies/bench/bench_report.py --baseline REV [--rounds N] [--skip-cold]
-      python studies/bench/bench_report.py --baseline REV --sections
+Run:  python benchmarks/bench_report.py --baseline REV [--rounds N] [--skip-cold]
+      python benchmarks/bench_report.py --baseline REV --sections
 """
 
 import argparse

@@ -28,7 +28,7 @@ the record is written once, and each version (``DIR``, a checkout of another rev
 this one) diagnoses it in child processes, alternately, ``--repeats`` times each; the
 medians and their ratio are printed.
 
-Run:  python studies/bench/bench_diagnose_trust.py [--duration SECONDS] [--against DIR]
+Run:  python benchmarks/bench_diagnose_trust.py [--duration SECONDS] [--against DIR]
 """
 
 import argparse
@@ -100,7 +100,7 @@ print(time.perf_counter() - t0, "+".join(dg.names))
 
 def against(other, duration, repeats):
     """Time the diagnosis of one record with the toolkit in ``other`` and with this one."""
-    here = Path(__file__).resolve().parents[2]
+    here = Path(__file__).resolve().parents[1]
     trees = {"other": Path(other).resolve(), "this": here}
     times = {k: [] for k in trees}
     with tempfile.TemporaryDirectory() as tmp:

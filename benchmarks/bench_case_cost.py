@@ -7,7 +7,7 @@ runs a few representative :func:`ppamsafety.sweep_cases.safety_case` cases (kern
 compiled first, one process) and prints, per case, the measured seconds beside the model's,
 as a ratio (model / measured; > 1: the estimate is on the safe side).
 
-Run:  python studies/bench/bench_case_cost.py [--repeat 2]
+Run:  python benchmarks/bench_case_cost.py [--repeat 2]
 """
 
 from __future__ import annotations

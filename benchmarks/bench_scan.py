@@ -10,7 +10,7 @@ that both give the same worst instant and the same F_max/HIC36 (exact float
 equality) and prints the process (CPU) and wall times with their ratios.
 Both run on one process here (the safety study spreads experiments over 2).
 
-Run (from the repository root):  PYTHONPATH=. python studies/bench/bench_scan.py [--every N] [--experiments K]
+Run (from the repository root):  PYTHONPATH=. python benchmarks/bench_scan.py [--every N] [--experiments K]
 """
 
 import argparse

@@ -2,7 +2,7 @@
 
 Time to simulate 10 s of open-loop motion at a 1 kHz input rate (one RK4 step
 per period, the default), for one state and for a batch of 100 parameter
-variants.  Run:  python studies/bench/bench_plant.py
+variants.  Run:  python benchmarks/bench_plant.py
 """
 
 import time

@@ -13,7 +13,7 @@ The quick sections call the same kernels with the same types as the full report.
 ``--baseline REV`` measures the git revision REV and the working tree, one after the other
 (``baseline.py``), and prints the totals side by side.
 
-Run:  python studies/bench/bench_compile.py [--baseline REV] [--top N]
+Run:  python benchmarks/bench_compile.py [--baseline REV] [--top N]
 """
 
 import argparse

@@ -11,7 +11,7 @@ model), ranked by the force over each region's transient limit
 their ratio (target: at most 3x), and the load average.
 
 Run (from the repository root):
-    PYTHONPATH=. python studies/bench/bench_anywhere.py [--experiments K] [--repeats R]
+    PYTHONPATH=. python benchmarks/bench_anywhere.py [--experiments K] [--repeats R]
 """
 
 import argparse

@@ -17,7 +17,7 @@ the fit (``--fit``)
 ``--baseline REV`` measures the evaluation in the git revision REV and in the working tree,
 alternately (``baseline.py``), and prints the ratios (REV / now; above 1: faster now).
 
-Run:  python studies/bench/bench_as_built.py [--baseline REV] [--rounds N] [--quick]
+Run:  python benchmarks/bench_as_built.py [--baseline REV] [--rounds N] [--quick]
       [--per-plant] [--fit]
 """
 

@@ -29,7 +29,7 @@ with a plant effect and dotted-path arm parameters (``effects={"payload_mass": .
 same physics.  Both run in this process through ``run_sweep``, interleaved in rounds (A, B,
 A, B ...) so that the load of a shared machine hits both alike; ratio = with / without.
 
-Run:  python studies/bench/bench_sweep.py [--cases 1000] [--processes 2] [--physics 40]
+Run:  python benchmarks/bench_sweep.py [--cases 1000] [--processes 2] [--physics 40]
 """
 
 from __future__ import annotations
@@ -73,19 +73,19 @@ def main(argv=None) -> int:
     base = _timed(plain)
     rows.append(("plain ProcessPoolExecutor.map", base))
     rows.append(("run_sweep local, no cache", _timed(
-        lambda: run_sweep(trivial, cases, processes=procs, progress=False))))
+        lambda: run_sweep(trivial, cases, processes=procs, progress=False).table)))
     with tempfile.TemporaryDirectory() as d:
         rows.append(("run_sweep local, cache folder", _timed(
-            lambda: run_sweep(trivial, cases, processes=procs, cache_dir=d, progress=False))))
+            lambda: run_sweep(trivial, cases, processes=procs, cache_dir=d, progress=False).table)))
         rows.append(("  (rerun: all cached)", _timed(
-            lambda: run_sweep(trivial, cases, processes=procs, cache_dir=d, progress=False))))
+            lambda: run_sweep(trivial, cases, processes=procs, cache_dir=d, progress=False).table)))
     try:
         from dask.distributed import Client, LocalCluster
     except ImportError:
         print("dask.distributed not installed (pip install 'ppamsafety[cluster]'): dask skipped")
     else:
         rows.append(("run_sweep dask, LocalCluster started", _timed(
-            lambda: run_sweep(trivial, cases, backend="dask", processes=procs, progress=False))))
+            lambda: run_sweep(trivial, cases, backend="dask", processes=procs, progress=False).table)))
         with LocalCluster(n_workers=procs, threads_per_worker=1, processes=True,
                           dashboard_address=None) as cluster, Client(cluster) as client:
             client.run(lambda: None)                      # workers up
@@ -96,7 +96,7 @@ def main(argv=None) -> int:
             rows.append(("  (plain dask Client.map + gather)", _timed(plain_dask)))
             rows.append(("run_sweep dask, running LocalCluster", _timed(
                 lambda: run_sweep(trivial, cases, backend="dask", scheduler=client,
-                                  progress=False))))
+                                  progress=False).table)))
     print(f"{n} trivial cases on {procs} worker processes")
     print(f"{'variant':40s} {'wall [s]':>9s} {'per case [ms]':>14s} {'vs plain pool':>14s}")
     for name, t in rows:
@@ -137,11 +137,11 @@ def physics(n: int, rounds: int = 4) -> tuple:
                  "arm.pneumatics.mean_pressure": pm * (1 + 1e-12 * (i + n * r))}
                 for i, lam in enumerate(lams)]
 
-    run_sweep(safety_case, plain[:1] + dotted(-1)[:1], progress=False)     # compile, warm
+    run_sweep(safety_case, plain[:1] + dotted(-1)[:1], progress=False).table     # compile, warm
     t_a = t_b = 0.0
     for r in range(rounds):
-        t_a += _timed(lambda: run_sweep(safety_case, plain, progress=False))
-        t_b += _timed(lambda: run_sweep(safety_case, dotted(r), progress=False))
+        t_a += _timed(lambda: run_sweep(safety_case, plain, progress=False).table)
+        t_b += _timed(lambda: run_sweep(safety_case, dotted(r), progress=False).table)
     k = n * rounds
     print(f"\n{k} safety cases per variant (step, joint PSMC), in this process, "
           f"{rounds} interleaved rounds")

@@ -26,7 +26,7 @@ from pathlib import Path
 TREES = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "ppamsafety" / \
     "bench-trees"
 #: The working tree (the repository root this file lives in).
-HERE = Path(__file__).resolve().parents[2]
+HERE = Path(__file__).resolve().parents[1]
 
 
 def commit_of(rev: str) -> str:

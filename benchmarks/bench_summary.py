@@ -9,7 +9,7 @@ force limit), every instant.  Prints the process time of each, their ratio (the 
 scan over contact points and regions: at most 3x) and the load average.
 
 Run (from the repository root):
-    PYTHONPATH=. python studies/bench/bench_summary.py
+    PYTHONPATH=. python benchmarks/bench_summary.py
 """
 
 import os

@@ -32,7 +32,7 @@ straightforward (output error)
 Times are wall times (time.perf_counter) after a warm-up that compiles /
 loads the kernels; the kernels run single-threaded.
 
-Run:  python studies/bench/bench_diagnose.py [--duration SECONDS]
+Run:  python benchmarks/bench_diagnose.py [--duration SECONDS]
 """
 
 import argparse

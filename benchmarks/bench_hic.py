@@ -5,7 +5,7 @@ zeros, sampled at dt = 10 us (the impact integration rate) and 1 us; HIC36.
 Both kernels are compiled (warm-up call) before timing; times are the best
 of several repeats (time.perf_counter).  Also checks that both agree.
 
-Run:  python studies/bench/bench_hic.py
+Run:  python benchmarks/bench_hic.py
 """
 
 import time

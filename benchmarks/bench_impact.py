@@ -5,7 +5,7 @@ Prints the wall time of one impact with its HIC, of a batch of 5000 impacts
 dense-output engine with the single-pulse HIC path),
 of the same impacts with one scipy.integrate.solve_ivp call each (measured on
 a sample and extrapolated), and of the exact HIC against brute force on a
-50 ms record.  Run:  python studies/bench/bench_impact.py
+50 ms record.  Run:  python benchmarks/bench_impact.py
 """
 
 import time
