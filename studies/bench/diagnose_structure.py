@@ -11,9 +11,9 @@ and how many files name each candidate by hand.
   written again for another data shape (``run_battery``, ``_where``, ``TUNING_SEEDS``, ...).
   A name re-exported by an import is not a definition;
 * **files naming a candidate**: for every candidate of every record kind, the package files
-  in which its name appears as a string literal (``"payload"``): each is a place a new
-  candidate must be added by hand.  The candidates are read from the registries, so the
-  count follows the code.
+  (outside the other kinds' subpackages) in which its name appears as a string literal
+  (``"payload"``, a docstring counts): each is a place a new candidate must be added or kept
+  true by hand.  The candidates are read from the registries, so the count follows the code.
 
 Prints one block of numbers; ``--list`` also prints every duplicated name with its modules.
 Run from the repository root (or give ``--root``).
@@ -76,20 +76,25 @@ def string_literals(path: Path) -> set:
             and isinstance(n.value, str)}
 
 
-def candidate_places(pkg: Path, names) -> dict:
-    """Candidate name -> the files of ``pkg`` holding it as a whole string literal."""
-    lits = {p: string_literals(p) for p in python_files(pkg)}
+def candidate_places(pkg: Path, names, *, exclude=()) -> dict:
+    """Candidate name -> the files of ``pkg`` holding it as a whole string literal, outside
+    the subpackages ``exclude`` (another record kind's files: a name two kinds share, such as
+    ``hysteresis``, is counted for each kind in its own files and the shared ones)."""
+    lits = {p: string_literals(p) for p in python_files(pkg)
+            if p.relative_to(pkg).parts[0] not in exclude}
     return {n: sorted(str(p.relative_to(pkg)) for p, s in lits.items() if n in s)
             for n in names}
 
 
 def candidate_names() -> dict:
-    """Record kind -> its candidate names, read from the package's own registries."""
+    """Record kind -> (its candidate names, read from the package's own registries; the
+    subpackages of the other kinds)."""
     from ppamsafety.diagnose.arm.candidates import REGISTRY
     from ppamsafety.diagnose.bench.candidates import ACTUATOR_VOCABULARY
     from ppamsafety.diagnose.bench.friction import VOCABULARY
-    return {"arm": tuple(REGISTRY), "muscle bench": tuple(ACTUATOR_VOCABULARY),
-            "cylinder campaign": tuple(VOCABULARY)}
+    return {"arm": (tuple(REGISTRY), ("bench",)),
+            "muscle bench": (tuple(ACTUATOR_VOCABULARY), ("arm",)),
+            "cylinder campaign": (tuple(VOCABULARY), ("arm",))}
 
 
 def main(argv=None) -> int:
@@ -106,8 +111,8 @@ def main(argv=None) -> int:
           f"the thesis's own numbers ({', '.join(THESIS_FITS)}): {total - fits}")
     print(f"names defined in more than one module: {len(dup)} "
           f"({sum(len(m) for m in dup.values())} definitions)")
-    for kind, names in candidate_names().items():
-        places = candidate_places(pkg, names)
+    for kind, (names, other) in candidate_names().items():
+        places = candidate_places(pkg, names, exclude=other)
         counts = [len(v) for v in places.values()]
         print(f"{kind}: files naming a candidate by hand: median "
               f"{statistics.median(counts):g}, max {max(counts)} "
