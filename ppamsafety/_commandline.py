@@ -9,7 +9,10 @@ error ends in a Python traceback:
 2
     Bad usage or input (``ppamsafety: error: ...`` on stderr).
 1
-    A failure that is not the user's; ``PPAMSAFETY_DEBUG=1`` shows the traceback.
+    A failure that is not the user's; ``PPAMSAFETY_DEBUG=1`` shows the traceback.  A
+    ``TypeError`` is the user's only when the library raised it on purpose
+    (:func:`is_internal_error`): a call with a wrong keyword, an operation on the wrong type,
+    a ``TypeError`` of numpy or the standard library are bugs of ppamsafety.
 130
     Interrupted (Ctrl-C).
 
@@ -28,6 +31,7 @@ import traceback
 import warnings
 
 from ._interrupt import install as install_interrupt, restore as restore_interrupt
+from ._errors import InternalFailure, is_internal_error, mark_internal
 
 EXIT_OK, EXIT_FAILURE, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
 
@@ -156,8 +160,10 @@ def run_guarded(parser: argparse.ArgumentParser, func, argv=None) -> int:
     ``ValueError``, ``TypeError`` or ``OSError`` (bad input, including
     :class:`ppamsafety.output.OutputError`) prints ``ppamsafety: error: ...``
     and gives 2, and so does a ``MemoryError`` (a request too large for the machine:
-    the library refuses the sizes it can estimate before allocating, this is the net); any other exception prints one line asking to report it and
-    gives 1.  No traceback unless the environment sets ``PPAMSAFETY_DEBUG=1``.
+    the library refuses the sizes it can estimate before allocating, this is the net);
+    any other exception, and a ``TypeError`` that is a bug (:func:`is_internal_error`),
+    prints one line asking to report it and gives 1.  No traceback unless the environment
+    sets ``PPAMSAFETY_DEBUG=1``.
     Every warning raised while ``func`` runs is printed once as one line
     ``ppamsafety: warning: ...`` (no Python source line).
 
@@ -214,18 +220,26 @@ def run_guarded(parser: argparse.ArgumentParser, func, argv=None) -> int:
             argparse.ArgumentTypeError) as exc:
         if debug:
             traceback.print_exc()
+        if is_internal_error(exc):
+            return _internal(exc)
         _error(str(exc) or type(exc).__name__)
         return EXIT_USAGE
     except Exception as exc:           # not the user's fault
         if debug:
             traceback.print_exc()
-        _error(f"internal failure ({type(exc).__name__}: {exc}); please report this with the "
-               f"command line used (PPAMSAFETY_DEBUG=1 shows the traceback)")
-        return EXIT_FAILURE
+        return _internal(exc)
     finally:
         log.removeHandler(handler)
         log.setLevel(old_level)
         restore_interrupt(previous_sigint)
 
 
-__all__ = ["EXIT_OK", "EXIT_FAILURE", "EXIT_USAGE", "EXIT_INTERRUPTED", "Parser", "run_guarded"]
+def _internal(exc: BaseException) -> int:
+    what = str(exc) if isinstance(exc, InternalFailure) else f"{type(exc).__name__}: {exc}"
+    _error(f"internal failure ({what}); please report this with the command line used "
+           f"(PPAMSAFETY_DEBUG=1 shows the traceback)")
+    return EXIT_FAILURE
+
+
+__all__ = ["EXIT_OK", "EXIT_FAILURE", "EXIT_USAGE", "EXIT_INTERRUPTED", "Parser", "run_guarded",
+           "InternalFailure", "is_internal_error", "mark_internal"]

@@ -205,13 +205,25 @@ def _section_names(text: str) -> list[str]:
 
 
 def _arm_of(args):
-    """The arm of ``--arm FILE`` (None: the thesis arm), loaded and validated."""
+    """The arm of ``--arm FILE`` (None: the thesis arm), loaded and checked; its notes
+    (:func:`ppamsafety.design.arm_notes`) go to stderr."""
     if getattr(args, "arm", None) is None:
         return None
-    from .params import load_arm
+    from .design import load_arm
 
     with _named("--arm", args.arm):
-        return load_arm(args.arm)
+        arm = load_arm(args.arm)
+    _print_notes(arm, args.arm)
+    return arm
+
+
+def _print_notes(arm, where, notes=None) -> None:
+    """Print the arm's notes (default :func:`ppamsafety.design.arm_notes`) as
+    ``ppamsafety: note: <file>: ...`` lines on stderr."""
+    from .design import arm_notes
+
+    for note in arm_notes(arm) if notes is None else notes:
+        print(f"ppamsafety: note: {where}: {note}", file=sys.stderr)
 
 
 def _head_of(args):
@@ -308,7 +320,10 @@ def _cmd_sweep(args) -> int:
     if args.resume and args.overwrite:
         raise ValueError("--resume and --overwrite exclude each other: --resume continues the "
                          "sweep in --out, --overwrite recomputes it from scratch")
-    study = load_study(args.study, arm=_arm_of(args), head=_head_of(args))   # checked first
+    arm = _arm_of(args)
+    study = load_study(args.study, arm=arm, head=_head_of(args))   # checked first
+    if arm is None and study.arm is not None:       # the study file's own [arm] file
+        _print_notes(study.arm, f"{args.study} [arm]")
     n = len(study.cases) if args.max_cases is None else min(args.max_cases, len(study.cases))
     est = study.estimate(processes=args.processes, max_cases=n)
     with _options(max_cases="--max-cases", confirm="--yes"):           # refused before it runs
@@ -611,18 +626,21 @@ THESIS_TWIN = ", the thesis arm's parameters"
 
 
 def _cmd_arm_check(args) -> int:
-    from .design import arm_summary
+    from .design import arm_notes, arm_summary, load_arm
     from .params import is_thesis_arm
-    from .params import load_arm
     from .params.arm_file import arm_fingerprint
 
     arm = load_arm(args.file)
     q = None if args.q is None else np.array(args.q, dtype=float) * DEG
     summary = arm_summary(arm, q=q)
+    notes = arm_notes(arm)
+    n = len(notes)
     print(f"{args.file}: valid arm file ({arm.name or 'unnamed arm'}"
           f"{THESIS_TWIN if is_thesis_arm(arm) else ''}; sha256 "
-          f"{arm_fingerprint(arm)[:16]})")
+          f"{arm_fingerprint(arm)[:16]}"
+          f"{f'; {n} note' + ('s' if n > 1 else '') + ' on stderr' if n else ''})")
     print("\n".join(summary.lines()))
+    _print_notes(arm, args.file, notes)
     if not summary.pose_holdable:
         print("ppamsafety: warning: the static pressures at the stiffness pose leave "
               "[0, max_pressure]: the Delta-p approach cannot hold the arm there with these "

@@ -12,17 +12,21 @@ in :mod:`ppamsafety.plots.design` (``result.plot()`` delegates there).
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from functools import lru_cache
 
 import numpy as np
 import pandas as pd
 
 from ._validation import check_instance, check_int, check_range
 from .params import ArmParameters
+from .params.arm_file import ArmFileError
+from .params.effects import Effects
 from .params.inertia import LINK_PRIORS, RADIUS_OF_GYRATION, LinkInertia
 from .plant import geometry as geo
 from .plant import pneumatics as pn
-from .plant import torque
+from .plant import ppam_theory, torque
+from .plant.muscle import polynomial
 from .plots.design import plot_torque_functions, plot_stiffness_map, plot_max_load
 from .units import BAR, DEG
 
@@ -150,6 +154,16 @@ def stiffness_map(arm, *, n1: int = 61, n2: int = 61) -> StiffnessMap:
         df[f"p{i + 1}_Pa"] = pc[:, i]
     df["holdable"] = holdable
     return StiffnessMap(df)
+
+
+def _holding(arm, q) -> tuple:
+    """(static Delta-p pressures (n, 4) [Pa], holdable (n,) bool) of ``arm`` at the poses ``q``.
+
+    Holdable: every pressure in [0, p_max] without clipping (the Delta-p approach with the
+    arm's mean pressures holds the arm there, (3.18)-(3.19)).
+    """
+    p = pn.static_pressures(q, arm)
+    return p, np.all((p >= 0) & (p <= arm.pneumatics.p_max), axis=-1)
 
 
 def cad_links() -> LinkInertia:
@@ -327,10 +341,9 @@ def rest_stiffness(arm, q) -> RestStiffness:
 def _rest(q, arm):
     """Static pressures (unclipped, clipped to [0, p_max]), whether they are in range, and the
     stiffness (2.18) with the clipped ones, for poses ``q`` of shape (..., 2)."""
-    p = pn.static_pressures(q, arm)
-    pmax = arm.pneumatics.p_max
-    pc = np.clip(p, 0.0, pmax)
-    return p, pc, np.all((p >= 0) & (p <= pmax), axis=-1), pn.joint_stiffness(q, pc, arm)
+    p, holdable = _holding(arm, q)
+    pc = np.clip(p, 0.0, arm.pneumatics.p_max)
+    return p, pc, holdable, pn.joint_stiffness(q, pc, arm)
 
 
 #: Pose at which :func:`arm_summary` reports the stiffness when none is given: the
@@ -462,3 +475,321 @@ def arm_summary(arm, *, q=None, n: int = 61) -> ArmSummary:
     return ArmSummary(name=arm.name, pose=(float(q[0]), float(q[1])),
                       pose_pressures=tuple(float(v) for v in p), pose_holdable=holdable,
                       stiffness=(float(K[0]), float(K[1])), data=df)
+
+
+# ----------------------------------------------------------------------------- arm checks
+# What an arm file must satisfy beyond the data checks of its parameter classes (ranges,
+# cross-field geometry: ppamsafety.params): the physics of the arm.  load_arm applies them to
+# every file a command reads; arm_notes lists what is physically possible but likely a slip.
+
+#: Poses per joint of the grid on which an arm must hold itself somewhere (as arm_summary).
+HOLD_GRID = 61
+
+#: A muscle group's force law (3.9) pulls, on average over the design contraction range
+#: [eps_min, eps_max], within this factor of the theoretical PPAM of its size: F/p = l0^2
+#: f_t0(eps, l0/R) (thesis (2.2), :mod:`ppamsafety.plant.ppam_theory`).  The thesis' identified
+#: groups (Table B.1) pull 0.57 to 1.16 times the theory; a McKibben muscle of the same size
+#: about 0.2 times.  Unit slips are 1e3 (kPa) to 1e5 (N/bar values written as N/Pa) times off.
+FORCE_LAW_FACTOR = 30.0
+
+#: The plant's gravity moments m1 L_G1 + m2 L1 and m2 L_G2 differ from the controllers'
+#: identified model when the gap exceeds MODEL_GAP times the plant's value plus
+#: MODEL_GAP_FLOOR [kg m] (a 1 kg link 1 cm off).  The thesis' two identifications of one arm
+#: (Tables 3.1, 3.5) differ by up to 3 % on these moments and its reconciled plant by up to
+#: 5 % (params.inertia); an arm with a 30 % heavier forearm and the thesis model differs by 35 %.
+MODEL_GAP = 0.10
+MODEL_GAP_FLOOR = 0.01
+
+#: The controllers' identified inertias (theta3 = I_zO,1 + m2 L1^2, theta6 = I_zS,2) are not
+#: physically consistent (Table 3.5 is 8 times below its plant on theta3, params.inertia), but
+#: one more than this factor from the plant's is noted: an inertia in g m^2 written as kg m^2
+#: is 1000 times off.
+INERTIA_GAP_FACTOR = 30.0
+
+#: A valve time constant at or above this [s] gets a note: the thesis' valves take 45-60 ms
+#: (Table B.2, §4.2.5); 2-10 ms written with unit "s" land here.
+SLOW_VALVE = 1.0
+
+#: A joint working range narrower than this [rad] gets a note: the thesis arm's are 85 and
+#: 100 deg (2.6)-(2.7); radian values written with unit "deg" (0.35 to 1.83 deg) land here.
+NARROW_RANGE = 5.0 * DEG
+
+#: An encoder coarser than this per count [rad] gets a note: the thesis arm's counts 2 pi/8000
+#: (0.045 deg, §2.4.5); a resolution in degrees written with unit "rad" lands here.
+COARSE_ENCODER = 1.0 * DEG
+
+#: A timing-board clock slower than this [Hz] gets a note: the board times encoder pulses to
+#: well below the 1 ms control period (the thesis': 2 MHz, §2.4.5); "2" meant in MHz lands here.
+SLOW_CLOCK = 1.0e4
+
+#: Unit slips of a pressure: the factor to the value meant, and the slip.
+_PRESSURE_SLIPS = ((BAR, "bar written as Pa"), (1.0e3, "kPa written as Pa, or bar as mbar"))
+
+
+def _bar(values) -> str:
+    """Pressures [Pa] as ``"1.4 Pa (1.4e-05 bar)"`` or a list of them."""
+    v = np.atleast_1d(np.asarray(values, dtype=float))
+    pa = ", ".join(f"{x:.4g}" for x in v)
+    bar = ", ".join(f"{x / BAR:.4g}" for x in v)
+    return f"{pa} Pa ({bar} bar)" if v.size == 1 else f"[{pa}] Pa ([{bar}] bar)"
+
+
+@lru_cache(maxsize=64)
+def _theory_pull(slenderness: float, lo: float, hi: float) -> float:
+    """Mean f_t0 of the theoretical PPAM over contractions [lo, hi] [-] (F/p = l0^2 f_t0)."""
+    return float(np.mean(ppam_theory.f_t0(np.linspace(lo, hi, 5), slenderness)))
+
+
+def _check_force_laws(arm) -> None:
+    """Refuse a force law that no PPAM of its size can have (a unit slip, a sign error)."""
+    m = arm.muscles
+    for k, grp in enumerate(m.groups, start=1):
+        lo = m.eps_min
+        hi = min(m.eps_max, 0.95 * ppam_theory.max_contraction(grp.slenderness))
+        if not hi > lo:          # too stubby a muscle for the theory over this range
+            continue
+        pull = float(np.mean(polynomial(grp.coefficients, np.linspace(lo, hi, 5))))
+        theory = grp.l0 ** 2 * _theory_pull(grp.slenderness, lo, hi)
+        ratio = pull / theory
+        if 1.0 / FORCE_LAW_FACTOR <= ratio <= FORCE_LAW_FACTOR:
+            continue
+        if ratio > 0 and 1.0 / FORCE_LAW_FACTOR <= ratio / BAR <= FORCE_LAW_FACTOR:
+            hint = (" The coefficients look like N/bar values written with unit \"N/Pa\": "
+                    "write unit = \"N/bar\".")
+        elif ratio > 0 and 1.0 / FORCE_LAW_FACTOR <= ratio * BAR <= FORCE_LAW_FACTOR:
+            hint = (" The coefficients look like N/Pa (m^2) values written with unit "
+                    "\"N/bar\": write unit = \"N/Pa\".")
+        elif ratio <= 0:
+            hint = " A muscle only pulls: check the signs of the coefficients."
+        else:
+            hint = " Check the coefficients' unit, and l0 and slenderness."
+        raise ArmFileError(
+            f"muscles.group{k}.force_law: the muscle pulls {pull * BAR:.4g} N/bar on average over "
+            f"contractions {lo:g} to {hi:.3g} (muscles.eps_min, eps_max), {ratio:.3g} times the "
+            f"theoretical PPAM of its size (muscles.group{k}.l0 = {grp.l0:.4g} m, slenderness = "
+            f"{grp.slenderness:g}: {theory * BAR:.4g} N/bar, thesis (2.2)); a muscle of this size "
+            f"pulls within a factor {FORCE_LAW_FACTOR:g} of it (the thesis' muscles: 0.57 to "
+            f"1.16).{hint}")
+
+
+def _hold_share(arm) -> tuple:
+    """(share of the working area where ``arm`` holds itself, poses, pressures, holdable)."""
+    q = _grid(arm, HOLD_GRID, HOLD_GRID)
+    p, ok = _holding(arm, q)
+    return float(ok.mean()), q, p, ok
+
+
+def _closest_pose(arm, q, p) -> str:
+    """The pose whose static pressures come closest to [0, p_max], and those pressures."""
+    miss = np.max(np.maximum(-p, p - arm.pneumatics.p_max), axis=1)
+    j = int(np.argmin(miss))
+    return (f"closest: q = ({np.degrees(q[j, 0]):.4g}, {np.degrees(q[j, 1]):.4g}) deg needs "
+            f"p1..p4 = {', '.join(f'{x / BAR:.3g}' for x in p[j])} bar")
+
+
+def _pressure_slip(arm):
+    """(pneumatics with the slip undone, the slip, holdable share) or None."""
+    pnm = arm.pneumatics
+    for factor, slip in _PRESSURE_SLIPS:
+        for with_max in (False, True):
+            try:
+                fixed = replace(pnm, p_mean=tuple(v * factor for v in pnm.p_mean),
+                                p_max=pnm.p_max * factor if with_max else pnm.p_max)
+            except ValueError:
+                continue
+            share = _hold_share(arm.replace(pneumatics=fixed))[0]
+            if share > 0:
+                return fixed, slip, share
+    return None
+
+
+def _check_holds_itself(arm) -> None:
+    """Refuse an arm that cannot hold itself anywhere in its working area (effects off)."""
+    bare = arm if arm.effects == Effects() else arm.replace(effects=Effects())
+    share, q, p, _ = _hold_share(bare)
+    if share > 0:
+        return
+    pnm = bare.pneumatics
+    what = (f"pneumatics.mean_pressure = {_bar(pnm.p_mean)} with pneumatics.max_pressure = "
+            f"{_bar(pnm.p_max)}: the arm cannot hold itself anywhere in its working area (at "
+            f"none of {HOLD_GRID} x {HOLD_GRID} poses do the static Delta-p pressures "
+            f"(3.18)-(3.19) stay in [0, max_pressure]; {_closest_pose(bare, q, p)})")
+    slip = _pressure_slip(bare)
+    if slip is not None:
+        fixed, name, share = slip
+        also = (f" and max_pressure = {_bar(fixed.p_max)}" if fixed.p_max != pnm.p_max else "")
+        raise ArmFileError(
+            f"{what}.  Did you mean mean_pressure = {_bar(fixed.p_mean)}{also} (a unit slip: "
+            f"{name})?  With it the arm holds itself in {100 * share:.0f} % of its working area.")
+    raise ArmFileError(
+        f"{what}.  Other mean pressures (pneumatics.mean_pressure), a higher "
+        f"pneumatics.max_pressure, lighter links (links.m1, links.m2) or stronger muscles "
+        f"(muscles.groupN.count, force_law) would let it hold itself.")
+
+
+def check_arm(arm) -> None:
+    """Refuse an arm whose physics cannot be right (what :func:`load_arm` adds to the data checks).
+
+    * every muscle group's force law pulls within :data:`FORCE_LAW_FACTOR` of the theoretical
+      PPAM of its size over the design contraction range (a force law in N/bar written as
+      N/Pa is 1e5 times too strong);
+    * the arm (its plant effects off) holds itself somewhere in its working area: at one pose
+      at least of a :data:`HOLD_GRID` x :data:`HOLD_GRID` grid, the static Delta-p pressures
+      (3.18)-(3.19) lie in [0, max_pressure] (``mean_pressure = [1.4, 1.5] Pa`` holds it
+      nowhere: the likely unit slip is named).
+
+    What is physically possible but likely a slip is listed by :func:`arm_notes` instead.  The
+    cross-field checks that need no physics (a point of a link beyond 1.5 link lengths, ...)
+    are made when the :class:`~ppamsafety.params.ArmParameters` is built.
+
+    Parameters
+    ----------
+    arm : ArmParameters
+        Any arm.
+
+    Raises
+    ------
+    ppamsafety.params.arm_file.ArmFileError
+        A ``ValueError`` naming the dotted keys of the arm file, the values and the likely
+        slip.
+    """
+    arm = _arm(arm)
+    _check_force_laws(arm)
+    _check_holds_itself(arm)
+
+
+def _model_note(arm):
+    """The note on the plant's gravity moments against the controllers' model, or None."""
+    plant = arm.plant_base
+    gaps = []
+    for label, attr in (("m2 L_G2", "m2LG2"), ("m1 L_G1 + m2 L1", "m1LG1_m2L1")):
+        mine = getattr(plant, attr)
+        theirs = [(t, getattr(getattr(arm, t), attr)) for t in ("model", "model_gravity")]
+        off = [(t, v) for t, v in theirs
+               if abs(v - mine) > MODEL_GAP * abs(mine) + MODEL_GAP_FLOOR]
+        if off:
+            listed = " and ".join(f"{v:.4g} kg m ({t}.{attr})" for t, v in off)
+            gaps.append(f"{label} = {mine:.4g} kg m (links) against {listed}")
+    for label, attr in (("I_zO,1 + m2 L1^2", "IO1_m2L1sq"), ("I_zS,2", "IS2")):
+        mine = getattr(plant, attr)
+        off = [(t, getattr(getattr(arm, t), attr)) for t in ("model", "model_gravity")]
+        off = [(t, v) for t, v in off
+               if not 1.0 / INERTIA_GAP_FACTOR <= v / mine <= INERTIA_GAP_FACTOR]
+        if off:
+            listed = " and ".join(f"{v:.4g} kg m^2 ({t}.{attr}, {v / mine:.3g} times)"
+                                  for t, v in off)
+            gaps.append(f"{label} = {mine:.4g} kg m^2 (links) against {listed}: more than "
+                        f"{INERTIA_GAP_FACTOR:g} times off (an inertia in g m^2 written as "
+                        f"kg m^2?)")
+    if not gaps:
+        return None
+    believed, lg2 = arm.model.m2LG2, arm.links.LG2
+    heavier = ""
+    if abs(lg2) > 0.01 and (abs(plant.m2LG2 - believed)
+                            > MODEL_GAP * abs(plant.m2LG2) + MODEL_GAP_FLOOR):
+        dm = (plant.m2LG2 - believed) / lg2          # the forearm's mass at its own L_G2
+        heavier = (f" (as if the forearm were {abs(dm):.3g} kg "
+                   f"{'heavier' if dm > 0 else 'lighter'} than the controllers believe)")
+    return (f"the plant's links differ from the controllers' identified model: "
+            f"{'; '.join(gaps)}{heavier}.  The model-based controllers (gravity compensation "
+            f"(3.18)-(3.19), the SMC's feedback linearisation) act on the model, not on the "
+            f"plant: a re-identification of this arm would find the plant's values.  Update "
+            f"[model] and [model_gravity], or keep the gap on purpose to study a model error.")
+
+
+def arm_notes(arm) -> tuple:
+    """What is physically possible in an arm but likely a slip: one line each.
+
+    * the plant's gravity moments (links) differ from the controllers' identified model
+      (``model``, ``model_gravity``) by more than :data:`MODEL_GAP`, or its inertias by more
+      than :data:`INERTIA_GAP_FACTOR` times (one note: a warning, not an error; it is what a
+      re-identification would find);
+    * with its plant effects (a payload ...) the arm holds itself nowhere in its working area;
+    * a valve time constant of :data:`SLOW_VALVE` or more (milliseconds written as seconds?);
+    * a joint working range narrower than :data:`NARROW_RANGE` (radians written as degrees?);
+    * an encoder coarser than :data:`COARSE_ENCODER` per count (degrees written as radians?),
+      a timing clock slower than :data:`SLOW_CLOCK` (MHz written as Hz?).
+
+    Parameters
+    ----------
+    arm : ArmParameters
+        Any arm.
+
+    Returns
+    -------
+    tuple of str
+        The notes (empty for the thesis arm and the shipped example arm).
+    """
+    arm = _arm(arm)
+    notes = []
+    model = _model_note(arm)
+    if model:
+        notes.append(model)
+    if arm.effects != Effects():
+        share, q, p, _ = _hold_share(arm)
+        bare = arm.replace(effects=Effects())
+        if share == 0 and _hold_share(bare)[0] > 0:
+            on = ", ".join(f"effects.{e}" for e in arm.effects.enabled())
+            notes.append(f"with its plant effects ({on}) the arm "
+                         f"cannot hold itself anywhere in its working area "
+                         f"({_closest_pose(arm, q, p)}); without them it can")
+    slow = [(f"valves.valve{i}.time_constant", v.time_constant)
+            for i, v in enumerate(arm.valves.valves, start=1)]
+    slow += [(f"effects.valve_time_constant[{i}]", t)
+             for i, t in enumerate(arm.effects.valve_time_constant or ())]
+    slow = [(k, t) for k, t in slow if np.isfinite(t) and t >= SLOW_VALVE]
+    if slow:
+        notes.append(f"{', '.join(f'{k} = {t:g} s' for k, t in slow)}: a valve this slow takes "
+                     f"seconds to reach a set pressure (the thesis' valves: 45-60 ms); if these "
+                     f"are milliseconds, write unit = \"ms\"")
+    sen = arm.sensors
+    if sen.encoder_resolution > COARSE_ENCODER:
+        notes.append(f"sensors.encoder_resolution = {sen.encoder_resolution:.4g} rad "
+                     f"({np.degrees(sen.encoder_resolution):.3g} deg per count) is coarser than "
+                     f"a degree (the thesis' encoders: 0.045 deg); if {sen.encoder_resolution:g} "
+                     f"is in degrees, write unit = \"deg\"")
+    if sen.clock_hz < SLOW_CLOCK:
+        notes.append(f"sensors.timing_clock = {sen.clock_hz:g} Hz is too slow to time encoder "
+                     f"pulses within a 1 ms control period (the thesis' board: 2 MHz); if "
+                     f"{sen.clock_hz:g} is in kHz or MHz, write that unit")
+    g = arm.geometry
+    for j in (1, 2):
+        lo, hi = getattr(g, f"q{j}_min"), getattr(g, f"q{j}_max")
+        if hi - lo < NARROW_RANGE:
+            dlo, dhi = np.degrees(lo), np.degrees(hi)      # the numbers the file gave in deg
+            as_rad = -np.pi < dlo and dhi < np.pi and dhi - dlo >= NARROW_RANGE
+            hint = (f"; if {dlo:.4g} and {dhi:.4g} are radians, write unit = \"rad\""
+                    if as_rad else "")
+            notes.append(f"geometry.q{j}_min, geometry.q{j}_max: joint {j} moves over only "
+                         f"{dhi - dlo:.3g} deg ({dlo:.4g} to {dhi:.4g} deg){hint}")
+    return tuple(notes)
+
+
+def load_arm(path) -> ArmParameters:
+    """Read an arm file and check it: its data (``ArmParameters.from_file``) and physics
+    (:func:`check_arm`).  Every command reads an arm file through this function.
+
+    Parameters
+    ----------
+    path : path-like
+        The ``.toml`` file (``docs/arm_files.md``; ``ppamsafety arm export`` writes a
+        template).
+
+    Returns
+    -------
+    ArmParameters
+        The arm; :func:`arm_notes` lists what in it is possible but likely a slip.
+
+    Raises
+    ------
+    FileNotFoundError
+        If there is no such file.
+    ppamsafety.params.arm_file.ArmFileError
+        A ``ValueError``: ``"<path>: <dotted key> = <value>: <what is allowed>"``.
+    """
+    arm = ArmParameters.from_file(path)
+    try:
+        check_arm(arm)
+    except ArmFileError as exc:
+        raise ArmFileError(f"{path}: {exc}") from None
+    return arm

@@ -117,8 +117,8 @@ from .envelope import LIMITS, SCAN, check_bounds, resolve_limit, safety_envelope
 from .experiments.catalog import DEFAULT_DURATIONS
 from .impact.head import HeadContactModel, load_head
 from .output import OutputError, OutputFolder, check_output_path, read_marker
+from .design import load_arm
 from .params import ArmParameters
-from .params import load_arm
 from .params.arm_file import ArmFileError, arm_key, arm_to_toml, read_value
 from .plots.figure import save as save_figure
 from .plots.sweep import limit_lines, plot_sweep

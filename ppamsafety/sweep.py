@@ -58,6 +58,7 @@ from tqdm.auto import tqdm
 from ._interrupt import deferred as interrupt_deferred
 from ._interrupt import requested as interrupt_requested
 from ._sourcehash import source_hash
+from ._errors import mark_internal
 
 _STATUS_COLUMNS = ("status", "error")
 #: How often [s] a pooled sweep looks for Ctrl-C while its cases run.
@@ -232,7 +233,16 @@ def _assemble(cases, results, failures, on_error, name) -> pd.DataFrame:
 
 
 def _call(func, case):
-    return func(**case)
+    """``func(**case)``; a bug's ``TypeError`` is raised as an ``InternalFailure`` (read from
+    the traceback, which a worker's exception loses: ``_errors.is_internal_error``), so
+    that a failed case is never put down to bad input."""
+    try:
+        return func(**case)
+    except TypeError as exc:
+        marked = mark_internal(exc, "sweep case")
+        if marked is exc:
+            raise
+        raise marked from exc
 
 
 def _ignore_interrupt():
@@ -714,7 +724,7 @@ def run_sweep(func, cases=None, *, name: str | None = None, cache_dir=None,
                 if interrupt_requested():
                     raise KeyboardInterrupt
                 try:
-                    out = func(**cases[i])
+                    out = _call(func, cases[i])
                 except Exception as exc:
                     ok = finish(i, exc=exc)
                 else:

@@ -21,9 +21,12 @@ exit1 / traceback / accepted / hang / memory / lost / noisy
     file changed or deleted, or a raw Python warning printed beside the error.
 
 A case that expects an *interrupt* gets Ctrl-C (SIGINT to its process group, as a terminal
-sends it) after ``interrupt`` seconds and is clear when it exits 130 with ``ppamsafety:
-interrupted`` within :data:`INTERRUPT_GRACE` seconds (else "hang"; "not-interrupted" if it
-finished first).
+sends it) after ``interrupt`` seconds, or as soon as its stderr shows ``interrupt_on`` (a line
+the command prints once its work has started, on an input long enough that the work cannot
+end in the moment between that line and the signal: no dependence on how fast the work is),
+and is clear when it exits 130 with ``ppamsafety: interrupted`` having spent at most
+:data:`INTERRUPT_GRACE` seconds of CPU after it (else "hang"; "not-interrupted" if it finished
+first).
 
 The classes of the first pass (``synth-effect``, ``data-file``, ``study-file``,
 ``output-folder`` ...) were joined in the second pass by ``campaign-file`` (bench campaign
@@ -93,6 +96,7 @@ class Case:
     unprivileged: bool = False          # run as user nobody (read-only targets)
     timeout: float = TIMEOUT
     interrupt: float | None = None      # send Ctrl-C (SIGINT to the process group) after this [s]
+    interrupt_on: str | None = None     # ... or once the command's stderr shows this text
 
 
 CASES: list[Case] = []
@@ -124,6 +128,14 @@ def make_base(folder: Path) -> None:
                    controller="PID").save(folder / "cl.csv")
     if not (folder / "st.csv").exists():
         synthetic_static().save(folder / "st.csv")
+    if not (folder / "ol_long.csv").exists():
+        # a record whose diagnosis takes far longer than the moment between the line that
+        # starts it and Ctrl-C (the interrupt of diagnose), with a metadata key the loader
+        # only notes: that note is the line
+        synthesize("open-loop", duration=10.0, seed=2).save(folder / "ol_long.csv")
+        m, df = _split(folder / "ol_long.csv")
+        m["interrupt_marker"] = "the diagnosis starts after this note"
+        write_record(folder / "ol_long.csv", m, df)
     if not (folder / "ten.csv").exists():
         synthesize(kind="actuator", seed=1, cycles=1).save(folder / "ten.csv")
     (folder / "study.toml").write_text('[case]\nexperiment = "step"\ncontroller = "PID"\n'
@@ -1187,7 +1199,8 @@ def _more_cases():
          expect="interrupt")
     case("interrupt", "report", ["report", "--quick", "--outdir", "r", "--processes", "2"],
          interrupt=10.0, expect="interrupt")
-    case("interrupt", "diagnose", DIAG + ["--bootstrap", "200"], setup=ol, interrupt=4.0,
+    case("interrupt", "diagnose", DIAG + ["--bootstrap", "200"],
+         setup=copy_base("ol_long.csv", "data.csv"), interrupt_on="interrupt_marker",
          expect="interrupt")
     case("interrupt", "synthesize", ["synthesize", "--out", "x.csv", "--duration", "600"],
          interrupt=3.0, expect="interrupt")
@@ -1259,7 +1272,7 @@ def _more_api_cases():
         import importlib
         return getattr(importlib.import_module(mod), fn)(*a, **k)
 
-    for fn, mod in (("load_arm", "ppamsafety.params"), ("load_head", "ppamsafety.impact.head"),
+    for fn, mod in (("load_arm", "ppamsafety.design"), ("load_head", "ppamsafety.impact.head"),
                     ("load_study", "ppamsafety.study_files"),
                     ("load_campaign", "ppamsafety.data.campaign"),
                     ("load_measured", "ppamsafety.data")):
@@ -1620,17 +1633,42 @@ def _rmtree(d: Path) -> None:
     shutil.rmtree(d, ignore_errors=True)
 
 
-#: Seconds a command may take to exit after Ctrl-C before it counts as a hang.
+#: CPU seconds a command (its whole process group) may spend after Ctrl-C before it counts as
+#: a hang: the work it does after being told to stop, whatever the machine's load (a wall-clock
+#: grace would blame the command for a busy machine: a compiled 600 s simulation call, which
+#: Ctrl-C cannot cut, ends 2-5 s of CPU after it on 2 cores).
 INTERRUPT_GRACE = 10.0
+#: Wall seconds after Ctrl-C at which a command that still runs (e.g. blocked) counts as a hang.
+INTERRUPT_WALL = 120.0
 
 
-def _wait(pid: int, timeout: float, interrupt: float | None = None):
+def _group_cpu(pgid: int) -> float:
+    """CPU seconds (user + system, with reaped children) of the live processes of a group."""
+    total = 0
+    for d in os.listdir("/proc"):
+        if not d.isdigit():
+            continue
+        try:
+            with open(f"/proc/{d}/stat") as fh:
+                stat = fh.read()
+        except OSError:
+            continue
+        fields = stat[stat.rindex(")") + 2:].split()       # from field 3 (state) on
+        if int(fields[2]) == pgid:                         # field 5: the process group
+            total += sum(int(x) for x in fields[11:15])    # fields 14-17: utime .. cstime
+    return total / os.sysconf("SC_CLK_TCK")
+
+
+def _wait(pid: int, timeout: float, interrupt: float | None = None, interrupt_on=None,
+          err_file: Path | None = None):
     """(status, rusage, verdict_override, peak, seconds from Ctrl-C to exit) of a child,
     killing it on timeout or memory; with ``interrupt``, SIGINT goes to its process group
-    after that many seconds (what Ctrl-C in a terminal does)."""
+    after that many seconds (what Ctrl-C in a terminal does); with ``interrupt_on``, as soon
+    as ``err_file`` (its stderr) holds that text.  After Ctrl-C it is a hang once its process
+    group has spent :data:`INTERRUPT_GRACE` s of CPU or :data:`INTERRUPT_WALL` s have passed."""
     t0 = time.monotonic()
     peak = 0
-    t_int = None
+    t_int = cpu_int = None
 
     def kill(verdict):
         os.killpg(pid, signal.SIGKILL)
@@ -1647,13 +1685,20 @@ def _wait(pid: int, timeout: float, interrupt: float | None = None):
         now = time.monotonic()
         if rss > MEMORY_KILL:
             return kill("memory")
-        if interrupt is not None and t_int is None and now - t0 > interrupt:
+        due = (interrupt is not None and now - t0 > interrupt) or (
+            interrupt_on is not None and err_file is not None and err_file.exists()
+            and interrupt_on in err_file.read_text(errors="replace"))
+        if t_int is None and due:
             try:
                 os.killpg(pid, signal.SIGINT)
             except ProcessLookupError:
                 pass
-            t_int = now
-        if (t_int is not None and now - t_int > INTERRUPT_GRACE) or now - t0 > timeout:
+            t_int, cpu_int = now, _group_cpu(pid)
+        if t_int is None:
+            if now - t0 > timeout:
+                return kill("hang")
+        elif (now - t_int > INTERRUPT_WALL
+              or _group_cpu(pid) - cpu_int > INTERRUPT_GRACE):
             return kill("hang")
         time.sleep(0.02)
 
@@ -1681,7 +1726,7 @@ def run_case(c: Case, workdir: Path, *, real: bool = False) -> Result:
                     os.setgid(NOBODY)
                     os.setuid(NOBODY)
             p = subprocess.Popen(cmd, cwd=d, stdout=o, stderr=e, preexec_fn=pre)
-            status, ru, over, peak, t_exit = _wait(p.pid, c.timeout, c.interrupt)
+            status, ru, over, peak, t_exit = _wait(p.pid, c.timeout, c.interrupt, c.interrupt_on, err_f)
             p.returncode = os.waitstatus_to_exitcode(status)
     else:
         sys.stdout.flush()
@@ -1713,7 +1758,7 @@ def run_case(c: Case, workdir: Path, *, real: bool = False) -> Result:
                     sys.stderr.flush()
                 finally:
                     os._exit(rc if isinstance(rc, int) and 0 <= rc < 256 else 1)
-        status, ru, over, peak, t_exit = _wait(pid, c.timeout, c.interrupt)
+        status, ru, over, peak, t_exit = _wait(pid, c.timeout, c.interrupt, c.interrupt_on, err_f)
     secs = time.monotonic() - t0
     rc = os.waitstatus_to_exitcode(status) if over is None else None
     out = out_f.read_text(errors="replace") if out_f.exists() else ""
@@ -1786,9 +1831,10 @@ def _classify_cli(c: Case, rc, over, out: str, err: str):
 
 
 def _classify_interrupt(rc, over, err, after):
-    """Ctrl-C: exit 130 within :data:`INTERRUPT_GRACE` s with one line, no traceback."""
+    """Ctrl-C: exit 130 within :data:`INTERRUPT_GRACE` s of CPU with one line, no traceback."""
     if over:
-        return over, f"still running {INTERRUPT_GRACE:g} s after Ctrl-C; " + err[-300:]
+        return over, (f"still running after Ctrl-C ({INTERRUPT_GRACE:g} s of CPU or "
+                      f"{INTERRUPT_WALL:g} s); " + err[-300:])
     if "Traceback (most recent call last)" in err:
         return "traceback", err[-600:]
     if after is None:

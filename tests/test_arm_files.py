@@ -11,7 +11,8 @@ from hypothesis import strategies as st
 
 from ppamsafety.impact.head import (CHECK_NAMES, HeadContactModel, head_model, head_model_names,
                                     load_head, resolve_head)
-from ppamsafety.params import ArmParameters, is_thesis_arm, load_arm, thesis_arm
+from ppamsafety.design import load_arm
+from ppamsafety.params import ArmParameters, is_thesis_arm, thesis_arm
 from ppamsafety.params.arm import SOURCE_PARTS
 from ppamsafety.params.arm_file import (ARM_FORMAT, TABLES, ArmFileError, apply_arm_changes,
                                         arm_fingerprint, arm_parameter_paths, arm_to_dict,

@@ -17,7 +17,8 @@ import pytest
 
 from ppamsafety.diagnose.arm import as_built as ab
 from ppamsafety.experiments.conclusions import ki12_step_oscillatory
-from ppamsafety.params import load_arm, thesis_arm
+from ppamsafety.design import load_arm
+from ppamsafety.params import thesis_arm
 
 ROOT = Path(__file__).resolve().parents[1]
 #: A three-variant, short design: the cheapest that still has every source of measurements.

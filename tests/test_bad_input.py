@@ -476,8 +476,8 @@ def test_run_sweep_streams_a_grid():
 
 def _readers():
     from ppamsafety.data.campaign import load_campaign
+    from ppamsafety.design import load_arm
     from ppamsafety.impact.head import load_head
-    from ppamsafety.params import load_arm
     from ppamsafety.study_files import load_study
     return {"arm": load_arm, "head": load_head, "study": load_study, "campaign": load_campaign}
 

@@ -120,6 +120,7 @@ def test_half_sample_covariance_matches_the_noise_on_a_clean_record():
 
 
 @pytest.mark.slow
+@pytest.mark.battery
 def test_bench_battery_on_measurement_seeds():
     """Issue 19's targets on the muscle battery, its measurement seeds (never used for
     tuning; docs/diagnose.md has the measured table).  The fit's own interval coverage is

@@ -7,7 +7,8 @@ import pytest
 from ppamsafety.cli import build_parser, main
 from ppamsafety.data import load_measured, read_metadata
 from ppamsafety.impact.head import head_model
-from ppamsafety.params import load_arm, thesis_arm
+from ppamsafety.design import load_arm
+from ppamsafety.params import thesis_arm
 from ppamsafety.params.arm_file import arm_fingerprint
 
 ROOT = Path(__file__).parent.parent

@@ -69,21 +69,27 @@ DELTA_TOL = 0.007
 
 
 def check_parameters(case, dg):
-    """Fitted parameters within the stated tolerances (module docstring)."""
+    """Fitted parameters within the stated tolerances (module docstring).
+
+    Only the effects hidden in ``case`` have a truth: an effect named in another case (e.g.
+    a polytropic exponent below "high" on the out-of-library record) is not compared with
+    the truth of the case that hides it.
+    """
     p = {e["name"]: e["parameters"] for e in dg.effects}
-    if "payload" in p and "payload" in case:
+    hidden = set(CASES[case][0])
+    if "payload" in p and "payload_mass" in hidden:
         assert abs(p["payload"]["M"]["value"] - 0.4) < 0.02
-    if "valve_lag" in p and "lag" in case:
+    if "valve_lag" in p and "valve_time_constant_factor" in hidden:
         T = np.array([p["valve_lag"][f"T_{i}"]["value"] for i in range(1, 5)])
         np.testing.assert_allclose(T, 1.5 * NOM_T, rtol=0.10)
-    if "joint_friction" in p:
+    if "joint_friction" in p and "friction_coulomb_factor" in hidden:
         c = np.array([p["joint_friction"]["c1"]["value"], p["joint_friction"]["c2"]["value"]])
         np.testing.assert_allclose(c, 3 * NOM_C, rtol=0.35)
-    if "polytropic_exponent" in p:
+    if "polytropic_exponent" in p and "polytropic_n" in hidden:
         assert abs(p["polytropic_exponent"]["n"]["value"] - 1.0) < 0.15
-    if "valve_dead_time" in p:
+    if "valve_dead_time" in p and "valve_dead_time" in hidden:
         assert abs(p["valve_dead_time"]["d"]["value"] - 0.02) <= 0.002
-    if "hysteresis" in p and "hysteresis" in case:
+    if "hysteresis" in p and "hysteresis_delta" in hidden:
         assert abs(p["hysteresis"]["delta"]["value"] - 0.139) <= DELTA_TOL
     if "valve_offset_gain" in p and case == "valve_offset":
         for i in range(4):
@@ -95,8 +101,6 @@ def check_parameters(case, dg):
         for i in range(4):
             v = p["valve_offset_gain"][f"v1_{i + 1}"]["value"]
             assert abs(v - NOM_V1[i] - 5000) <= 100.0, (i, v)
-    if "payload" in p and case == "sawtooth:payload":
-        assert abs(p["payload"]["M"]["value"] - 0.4) < 0.02
 
 
 def outcome(case, dg):

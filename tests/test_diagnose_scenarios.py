@@ -239,6 +239,7 @@ def test_full_declared_battery_reproduces_the_shipped_file(shipped_declared):
 
 
 @pytest.mark.slow
+@pytest.mark.battery
 def test_full_measurement_battery_reproduces_the_shipped_file(shipped):
     """About 25-45 min on 2 cores: the whole battery, re-run, claims equal row by row."""
     seeds = sorted(int(s) for s in shipped.seed)

@@ -56,6 +56,7 @@ def test_documented_import_works(doc, module, name):
     ("ppamsafety.control", "PIDDerivative"),
     ("ppamsafety.control", "GCMode"),
     ("ppamsafety.params.head", "MAXILLA_FRACTURE_N"),
+    ("ppamsafety.params", "load_arm"),            # data checks only: design.load_arm adds physics
 ])
 def test_former_paths_still_import(module, name):
     assert _from_import(module, name) is not None

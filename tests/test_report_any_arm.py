@@ -12,7 +12,8 @@ import pandas as pd
 import pytest
 
 from ppamsafety.cli import main
-from ppamsafety.params import load_arm, thesis_arm
+from ppamsafety.design import load_arm
+from ppamsafety.params import thesis_arm
 from ppamsafety.sections import REGISTRY
 
 ROOT = Path(__file__).parent.parent

@@ -10,7 +10,8 @@ import pytest
 
 from ppamsafety.envelope import LIMITS, safety_envelope
 from ppamsafety.impact.head import head_model
-from ppamsafety.params import load_arm, thesis_arm
+from ppamsafety.design import load_arm
+from ppamsafety.params import thesis_arm
 from ppamsafety.params.arm_file import apply_arm_changes
 from ppamsafety.study_files import load_study, parse_study, run_study_file
 from ppamsafety.sweep import function_hash

@@ -1,7 +1,10 @@
 """Named, cited, immutable parameter sets (validated on construction).
 
-Arm files (TOML): :func:`load_arm`, ``ArmParameters.to_toml()`` /
-``ArmParameters.from_toml()``; the format is :mod:`ppamsafety.params.arm_file`.
+Arm files (TOML): ``ArmParameters.to_toml()`` / ``ArmParameters.from_toml()`` /
+``ArmParameters.from_file()`` (the data checks); the format is
+:mod:`ppamsafety.params.arm_file`.  Commands read a file with
+:func:`ppamsafety.design.load_arm`, which adds the checks that need the arm's physics
+(``ppamsafety.params.load_arm``, the former front door, makes the data checks only).
 """
 
 from .arm import ArmParameters, is_thesis_arm, load_arm, thesis_arm

@@ -22,6 +22,7 @@ sliding-mode controller's feedback linearisation).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field, replace
 from functools import lru_cache
 
@@ -83,7 +84,11 @@ class ArmParameters:
     -----
     Besides the types and ranges of ``gravity`` ([0, 30] m/s^2) and
     ``friction_velocity`` ([1e-5, 1] rad/s), construction refuses sets that
-    cannot be built: non-positive connection lengths or contractions outside
+    cannot be built: a point of a link (muscle attachment, load point, centre of
+    gravity) or its radius of gyration farther from its joint than
+    :data:`LINK_EXTENT_FACTOR` times its length (``L2 = 0.31 mm`` with the forearm's
+    attachments at 0.285 m; ``LG2 = 1.5 m`` on a 0.31 m forearm), non-positive
+    connection lengths or contractions outside
     [0, 0.4] anywhere in the working area (e.g. ``L22 = 0``), a plant
     inertia matrix that is numerically singular, and a link whose inertia about
     its joint is below m (0.05 L)^2 (:data:`MIN_GYRATION_FRACTION`).  The identified ``model``
@@ -113,6 +118,7 @@ class ArmParameters:
                                                         0.0, 30.0, unit="m/s^2"))
         object.__setattr__(self, "friction_velocity", check_range(
             "ArmParameters.friction_velocity", self.friction_velocity, 1e-5, 1.0, unit="rad/s"))
+        _check_link_extents(self.geometry, self.links)
         _check_muscles_fit(self.geometry, self.muscles)
         _check_plant_inertia(self.geometry, self.links)
         check_instance("ArmParameters.effects", self.effects, Effects)
@@ -173,7 +179,11 @@ class ArmParameters:
 
     @classmethod
     def from_file(cls, path) -> "ArmParameters":
-        """An arm from an arm file, validated (:func:`load_arm`).
+        """An arm from an arm file, its data validated.
+
+        The checks that need the arm's physics (it holds itself somewhere, its force laws
+        are a PPAM's) are :func:`ppamsafety.design.check_arm`; read a file with
+        :func:`ppamsafety.design.load_arm`, which makes both.
 
         Parameters
         ----------
@@ -243,6 +253,74 @@ def _check_sources(sources) -> tuple:
         if item[1]:
             out.append((item[0], item[1]))
     return tuple(sorted(out, key=lambda kv: SOURCE_PARTS.index(kv[0])))
+
+
+#: How far from its joint the parts of a link may lie, in link lengths (L1 for the upper arm,
+#: L2 for the forearm): its muscle attachment points and load point (distance sqrt(L^2 + d^2)),
+#: its centre of gravity (sqrt(L_G^2 + d_G^2)) and its radius of gyration sqrt(I_G / m).  The
+#: thesis arm reaches 1.12 L1 (the group 3 attachment at L32 = 334.8 mm on a lever past the
+#: 300 mm upper arm, Table 2.1) and 0.97 L2 (the load point); 1.5 leaves room for a longer
+#: lever or a tool flange and refuses what a unit slip gives (a length in mm read as m is 1000
+#: times too long, one in m read as mm 1000 times too short; a centre of gravity of 1.5 m on a
+#: 0.31 m forearm is 4.8 lengths out).
+LINK_EXTENT_FACTOR = 1.5
+
+#: Points of each link, as (ArmGeometry or LinkInertia field along, field perpendicular, what).
+_LINK_POINTS = {
+    1: (("ArmGeometry", "L12", "d12", "the group 1 attachment"),
+        ("ArmGeometry", "L22", "d22", "the group 2 attachment"),
+        ("ArmGeometry", "L32", "d32", "the group 3 attachment"),
+        ("ArmGeometry", "L42", "d42", "the group 4 attachment"),
+        ("LinkInertia", "LG1", "dG1", "the centre of gravity")),
+    2: (("ArmGeometry", "L33", "d33", "the group 3 attachment"),
+        ("ArmGeometry", "L43", "d43", "the group 4 attachment"),
+        ("ArmGeometry", "LL", "dL", "the load point"),
+        ("LinkInertia", "LG2", "dG2", "the centre of gravity")),
+}
+#: Factors by which a length is too short after a unit slip, with the slip.
+_LENGTH_SLIPS = ((10.0, "mm for cm"), (100.0, "cm for m"), (1000.0, "mm for m"))
+
+
+def _check_link_extents(geometry: ArmGeometry, links: LinkInertia) -> None:
+    """Refuse a link whose points or radius of gyration lie beyond
+    :data:`LINK_EXTENT_FACTOR` link lengths from its joint, naming both keys."""
+    objs = {"ArmGeometry": geometry, "LinkInertia": links}
+    for k, name, joint in ((1, "upper arm", "base joint"), (2, "forearm", "elbow")):
+        length = getattr(geometry, f"L{k}")
+        limit = LINK_EXTENT_FACTOR * length
+        far = []
+        for cls, along, perp, what in _LINK_POINTS[k]:
+            a, d = getattr(objs[cls], along), getattr(objs[cls], perp)
+            r = math.hypot(a, d)
+            if r > limit:
+                far.append((r, f"{cls}.{along} = {a:.4g} m ({what}, {r / length:.3g} L{k} from "
+                               f"the {joint})"))
+        m, ig = getattr(links, f"m{k}"), getattr(links, f"IG{k}")
+        gyration = math.sqrt(ig / m)
+        if not far and gyration > limit:
+            raise ValueError(
+                f"ArmParameters: LinkInertia.IG{k} = {ig:.4g} kg m^2 with LinkInertia.m{k} = "
+                f"{m:.4g} kg is a radius of gyration sqrt(IG{k}/m{k}) = {gyration:.4g} m about the "
+                f"centre of gravity, {gyration / length:.3g} {name} lengths (ArmGeometry.L{k} = "
+                f"{length:.4g} m): the mass of a link lies within {LINK_EXTENT_FACTOR:g} L{k} = "
+                f"{limit:.4g} m of its joint.  Check both units: a mass in g written as kg is 1000 "
+                f"times too small, an inertia in g m^2 written as kg m^2 1000 times too large")
+        if not far:
+            continue
+        listed = "; ".join(t for _, t in sorted(far, reverse=True))
+        if len(far) * 2 <= len(_LINK_POINTS[k]):          # one or two points: blame them
+            raise ValueError(
+                f"ArmParameters: {listed} lies beyond {LINK_EXTENT_FACTOR:g} {name} lengths from "
+                f"the {joint} (ArmGeometry.L{k} = {length:.4g} m: within {limit:.4g} m); check "
+                f"its value and unit, and ArmGeometry.L{k}")
+        reach = max(r for r, _ in far)
+        hint = next((f"  Did you mean ArmGeometry.L{k} = {length * f:.4g} m ({f:g} times longer: "
+                     f"a unit slip such as {slip})?" for f, slip in _LENGTH_SLIPS
+                     if 0.5 * length * f <= reach <= limit * f and length * f <= 5.0), "")
+        raise ValueError(
+            f"ArmParameters: ArmGeometry.L{k} = {length:.4g} m ({name} length) is too short for "
+            f"what lies along the {name}: {listed}; every part of a link lies within "
+            f"{LINK_EXTENT_FACTOR:g} L{k} = {limit:.4g} m of its joint.{hint}")
 
 
 #: Smallest admissible relative determinant det H / (H11 H22) of the plant's inertia
@@ -374,23 +452,21 @@ def thesis_arm() -> ArmParameters:
 
 
 def load_arm(path) -> ArmParameters:
-    """Read and validate an arm file (``docs/arm_files.md``).
+    """Read an arm file with the data checks only (the former front door, kept for scripts).
+
+    Commands and new code read arm files with :func:`ppamsafety.design.load_arm`, which adds
+    the checks that need the arm's physics (it holds itself somewhere in its working area,
+    its force laws are a PPAM's; this layer cannot compute them).
 
     Parameters
     ----------
     path : path-like
-        The ``.toml`` file (``ppamsafety arm export`` writes a template).
+        The ``.toml`` file.
 
     Returns
     -------
     ArmParameters
-
-    Raises
-    ------
-    FileNotFoundError
-        If there is no such file.
-    ppamsafety.params.arm_file.ArmFileError
-        A ``ValueError``: ``"<path>: <dotted key> = <value>: <what is allowed>"``.
+        ``ArmParameters.from_file(path)``.
     """
     return ArmParameters.from_file(path)
 
@@ -410,4 +486,4 @@ def is_thesis_arm(arm) -> bool:
 
 
 __all__ = ["ArmParameters", "thesis_arm", "is_thesis_arm", "load_arm", "THESIS_SOURCES",
-           "SOURCE_PARTS"]
+           "SOURCE_PARTS", "LINK_EXTENT_FACTOR"]

@@ -35,7 +35,9 @@ Rules
   off); ``[sensors]`` is optional (default: the thesis hardware).
 * :func:`arm_to_toml` (``ArmParameters.to_toml``) writes floats with their shortest exact
   representation, so ``ArmParameters.from_toml(arm.to_toml()) == arm``, names and sources
-  included.  :func:`ppamsafety.params.load_arm` reads a file.
+  included.  :func:`read_arm_file` (``ArmParameters.from_file``) reads a file with these
+  data checks; :func:`ppamsafety.design.load_arm`, what every command uses, adds the checks
+  that need the arm's physics (``ppamsafety.design.check_arm``).
 
 The same keys address parameters in sweeps: :func:`apply_arm_changes` sets
 ``"pneumatics.mean_pressure"``, ``"muscles.group1.count"``, ``"links.m2"``,
@@ -631,7 +633,8 @@ def arm_from_toml(text: str, *, cls, where: str = ""):
 
 
 def read_arm_file(path, *, cls):
-    """Read and validate an arm file (:func:`ppamsafety.params.load_arm` is the front door).
+    """Read and validate an arm file's data (:func:`ppamsafety.design.load_arm` is the front
+    door: it adds the checks that need the arm's physics).
 
     Parameters
     ----------
@@ -929,6 +932,13 @@ def _part(arm, table: str):
     return getattr(arm, table)
 
 
+#: A dotted key of a table (``links.m2``, ``muscles.group1.l0``) not yet written ``arm.<key>``,
+#: as a sweep names it (the root keys are left alone: "gravity" is also a word).
+_ARM_KEY = re.compile(r"(?<![\w.])(" + "|".join(
+    re.escape(k) for k in sorted((k for k in arm_parameter_paths() if "." in k), key=len,
+                                 reverse=True)) + r")(?![\w])")
+
+
 def apply_arm_changes(arm, changes):
     """A copy of ``arm`` with parameters set by their dotted keys, validated like a file.
 
@@ -988,13 +998,14 @@ def apply_arm_changes(arm, changes):
         msg = str(exc)
         if not msg.startswith("arm."):
             base = msg.split(" ", 1)[0].split("[", 1)[0].rstrip(":")
-            if base in arm_parameter_paths():
-                msg = "arm." + msg
-            else:      # a consistency check of the whole arm: name what was changed
+            if base not in arm_parameter_paths():
+                # a consistency check of the whole arm: name what was changed
                 what = ", ".join(f"arm.{k[4:] if k.startswith('arm.') else k} = {_fmt(v)}"
                                  for k, v in changes.items())
                 msg = f"{what}: {msg}"
-        raise ArmFileError(msg) from None
+            elif "." not in base:          # a root key ("gravity"): _ARM_KEY leaves those
+                msg = "arm." + msg
+        raise ArmFileError(_ARM_KEY.sub(r"arm.\1", msg)) from None
 
 
 def _rebuild(arm, by_table: dict):

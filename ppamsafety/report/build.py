@@ -43,6 +43,7 @@ from pathlib import Path
 import pandas as pd
 from threadpoolctl import threadpool_limits
 
+from .._errors import mark_internal
 from .._validation import check_int, did_you_mean
 from ..impact.head import head_model, resolve_head
 from ..output import OutputFolder
@@ -58,14 +59,23 @@ def _timed_section(name: str, stage, quick: bool, arm=None, head=None, processes
     """Run one section into ``stage``; (SectionResult, wall time [s], warnings).
 
     The warnings are (message, category) pairs naming the section, raised again by the
-    report in the main process (a worker's own warnings would print unformatted).  Top
-    level: picklable.
+    report in the main process (a worker's own warnings would print unformatted).  A bug
+    (:func:`ppamsafety._errors.is_internal_error`, read from the traceback, which a
+    worker's exception loses on its way to the parent) is raised as an
+    ``InternalFailure`` naming the section, so that it is never reported as bad input.
+    Top level: picklable.
     """
     t0 = time.perf_counter()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        res = run_section(name, stage, quick=quick, arm=arm, head=head,   # compute, render,
-                          processes=processes)                           # write
+        try:
+            res = run_section(name, stage, quick=quick, arm=arm, head=head,  # compute,
+                              processes=processes)                          # render, write
+        except TypeError as exc:
+            marked = mark_internal(exc, f"report section {name!r}")
+            if marked is exc:
+                raise
+            raise marked from exc
     return res, time.perf_counter() - t0, [(str(w.message), w.category) for w in caught]
 
 
@@ -300,7 +310,7 @@ def build_report(outdir="reports", *, quick: bool = False, only=None, progress: 
         in this process.  The report is the same either way.
     arm : ArmParameters, optional
         The arm of every section (default the thesis arm): any valid arm, e.g. from an
-        arm file (:func:`ppamsafety.params.arm_file.load_arm`).  Thesis values and
+        arm file (:func:`ppamsafety.design.load_arm`).  Thesis values and
         ratios appear only for the thesis arm; the sections that do not concern the arm
         are left out unless asked for (:func:`select_sections`).
     head : HeadContactModel, str or path-like, optional

@@ -41,7 +41,8 @@ from .._validation import check_bool
 from ..output import OutputFolder
 # the impact.head module by its own name: ``head_model`` is a section module here
 from ..impact import head as _head
-from ..params import ArmParameters, is_thesis_arm, load_arm, thesis_arm
+from ..design import load_arm
+from ..params import ArmParameters, is_thesis_arm, thesis_arm
 from ..plots.figure import save
 
 
@@ -387,7 +388,9 @@ def run_section(name: str, outdir, *, quick: bool = False, arm=None,
     arm : ArmParameters, optional
         The arm (default the thesis arm).
     head : HeadContactModel, optional
-        The head model of the impacts (default ``thesis-frontal``).
+        The head model of the impacts (default ``thesis-frontal``).  A section whose
+        ``compute`` takes no ``head`` (it crashes into none) runs without it: the report
+        passes each section only the options it takes (:func:`section_options`).
     processes : int, optional
         Worker processes a section that runs a sweep of its own may start (its
         ``compute(processes=...)``; default the section's own choice).
@@ -403,8 +406,10 @@ def run_section(name: str, outdir, *, quick: bool = False, arm=None,
         kw["arm"] = resolve_arm(arm)
     if head is not None:
         kw["head"] = _head.resolve_head(head)
-    if processes is not None and "processes" in inspect.signature(mod.compute).parameters:
+    if processes is not None:
         kw["processes"] = processes
+    taken = section_options(name)
+    kw = {k: v for k, v in kw.items() if k in taken}
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         res = write_section(mod.render(mod.compute(quick=quick, **kw)), outdir)
@@ -441,6 +446,25 @@ def named_warnings(name: str, caught) -> list:
         seen.add(text)
         out.append(_Named(f"section {name}: {text}", w.category))
     return out
+
+
+def section_options(name: str) -> frozenset:
+    """The keyword options a section's ``compute`` takes (``quick``, ``arm``, ``head`` ...).
+
+    Parameters
+    ----------
+    name : str
+        Section name (see :data:`REGISTRY`).
+
+    Returns
+    -------
+    frozenset of str
+        Names of the keyword parameters of ``compute`` (read from its signature, through
+        the :func:`checked_compute` wrapper).
+    """
+    params = inspect.signature(section_module(name).compute).parameters.values()
+    return frozenset(p.name for p in params
+                     if p.kind in (p.KEYWORD_ONLY, p.POSITIONAL_OR_KEYWORD))
 
 
 def main(name: str, argv=None) -> int:

@@ -184,8 +184,7 @@ def compute(*, quick: bool = False, arm=None, calibration_runs: int | None = Non
                 laws.append(row)
     t1 = time.perf_counter()
     seeds = list(MEASURE_SEEDS)[:n_cal]
-    names, runs = run_calibration(seeds) if seeds else (
-        pd.DataFrame(columns=["seed", "kind", "name", "level", "right"]), pd.DataFrame())
+    names, runs = run_calibration(seeds)            # no seeds: the two tables, empty
     cal = calibration_table(names)
     records = pd.concat(recs, ignore_index=True)
     m = {"seals": len(dgs), "diagnosis_seconds": t1 - t0,

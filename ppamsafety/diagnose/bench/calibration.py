@@ -135,6 +135,12 @@ def score(scenario: dict, dg) -> list:
     return rows
 
 
+#: Columns of the second table of :func:`run_calibration` (one row per scenario), also when no
+#: scenario ran: a table without columns is a CSV file no reader can parse.
+RUN_COLUMNS = ("seed", "hidden", "named", "high", "missed", "wrong_high", "records", "rho_after",
+               "seconds")
+
+
 def run_calibration(seeds, *, diagnose_options=None) -> tuple:
     """Synthesize and diagnose one random campaign per seed; score every name.
 
@@ -177,7 +183,7 @@ def run_calibration(seeds, *, diagnose_options=None) -> tuple:
                      "seconds": time.perf_counter() - t0})
     return pd.DataFrame(rows, columns=["seed", "kind", "name", "level", "right", "cv_gain",
                                        "p_value", "stability", "setting", "at_edge"]), \
-        pd.DataFrame(runs)
+        pd.DataFrame(runs, columns=list(RUN_COLUMNS))
 
 
 def calibration_table(names: pd.DataFrame) -> pd.DataFrame:
@@ -209,5 +215,5 @@ def calibration_table(names: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(out).set_index("level")
 
 
-__all__ = ["random_scenario", "score", "run_calibration", "calibration_table", "TUNING_SEEDS",
-           "MEASURE_SEEDS", "HIGH_PRECISION", "PRESSURE_FAMILY"]
+__all__ = ["random_scenario", "score", "run_calibration", "calibration_table", "RUN_COLUMNS",
+           "TUNING_SEEDS", "MEASURE_SEEDS", "HIGH_PRECISION", "PRESSURE_FAMILY"]
