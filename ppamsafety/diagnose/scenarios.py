@@ -68,6 +68,7 @@ from ..plant import packing
 from .arm.candidates import REGISTRY, default_candidates
 from .bench import scenarios as bench_scenarios
 from .core.battery import coverage_entry, run_seeds
+from .core.solve import lstsq
 from .arm.residuals import arm_record, block_system, model_vector
 from .arm.selection import _directions, make_problem
 from .arm.synthesize import plant_vector
@@ -563,8 +564,7 @@ def irreducible_gap(sc: Scenario, record, noise_levels, *, arm=None) -> float:
     Z = (P / sig[None, :, None])[:nb].reshape(nb * 6, -1)
     keep = np.sqrt(np.sum(Z ** 2, axis=0)) > 0
     Z = Z[:, keep] / np.sqrt(np.sum(Z[:, keep] ** 2, axis=0))
-    coef, *_ = np.linalg.lstsq(Z, dz.ravel(), rcond=1e-10)
-    r = (dz.ravel() - Z @ coef).reshape(nb, 6)
+    r = (dz.ravel() - Z @ lstsq(Z, dz.ravel())).reshape(nb, 6)
     gamma = np.sqrt(np.mean(r ** 2, axis=0))
     if sc.kind == "static-sawtooth" and "valve_offset_gain" not in cands:
         gamma[:4] = 0.0

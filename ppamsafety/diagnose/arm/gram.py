@@ -36,7 +36,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..core.criteria import CV_SEGMENTS
-from ..core.omitted import pinv_psd
+from ..core.solve import solve_normal
 
 
 def chunk_layout(nb: int, *, segments: int = CV_SEGMENTS, length: int | None = None) -> tuple:
@@ -202,9 +202,8 @@ def solve(Gs: np.ndarray, cols, sigma, Aw: np.ndarray | None = None, *,
           per_channel: bool = True) -> GramFit:
     """Weighted least squares of ``base`` on the columns ``cols`` from summed Grams ``Gs``.
 
-    Channels are weighted by 1/sigma_c^2.  Normal equations with the columns
-    scaled to unit diagonal, solved through the eigen-decomposition
-    (directions with eigenvalue below 1e-12 of the largest dropped: the
+    Channels are weighted by 1/sigma_c^2.  The normal equations are solved under the
+    diagnosis's one rank rule (:func:`~ppamsafety.diagnose.core.solve.solve_normal`: the
     minimum-norm solution of a rank-deficient problem).
 
     Parameters
@@ -235,7 +234,7 @@ def solve(Gs: np.ndarray, cols, sigma, Aw: np.ndarray | None = None, *,
         Aw = np.tensordot(w, Gs, axes=1)
     A = Aw[np.ix_(cols, cols)]
     b = Aw[cols, K]
-    phi = _solve_normal(A, b)
+    phi = solve_normal(A, b)
     if not per_channel:
         chi2 = float(max(Aw[K, K] - 2.0 * (b @ phi) + phi @ A @ phi, 0.0))
         return GramFit(cols=cols, phi=phi, chi2=chi2, chi2_channel=None, A=A)
@@ -268,32 +267,4 @@ def chi2_at(Gs: np.ndarray, cols, phi, sigma, Aw: np.ndarray | None = None) -> f
     return float(max(c, 0.0))
 
 
-def _solve_normal(A, b) -> np.ndarray:
-    d = np.sqrt(np.maximum(np.diag(A), 0.0))
-    d[d == 0] = 1.0
-    As = A / d[:, None] / d[None, :]
-    try:                                    # well-conditioned (the usual case): Cholesky
-        L = np.linalg.cholesky(As)
-        if np.min(np.abs(np.diag(L))) > 1e-6:
-            z = np.linalg.solve(L, b / d)
-            return np.linalg.solve(L.T, z) / d
-    except np.linalg.LinAlgError:
-        pass
-    wv, V = np.linalg.eigh(As)
-    keep = wv > 1e-12 * max(float(wv[-1]), 1e-300)
-    Vk = V[:, keep]
-    return (Vk @ ((Vk.T @ (b / d)) / wv[keep])) / d
-
-
-def covariance(A) -> np.ndarray:
-    """(A)^-1 with the same scaling and rank handling as :func:`solve` (pseudo-inverse,
-    :func:`~ppamsafety.diagnose.core.omitted.pinv_psd`).
-
-    Parameters
-    ----------
-    A : numpy.ndarray, shape (k, k)
-    """
-    return pinv_psd(A)
-
-
-__all__ = ["GramSet", "GramFit", "chunk_layout", "solve", "chi2_at", "covariance"]
+__all__ = ["GramSet", "GramFit", "chunk_layout", "solve", "chi2_at"]

@@ -81,6 +81,7 @@ from ...data.campaign import Campaign
 from ...data.measured import MeasuredData
 from ..core.criteria import Step
 from ..core.noise import interpolation_sigma
+from ..core.solve import pinv_psd
 from . import friction as fr
 from .gram import ClusterGram, cv_mse, fit, sse_of, wald
 from .result import BenchDiagnosis
@@ -291,8 +292,7 @@ def _confounded_groups(cg_all: np.ndarray, lib_index: dict) -> list:
     def outside(a_cols, b_cols):
         """Largest relative residual norm of a's columns after projection on b's span."""
         Gbb = G[np.ix_(b_cols, b_cols)]
-        d = np.sqrt(np.maximum(np.diag(Gbb), 1e-300))
-        inv = np.linalg.pinv(Gbb / np.outer(d, d), rcond=1e-10) / np.outer(d, d)
+        inv = pinv_psd(Gbb)
         worst = 0.0
         for a in a_cols:
             gaa = G[a, a]

@@ -8,8 +8,9 @@ enter only through the **per-cluster Gram matrices** ``G_c = [Z y]^T W [Z y]``
 correlated within a stroke, not between strokes), computed once; any model
 (a set of columns J) on any set of clusters is then a small linear solve:
 
-* coefficients ``phi = G_JJ^-1 b_J`` (columns scaled to unit diagonal, a
-  1e-10 ridge for exactly collinear columns);
+* coefficients ``phi = G_JJ^-1 b_J`` under the diagnosis's one rank rule
+  (:mod:`ppamsafety.diagnose.core.solve`: the minimum-norm solution for exactly collinear
+  columns);
 * weighted SSE ``y^T W y - 2 phi^T b_J + phi^T G_JJ phi``;
 * held-out SSE of a fold from the other fold's fit;
 * the cluster-robust ("sandwich") covariance with strokes as clusters,
@@ -24,6 +25,8 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy import special
+
+from ..core.solve import pinv_psd, solve_normal
 
 
 @dataclass(frozen=True, eq=False)
@@ -108,20 +111,12 @@ class GramFit:
 
 
 def _solve(G, cols):
-    """phi for the columns ``cols`` of a summed Gram (scaled, small ridge)."""
+    """phi for the columns ``cols`` of a summed Gram, and their normal matrix."""
     y = G.shape[0] - 1
     if cols.size == 0:
         return np.zeros(0), None
     A = G[np.ix_(cols, cols)]
-    b = G[cols, y]
-    d = np.sqrt(np.maximum(np.diag(A), 1e-300))
-    An = A / np.outer(d, d)
-    An[np.diag_indices_from(An)] += 1e-10
-    try:
-        sol = np.linalg.solve(An, b / d)
-    except np.linalg.LinAlgError:
-        sol = np.linalg.lstsq(An, b / d, rcond=None)[0]
-    return sol / d, (An, d)
+    return solve_normal(A, G[cols, y]), A
 
 
 def sse_of(G, cols, phi) -> float:
@@ -171,8 +166,7 @@ def fit(cg: ClusterGram, clusters, cols, *, robust: bool = False, Gsum=None) -> 
     wsum = float(cg.weight[clusters].sum())
     cov = None
     if robust and cols.size:
-        An, d = fac
-        inv = np.linalg.pinv(An) / np.outer(d, d)
+        inv = pinv_psd(fac)
         y = G.shape[0] - 1
         cl = np.asarray(clusters)
         # only the (cluster, J, J) and (cluster, J, y) blocks: copying every cluster's whole
@@ -219,13 +213,8 @@ def wald(phi, cov, block) -> tuple:
     """
     b = phi[block]
     V = cov[block][:, block] if not isinstance(block, slice) else cov[block, block]
-    d = np.sqrt(np.maximum(np.diag(V), 1e-300))
-    Vn = V / np.outer(d, d)
-    w, U = np.linalg.eigh(Vn)
-    keep = w > 1e-8 * max(w.max(), 1e-300)
-    z = U[:, keep].T @ (b / d)
-    stat = float(np.sum(z * z / w[keep]))
-    df = int(keep.sum())
+    Vi, df = pinv_psd(V, rank=True)
+    stat = float(b @ Vi @ b)
     return stat, df, float(special.chdtrc(max(df, 1), stat))
 
 

@@ -57,6 +57,7 @@ from ...data.measured import MeasuredDataWarning
 from ...params.muscles import TABLE_B1_N_PER_BAR
 from ...units import BAR
 from ..core.battery import coverage_entry, run_seeds
+from ..core.solve import lstsq
 from .candidates import ACTUATOR_VOCABULARY, force_function
 from .design import actuator_design, actuator_record
 from .detection import signature_ratio
@@ -351,10 +352,7 @@ def irreducible_gap(sc: BenchScenario, record, design) -> float | None:
     Z = np.concatenate([c for c in design.columns.values()], axis=1) if design.columns else \
         np.zeros((d.size, 0))
     if Z.shape[1]:
-        sc_ = np.sqrt(np.sum(Z ** 2, axis=0))
-        sc_[sc_ == 0] = 1.0
-        coef, *_ = np.linalg.lstsq(Z / sc_, d, rcond=1e-10)
-        d = d - (Z / sc_) @ coef
+        d = d - Z @ lstsq(Z, d)
     gamma = float(np.sqrt(np.mean(d ** 2)))
     return math.sqrt(1.0 + gamma * gamma)
 
