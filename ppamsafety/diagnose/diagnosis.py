@@ -28,7 +28,8 @@ from ..params.arm_file import arm_fingerprint
 from .arm.pipeline import diagnose_arm
 from .bench.campaign import diagnose_campaign
 from .bench.pipeline import diagnose_actuator
-from .core.result import HIGH_CONFIDENCE, JSON_NAME, SCHEMA_VERSION, Diagnosis
+from .core.gates import HIGH_WEIGHT
+from .core.result import JSON_NAME, SCHEMA_VERSION, Diagnosis
 
 
 def diagnose(data, *, arm=None, candidates=None, block_seconds: float = 0.05,
@@ -193,5 +194,5 @@ def _diagnose(data, *, arm, candidates, block_seconds, alpha, rho_max, experimen
                        "name": used.name, "sha256": fp}, "same": mismatch is None}})
 
 
-__all__ = ["Diagnosis", "diagnose", "other_arm", "SCHEMA_VERSION", "HIGH_CONFIDENCE",
+__all__ = ["Diagnosis", "diagnose", "other_arm", "SCHEMA_VERSION", "HIGH_WEIGHT",
            "JSON_NAME"]

@@ -1,7 +1,9 @@
-"""The gates before "high" confidence: what a named effect must pass to be reported as certain.
+"""The gates before "high" confidence on an arm record: its :class:`~..core.gates.HighRule`.
 
 A name reaches ``confidence_level = "high"`` only through every gate below;
-otherwise it is ``"low"`` (a hint, not a finding).  The gates and their
+otherwise it is ``"low"`` (a hint, not a finding).  The gates are judged by the one rule of
+every record kind (:mod:`ppamsafety.diagnose.core.gates`); this module holds the arm's
+thresholds and the evidence only an arm gives (moved and admissible parameters).  The gates and their
 thresholds were set on the randomized scenario battery
 (:mod:`ppamsafety.diagnose.scenarios`, its ``TUNING_SEEDS``) and the claim they
 make -- of all effects named "high", at least 97 % are right -- is measured on
@@ -13,7 +15,7 @@ gate                passes when
 ==================  ==============================================================
 weight              its inclusion probability (the BIC weights of the subsets of
                     the library that hold it, :mod:`.subsets`) is >=
-                    :data:`HIGH_WEIGHT`: decisive against every other small model
+                    :data:`~..core.gates.HIGH_WEIGHT`: decisive against every other small model
 stable              the complementary-pairs stability selection picked it in >=
                     ``Stability.threshold`` of the halves of the record (the
                     name does not hinge on a part of the record)
@@ -35,7 +37,7 @@ residual_at_noise   every block channel's final residual/noise RMS ratio is
                     may leak into this subsystem)
 consistent          the effect's parameters are the same in the low and the high
                     third of each joint's range (a Chow test at
-                    ``selection.CONSTANCY_ALPHA``): an effect standing in for
+                    ``core.gates.CONSTANCY_ALPHA``): an effect standing in for
                     something else (an encoder gain taken for an offset, a heavier
                     link for a payload) fits different values in different poses;
                     and so are those of every other named effect sharing a
@@ -54,14 +56,10 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
+from ..core.gates import CONSTANCY_ALPHA, HighRule, judge, level
 from ..core.parameter import physically_admissible as core_admissible
-from ..core.power import noise_rho_quantile
 from .candidates import REGISTRY
 
-#: Inclusion probability at or above which a name counts as decisive.
-HIGH_WEIGHT = 0.95
 #: Largest final residual/noise RMS ratio of every block channel for "high" (under a
 #: correct model the ratio is 1 within a few per cent; 1.2 leaves room for a noise estimate
 #: that is somewhat off, not for a model error of half the noise).
@@ -71,6 +69,9 @@ GATES = ("weight", "stable", "admissible", "moved", "clear", "residual_at_noise"
          "not_compensating", "not_confounded")
 #: Smallest magnitude over the detection limit of a "high" name.
 CLEAR_RATIO = 5.0
+#: The arm's rule for "high".
+RULE = HighRule(gates=GATES, rho_factor=RHO_HIGH, rho_quantile=0.999, clear_ratio=CLEAR_RATIO,
+                consistency_alpha=CONSTANCY_ALPHA)
 
 
 def moved_parameters(name: str, table: dict) -> tuple:
@@ -103,21 +104,9 @@ def physically_admissible(name: str, table: dict) -> bool:
     return core_admissible(REGISTRY[name].parameters, table, moved_parameters(name, table))
 
 
-def rho_high(blocks: int) -> float:
-    """The largest residual/noise ratio of a channel with ``blocks`` blocks for "high".
-
-    Parameters
-    ----------
-    blocks : int
-    """
-    m = max(int(blocks), 1)
-    return RHO_HIGH * noise_rho_quantile(m, 0.999)
-
-
 def gates(name: str, table: dict, *, weight: float, stability: float | None,
           stability_threshold: float, rho, unexplained: bool, confounded: bool,
-          consistency: float = 1.0, consistency_alpha: float = 1e-3,
-          blocks: int = 10 ** 6, clear: float = math.inf,
+          consistency: float = 1.0, blocks: int = 10 ** 6, clear: float = math.inf,
           compensating: bool = False) -> dict:
     """Every gate of the module docstring for one named effect.
 
@@ -139,10 +128,8 @@ def gates(name: str, table: dict, *, weight: float, stability: float | None,
     consistency : float, keyword-only
         Smallest p-value of the region-constancy test
         (:func:`~.selection.region_consistency`).
-    consistency_alpha : float, keyword-only
-        Its level.
     blocks : int, keyword-only
-        Blocks per channel (:func:`rho_high`).
+        Blocks per channel (``RULE.rho_high``).
     clear : float, keyword-only
         Largest change of a parameter over its detection limit.
     compensating : bool, keyword-only
@@ -153,28 +140,13 @@ def gates(name: str, table: dict, *, weight: float, stability: float | None,
     dict
         Gate -> bool, in the order of :data:`GATES`.
     """
-    rho = np.asarray(rho, dtype=float)
-    return {"weight": bool(weight >= HIGH_WEIGHT),
-            "stable": bool(stability is not None and stability >= stability_threshold),
-            "admissible": physically_admissible(name, table),
-            "moved": bool(moved_parameters(name, table)),
-            "clear": bool(clear >= CLEAR_RATIO),
-            "residual_at_noise": bool(not unexplained and np.all(rho <= rho_high(blocks))),
-            "consistent": bool(consistency >= consistency_alpha),
-            "not_compensating": not compensating,
-            "not_confounded": not confounded}
+    return judge(RULE, weight=weight, stability=stability,
+                 stability_threshold=stability_threshold,
+                 admissible=physically_admissible(name, table),
+                 moved=bool(moved_parameters(name, table)), clear=clear, rho=rho, m=blocks,
+                 unexplained=unexplained, consistency=consistency,
+                 not_compensating=not compensating, confounded=confounded)
 
 
-def level(g: dict) -> str:
-    """``"high"`` when every gate passes, else ``"low"``.
-
-    Parameters
-    ----------
-    g : dict
-        :func:`gates`.
-    """
-    return "high" if all(g.values()) else "low"
-
-
-__all__ = ["GATES", "HIGH_WEIGHT", "RHO_HIGH", "CLEAR_RATIO", "rho_high", "gates", "level", "moved_parameters",
-           "physically_admissible"]
+__all__ = ["GATES", "RULE", "RHO_HIGH", "CLEAR_RATIO", "gates", "level",
+           "moved_parameters", "physically_admissible"]

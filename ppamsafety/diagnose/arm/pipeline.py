@@ -35,7 +35,8 @@ from ..core.omitted import HINT_P
 from ..core.result import Diagnosis
 from .candidates import REGISTRY, SensorFault, default_candidates, separating_experiment
 from .detection import detection_limits, omitted
-from .gates import GATES, HIGH_WEIGHT, RHO_HIGH, gates, level, moved_parameters
+from ..core.gates import HIGH_WEIGHT, level
+from .gates import GATES, RHO_HIGH, gates, moved_parameters
 from .residuals import (CHANNELS, CHANNEL_UNITS, PRESSURE_GAIN_COLUMNS, SUBSYSTEM, ArmRecord,
                         Columns, arm_record, block_system, changed_delays, channel_noise,
                         coulomb_velocity, declared_delays, model_vector, noise_draws, replay,
@@ -514,7 +515,7 @@ def diagnose_arm(data, *, arm=None, candidates=None, block_seconds: float = 0.05
                   stability=None if sfreq is None else sfreq.get(e["name"], 0.0),
                   stability_threshold=STABILITY_THRESHOLD if stab is None else stab.threshold,
                   rho=rho, unexplained=unexplained, confounded=False,
-                  consistency=own, consistency_alpha=CONSTANCY_ALPHA, blocks=bs.nb,
+                  consistency=own, blocks=bs.nb,
                   clear=e["evidence"]["limit_ratio"] if detection else math.inf,
                   compensating=e["name"] in comp)
         e["gates"] = g

@@ -81,6 +81,7 @@ from scipy import stats
 from ..._validation import check_int, check_seed
 from ..core.criteria import (ALPHA, CV_SEGMENTS, RHO_MAX, Step, _chi2_sf, _normal_quantile, aicc,
                              bic, false_selection_bound, rank_step)
+from ..core.gates import CONSTANCY_ALPHA
 from ..core.omitted import widened_interval
 from ...lstsq import step_scores
 from .candidates import DEAD_TIME_MAX, REGISTRY, identity_values, library
@@ -1057,10 +1058,6 @@ def stability_selection(prob: Problem, candidates=None, *, pairs: int = STABILIT
 
 
 # ----------------------------------------------------------------------------- consistency
-
-#: Significance level of the parameter-constancy test across operating regions.
-CONSTANCY_ALPHA = 1e-3
-
 
 def region_consistency(prob: Problem, fit: Fit, name: str) -> dict:
     """Are the parameters of effect ``name`` the same in different parts of the arm's motion?

@@ -80,6 +80,7 @@ from ..._validation import check_range
 from ...data.campaign import Campaign
 from ...data.measured import MeasuredData
 from ..core.criteria import Step
+from ..core.gates import HighRule, judge, level
 from ..core.noise import interpolation_sigma
 from ..core.solve import pinv_psd
 from . import friction as fr
@@ -107,6 +108,12 @@ MID_PROFILE_HIGH = 0.3
 #: Two candidates whose columns' residual (relative norm) after projection on each other's
 #: span is below this are confounded.
 CONFOUND_TOL = 0.05
+#: The campaign's rule for "high" (:mod:`ppamsafety.diagnose.core.gates`): stable in every
+#: rerun, significant, a held-out gain, admissible, not at the edge of a profiled grid, and a
+#: stroke profile standing out in the middle of the stroke.
+RULE = HighRule(gates=("stable", "significant", "held_out", "admissible", "not_at_edge",
+                       "mid_stroke"), stability=STABILITY_HIGH, p_value=P_HIGH,
+                cv_gain=GAIN_HIGH)
 #: Position bins of the repeatability level (per record and direction): the stroke / this.
 REPEAT_BINS = 60
 #: Samples within this travel of a reversal are "near a reversal" in the where table [m].
@@ -606,11 +613,11 @@ def diagnose_campaign(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
             ev["mid_stroke_rms"] = float(np.sqrt(np.mean(contrib[mid] ** 2))) if mid.any() \
                 else 0.0
             mid_ok = ev["mid_stroke_rms"] >= MID_PROFILE_HIGH
-        high = (stability and freq >= STABILITY_HIGH and row["p_value"] < P_HIGH
-                and row["cv_gain"] >= GAIN_HIGH and ok and not edge and mid_ok)
+        g = judge(RULE, stability=freq if stability else None, p_value=row["p_value"],
+                  cv_gain=row["cv_gain"], admissible=ok, not_at_edge=not edge, mid_stroke=mid_ok)
         effects.append({"name": unit, "subsystem": "force", "parameters": params,
                         "evidence": ev, "confidence": freq,
-                        "confidence_level": "high" if high else "low",
+                        "confidence_level": level(g),
                         "signature": fr.SIGNATURE[unit]})
     # derived laws: friction level and presliding step against pressure
     laws = {}

@@ -20,11 +20,10 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.criteria import _chi2_sf
+from ..core.gates import CONSTANCY_ALPHA
 from ..core.linear_selection import LinearGram
 from ..core.solve import pinv_psd
 
-#: Level of the constancy test (the arm's ``selection.CONSTANCY_ALPHA``).
-CONSTANCY_ALPHA = 1e-3
 
 
 def time_consistency(design, names, name: str) -> float:

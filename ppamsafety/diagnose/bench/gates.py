@@ -1,9 +1,10 @@
 """The gates before "high" confidence on a muscle record.
 
 A named effect reaches ``confidence_level = "high"`` only through every gate
-below; otherwise it is ``"low"`` (a hint, not a finding).  They are the arm's
-gates (:mod:`ppamsafety.diagnose.arm.gates`) where they apply, plus two that
-say what a muscle record must contain.  The thresholds were set on the
+below; otherwise it is ``"low"`` (a hint, not a finding).  They are judged by the one rule
+of every record kind (:mod:`ppamsafety.diagnose.core.gates`): the arm's gates where they
+apply, plus two that say what a muscle record must contain; this module holds the muscle
+record's thresholds (:data:`RULE`) and the evidence only a muscle record gives.  The thresholds were set on the
 randomized battery of muscle records (:mod:`.scenarios`, seeds 0-299) and the
 claim -- of all effects named "high", at least 97 % are right -- is measured
 on unseen seeds (``docs/diagnose.md``).
@@ -13,7 +14,7 @@ gate                 passes when
 ===================  ===========================================================
 weight               its inclusion probability (the BIC weights of the admissible
                      subsets of the library that hold it, :mod:`.selection`) is
-                     >= :data:`~ppamsafety.diagnose.core.result.HIGH_CONFIDENCE`
+                     >= :data:`~ppamsafety.diagnose.core.gates.HIGH_WEIGHT`
 stable               the naming rule picked it in >= ``THRESHOLD`` of the halves
                      of the record's loops (:mod:`.stability`)
 admissible           every parameter it moved has its 95 % interval inside the
@@ -48,11 +49,7 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
-from ..core.power import noise_rho_quantile
-from ..core.result import HIGH_CONFIDENCE
-from .consistency import CONSTANCY_ALPHA
+from ..core.gates import CONSTANCY_ALPHA, HighRule, judge, level
 
 #: Largest final residual/noise RMS ratio for "high", as a factor of the 99.9 % point
 #: of the ratio under noise alone (1.15 x 1.02-1.06: the estimated noise level is good to
@@ -74,17 +71,9 @@ GATES = ("weight", "stable", "admissible", "moved", "clear", "residual_at_noise"
 #: stopped by other gates: 2 keeps the gate's purpose (no "high" at the edge of visibility)
 #: without dropping right names for nothing.
 CLEAR_RATIO = 2.0
-
-
-def rho_high(m: int) -> float:
-    """The largest final residual/noise ratio on m equations for "high".
-
-    Parameters
-    ----------
-    m : int
-        Equations (samples used).
-    """
-    return RHO_HIGH * noise_rho_quantile(max(int(m), 1))
+#: The muscle record's rule for "high".
+RULE = HighRule(gates=GATES, rho_factor=RHO_HIGH, rho_quantile=0.999, clear_ratio=CLEAR_RATIO,
+                consistency_alpha=CONSTANCY_ALPHA)
 
 
 def gates(name: str, extension, phi, cov, *, weight: float, stability: float | None,
@@ -127,29 +116,15 @@ def gates(name: str, extension, phi, cov, *, weight: float, stability: float | N
     dict
         Gate -> bool, in the order of :data:`GATES`.
     """
-    return {"weight": bool(weight >= HIGH_CONFIDENCE),
-            "stable": bool(stability is not None and stability >= stability_threshold),
-            "admissible": bool(extension.physically_admissible(phi, cov)),
-            "moved": bool(extension.moved(phi, cov)),
-            "clear": bool(clear >= CLEAR_RATIO),
-            "residual_at_noise": bool(not unexplained and np.isfinite(rho)
-                                      and rho <= rho_high(m)),
-            "consistent": bool(consistency >= CONSTANCY_ALPHA),
-            "reversals": bool(name not in HISTORY_EFFECTS or turns >= MIN_REVERSALS_HIGH),
-            "pressure_levels": bool(name not in PRESSURE_EFFECTS or not one_level),
-            "not_confounded": not confounded}
+    return judge(RULE, weight=weight, stability=stability,
+                 stability_threshold=stability_threshold,
+                 admissible=extension.physically_admissible(phi, cov),
+                 moved=extension.moved(phi, cov), clear=clear, rho=rho, m=m,
+                 unexplained=unexplained, consistency=consistency,
+                 reversals=name not in HISTORY_EFFECTS or turns >= MIN_REVERSALS_HIGH,
+                 pressure_levels=name not in PRESSURE_EFFECTS or not one_level,
+                 confounded=confounded)
 
 
-def level(g: dict) -> str:
-    """``"high"`` when every gate passes, else ``"low"``.
-
-    Parameters
-    ----------
-    g : dict
-        :func:`gates`.
-    """
-    return "high" if all(g.values()) else "low"
-
-
-__all__ = ["GATES", "CLEAR_RATIO", "RHO_HIGH", "MIN_REVERSALS_HIGH", "HISTORY_EFFECTS", "PRESSURE_EFFECTS",
-           "rho_high", "gates", "level"]
+__all__ = ["GATES", "RULE", "CLEAR_RATIO", "RHO_HIGH", "MIN_REVERSALS_HIGH", "HISTORY_EFFECTS", "PRESSURE_EFFECTS",
+           "gates", "level"]

@@ -47,7 +47,8 @@ from .design import (AMBIGUOUS_SIGMAS, LOCAL_WINDOW, NOISE_PLATEAU, PRESSURE_LEV
                      ActuatorRecord, actuator_design, actuator_record, contraction_rate,
                      motion_direction, residual_noise)
 from .detection import detection_limits, limit_ratio, omitted
-from .gates import CLEAR_RATIO, GATES, MIN_REVERSALS_HIGH, RHO_HIGH, gates, level, rho_high
+from ..core.gates import level
+from .gates import CLEAR_RATIO, GATES, MIN_REVERSALS_HIGH, RHO_HIGH, RULE, gates
 from .selection import MIN_EFFECT_RMS, relinearised, select
 from .stability import (PAIRS, THRESHOLD, half_sample_covariance, inflated_covariance,
                         stability_selection)
@@ -274,7 +275,7 @@ def diagnose_actuator(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
                              f"effect RMS >= {MIN_EFFECT_RMS} x noise; then a backward pass; "
                              "look-alikes (a member whose LR test given an outside candidate "
                              "is not significant) reported as confounded, not named",
-                "min_effect_rms": MIN_EFFECT_RMS, "rho_high": rho_high(des.m),
+                "min_effect_rms": MIN_EFFECT_RMS, "rho_high": RULE.rho_high(des.m),
                 "high_confidence": {"rho_high_factor": RHO_HIGH, "gates": list(GATES),
                                     "clear_ratio": CLEAR_RATIO,
                                     "stability_threshold": THRESHOLD if stab is None
