@@ -14,7 +14,7 @@ import pytest
 
 from ppamsafety.data import MeasuredDataWarning
 from ppamsafety.diagnose.bench.design import actuator_design
-from ppamsafety.diagnose.bench.gates import CLEAR_RATIO, GATES
+from ppamsafety.diagnose.bench.gates import MUSCLE_RULE
 from ppamsafety.diagnose.bench.pipeline import diagnose_actuator
 from ppamsafety.diagnose.bench.scenarios import MEASURE_SEEDS as BENCH_MEASURE_SEEDS
 from ppamsafety.diagnose.bench.scenarios import random_scenario, record_of, run_battery
@@ -65,8 +65,8 @@ def test_quick_claims_are_right(quick):
         # every 'high' name is a hidden effect, and has passed every gate
         assert set(r.high) <= hidden, (r.seed, r.high, r.hidden)
         for n in r.high:
-            assert set(r.gates[n]) == set(GATES) and all(r.gates[n].values())
-            assert r.named_ratios[n] >= CLEAR_RATIO
+            assert set(r.gates[n]) == set(MUSCLE_RULE.gates) and all(r.gates[n].values())
+            assert r.named_ratios[n] >= MUSCLE_RULE.clear_ratio
         # a confounded group names none of its members
         for g in r.confounded:
             assert not set(g) & set(r.named), (r.seed, g, r.named)

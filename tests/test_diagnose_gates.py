@@ -5,9 +5,9 @@ import math
 
 import pytest
 
-from ppamsafety.diagnose.arm.gates import RULE as ARM_RULE
-from ppamsafety.diagnose.bench.campaign import GAIN_HIGH, P_HIGH, RULE as CAMPAIGN_RULE
-from ppamsafety.diagnose.bench.gates import RULE as BENCH_RULE
+from ppamsafety.diagnose.arm.gates import ARM_RULE
+from ppamsafety.diagnose.bench.campaign import CAMPAIGN_RULE, GAIN_HIGH, P_HIGH
+from ppamsafety.diagnose.bench.gates import MUSCLE_RULE as BENCH_RULE
 from ppamsafety.diagnose.core.gates import HIGH_WEIGHT, judge, level
 
 

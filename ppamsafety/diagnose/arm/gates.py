@@ -1,4 +1,4 @@
-"""The gates before "high" confidence on an arm record: its :class:`~..core.gates.HighRule`.
+"""The gates before "high" confidence on an arm record: its :class:`~..core.gates.HighRule`, :data:`ARM_RULE`.
 
 A name reaches ``confidence_level = "high"`` only through every gate below;
 otherwise it is ``"low"`` (a hint, not a finding).  The gates are judged by the one rule of
@@ -26,11 +26,11 @@ admissible          every parameter the effect moved (interval excluding the
                     something else; a viscous friction of -0.002 +- 0.01 is a zero)
 moved               some parameter's interval excludes its nominal value (the
                     dead time: a delay of at least one sample)
-clear               some parameter moved by >= :data:`CLEAR_RATIO` x its detection
+clear               some parameter moved by >= ``ARM_RULE.clear_ratio`` (5) x its detection
                     limit on the record (:mod:`.detection`): close to the limit a
                     small error the library does not hold can pose as the effect
 residual_at_noise   every block channel's final residual/noise RMS ratio is
-                    <= :data:`RHO_HIGH` x the 99.9 % point of the ratio under
+                    <= ``ARM_RULE.rho_factor`` (1.2) x the 99.9 % point of the ratio under
                     the noise alone (sqrt(chi2_m(0.999) / m) for m blocks: 1.06
                     for 1200 blocks, 1.49 for the 21 rest points of a sawtooth),
                     and nothing is unexplained (an unexplained error elsewhere
@@ -60,18 +60,16 @@ from ..core.gates import CONSTANCY_ALPHA, HighRule, judge, level
 from ..core.parameter import physically_admissible as core_admissible
 from .candidates import REGISTRY
 
-#: Largest final residual/noise RMS ratio of every block channel for "high" (under a
-#: correct model the ratio is 1 within a few per cent; 1.2 leaves room for a noise estimate
-#: that is somewhat off, not for a model error of half the noise).
-RHO_HIGH = 1.2
-#: The gates, in the order they are reported.
-GATES = ("weight", "stable", "admissible", "moved", "clear", "residual_at_noise", "consistent",
-         "not_compensating", "not_confounded")
-#: Smallest magnitude over the detection limit of a "high" name.
-CLEAR_RATIO = 5.0
-#: The arm's rule for "high".
-RULE = HighRule(gates=GATES, rho_factor=RHO_HIGH, rho_quantile=0.999, clear_ratio=CLEAR_RATIO,
-                consistency_alpha=CONSTANCY_ALPHA)
+#: The arm's rule for "high": its gates in the order they are reported; the largest final
+#: residual/noise RMS ratio of every block channel as a factor of the 99.9 % point under
+#: noise alone (under a correct model the ratio is 1 within a few per cent; 1.2 leaves room
+#: for a noise estimate that is somewhat off, not for a model error of half the noise); the
+#: smallest magnitude over the detection limit of a "high" name, 5.
+ARM_RULE = HighRule(gates=("weight", "stable", "admissible", "moved", "clear",
+                           "residual_at_noise", "consistent", "not_compensating",
+                           "not_confounded"),
+                    rho_factor=1.2, rho_quantile=0.999, clear_ratio=5.0,
+                    consistency_alpha=CONSTANCY_ALPHA)
 
 
 def moved_parameters(name: str, table: dict) -> tuple:
@@ -129,7 +127,7 @@ def gates(name: str, table: dict, *, weight: float, stability: float | None,
         Smallest p-value of the region-constancy test
         (:func:`~.selection.region_consistency`).
     blocks : int, keyword-only
-        Blocks per channel (``RULE.rho_high``).
+        Blocks per channel (``ARM_RULE.rho_high``).
     clear : float, keyword-only
         Largest change of a parameter over its detection limit.
     compensating : bool, keyword-only
@@ -138,9 +136,9 @@ def gates(name: str, table: dict, *, weight: float, stability: float | None,
     Returns
     -------
     dict
-        Gate -> bool, in the order of :data:`GATES`.
+        Gate -> bool, in the order of ``ARM_RULE.gates``.
     """
-    return judge(RULE, weight=weight, stability=stability,
+    return judge(ARM_RULE, weight=weight, stability=stability,
                  stability_threshold=stability_threshold,
                  admissible=physically_admissible(name, table),
                  moved=bool(moved_parameters(name, table)), clear=clear, rho=rho, m=blocks,
@@ -148,5 +146,5 @@ def gates(name: str, table: dict, *, weight: float, stability: float | None,
                  not_compensating=not compensating, confounded=confounded)
 
 
-__all__ = ["GATES", "RULE", "RHO_HIGH", "CLEAR_RATIO", "gates", "level",
+__all__ = ["ARM_RULE", "gates", "level",
            "moved_parameters", "physically_admissible"]

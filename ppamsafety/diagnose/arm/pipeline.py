@@ -36,7 +36,7 @@ from ..core.result import Diagnosis
 from .candidates import REGISTRY, SensorFault, default_candidates, separating_experiment
 from .detection import detection_limits, omitted
 from ..core.gates import HIGH_WEIGHT, level
-from .gates import GATES, RHO_HIGH, gates, moved_parameters
+from .gates import ARM_RULE, gates, moved_parameters
 from .residuals import (CHANNELS, CHANNEL_UNITS, PRESSURE_GAIN_COLUMNS, SUBSYSTEM, ArmRecord,
                         Columns, arm_record, block_system, changed_delays, channel_noise,
                         coulomb_velocity, declared_delays, model_vector, noise_draws, replay,
@@ -568,9 +568,9 @@ def diagnose_arm(data, *, arm=None, candidates=None, block_seconds: float = 0.05
                            "statistic": "RMS(after - measured) / sample noise per replay "
                                         "channel; at the noise when every one is <= limit",
                            "at_noise": not replay_bad},
-                "high_confidence": {"inclusion_probability": HIGH_WEIGHT, "rho_high": RHO_HIGH,
+                "high_confidence": {"inclusion_probability": HIGH_WEIGHT, "rho_high": ARM_RULE.rho_factor,
                                     "stability_threshold": STABILITY_THRESHOLD if stab is None
-                                    else stab.threshold, "gates": list(GATES)},
+                                    else stab.threshold, "gates": list(ARM_RULE.gates)},
                 "candidates": list(candidates),
                 "blocks": int(bs.nb), "samples": int(len(rec.t)),
                 "dt_s": None if static else rec.dt,

@@ -111,7 +111,7 @@ CONFOUND_TOL = 0.05
 #: The campaign's rule for "high" (:mod:`ppamsafety.diagnose.core.gates`): stable in every
 #: rerun, significant, a held-out gain, admissible, not at the edge of a profiled grid, and a
 #: stroke profile standing out in the middle of the stroke.
-RULE = HighRule(gates=("stable", "significant", "held_out", "admissible", "not_at_edge",
+CAMPAIGN_RULE = HighRule(gates=("stable", "significant", "held_out", "admissible", "not_at_edge",
                        "mid_stroke"), stability=STABILITY_HIGH, p_value=P_HIGH,
                 cv_gain=GAIN_HIGH)
 #: Position bins of the repeatability level (per record and direction): the stroke / this.
@@ -613,7 +613,7 @@ def diagnose_campaign(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
             ev["mid_stroke_rms"] = float(np.sqrt(np.mean(contrib[mid] ** 2))) if mid.any() \
                 else 0.0
             mid_ok = ev["mid_stroke_rms"] >= MID_PROFILE_HIGH
-        g = judge(RULE, stability=freq if stability else None, p_value=row["p_value"],
+        g = judge(CAMPAIGN_RULE, stability=freq if stability else None, p_value=row["p_value"],
                   cv_gain=row["cv_gain"], admissible=ok, not_at_edge=not edge, mid_stroke=mid_ok)
         effects.append({"name": unit, "subsystem": "force", "parameters": params,
                         "evidence": ev, "confidence": freq,

@@ -48,7 +48,7 @@ from .design import (AMBIGUOUS_SIGMAS, LOCAL_WINDOW, NOISE_PLATEAU, PRESSURE_LEV
                      motion_direction, residual_noise)
 from .detection import detection_limits, limit_ratio, omitted
 from ..core.gates import level
-from .gates import CLEAR_RATIO, GATES, MIN_REVERSALS_HIGH, RHO_HIGH, RULE, gates
+from .gates import MIN_REVERSALS_HIGH, MUSCLE_RULE, gates
 from .selection import MIN_EFFECT_RMS, relinearised, select
 from .stability import (PAIRS, THRESHOLD, half_sample_covariance, inflated_covariance,
                         stability_selection)
@@ -275,9 +275,10 @@ def diagnose_actuator(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
                              f"effect RMS >= {MIN_EFFECT_RMS} x noise; then a backward pass; "
                              "look-alikes (a member whose LR test given an outside candidate "
                              "is not significant) reported as confounded, not named",
-                "min_effect_rms": MIN_EFFECT_RMS, "rho_high": RULE.rho_high(des.m),
-                "high_confidence": {"rho_high_factor": RHO_HIGH, "gates": list(GATES),
-                                    "clear_ratio": CLEAR_RATIO,
+                "min_effect_rms": MIN_EFFECT_RMS, "rho_high": MUSCLE_RULE.rho_high(des.m),
+                "high_confidence": {"rho_high_factor": MUSCLE_RULE.rho_factor,
+                                    "gates": list(MUSCLE_RULE.gates),
+                                    "clear_ratio": MUSCLE_RULE.clear_ratio,
                                     "stability_threshold": THRESHOLD if stab is None
                                     else stab.threshold,
                                     "min_reversals": MIN_REVERSALS_HIGH},
