@@ -637,7 +637,7 @@ def run_scenario(sc: Scenario, *, gap: bool = True, arm=None) -> dict:
     return row
 
 
-def _scenario_row(seed, arm=None, declared=False):
+def _arm_row(seed, arm=None, declared=False):
     """The row of ``random_scenario(seed)`` (the arm's :class:`~.core.battery.Battery`)."""
     return run_scenario(random_scenario(seed, arm=arm, declared=bool(declared)), arm=arm)
 
@@ -653,7 +653,7 @@ def _scenario_row(seed, arm=None, declared=False):
 #: :func:`~.core.battery.run_battery`: ``arm`` (the nominal arm, default the thesis arm) and
 #: ``declared`` (arms that declare effects of their own, :func:`random_scenario`).
 ARM_BATTERY = Battery(kind="arm", tuning=range(0, 3000), measure=range(3000, 5000),
-                      run=_scenario_row, error_row={"stage": "battery"}, processes=None)
+                      run=_arm_row, error_row={"stage": "battery"}, processes=None)
 
 
 # ----------------------------------------------------------------------------- stored results

@@ -74,7 +74,6 @@ import time
 
 import numpy as np
 import pandas as pd
-from scipy import stats
 
 from ..._validation import check_range
 from ...data.campaign import Campaign
@@ -82,6 +81,7 @@ from ...data.measured import MeasuredData
 from ..core.criteria import Step
 from ..core.gates import HighRule, judge, level
 from ..core.noise import interpolation_sigma
+from ..core.regions import region_rows
 from ..core.solve import pinv_psd
 from . import friction as fr
 from .gram import ClusterGram, cv_mse, fit, sse_of, wald
@@ -440,10 +440,8 @@ class _Selector:
         return chosen, steps
 
 
-def _where(df, e_norm, rho_max):
+def _stroke_regions(df, e_norm, rho_max):
     """Mean, RMS and z (by strokes) of the final residual per region (in repeatability units)."""
-    zcrit = stats.norm.isf(0.0005)
-    rows = []
     near = df["dx"].to_numpy() < NEAR_REVERSAL
     groups = {"record": {f"{lab}": (df["label"] == lab).to_numpy()
                          for lab in pd.unique(df["label"])},
@@ -456,22 +454,8 @@ def _where(df, e_norm, rho_max):
     groups["rod position"] = {f"< {1e3 * a:.3g} mm": x < a,
                               f"{1e3 * a:.3g}-{1e3 * b:.3g} mm": (x >= a) & (x < b),
                               f">= {1e3 * b:.3g} mm": x >= b}
-    cl = df["cluster"].to_numpy()
-    for region, gs in groups.items():
-        for g, m in gs.items():
-            n = int(m.sum())
-            if n < 10:
-                continue
-            e = e_norm[m]
-            sm = pd.Series(e).groupby(cl[m]).mean().to_numpy()
-            se = float(np.std(sm, ddof=1) / math.sqrt(sm.size)) if sm.size > 2 else math.inf
-            mean = float(e.mean())
-            rms = float(np.sqrt(np.mean(e * e)))
-            z = mean / se if se > 0 else math.inf
-            rows.append({"channel": "force", "region": region, "group": g, "blocks": n,
-                         "mean": mean, "rms": rms, "z": z,
-                         "significant": bool(abs(z) > zcrit or rms > rho_max)})
-    return pd.DataFrame(rows)
+    return pd.DataFrame(region_rows(e_norm, groups, "force", rho_max,
+                                    cluster=df["cluster"].to_numpy(), min_n=10))
 
 
 def diagnose_campaign(data, *, candidates=None, alpha: float = 0.01, rho_max: float = 1.5,
@@ -658,7 +642,7 @@ def diagnose_campaign(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
         sse_te = sse_of(Gte, cols, ft.phi) if cols.size else float(Gte[-1, -1])
         row["rho_left_out"] = math.sqrt(max(sse_te, 0.0) / float(cg.n[te_].sum()))
     records = pd.DataFrame(rrows)
-    where = _where(u, e_all_norm, rho_max)
+    where = _stroke_regions(u, e_all_norm, rho_max)
     if unexplained:
         sigw = where[where["significant"]]
         worst = sigw.reindex(sigw["z"].abs().sort_values(ascending=False).index).head(3)

@@ -412,7 +412,7 @@ def run_scenario(sc: BenchScenario) -> dict:
     return row
 
 
-def _scenario_row(seed):
+def _muscle_row(seed):
     """The row of ``random_scenario(seed)`` (the muscle bench's :class:`~..core.battery.Battery`)."""
     return run_scenario(random_scenario(seed))
 
@@ -423,7 +423,7 @@ def _scenario_row(seed):
 #: gates before the intervals were widened; the measurement since runs on seeds no earlier
 #: run has seen).
 MUSCLE_BATTERY = Battery(kind="actuator", tuning=range(0, 200), measure=range(1300, 1600),
-                         run=_scenario_row, error_row={"kind": "actuator"}, processes=1)
+                         run=_muscle_row, error_row={"kind": "actuator"}, processes=1)
 
 
 def single_effect_outcomes(results: pd.DataFrame) -> pd.DataFrame:

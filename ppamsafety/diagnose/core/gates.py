@@ -105,7 +105,7 @@ def _stable(rule, ev):
     return bool(s is not None and s >= thr)
 
 
-def _residual(rule, ev):
+def _at_noise(rule, ev):
     rho = np.asarray(ev["rho"], dtype=float)
     return bool(not ev["unexplained"]
                 and np.all(np.isfinite(rho) & (rho <= rule.rho_high(ev["m"]))))
@@ -118,7 +118,7 @@ TESTS = {
     "admissible": lambda r, ev: bool(ev["admissible"]),
     "moved": lambda r, ev: bool(ev["moved"]),
     "clear": lambda r, ev: bool(ev.get("clear", math.inf) >= r.clear_ratio),
-    "residual_at_noise": _residual,
+    "residual_at_noise": _at_noise,
     "consistent": lambda r, ev: bool(ev.get("consistency", 1.0) >= r.consistency_alpha),
     "significant": lambda r, ev: bool(ev["p_value"] < r.p_value),
     "held_out": lambda r, ev: bool(ev["cv_gain"] >= r.cv_gain),
