@@ -7,8 +7,8 @@ oracle is numpy's SVD-based least squares on problems whose rank is unambiguous.
 import numpy as np
 import pytest
 
-from ppamsafety.diagnose.arm.gram import solve as arm_solve
-from ppamsafety.diagnose.bench.gram import ClusterGram, fit as cluster_fit
+from ppamsafety.diagnose.bench.gram import fit as cluster_fit
+from ppamsafety.diagnose.core.gram import Gram, solve as arm_solve
 from ppamsafety.diagnose.core.linear_selection import LinearGram
 from ppamsafety.diagnose.core.solve import EIG_MIN, lstsq, pinv_psd, solve_normal
 from ppamsafety.lstsq import solve_subset
@@ -80,6 +80,20 @@ def test_every_record_kind_fits_through_the_one_solve():
     lg = LinearGram(y, {f"c{j}": X[:, j:j + 1] for j in range(4)})
     np.testing.assert_allclose(lg.fit([f"c{j}" for j in range(4)]).phi, ref, rtol=1e-8)
     # cylinder campaign: strokes as clusters
-    cg = ClusterGram.build(X, y, np.ones(y.size), np.arange(y.size) % 7)
+    cg = Gram.from_samples(X, y, np.ones(y.size), np.arange(y.size) % 7)
     np.testing.assert_allclose(cluster_fit(cg, np.arange(7), np.arange(4)).phi, ref,
                                rtol=1e-8)
+
+
+def test_one_gram_class_sums_groups_and_keeps_empty_ones():
+    X, y = _problem(5, m=60, k=3)
+    group = np.repeat([0, 2], 30)                     # group 1 has no samples
+    g = Gram.from_samples(X, y, np.full(60, 4.0), group, groups=4)
+    assert g.G.shape == (4, 1, 4, 4) and not g.G[1].any() and not g.G[3].any()
+    aug = np.column_stack([X, y]) * 2.0               # weights 4: sqrt applied to the rows
+    np.testing.assert_allclose(g.summed()[0], aug.T @ aug, rtol=1e-12)
+    np.testing.assert_array_equal(g.n, [30, 0, 30, 0])
+    np.testing.assert_allclose(g.weight, [120.0, 0.0, 120.0, 0.0])
+    fit = cluster_fit(g, np.array([0, 2]), np.arange(3))
+    np.testing.assert_allclose(fit.phi, np.linalg.lstsq(X, y, rcond=None)[0], rtol=1e-8)
+    assert fit.mse == pytest.approx(fit.chi2 / 240.0)

@@ -86,7 +86,8 @@ from ..core.omitted import widened_interval
 from ...lstsq import step_scores
 from .candidates import DEAD_TIME_MAX, REGISTRY, identity_values, library
 from ..core.solve import lstsq, pinv_psd
-from .gram import GramSet, chi2_at, chunk_layout, solve
+from ..core.gram import Gram, chi2_at, solve
+from .gram import chunk_layout
 from .residuals import SUBSYSTEM, BlockSystem, block_noise
 
 #: 95 % quantile of chi2 with one degree of freedom (the dead-time profile interval).
@@ -430,7 +431,7 @@ def _grid_name(names) -> str | None:
     return next((c.name for c in library(names) if c.grid), None)
 
 
-def _gram_set(prob: Problem, names, shift: int) -> GramSet:
+def _gram_set(prob: Problem, names, shift: int) -> Gram:
     """The Gram set of every linear candidate of ``names`` at dead time ``shift`` (cached)."""
     lin = tuple(n for n in names if not REGISTRY[n].grid)
     key = ("gram", lin, int(shift))
@@ -443,7 +444,7 @@ def _gram_set(prob: Problem, names, shift: int) -> GramSet:
         if E is not None:
             P = P + E
         base = prob.bs.y - (Xf @ prob.mu0).reshape(nb, nc)
-        prob._memo[key] = (GramSet.build(P, base, prob.chunk, slices, shift), D)
+        prob._memo[key] = (Gram.from_blocks(P, base, prob.chunk, slices, shift), D)
     return prob._memo[key]
 
 

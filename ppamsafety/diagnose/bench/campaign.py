@@ -84,7 +84,8 @@ from ..core.noise import interpolation_sigma
 from ..core.regions import region_rows
 from ..core.solve import pinv_psd
 from . import friction as fr
-from .gram import ClusterGram, cv_mse, fit, sse_of, wald
+from ..core.gram import Gram
+from .gram import cv_mse, fit, sse_of, wald
 from .result import BenchDiagnosis
 from .strokes import stroke_state
 
@@ -362,8 +363,8 @@ class _Selector:
     def run(self, clusters, *, record_steps: bool = False):
         cg, lib = self.cg, self.lib
         folds = _folds_for(clusters, self.cl_rec, self.cl_cycle)
-        Gf = [(cg.G[clusters[folds == k]].sum(axis=0), float(cg.n[clusters[folds == k]].sum()))
-              for k in (0, 1)]
+        Gf = [(cg.G[clusters[folds == k], 0].sum(axis=0),
+               float(cg.n[clusters[folds == k]].sum())) for k in (0, 1)]
         Gall = Gf[0][0] + Gf[1][0]
         n_all = float(cg.n[clusters].sum())
         recs = np.unique(self.cl_rec[clusters])
@@ -401,7 +402,7 @@ class _Selector:
                 row = {"name": u, "variant": var.label, "k": int(c.size), "cv_mse": cv,
                        "cv_gain": gain, "wald": stat, "lr_df": df_, "p_value": pv,
                        "in_bounds": bool(ok), "delta_bic": math.nan, "bic_weight": math.nan,
-                       "rms_after": math.sqrt(max(f.sse / n_all, 0.0))}
+                       "rms_after": math.sqrt(max(f.chi2 / n_all, 0.0))}
                 row["eligible"] = bool(gain >= MIN_GAIN and pv < self.alpha / len(rest) and ok)
                 rows.append(row)
                 cand[u] = (var, c)
@@ -511,13 +512,13 @@ def diagnose_campaign(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
     lib0 = _Library(variants, [])
     w = 1.0 / u["sigma"].to_numpy() ** 2
     clusters_all = u["cluster"].to_numpy()
-    cg = ClusterGram.build(lib0.Z, u["r"].to_numpy(), w, clusters_all)
+    cg = Gram.from_samples(lib0.Z, u["r"].to_numpy(), w, clusters_all)
     C = cg.G.shape[0]
     cl_rec = np.zeros(C, int)
     cl_cycle = np.zeros(C, int)
     cl_rec[clusters_all] = u["rec"].to_numpy()
     cl_cycle[clusters_all] = u["cycle"].to_numpy()
-    groups = _confounded_groups(cg.G.sum(axis=0), lib0.index)
+    groups = _confounded_groups(cg.G[:, 0].sum(axis=0), lib0.index)
     lib = _Library(variants, groups)
     for g in groups:
         notes.append(f"confounded on this campaign (the same terms within {CONFOUND_TOL:.0%}): "
@@ -544,7 +545,7 @@ def diagnose_campaign(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
     model, cols, slices = sel._model(chosen)
     f = fit(cg, allc, cols, robust=True)
     n_all = float(cg.n.sum())
-    rho_after = math.sqrt(f.sse / n_all)
+    rho_after = math.sqrt(f.chi2 / n_all)
     Zall = lib.Z
     pred = Zall[:, cols] @ f.phi if cols.size else np.zeros(len(u))
     e_after = u["r"].to_numpy() - pred
@@ -638,7 +639,7 @@ def diagnose_campaign(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
             row["rho_left_out"] = math.nan
             continue
         ft = fit(cg, tr_, cols)
-        Gte = cg.G[te_].sum(axis=0)
+        Gte = cg.G[te_, 0].sum(axis=0)
         sse_te = sse_of(Gte, cols, ft.phi) if cols.size else float(Gte[-1, -1])
         row["rho_left_out"] = math.sqrt(max(sse_te, 0.0) / float(cg.n[te_].sum()))
     records = pd.DataFrame(rrows)

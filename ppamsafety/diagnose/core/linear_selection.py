@@ -39,6 +39,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .criteria import ALPHA, CV_SEGMENTS, Step, aicc, bic, _chi2_sf, rank_step
+from .gram import Gram
 from .solve import pinv_psd, solve_normal
 
 
@@ -105,7 +106,8 @@ def fold_of(m: int, segments: int = CV_SEGMENTS) -> np.ndarray:
 
 
 class LinearGram:
-    """Per-fold Gram matrices of the whitened columns and residual: each fit is a k x k solve.
+    """Per-fold Gram matrices of the whitened columns and residual: each fit is a k x k solve
+    (the engine's :class:`~.gram.Gram`, one group per fold).
 
     ``[Z e0]^T [Z e0]`` summed over the equations of each cross-validation fold (and of
     ``mask``).  A fit of any subset of the candidates, its covariance and its held-out chi2
@@ -145,8 +147,9 @@ class LinearGram:
         else:
             fold_used = np.asarray(fold)[used] if np.asarray(fold).size == m_all else \
                 np.asarray(fold)
-        X = np.concatenate([self.Z[used], self.e0[used, None]], axis=1)
-        self.G = [X[fold_used == f].T @ X[fold_used == f] for f in (0, 1)]
+        gram = Gram.from_samples(self.Z[used], self.e0[used], np.ones(self.m), fold_used,
+                                 groups=2)
+        self.G = [gram.G[0, 0], gram.G[1, 0]]
         self.G_all = self.G[0] + self.G[1]
 
     def _index(self, names):
