@@ -1,14 +1,13 @@
-"""The gates before "high" confidence on an arm record: its :class:`~..core.gates.HighRule`, :data:`ARM_RULE`.
+"""The gates before "high" confidence on an arm record: its rule, :data:`ARM_RULE`.
 
-A name reaches ``confidence_level = "high"`` only through every gate below;
-otherwise it is ``"low"`` (a hint, not a finding).  The gates are judged by the one rule of
-every record kind (:mod:`ppamsafety.diagnose.core.gates`); this module holds the arm's
-thresholds and the evidence only an arm gives (moved and admissible parameters).  The gates and their
+A name reaches ``confidence_level = "high"`` only through every gate below; otherwise it is
+``"low"`` (a hint, not a finding).  The gates are judged by the one rule of every record
+kind (:mod:`ppamsafety.diagnose.core.gates`); this module holds the arm's thresholds and the
+evidence only an arm gives (moved and admissible parameters).  The gates and their
 thresholds were set on the randomized scenario battery
-(:mod:`ppamsafety.diagnose.scenarios`, its ``TUNING_SEEDS``) and the claim they
-make -- of all effects named "high", at least 97 % are right -- is measured on
-unseen seeds (``MEASURE_SEEDS``; ``docs/diagnose.md``, the report section
-``diagnose_trust``).
+(:mod:`ppamsafety.diagnose.scenarios`, ``ARM_BATTERY.tuning``) and the claim they make -- of
+all effects named "high", at least 97 % are right -- is measured on unseen seeds
+(``ARM_BATTERY.measure``; ``docs/diagnose.md``, the report section ``diagnose_trust``).
 
 ==================  ==============================================================
 gate                passes when

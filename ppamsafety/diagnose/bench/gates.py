@@ -4,10 +4,10 @@ A named effect reaches ``confidence_level = "high"`` only through every gate
 below; otherwise it is ``"low"`` (a hint, not a finding).  They are judged by the one rule
 of every record kind (:mod:`ppamsafety.diagnose.core.gates`): the arm's gates where they
 apply, plus two that say what a muscle record must contain; this module holds the muscle
-record's thresholds (:data:`MUSCLE_RULE`) and the evidence only a muscle record gives.  The thresholds were set on the
-randomized battery of muscle records (:mod:`.scenarios`, seeds 0-299) and the
-claim -- of all effects named "high", at least 97 % are right -- is measured
-on unseen seeds (``docs/diagnose.md``).
+record's thresholds (:data:`MUSCLE_RULE`) and the evidence only a muscle record gives.
+The thresholds were set on the randomized battery of muscle records (:mod:`.scenarios`,
+seeds 0-299) and the claim -- of all effects named "high", at least 97 % are right -- is
+measured on unseen seeds (``docs/diagnose.md``).
 
 ===================  ===========================================================
 gate                 passes when

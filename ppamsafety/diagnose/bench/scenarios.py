@@ -413,7 +413,8 @@ def run_scenario(sc: BenchScenario) -> dict:
 
 
 def _muscle_row(seed):
-    """The row of ``random_scenario(seed)`` (the muscle bench's :class:`~..core.battery.Battery`)."""
+    """The row of ``random_scenario(seed)`` (the muscle bench's
+    :class:`~..core.battery.Battery`)."""
     return run_scenario(random_scenario(seed))
 
 
