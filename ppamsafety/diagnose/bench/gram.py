@@ -32,13 +32,9 @@ from ..core.gram import Gram, GramFit
 from ..core.solve import pinv_psd, solve_normal
 
 
-def _solve(G, cols):
-    """phi for the columns ``cols`` of a summed Gram, and their normal matrix."""
-    y = G.shape[0] - 1
-    if cols.size == 0:
-        return np.zeros(0), None
-    A = G[np.ix_(cols, cols)]
-    return solve_normal(A, G[cols, y]), A
+def _phi(G, cols):
+    """Coefficients of the columns ``cols`` of a summed Gram (:func:`~..core.solve.solve_normal`)."""
+    return solve_normal(G[np.ix_(cols, cols)], G[cols, -1]) if cols.size else np.zeros(0)
 
 
 def sse_of(G, cols, phi) -> float:
@@ -83,12 +79,12 @@ def fit(cg: Gram, clusters, cols, *, robust: bool = False, Gsum=None) -> GramFit
     """
     cols = np.asarray(cols, int)
     G = cg.G[clusters, 0].sum(axis=0) if Gsum is None else Gsum
-    phi, fac = _solve(G, cols)
+    phi = _phi(G, cols)
     sse = sse_of(G, cols, phi)
     wsum = float(cg.weight[clusters].sum())
     cov = None
     if robust and cols.size:
-        inv = pinv_psd(fac)
+        inv = pinv_psd(G[np.ix_(cols, cols)])
         y = G.shape[0] - 1
         cl = np.asarray(clusters)
         # only the (cluster, J, J) and (cluster, J, y) blocks: copying every cluster's whole
@@ -117,8 +113,7 @@ def cv_mse(cg: Gram, folds: list, cols) -> float:
     """
     cols = np.asarray(cols, int)
     (G0, w0), (G1, w1) = folds
-    p0, _ = _solve(G0, cols)
-    p1, _ = _solve(G1, cols)
+    p0, p1 = _phi(G0, cols), _phi(G1, cols)
     return (sse_of(G1, cols, p0) + sse_of(G0, cols, p1)) / (w0 + w1)
 
 

@@ -328,8 +328,9 @@ def forward_selection_linear(e0, columns: dict, admissible, *, alpha: float = AL
     return current, steps
 
 
-#: Subsets within this BIC of the best carry its inclusion probabilities (the weights of
-#: the others are below exp(-15) relative to the best), as the arm's ``subsets.CHECK_BIC``.
+#: Subsets within this BIC of the best carry its inclusion probabilities and are checked for
+#: admissibility (the weights of the others are below exp(-15) relative to the best), every
+#: record kind.
 CHECK_BIC = 30.0
 
 
