@@ -4,7 +4,12 @@
   machine, reused by later processes and by sweep workers) and numpy's
   floating-point error model (division by zero gives inf/nan instead of
   raising; kernels validate their inputs instead).
-* :data:`leaf` -- the same, additionally inlined into every caller at the
+* :data:`nogil_kernel` -- a :data:`kernel` that releases the GIL, for the batch
+  kernels that :func:`run_threaded` runs in several threads at once (the closed-loop
+  batch of :func:`~ppamsafety.experiments.run_batch`): each thread runs a contiguous
+  range of the batch's rows, and every row writes only its own outputs, so the result
+  is bitwise the same for any number of threads.
+* :data:`leaf` -- the same as :data:`kernel`, additionally inlined into every caller at the
   numba IR level.  Each call site is then typed and lowered again, which is
   what makes first compilations slow (the dense impact engine took 45 s with
   its derivative inlined at 14 call sites).  A plain kernel called from
@@ -49,8 +54,10 @@ Set ``NUMBA_DISABLE_JIT=1`` to run the kernels as plain Python for debugging.
 import os
 import re
 import shutil
+import threading
 import time
 import warnings
+from concurrent.futures import FIRST_EXCEPTION, ThreadPoolExecutor, wait
 
 import numba
 import numpy as np
@@ -292,6 +299,8 @@ _configure_cache()
 
 _compile = njit(cache=True, error_model="numpy")
 _compile_inline = njit(cache=True, error_model="numpy", inline="always")
+_compile_nogil = njit(cache=True, error_model="numpy", nogil=True)
+_compile_step = njit(cache=True, error_model="numpy", _nrt=False)
 
 
 def kernel(func):
@@ -318,6 +327,128 @@ def leaf(func):
     return _compile_inline(func)
 
 
+def nogil_kernel(func):
+    """:func:`kernel` that releases the GIL, so that :func:`run_threaded` runs it on every core.
+
+    Parameters
+    ----------
+    func : function
+        Defined in a file of :data:`~ppamsafety._sourcehash.KERNEL_FILES` (else ImportError).
+    """
+    check_kernel_file(func)
+    return _compile_nogil(func)
+
+
+def step_kernel(func):
+    """:func:`kernel` without numba's reference counting (no array is made or freed inside).
+
+    For the per-step kernels of the closed loop, called millions of times.
+
+    Parameters
+    ----------
+    func : function
+        Defined in a file of :data:`~ppamsafety._sourcehash.KERNEL_FILES` (else ImportError).
+    """
+    check_kernel_file(func)
+    return _compile_step(func)
+
+#: Parts per thread a batch is cut into by :func:`run_threaded`: a thread that finishes its
+#: part early takes the next, so rows of unequal cost still share the cores evenly.
+PARTS_PER_THREAD = 4
+#: Threads of :func:`run_threaded` when none are given (None: every core this process may
+#: use, :func:`available_cores`); set with :func:`set_default_threads`.
+_default_threads = [None]
+#: The thread pool of this process: (process id, pool, threads), made on first use (a pool
+#: made before a ``fork`` has no threads in the child, so the child makes its own).
+_pool = [None, None, 0]
+_pool_lock = threading.Lock()
+
+
+def available_cores() -> int:
+    """Cores this process may run on (its CPU affinity; the CPU count where there is none)."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except (AttributeError, OSError):
+        return os.cpu_count() or 1
+
+
+def set_default_threads(threads) -> None:
+    """Set the threads of :func:`run_threaded` when a call gives none (None: every core).
+
+    The report's worker processes, which already keep every core busy with a section each,
+    may lower it; a library user rarely needs it (``threads=`` of the batch functions).
+
+    Parameters
+    ----------
+    threads : int or None
+        Threads, >= 1, or None for :func:`available_cores`.
+    """
+    if threads is not None and (isinstance(threads, bool) or not isinstance(threads, int)
+                                or threads < 1):
+        raise ValueError(f"threads must be an int >= 1 or None, got {threads!r}")
+    _default_threads[0] = threads
+
+
+def default_threads() -> int:
+    """Threads of :func:`run_threaded` when a call gives none (:func:`set_default_threads`)."""
+    return _default_threads[0] or available_cores()
+
+
+def _thread_pool(threads: int) -> ThreadPoolExecutor:
+    """This process' pool with at least ``threads`` threads (made, or grown, here)."""
+    with _pool_lock:
+        pid, pool, size = _pool
+        if pool is None or pid != os.getpid() or size < threads:
+            if pool is not None and pid == os.getpid():
+                pool.shutdown(wait=False)
+            pool = ThreadPoolExecutor(max_workers=threads, thread_name_prefix="ppamsafety")
+            _pool[:] = [os.getpid(), pool, threads]
+        return pool
+
+
+def run_threaded(func, n: int, threads=None) -> None:
+    """Call ``func(first, last)`` over consecutive ranges covering ``range(n)``, in threads.
+
+    ``func`` calls a :data:`nogil_kernel` on the rows ``first <= b < last`` of a batch;
+    the rows must be independent (each writes only its own outputs), so the result does
+    not depend on the number of threads.  With one thread, or one row, ``func(0, n)`` runs
+    in the calling thread.  Otherwise the rows are cut into about
+    :data:`PARTS_PER_THREAD` parts per thread, handed out in order to the first free thread.
+    An exception in a part (or Ctrl-C) cancels the parts not yet started and is raised once
+    the running ones have finished.
+
+    Parameters
+    ----------
+    func : callable
+        ``func(first, last)``.
+    n : int
+        Rows of the batch, >= 0.
+    threads : int, optional
+        Threads (default :func:`default_threads`); never more than ``n`` are used.
+    """
+    threads = default_threads() if threads is None else threads
+    if isinstance(threads, bool) or not isinstance(threads, int) or threads < 1:
+        raise ValueError(f"threads must be an int >= 1, got {threads!r}")
+    threads = min(threads, n)
+    if threads <= 1:
+        if n > 0:
+            func(0, n)
+        return
+    parts = min(n, threads * PARTS_PER_THREAD)
+    edges = [n * i // parts for i in range(parts + 1)]
+    pool = _thread_pool(threads)
+    futures = [pool.submit(func, a, b) for a, b in zip(edges[:-1], edges[1:])]
+    try:
+        done, _ = wait(futures, return_when=FIRST_EXCEPTION)
+        for f in done:
+            f.result()                                   # raises the first error
+    except BaseException:
+        for f in futures:
+            f.cancel()
+        wait(futures)                                    # running parts write into our arrays
+        raise
+
+
 def kernel_array(a) -> np.ndarray:
     """``a`` as the one array type the kernels are compiled for: float64, C-contiguous, writable.
 
@@ -340,4 +471,5 @@ def kernel_array(a) -> np.ndarray:
     return np.require(a, np.float64, ["C_CONTIGUOUS", "WRITEABLE", "ALIGNED"])
 
 
-__all__ = ["kernel", "kernel_array", "leaf"]
+__all__ = ["available_cores", "default_threads", "kernel", "kernel_array", "leaf", "nogil_kernel",
+           "run_threaded", "set_default_threads"]

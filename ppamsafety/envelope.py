@@ -34,13 +34,13 @@ gives, so an envelope, a sweep and the report agree on the same case.
 from __future__ import annotations
 
 import math
-import os
 import warnings
 from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
 
+from ._jit import available_cores
 from ._validation import check_int, check_range, check_str
 from .impact.head import HeadContactModel, head_model
 from .impact.verdicts import Criterion, criterion, criterion_names
@@ -390,7 +390,7 @@ def safety_envelope(parameter: str, bounds, *, limit: str = "F_max", limit_value
     scan = check_int("scan", scan, 2, 1000)
     max_rounds = check_int("max_rounds", max_rounds, 1, 100)
     procs = 1 if processes is None else min(check_int("processes", processes, 1, 1024),
-                                                _cores())
+                                            available_cores())
     base = dict(case or {})
     if parameter in base:
         raise ValueError(f"case sets {parameter!r}, the parameter searched; leave it out")
@@ -582,13 +582,6 @@ def _bounds(bounds) -> tuple:
     if not lo < hi:
         raise ValueError(f"bounds = ({lo:g}, {hi:g}): low must be smaller than high")
     return lo, hi
-
-
-def _cores() -> int:
-    try:
-        return len(os.sched_getaffinity(0))
-    except (AttributeError, OSError):
-        return 1
 
 
 __all__ = ["Limit", "LIMITS", "NUMERIC", "SCAN", "FLAT_FRACTION", "SafetyEnvelope",

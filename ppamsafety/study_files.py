@@ -102,7 +102,6 @@ import html
 import importlib.util
 import itertools
 import math
-import os
 import tomllib
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -112,6 +111,7 @@ import numpy as np
 import pandas as pd
 
 from ._inputfiles import check_input_path, read_text
+from ._jit import available_cores
 from ._validation import MAX_BYTES, check_int
 from .envelope import LIMITS, SCAN, check_bounds, resolve_limit, safety_envelope
 from .experiments.catalog import DEFAULT_DURATIONS
@@ -941,7 +941,7 @@ def estimate_cases(cases, *, processes: int | None = None, histories: bool = Fal
         ``bytes`` (results held in memory until the table is written).
     """
     n = len(cases)
-    procs = min(processes or _cores(), _cores())     # more workers than cores run no faster
+    procs = min(processes or available_cores(), available_cores())   # more workers: no faster
     if isinstance(cases, CaseGrid) and n > CHECK_ALL:
         reps = {k: a.representatives() for k, a in cases.axes.items()}
         costs = [_case_cost(cases.case(j, dict(zip(reps, combo))))
@@ -957,13 +957,6 @@ def estimate_cases(cases, *, processes: int | None = None, histories: bool = Fal
             nbytes += b
     return {"cases": n, "cpu_seconds": sec, "wall_seconds": sec / max(1, min(procs, max(n, 1))),
             "bytes": nbytes, "processes": procs}
-
-
-def _cores() -> int:
-    try:
-        return len(os.sched_getaffinity(0))
-    except (AttributeError, OSError):
-        return os.cpu_count() or 1
 
 
 def _duration_text(seconds: float) -> str:

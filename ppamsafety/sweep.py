@@ -57,6 +57,7 @@ from tqdm.auto import tqdm
 
 from ._interrupt import deferred as interrupt_deferred
 from ._interrupt import requested as interrupt_requested
+from ._jit import available_cores
 from ._sourcehash import source_hash
 from ._errors import mark_internal
 
@@ -168,13 +169,6 @@ def case_key(name: str, case: dict, code: str = "") -> str:
     except (TypeError, ValueError) as exc:
         raise ValueError(f"sweep case is not JSON-serialisable: {case!r} ({exc})") from None
     return hashlib.sha1(text.encode()).hexdigest()[:20]
-
-
-def _available_cores() -> int:
-    try:
-        return len(os.sched_getaffinity(0))
-    except (AttributeError, OSError):
-        return os.cpu_count() or 1
 
 
 def _as_frame(case: dict, out) -> pd.DataFrame:
@@ -357,7 +351,7 @@ class ResultColumnError(ValueError):
 
 def _check_processes(processes) -> int:
     if processes is None:
-        return _available_cores()
+        return available_cores()
     if isinstance(processes, bool):
         raise TypeError(f"processes must be a positive int, got {processes!r}")
     try:
@@ -368,7 +362,7 @@ def _check_processes(processes) -> int:
     if processes < 1:
         raise ValueError(f"processes = {processes} is not allowed: use a positive int (1 = run "
                          f"in this process)")
-    cores = _available_cores()
+    cores = available_cores()
     if processes > cores:
         warnings.warn(f"processes = {processes} exceeds the {cores} available cores; "
                       f"using {cores} worker processes", UserWarning, stacklevel=3)

@@ -29,7 +29,13 @@ SMALL = ab.Design(variants=("PID", "PSMC joint Ki=12 λ=0.4", "PSMC task λ=0.4"
 
 # ------------------------------------------------------------------ closed-form machinery
 
-def test_lm_broyden_reaches_the_regularised_least_squares_solution_of_a_linear_model():
+def _batched(r):
+    return lambda points: [r(np.asarray(p, float)) for p in points]
+
+
+def test_levenberg_marquardt_converges_to_the_regularised_least_squares_solution():
+    """On a linear model the fit stops at the closed-form minimum of chi2 + prior, converged
+    with a fresh Jacobian that equals the model's matrix, and says which criterion held."""
     rng = np.random.default_rng(3)
     A = rng.normal(size=(30, 3))
     truth = np.array([0.3, -0.2, 0.1])
@@ -39,33 +45,60 @@ def test_lm_broyden_reaches_the_regularised_least_squares_solution_of_a_linear_m
     def r(th):
         return A @ th - b
 
-    path = ab.lm_broyden(r, np.zeros(3), r(np.zeros(3)), A, lower=-np.ones(3),
-                         upper=np.ones(3), prior_sd=sd, iterations=6)
+    # a poor start model (half the true sensitivities): the fit must measure J itself
+    path = ab.levenberg_marquardt(_batched(r), np.zeros(3), r(np.zeros(3)), 0.5 * A,
+                                  lower=-np.ones(3), upper=np.ones(3), probe=np.full(3, 0.05),
+                                  prior_sd=sd, xtol=1e-6, gtol=1e-6, max_evaluations=60)
     closed = np.linalg.solve(A.T @ A + np.eye(3) / sd ** 2, A.T @ b)
-    np.testing.assert_allclose(path.theta, closed, atol=1e-8)
-    # an exact Jacobian stays exact under the Broyden update of a linear model
-    np.testing.assert_allclose(path.jacobian, A, atol=1e-9)
+    np.testing.assert_allclose(path.theta, closed, atol=1e-6)
+    assert path.converged and path.reason in ("gradient", "step") and path.jacobian_fresh
+    np.testing.assert_allclose(path.jacobian, A, atol=1e-9)      # finite differences: exact
+    assert np.max(np.abs(path.gradient)) * 0.05 <= 1e-6 or np.max(
+        np.abs(path.gauss_newton_step)) <= 1e-6
     assert path.history.accepted.iloc[path.best_index]
+    assert set(path.history.kind) == {"start", "step", "jacobian"}
+    assert path.evaluations == (path.history.kind == "step").sum() + 3 * (
+        path.history.kind == "jacobian").sum()
 
 
-def test_lm_broyden_respects_bounds_and_rejects_worse_steps():
+def test_levenberg_marquardt_respects_bounds_rejects_worse_steps_and_its_budget():
     A = np.eye(2)
     b = np.array([3.0, 0.2])                   # the unbounded optimum is outside theta <= 1
 
     def r(th):
         return A @ th - b
 
-    path = ab.lm_broyden(r, np.zeros(2), r(np.zeros(2)), A, lower=np.zeros(2),
-                         upper=np.ones(2), prior_sd=1e3, iterations=8)
+    path = ab.levenberg_marquardt(_batched(r), np.zeros(2), r(np.zeros(2)), A,
+                                  lower=np.zeros(2), upper=np.ones(2), probe=np.full(2, 0.05),
+                                  prior_sd=1e3, max_evaluations=20)
     np.testing.assert_allclose(path.theta, [1.0, 0.2], atol=1e-6)
+    assert path.converged
+    assert path.gradient[0] == 0.0          # at the upper bound, pointing out of the box
     # a nonlinear model whose secant overshoots: the objective never increases
     def r2(th):
         return np.array([np.tanh(5 * th[0]) - 0.5, 0.0])
-    p2 = ab.lm_broyden(r2, np.zeros(1), r2(np.zeros(1)), np.array([[5.0], [0.0]]),
-                       lower=np.zeros(1), upper=np.ones(1), prior_sd=1e3, iterations=6)
+    p2 = ab.levenberg_marquardt(_batched(r2), np.zeros(1), r2(np.zeros(1)),
+                                np.array([[5.0], [0.0]]), lower=np.zeros(1), upper=np.ones(1),
+                                probe=np.array([1e-3]), prior_sd=1e3, xtol=1e-4, gtol=1e-6,
+                                max_evaluations=40)
     acc = p2.history[p2.history.accepted]
     assert np.all(np.diff(acc.objective.to_numpy()) < 0)
-    assert abs(math.tanh(5 * p2.theta[0]) - 0.5) < 0.05
+    assert p2.converged and abs(math.tanh(5 * p2.theta[0]) - 0.5) < 1e-3
+    # a budget too small to converge: stops, says so, never exceeds it
+    p3 = ab.levenberg_marquardt(_batched(r2), np.zeros(1), r2(np.zeros(1)),
+                                np.array([[5.0], [0.0]]), lower=np.zeros(1), upper=np.ones(1),
+                                probe=np.array([1e-3]), prior_sd=1e3, xtol=1e-9, gtol=1e-12,
+                                max_evaluations=2)
+    assert not p3.converged and p3.reason == "evaluation budget" and p3.evaluations <= 2
+
+
+def test_probe_of_the_dead_time_is_whole_control_periods():
+    q = ab.CONTROL_PERIOD / 0.03                        # one period on the 0-30 ms axis
+    assert ab.candidate_probe("valve_dead_time", 0.05) == pytest.approx(2 * q)
+    assert ab.candidate_probe("valve_dead_time", q) == pytest.approx(q)
+    assert ab.candidate_probe("payload_mass", 0.05) == 0.05
+    with pytest.raises(ValueError, match="probe"):
+        ab.candidate_probe("payload_mass", 0.0)
 
 
 def test_identifiability_finds_rank_confounded_pair_and_the_unseen_column():
@@ -163,7 +196,7 @@ def test_fit_recovers_known_effects_from_a_synthetic_thesis():
     truth = {"valve_time_constant_factor": 0.4, "payload_mass": 0.3}
     meas = ab.simulated_measurements(arm, truth, SMALL)
     fit = ab.fit_as_built(arm, candidates=tuple(truth), design=SMALL, measurements=meas,
-                          iterations=4, prior_sd=100.0)
+                          prior_sd=100.0)
     th = fit.thetas()
     # the simulated statistics are rough at the percent level (a maximum over a window, the
     # impact at the sample of the largest speed), which limits the recovery to about 0.05 in
@@ -189,7 +222,7 @@ def test_a_candidate_beyond_the_rank_stays_at_nominal():
     arm = thesis_arm()
     meas = ab.simulated_measurements(arm, {"payload_mass": 0.3}, SMALL)
     fit = ab.fit_as_built(arm, candidates=("payload_mass", "valve_time_constant_factor"),
-                          design=SMALL, measurements=meas, iterations=3, prior_sd=100.0,
+                          design=SMALL, measurements=meas, max_evaluations=6, prior_sd=100.0,
                           rank_tol=0.9)
     eff = fit.effects.set_index("candidate")
     assert fit.identifiability.rank == 1

@@ -107,8 +107,10 @@ def test_buffers_are_sized_from_the_declarations():
     # the runner uses exactly these
     assert cl.NSTATE == dispatch.NSTATE and cl.NSCRATCH == dispatch.NSCRATCH
     assert cl.NINT == dispatch.NINT and cl.LOG.length("internals") == dispatch.NINT
-    # scratch needs come from scratch layouts (SMC uses all of its 32 slots)
-    assert SlidingModeControl.SCRATCH == 32 and TaskPSMC.SCRATCH == 24
+    # scratch needs come from scratch layouts (SMC uses all of its 32 slots: the torque
+    # functions of its model, its pressure terms and the b, A, v of (4.33)-(4.41); the task
+    # PSMC its m_tau and the gravity compensation's)
+    assert SlidingModeControl.SCRATCH == 32 and TaskPSMC.SCRATCH == 8
 
 
 @pytest.mark.parametrize("kind", KINDS)

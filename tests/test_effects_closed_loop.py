@@ -60,10 +60,14 @@ def test_sensor_fault_validation_and_flag():
 def test_pressure_read_closed_form():
     p = np.array([1.0, 2.0, 2.5, 0.5]) * BAR
     out = np.empty(4)
-    pressure_read(p, SensorConfig().pack(), out)
+    pressure_read(p, 0, SensorConfig().pack(), out)
     np.testing.assert_array_equal(out, p)
     g, o = (1.1, 0.9, 1.0, 1.2), (0.05 * BAR, 0.0, -0.1 * BAR, 0.02 * BAR)
-    pressure_read(p, SensorConfig(pressure_gain=g, pressure_offset=o).pack(), out)
+    pressure_read(p, 0, SensorConfig(pressure_gain=g, pressure_offset=o).pack(), out)
+    np.testing.assert_array_equal(out, np.array(g) * p + np.array(o))
+    # the pressures read from inside a plant state, at their offset
+    x = np.concatenate([[0.3, -1.2, 0.1, 0.2], p])
+    pressure_read(x, 4, SensorConfig(pressure_gain=g, pressure_offset=o).pack(), out)
     np.testing.assert_array_equal(out, np.array(g) * p + np.array(o))
 
 

@@ -148,7 +148,7 @@ def _scheduled(monkeypatch, tasks, studies=("s1", "s2"), processes=2):
     def fake_study(name, stage, quick, arm=None, head=None, processes=None):
         with lock:
             log.append(("start", name))
-        return name, 0.0
+        return name, 0.0, 0.0
 
     monkeypatch.setattr(warmup, "TASKS", tuple(warmup.Task(task(*spec[:3]), after=spec[3])
                                                for spec in tasks))
@@ -156,7 +156,7 @@ def _scheduled(monkeypatch, tasks, studies=("s1", "s2"), processes=2):
     reported = []
     with ThreadPoolExecutor(processes) as pool:
         build._run_in_pool(pool, processes, list(studies), None, False, True,
-                           lambda name, res, dt: reported.append(name))
+                           lambda name, res, dt, cpu: reported.append(name))
     return {e: i for i, e in enumerate(log)}, reported
 
 
@@ -206,3 +206,17 @@ def test_report_workers_use_one_blas_thread():
 def test_bad_task_is_named(kwargs, match):
     with pytest.raises(TypeError, match=match):
         warmup.Task(**kwargs)
+
+
+def test_metrics_record_wall_and_cpu_time_of_each_section(tmp_path):
+    """metrics.json holds each section's wall and CPU time [s] (the CPU time counts the
+    threads of the process that ran it); here one quick section in this process."""
+    import json
+
+    from ppamsafety.report.build import build_report
+
+    build_report(tmp_path / "r", quick=True, only=["stiffness"], processes=1, progress=False)
+    m = json.loads((tmp_path / "r" / "metrics.json").read_text())["stiffness"]
+    assert m["wall_time_s"] > 0 and m["cpu_time_s"] > 0
+    # one thread mostly: the CPU time is not far above the wall time
+    assert m["cpu_time_s"] < 4.0 * m["wall_time_s"] + 1.0

@@ -61,7 +61,7 @@ def fails_on_two(x):
 
 @pytest.mark.parametrize("processes", [1, 2])
 def test_failing_case_is_recorded_and_the_others_kept(tmp_path, processes, monkeypatch):
-    monkeypatch.setattr(sweep_mod, "_available_cores", lambda: 2)   # really use 2 workers
+    monkeypatch.setattr(sweep_mod, "available_cores", lambda: 2)   # really use 2 workers
     cases = [{"x": x} for x in range(4)]
     with pytest.warns(RuntimeWarning, match=r"1 of 4 cases failed.*x = 2 is bad"):
         df = run_sweep(fails_on_two, cases, cache_dir=tmp_path, processes=processes,
@@ -76,7 +76,7 @@ def test_failing_case_is_recorded_and_the_others_kept(tmp_path, processes, monke
 @pytest.mark.parametrize("processes", [1, 2])
 def test_on_error_raise_names_the_case_and_keeps_finished_results(tmp_path, processes,
                                                                   monkeypatch):
-    monkeypatch.setattr(sweep_mod, "_available_cores", lambda: 2)
+    monkeypatch.setattr(sweep_mod, "available_cores", lambda: 2)
     cases = [{"x": x} for x in (0, 1, 2)]
     with pytest.raises(SweepError, match=r"case 2 \{'x': 2\} failed: ValueError") as e:
         run_sweep(fails_on_two, cases, cache_dir=tmp_path, processes=processes, progress=False,
@@ -103,7 +103,7 @@ def test_corrupt_cache_file_is_named_and_recomputed(tmp_path, garbage):
 
 
 def test_more_processes_than_cores_warns_and_caps(monkeypatch):
-    monkeypatch.setattr(sweep_mod, "_available_cores", lambda: 1)
+    monkeypatch.setattr(sweep_mod, "available_cores", lambda: 1)
     CALLS.clear()
     with pytest.warns(UserWarning, match="processes = 3 exceeds the 1 available cores; using 1"):
         df = run_sweep(square, [{"x": 1.0}, {"x": 2.0}], processes=3, progress=False)

@@ -56,7 +56,7 @@ def test_first_case_runs_in_this_process_the_rest_in_workers(tmp_path, monkeypat
     a failing case is still recorded and the sweep goes on."""
     import ppamsafety.sweep as sweep_mod
 
-    monkeypatch.setattr(sweep_mod, "_available_cores", lambda: 2)   # really use 2 workers
+    monkeypatch.setattr(sweep_mod, "available_cores", lambda: 2)   # really use 2 workers
     calls = tmp_path / "calls"
     calls.mkdir()
     df = run_sweep(h.counted, [{"calls_dir": str(calls)}], grid={"x": [0, 1, 2, 3, 4, 5]},
@@ -72,7 +72,7 @@ def test_no_more_cases_than_workers_all_run_in_workers(tmp_path, monkeypatch):
     """Two cases on two workers: running one here first would only serialise them."""
     import ppamsafety.sweep as sweep_mod
 
-    monkeypatch.setattr(sweep_mod, "_available_cores", lambda: 2)
+    monkeypatch.setattr(sweep_mod, "available_cores", lambda: 2)
     calls = tmp_path / "calls"
     calls.mkdir()
     run_sweep(h.counted, [{"calls_dir": str(calls)}], grid={"x": [0, 1]}, processes=2,
@@ -85,7 +85,7 @@ def test_first_case_failing_with_raise_starts_no_workers(tmp_path, monkeypatch):
     import ppamsafety.sweep as sweep_mod
     from ppamsafety.sweep import SweepError
 
-    monkeypatch.setattr(sweep_mod, "_available_cores", lambda: 2)
+    monkeypatch.setattr(sweep_mod, "available_cores", lambda: 2)
     calls = tmp_path / "calls"
     calls.mkdir()
     with pytest.raises(SweepError, match=r"case 0 .*'x': 3.* failed: ValueError"):

@@ -248,3 +248,22 @@ def test_reference_and_instants_checks():
         join_table_6_1([1, 2])
     with pytest.raises(ValueError, match="lacks the key column"):
         join_table_6_1(pd.DataFrame({"experiment": ["step"]}))
+
+
+def test_heuristic_impacts_start_from_the_rows_of_impact_states():
+    """evaluate_experiment computes the joint stiffness of its four starting states only: the
+    same numbers as impact_states gives for those rows, so the same impacts."""
+    from ppamsafety.control import PID
+    from ppamsafety.experiments import ExperimentCase, run_batch
+    from ppamsafety.experiments.catalog import thesis_reference
+
+    res = run_batch([ExperimentCase(ARM, PID(), thesis_reference(ARM, "step", duration=3.0))])[0]
+    st = impact_states(res, ARM)
+    assert list(st.columns) == ["t", "q1", "q2", "qd1", "qd2", "K1", "K2", "tcp_speed"]
+    sub = st.iloc[list(heuristic_instants(st).values())]
+    direct = simulate_impacts(ARM, sub[["q1", "q2"]].to_numpy(), sub[["qd1", "qd2"]].to_numpy(),
+                              sub[["K1", "K2"]].to_numpy()).summary
+    ev = evaluate_experiment(res, ARM).summary
+    np.testing.assert_array_equal(ev.t0.to_numpy(), sub.t.to_numpy())
+    for c in ("F_max", "HIC36", "HIC15", "tcp_speed"):
+        np.testing.assert_array_equal(ev[c].to_numpy(), direct[c].to_numpy())

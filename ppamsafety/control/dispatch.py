@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
-from .._jit import kernel
+from .._jit import step_kernel
 from ..layouts import Layout
 from .kinds import (KIND_ADMITTANCE, KIND_GC, KIND_PID, KIND_PSMC_JOINT, KIND_PSMC_TASK, KIND_SMC,
                     ControllerKind)
@@ -85,7 +85,7 @@ def declared_sizes(kind) -> tuple:
     return d.params.size, d.state.size, d.internals.size, d.scratch
 
 
-@kernel
+@step_kernel
 def controller_step(kind, C, S, Pm, k, dt, qm, qdm, pm, ref, fest, dp, internals, scratch):
     """Compute Delta p (2) [Pa] for controller ``kind`` at sample ``k``.
 

@@ -74,7 +74,7 @@ import math
 
 import numpy as np
 
-from .._jit import kernel, leaf
+from .._jit import kernel, leaf, step_kernel
 from .._validation import check_instance, check_range, as_float_array
 from ..layouts import Field, Layout
 from ..params.inertia import BaseParameters
@@ -150,7 +150,7 @@ def dead_zone(fx, fy, fmin):
     return fx, fy
 
 
-@kernel
+@step_kernel
 def estimator_step(E, ES, Pe, k, dt, qm, qdm, pm, out, scratch):
     """One sample of both force estimators.
 

@@ -41,7 +41,7 @@ from enum import IntEnum
 
 import numpy as np
 
-from .._jit import kernel
+from .._jit import kernel, step_kernel
 from .._validation import check_bool, check_int, check_range, check_vector
 from ..layouts import Field, Layout, check_flag
 from ..params.sensors import SensorHardware, TABLE_3_2_VARIANCES  # noqa: F401 (re-exported)
@@ -347,7 +347,7 @@ def sensor_init(q1, q2, cfg, st):
     st[S_COUNT + 1] = encoder_count(q2, cfg[C_RES])
 
 
-@kernel
+@step_kernel
 def sensor_track(j, q_old, q_new, t_old, h, cfg, st):
     """Register the encoder edges of joint ``j`` while q moves q_old -> q_new in [t_old, t_old + h].
 
@@ -398,7 +398,35 @@ def sensor_track(j, q_old, q_new, t_old, h, cfg, st):
     st[S_READ + j] = d * w if w >= cfg[C_DEAD] else 0.0
 
 
-@kernel
+@step_kernel
+def sensor_track_joints(q1_old, q2_old, q1_new, q2_new, t_old, h, cfg, st):
+    """:func:`sensor_track` of joint 1, then of joint 2, over one sub-step.
+
+    The joint index is not a compile-time constant here, so one compiled
+    :func:`sensor_track` serves both joints (numba compiles a kernel once per distinct
+    constant argument).
+
+    Parameters
+    ----------
+    q1_old, q2_old : float
+        Angles of joints 1 and 2 at the start of the sub-step [rad].
+    q1_new, q2_new : float
+        Their angles at the end of the sub-step [rad].
+    t_old : float
+        Time at the start of the sub-step [s].
+    h : float
+        Sub-step length [s], > 0.
+    cfg : numpy.ndarray
+        Sensor configuration row (layout ``SENSOR_CONFIG``).
+    st : numpy.ndarray
+        Sensor state of both joints (layout ``SENSOR_STATE``), updated in place.
+    """
+    for j in range(2):
+        sensor_track(j, q1_old if j == 0 else q2_old, q1_new if j == 0 else q2_new, t_old, h,
+                     cfg, st)
+
+
+@step_kernel
 def sensor_read(j, q_true, qd_true, t, cfg, st):
     """Measured (angle, velocity) of joint ``j`` at sample time ``t``.
 
@@ -436,16 +464,20 @@ def sensor_read(j, q_true, qd_true, t, cfg, st):
     return qm, st[S_READ + j]
 
 
-@kernel
-def pressure_read(p, cfg, out):
-    """Measured gauge pressures (4) [Pa] of true pressures ``p`` into ``out``.
+@step_kernel
+def pressure_read(p, po, cfg, out):
+    """Measured gauge pressures (4) [Pa] of true pressures ``p[po:po + 4]`` into ``out``.
 
-    ``gain_i p_i + offset_i`` with the sensor faults on, else a copy of ``p``.
+    ``gain_i p_i + offset_i`` with the sensor faults on, else a copy.  The pressures are
+    given as an array and an offset (the plant state and the offset of its pressures), not
+    as a view: a view costs two atomic reference-count updates per call in compiled code.
 
     Parameters
     ----------
     p : float64[:]
-        True gauge pressures (4) [Pa].
+        Holds the true gauge pressures (4) [Pa] from ``po``.
+    po : int
+        Offset of the pressures in ``p``.
     cfg : float64[:]
         Sensor configuration row (``SENSOR_CONFIG``).
     out : float64[:]
@@ -453,7 +485,7 @@ def pressure_read(p, cfg, out):
     """
     if int(cfg[C_FAULTS]) == SensorFaults.ON:
         for i in range(4):
-            out[i] = cfg[C_PGAIN + i] * p[i] + cfg[C_POFF + i]
+            out[i] = cfg[C_PGAIN + i] * p[po + i] + cfg[C_POFF + i]
     else:
         for i in range(4):
-            out[i] = p[i]
+            out[i] = p[po + i]

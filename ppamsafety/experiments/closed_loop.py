@@ -19,14 +19,14 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from .._jit import kernel
+from .._jit import nogil_kernel, run_threaded
 from .._validation import UnknownNameError, check_int, check_range, check_size, did_you_mean
 from ..control import CONTROLLER_CLASSES
 from ..control.dispatch import NINT, NSCRATCH, NSTATE, controller_step
 from ..control.estimation import (ESTIMATOR_INTERNALS, ESTIMATOR_PARAMS, ESTIMATOR_SCRATCH,
                                   ESTIMATOR_STATE, estimator_step)
 from ..control.sensors import (N_Q, N_QD, NSENSOR, SENSOR_NOISE, SensorConfig, pressure_read,
-                               sensor_init, sensor_read, sensor_reset, sensor_track)
+                               sensor_init, sensor_read, sensor_reset, sensor_track_joints)
 from ..layouts import Field, Layout
 from ..plant import layout as lay
 from ..plant import packing
@@ -96,17 +96,18 @@ DIVERGENCE_VELOCITY = 1.0e3
 Z_PARAMS, Z_STATE, Z_INTERNALS, Z_SCRATCH = 0, 1, 2, 3
 
 
-@kernel
-def _run_batch(X0, REFS, ref_idx, PP, PM, KIND, CP, CSIZE, SCFG, NOISE, noise_idx, dt, substeps,
-               LOG, EXT, ext_idx, EP, PE, est_on, ILOG):
-    """Closed loop of every case b; CSIZE[b] = declared (params, state, internals, scratch).
+@nogil_kernel
+def _run_batch(first, last, X0, REFS, ref_idx, PP, PM, KIND, CP, CSIZE, SCFG, NOISE, noise_idx,
+               dt, substeps, LOG, EXT, ext_idx, EP, PE, est_on, ILOG, diverged):
+    """Closed loop of the cases first <= b < last (sets diverged[b]); CSIZE[b] = declared
+    (params, state, internals, scratch).  Releases the GIL: :func:`run_batch` runs parts
+    of a batch side by side in threads (every case writes only its own rows).
 
     Interaction (issue 12): EXT[ext_idx[b]] holds case b's external-input rows
     (``EXTERNAL_INPUT``; ext_idx < 0: none, the plant gets the zero torque as
     before); est_on[b] runs the force estimator with parameters EP[b] and
     model row PE[b]; ILOG (``INTERACTION_LOG``) receives both.
     """
-    nb = X0.shape[0]
     n = LOG.shape[1]
     h = dt / substeps
     x = np.empty(NX)
@@ -121,12 +122,12 @@ def _run_batch(X0, REFS, ref_idx, PP, PM, KIND, CP, CSIZE, SCFG, NOISE, noise_id
     u = np.empty(4)
     internals = np.empty(NINT)
     scratch_buf = np.empty(NSCRATCH)
-    diverged = np.zeros(nb, dtype=np.bool_)
     tau_e = np.zeros(2)
     fest = np.zeros(NEST)
     ES = np.empty(_NES)
     escr = np.empty(_NESCR)
-    for b in range(nb):
+    for b in range(first, last):
+        diverged[b] = False
         x[:] = X0[b]
         S_buf[:] = 0.0
         sensor_reset(st)
@@ -151,27 +152,31 @@ def _run_batch(X0, REFS, ref_idx, PP, PM, KIND, CP, CSIZE, SCFG, NOISE, noise_id
                 a, w = sensor_read(j, x[X_Q + j], x[X_QD + j], t, cfg, st)
                 qm[j] = a + noise[k, N_Q + j]
                 qdm[j] = w + noise[k, N_QD + j]
-            pressure_read(x[X_P:X_P + 4], cfg, pmeas)      # sensor faults (off: a copy)
+            pressure_read(x, X_P, cfg, pmeas)      # sensor faults (off: a copy)
             if est:
                 estimator_step(EP[b], ES, PE[b], k, dt, qm, qdm, pmeas, fest, escr)
                 ILOG[b, k, IL_EST:IL_EST + NEST] = fest
             controller_step(KIND[b], C, S, Pm, k, dt, qm, qdm, pmeas, R[k], fest, dp,
                             ints, scratch)
             delta_p_to_set_values(dp[0], dp[1], Pm, u)
-            row = LOG[b, k]
-            row[L_T] = t
-            row[L_Q:L_Q + 2] = x[X_Q:X_Q + 2]
-            row[L_QD:L_QD + 2] = x[X_QD:X_QD + 2]
-            row[L_P:L_P + 4] = x[X_P:X_P + 4]
-            row[L_QM:L_QM + 2] = qm
-            row[L_QDM:L_QDM + 2] = qdm
-            row[L_U:L_U + 4] = u
-            row[L_DP:L_DP + 2] = dp
-            row[L_X], row[L_Y] = tcp_position(x[X_Q], x[X_Q + 1], Pp)
+            # element by element: a view of the row or of x costs two atomic
+            # reference-count updates per sample
+            LOG[b, k, L_T] = t
+            for i in range(2):
+                LOG[b, k, L_Q + i] = x[X_Q + i]
+                LOG[b, k, L_QD + i] = x[X_QD + i]
+                LOG[b, k, L_QM + i] = qm[i]
+                LOG[b, k, L_QDM + i] = qdm[i]
+                LOG[b, k, L_DP + i] = dp[i]
+            for i in range(4):
+                LOG[b, k, L_P + i] = x[X_P + i]
+                LOG[b, k, L_U + i] = u[i]
+            LOG[b, k, L_X], LOG[b, k, L_Y] = tcp_position(x[X_Q], x[X_Q + 1], Pp)
             j11, j12, j21, j22 = tcp_jacobian(x[X_Q], x[X_Q + 1], Pp)
-            row[L_XD] = j11 * x[X_QD] + j12 * x[X_QD + 1]
-            row[L_YD] = j21 * x[X_QD] + j22 * x[X_QD + 1]
-            row[L_INT:L_INT + NINT] = internals
+            LOG[b, k, L_XD] = j11 * x[X_QD] + j12 * x[X_QD + 1]
+            LOG[b, k, L_YD] = j21 * x[X_QD] + j22 * x[X_QD + 1]
+            for i in range(NINT):
+                LOG[b, k, L_INT + i] = internals[i]
             valve_delay(z, u, Pp)          # valve dead time: the plant gets u[k - d] (off: none)
             for i in range(substeps):
                 q_old0, q_old1 = x[X_Q], x[X_Q + 1]
@@ -183,8 +188,8 @@ def _run_batch(X0, REFS, ref_idx, PP, PM, KIND, CP, CSIZE, SCFG, NOISE, noise_id
                     rk4_step(x, z, u, tau_e, h, Pp, work)
                 else:
                     rk4_step(x, z, u, tau0, h, Pp, work)
-                sensor_track(0, q_old0, x[X_Q], t + i * h, h, cfg, st)
-                sensor_track(1, q_old1, x[X_Q + 1], t + i * h, h, cfg, st)
+                sensor_track_joints(q_old0, q_old1, x[X_Q], x[X_Q + 1], t + i * h, h, cfg,
+                                    st)
             if not (np.isfinite(x[X_Q]) and np.isfinite(x[X_Q + 1])
                     and abs(x[X_QD]) < DIVERGENCE_VELOCITY
                     and abs(x[X_QD + 1]) < DIVERGENCE_VELOCITY):
@@ -192,7 +197,6 @@ def _run_batch(X0, REFS, ref_idx, PP, PM, KIND, CP, CSIZE, SCFG, NOISE, noise_id
                 LOG[b, k + 1:, :] = np.nan
                 ILOG[b, k + 1:, :] = np.nan
                 break
-    return diverged
 
 
 @dataclass
@@ -386,8 +390,11 @@ def _check_valves(row, dt: float, substeps: int, name: str) -> None:
                          f"constant {t_min:g} s; use substeps >= {need} ({exc})") from None
 
 
-def run_batch(cases, *, dt: float = 1e-3, substeps: int = 1) -> list:
+def run_batch(cases, *, dt: float = 1e-3, substeps: int = 1, threads: int | None = None) -> list:
     """Run many closed-loop experiments of equal length in one compiled call.
+
+    The cases run side by side on every core (``threads``): each thread runs a part of
+    the batch in the compiled loop; the results do not depend on the number of threads.
 
     Parameters
     ----------
@@ -406,6 +413,9 @@ def run_batch(cases, *, dt: float = 1e-3, substeps: int = 1) -> list:
         :func:`~ppamsafety.plant.model.simulate`); a faster valve is refused
         with the number of substeps it needs, never chosen silently, so the
         same call always integrates the same way.
+    threads : int, optional
+        Threads the cases are shared among, >= 1 (default every core this process may use,
+        :func:`ppamsafety._jit.default_threads`; never more than the cases).
 
     Returns
     -------
@@ -425,6 +435,8 @@ def run_batch(cases, *, dt: float = 1e-3, substeps: int = 1) -> list:
     """
     dt = check_range("dt", dt, 1e-5, 0.1, unit="s")
     substeps = check_int("substeps", substeps, 1, 1000)
+    if threads is not None:
+        threads = check_int("threads", threads, 1, 1024)
     if isinstance(cases, (ExperimentCase, str, bytes)) or not hasattr(cases, "__iter__"):
         raise TypeError(f"cases must be a sequence of ExperimentCase, got "
                         f"{type(cases).__name__}")
@@ -506,13 +518,15 @@ def run_batch(cases, *, dt: float = 1e-3, substeps: int = 1) -> list:
     # only as long as the run when some case writes it (never written otherwise)
     any_inter = any(c.has_external_input or c.estimator is not None for c in cases)
     ILOG = np.zeros((len(cases), n if any_inter else 1, NILOG))
-    diverged = _run_batch(np.array(X0), np.array([r.data for r in refs]),
-                          np.array(ref_ids, dtype=np.int64), np.array(PP), np.array(PM),
-                          np.array(KIND, dtype=np.int64), CP, np.array(CSIZE, dtype=np.int64),
-                          np.array(SC), np.array(noises),
-                          np.array(noise_ids, dtype=np.int64), float(dt), substeps, LOG,
-                          np.array(exts), np.array(ext_ids, dtype=np.int64), np.array(EPs),
-                          np.array(PEs), np.array(est_on, dtype=np.int64), ILOG)
+    args = (np.array(X0), np.array([r.data for r in refs]), np.array(ref_ids, dtype=np.int64),
+            np.array(PP), np.array(PM), np.array(KIND, dtype=np.int64), CP,
+            np.array(CSIZE, dtype=np.int64), np.array(SC), np.array(noises),
+            np.array(noise_ids, dtype=np.int64), float(dt), substeps, LOG, np.array(exts),
+            np.array(ext_ids, dtype=np.int64), np.array(EPs), np.array(PEs),
+            np.array(est_on, dtype=np.int64), ILOG)
+    diverged = np.zeros(len(cases), dtype=np.bool_)
+    run_threaded(lambda first, last: _run_batch(first, last, *args, diverged), len(cases),
+                 threads)
     out = []
     for i, c in enumerate(cases):
         desc = {**c.controller.describe(), "kind": int(c.controller.kind)}
@@ -551,6 +565,10 @@ def divergence(log: np.ndarray, stopped: bool, dt: float) -> tuple:
     diverged_at : float
         Time of the first invalid sample [s] (NaN if not diverged).
     """
+    if not stopped and np.isfinite(log.sum()):
+        # fast path: a NaN or an infinity makes the sum non-finite (a sum that overflows
+        # from finite values only takes the exact path below)
+        return False, "", np.nan
     finite = np.isfinite(log)
     bad_rows = np.nonzero(~finite.all(axis=1))[0]
     n = log.shape[0]

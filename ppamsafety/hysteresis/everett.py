@@ -44,7 +44,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from .._jit import kernel, leaf
+from .._jit import kernel, leaf, step_kernel
 from .._validation import as_float_array, check_range
 
 #: Weight parameters of (3.33), thesis §3.6.3 (after Zsolt 2002).
@@ -60,14 +60,15 @@ _SQRT_PI_2 = 0.5 * math.sqrt(math.pi)
 
 
 @leaf
-def _h_integral(s, d):
-    """H(s) = integral_0^s exp(-(|s'| + d)^2) ds' (closed form, odd in s)."""
-    v = _SQRT_PI_2 * (math.erf(abs(s) + d) - math.erf(d))
+def _h_integral(s, d, erf_d):
+    """H(s) = integral_0^s exp(-(|s'| + d)^2) ds' (closed form, odd in s); ``erf_d`` is
+    erf(d), computed once by the caller (the same number)."""
+    v = _SQRT_PI_2 * (math.erf(abs(s) + d) - erf_d)
     return v if s >= 0.0 else -v
 
 
 @leaf
-def _piece(alpha, beta, lo, hi, c, d):
+def _piece(alpha, beta, lo, hi, c, d, erf_d):
     """Integral of g(r) [H(2 alpha - r) - H(2 beta + r)] over [lo, hi], one smooth piece."""
     m = int(math.ceil((hi - lo) / _MAX_PIECE))
     if m < 1:
@@ -81,12 +82,12 @@ def _piece(alpha, beta, lo, hi, c, d):
         for i in range(_N_GL):
             r = mid + 0.5 * h * _GL_NODES[i]
             acc += _GL_WEIGHTS[i] * math.exp(-(r + c) * (r + c)) * (
-                _h_integral(2.0 * alpha - r, d) - _h_integral(2.0 * beta + r, d))
+                _h_integral(2.0 * alpha - r, d, erf_d) - _h_integral(2.0 * beta + r, d, erf_d))
         total += 0.5 * h * acc
     return total
 
 
-@kernel
+@step_kernel
 def everett_raw(alpha, beta, c, d):
     """Un-normalised Everett function of the weight (3.33) with parameters c, d.
 
@@ -115,13 +116,14 @@ def everett_raw(alpha, beta, c, d):
         k1, k2 = k2, k1
     total = 0.0
     lo = 0.0
+    erf_d = math.erf(d)                 # a constant of every node: once per call
     if 0.0 < k1 < length:
-        total += _piece(alpha, beta, lo, k1, c, d)
+        total += _piece(alpha, beta, lo, k1, c, d, erf_d)
         lo = k1
     if lo < k2 < length:
-        total += _piece(alpha, beta, lo, k2, c, d)
+        total += _piece(alpha, beta, lo, k2, c, d, erf_d)
         lo = k2
-    total += _piece(alpha, beta, lo, length, c, d)
+    total += _piece(alpha, beta, lo, length, c, d, erf_d)
     return 0.5 * total
 
 

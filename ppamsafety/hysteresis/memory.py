@@ -83,7 +83,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._jit import kernel, leaf
+from .._jit import kernel, leaf, step_kernel
 from .._validation import as_float_array, check_int
 from ..layouts import Field, Layout
 from .everett import (C_THESIS, D_THESIS, THESIS_WEIGHT, PreisachWeight, check_weight,
@@ -113,6 +113,10 @@ _S_THESIS = MEMORY.offset("prefix")
 _C = C_THESIS
 _D = D_THESIS
 _INV_Z = THESIS_WEIGHT.inv_z
+#: MAX_DEPTH as a run-time int64 for :func:`advance`: the flag ``write`` and the capacity are
+#: passed as numpy scalars, not constants, so that numba compiles :func:`advance` once (it
+#: compiles a kernel once per distinct constant argument).
+_CAP = np.int64(MAX_DEPTH)
 
 
 def state_length(capacity: int = MAX_DEPTH) -> int:
@@ -136,7 +140,7 @@ def _signed(a, b, c, d, inv_z):
     return 0.0
 
 
-@kernel
+@step_kernel
 def advance(z, o, cap, v, c, d, inv_z, write):
     """Move the input of the memory row ``z[o:]`` to ``v``; return the output W.
 
@@ -232,7 +236,7 @@ def preisach_update(state, u, offset):
     offset : int
         Index of the row's first slot in ``state``.
     """
-    return advance(state, offset, MAX_DEPTH, u, _C, _D, _INV_Z, True)
+    return advance(state, offset, _CAP, u, _C, _D, _INV_Z, np.bool_(True))
 
 
 @leaf
@@ -253,7 +257,7 @@ def preisach_peek(state, u, offset):
     offset : int
         Index of the row's first slot in ``state``.
     """
-    return advance(state, offset, MAX_DEPTH, u, _C, _D, _INV_Z, False)
+    return advance(state, offset, _CAP, u, _C, _D, _INV_Z, np.bool_(False))
 
 
 @leaf
@@ -268,7 +272,7 @@ def preisach_output(state, offset):
     offset : int
         Index of the row's first slot in ``state``.
     """
-    return advance(state, offset, MAX_DEPTH, state[offset + U_], _C, _D, _INV_Z, False)
+    return advance(state, offset, _CAP, state[offset + U_], _C, _D, _INV_Z, np.bool_(False))
 
 
 @kernel
@@ -292,7 +296,7 @@ def run(u, z, cap, c, d, inv_z, out):
         Output, overwritten: W after each sample, in [-1, 1] [-].
     """
     for i in range(u.size):
-        out[i] = advance(z, 0, cap, u[i], c, d, inv_z, True)
+        out[i] = advance(z, np.int64(0), cap, u[i], c, d, inv_z, np.bool_(True))
 
 
 def initial_memory(initial="negative", *, weight: PreisachWeight = THESIS_WEIGHT,

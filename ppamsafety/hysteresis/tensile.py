@@ -139,7 +139,7 @@ def _tensile(force, p, a, e_full, e_max, delta, wa, wb, z, cap, c, d, inv_z, eps
                 if mid <= lo or mid >= hi:
                     break
                 es = scaled_contraction(mid, e_max)
-                w = advance(z, 0, cap, es, c, d, inv_z, False)
+                w = advance(z, np.int64(0), cap, es, c, d, inv_z, np.bool_(False))
                 g = p * _f(mid, a, e_full) * (1.0 + delta * (w - (wa * es + wb))) - target
                 if g > 0.0:
                     lo = mid          # muscle pulls harder than imposed: contracts further
@@ -147,7 +147,8 @@ def _tensile(force, p, a, e_full, e_max, delta, wa, wb, z, cap, c, d, inv_z, eps
                     hi = mid
             e = 0.5 * (lo + hi)
         eps_out[i] = e
-        w_out[i] = advance(z, 0, cap, scaled_contraction(e, e_max), c, d, inv_z, True)
+        w_out[i] = advance(z, np.int64(0), cap, scaled_contraction(e, e_max), c, d, inv_z,
+                           np.bool_(True))
 
 
 def simulate_tensile_test(delta: float, *, pressure: float = TENSILE_PRESSURE,

@@ -42,7 +42,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from .._jit import kernel
+from .._jit import kernel, step_kernel
 from .._validation import (as_float_array, check_choice, check_finite_result, check_int,
                            check_range)
 from ..layouts import Field, Layout
@@ -100,13 +100,13 @@ NSUM = CLAMP_SUMMARY.size
 ENERGY_TOL = 1e-3
 
 
-@kernel
+@step_kernel
 def _terms(y, P):
     """:func:`~ppamsafety.impact.engine.arm_terms` at the link angles of the clamping state."""
     return arm_terms(y[Y_Q], y[Y_Q + 1], P)
 
 
-@kernel
+@step_kernel
 def clamp_rhs(y, case, P, hp, wp, dy):
     """Derivative of the clamping state; returns (F_tool, F_wall, delta, delta_wall, |v_tcp|).
 
@@ -155,7 +155,7 @@ def clamp_rhs(y, case, P, hp, wp, dy):
     return f, fw, delta, dw, math.sqrt(vx * vx + vy * vy)
 
 
-@kernel
+@step_kernel
 def clamp_energy(y, case, P, hp, wp):
     """Kinetic + joint-spring + both contact potentials [J] (dissipation not included).
 
@@ -185,7 +185,7 @@ def clamp_energy(y, case, P, hp, wp):
     return e
 
 
-@kernel
+@step_kernel
 def clamp_initial_state(case, P, hp, y):
     """Arm at q0 with qd0, head at rest with its surface at the tool and its back at the wall.
 

@@ -57,7 +57,7 @@ from enum import IntEnum
 import numpy as np
 import pandas as pd
 
-from .._jit import kernel, kernel_array
+from .._jit import kernel, kernel_array, step_kernel
 from .._validation import (InvalidTypeError, as_float_array, check_int, check_range,
                            check_shape, describe)
 from ..control.dispatch import NINT, NSCRATCH, NSTATE, controller_step
@@ -65,7 +65,7 @@ from ..control.estimation import (EI_R, ESTIMATOR_SCRATCH, ESTIMATOR_STATE, Forc
                                   estimator_step)
 from ..control.reference import NREF, R_Q_D, R_R_D
 from ..control.sensors import (N_Q, N_QD, NSENSOR, SENSOR_NOISE, pressure_read, sensor_init,
-                               sensor_read, sensor_reset, sensor_track)
+                               sensor_read, sensor_reset, sensor_track_joints)
 from ..experiments.case import ExperimentCase
 from ..experiments.closed_loop import (DIVERGENCE_VELOCITY, IL_EST, IL_F, L_DP, L_INT, L_P, L_Q,
                                        L_QD, L_QDM, L_QM, L_T, L_U, L_X, L_XD, L_Y, L_YD, NEST,
@@ -176,7 +176,7 @@ FT_F, FT_A = FINE_TRACE.offsets("F", "a_head_g")
 NFINE = FINE_TRACE.size
 
 
-@kernel
+@step_kernel
 def _contact(x, hs, P, hp):
     """Contact at plant state x, head state hs: (F, nx, ny, delta, ddelta, vx, vy, J)."""
     xt, yt = tcp_position(x[X_Q], x[X_Q + 1], P)
@@ -192,7 +192,7 @@ def _contact(x, hs, P, hp):
     return f, nx, ny, delta, dd, vx, vy, j11, j12, j21, j22
 
 
-@kernel
+@step_kernel
 def _head_rhs(hs, f, nx, ny, vx, vy, delta, dd, hp, CP, dh):
     """Head derivative with contact force f along n (tool -> head) and the neck."""
     fnx = -CP[CC_KN] * (hs[H_X] - CP[CC_XH0]) - CP[CC_BN] * hs[H_V]
@@ -206,7 +206,7 @@ def _head_rhs(hs, f, nx, ny, vx, vy, delta, dd, hp, CP, dh):
         else 0.0
 
 
-@kernel
+@step_kernel
 def _coupled_rhs(x, hs, z, u, P, hp, CP, dx, dh, tau, buf):
     """Plant + head derivative with the contact force at this stage; returns F [N].
 
@@ -223,7 +223,7 @@ def _coupled_rhs(x, hs, z, u, P, hp, CP, dx, dh, tau, buf):
     return f
 
 
-@kernel
+@step_kernel
 def _coupled_rk4(x, hs, z, u, h, P, hp, CP, k1, k2, k3, k4, xt, g1, g2, g3, g4, ht, tau, buf):
     """One coupled RK4 step of plant and head; returns (F, |a_head|) at the step start."""
     f = _coupled_rhs(x, hs, z, u, P, hp, CP, k1, g1, tau, buf)
@@ -251,7 +251,7 @@ def _coupled_rk4(x, hs, z, u, h, P, hp, CP, k1, k2, k3, k4, xt, g1, g2, g3, g4, 
     return f, a
 
 
-@kernel
+@step_kernel
 def _head_free_rk4(hs, h, hp, CP, g1, g2, g3, g4, ht):
     """One RK4 step of the head alone (no contact; neck only)."""
     _head_rhs(hs, 0.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, hp, CP, g1)
@@ -326,7 +326,7 @@ def _run_collision(x0, R, Pp, Pm, kind, C, sizes, cfg, noise, dt, substeps, EP, 
             a, w = sensor_read(j, x[X_Q + j], x[X_QD + j], t, cfg, st)
             qm[j] = a + noise[k, N_Q + j]
             qdm[j] = w + noise[k, N_QD + j]
-        pressure_read(x[X_P:X_P + 4], cfg, pmeas)
+        pressure_read(x, X_P, cfg, pmeas)
         estimator_step(EP, ES, PE, k, dt, qm, qdm, pmeas, fest, escr)
         ILOG[k, IL_EST:IL_EST + NEST] = fest
         if (not detected) and (abs(fest[EI_R]) > CP[CC_TH] or abs(fest[EI_R + 1]) > CP[CC_TH + 1]):
@@ -392,15 +392,15 @@ def _run_collision(x0, R, Pp, Pm, kind, C, sizes, cfg, noise, dt, substeps, EP, 
                                       g1, g2, g3, g4, ht, tau, buf)
                 FINE[k * nf + i, FT_F] = fi
                 FINE[k * nf + i, FT_A] = ai / G0
-                sensor_track(0, q_old0, x[X_Q], t + i * hf, hf, cfg, st)
-                sensor_track(1, q_old1, x[X_Q + 1], t + i * hf, hf, cfg, st)
+                sensor_track_joints(q_old0, q_old1, x[X_Q], x[X_Q + 1], t + i * hf, hf, cfg,
+                                    st)
         else:
             for i in range(substeps):
                 q_old0, q_old1 = x[X_Q], x[X_Q + 1]
                 rk4_step(x, z, u, tau0, h, Pp, work)
                 _head_free_rk4(hs, h, hp, CP, g1, g2, g3, g4, ht)
-                sensor_track(0, q_old0, x[X_Q], t + i * h, h, cfg, st)
-                sensor_track(1, q_old1, x[X_Q + 1], t + i * h, h, cfg, st)
+                sensor_track_joints(q_old0, q_old1, x[X_Q], x[X_Q + 1], t + i * h, h, cfg,
+                                    st)
             fe = _contact(x, hs, Pp, hp)
             if present and fe[3] > 0.0:
                 status = RunStatus.MISSED_CONTACT

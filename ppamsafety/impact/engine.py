@@ -47,7 +47,7 @@ from enum import IntEnum
 
 import numpy as np
 
-from .._jit import kernel, leaf
+from .._jit import kernel, leaf, step_kernel
 from ..layouts import Field, Layout
 from ..plant.dynamics import coriolis_cs, mass_matrix_cs
 from ..plant.geometry import tcp_kinematics_cs
@@ -254,7 +254,7 @@ def pack_head(head) -> np.ndarray:
     return row
 
 
-@kernel
+@step_kernel
 def arm_terms(q1, q2, P):
     """cos/sin of q2, inertia matrix entries and TCP kinematics at the angles q1, q2 [rad].
 
@@ -279,7 +279,7 @@ def arm_terms(q1, q2, P):
     return c2, s2, h11, h12, h22, x, yy, j11, j12, j21, j22
 
 
-@kernel
+@step_kernel
 def _arm_terms(y, P):
     """:func:`arm_terms` at the link angles of the impact state ``y`` (layout :data:`STATE`)."""
     return arm_terms(y[Y_Q], y[Y_Q + 1], P)
@@ -361,12 +361,12 @@ def _impact_rhs_py(y, case, P, hp, dy):
 
 
 #: The derivative compiled once, for the engines' calls outside the RK4 step.
-impact_rhs = kernel(_impact_rhs_py)
+impact_rhs = step_kernel(_impact_rhs_py)
 #: The same source inlined into :func:`_rk4`, where it is hot (see :mod:`ppamsafety._jit`).
 _impact_rhs_inline = leaf(_impact_rhs_py)
 
 
-@kernel
+@step_kernel
 def _energy(y, case, P, hp):
     """Kinetic (links, motor sides) + spring + contact potential energy [J].
 
@@ -399,7 +399,7 @@ def _energy(y, case, P, hp):
     return e
 
 
-@kernel
+@step_kernel
 def initial_state(case, P, hp, y):
     """Arm at q0 with qd0, head centre at r_tcp + R u, head velocity v_h0.
 
@@ -431,7 +431,7 @@ def initial_state(case, P, hp, y):
         y[Y_THD], y[Y_THD + 1] = case[C_QD], case[C_QD + 1]
 
 
-@kernel
+@step_kernel
 def _rk4(y, h, case, P, hp, k1, k2, k3, k4, yt):
     """One RK4 step of length h, then the derivative at the new state.
 
@@ -458,7 +458,7 @@ def _rk4(y, h, case, P, hp, k1, k2, k3, k4, yt):
     return _impact_rhs_inline(y, case, P, hp, k1)
 
 
-@kernel
+@step_kernel
 def _write_history(h, s, dt, f, delta, a, y, case, P, hp):
     """Fill the :data:`HIST` row ``h`` of step ``s`` from the state ``y``."""
     h[W_T], h[W_F], h[W_DELTA], h[W_AG] = s * dt, f, delta, a
@@ -580,7 +580,7 @@ DENSE_STRIDE = 8
 DENSE_FREE_STRIDE = 100
 
 
-@kernel
+@step_kernel
 def _delta_rates(y, case, P, hp, dy):
     """(d2 delta/dt2, dF/dt) at state ``y`` whose derivative ``dy`` is given.
 
@@ -614,7 +614,7 @@ def _delta_rates(y, case, P, hp, dy):
     return ddd, hp[HP_N] * dn / delta * dd * g + hp[HP_B] * dn * ddd
 
 
-@kernel
+@step_kernel
 def _hermite(v0, d0, v1, d1, h, s):
     """Cubic Hermite interpolant at fraction s of [0, h] from values and derivatives at both ends."""
     s2 = s * s

@@ -42,7 +42,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .._jit import kernel
+from .._jit import kernel, step_kernel
 from .._validation import as_float_array, check_finite_result, check_nonnegative, check_range
 
 _SLACK = 1.0 + 1e-12  # bounds are inflated by this factor against their own rounding
@@ -139,7 +139,7 @@ def _range_max_table(a):
     return t, lg
 
 
-@kernel
+@step_kernel
 def _clip(i0, i1, j0, j1, wn, nxt, prv):
     """Shrink a block to valid, non-dominated pairs (empty: i0 > i1 or j0 > j1 on return)."""
     i0 = nxt[max(i0, j0 - wn)]
@@ -151,7 +151,7 @@ def _clip(i0, i1, j0, j1, wn, nxt, prv):
     return i0, i1, j0, j1
 
 
-@kernel
+@step_kernel
 def _bound(c, s, dt, wn, t, lg, offset):
     """Upper bound of HIC over a clipped block ``c = (i0, i1, j0, j1)``; 0 if it is empty.
 
@@ -167,7 +167,7 @@ def _bound(c, s, dt, wn, t, lg, offset):
     return mean * math.sqrt(mean) * min(area, dt * min(j1 - i0, wn) * mean) * _SLACK
 
 
-@kernel
+@step_kernel
 def _push(blocks, bounds, top, c, b, best):
     """Push block ``c`` with bound ``b`` unless it cannot beat ``best``; return the new top."""
     if b <= best:
@@ -359,8 +359,9 @@ def _hic_branch_and_bound(a, dt, max_window_samples):
             best, bi, bj = v, i, i + w
     blocks = np.empty((_STACK, 4), np.int64)
     bounds = np.empty(_STACK)
-    root = _clip(0, n - 2, 1, n - 1, wn, nxt, prv)
-    top = _push(blocks, bounds, 0, root, _bound(root, s, dt, wn, t, lg, first), best)
+    # run-time ints, not constants: numba compiles a kernel once per constant argument
+    root = _clip(np.int64(0), n - 2, np.int64(1), n - 1, wn, nxt, prv)
+    top = _push(blocks, bounds, np.int64(0), root, _bound(root, s, dt, wn, t, lg, first), best)
     while top > 0:
         top -= 1
         if bounds[top] <= best:

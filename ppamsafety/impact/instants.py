@@ -53,16 +53,25 @@ def impact_states(result, arm) -> pd.DataFrame:
     """
     result = _check_result(result)
     arm = check_arm(arm)
+    st, p = _states(result, arm)
+    K = joint_stiffness(st[["q1", "q2"]].to_numpy(), p, arm)
+    st.insert(5, "K1", K[:, 0])
+    st.insert(6, "K2", K[:, 1])
+    return st
+
+
+def _states(result, arm) -> tuple:
+    """:func:`impact_states` without the stiffnesses, and the pressures (n, 4) [Pa] of its
+    rows: the stiffness of the few rows an impact starts from is computed alone (the same
+    numbers, row by row)."""
     ok = np.all(np.isfinite(result.signals("q1", "q2", "qd1", "qd2", "p1", "p2", "p3", "p4")),
                 axis=1)
     q = result.signals("q1", "q2")[ok]
     qd = result.signals("qd1", "qd2")[ok]
     p = result.signals("p1", "p2", "p3", "p4")[ok]
-    K = joint_stiffness(q, p, arm)
     v = np.einsum("nij,nj->ni", geo.jacobian(q, arm), qd)
     return pd.DataFrame({"t": result.t[ok], "q1": q[:, 0], "q2": q[:, 1], "qd1": qd[:, 0],
-                         "qd2": qd[:, 1], "K1": K[:, 0], "K2": K[:, 1],
-                         "tcp_speed": np.linalg.norm(v, axis=1)})
+                         "qd2": qd[:, 1], "tcp_speed": np.linalg.norm(v, axis=1)}), p
 
 
 def heuristic_instants(states: pd.DataFrame) -> dict:
@@ -139,7 +148,7 @@ def evaluate_experiment(result, arm, *, instants: str = "heuristic", every: int 
     every = check_int("every", every, 1, 10 ** 6)
     head = resolve_head(head)
     min_speed = check_nonnegative("min_speed", min_speed, unit="m/s")
-    st = impact_states(result, arm)
+    st, p = _states(result, arm)
     if len(st) == 0:
         raise ValueError(f"result {result.name!r} has no finite sample to evaluate")
     if instants == "heuristic":
@@ -151,8 +160,9 @@ def evaluate_experiment(result, arm, *, instants: str = "heuristic", every: int 
         idx = idx[st["tcp_speed"].to_numpy()[idx] >= min_speed] if min_speed > 0 else idx
         names = None
     sub = st.iloc[idx]
-    res = _simulate_impacts(arm, sub[["q1", "q2"]].to_numpy(), sub[["qd1", "qd2"]].to_numpy(),
-                            sub[["K1", "K2"]].to_numpy(), head=head, direction=None,
+    q0 = sub[["q1", "q2"]].to_numpy()
+    res = _simulate_impacts(arm, q0, sub[["qd1", "qd2"]].to_numpy(),
+                            joint_stiffness(q0, p[idx], arm), head=head, direction=None,
                             head_velocity=None, fixed_arm=False, dt=dt, duration=duration,
                             history=history, integrator="fixed", warn_area=False,
                             stacklevel=4)

@@ -138,7 +138,7 @@ import math
 
 import numpy as np
 
-from .._jit import kernel, kernel_array, leaf
+from .._jit import kernel, step_kernel, kernel_array, leaf
 from .._validation import (as_float_array, check_bool, check_finite_result, check_int,
                            check_range, check_size)
 from ..hysteresis.force import hysteresis_factor, scaled_contraction
@@ -154,8 +154,8 @@ from .layout import (DEAD, DEAD_LEN, DEAD_MODE, HYST_DELTA, HYST_EPS_MAX, HYST_I
                      HYST_ROW, HYST_STAGES, HYST_WFIT_INTERCEPT, HYST_WFIT_SLOPE, NZ, Z_DELAY,
                      Z_DELAY_COUNT, Z_HYST, Z_HYST_DIR, Z_HYST_SLOPE, Z_HYST_W, HysteresisStages,
                      Switch, TORQUE_BIAS, TORQUE_BIAS_MODE)
-from .pneumatics import pressure_rates, static_pressures
-from .torque import group_contraction, group_terms, torque_kernel_cs
+from .pneumatics import pressure_rates_at, static_pressures
+from .torque import group_contraction, group_terms
 
 #: The plant state x, one row per batch case (thesis (3.1), (3.6)).
 STATE = Layout("plant state", [
@@ -187,6 +187,8 @@ RK4_SCRATCH = Layout("rk4_step scratch", [
 W_K1, W_K2, W_K3, W_K4, W_XT, W_RHS = RK4_SCRATCH.offsets("k1", "k2", "k3", "k4", "x_stage",
                                                            "rhs")
 NWORK = RK4_SCRATCH.size
+#: Offsets of the four stage derivatives in the RK4 work memory.
+_STAGE_OFFSETS = (W_K1, W_K2, W_K3, W_K4)
 #: Largest stage change of eps_s evaluated by the secant scheme (HysteresisStages.SECANT);
 #: beyond it the stage uses preisach_peek.  0.01 (an eps change of 0.00175, a contraction
 #: rate of 1.75 /s over a 1 ms step) is reached only by jumps (the first step from a
@@ -281,7 +283,7 @@ def effects_init(z, P):
         z[Z_DELAY_COUNT] = 0.0
 
 
-@kernel
+@step_kernel
 def valve_delay(z, u, P):
     """Valve dead time: replace the set values ``u`` (4) [Pa] in place by u_i[k - d_i].
 
@@ -346,7 +348,7 @@ def _hysteresis_factor(k, eps, z, P):
                              P[HYST_WFIT_INTERCEPT])
 
 
-@kernel
+@step_kernel
 def plant_rhs(x, z, u, tau_ext, P, dx, work):
     """State derivative of the plant; writes ``dx`` (8,).  ``work`` >= NRHS (16) floats.
 
@@ -376,35 +378,69 @@ def plant_rhs(x, z, u, tau_ext, P, dx, work):
         volumes and (hysteresis on) force factors of the four groups;
         overwritten.
     """
-    mt = work[W_MT:W_MT + 4]
-    dmt = work[W_DMT:W_DMT + 4]
-    vol = work[W_VOL:W_VOL + 4]
-    c1, s1 = math.cos(x[X_Q]), math.sin(x[X_Q])
-    c2, s2 = math.cos(x[X_Q + 1]), math.sin(x[X_Q + 1])
+    zero = np.int64(0)          # not a compile-time constant: one compiled plant_rhs_at
+    plant_rhs_at(x, zero, z, u, tau_ext, P, dx, zero, work, zero)
+
+
+@step_kernel
+def plant_rhs_at(x, xo, z, u, tau_ext, P, dx, do, work, wo):
+    """:func:`plant_rhs` on the state ``x[xo:xo + 8]`` into ``dx[do:do + 8]``, with the work
+    memory ``work[wo:wo + NRHS]``.
+
+    Offsets instead of views: in compiled code every view of an array costs two atomic
+    updates of its reference count, which took a sixth of the closed loop's time when the
+    RK4 step handed views of its work memory to each stage.
+
+    Parameters
+    ----------
+    x : float64[:]
+        Holds the state (8,) from ``xo``.
+    xo : int
+        Offset of the state in ``x``.
+    z, u, tau_ext, P
+        As in :func:`plant_rhs`.
+    dx : float64[:]
+        Receives the state derivative (8,) from ``do``.
+    do : int
+        Offset of the derivative in ``dx``.
+    work : float64[:]
+        Work memory: :data:`NRHS` floats from ``wo`` (layout :data:`RHS_SCRATCH`),
+        overwritten.
+    wo : int
+        Offset of the work memory.
+    """
+    mo, vo = wo + W_MT, wo + W_VOL
+    c1, s1 = math.cos(x[xo + X_Q]), math.sin(x[xo + X_Q])
+    c2, s2 = math.cos(x[xo + X_Q + 1]), math.sin(x[xo + X_Q + 1])
     c12, s12 = c1 * c2 - s1 * s2, s1 * c2 + c1 * s2
+    p0 = xo + X_P
     if int(P[HYST_MODE]) == Switch.ON:
-        fac = work[W_FAC:W_FAC + 4]
+        fo = wo + W_FAC
         for k in range(4):
-            mt[k], dmt[k], vol[k], eps = group_terms(k, c1, s1, c12, s12, P)
-            fac[k] = _hysteresis_factor(k, eps, z, P)
-        tau1 = x[X_P] * (mt[0] * fac[0]) + x[X_P + 1] * (mt[1] * fac[1]) + tau_ext[0]
-        tau2 = x[X_P + 2] * (mt[2] * fac[2]) + x[X_P + 3] * (mt[3] * fac[3]) + tau_ext[1]
+            work[mo + k], _, work[vo + k], eps = group_terms(k, c1, s1, c12, s12, P)
+            work[fo + k] = _hysteresis_factor(k, eps, z, P)
+        tau1 = (x[p0] * (work[mo] * work[fo]) + x[p0 + 1] * (work[mo + 1] * work[fo + 1])
+                + tau_ext[0])
+        tau2 = (x[p0 + 2] * (work[mo + 2] * work[fo + 2])
+                + x[p0 + 3] * (work[mo + 3] * work[fo + 3]) + tau_ext[1])
     else:
-        torque_kernel_cs(c1, s1, c12, s12, P, mt, dmt, vol)
-        tau1 = x[X_P] * mt[0] + x[X_P + 1] * mt[1] + tau_ext[0]
-        tau2 = x[X_P + 2] * mt[2] + x[X_P + 3] * mt[3] + tau_ext[1]
+        for k in range(4):
+            work[mo + k], _, work[vo + k], _ = group_terms(k, c1, s1, c12, s12, P)
+        tau1 = x[p0] * work[mo] + x[p0 + 1] * work[mo + 1] + tau_ext[0]
+        tau2 = x[p0 + 2] * work[mo + 2] + x[p0 + 3] * work[mo + 3] + tau_ext[1]
     if int(P[TORQUE_BIAS_MODE]) == Switch.ON:
         tau1 += P[TORQUE_BIAS]
         tau2 += P[TORQUE_BIAS + 1]
-    a1, a2 = forward_dynamics_cs(c1, s1, c2, s2, c12, s12, x[X_QD], x[X_QD + 1], tau1, tau2, P)
-    dx[X_Q] = x[X_QD]
-    dx[X_Q + 1] = x[X_QD + 1]
-    dx[X_QD] = a1
-    dx[X_QD + 1] = a2
-    pressure_rates(x[X_P:X_P + 4], u, x[X_QD], x[X_QD + 1], mt, vol, P, dx[X_P:X_P + 4])
+    w1, w2 = x[xo + X_QD], x[xo + X_QD + 1]
+    a1, a2 = forward_dynamics_cs(c1, s1, c2, s2, c12, s12, w1, w2, tau1, tau2, P)
+    dx[do + X_Q] = w1
+    dx[do + X_Q + 1] = w2
+    dx[do + X_QD] = a1
+    dx[do + X_QD + 1] = a2
+    pressure_rates_at(x, p0, u, w1, w2, work, mo, work, vo, P, dx, do + X_P)
 
 
-@kernel
+@step_kernel
 def rk4_step(x, z, u, tau_ext, h, P, work):
     """Advance ``x`` in place by one RK4 step of length ``h`` [s] (inputs held).
 
@@ -432,24 +468,20 @@ def rk4_step(x, z, u, tau_ext, h, P, work):
         stage derivatives, the stage state and the :func:`plant_rhs` work;
         overwritten.
     """
-    k1 = work[W_K1:W_K1 + NX]
-    k2 = work[W_K2:W_K2 + NX]
-    k3 = work[W_K3:W_K3 + NX]
-    k4 = work[W_K4:W_K4 + NX]
-    xt = work[W_XT:W_XT + NX]
-    buf = work[W_RHS:W_RHS + NRHS]
-    plant_rhs(x, z, u, tau_ext, P, k1, buf)
+    # one call site of the derivative, with offsets that are not compile-time constants:
+    # numba compiles a kernel once per distinct constant argument
+    for stage in range(4):
+        src = x if stage == 0 else work
+        plant_rhs_at(src, np.int64(0 if stage == 0 else W_XT), z, u, tau_ext, P, work,
+                     _STAGE_OFFSETS[stage], work, np.int64(W_RHS))
+        if stage < 3:
+            c = h if stage == 2 else 0.5 * h       # x + h/2 k1, x + h/2 k2, x + h k3
+            o = _STAGE_OFFSETS[stage]
+            for i in range(NX):
+                work[W_XT + i] = x[i] + c * work[o + i]
     for i in range(NX):
-        xt[i] = x[i] + 0.5 * h * k1[i]
-    plant_rhs(xt, z, u, tau_ext, P, k2, buf)
-    for i in range(NX):
-        xt[i] = x[i] + 0.5 * h * k2[i]
-    plant_rhs(xt, z, u, tau_ext, P, k3, buf)
-    for i in range(NX):
-        xt[i] = x[i] + h * k3[i]
-    plant_rhs(xt, z, u, tau_ext, P, k4, buf)
-    for i in range(NX):
-        x[i] += h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i])
+        x[i] += h / 6.0 * (work[W_K1 + i] + 2.0 * work[W_K2 + i] + 2.0 * work[W_K3 + i]
+                           + work[W_K4 + i])
     effects_update(x, z, u, P)
 
 

@@ -17,17 +17,19 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-from .._jit import kernel, kernel_array, leaf
+from .._jit import kernel, step_kernel, kernel_array, leaf
 from .._validation import as_float_array, check_range, check_range_array
 from ..units import DEG
 from . import packing
 from ._checks import (PRESSURE_MAX, accelerations, angles, check_pressures,  # noqa: F401
                       checks_arm, speeds, torques)
-from .dynamics import gravity_torque
+from .dynamics import gravity_cs
 from .layout import NPOLY, PATM, PM1, PM2, PMAX, TV, V1, V2, TORQUE_BIAS, TORQUE_BIAS_MODE, Switch
-from .torque import torque_kernel
+from .torque import torque_functions_cs, torque_kernel
 
 
 @leaf
@@ -56,11 +58,42 @@ def pressure_rates(p, u, qd1, qd2, mt, vol, P, out):
     out : ndarray of float64, shape (4,)
         Output, overwritten: dp_i/dt [Pa/s].
     """
+    pressure_rates_at(p, 0, u, qd1, qd2, mt, 0, vol, 0, P, out, 0)
+
+
+@leaf
+def pressure_rates_at(p, po, u, qd1, qd2, mt, mo, vol, vo, P, out, oo):
+    """:func:`pressure_rates` on ``p[po:po + 4]``, ``mt[mo:mo + 4]``, ``vol[vo:vo + 4]`` into
+    ``out[oo:oo + 4]``: offsets instead of views, for the plant's derivative (a view costs two
+    atomic reference-count updates in compiled code).
+
+    Parameters
+    ----------
+    p : ndarray of float64
+        Holds the gauge pressures of the four groups [Pa] from ``po``.
+    po : int
+        Offset of the pressures in ``p``.
+    u : ndarray of float64, shape (4,)
+        Valve set values of the four groups [Pa].
+    qd1, qd2 : float
+        Joint velocities (shoulder, elbow) [rad/s].
+    mt, vol : ndarray of float64
+        Hold the torque functions [m^3] from ``mo`` and the group volumes [m^3] from
+        ``vo`` (the same array may hold both).
+    mo, vo : int
+        Their offsets.
+    P : ndarray of float64, shape (NP,)
+        Packed plant parameter row.
+    out : ndarray of float64
+        Receives dp_i/dt [Pa/s] from ``oo``.
+    oo : int
+        Offset of the output.
+    """
     n = P[NPOLY]
     for i in range(4):
         w = qd1 if i < 2 else qd2
-        out[i] = ((P[V1 + i] + P[V2 + i] * u[i] - p[i]) / P[TV + i]
-                  - n * (P[PATM] + p[i]) * mt[i] * w / vol[i])
+        out[oo + i] = ((P[V1 + i] + P[V2 + i] * u[i] - p[po + i]) / P[TV + i]
+                       - n * (P[PATM] + p[po + i]) * mt[mo + i] * w / vol[vo + i])
 
 
 @leaf
@@ -117,7 +150,7 @@ def set_value(i, p_desired, P):
     return min(max(ps, 0.0), P[PMAX])
 
 
-@kernel
+@step_kernel
 def delta_p_to_set_values(dp1, dp2, P, out):
     """Delta-p approach (3.7): desired pressures p_m +- dp, clipped, then set values.
 
@@ -143,14 +176,13 @@ def delta_p_to_set_values(dp1, dp2, P, out):
         out[i] = set_value(i, min(max(pd, 0.0), pmax), P)
 
 
-@kernel
-def gravity_compensation_dp(q1, q2, Pc, mt, dmt, vol):
+@step_kernel
+def gravity_compensation_dp(q1, q2, Pc, mt):
     """Delta-p for static gravity compensation (3.18)-(3.19) [Pa].
 
     ``Pc`` is the controller's packed view (identified gravity terms, see
-    :func:`ppamsafety.plant.packing.controller_view`).  Scratch arrays
-    ``mt``, ``dmt``, ``vol`` of length 4 are overwritten.  Returns
-    ``(dp1, dp2)``.
+    :func:`ppamsafety.plant.packing.controller_view`).  The scratch array
+    ``mt`` of length 4 is overwritten.  Returns ``(dp1, dp2)``.
 
     Parameters
     ----------
@@ -161,13 +193,13 @@ def gravity_compensation_dp(q1, q2, Pc, mt, dmt, vol):
         the compensation believes in; reads the torque-function fields,
         ``theta``, ``gravity``, ``p_mean`` and, in a plant-truth row with the
         torque bias on, the bias (the controllers' rows never carry it).
-    mt, dmt, vol : ndarray of float64, shape (4,)
-        Scratch, overwritten with the outputs of
-        :func:`~ppamsafety.plant.torque.torque_kernel` at (q1, q2):
-        m_tau [m^3], d m_tau/dq [m^3/rad], group volumes [m^3].
+    mt : ndarray of float64, shape (4,)
+        Scratch, overwritten with the torque functions m_tau [m^3] at (q1, q2)
+        (:func:`~ppamsafety.plant.torque.torque_functions_cs`).
     """
-    torque_kernel(q1, q2, Pc, mt, dmt, vol)
-    g1, g2 = gravity_torque(q1, q2, Pc)
+    c1, s1, c12, s12 = math.cos(q1), math.sin(q1), math.cos(q1 + q2), math.sin(q1 + q2)
+    torque_functions_cs(c1, s1, c12, s12, Pc, mt)
+    g1, g2 = gravity_cs(c1, s1, c12, s12, Pc)
     if int(Pc[TORQUE_BIAS_MODE]) == Switch.ON:     # the muscles hold what the bias does not
         g1 -= Pc[TORQUE_BIAS]
         g2 -= Pc[TORQUE_BIAS + 1]
@@ -186,9 +218,9 @@ def _stiffness_many(q, p, P, out):
 
 @kernel
 def _gc_many(q, Pc, out):
-    mt, dmt, vol = np.empty(4), np.empty(4), np.empty(4)
+    mt = np.empty(4)
     for n in range(q.shape[0]):
-        out[n, 0], out[n, 1] = gravity_compensation_dp(q[n, 0], q[n, 1], Pc, mt, dmt, vol)
+        out[n, 0], out[n, 1] = gravity_compensation_dp(q[n, 0], q[n, 1], Pc, mt)
 
 
 @checks_arm

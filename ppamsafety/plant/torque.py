@@ -19,7 +19,7 @@ import math
 
 import numpy as np
 
-from .._jit import kernel, kernel_array, leaf
+from .._jit import kernel, kernel_array, leaf, step_kernel
 from . import packing
 from ._checks import accelerations, angles, check_pressures, checks_arm, speeds, torques  # noqa: F401
 from .geometry import _flat_q, group_length_lever
@@ -27,7 +27,7 @@ from .layout import L0, LCONN, NM
 from .muscle import dforce_deps, force_per_pressure, muscle_volume
 
 
-@kernel
+@step_kernel
 def torque_kernel(q1, q2, P, mt, dmt, vol):
     """:func:`torque_kernel_cs` for angles ``q1``, ``q2`` [rad].
 
@@ -74,6 +74,31 @@ def torque_kernel_cs(c1, s1, c12, s12, P, mt, dmt, vol):
     """
     for k in range(4):
         mt[k], dmt[k], vol[k], _ = group_terms(k, c1, s1, c12, s12, P)
+
+
+@step_kernel
+def torque_functions_cs(c1, s1, c12, s12, P, mt):
+    """Fill m_tau (4) [m^3] only: :func:`torque_kernel_cs` without the derivatives and volumes.
+
+    The same arithmetic as :func:`group_terms` (bitwise the same m_tau); what a caller
+    does not use is left out by the compiler (no logarithm of the volume, no
+    derivative of the force law).  Compiled once (not inlined into its callers: the
+    gravity compensation, the task PSMC and the SMC model), which keeps their first
+    compilation short.
+
+    Parameters
+    ----------
+    c1, s1 : float
+        cos q1 and sin q1 of the shoulder angle q1 [-].
+    c12, s12 : float
+        cos(q1 + q2) and sin(q1 + q2) [-].
+    P : ndarray of float64, shape (NP,)
+        Packed plant parameter row (:data:`ppamsafety.plant.layout.PLANT`).
+    mt : ndarray of float64, shape (4,)
+        Output, overwritten: torque functions m_tau,i of (2.10) per group 0..3 [m^3].
+    """
+    for k in range(4):
+        mt[k] = group_terms(k, c1, s1, c12, s12, P)[0]
 
 
 @leaf

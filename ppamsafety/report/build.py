@@ -22,8 +22,11 @@ calls are done, and the sections once every task has started), so that a cold
 kernel cache is not filled by every worker at once.  Each worker runs one BLAS
 thread.  A section that starts worker processes of its own (the safety scan, the lambda
 sweep) gets its worker's share of the processes, so the report never runs more than
-``processes`` at once (``--processes 1``: everything in this process).  A section's warnings
-are raised again in the main process, naming the section.
+``processes`` at once (``--processes 1``: everything in this process), and the closed-loop
+batches of a section run in threads on every core (:func:`~ppamsafety.experiments.run_batch`),
+so that the last sections of a report, when the other workers are idle, still use the whole
+machine.  A section's warnings are raised again in the main process, naming the section.
+``metrics.json`` records each section's wall and CPU time.
 
 **Which sections.**  The thesis report runs every section.  The report for another arm leaves
 out the sections that do not concern it (:func:`select_sections`: the bench case study, the
@@ -35,6 +38,7 @@ from __future__ import annotations
 
 import json
 import os
+import resource
 import time
 import warnings
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
@@ -55,17 +59,25 @@ from .columns import unit_of, with_header_units
 from .html import report_page
 
 
-def _timed_section(name: str, stage, quick: bool, arm=None, head=None, processes=None):
-    """Run one section into ``stage``; (SectionResult, wall time [s], warnings).
+def _cpu_seconds() -> float:
+    """CPU time [s] of this process (all its threads) and of its children waited for."""
+    me, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(
+        resource.RUSAGE_CHILDREN)
+    return me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime
 
-    The warnings are (message, category) pairs naming the section, raised again by the
-    report in the main process (a worker's own warnings would print unformatted).  A bug
-    (:func:`ppamsafety._errors.is_internal_error`, read from the traceback, which a
-    worker's exception loses on its way to the parent) is raised as an
-    ``InternalFailure`` naming the section, so that it is never reported as bad input.
-    Top level: picklable.
+
+def _timed_section(name: str, stage, quick: bool, arm=None, head=None, processes=None):
+    """Run one section into ``stage``; (SectionResult, wall time [s], CPU time [s], warnings).
+
+    The CPU time counts every thread of the process that ran the section and the worker
+    processes the section started and ended.  The warnings are (message, category) pairs
+    naming the section, raised again by the report in the main process (a worker's own
+    warnings would print unformatted).  A bug (:func:`ppamsafety._errors.is_internal_error`,
+    read from the traceback, which a worker's exception loses on its way to the parent) is
+    raised as an ``InternalFailure`` naming the section, so that it is never reported as bad
+    input.  Top level: picklable.
     """
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), _cpu_seconds()
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
@@ -76,7 +88,8 @@ def _timed_section(name: str, stage, quick: bool, arm=None, head=None, processes
             if marked is exc:
                 raise
             raise marked from exc
-    return res, time.perf_counter() - t0, [(str(w.message), w.category) for w in caught]
+    return (res, time.perf_counter() - t0, _cpu_seconds() - c0,
+            [(str(w.message), w.category) for w in caught])
 
 
 def _run_in_pool(pool, processes: int, order, stage, quick: bool, warm: bool, report,
@@ -90,7 +103,8 @@ def _run_in_pool(pool, processes: int, order, stage, quick: bool, warm: bool, re
     task has started, it takes the next section of ``order``.  A warm-up task is
     only an optimisation: one that fails is reported as a warning and the
     sections compile what they need themselves.  A section's error is raised here
-    (``report(name, result, seconds)`` is called for each section that finished).
+    (``report(name, result, seconds, cpu_seconds)`` is called for each section that
+    finished).
     """
     tasks = warmup.TASKS if warm else ()
     subject = (arm, head)
@@ -342,12 +356,13 @@ def build_report(outdir="reports", *, quick: bool = False, only=None, progress: 
                       replace_kind=replace_kind) as stage:
         done = {}
 
-        def report(name, res, dt, caught=()):
-            done[name] = (res, dt)
+        def report(name, res, dt, cpu, caught=()):
+            done[name] = (res, dt, cpu)
             for message, category in caught:     # a section's warnings, named (in this process)
                 warnings.warn(message, category, stacklevel=2)
             if progress:
-                print(f"[report] {name}: {dt:.1f} s, {len(res.artifacts)} artifacts", flush=True)
+                print(f"[report] {name}: {dt:.1f} s ({cpu:.1f} s of CPU), "
+                      f"{len(res.artifacts)} artifacts", flush=True)
 
         if processes == 1:
             for name in names:
@@ -375,8 +390,9 @@ def build_report(outdir="reports", *, quick: bool = False, only=None, progress: 
             pool.shutdown(wait=True)
         sections, metrics = [], {}
         for name in names:                                  # the order asked for
-            res, dt = done[name]
-            metrics[name] = {**res.metrics, "wall_time_s": round(dt, 2)}
+            res, dt, cpu = done[name]
+            metrics[name] = {**res.metrics, "wall_time_s": round(dt, 2),
+                             "cpu_time_s": round(cpu, 2)}
             body = with_header_units(res.markdown.strip(), name)
             sections.append(f"## {res.title}\n\n{body}\n\n*Study `{name}` ran in "
                             f"{dt:.1f} s.*\n")

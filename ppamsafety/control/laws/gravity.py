@@ -27,10 +27,8 @@ GC_MODES = {m.name.lower(): m for m in GCMode}
 #: :func:`ppamsafety.plant.pneumatics.gravity_compensation_dp`).
 GC_SCRATCH = Layout("gravity compensation scratch", [
     Field("mt", 4, "m^3", "m_tau of the four muscle groups (B.2)"),
-    Field("dmt", 4, "m^3/rad", "d m_tau / dq"),
-    Field("vol", 4, "m^3", "group volumes"),
 ])
-_G_MT, _G_DMT, _G_VOL = GC_SCRATCH.offsets("mt", "dmt", "vol")
+_G_MT = GC_SCRATCH.offset("mt")
 
 #: Parameter row of :class:`GravityCompensation`.
 GC_PARAMS = Layout("gravity compensation parameters", [
@@ -64,8 +62,8 @@ def add_gravity_compensation(mode, Pm, qm, ref, qp1, qp2, dp, scratch):
     dp : numpy.ndarray, shape (2,)
         Delta p per joint [Pa]; Delta p_gc is added to it.
     scratch : numpy.ndarray, shape (GC_SCRATCH.size,)
-        Work memory (layout ``GC_SCRATCH``: m_tau, d m_tau/dq and volumes of
-        the four muscle groups), overwritten.
+        Work memory (layout ``GC_SCRATCH``: m_tau of the four muscle groups),
+        overwritten.
     """
     if mode != GCMode.OFF:
         if mode == GCMode.MEASURED:
@@ -74,8 +72,7 @@ def add_gravity_compensation(mode, Pm, qm, ref, qp1, qp2, dp, scratch):
             q1, q2 = ref[R_Q], ref[R_Q + 1]
         else:
             q1, q2 = qp1, qp2
-        g1, g2 = gravity_compensation_dp(q1, q2, Pm, scratch[_G_MT:_G_MT + 4],
-                                         scratch[_G_DMT:_G_DMT + 4], scratch[_G_VOL:_G_VOL + 4])
+        g1, g2 = gravity_compensation_dp(q1, q2, Pm, scratch[_G_MT:_G_MT + 4])
         dp[0] += g1
         dp[1] += g2
 

@@ -7,7 +7,7 @@ import math
 from ..._jit import leaf
 from ...layouts import Field, Layout
 from ...plant.geometry import inverse_kinematics_elbow_up, tcp_jacobian, tcp_position
-from ...plant.torque import torque_kernel
+from ...plant.torque import torque_functions_cs
 from ..reference import R_Q, R_QD, R_X, R_XD, R_Y, R_YD
 from .gravity import GC_SCRATCH, add_gravity_compensation
 
@@ -68,11 +68,9 @@ IT_F, IT_S, IT_ON, IT_NORM, IT_A = TASK_PSMC_INTERNALS.offsets(
 
 TASK_PSMC_SCRATCH = Layout("task PSMC scratch", [
     Field("mt", 4, "m^3", "m_tau of the four muscle groups at q (B.2)"),
-    Field("dmt", 4, "m^3/rad", "d m_tau / dq"),
-    Field("vol", 4, "m^3", "group volumes"),
     Field("gc", GC_SCRATCH.size, "-", "work memory of the gravity compensation"),
 ])
-XT_MT, XT_DMT, XT_VOL, XT_GC = TASK_PSMC_SCRATCH.offsets("mt", "dmt", "vol", "gc")
+XT_MT, XT_GC = TASK_PSMC_SCRATCH.offsets("mt", "gc")
 _NGC = GC_SCRATCH.size
 
 
@@ -235,7 +233,8 @@ def psmc_task_step(C, S, Pm, dt, qm, qdm, ref, dp, internals, scratch):
     tau1 = j11 * fx + j21 * fy                     # tau = J^T f   (5.30)
     tau2 = j12 * fx + j22 * fy
     mt = scratch[XT_MT:XT_MT + 4]
-    torque_kernel(qm[0], qm[1], Pm, mt, scratch[XT_DMT:XT_DMT + 4], scratch[XT_VOL:XT_VOL + 4])
+    torque_functions_cs(math.cos(qm[0]), math.sin(qm[0]), math.cos(qm[0] + qm[1]),
+                        math.sin(qm[0] + qm[1]), Pm, mt)
     dp[0] = tau1 / (mt[0] - mt[1])                 # (5.33)-(5.34) without the p_m/G part,
     dp[1] = tau2 / (mt[2] - mt[3])                 # which the gravity compensation adds
     c = (dt + lam) / (ki * dt * dt + kp * dt + kd)

@@ -5,13 +5,11 @@ from __future__ import annotations
 import math
 from enum import IntEnum
 
-import numpy as np
-
-from ..._jit import kernel, leaf
+from ..._jit import leaf, step_kernel
 from ...layouts import Field, Layout
 from ...plant import layout as lay
 from ...plant.dynamics import forward_dynamics, mass_matrix_cs
-from ...plant.torque import torque_kernel
+from ...plant.torque import torque_functions_cs, torque_kernel
 from ..reference import R_Q, R_QD, R_QDD, R_QDDD
 
 
@@ -45,18 +43,21 @@ SMC_INTERNALS = Layout("SMC internals", [
 I_S, I_A, I_B, I_U = SMC_INTERNALS.offsets("s", "a_diag", "b", "u_smc")
 
 SMC_SCRATCH = Layout("SMC scratch", [
-    Field("qdd_buf", 12, "-", "work memory of model_qdd (torque functions)"),
+    Field("qdd_buf", 4, "m^3", "work memory of model_qdd (torque functions)"),
     Field("mt", 4, "m^3", "m_tau of the four muscle groups at the measured q (B.2)"),
     Field("vol", 4, "m^3", "group volumes"),
     Field("dmt", 4, "m^3/rad", "d m_tau / dq"),
     Field("fp", 4, "Pa/s", "pressure drift (valve towards p_m, polytropic coupling)"),
     Field("gp", 4, "1/s", "pressure input direction"),
+    Field("b", 2, "rad/s^3", "drift terms b_i (4.33)"),
+    Field("a", 4, "1/(s^3 Pa)", "input gains a_ij (4.33), row by row"),
+    Field("v", 2, "rad/s^3", "the right-hand sides of (4.41)"),
 ])
-X_BUF, X_MT, X_VOL, X_DMT, X_FP, X_GP = SMC_SCRATCH.offsets(
-    "qdd_buf", "mt", "vol", "dmt", "fp", "gp")
+X_BUF, X_MT, X_VOL, X_DMT, X_FP, X_GP, X_B, X_A, X_V = SMC_SCRATCH.offsets(
+    "qdd_buf", "mt", "vol", "dmt", "fp", "gp", "b", "a", "v")
 
 
-@kernel
+@step_kernel
 def model_qdd(q1, q2, w1, w2, p, Pm, buf):
     """Model joint accelerations for state (q, qd, p) (compiled, unchecked).
 
@@ -73,9 +74,9 @@ def model_qdd(q1, q2, w1, w2, p, Pm, buf):
         Gauge pressures of the four muscle groups [Pa].
     Pm : numpy.ndarray
         The controller's model row (layout ``PLANT``).
-    buf : numpy.ndarray, shape (>= 12,)
-        Work memory: m_tau [m^3], d m_tau/dq [m^3/rad] and volumes [m^3] of
-        the four groups (``qdd_buf`` of ``SMC_SCRATCH``), overwritten.
+    buf : numpy.ndarray, shape (>= 4,)
+        Work memory: m_tau [m^3] of the four groups (``qdd_buf`` of ``SMC_SCRATCH``),
+        overwritten.
 
     Returns
     -------
@@ -83,7 +84,8 @@ def model_qdd(q1, q2, w1, w2, p, Pm, buf):
         Joint accelerations (qdd1, qdd2) [rad/s^2].
     """
     mt = buf[0:4]
-    torque_kernel(q1, q2, Pm, mt, buf[4:8], buf[8:12])
+    torque_functions_cs(math.cos(q1), math.sin(q1), math.cos(q1 + q2), math.sin(q1 + q2), Pm,
+                        mt)
     return forward_dynamics(q1, q2, w1, w2, p[0] * mt[0] + p[1] * mt[1],
                             p[2] * mt[2] + p[3] * mt[3], Pm)
 
@@ -123,7 +125,7 @@ def smc_step(C, S, Pm, dt, qm, qdm, pm, ref, dp, internals, scratch):
     scratch : numpy.ndarray, shape (SMC_SCRATCH.size,)
         Work memory (layout ``SMC_SCRATCH``), overwritten.
     """
-    buf = scratch[X_BUF:X_BUF + 12]
+    buf = scratch[X_BUF:X_BUF + 4]
     q1, q2, w1, w2 = qm[0], qm[1], qdm[0], qdm[1]
     mt = scratch[X_MT:X_MT + 4]
     vol = scratch[X_VOL:X_VOL + 4]
@@ -163,9 +165,12 @@ def smc_step(C, S, Pm, dt, qm, qdm, pm, ref, dp, internals, scratch):
     hinv = ((hi11, hi12), (hi12, hi22))
     dq = ((d1q1[0] - d2q1[0], d1q2[0] - d2q2[0]), (d1q1[1] - d2q1[1], d1q2[1] - d2q2[1]))
     dw = ((d1w1[0] - d2w1[0], d1w2[0] - d2w2[0]), (d1w1[1] - d2w1[1], d1w2[1] - d2w2[1]))
-    b = np.zeros(2)
-    A = np.zeros((2, 2))
-    v = np.zeros(2)
+    b = scratch[X_B:X_B + 2]
+    A = scratch[X_A:X_A + 4]                       # A[2 i + j] = a_ij
+    v = scratch[X_V:X_V + 2]
+    b[:] = 0.0
+    A[:] = 0.0
+    v[:] = 0.0
     for i in range(2):
         for j in range(2):
             if j != i and not mimo:
@@ -173,22 +178,22 @@ def smc_step(C, S, Pm, dt, qm, qdm, pm, ref, dp, internals, scratch):
             b[i] += dq[i][j] / (2 * H_Q) * qdm[j] + dw[i][j] / (2 * H_W) * acc[j]
             for k in (2 * j, 2 * j + 1):
                 b[i] += hinv[i][j] * mt[k] * fp[k]
-                A[i, j] += hinv[i][j] * mt[k] * gp[k]
+                A[2 * i + j] += hinv[i][j] * mt[k] * gp[k]
         e = ref[R_Q + i] - qm[i]
         ed = ref[R_QD + i] - qdm[i]
         edd = ref[R_QDD + i] - acc[i]
         s = edd + C[P_A1 + i] * ed + C[P_A0 + i] * e
         v[i] = ref[R_QDDD + i] - b[i] + C[P_A1 + i] * edd + C[P_A0 + i] * ed
         internals[I_S + i] = s
-        internals[I_A + i] = A[i, i]
+        internals[I_A + i] = A[3 * i]
         internals[I_B + i] = b[i]
         v[i] += C[P_K + i] * _sat(s / C[P_GAMMA + i])
     if mimo:
-        det_a = A[0, 0] * A[1, 1] - A[0, 1] * A[1, 0]
-        dp[0] = (A[1, 1] * v[0] - A[0, 1] * v[1]) / det_a
-        dp[1] = (A[0, 0] * v[1] - A[1, 0] * v[0]) / det_a
+        det_a = A[0] * A[3] - A[1] * A[2]
+        dp[0] = (A[3] * v[0] - A[1] * v[1]) / det_a
+        dp[1] = (A[0] * v[1] - A[2] * v[0]) / det_a
     else:
-        dp[0] = v[0] / A[0, 0]
-        dp[1] = v[1] / A[1, 1]
+        dp[0] = v[0] / A[0]
+        dp[1] = v[1] / A[3]
     internals[I_U] = dp[0]
     internals[I_U + 1] = dp[1]

@@ -77,11 +77,17 @@ Fit
    its column, after removing what the already chosen columns explain, keeps at least
    :data:`RANK_TOL` of the largest column's norm.  The other candidates stay at nominal and
    are reported as confounded or unseen.
-3. *Levenberg-Marquardt with Broyden updates* on the chosen subset: minimise
-   ``chi2 + sum (theta / PRIOR_SD)^2`` (a prior towards the nominal arm: the end of an axis is
-   a two-sigma deviation, ``PRIOR_SD`` = 0.5) inside the axis bounds, by bounded linear
-   least-squares steps within a trust region; after each step one batched evaluation, the
-   secant update of J (Broyden) and the trust region halved on failure, doubled on success.
+3. *Levenberg-Marquardt to convergence* on the chosen subset (:func:`levenberg_marquardt`):
+   minimise ``chi2 + sum (theta / PRIOR_SD)^2`` (a prior towards the nominal arm: the end of
+   an axis is a two-sigma deviation, ``PRIOR_SD`` = 0.5) inside the axis bounds, by bounded
+   linear least-squares steps within a trust region; after each step one evaluation, a
+   Broyden update of J, the trust region doubled on success; after a failure on an updated
+   J, and before convergence is declared, J is measured afresh by finite differences
+   (:data:`PROBE`, all probes in one batch).  Converged when, with a fresh J, the projected
+   gradient times the probe step is at most :data:`GTOL` in every theta, or the bounded
+   Gauss-Newton step is at most :data:`XTOL`, or the model's steps failed until its trust
+   region shrank below :data:`XTOL`; a budget of :data:`MAX_EVALUATIONS` points stops it
+   otherwise (reported as not converged).
 4. *Intervals.*  95 % intervals from the posterior covariance
    ``s2 (J^T J + I / PRIOR_SD^2)^-1``, scaled by the residual variance s2 = max(1, chi2 /
    (m - k)) as in :mod:`ppamsafety.diagnose.arm.summary_fit`, clipped to the axis.
@@ -180,6 +186,24 @@ CANDIDATES = ("valve_time_constant_factor", "valve_dead_time", "friction_coulomb
               "velocity_noise")
 #: Secant step of the sensitivities per candidate (theta units).
 STEP = 0.5
+#: Control period of every simulated experiment [s] (the dead time is whole periods of it).
+CONTROL_PERIOD = 1e-3
+#: Finite-difference step of the Jacobians of the fit (theta units; a quantised axis, the
+#: dead time in whole control periods, is probed by a whole number of its quanta): a few
+#: hundredths of an axis, because the simulated statistics are rough at the percent level.
+PROBE = 0.05
+#: Step tolerance of the fit (theta units): converged when, with a fresh Jacobian, the bounded
+#: Gauss-Newton step moves no theta by more than this, or the steps the model proposes fail
+#: until its trust region is smaller than this.  Below it the objective is rough (moving a
+#: theta by 0.002 changes chi2 by about 10 at the fitted point: the statistics are a maximum
+#: over a window and impacts at one sample), so a smaller step resolves noise, not a minimum.
+XTOL = 0.02
+#: Gradient tolerance of the fit (chi2 + prior per probe step): converged when no theta,
+#: moved by one probe step along the projected gradient, lowers chi2 + prior by more than
+#: this to first order -- the roughness of chi2 at that scale (see :data:`XTOL`).
+GTOL = 10.0
+#: Evaluated points after which the fit stops unconverged (trial steps and Jacobian probes).
+MAX_EVALUATIONS = 60
 
 
 def candidate_axis(name: str) -> MagnitudeAxis:
@@ -228,6 +252,33 @@ def theta_bounds(name: str) -> tuple:
     return (BELOW_NOMINAL.get(name, 0.0), 1.0)
 
 
+def candidate_probe(name: str, probe: float = PROBE) -> float:
+    """Finite-difference step of the fit's Jacobians on the axis of candidate ``name``.
+
+    ``probe`` for a continuous axis; for the valve dead time, which the plant applies in
+    whole control periods of :data:`CONTROL_PERIOD`, the smallest whole number of periods
+    at least ``probe`` long (in theta units), so that every probe moves the plant by exactly
+    its step.
+
+    Parameters
+    ----------
+    name : str
+        A candidate (:func:`candidate_axis`).
+    probe : float
+        The step of a continuous axis (theta units), in (0, 1].
+
+    Returns
+    -------
+    float
+    """
+    ax = candidate_axis(name)
+    probe = check_range("probe", probe, 0.0, 1.0, lo_open=True)
+    if name == "valve_dead_time":
+        q = CONTROL_PERIOD / abs(ax.full - ax.nominal)
+        return math.ceil(probe / q - 1e-9) * q
+    return probe
+
+
 def as_built_setup(arm, thetas: dict):
     """The plant truth and the sensors with the candidates at ``thetas``.
 
@@ -270,8 +321,9 @@ def as_built_setup(arm, thetas: dict):
     return plant, SensorConfig.for_arm(arm, **opts)
 
 
-def _plant(arm, values: dict, *, dt: float = 1e-3):
+def _plant(arm, values: dict, *, dt: float = None):
     """The plant truth with plant-effect axes at physical magnitudes ``{axis: value}``."""
+    dt = CONTROL_PERIOD if dt is None else dt
     eff, rel = {}, {}
     for name, v in values.items():
         if name == "valve_dead_time":
@@ -501,12 +553,59 @@ def _measured_error(r, arm) -> np.ndarray:
     return np.hypot(r.signal("x_d") - xy[:, 0], r.signal("y_d") - xy[:, 1])
 
 
+@dataclass(frozen=True)
+class DesignReferences:
+    """The references a :class:`Design` runs, made once for all the plants of a fit.
+
+    Attributes
+    ----------
+    circles : dict
+        Period [s] -> circle reference (warm-up plus window).
+    step, switch : Reference
+    sawtooth : Reference
+    sawtooth_windows : numpy.ndarray of int, shape (m, 2)
+        Data windows of the sawtooth (:func:`sawtooth_reference`).
+    """
+
+    circles: dict
+    step: Reference
+    switch: Reference
+    sawtooth: Reference
+    sawtooth_windows: np.ndarray
+
+    @classmethod
+    def of(cls, arm, design: "Design") -> "DesignReferences":
+        """The references of ``design`` for the nominal ``arm``.
+
+        Parameters
+        ----------
+        arm : ArmParameters
+            The nominal arm (the references' kinematics).
+        design : Design
+            What is simulated.
+
+        Returns
+        -------
+        DesignReferences
+        """
+        if not isinstance(design, Design):
+            raise TypeError(f"design must be a Design, got {type(design).__name__}")
+        saw, win = sawtooth_reference(arm, design.sawtooth_levels)
+        return cls(circles={P: thesis_reference(arm, f"circle{P:g}", duration=design.warmup + w)
+                            for P, w in zip(design.periods, design.windows)},
+                   step=thesis_reference(arm, "step", duration=design.step_duration),
+                   switch=thesis_reference(arm, "switch", duration=design.switch_duration),
+                   sawtooth=saw, sawtooth_windows=win)
+
+
 def evaluate_plants(arm, setups: list, design: Design, *, head=None,
-                    thetas: list | None = None) -> list:
+                    thetas: list | None = None, references: DesignReferences | None = None
+                    ) -> list:
     """Simulate every measurement of ``design`` for several (plant, sensors) at once.
 
     One batched closed-loop run per experiment (circle per period, step, switch, sawtooth)
-    over all setups and variants; impacts per run.
+    over all setups and variants, on every core
+    (:func:`~ppamsafety.experiments.closed_loop.run_batch`); impacts per run.
 
     Parameters
     ----------
@@ -519,6 +618,9 @@ def evaluate_plants(arm, setups: list, design: Design, *, head=None,
         Head of the impacts (default ``thesis-frontal``).
     thetas : list of dict, optional, keyword-only
         The thetas of each setup (stored in the result).
+    references : DesignReferences, optional, keyword-only
+        The references of ``design`` for ``arm`` (default: made here); a fit that evaluates
+        many plants makes them once.
 
     Returns
     -------
@@ -528,6 +630,9 @@ def evaluate_plants(arm, setups: list, design: Design, *, head=None,
         raise TypeError(f"design must be a Design, got {type(design).__name__}")
     if not setups:
         raise ValueError("setups must not be empty")
+    refs = DesignReferences.of(arm, design) if references is None else references
+    if not isinstance(refs, DesignReferences):
+        raise TypeError(f"references must be a DesignReferences, got {type(refs).__name__}")
     thetas = [{}] * len(setups) if thetas is None else thetas
     vs = design.variant_list()
     nv = len(vs)
@@ -536,9 +641,9 @@ def evaluate_plants(arm, setups: list, design: Design, *, head=None,
     bad = [False] * len(setups)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", UserWarning)          # divergence: NaN statistics
-        for P, win in zip(design.periods, design.windows):
+        for P in design.periods:
             name = f"circle{P:g}"
-            ref = thesis_reference(arm, name, duration=design.warmup + win)
+            ref = refs.circles[P]
             res = run_batch([ExperimentCase(pl, v.controller, ref, sensors=s,
                                             meta=_meta(v, name))
                              for pl, s in setups for v in vs])
@@ -555,8 +660,7 @@ def evaluate_plants(arm, setups: list, design: Design, *, head=None,
                                     "lambda_s": vs[v].lambda_s, "period_s": P, "mean_m": mean,
                                     "max_m": mx})
         runs, tables = {}, {}
-        for name, dur in (("step", design.step_duration), ("switch", design.switch_duration)):
-            ref = thesis_reference(arm, name, duration=dur)
+        for name, ref in (("step", refs.step), ("switch", refs.switch)):
             res = run_batch([ExperimentCase(pl, v.controller, ref, sensors=s,
                                             meta=_meta(v, name))
                              for pl, s in setups for v in vs])
@@ -583,7 +687,7 @@ def evaluate_plants(arm, setups: list, design: Design, *, head=None,
                     vals[k][f"Table 6.1 F_max|{name}|{vs[v].label}"] = fmax
                     imp[k].append({"experiment": name, "variant": vs[v].label, "HIC36": hic,
                                    "F_max": fmax})
-        ref, win = sawtooth_reference(arm, design.sawtooth_levels)
+        ref, win = refs.sawtooth, refs.sawtooth_windows
         res = run_batch([ExperimentCase(pl, GravityCompensation(at="desired"), ref, sensors=s,
                                         name="sawtooth") for pl, s in setups])
         idx = np.concatenate([np.arange(a, b) for a, b in win])
@@ -783,7 +887,7 @@ def identifiability(J, names, *, rank_tol: float = RANK_TOL,
 
 @dataclass(eq=False)
 class FitPath:
-    """The Levenberg-Marquardt/Broyden iterations of :func:`lm_broyden`.
+    """The iterations of :func:`levenberg_marquardt` and how they ended.
 
     Attributes
     ----------
@@ -796,13 +900,28 @@ class FitPath:
     residual : numpy.ndarray
         Whitened residuals at the best point.
     jacobian : numpy.ndarray
-        The (Broyden-updated) sensitivity matrix at the end.
+        The sensitivity matrix at the end: a finite-difference Jacobian at the best point
+        when ``jacobian_fresh`` (always so for a converged fit), else the Broyden-updated one.
     history : pandas.DataFrame
-        One row per evaluated step: iteration, accepted, chi2, objective, radius, thetas.
+        One row per evaluated point: iteration, kind (``"start"``, ``"step"`` (a trial
+        step) or ``"jacobian"`` (the finite-difference Jacobian at the current point, one
+        row for its batch of probes)), accepted, chi2, objective, radius, theta.
     evaluations : int
-        Points evaluated after the sensitivities.
+        Points evaluated after the sensitivities (trial steps and Jacobian probes).
     best_index : int
-        Index (into the evaluated points, 0 = start) of the best point.
+        Row of ``history`` of the best point (0 = start).
+    converged : bool
+        A convergence criterion holds at the best point (with a fresh Jacobian).
+    reason : str
+        Which criterion holds (``"gradient"``, ``"step"``, ``"trust region"``), or why the
+        fit stopped without (``"evaluation budget"``).
+    gradient : numpy.ndarray
+        d(chi2 + prior)/d theta at the best point from the final Jacobian, projected on the
+        bounds (a component that points out of the box at an active bound is 0).
+    gauss_newton_step : numpy.ndarray
+        The step the final linear model takes to its bounded minimum (no trust region).
+    jacobian_fresh : bool
+        ``jacobian`` is a finite-difference Jacobian at the best point.
     """
 
     theta: np.ndarray
@@ -813,6 +932,11 @@ class FitPath:
     history: pd.DataFrame
     evaluations: int
     best_index: int
+    converged: bool = False
+    reason: str = ""
+    gradient: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    gauss_newton_step: np.ndarray = field(default_factory=lambda: np.zeros(0))
+    jacobian_fresh: bool = False
 
 
 def _objective(r, theta, prior_sd):
@@ -820,83 +944,184 @@ def _objective(r, theta, prior_sd):
     return float(np.sum(rr ** 2) + np.sum((theta / prior_sd) ** 2)), float(np.sum(rr ** 2))
 
 
-def lm_broyden(evaluate, theta0, r0, J0, *, lower, upper, prior_sd: float = PRIOR_SD,
-               iterations: int = 4, radius: float = 0.5, max_radius: float = 0.5) -> FitPath:
-    """Bounded Levenberg-Marquardt steps on a secant model with Broyden updates.
+def _bounded_step(J, r, th, prior_sd, lo, hi):
+    """The step s minimising ||r + J s||^2 + ||(th + s)/prior_sd||^2 for lo <= th + s <= hi."""
+    k = th.size
+    A = np.vstack([J, np.eye(k) / prior_sd])
+    b = np.concatenate([J @ th - r, np.zeros(k)])
+    hi = np.where(hi <= lo, lo + 1e-12, hi)
+    return lsq_linear(A, b, bounds=(lo, hi)).x - th
 
-    Minimises ``||r(theta)||^2 + ||theta / prior_sd||^2`` for ``lower <= theta <= upper``.
-    Each step solves the linearised problem within the trust region ``|dtheta|_inf <=
-    radius`` by bounded least squares, evaluates the point (one call of ``evaluate``),
-    updates J by Broyden's rank-one secant formula, and halves the radius on failure,
-    doubles it (up to ``max_radius``) on success.
+
+def _projected_gradient(J, r, th, prior_sd, lower, upper):
+    """d(chi2 + prior)/d theta, zero where an active bound stops the descent."""
+    g = 2.0 * (J.T @ r + th / prior_sd ** 2)
+    at_lo = (th <= lower + 1e-12) & (g > 0.0)
+    at_hi = (th >= upper - 1e-12) & (g < 0.0)
+    return np.where(at_lo | at_hi, 0.0, g)
+
+
+def levenberg_marquardt(evaluate, theta0, r0, J0, *, lower, upper, probe,
+                        prior_sd: float = PRIOR_SD, xtol: float = XTOL, gtol: float = GTOL,
+                        max_evaluations: int = MAX_EVALUATIONS, radius: float = 0.5,
+                        max_radius: float = 0.5) -> FitPath:
+    """Bounded Levenberg-Marquardt to a stated convergence criterion.
+
+    Minimises ``F(theta) = ||r(theta)||^2 + ||theta / prior_sd||^2`` for ``lower <= theta
+    <= upper``.  Each iteration solves the linearised problem inside the trust region
+    ``|dtheta|_inf <= radius`` by bounded linear least squares and evaluates the point; an
+    accepted step (F lower) doubles the radius (up to ``max_radius``) and updates J by
+    Broyden's rank-one secant formula.  When a step fails on a Broyden-updated J, the radius
+    is halved and J is measured afresh by finite differences at the current point
+    (``theta + probe_j e_j``, or minus where the upper bound is too close; all probes in one
+    batch), as it is before convergence is declared; when a step fails on a fresh J, the
+    radius becomes a quarter of that step.
+
+    Convergence, tested only with a fresh finite-difference Jacobian at the current point:
+
+    * *gradient*: every component of the projected gradient of F, times its probe step, is
+      at most ``gtol`` (moving any theta by one probe step along the gradient lowers chi2 +
+      prior by at most ``gtol`` to first order);
+    * *step*: the bounded Gauss-Newton step of the linear model (no trust region) moves
+      every theta by at most ``xtol``;
+    * *trust region*: every step the fresh model proposed raised F, until the trust region
+      shrank below ``xtol`` (a minimum at the resolution ``xtol``, though not one the linear
+      model predicts: its gradient and Gauss-Newton step are reported).
+
+    The fit also stops after ``max_evaluations`` evaluated points (reported as not
+    converged).  A finite difference over a probe step of a few hundredths of an axis, not
+    an infinitesimal one: the simulated statistics are rough at the percent level (a
+    maximum over a window, the impact at the sample of the largest speed), which a smaller
+    step would turn into noise.
 
     Parameters
     ----------
     evaluate : callable
-        ``evaluate(theta) -> r``: whitened residuals (NaN for a failed point).
+        ``evaluate(thetas) -> list of r``: whitened residuals (NaN for a failed number) of
+        each point of the list ``thetas``, evaluated together (one batch).
     theta0 : array_like, shape (k,)
         Start (the nominal arm: zeros).
     r0 : array_like, shape (m,)
         Residuals at ``theta0``.
     J0 : array_like, shape (m, k)
-        Secant sensitivities at ``theta0``.
+        Sensitivities to start with (e.g. secants from ``theta0``).
     lower, upper : array_like, shape (k,), keyword-only
         Bounds of theta.
+    probe : array_like, shape (k,), keyword-only
+        Finite-difference steps of the Jacobian (theta units, > 0).
     prior_sd : float, keyword-only
         Prior standard deviation of theta around 0.
-    iterations : int, keyword-only
-        Evaluated steps.
+    xtol : float, keyword-only
+        Step tolerance (theta units).
+    gtol : float, keyword-only
+        Gradient tolerance (chi2 + prior per probe step).
+    max_evaluations : int, keyword-only
+        Largest number of points evaluated (0: none; the start is returned).
     radius : float, keyword-only
         Initial trust radius (theta units).
     max_radius : float, keyword-only
-        Largest trust radius (the secant model is trusted over at most this step).
+        Largest trust radius.
 
     Returns
     -------
     FitPath
     """
-
     th = np.asarray(theta0, float).copy()
     r = np.asarray(r0, float).copy()
     J = np.asarray(J0, float).copy()
     lower, upper = np.asarray(lower, float), np.asarray(upper, float)
+    probe = np.asarray(probe, float)
     k = th.size
     if J.shape != (r.size, k):
         raise ValueError(f"J0 must have shape ({r.size}, {k}), got {J.shape}")
+    if probe.shape != (k,) or not np.all(np.isfinite(probe) & (probe > 0)):
+        raise ValueError(f"probe must hold {k} positive finite steps, got {probe!r}")
     prior_sd = check_range("prior_sd", prior_sd, 0.0, 1e6, lo_open=True)
-    iterations = check_int("iterations", iterations, 0, 100)
+    xtol = check_range("xtol", xtol, 0.0, 1.0, lo_open=True)
+    gtol = check_range("gtol", gtol, 0.0, 1e12, lo_open=True)
+    max_evaluations = check_int("max_evaluations", max_evaluations, 0, 10000)
     ok = np.isfinite(r)
     obj, chi2 = _objective(r, th, prior_sd)
-    hist = [{"iteration": 0, "accepted": True, "chi2": chi2, "objective": obj,
+    hist = [{"iteration": 0, "kind": "start", "accepted": True, "chi2": chi2, "objective": obj,
              "radius": radius, "theta": th.tolist()}]
-    best_i = 0
-    for it in range(1, iterations + 1):
-        A = np.vstack([J[ok], np.eye(k) / prior_sd])
-        b = np.concatenate([J[ok] @ th - r[ok], np.zeros(k)])
-        lo = np.maximum(lower, th - radius)
-        hi = np.minimum(upper, th + radius)
-        hi = np.where(hi <= lo, lo + 1e-12, hi)
-        new = lsq_linear(A, b, bounds=(lo, hi)).x
-        s = new - th
-        if np.max(np.abs(s)) < 1e-4:
+    best_i, evals, it, fresh = 0, 0, 0, False
+    reason = ""
+
+    def refresh():
+        """J by finite differences at th (one batch); False if the budget does not allow."""
+        nonlocal J, fresh, evals
+        if evals + k > max_evaluations:
+            return False
+        h = np.where(th + probe <= upper + 1e-12, probe, -probe)
+        pts = [th + h[j] * np.eye(k)[j] for j in range(k)]
+        R = np.asarray(evaluate(pts), float)
+        evals += k
+        Jn = (R - r).T / h
+        J = np.where(np.isfinite(Jn), Jn, 0.0)
+        fresh = True
+        hist.append({"iteration": it, "kind": "jacobian", "accepted": False, "chi2": np.nan,
+                     "objective": np.nan, "radius": radius, "theta": th.tolist()})
+        return True
+
+    while True:
+        Jok, rok = J[ok], r[ok]
+        if fresh:
+            g = _projected_gradient(Jok, rok, th, prior_sd, lower, upper)
+            s_gn = _bounded_step(Jok, rok, th, prior_sd, lower, upper)
+            if np.max(np.abs(g) * probe) <= gtol:
+                reason = "gradient"
+                break
+            if np.max(np.abs(s_gn)) <= xtol:
+                reason = "step"
+                break
+        if evals >= max_evaluations:
+            reason = "evaluation budget"
             break
-        rn = np.asarray(evaluate(new), float)
+        s = _bounded_step(Jok, rok, th, prior_sd, np.maximum(lower, th - radius),
+                          np.minimum(upper, th + radius))
+        if np.max(np.abs(s)) <= xtol:
+            if not fresh:                  # a stale model proposes no move: measure J
+                if not refresh():
+                    reason = "evaluation budget"
+                    break
+                continue
+            if radius <= xtol:             # a fresh model, and no decrease within xtol
+                reason = "trust region"
+                break
+        it += 1
+        new = th + s
+        rn = np.asarray(evaluate([new])[0], float)
+        evals += 1
         okn = np.isfinite(rn) & ok
         on, cn = _objective(np.where(okn, rn, np.nan), new, prior_sd)
-        if okn.sum() == ok.sum():
-            y = np.where(ok, rn - r, 0.0)
-            J = J + np.outer(y - J @ s, s) / float(s @ s)
-        accepted = bool(okn.sum() == ok.sum() and on < obj)
-        hist.append({"iteration": it, "accepted": accepted, "chi2": cn, "objective": on,
-                     "radius": radius, "theta": new.tolist()})
+        complete = okn.sum() == ok.sum()
+        accepted = bool(complete and on < obj)
+        hist.append({"iteration": it, "kind": "step", "accepted": accepted, "chi2": cn,
+                     "objective": on, "radius": radius, "theta": new.tolist()})
         if accepted:
+            if complete:
+                y = np.where(ok, rn - r, 0.0)
+                J = J + np.outer(y - J @ s, s) / float(s @ s)
             th, r, obj, chi2 = new, rn, on, cn
-            best_i = it
-            radius = min(max_radius, 2 * radius)
+            best_i = len(hist) - 1
+            radius = min(max_radius, 2.0 * radius)
+            fresh = False
+        elif fresh:
+            # the model was measured at th: its step is wrong at this length, try a quarter
+            radius = 0.25 * min(radius, float(np.max(np.abs(s))))
         else:
             radius *= 0.5
+            if not refresh():
+                reason = "evaluation budget"
+                break
+    if not fresh:
+        # the final model is a Broyden update (the budget ran out): its gradient and step
+        g = _projected_gradient(J[ok], r[ok], th, prior_sd, lower, upper)
+        s_gn = _bounded_step(J[ok], r[ok], th, prior_sd, lower, upper)
     return FitPath(theta=th, objective=obj, chi2=chi2, residual=r, jacobian=J,
-                   history=pd.DataFrame(hist), evaluations=len(hist) - 1, best_index=best_i)
+                   history=pd.DataFrame(hist), evaluations=evals, best_index=best_i,
+                   converged=reason != "evaluation budget", reason=reason, gradient=g,
+                   gauss_newton_step=s_gn, jacobian_fresh=fresh)
 
 
 def posterior_intervals(J, theta, chi2, m, *, lower, upper, prior_sd: float = PRIOR_SD,
@@ -1103,8 +1328,9 @@ def _unreachable(J, r) -> float:
 
 def fit_as_built(arm=None, *, candidates=CANDIDATES, design: Design | None = None,
                  measurements: pd.DataFrame | None = None, step: float = STEP,
-                 iterations: int = 4, prior_sd: float = PRIOR_SD, head=None,
-                 rank_tol: float = RANK_TOL) -> AsBuiltFit:
+                 max_evaluations: int = MAX_EVALUATIONS, xtol: float = XTOL,
+                 gtol: float = GTOL, probe: float = PROBE, prior_sd: float = PRIOR_SD,
+                 head=None, rank_tol: float = RANK_TOL) -> AsBuiltFit:
     """Fit the candidates jointly to every printed measurement (module docstring).
 
     Parameters
@@ -1120,8 +1346,13 @@ def fit_as_built(arm=None, *, candidates=CANDIDATES, design: Design | None = Non
         synthetic thesis to check the machinery.
     step : float, keyword-only
         Secant step of the sensitivities (theta units), in (0, 1].
-    iterations : int, keyword-only
-        Levenberg-Marquardt steps (each one batched evaluation).
+    max_evaluations : int, keyword-only
+        Points the fit may evaluate after the sensitivities (trial steps and Jacobian
+        probes) before it stops unconverged (:func:`levenberg_marquardt`).
+    xtol, gtol : float, keyword-only
+        Step and gradient tolerances of the fit (:data:`XTOL`, :data:`GTOL`).
+    probe : float, keyword-only
+        Finite-difference step of the fit's Jacobians (:func:`candidate_probe`).
     prior_sd : float, keyword-only
         Prior standard deviation of theta around the nominal arm.
     head : HeadContactModel or str, optional, keyword-only
@@ -1146,13 +1377,15 @@ def fit_as_built(arm=None, *, candidates=CANDIDATES, design: Design | None = Non
     for n in names:
         candidate_axis(n)
     step = check_range("step", step, 0.0, 1.0, lo_open=True)
+    max_evaluations = check_int("max_evaluations", max_evaluations, 0, 10000)
     meas = check_measurements(thesis_measurements(design) if measurements is None
                               else measurements).reset_index(drop=True)
     m = len(meas)
+    refs = DesignReferences.of(arm, design)
     # 1. sensitivities: the nominal arm and every candidate at theta = step, one batch
     pts = [{}] + [{n: step} for n in names]
     evs = evaluate_plants(arm, [as_built_setup(arm, p) for p in pts], design, head=head,
-                          thetas=pts)
+                          thetas=pts, references=refs)
     R = np.array([whitened_residuals(e.values, meas) for e in evs])
     r0 = R[0]
     if not np.any(np.isfinite(r0)):
@@ -1170,18 +1403,21 @@ def fit_as_built(arm=None, *, candidates=CANDIDATES, design: Design | None = Non
     si = [names.index(n) for n in sel]
     lower = np.array([theta_bounds(n)[0] for n in sel])
     upper = np.array([theta_bounds(n)[1] for n in sel])
+    probes = np.array([candidate_probe(n, probe) for n in sel])
     cache = {}
 
-    def evaluate(theta):
-        th = {n: float(v) for n, v in zip(sel, theta)}
-        e = evaluate_plants(arm, [as_built_setup(arm, th)], design, head=head,
-                            thetas=[th])[0]
-        cache[tuple(np.round(theta, 12))] = e
-        return whitened_residuals(e.values, meas)
+    def evaluate(points):
+        ths = [{n: float(v) for n, v in zip(sel, theta)} for theta in points]
+        es = evaluate_plants(arm, [as_built_setup(arm, th) for th in ths], design, head=head,
+                             thetas=ths, references=refs)
+        for theta, e in zip(points, es):
+            cache[tuple(np.round(theta, 12))] = e
+        return [whitened_residuals(e.values, meas) for e in es]
 
-    # 2.-3. Levenberg-Marquardt with Broyden updates on the identifiable subset
-    path = lm_broyden(evaluate, np.zeros(len(sel)), r0, Jz[:, si], lower=lower, upper=upper,
-                      prior_sd=prior_sd, iterations=iterations)
+    # 2.-3. bounded Levenberg-Marquardt on the identifiable subset, to convergence
+    path = levenberg_marquardt(evaluate, np.zeros(len(sel)), r0, Jz[:, si], lower=lower,
+                               upper=upper, probe=probes, prior_sd=prior_sd, xtol=xtol,
+                               gtol=gtol, max_evaluations=max_evaluations)
     built = evs[0] if path.best_index == 0 else cache[tuple(np.round(path.theta, 12))]
     r_b = path.residual
     sd, lo, hi, corr, s2 = posterior_intervals(path.jacobian[np.isfinite(r_b)], path.theta,
@@ -1236,6 +1472,12 @@ def fit_as_built(arm=None, *, candidates=CANDIDATES, design: Design | None = Non
                "chi2_per_number_nominal": chi2_nom / m,
                "chi2_per_number_as_built": float(path.chi2) / m,
                "unreachable_fraction": unreach, "evaluations": 1 + len(names) + path.evaluations,
+               "fit_converged": bool(path.converged), "fit_convergence": path.reason,
+               "fit_budget": int(max_evaluations),
+               "fit_steps": int((path.history.kind == "step").sum()),
+               "fit_jacobians": int((path.history.kind == "jacobian").sum()),
+               "fit_gradient_max": float(np.max(np.abs(path.gradient) * probes)),
+               "fit_gauss_newton_step_max": float(np.max(np.abs(path.gauss_newton_step))),
                "fitted": {r.candidate: float(r.value) for r in effects.itertuples() if r.fitted}}
     if concl is not None:
         metrics["conclusions"] = {lab: {c.key: bool(c.holds) for c in cs}
@@ -1289,5 +1531,6 @@ __all__ = ["REPRODUCIBILITY", "PRINT_STEP", "FIG_3_1_RMS_DEG", "RANK_TOL", "CONF
            "theta_bounds", "as_built_setup", "Design", "thesis_measurements",
            "sawtooth_reference", "PlantEvaluation", "evaluate_plants", "whitened_residuals",
            "check_measurements", "Identifiability", "identifiability", "FitPath",
-           "lm_broyden", "posterior_intervals", "AsBuiltFit", "statement_checks",
-           "fit_as_built", "simulated_measurements"]
+           "levenberg_marquardt", "posterior_intervals", "candidate_probe", "DesignReferences",
+           "PROBE", "XTOL", "GTOL", "MAX_EVALUATIONS", "CONTROL_PERIOD", "AsBuiltFit",
+           "statement_checks", "fit_as_built", "simulated_measurements"]
