@@ -57,6 +57,12 @@ class ArmKind(RecordKind):
     rule = ARM_RULE
 
     def accepts(self, data) -> bool:
+        """True for an arm record (not a test-bench record, not a cylinder).
+
+        Parameters
+        ----------
+        data : MeasuredData or Campaign
+        """
         return (isinstance(data, MeasuredData) and data.kind != "actuator"
                 and data.actuator_type != "cylinder")
 
@@ -67,7 +73,18 @@ class ArmKind(RecordKind):
                  rho_max=1.5, experiment=None, seed=0, bootstrap=None, stability=None,
                  mismatch=None, **_):
         """:func:`~.pipeline.diagnose_arm`, and the arm the record names in its settings and
-        notes (``mismatch``: :func:`other_arm`, allowed by the caller)."""
+        notes.
+
+        Parameters
+        ----------
+        data : MeasuredData
+        arm, candidates, block_seconds, alpha, rho_max, experiment, seed, bootstrap, stability
+            As :func:`ppamsafety.diagnose.diagnose` (checked there).
+        mismatch : str, optional
+            :func:`other_arm` of the record, allowed by the caller.
+        **_
+            Front-door options of other kinds (none is given: :meth:`check_options`).
+        """
         dg = diagnose_arm(data, arm=arm, candidates=candidates, block_seconds=block_seconds,
                           alpha=alpha, rho_max=rho_max, experiment=experiment, seed=seed,
                           bootstrap=bootstrap, stability=stability)

@@ -33,6 +33,12 @@ class MuscleKind(RecordKind):
     refused = {"arm": _NO_ARM}
 
     def accepts(self, data) -> bool:
+        """True for a muscle's test-bench record.
+
+        Parameters
+        ----------
+        data : MeasuredData or Campaign
+        """
         return (isinstance(data, MeasuredData) and data.kind == "actuator"
                 and data.actuator_type != "cylinder")
 
@@ -41,6 +47,17 @@ class MuscleKind(RecordKind):
 
     def diagnose(self, data, *, candidates=None, alpha=0.01, rho_max=1.5, experiment=None,
                  **_):
+        """:func:`~.pipeline.diagnose_actuator` of the record.
+
+        Parameters
+        ----------
+        data : MeasuredData
+        candidates, alpha, rho_max, experiment
+            As :func:`ppamsafety.diagnose.diagnose`.
+        **_
+            The arm's options (``arm`` is refused by :meth:`check_options`, the others
+            do not apply).
+        """
         return diagnose_actuator(data, candidates=candidates, alpha=alpha, rho_max=rho_max,
                                  experiment=experiment)
 
@@ -54,6 +71,12 @@ class CampaignKind(RecordKind):
     refused = {"arm": _NO_ARM}
 
     def accepts(self, data) -> bool:
+        """True for a campaign or one cylinder record.
+
+        Parameters
+        ----------
+        data : MeasuredData or Campaign
+        """
         return isinstance(data, Campaign) or (isinstance(data, MeasuredData)
                                               and data.actuator_type == "cylinder")
 
@@ -61,6 +84,16 @@ class CampaignKind(RecordKind):
         return tuple(VOCABULARY)
 
     def diagnose(self, data, *, candidates=None, alpha=0.01, rho_max=1.5, **_):
+        """:func:`~.campaign.diagnose_campaign` of the campaign.
+
+        Parameters
+        ----------
+        data : Campaign or MeasuredData
+        candidates, alpha, rho_max
+            As :func:`ppamsafety.diagnose.diagnose`.
+        **_
+            Options that do not apply (``arm`` is refused by :meth:`check_options`).
+        """
         return diagnose_campaign(data, candidates=candidates, alpha=alpha, rho_max=rho_max)
 
 
