@@ -7,7 +7,7 @@ from ppamsafety.diagnose.arm.kind import ARM, ArmKind
 from ppamsafety.diagnose.bench.cylinder_synth import synthesize_cylinder
 from ppamsafety.diagnose.bench.kind import CAMPAIGN, MUSCLE
 from ppamsafety.diagnose.bench.synthesize import synthesize_actuator
-from ppamsafety.diagnose.core.kind import RecordKind, kind_of, register, registered
+from ppamsafety.diagnose.core.kind import RecordKind, kind_of, register_kind, registered
 from ppamsafety.params import thesis_arm
 
 
@@ -35,9 +35,9 @@ def test_a_bench_kind_refuses_the_arm_option(records):
 
 def test_registry_refuses_a_kind_twice_and_non_kinds():
     with pytest.raises(ValueError, match="ArmKind"):
-        register(ArmKind())
+        register_kind(ArmKind())
     with pytest.raises(TypeError, match="kind"):
-        register(object())
+        register_kind(object())
 
 
 def test_a_record_no_kind_accepts_names_the_registered_kinds(records):

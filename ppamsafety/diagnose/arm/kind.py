@@ -12,7 +12,7 @@ from dataclasses import replace
 from ...data.measured import MeasuredData
 from ...params import thesis_arm
 from ...params.arm_file import arm_fingerprint
-from ..core.kind import RecordKind, register
+from ..core.kind import RecordKind, register_kind
 from .candidates import REGISTRY
 from .gates import ARM_RULE
 from .pipeline import diagnose_arm
@@ -106,6 +106,6 @@ class ArmKind(RecordKind):
                            "name": used.name, "sha256": fp}, "same": mismatch is None}})
 
 
-ARM = register(ArmKind())
+ARM = register_kind(ArmKind())
 
 __all__ = ["ArmKind", "ARM", "other_arm"]

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from ...data.campaign import Campaign
 from ...data.measured import MeasuredData
-from ..core.kind import RecordKind, register
+from ..core.kind import RecordKind, register_kind
 from .campaign import CAMPAIGN_RULE, diagnose_campaign
 from .candidates import ACTUATOR_VOCABULARY
 from .friction import VOCABULARY
@@ -97,7 +97,7 @@ class CampaignKind(RecordKind):
         return diagnose_campaign(data, candidates=candidates, alpha=alpha, rho_max=rho_max)
 
 
-MUSCLE = register(MuscleKind())
-CAMPAIGN = register(CampaignKind())
+MUSCLE = register_kind(MuscleKind())
+CAMPAIGN = register_kind(CampaignKind())
 
 __all__ = ["MuscleKind", "CampaignKind", "MUSCLE", "CAMPAIGN"]

@@ -16,12 +16,12 @@ recipe for a new kind is in ``docs/architecture.md``; the muscle test bench
 
 from __future__ import annotations
 
-#: The registered kinds, in registration order (:func:`register`).
+#: The registered kinds, in registration order (:func:`register_kind`).
 _KINDS: list = []
 
 
 class RecordKind:
-    """Interface of a record kind (subclass it and :func:`register` an instance).
+    """Interface of a record kind (subclass it and :func:`register_kind` an instance).
 
     Attributes
     ----------
@@ -75,7 +75,7 @@ class RecordKind:
         raise NotImplementedError
 
 
-def register(kind: RecordKind) -> RecordKind:
+def register_kind(kind: RecordKind) -> RecordKind:
     """Add a record kind to the registry the front door loops over (once per class).
 
     Parameters
@@ -115,4 +115,4 @@ def kind_of(data) -> RecordKind:
     return found[0]
 
 
-__all__ = ["RecordKind", "register", "registered", "kind_of"]
+__all__ = ["RecordKind", "register_kind", "registered", "kind_of"]
