@@ -3,7 +3,7 @@
 What is measured
 ----------------
 evaluation
-    :func:`ppamsafety.diagnose.arm.as_built.evaluate_plants` of the sensitivity step (the
+    :func:`ppamsafety.thesis_fits.as_built.evaluate_plants` of the sensitivity step (the
     nominal arm and each candidate at theta = 0.5) in one call, and of one plant alone (the
     plant the report's fit converges near: valve time constant theta -0.2, Coulomb friction
     theta 1, hysteresis theta 0.65), wall and CPU time after a warm-up that loads the
@@ -11,7 +11,7 @@ evaluation
 batched vs one call per plant (``--per-plant``)
     The same plants one call each, as a loop over the plants would do.
 the fit (``--fit``)
-    :func:`~ppamsafety.diagnose.arm.as_built.fit_as_built` of the report (every candidate,
+    :func:`~ppamsafety.thesis_fits.as_built.fit_as_built` of the report (every candidate,
     the full design) to convergence: its steps, Jacobians, criterion, chi2 and CPU time.
 
 ``--baseline REV`` measures the evaluation in the git revision REV and in the working tree,
@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ppamsafety.diagnose.arm import as_built as ab
+from ppamsafety.thesis_fits import as_built as ab
 from ppamsafety.params import thesis_arm
 
 #: The plant near the report's converged fit, for the one-plant evaluation.

@@ -15,7 +15,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from ppamsafety.diagnose.arm import as_built as ab
+from ppamsafety.thesis_fits import as_built as ab
 from ppamsafety.experiments.conclusions import ki12_step_oscillatory
 from ppamsafety.design import load_arm
 from ppamsafety.params import thesis_arm

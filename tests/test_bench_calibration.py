@@ -14,8 +14,9 @@ import pytest
 from ppamsafety.data.measured import MeasuredDataWarning
 from ppamsafety.diagnose import diagnose
 from ppamsafety.diagnose.bench import friction as fr
-from ppamsafety.diagnose.bench.calibration import (HIGH_PRECISION, MEASURE_SEEDS,
-                                                   TUNING_SEEDS, calibration_table,
+from ppamsafety.diagnose.bench.calibration import (CAMPAIGN_MEASURE as MEASURE_SEEDS,
+                                                   CAMPAIGN_TUNING as TUNING_SEEDS,
+                                                   HIGH_PRECISION, calibration_table,
                                                    run_calibration)
 from ppamsafety.diagnose.bench.campaign import diagnose_campaign
 from ppamsafety.diagnose.bench.cylinder_synth import synthesize_cylinder

@@ -14,14 +14,22 @@ import pytest
 
 from ppamsafety.data import MeasuredDataWarning
 from ppamsafety.diagnose.bench.design import actuator_design
-from ppamsafety.diagnose.bench.gates import CLEAR_RATIO, GATES
+from ppamsafety.diagnose.bench.gates import MUSCLE_RULE
 from ppamsafety.diagnose.bench.pipeline import diagnose_actuator
-from ppamsafety.diagnose.bench.scenarios import MEASURE_SEEDS as BENCH_MEASURE_SEEDS
-from ppamsafety.diagnose.bench.scenarios import random_scenario, record_of, run_battery
+from ppamsafety.diagnose.bench.scenarios import MUSCLE_BATTERY, random_scenario, record_of
 from ppamsafety.diagnose.bench.stability import half_sample_covariance, inflated_covariance
 from ppamsafety.diagnose.bench.synthesize import synthesize_actuator
+from ppamsafety.diagnose.core.battery import run_battery as core_run_battery
 from ppamsafety.diagnose.core.linear_selection import fit_linear
 from ppamsafety.diagnose.scenarios import HIGH_PRECISION, calibration_table, scores
+
+BENCH_MEASURE_SEEDS = MUSCLE_BATTERY.measure
+
+
+def run_battery(seeds, **options):
+    """The muscle bench's battery through the one runner of every record kind."""
+    return core_run_battery(MUSCLE_BATTERY, seeds, **options)
+
 
 #: The keys of a row of the arm's battery (ppamsafety.diagnose.scenarios.run_scenario).
 ARM_ROW_KEYS = {"seed", "kind", "reference", "controller", "dt", "duration", "hidden",
@@ -65,8 +73,8 @@ def test_quick_claims_are_right(quick):
         # every 'high' name is a hidden effect, and has passed every gate
         assert set(r.high) <= hidden, (r.seed, r.high, r.hidden)
         for n in r.high:
-            assert set(r.gates[n]) == set(GATES) and all(r.gates[n].values())
-            assert r.named_ratios[n] >= CLEAR_RATIO
+            assert set(r.gates[n]) == set(MUSCLE_RULE.gates) and all(r.gates[n].values())
+            assert r.named_ratios[n] >= MUSCLE_RULE.clear_ratio
         # a confounded group names none of its members
         for g in r.confounded:
             assert not set(g) & set(r.named), (r.seed, g, r.named)

@@ -21,7 +21,7 @@ from ppamsafety.diagnose import diagnose, synthesize
 from ppamsafety.diagnose.bench.pipeline import (actuator_record, diagnose_actuator,
                                                 motion_direction, residual_noise)
 from ppamsafety.diagnose.bench.battery import (CASES, CONFOUNDED, confusion_matrix, outcome,
-                                               parameter_failures, required_rate, run_battery)
+                                               parameter_failures, required_rate, run_cases)
 from ppamsafety.diagnose.bench.synthesize import synthesize_actuator
 from ppamsafety.diagnose.core.noise import interpolation_sigma, second_difference_sigma
 
@@ -309,7 +309,7 @@ def test_invalid_inputs_name_the_argument():
 
 
 def test_confusion_matrix_is_a_dataframe_with_rates():
-    res = run_battery(cases=["nothing", "outside:backlash"], seeds=(21,), cycles=2)
+    res = run_cases(cases=["nothing", "outside:backlash"], seeds=(21,), cycles=2)
     m = confusion_matrix(res)
     assert list(m.index) == ["nothing", "outside:backlash"]
     assert {"runs", "ok_rate", "required"} <= set(m.columns)
@@ -323,7 +323,7 @@ def test_battery_full():
     seeds = tuple(range(1, 11))
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        res = run_battery(seeds=seeds)
+        res = run_cases(seeds=seeds)
     m = confusion_matrix(res)
     text = m.to_string()
     print(text)

@@ -14,13 +14,22 @@ import pytest
 
 from ppamsafety.diagnose.scenarios import (DECLARED_MEASURE_COUNT, DECLARED_MEASURE_SEEDS,
                                            DECLARED_RESULTS_FILE, DECLARED_TUNING_SEEDS,
-                                           HIGH_PRECISION, MEASURE_SEEDS, TUNING_SEEDS,
+                                           HIGH_PRECISION, ARM_BATTERY,
                                            calibration_table, declared_arm, failures,
                                            load_results, random_scenario, replay_limits,
-                                           replay_null, run_battery, save_results, scores,
+                                           replay_null, save_results, scores,
                                            REPLAY_TUNING_FILE)
 from ppamsafety.diagnose.arm.pipeline import REPLAY_RHO, REPLAY_RHO_STATIC
+from ppamsafety.diagnose.core.battery import run_battery as core_run_battery
 from ppamsafety.sections import diagnose_trust
+
+TUNING_SEEDS, MEASURE_SEEDS = ARM_BATTERY.tuning, ARM_BATTERY.measure
+
+
+def run_battery(seeds, **options):
+    """The arm's battery through the one runner of every record kind."""
+    return core_run_battery(ARM_BATTERY, seeds, **options)
+
 
 #: Scenarios of the shipped battery (issue 19: ">= 1000").
 MIN_SCENARIOS = 1000

@@ -9,7 +9,8 @@ from ppamsafety.diagnose import diagnose, synthesize
 from ppamsafety.diagnose.bench.battery import CASES
 from ppamsafety.diagnose.bench.synthesize import synthesize_actuator
 from ppamsafety.diagnose.core.omitted import (HINT_P, OmittedEffect, omitted_effects,
-                                              pinv_psd, widened_interval)
+                                              widened_interval)
+from ppamsafety.diagnose.core.solve import pinv_psd
 
 Z95 = stats.norm.isf(0.025)
 

@@ -2,7 +2,7 @@
 
 import numpy as np
 
-from ppamsafety.diagnose.arm.summary_fit import AXES, axis, fit_summary, plant_at, whitened
+from ppamsafety.thesis_fits.summary_fit import AXES, axis, fit_summary, plant_at, whitened
 from ppamsafety.params import thesis_arm
 from ppamsafety.plant import packing
 from ppamsafety.sections import REGISTRY, diagnose_cases

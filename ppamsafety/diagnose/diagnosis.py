@@ -1,34 +1,32 @@
 """:func:`diagnose`: the front door of the discrepancy workflow, for every record kind.
 
-It checks the record and hands it to the pipeline of its kind:
+It checks what every kind shares and hands the record to the one registered record kind
+(:mod:`ppamsafety.diagnose.core.kind`) that accepts it; the kinds registered here:
 
-* an arm record (open loop, closed loop, static sawtooth) to
-  :func:`ppamsafety.diagnose.arm.pipeline.diagnose_arm`;
-* an actuator record of a muscle on a test bench to
-  :func:`ppamsafety.diagnose.bench.pipeline.diagnose_actuator`;
+* an arm record (open loop, closed loop, static sawtooth),
+  :class:`ppamsafety.diagnose.arm.kind.ArmKind`;
+* an actuator record of a muscle on a test bench,
+  :class:`ppamsafety.diagnose.bench.kind.MuscleKind`;
 * a pneumatic cylinder on a bench -- one record or a campaign of several
-  (:class:`~ppamsafety.data.campaign.Campaign`) -- to
-  :func:`ppamsafety.diagnose.bench.campaign.diagnose_campaign`.
+  (:class:`~ppamsafety.data.campaign.Campaign`) --
+  :class:`ppamsafety.diagnose.bench.kind.CampaignKind`.
 
-Both return a :class:`~ppamsafety.diagnose.core.result.Diagnosis`.
+Each returns a :class:`~ppamsafety.diagnose.core.result.Diagnosis`.
 """
 
 from __future__ import annotations
-
-from dataclasses import replace
 
 from threadpoolctl import threadpool_limits
 
 from ..data.campaign import Campaign
 from .._validation import check_bool, check_instance, check_int, check_seed, did_you_mean
 from ..data.measured import MeasuredData
-from ..params import thesis_arm
 from ..params.arm import ArmParameters
-from ..params.arm_file import arm_fingerprint
-from .arm.pipeline import diagnose_arm
-from .bench.campaign import diagnose_campaign
-from .bench.pipeline import diagnose_actuator
-from .core.result import HIGH_CONFIDENCE, JSON_NAME, SCHEMA_VERSION, Diagnosis
+from .arm.kind import other_arm
+from .bench import kind as _bench_kinds  # noqa: F401  (registers the bench kinds)
+from .core.gates import HIGH_WEIGHT
+from .core.kind import kind_of
+from .core.result import JSON_NAME, SCHEMA_VERSION, Diagnosis
 
 
 def diagnose(data, *, arm=None, candidates=None, block_seconds: float = 0.05,
@@ -108,38 +106,6 @@ def diagnose(data, *, arm=None, candidates=None, block_seconds: float = 0.05,
                          allow_other_arm=allow_other_arm)
 
 
-def _label(name, sha256) -> str:
-    return f"'{name or 'unnamed arm'}' (sha256 {sha256[:16]})"
-
-
-def other_arm(data, arm) -> str | None:
-    """The mismatch between the arm a record names and the arm it is diagnosed against.
-
-    Parameters
-    ----------
-    data : MeasuredData or Campaign
-        The record; an arm record may name the arm it came from (metadata ``[arm]``: its
-        ``name`` and ``sha256``, :func:`ppamsafety.params.arm_file.arm_fingerprint`).
-    arm : ArmParameters or None
-        The model under test (None: the thesis arm).
-
-    Returns
-    -------
-    str or None
-        None when the record names no arm or the same one; else a sentence naming both
-        arms (name and fingerprint).
-    """
-    made = data.meta.get("arm") if isinstance(data, MeasuredData) else None
-    if made is None:
-        return None
-    used = thesis_arm() if arm is None else arm
-    fp = arm_fingerprint(used)
-    if made["sha256"] == fp:
-        return None
-    return (f"the record came from arm {_label(made.get('name'), made['sha256'])} but is "
-            f"diagnosed against arm {_label(used.name, fp)}")
-
-
 def _diagnose(data, *, arm, candidates, block_seconds, alpha, rho_max, experiment, seed,
               bootstrap, stability, allow_other_arm):
     check_instance("data", data, (MeasuredData, Campaign))
@@ -158,40 +124,19 @@ def _diagnose(data, *, arm, candidates, block_seconds, alpha, rho_max, experimen
             raise ValueError(f"experiment = {experiment!r} does not match the experiment "
                              f"{', '.join(map(repr, exps))} of the record's metadata"
                              f"{did_you_mean(experiment, exps)}")
-    if isinstance(data, Campaign) or data.kind == "actuator":
-        # what applies to arm records only is refused rather than silently ignored
-        if arm is not None:
-            raise ValueError("arm applies to arm records; an actuator record (a test bench) is "
-                             "diagnosed against its own nominal force law (leave arm out)")
+    kind = kind_of(data)
+    options = dict(arm=arm, candidates=candidates, block_seconds=block_seconds, alpha=alpha,
+                   rho_max=rho_max, experiment=experiment, seed=seed, bootstrap=bootstrap,
+                   stability=stability)
+    # what applies to some kinds only is refused rather than silently ignored
+    kind.check_options(options)
     mismatch = other_arm(data, arm)
     if mismatch is not None and not allow_other_arm:
         raise ValueError(f"{mismatch}: diagnose the record against the arm it came from "
                          f"(arm=load_arm(FILE), the arm file whose fingerprint it names), or "
                          f"give allow_other_arm=True to compare the two arms on purpose")
-    if isinstance(data, Campaign) or data.actuator_type == "cylinder":
-        return diagnose_campaign(data, candidates=candidates, alpha=alpha, rho_max=rho_max)
-    if data.kind == "actuator":
-        return diagnose_actuator(data, candidates=candidates, alpha=alpha, rho_max=rho_max,
-                                 experiment=experiment)
-    dg = diagnose_arm(data, arm=arm, candidates=candidates, block_seconds=block_seconds,
-                      alpha=alpha, rho_max=rho_max, experiment=experiment, seed=seed,
-                      bootstrap=bootstrap, stability=stability)
-    made = data.meta.get("arm") if isinstance(data, MeasuredData) else None
-    if made is None:
-        return dg
-    used = thesis_arm() if arm is None else arm
-    fp = arm_fingerprint(used)
-    warnings = dg.warnings
-    if mismatch is None:
-        note = f"arm: the record came from the arm it is diagnosed against, {_label(used.name, fp)}"
-    else:
-        note = (f"arm: {mismatch} (allowed on purpose): every difference between the two arms "
-                f"is reported as a missing effect")
-        warnings = (note[5:],) + tuple(warnings)
-    return replace(dg, notes=(*dg.notes, note), warnings=warnings,
-                   settings={**dg.settings, "arm": {"record": dict(made), "model": {
-                       "name": used.name, "sha256": fp}, "same": mismatch is None}})
+    return kind.diagnose(data, mismatch=mismatch, **options)
 
 
-__all__ = ["Diagnosis", "diagnose", "other_arm", "SCHEMA_VERSION", "HIGH_CONFIDENCE",
+__all__ = ["Diagnosis", "diagnose", "other_arm", "SCHEMA_VERSION", "HIGH_WEIGHT",
            "JSON_NAME"]

@@ -31,7 +31,7 @@ with the verdict:
     PSMC with Ki = 12 overshoots the upward step more than with Ki = 2 at the
     same lambda, for lambda = 0.4 s (the lambda of Table 5.1), and by more than
     0.1 % of the step.  Not part of :func:`evaluate_conclusions` (a)-(f); the
-    as-built arm (:mod:`ppamsafety.diagnose.arm.as_built`) tests it.
+    as-built arm (:mod:`ppamsafety.thesis_fits.as_built`) tests it.
 
 Table formats (all SI): ``errors`` has one row per (variant, period) with
 columns ``variant``, ``family``, ``lambda_s``, ``period_s``, ``mean_m``,

@@ -210,7 +210,7 @@ class EffectKind(enum.Enum):
 class MagnitudeAxis:
     """An effect's magnitude axis theta in [0, 1], from the nominal plant to its largest
     plausible magnitude (the fit of effects to summary statistics,
-    :mod:`ppamsafety.diagnose.arm.summary_fit`).
+    :mod:`ppamsafety.thesis_fits.summary_fit`).
 
     Attributes
     ----------

@@ -183,8 +183,8 @@ def plot_summary_profiles(fit, *, rank_tol: float):
 
     Parameters
     ----------
-    fit : ppamsafety.diagnose.summary_fit.SummaryFit
-        Result of :func:`~ppamsafety.diagnose.arm.summary_fit.fit_summary`.
+    fit : ppamsafety.thesis_fits.summary_fit.SummaryFit
+        Result of :func:`~ppamsafety.thesis_fits.summary_fit.fit_summary`.
     rank_tol : float, keyword-only
         Singular values below this fraction of the largest do not count towards the rank
         (drawn as a dotted line; ``summary_fit.RANK_TOL``).
@@ -334,7 +334,7 @@ def plot_as_built(cells, effects, *, sources):
     Parameters
     ----------
     cells : pandas.DataFrame
-        One row per printed number (``ppamsafety.diagnose.arm.as_built.AsBuiltFit.cells``):
+        One row per printed number (``ppamsafety.thesis_fits.as_built.AsBuiltFit.cells``):
         ``source``, ``ratio_nominal``, ``ratio_as_built`` (simulated / printed) and
         ``sigma_log`` (standard uncertainty of ln ratio).
     effects : pandas.DataFrame

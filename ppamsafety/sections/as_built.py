@@ -7,7 +7,7 @@ Part of ``ppamsafety report`` (section "as_built"); run alone with
 The thesis prints Table 5.2 (tracking means and maxima), Table 6.1 (HIC and F_max of the step
 and the switch), the RMS errors of the gravity-compensation sawtooth of fig. 3.1 and
 statements about the step and switch responses (§5.3.5).  The computation,
-:func:`ppamsafety.diagnose.arm.as_built.fit_as_built`, fits a vector of effect magnitudes
+:func:`ppamsafety.thesis_fits.as_built.fit_as_built`, fits a vector of effect magnitudes
 (valve time constant and dead time, Coulomb friction, muscle hysteresis, payload, encoder
 offsets, velocity noise) to all of them at once, after an identifiability analysis of the
 joint sensitivity matrix, and returns the as-built plant with intervals.  This section shows
@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from ..diagnose.arm.as_built import (CANDIDATES, CONFOUNDED_COS, FIG_3_1_RMS_DEG, GTOL,
+from ..thesis_fits.as_built import (CANDIDATES, CONFOUNDED_COS, FIG_3_1_RMS_DEG, GTOL,
                                      PROBE, RANK_TOL, REPRODUCIBILITY, SOURCES, XTOL, Design,
                                      fit_as_built)
 from ..experiments.conclusions import conclusions_table
@@ -283,7 +283,7 @@ def render(study: AsBuiltFindings) -> Section:
                "sqrt(rep^2 + (printed step / sqrt(12) / value)^2), with the reproducibility "
                "rep our stated assumption (the thesis gives no repeats): "
              + ", ".join(f"{k} {100 * v:g} %" for k, v in REPRODUCIBILITY.items())
-             + " (reasons: `ppamsafety/diagnose/arm/as_built.py`). The circles run "
+             + " (reasons: `ppamsafety/thesis_fits/as_built.py`). The circles run "
                f"{d.warmup:g} s of warm-up and windows of "
                f"{', '.join(f'{w:g}' for w in d.windows)} s for P = "
                f"{', '.join(f'{p:g}' for p in d.periods)} s (whole periods of the periodic "

@@ -30,7 +30,7 @@ from ..data.campaign import load_campaign
 from ..data.datasets import ZILLEN2021_SEALS, zillen2021_manifest
 from ..data.measured import MeasuredDataWarning
 from ..diagnose import diagnose
-from ..diagnose.bench.calibration import (HIGH_PRECISION, MEASURE_SEEDS, calibration_table,
+from ..diagnose.bench.calibration import (CAMPAIGN_MEASURE, HIGH_PRECISION, calibration_table,
                                           run_calibration)
 from ..markdown import markdown_table
 from ..plots.bench import seal_parameters_figure
@@ -188,7 +188,7 @@ def compute(*, quick: bool = False, arm=None, calibration_runs: int | None = Non
                         row[f"{col}_N"] = row[f"{col}_se_N"] = np.nan
                 laws.append(row)
     t1 = time.perf_counter()
-    seeds = list(MEASURE_SEEDS)[:n_cal]
+    seeds = list(CAMPAIGN_MEASURE)[:n_cal]
     names, runs = run_calibration(seeds)            # no seeds: the two tables, empty
     cal = calibration_table(names)
     records = pd.concat(recs, ignore_index=True)

@@ -16,7 +16,7 @@ Part of ``ppamsafety report`` (section "diagnose_cases"); run alone with
 2. *Case (b), Table 5.2.*  The thesis publishes only summary statistics of
    its tracking errors; every library effect is fitted to them one at a
    time and the identifiability of the effects from such data is assessed
-   (:mod:`ppamsafety.diagnose.arm.summary_fit`).  The report runs a reduced
+   (:mod:`ppamsafety.thesis_fits.summary_fit`).  The report runs a reduced
    design (three variants, two periods, 10 s windows)
    to stay within the report's time budget.
 3. *A small blind battery* (:data:`BATTERY`): each library effect alone,
@@ -34,7 +34,7 @@ import numpy as np
 import pandas as pd
 
 from ..diagnose import diagnose, synthesize
-from ..diagnose.arm.summary_fit import (TableDesign, fit_pair, fit_summary, CONFOUNDED_COS,
+from ..thesis_fits.summary_fit import (TableDesign, fit_pair, fit_summary, CONFOUNDED_COS,
                                         PRINT_STD, RANK_TOL, REPRODUCIBILITY, axis)
 from ..markdown import markdown_table
 from ..plots.diagnose import plot_confusion, plot_gap

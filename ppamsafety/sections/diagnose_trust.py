@@ -8,7 +8,7 @@ prints:
   open loop, closed loop under every reference and controller family, the
   static sawtooth; 0-3 library effects with log-uniform magnitudes, sensor
   faults, out-of-library perturbations), how many were right -- measured on
-  seeds never used to set the gates (:data:`~ppamsafety.diagnose.scenarios.MEASURE_SEEDS`),
+  seeds never used to set the gates (``ARM_BATTERY.measure``, :mod:`ppamsafety.diagnose.scenarios`),
   with the battery's other targets.  The full battery (>= 1000 scenarios,
   ``python -m ppamsafety.diagnose.scenarios``, about 25 min on 2 cores) is too long
   for the report: its per-scenario rows are shipped
@@ -55,7 +55,7 @@ from ..diagnose.bench.scenarios import single_effect_outcomes
 from ..diagnose.core.omitted import HINT_P
 from ..diagnose.arm.pipeline import REPLAY_RHO, REPLAY_RHO_STATIC
 from ..diagnose.scenarios import (BENCH_RESULTS_FILE, DECLARED_MEASURE_SEEDS,
-                                  DECLARED_RESULTS_FILE, HIGH_PRECISION, MEASURE_SEEDS,
+                                  DECLARED_RESULTS_FILE, HIGH_PRECISION, ARM_BATTERY,
                                   P_DECLARED_CHANGE, declared_names,
                                   by_effect, calibration_table, detection_curve, failures,
                                   interval_widening, load_results, run_battery, scores)
@@ -107,7 +107,7 @@ class DiagnoseTrustFindings(Result):
         Detection limits of the standard records: ``record``, ``effect``, ``parameter``,
         ``unit``, ``limit``, ``limit_named``, ``closest``.
     live : pandas.DataFrame
-        The live rows (:func:`~ppamsafety.diagnose.scenarios.run_battery`; with the thesis
+        The live rows (:func:`~ppamsafety.diagnose.core.battery.run_battery`; with the thesis
         arm also those of the declared-effect battery, ``battery`` column).
     stored : bool
         The scores come from the shipped battery (the thesis arm); False: from the live
@@ -191,15 +191,15 @@ def compute(*, quick: bool = False, arm=None, head=None,
     n = (LIVE_RUNS_QUICK if quick else LIVE_RUNS) if live_runs is None else \
         check_int("live_runs", live_runs, 0, 1000)
     t0 = time.perf_counter()
-    seeds = list(MEASURE_SEEDS)[:n]
-    live = run_battery(seeds, processes=1, arm=arm) if seeds else pd.DataFrame()
+    seeds = list(ARM_BATTERY.measure)[:n]
+    live = run_battery(ARM_BATTERY, seeds, processes=1, arm=arm) if seeds else pd.DataFrame()
     live_declared = pd.DataFrame()
     if thesis:
         nd = (LIVE_DECLARED_QUICK if quick else LIVE_DECLARED) if live_runs is None else \
             min(n, LIVE_DECLARED)
         dseeds = list(DECLARED_MEASURE_SEEDS)[:nd]
         if dseeds:
-            live_declared = run_battery(dseeds, processes=1, declared=True)
+            live_declared = run_battery(ARM_BATTERY, dseeds, processes=1, declared=True)
     t1 = time.perf_counter()
     limits = standard_limits(arm=arm, quick=quick)
     t2 = time.perf_counter()

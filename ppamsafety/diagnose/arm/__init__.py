@@ -1,4 +1,4 @@
 """Diagnosis of arm records (open loop, closed loop, static sawtooth): block residuals per
 subsystem, the arm's candidate library, forward selection with its bootstrap, the pipeline,
-the hidden-effect generator, the fit of effects to summary statistics (Table 5.2) and the
-joint fit of the as-built arm to every printed measurement of the thesis (``as_built``)."""
+the hidden-effect generator and the arm's record-kind adapter.  The fits of the thesis's own
+numbers (the as-built arm, the summary-statistics fit) live in :mod:`ppamsafety.thesis_fits`."""

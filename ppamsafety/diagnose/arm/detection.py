@@ -41,7 +41,7 @@ from scipy import stats
 from ..core.omitted import omitted_effects
 from ..core.power import POWER, needed_noncentrality
 from .candidates import REGISTRY, library
-from .gram import covariance
+from ..core.solve import pinv_psd
 from .selection import Problem, _directions, _gram_set
 
 
@@ -88,7 +88,7 @@ def _schur(A, cc, cm):
     if cm.size == 0:
         return Acc
     Acm = A[np.ix_(cc, cm)]
-    return Acc - Acm @ covariance(A[np.ix_(cm, cm)]) @ Acm.T
+    return Acc - Acm @ pinv_psd(A[np.ix_(cm, cm)]) @ Acm.T
 
 
 def detection_limits(prob: Problem, fit, candidates=None, *, alpha: float = 0.01,

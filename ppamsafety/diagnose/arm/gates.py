@@ -1,19 +1,20 @@
-"""The gates before "high" confidence: what a named effect must pass to be reported as certain.
+"""The gates before "high" confidence on an arm record: its rule, :data:`ARM_RULE`.
 
-A name reaches ``confidence_level = "high"`` only through every gate below;
-otherwise it is ``"low"`` (a hint, not a finding).  The gates and their
+A name reaches ``confidence_level = "high"`` only through every gate below; otherwise it is
+``"low"`` (a hint, not a finding).  The gates are judged by the one rule of every record
+kind (:mod:`ppamsafety.diagnose.core.gates`); this module holds the arm's thresholds and the
+evidence only an arm gives (moved and admissible parameters).  The gates and their
 thresholds were set on the randomized scenario battery
-(:mod:`ppamsafety.diagnose.scenarios`, its ``TUNING_SEEDS``) and the claim they
-make -- of all effects named "high", at least 97 % are right -- is measured on
-unseen seeds (``MEASURE_SEEDS``; ``docs/diagnose.md``, the report section
-``diagnose_trust``).
+(:mod:`ppamsafety.diagnose.scenarios`, ``ARM_BATTERY.tuning``) and the claim they make -- of
+all effects named "high", at least 97 % are right -- is measured on unseen seeds
+(``ARM_BATTERY.measure``; ``docs/diagnose.md``, the report section ``diagnose_trust``).
 
 ==================  ==============================================================
 gate                passes when
 ==================  ==============================================================
 weight              its inclusion probability (the BIC weights of the subsets of
                     the library that hold it, :mod:`.subsets`) is >=
-                    :data:`HIGH_WEIGHT`: decisive against every other small model
+                    :data:`~..core.gates.HIGH_WEIGHT`: decisive against every other small model
 stable              the complementary-pairs stability selection picked it in >=
                     ``Stability.threshold`` of the halves of the record (the
                     name does not hinge on a part of the record)
@@ -24,18 +25,18 @@ admissible          every parameter the effect moved (interval excluding the
                     something else; a viscous friction of -0.002 +- 0.01 is a zero)
 moved               some parameter's interval excludes its nominal value (the
                     dead time: a delay of at least one sample)
-clear               some parameter moved by >= :data:`CLEAR_RATIO` x its detection
+clear               some parameter moved by >= ``ARM_RULE.clear_ratio`` (5) x its detection
                     limit on the record (:mod:`.detection`): close to the limit a
                     small error the library does not hold can pose as the effect
 residual_at_noise   every block channel's final residual/noise RMS ratio is
-                    <= :data:`RHO_HIGH` x the 99.9 % point of the ratio under
+                    <= ``ARM_RULE.rho_factor`` (1.2) x the 99.9 % point of the ratio under
                     the noise alone (sqrt(chi2_m(0.999) / m) for m blocks: 1.06
                     for 1200 blocks, 1.49 for the 21 rest points of a sawtooth),
                     and nothing is unexplained (an unexplained error elsewhere
                     may leak into this subsystem)
 consistent          the effect's parameters are the same in the low and the high
                     third of each joint's range (a Chow test at
-                    ``selection.CONSTANCY_ALPHA``): an effect standing in for
+                    ``core.gates.CONSTANCY_ALPHA``): an effect standing in for
                     something else (an encoder gain taken for an offset, a heavier
                     link for a payload) fits different values in different poses;
                     and so are those of every other named effect sharing a
@@ -54,23 +55,20 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
+from ..core.gates import CONSTANCY_ALPHA, HighRule, judge, level
 from ..core.parameter import physically_admissible as core_admissible
-from ..core.power import noise_rho_quantile
 from .candidates import REGISTRY
 
-#: Inclusion probability at or above which a name counts as decisive.
-HIGH_WEIGHT = 0.95
-#: Largest final residual/noise RMS ratio of every block channel for "high" (under a
-#: correct model the ratio is 1 within a few per cent; 1.2 leaves room for a noise estimate
-#: that is somewhat off, not for a model error of half the noise).
-RHO_HIGH = 1.2
-#: The gates, in the order they are reported.
-GATES = ("weight", "stable", "admissible", "moved", "clear", "residual_at_noise", "consistent",
-         "not_compensating", "not_confounded")
-#: Smallest magnitude over the detection limit of a "high" name.
-CLEAR_RATIO = 5.0
+#: The arm's rule for "high": its gates in the order they are reported; the largest final
+#: residual/noise RMS ratio of every block channel as a factor of the 99.9 % point under
+#: noise alone (under a correct model the ratio is 1 within a few per cent; 1.2 leaves room
+#: for a noise estimate that is somewhat off, not for a model error of half the noise); the
+#: smallest magnitude over the detection limit of a "high" name, 5.
+ARM_RULE = HighRule(gates=("weight", "stable", "admissible", "moved", "clear",
+                           "residual_at_noise", "consistent", "not_compensating",
+                           "not_confounded"),
+                    rho_factor=1.2, rho_quantile=0.999, clear_ratio=5.0,
+                    consistency_alpha=CONSTANCY_ALPHA)
 
 
 def moved_parameters(name: str, table: dict) -> tuple:
@@ -103,21 +101,9 @@ def physically_admissible(name: str, table: dict) -> bool:
     return core_admissible(REGISTRY[name].parameters, table, moved_parameters(name, table))
 
 
-def rho_high(blocks: int) -> float:
-    """The largest residual/noise ratio of a channel with ``blocks`` blocks for "high".
-
-    Parameters
-    ----------
-    blocks : int
-    """
-    m = max(int(blocks), 1)
-    return RHO_HIGH * noise_rho_quantile(m, 0.999)
-
-
 def gates(name: str, table: dict, *, weight: float, stability: float | None,
           stability_threshold: float, rho, unexplained: bool, confounded: bool,
-          consistency: float = 1.0, consistency_alpha: float = 1e-3,
-          blocks: int = 10 ** 6, clear: float = math.inf,
+          consistency: float = 1.0, blocks: int = 10 ** 6, clear: float = math.inf,
           compensating: bool = False) -> dict:
     """Every gate of the module docstring for one named effect.
 
@@ -139,10 +125,8 @@ def gates(name: str, table: dict, *, weight: float, stability: float | None,
     consistency : float, keyword-only
         Smallest p-value of the region-constancy test
         (:func:`~.selection.region_consistency`).
-    consistency_alpha : float, keyword-only
-        Its level.
     blocks : int, keyword-only
-        Blocks per channel (:func:`rho_high`).
+        Blocks per channel (``ARM_RULE.rho_high``).
     clear : float, keyword-only
         Largest change of a parameter over its detection limit.
     compensating : bool, keyword-only
@@ -151,30 +135,15 @@ def gates(name: str, table: dict, *, weight: float, stability: float | None,
     Returns
     -------
     dict
-        Gate -> bool, in the order of :data:`GATES`.
+        Gate -> bool, in the order of ``ARM_RULE.gates``.
     """
-    rho = np.asarray(rho, dtype=float)
-    return {"weight": bool(weight >= HIGH_WEIGHT),
-            "stable": bool(stability is not None and stability >= stability_threshold),
-            "admissible": physically_admissible(name, table),
-            "moved": bool(moved_parameters(name, table)),
-            "clear": bool(clear >= CLEAR_RATIO),
-            "residual_at_noise": bool(not unexplained and np.all(rho <= rho_high(blocks))),
-            "consistent": bool(consistency >= consistency_alpha),
-            "not_compensating": not compensating,
-            "not_confounded": not confounded}
+    return judge(ARM_RULE, weight=weight, stability=stability,
+                 stability_threshold=stability_threshold,
+                 admissible=physically_admissible(name, table),
+                 moved=bool(moved_parameters(name, table)), clear=clear, rho=rho, m=blocks,
+                 unexplained=unexplained, consistency=consistency,
+                 not_compensating=not compensating, confounded=confounded)
 
 
-def level(g: dict) -> str:
-    """``"high"`` when every gate passes, else ``"low"``.
-
-    Parameters
-    ----------
-    g : dict
-        :func:`gates`.
-    """
-    return "high" if all(g.values()) else "low"
-
-
-__all__ = ["GATES", "HIGH_WEIGHT", "RHO_HIGH", "CLEAR_RATIO", "rho_high", "gates", "level", "moved_parameters",
-           "physically_admissible"]
+__all__ = ["ARM_RULE", "gates", "level",
+           "moved_parameters", "physically_admissible"]

@@ -23,7 +23,6 @@ from dataclasses import replace
 
 import numpy as np
 import pandas as pd
-from scipy import stats
 
 from ..._validation import check_int, check_range, check_seed
 from ...params import thesis_arm
@@ -32,10 +31,12 @@ from ...params.effects import VALVE_DEAD_TIME_MAX
 from ...plant import layout as lay
 from ...plant import packing
 from ..core.omitted import HINT_P
+from ..core.regions import region_rows, terciles, time_segments
 from ..core.result import Diagnosis
 from .candidates import REGISTRY, SensorFault, default_candidates, separating_experiment
 from .detection import detection_limits, omitted
-from .gates import GATES, HIGH_WEIGHT, RHO_HIGH, gates, level, moved_parameters
+from ..core.gates import HIGH_WEIGHT, level
+from .gates import ARM_RULE, gates, moved_parameters
 from .residuals import (CHANNELS, CHANNEL_UNITS, PRESSURE_GAIN_COLUMNS, SUBSYSTEM, ArmRecord,
                         Columns, arm_record, block_system, changed_delays, channel_noise,
                         coulomb_velocity, declared_delays, model_vector, noise_draws, replay,
@@ -64,46 +65,20 @@ REPLAY_CHANNELS = ("q1", "q2", "qd1", "qd2", "p1", "p2", "p3", "p4")
 REPLAY_UNITS = ("rad", "rad", "rad/s", "rad/s", "Pa", "Pa", "Pa", "Pa")
 
 
-def _where(prob, e, feats, rho_max):
+def _block_regions(e, feats, rho_max):
     """Operating regions of significant residual (see :func:`diagnose`)."""
-
-
-    nb = e.shape[0]
     rows = []
-    zcrit = stats.norm.isf(0.0005)
     for c, ch in enumerate(CHANNELS):
         j = 0 if c in (0, 1, 4) else 1
         pch = feats["p"][:, c] if c < 4 else feats["p"][:, 2 * j:2 * j + 2].mean(axis=1)
         groups = {
             "velocity sign": {"qd > 0": feats["qd"][:, j] > 0, "qd < 0": feats["qd"][:, j] <= 0},
-            "pressure level": _terciles(pch, "p"),
-            "configuration": _terciles(feats["q"][:, j], f"q{j + 1}"),
-            "time segment": {f"t {a:.3g}-{b:.3g} s": m for a, b, m in _segments(feats["t"])},
+            "pressure level": terciles(pch, "p"),
+            "configuration": terciles(feats["q"][:, j], f"q{j + 1}"),
+            "time segment": time_segments(feats["t"]),
         }
-        for region, gs in groups.items():
-            for g, m in gs.items():
-                n = int(m.sum())
-                if n == 0:
-                    continue
-                mean = float(e[m, c].mean())
-                rms = float(np.sqrt(np.mean(e[m, c] ** 2)))
-                z = mean * math.sqrt(n)
-                rows.append({"channel": ch, "region": region, "group": g, "blocks": n,
-                             "mean": mean, "rms": rms, "z": z,
-                             "significant": bool(abs(z) > zcrit or rms > rho_max)})
-    _ = nb
+        rows += region_rows(e[:, c], groups, ch, rho_max)
     return pd.DataFrame(rows)
-
-
-def _terciles(x, name):
-    a, b = np.quantile(x, [1 / 3, 2 / 3])
-    return {f"{name} low (< {a:.3g})": x < a, f"{name} mid": (x >= a) & (x < b),
-            f"{name} high (>= {b:.3g})": x >= b}
-
-
-def _segments(t, n=8):
-    edges = np.linspace(t.min(), t.max() + 1e-12, n + 1)
-    return [(edges[i], edges[i + 1], (t >= edges[i]) & (t < edges[i + 1])) for i in range(n)]
 
 
 def after_row(arm, fit, params) -> np.ndarray:
@@ -514,7 +489,7 @@ def diagnose_arm(data, *, arm=None, candidates=None, block_seconds: float = 0.05
                   stability=None if sfreq is None else sfreq.get(e["name"], 0.0),
                   stability_threshold=STABILITY_THRESHOLD if stab is None else stab.threshold,
                   rho=rho, unexplained=unexplained, confounded=False,
-                  consistency=own, consistency_alpha=CONSTANCY_ALPHA, blocks=bs.nb,
+                  consistency=own, blocks=bs.nb,
                   clear=e["evidence"]["limit_ratio"] if detection else math.inf,
                   compensating=e["name"] in comp)
         e["gates"] = g
@@ -533,7 +508,7 @@ def diagnose_arm(data, *, arm=None, candidates=None, block_seconds: float = 0.05
             continue
         rr[f"block_{ch}"] = {"unit": f"{units[c]} / noise (block residual ratio)",
                              "before": float(nrho[c]), "after": float(rho[c]), "noise": 1.0}
-    where = _where(fprob, fit.e, bs.features, rho_max)
+    where = _block_regions(fit.e, bs.features, rho_max)
     if static:
         where["region"] = where["region"].replace({"velocity sign": "direction of approach"})
         where["group"] = where["group"].str.replace("qd > 0", "angle rose").str.replace(
@@ -567,9 +542,9 @@ def diagnose_arm(data, *, arm=None, candidates=None, block_seconds: float = 0.05
                            "statistic": "RMS(after - measured) / sample noise per replay "
                                         "channel; at the noise when every one is <= limit",
                            "at_noise": not replay_bad},
-                "high_confidence": {"inclusion_probability": HIGH_WEIGHT, "rho_high": RHO_HIGH,
+                "high_confidence": {"inclusion_probability": HIGH_WEIGHT, "rho_high": ARM_RULE.rho_factor,
                                     "stability_threshold": STABILITY_THRESHOLD if stab is None
-                                    else stab.threshold, "gates": list(GATES)},
+                                    else stab.threshold, "gates": list(ARM_RULE.gates)},
                 "candidates": list(candidates),
                 "blocks": int(bs.nb), "samples": int(len(rec.t)),
                 "dt_s": None if static else rec.dt,

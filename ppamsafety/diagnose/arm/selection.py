@@ -81,10 +81,13 @@ from scipy import stats
 from ..._validation import check_int, check_seed
 from ..core.criteria import (ALPHA, CV_SEGMENTS, RHO_MAX, Step, _chi2_sf, _normal_quantile, aicc,
                              bic, false_selection_bound, rank_step)
+from ..core.gates import CONSTANCY_ALPHA
 from ..core.omitted import widened_interval
 from ...lstsq import step_scores
 from .candidates import DEAD_TIME_MAX, REGISTRY, identity_values, library
-from .gram import GramSet, chi2_at, chunk_layout, covariance, solve
+from ..core.solve import lstsq, pinv_psd
+from ..core.gram import Gram, chi2_at, solve
+from .gram import chunk_layout
 from .residuals import SUBSYSTEM, BlockSystem, block_noise
 
 #: 95 % quantile of chi2 with one degree of freedom (the dead-time profile interval).
@@ -312,25 +315,6 @@ def _directions_of(prob: Problem, names):
     return D, slices, grid, E
 
 
-def _lstsq_small(A, b):
-    """Least squares for a tall, narrow, column-scaled A (m x k, k of order 10).
-
-    Normal equations solved through the eigen-decomposition of the k x k
-    matrix A^T A (minimum-norm solution; directions whose eigenvalue is below
-    1e-13 of the largest -- singular values below 3e-7 of the largest -- are
-    dropped, as a rank-deficient lstsq would).  Equivalent to
-    ``numpy.linalg.lstsq`` for these well-scaled problems and 30-60x faster on
-    a shared machine: LAPACK's threaded QR/SVD of a 1000 x 10 matrix spends
-    its time synchronising threads; the selection solves thousands of them
-    (the dead-time profile).
-    """
-    G = A.T @ A
-    w, V = np.linalg.eigh(G)
-    keep = w > 1e-13 * max(float(w[-1]), 1e-300)
-    Vk = V[:, keep]
-    return Vk @ ((Vk.T @ (A.T @ b)) / w[keep])
-
-
 def _solve(prob, D, shift, mask, E=None):
     X = prob.X(shift)
     nb, nc, nm = X.shape
@@ -346,12 +330,7 @@ def _solve(prob, D, shift, mask, E=None):
     k = D.shape[1]
     b = base[mask].ravel()
     A = Z[mask].reshape(b.size, k)
-    if k:
-        scale = np.sqrt(np.sum(A ** 2, axis=0))
-        scale[scale == 0] = 1.0
-        phi = _lstsq_small(A / scale, b) / scale
-    else:
-        phi = np.zeros(0)
+    phi = lstsq(A, b)
     r = b - A @ phi
     return phi, float(r @ r), A, base, Z
 
@@ -375,7 +354,7 @@ def _scaled_cov(A_normal, chi2_channel, Zdiag_channels, m_per_channel):
     # never below the noise model: a residual under the stated noise (the resolution floor of
     # rest points) does not make a parameter better known than the noise allows
     sd = np.where(nch_of > 0, np.sqrt(np.maximum(chi2_of / dof, 1.0)), 1.0)
-    return sd[:, None] * covariance(A_normal) * sd[None, :]
+    return sd[:, None] * pinv_psd(A_normal) * sd[None, :]
 
 
 def fit_model(prob: Problem, names, mask=None) -> Fit:
@@ -452,7 +431,7 @@ def _grid_name(names) -> str | None:
     return next((c.name for c in library(names) if c.grid), None)
 
 
-def _gram_set(prob: Problem, names, shift: int) -> GramSet:
+def _gram_set(prob: Problem, names, shift: int) -> Gram:
     """The Gram set of every linear candidate of ``names`` at dead time ``shift`` (cached)."""
     lin = tuple(n for n in names if not REGISTRY[n].grid)
     key = ("gram", lin, int(shift))
@@ -465,7 +444,7 @@ def _gram_set(prob: Problem, names, shift: int) -> GramSet:
         if E is not None:
             P = P + E
         base = prob.bs.y - (Xf @ prob.mu0).reshape(nb, nc)
-        prob._memo[key] = (GramSet.build(P, base, prob.chunk, slices, shift), D)
+        prob._memo[key] = (Gram.from_blocks(P, base, prob.chunk, slices, shift), D)
     return prob._memo[key]
 
 
@@ -1081,10 +1060,6 @@ def stability_selection(prob: Problem, candidates=None, *, pairs: int = STABILIT
 
 # ----------------------------------------------------------------------------- consistency
 
-#: Significance level of the parameter-constancy test across operating regions.
-CONSTANCY_ALPHA = 1e-3
-
-
 def region_consistency(prob: Problem, fit: Fit, name: str) -> dict:
     """Are the parameters of effect ``name`` the same in different parts of the arm's motion?
 
@@ -1127,7 +1102,7 @@ def region_consistency(prob: Problem, fit: Fit, name: str) -> dict:
         fa, fb = (fit_model(fixed, fit.names, mask=m) for m in masks)
         d = fa.phi[sl] - fb.phi[sl]
         C = fa.cov[sl, sl] + fb.cov[sl, sl]
-        T = float(d @ np.linalg.pinv(C, rcond=1e-12) @ d)
+        T = float(d @ pinv_psd(C) @ d)
         out[f"q{j + 1}"] = _chi2_sf(max(T, 0.0), sl.stop - sl.start)
     return out
 
@@ -1249,7 +1224,7 @@ def hac_covariance(prob: Problem, fit: Fit, *, lags: int | None = None) -> np.nd
         w = 1.0 - lag / (L + 1.0)
         G = S[lag:].T @ S[:-lag]
         M += w * (G + G.T)
-    Bi = covariance(B)
+    Bi = pinv_psd(B)
     hac = Bi @ M @ Bi * nb / max(nb - k, 1)
     # never below the covariance of the noise model itself (Bi): residuals under the stated
     # noise (the resolution floor of rest points) do not make a parameter better known

@@ -45,6 +45,7 @@ from ..core.criteria import _chi2_sf
 from .candidates import REGISTRY
 from ...lstsq import many_chi2
 from ..core.criteria import bic
+from ..core.linear_selection import CHECK_BIC
 from .selection import Problem, _gram_set, gram_cv, gram_fit, in_bounds
 
 #: Largest subset size searched exhaustively.
@@ -52,9 +53,6 @@ MAX_SIZE = 4
 #: A replacement whose BIC is within this of the best model's is a look-alike (an evidence
 #: ratio below exp(6/2) = 20 against it: "positive" evidence at most, Kass & Raftery 1995).
 LOOKALIKE_BIC = 6.0
-#: Subsets within this BIC of the best are checked for admissibility (the weights of the
-#: others are below exp(-15) relative to the best).
-CHECK_BIC = 30.0
 
 
 @dataclass(frozen=True)

@@ -174,7 +174,7 @@ def parameter_failures(case: str, dg, force_law=None, eps_range=(0.05, 0.25)) ->
     return out
 
 
-def run_battery(cases=None, seeds=(1, 2, 3, 4, 5), **options) -> pd.DataFrame:
+def run_cases(cases=None, seeds=(1, 2, 3, 4, 5), **options) -> pd.DataFrame:
     """Synthesize and diagnose every case for every seed.
 
     Parameters
@@ -231,7 +231,7 @@ def confusion_matrix(results: pd.DataFrame) -> pd.DataFrame:
     Parameters
     ----------
     results : pandas.DataFrame
-        From :func:`run_battery`.
+        From :func:`run_cases`.
 
     Returns
     -------
@@ -244,7 +244,7 @@ def confusion_matrix(results: pd.DataFrame) -> pd.DataFrame:
     """
     if not isinstance(results, pd.DataFrame) or not {"case", "named", "confidence_levels",
                                                      "ok"} <= set(results.columns):
-        raise TypeError("results must be the DataFrame of run_battery()")
+        raise TypeError("results must be the DataFrame of run_cases()")
 
     def label(r):
         if r["named"] == "nothing":
@@ -275,5 +275,5 @@ def required_rate(case: str) -> float:
     return 0.85 if "+" in case else 0.95
 
 
-__all__ = ["CASES", "CONFOUNDED", "SHAPE_DELTA", "outcome", "parameter_failures", "run_battery", "confusion_matrix",
+__all__ = ["CASES", "CONFOUNDED", "SHAPE_DELTA", "outcome", "parameter_failures", "run_cases", "confusion_matrix",
            "required_rate"]

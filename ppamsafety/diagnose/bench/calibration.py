@@ -12,7 +12,7 @@ cycles, sometimes several speeds), :func:`run_calibration` diagnoses each
 campaign blind and scores every named effect, :func:`calibration_table`
 gives the precision per claimed level.  The thresholds of the confidence rule
 (:data:`~.campaign.STABILITY_HIGH`, :data:`~.campaign.P_HIGH`,
-:data:`~.campaign.GAIN_HIGH`) were set on seeds 0-99 (:data:`TUNING_SEEDS`);
+:data:`~.campaign.GAIN_HIGH`) were set on seeds 0-99 (:data:`CAMPAIGN_TUNING`);
 the report measures them on other seeds.
 
 Scoring: a named effect is *right* when the scenario hid it (any magnitude);
@@ -35,22 +35,17 @@ import pandas as pd
 
 from ..._validation import check_seed
 from ...data.measured import MeasuredDataWarning
+from ..core.battery import HIGH_PRECISION, logu, sgn, wilson_low
 from .campaign import diagnose_campaign
 from .cylinder_synth import LIBRARY_NAME, synthesize_cylinder
 
 #: Seeds the confidence thresholds were chosen on (never used to measure them).
-TUNING_SEEDS = range(0, 100)
+CAMPAIGN_TUNING = range(0, 100)
 #: Seeds of the measurement in the report (first 1000 of them at most).
-MEASURE_SEEDS = range(1000, 2000)
-#: Required precision of "high".
-HIGH_PRECISION = 0.97
+CAMPAIGN_MEASURE = range(1000, 2000)
 #: The pressure law of the Coulomb level: naming either term is right when the friction
 #: grows with the pressure (c1 p or c2 p^2 hidden), the claim each makes.
 PRESSURE_FAMILY = ("coulomb_pressure", "coulomb_pressure2")
-
-
-def _logu(rng, lo, hi):
-    return float(math.exp(rng.uniform(math.log(lo), math.log(hi))))
 
 
 def random_scenario(seed: int) -> dict:
@@ -69,31 +64,30 @@ def random_scenario(seed: int) -> dict:
     """
     seed = check_seed("seed", seed)
     rng = np.random.default_rng([seed, 20])
-    fx = {"coulomb": _logu(rng, 1.0, 10.0)}
-    sgn = lambda: float(rng.choice([-1.0, 1.0]))            # noqa: E731
-    draws = [("coulomb_pressure", 0.6, lambda: _logu(rng, 2e-6, 1.5e-5)),
-             ("coulomb_pressure2", 0.2, lambda: _logu(rng, 5e-12, 4e-11)),
-             ("presliding", 0.5, lambda: _logu(rng, 5e-5, 1.5e-3)),
-             ("stribeck", 0.25, lambda: _logu(rng, 0.5, 5.0)),
-             ("stroke_profile", 0.3, lambda: _logu(rng, 0.1, 1.5)),
-             ("stroke_profile_pressure", 0.2, lambda: _logu(rng, 0.2, 4.0)),
-             ("friction_drift", 0.3, lambda: sgn() * _logu(rng, 0.002, 0.02)),
-             ("force_sensor_offset", 0.3, lambda: sgn() * _logu(rng, 0.3, 3.0)),
-             ("pressure_sensor_offset", 0.15, lambda: sgn() * _logu(rng, 500.0, 5000.0)),
-             ("force_sensor_gain", 0.15, lambda: sgn() * _logu(rng, 0.005, 0.05)),
-             ("pressure_sensor_gain", 0.1, lambda: sgn() * _logu(rng, 0.005, 0.05)),
-             ("area_error", 0.15, lambda: sgn() * _logu(rng, 0.005, 0.08))]
+    fx = {"coulomb": logu(rng, 1.0, 10.0)}
+    draws = [("coulomb_pressure", 0.6, lambda: logu(rng, 2e-6, 1.5e-5)),
+             ("coulomb_pressure2", 0.2, lambda: logu(rng, 5e-12, 4e-11)),
+             ("presliding", 0.5, lambda: logu(rng, 5e-5, 1.5e-3)),
+             ("stribeck", 0.25, lambda: logu(rng, 0.5, 5.0)),
+             ("stroke_profile", 0.3, lambda: logu(rng, 0.1, 1.5)),
+             ("stroke_profile_pressure", 0.2, lambda: logu(rng, 0.2, 4.0)),
+             ("friction_drift", 0.3, lambda: sgn(rng) * logu(rng, 0.002, 0.02)),
+             ("force_sensor_offset", 0.3, lambda: sgn(rng) * logu(rng, 0.3, 3.0)),
+             ("pressure_sensor_offset", 0.15, lambda: sgn(rng) * logu(rng, 500.0, 5000.0)),
+             ("force_sensor_gain", 0.15, lambda: sgn(rng) * logu(rng, 0.005, 0.05)),
+             ("pressure_sensor_gain", 0.1, lambda: sgn(rng) * logu(rng, 0.005, 0.05)),
+             ("area_error", 0.15, lambda: sgn(rng) * logu(rng, 0.005, 0.08))]
     for name, prob, draw in draws:
         if rng.uniform() < prob:
             fx[name] = draw()
     protocol = "varied-speed" if rng.uniform() < 0.3 else "fixed-speed"
     if protocol == "varied-speed" and rng.uniform() < 0.6:
-        fx["viscous"] = _logu(rng, 20.0, 300.0)
-    nz = {"stroke_scatter": _logu(rng, 0.05, 0.4), "ripple": _logu(rng, 0.03, 0.3)}
+        fx["viscous"] = logu(rng, 20.0, 300.0)
+    nz = {"stroke_scatter": logu(rng, 0.05, 0.4), "ripple": logu(rng, 0.03, 0.3)}
     if rng.uniform() < 0.3:
-        nz["slow_transient"] = _logu(rng, 0.3, 2.0)
+        nz["slow_transient"] = logu(rng, 0.3, 2.0)
     if rng.uniform() < 0.2:
-        nz["record_offset"] = _logu(rng, 0.2, 2.0)
+        nz["record_offset"] = logu(rng, 0.2, 2.0)
     levels = [(1e5, 3e5, 5e5, 7e5), (1e5, 2e5, 3e5, 4e5, 5e5, 6e5, 7e5), (2e5, 4e5, 6e5),
               (1e5, 4e5), (3e5,)][int(rng.choice(5, p=[0.35, 0.15, 0.25, 0.15, 0.10]))]
     opts = {"pressures": levels, "cycles": int(rng.integers(4, 11)), "protocol": protocol}
@@ -206,9 +200,7 @@ def calibration_table(names: pd.DataFrame) -> pd.DataFrame:
         g = names[names["level"] == lev]
         n, k = len(g), int(g["right"].sum())
         p = k / n if n else math.nan
-        z = 1.959964
-        lo = ((p + z * z / (2 * n) - z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)))
-              / (1 + z * z / n)) if n else math.nan
+        lo = wilson_low(k, n, z=1.959964)
         out.append({"level": lev, "count": n, "right": k, "precision": p,
                     "precision_wilson_low": lo,
                     "required": HIGH_PRECISION if lev == "high" else math.nan})
@@ -216,4 +208,4 @@ def calibration_table(names: pd.DataFrame) -> pd.DataFrame:
 
 
 __all__ = ["random_scenario", "score", "run_calibration", "calibration_table", "RUN_COLUMNS",
-           "TUNING_SEEDS", "MEASURE_SEEDS", "HIGH_PRECISION", "PRESSURE_FAMILY"]
+           "CAMPAIGN_TUNING", "CAMPAIGN_MEASURE", "PRESSURE_FAMILY"]

@@ -74,15 +74,18 @@ import time
 
 import numpy as np
 import pandas as pd
-from scipy import stats
 
 from ..._validation import check_range
 from ...data.campaign import Campaign
 from ...data.measured import MeasuredData
 from ..core.criteria import Step
+from ..core.gates import HighRule, judge, level
 from ..core.noise import interpolation_sigma
+from ..core.regions import region_rows
+from ..core.solve import pinv_psd
 from . import friction as fr
-from .gram import ClusterGram, cv_mse, fit, sse_of, wald
+from ..core.gram import Gram
+from .gram import cv_mse, fit, sse_of, wald
 from .result import BenchDiagnosis
 from .strokes import stroke_state
 
@@ -106,6 +109,12 @@ MID_PROFILE_HIGH = 0.3
 #: Two candidates whose columns' residual (relative norm) after projection on each other's
 #: span is below this are confounded.
 CONFOUND_TOL = 0.05
+#: The campaign's rule for "high" (:mod:`ppamsafety.diagnose.core.gates`): stable in every
+#: rerun, significant, a held-out gain, admissible, not at the edge of a profiled grid, and a
+#: stroke profile standing out in the middle of the stroke.
+CAMPAIGN_RULE = HighRule(gates=("stable", "significant", "held_out", "admissible", "not_at_edge",
+                       "mid_stroke"), stability=STABILITY_HIGH, p_value=P_HIGH,
+                cv_gain=GAIN_HIGH)
 #: Position bins of the repeatability level (per record and direction): the stroke / this.
 REPEAT_BINS = 60
 #: Samples within this travel of a reversal are "near a reversal" in the where table [m].
@@ -291,8 +300,7 @@ def _confounded_groups(cg_all: np.ndarray, lib_index: dict) -> list:
     def outside(a_cols, b_cols):
         """Largest relative residual norm of a's columns after projection on b's span."""
         Gbb = G[np.ix_(b_cols, b_cols)]
-        d = np.sqrt(np.maximum(np.diag(Gbb), 1e-300))
-        inv = np.linalg.pinv(Gbb / np.outer(d, d), rcond=1e-10) / np.outer(d, d)
+        inv = pinv_psd(Gbb)
         worst = 0.0
         for a in a_cols:
             gaa = G[a, a]
@@ -355,8 +363,8 @@ class _Selector:
     def run(self, clusters, *, record_steps: bool = False):
         cg, lib = self.cg, self.lib
         folds = _folds_for(clusters, self.cl_rec, self.cl_cycle)
-        Gf = [(cg.G[clusters[folds == k]].sum(axis=0), float(cg.n[clusters[folds == k]].sum()))
-              for k in (0, 1)]
+        Gf = [(cg.G[clusters[folds == k], 0].sum(axis=0),
+               float(cg.n[clusters[folds == k]].sum())) for k in (0, 1)]
         Gall = Gf[0][0] + Gf[1][0]
         n_all = float(cg.n[clusters].sum())
         recs = np.unique(self.cl_rec[clusters])
@@ -394,7 +402,7 @@ class _Selector:
                 row = {"name": u, "variant": var.label, "k": int(c.size), "cv_mse": cv,
                        "cv_gain": gain, "wald": stat, "lr_df": df_, "p_value": pv,
                        "in_bounds": bool(ok), "delta_bic": math.nan, "bic_weight": math.nan,
-                       "rms_after": math.sqrt(max(f.sse / n_all, 0.0))}
+                       "rms_after": math.sqrt(max(f.chi2 / n_all, 0.0))}
                 row["eligible"] = bool(gain >= MIN_GAIN and pv < self.alpha / len(rest) and ok)
                 rows.append(row)
                 cand[u] = (var, c)
@@ -433,10 +441,8 @@ class _Selector:
         return chosen, steps
 
 
-def _where(df, e_norm, rho_max):
+def _stroke_regions(df, e_norm, rho_max):
     """Mean, RMS and z (by strokes) of the final residual per region (in repeatability units)."""
-    zcrit = stats.norm.isf(0.0005)
-    rows = []
     near = df["dx"].to_numpy() < NEAR_REVERSAL
     groups = {"record": {f"{lab}": (df["label"] == lab).to_numpy()
                          for lab in pd.unique(df["label"])},
@@ -449,22 +455,8 @@ def _where(df, e_norm, rho_max):
     groups["rod position"] = {f"< {1e3 * a:.3g} mm": x < a,
                               f"{1e3 * a:.3g}-{1e3 * b:.3g} mm": (x >= a) & (x < b),
                               f">= {1e3 * b:.3g} mm": x >= b}
-    cl = df["cluster"].to_numpy()
-    for region, gs in groups.items():
-        for g, m in gs.items():
-            n = int(m.sum())
-            if n < 10:
-                continue
-            e = e_norm[m]
-            sm = pd.Series(e).groupby(cl[m]).mean().to_numpy()
-            se = float(np.std(sm, ddof=1) / math.sqrt(sm.size)) if sm.size > 2 else math.inf
-            mean = float(e.mean())
-            rms = float(np.sqrt(np.mean(e * e)))
-            z = mean / se if se > 0 else math.inf
-            rows.append({"channel": "force", "region": region, "group": g, "blocks": n,
-                         "mean": mean, "rms": rms, "z": z,
-                         "significant": bool(abs(z) > zcrit or rms > rho_max)})
-    return pd.DataFrame(rows)
+    return pd.DataFrame(region_rows(e_norm, groups, "force", rho_max,
+                                    cluster=df["cluster"].to_numpy(), min_n=10))
 
 
 def diagnose_campaign(data, *, candidates=None, alpha: float = 0.01, rho_max: float = 1.5,
@@ -520,13 +512,13 @@ def diagnose_campaign(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
     lib0 = _Library(variants, [])
     w = 1.0 / u["sigma"].to_numpy() ** 2
     clusters_all = u["cluster"].to_numpy()
-    cg = ClusterGram.build(lib0.Z, u["r"].to_numpy(), w, clusters_all)
+    cg = Gram.from_samples(lib0.Z, u["r"].to_numpy(), w, clusters_all)
     C = cg.G.shape[0]
     cl_rec = np.zeros(C, int)
     cl_cycle = np.zeros(C, int)
     cl_rec[clusters_all] = u["rec"].to_numpy()
     cl_cycle[clusters_all] = u["cycle"].to_numpy()
-    groups = _confounded_groups(cg.G.sum(axis=0), lib0.index)
+    groups = _confounded_groups(cg.G[:, 0].sum(axis=0), lib0.index)
     lib = _Library(variants, groups)
     for g in groups:
         notes.append(f"confounded on this campaign (the same terms within {CONFOUND_TOL:.0%}): "
@@ -553,7 +545,7 @@ def diagnose_campaign(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
     model, cols, slices = sel._model(chosen)
     f = fit(cg, allc, cols, robust=True)
     n_all = float(cg.n.sum())
-    rho_after = math.sqrt(f.sse / n_all)
+    rho_after = math.sqrt(f.chi2 / n_all)
     Zall = lib.Z
     pred = Zall[:, cols] @ f.phi if cols.size else np.zeros(len(u))
     e_after = u["r"].to_numpy() - pred
@@ -606,11 +598,11 @@ def diagnose_campaign(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
             ev["mid_stroke_rms"] = float(np.sqrt(np.mean(contrib[mid] ** 2))) if mid.any() \
                 else 0.0
             mid_ok = ev["mid_stroke_rms"] >= MID_PROFILE_HIGH
-        high = (stability and freq >= STABILITY_HIGH and row["p_value"] < P_HIGH
-                and row["cv_gain"] >= GAIN_HIGH and ok and not edge and mid_ok)
+        g = judge(CAMPAIGN_RULE, stability=freq if stability else None, p_value=row["p_value"],
+                  cv_gain=row["cv_gain"], admissible=ok, not_at_edge=not edge, mid_stroke=mid_ok)
         effects.append({"name": unit, "subsystem": "force", "parameters": params,
                         "evidence": ev, "confidence": freq,
-                        "confidence_level": "high" if high else "low",
+                        "confidence_level": level(g),
                         "signature": fr.SIGNATURE[unit]})
     # derived laws: friction level and presliding step against pressure
     laws = {}
@@ -647,11 +639,11 @@ def diagnose_campaign(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
             row["rho_left_out"] = math.nan
             continue
         ft = fit(cg, tr_, cols)
-        Gte = cg.G[te_].sum(axis=0)
+        Gte = cg.G[te_, 0].sum(axis=0)
         sse_te = sse_of(Gte, cols, ft.phi) if cols.size else float(Gte[-1, -1])
         row["rho_left_out"] = math.sqrt(max(sse_te, 0.0) / float(cg.n[te_].sum()))
     records = pd.DataFrame(rrows)
-    where = _where(u, e_all_norm, rho_max)
+    where = _stroke_regions(u, e_all_norm, rho_max)
     if unexplained:
         sigw = where[where["significant"]]
         worst = sigw.reindex(sigw["z"].abs().sort_values(ascending=False).index).head(3)

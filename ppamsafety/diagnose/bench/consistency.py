@@ -20,18 +20,10 @@ from __future__ import annotations
 import numpy as np
 
 from ..core.criteria import _chi2_sf
-from ..core.linear_selection import EIGEN_CUTOFF, LinearGram
+from ..core.gates import CONSTANCY_ALPHA
+from ..core.linear_selection import LinearGram
+from ..core.solve import pinv_psd
 
-#: Level of the constancy test (the arm's ``selection.CONSTANCY_ALPHA``).
-CONSTANCY_ALPHA = 1e-3
-
-
-def _pinv_rank(C):
-    d = np.sqrt(np.maximum(np.diag(C), 0.0))
-    d[d == 0] = 1.0
-    w, V = np.linalg.eigh(C / np.outer(d, d))
-    keep = w > EIGEN_CUTOFF * max(float(w.max()), 1e-300) if w.size else w > 0
-    return ((V[:, keep] / w[keep]) @ V[:, keep].T) / np.outer(d, d), int(keep.sum())
 
 
 def time_consistency(design, names, name: str) -> float:
@@ -60,7 +52,7 @@ def time_consistency(design, names, name: str) -> float:
     fits = [LinearGram(design.e0, cols, mask=h).fit(names) for h in (half, ~half)]
     sl = fits[0].slices[name]
     d = fits[0].phi[sl] - fits[1].phi[sl]
-    Ci, rank = _pinv_rank(fits[0].cov[sl, sl] + fits[1].cov[sl, sl])
+    Ci, rank = pinv_psd(fits[0].cov[sl, sl] + fits[1].cov[sl, sl], rank=True)
     if rank == 0:
         return 1.0
     return _chi2_sf(max(float(d @ Ci @ d), 0.0), rank)

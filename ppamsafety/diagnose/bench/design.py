@@ -45,6 +45,7 @@ from ..._validation import check_range, as_float_array
 from ...data.measured import MeasuredData
 from ..core.noise import interpolation_sigma, MAD_GAUSS
 from ..core.record import longest_segment
+from ..core.solve import lstsq
 from .candidates import build_extensions, force_function
 
 #: Minimum samples of the diagnosed segment.
@@ -739,10 +740,7 @@ def actuator_design(data, candidates=None) -> ActuatorDesign:
     r_full = r
     if exts:
         A = np.concatenate([x.columns for x in exts.values()], axis=1)
-        sc = np.sqrt(np.sum(A ** 2, axis=0))
-        sc[sc == 0] = 1.0
-        coef, *_ = np.linalg.lstsq(A / sc, r, rcond=None)
-        r_full = r - (A / sc) @ coef
+        r_full = r - A @ lstsq(A, r)
     sigma, stride, est = residual_noise(rec.t, r_full)
     if stride > 1:
         listed = ", ".join(f"{v:.3g} N at stride {k}" for k, v in est.items())

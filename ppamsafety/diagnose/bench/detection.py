@@ -42,6 +42,7 @@ from scipy import stats
 
 from ..core.omitted import omitted_effects
 from ..core.power import POWER, needed_noncentrality
+from ..core.solve import lstsq
 from .selection import MIN_EFFECT_RMS
 
 
@@ -49,12 +50,7 @@ def _residualize(Z, X):
     """Z minus its projection on the span of X's columns (X may be empty)."""
     if X is None or X.shape[1] == 0:
         return Z
-    sc = np.sqrt(np.sum(X ** 2, axis=0))
-    sc[sc == 0] = 1.0
-    Q, R = np.linalg.qr(X / sc)
-    keep = np.abs(np.diag(R)) > 1e-10 * max(float(np.max(np.abs(np.diag(R)))), 1e-300)
-    Q = Q[:, keep]
-    return Z - Q @ (Q.T @ Z)
+    return Z - X @ lstsq(X, Z)
 
 
 def _stack(columns, names):
@@ -240,8 +236,7 @@ def signature_ratio(design, model, name: str, signature, *, alpha: float = 0.01,
         X = _stack(cols, base)
         R = _residualize(Zc, X)
         r = _residualize(d[:, None], X)[:, 0]
-        coef, *_ = np.linalg.lstsq(R, r, rcond=1e-10)
-        fitted = R @ coef
+        fitted = R @ lstsq(R, r)
         return float(fitted @ fitted)
 
     lt = lam_true(others)

@@ -1,19 +1,20 @@
 """The gates before "high" confidence on a muscle record.
 
 A named effect reaches ``confidence_level = "high"`` only through every gate
-below; otherwise it is ``"low"`` (a hint, not a finding).  They are the arm's
-gates (:mod:`ppamsafety.diagnose.arm.gates`) where they apply, plus two that
-say what a muscle record must contain.  The thresholds were set on the
-randomized battery of muscle records (:mod:`.scenarios`, seeds 0-299) and the
-claim -- of all effects named "high", at least 97 % are right -- is measured
-on unseen seeds (``docs/diagnose.md``).
+below; otherwise it is ``"low"`` (a hint, not a finding).  They are judged by the one rule
+of every record kind (:mod:`ppamsafety.diagnose.core.gates`): the arm's gates where they
+apply, plus two that say what a muscle record must contain; this module holds the muscle
+record's thresholds (:data:`MUSCLE_RULE`) and the evidence only a muscle record gives.
+The thresholds were set on the randomized battery of muscle records (:mod:`.scenarios`,
+seeds 0-299) and the claim -- of all effects named "high", at least 97 % are right -- is
+measured on unseen seeds (``docs/diagnose.md``).
 
 ===================  ===========================================================
 gate                 passes when
 ===================  ===========================================================
 weight               its inclusion probability (the BIC weights of the admissible
                      subsets of the library that hold it, :mod:`.selection`) is
-                     >= :data:`~ppamsafety.diagnose.core.result.HIGH_CONFIDENCE`
+                     >= :data:`~ppamsafety.diagnose.core.gates.HIGH_WEIGHT`
 stable               the naming rule picked it in >= ``THRESHOLD`` of the halves
                      of the record's loops (:mod:`.stability`)
 admissible           every parameter it moved has its 95 % interval inside the
@@ -22,12 +23,12 @@ admissible           every parameter it moved has its 95 % interval inside the
                      refitted force function > 0 at the contraction quantiles)
 moved                some parameter's interval excludes its nominal value (the
                      refit: the force function at a quantile node)
-clear                the fitted effect stands >= :data:`CLEAR_RATIO` x its
+clear                the fitted effect stands >= ``MUSCLE_RULE.clear_ratio`` (2) x its
                      detection limit (:func:`~.detection.limit_ratio`: sqrt of its
                      likelihood-ratio statistic over the noncentrality the naming rule
                      needs, the arm's ``clear`` gate): close to the limit a small error
                      the library does not hold can pose as the effect
-residual_at_noise    the final residual/noise RMS ratio is <= :data:`RHO_HIGH` x
+residual_at_noise    the final residual/noise RMS ratio is <= ``MUSCLE_RULE.rho_factor`` (1.15) x
                      the 99.9 % point of the ratio under noise alone and nothing
                      is unexplained
 consistent           its coefficients are the same in the first and the second half
@@ -48,43 +49,29 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
+from ..core.gates import CONSTANCY_ALPHA, HighRule, judge, level
 
-from ..core.power import noise_rho_quantile
-from ..core.result import HIGH_CONFIDENCE
-from .consistency import CONSTANCY_ALPHA
-
-#: Largest final residual/noise RMS ratio for "high", as a factor of the 99.9 % point
-#: of the ratio under noise alone (1.15 x 1.02-1.06: the estimated noise level is good to
-#: a few per cent, a model error of half the noise is not).
-RHO_HIGH = 1.15
 #: Fewest reversals of the motion for a history effect to be "high": two full loops.
 MIN_REVERSALS_HIGH = 4
 #: Effects that show at the reversals of the motion.
 HISTORY_EFFECTS = ("actuator_friction", "hysteresis")
 #: Effects that need several pressure levels to be told from one another.
 PRESSURE_EFFECTS = ("force_law_refit", "force_sensor_offset", "pressure_sensor_offset")
-#: The gates, in the order they are reported.
-GATES = ("weight", "stable", "admissible", "moved", "clear", "residual_at_noise", "consistent",
-         "reversals", "pressure_levels", "not_confounded")
-#: Smallest fitted effect over its detection limit of a "high" name.  The arm uses 5
+#: The muscle record's rule for "high": its gates in the order they are reported; the largest
+#: final residual/noise RMS ratio as a factor of the 99.9 % point of the ratio under noise
+#: alone, 1.15 (x 1.02-1.06: the estimated noise level is good to a few per cent, a model
+#: error of half the noise is not); the smallest fitted effect over its detection limit of a
+#: "high" name, 2.  The arm uses 5
 #: (:mod:`ppamsafety.diagnose.arm.gates`); on the muscle battery's tuning seeds 0-199 every
 #: name that passed the other gates was right at every ratio from 1 to 5 (67 names at 1, 65
 #: at 2, 51 at 5) and the two wrong names (at any level) stood 6.6 and 9.6 x their limits,
 #: stopped by other gates: 2 keeps the gate's purpose (no "high" at the edge of visibility)
 #: without dropping right names for nothing.
-CLEAR_RATIO = 2.0
-
-
-def rho_high(m: int) -> float:
-    """The largest final residual/noise ratio on m equations for "high".
-
-    Parameters
-    ----------
-    m : int
-        Equations (samples used).
-    """
-    return RHO_HIGH * noise_rho_quantile(max(int(m), 1))
+MUSCLE_RULE = HighRule(gates=("weight", "stable", "admissible", "moved", "clear",
+                              "residual_at_noise", "consistent", "reversals", "pressure_levels",
+                              "not_confounded"),
+                       rho_factor=1.15, rho_quantile=0.999, clear_ratio=2.0,
+                       consistency_alpha=CONSTANCY_ALPHA)
 
 
 def gates(name: str, extension, phi, cov, *, weight: float, stability: float | None,
@@ -125,31 +112,17 @@ def gates(name: str, extension, phi, cov, *, weight: float, stability: float | N
     Returns
     -------
     dict
-        Gate -> bool, in the order of :data:`GATES`.
+        Gate -> bool, in the order of ``MUSCLE_RULE.gates``.
     """
-    return {"weight": bool(weight >= HIGH_CONFIDENCE),
-            "stable": bool(stability is not None and stability >= stability_threshold),
-            "admissible": bool(extension.physically_admissible(phi, cov)),
-            "moved": bool(extension.moved(phi, cov)),
-            "clear": bool(clear >= CLEAR_RATIO),
-            "residual_at_noise": bool(not unexplained and np.isfinite(rho)
-                                      and rho <= rho_high(m)),
-            "consistent": bool(consistency >= CONSTANCY_ALPHA),
-            "reversals": bool(name not in HISTORY_EFFECTS or turns >= MIN_REVERSALS_HIGH),
-            "pressure_levels": bool(name not in PRESSURE_EFFECTS or not one_level),
-            "not_confounded": not confounded}
+    return judge(MUSCLE_RULE, weight=weight, stability=stability,
+                 stability_threshold=stability_threshold,
+                 admissible=extension.physically_admissible(phi, cov),
+                 moved=extension.moved(phi, cov), clear=clear, rho=rho, m=m,
+                 unexplained=unexplained, consistency=consistency,
+                 reversals=name not in HISTORY_EFFECTS or turns >= MIN_REVERSALS_HIGH,
+                 pressure_levels=name not in PRESSURE_EFFECTS or not one_level,
+                 confounded=confounded)
 
 
-def level(g: dict) -> str:
-    """``"high"`` when every gate passes, else ``"low"``.
-
-    Parameters
-    ----------
-    g : dict
-        :func:`gates`.
-    """
-    return "high" if all(g.values()) else "low"
-
-
-__all__ = ["GATES", "CLEAR_RATIO", "RHO_HIGH", "MIN_REVERSALS_HIGH", "HISTORY_EFFECTS", "PRESSURE_EFFECTS",
-           "rho_high", "gates", "level"]
+__all__ = ["MUSCLE_RULE", "MIN_REVERSALS_HIGH", "HISTORY_EFFECTS", "PRESSURE_EFFECTS",
+           "gates", "level"]

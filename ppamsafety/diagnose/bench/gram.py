@@ -1,5 +1,9 @@
 """Weighted least squares from per-cluster Gram matrices: fits, cross-validation, robust tests.
 
+The matrices are the engine's one :class:`~ppamsafety.diagnose.core.gram.Gram`, one group
+per cluster and one channel (:meth:`~ppamsafety.diagnose.core.gram.Gram.from_samples`); the
+fit is its :class:`~ppamsafety.diagnose.core.gram.GramFit`.
+
 A bench campaign has tens of thousands of samples and a few hundred candidate
 columns, and the selection fits thousands of small models (every candidate,
 every profiled variant, every step, every stability subset).  The samples
@@ -8,8 +12,9 @@ enter only through the **per-cluster Gram matrices** ``G_c = [Z y]^T W [Z y]``
 correlated within a stroke, not between strokes), computed once; any model
 (a set of columns J) on any set of clusters is then a small linear solve:
 
-* coefficients ``phi = G_JJ^-1 b_J`` (columns scaled to unit diagonal, a
-  1e-10 ridge for exactly collinear columns);
+* coefficients ``phi = G_JJ^-1 b_J`` under the diagnosis's one rank rule
+  (:mod:`ppamsafety.diagnose.core.solve`: the minimum-norm solution for exactly collinear
+  columns);
 * weighted SSE ``y^T W y - 2 phi^T b_J + phi^T G_JJ phi``;
 * held-out SSE of a fold from the other fold's fit;
 * the cluster-robust ("sandwich") covariance with strokes as clusters,
@@ -20,108 +25,16 @@ correlated within a stroke, not between strokes), computed once; any model
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 from scipy import special
 
-
-@dataclass(frozen=True, eq=False)
-class ClusterGram:
-    """Per-cluster Gram matrices of the columns Z and the response y (last row/column).
-
-    Attributes
-    ----------
-    G : numpy.ndarray, shape (C, M + 1, M + 1)
-        One weighted Gram matrix per cluster.
-    weight : numpy.ndarray, shape (C,)
-        Sum of the sample weights per cluster.
-    n : numpy.ndarray, shape (C,)
-        Samples per cluster.
-    """
-
-    G: np.ndarray
-    weight: np.ndarray
-    n: np.ndarray
-
-    @classmethod
-    def build(cls, Z, y, w, cluster) -> "ClusterGram":
-        """From samples.
-
-        Parameters
-        ----------
-        Z : numpy.ndarray, shape (N, M)
-            Columns.
-        y : numpy.ndarray, shape (N,)
-            Response.
-        w : numpy.ndarray, shape (N,)
-            Sample weights (1 / noise variance).
-        cluster : numpy.ndarray of int, shape (N,)
-            Cluster index 0..C-1 of every sample.
-        """
-        A = np.column_stack([Z, y]) * np.sqrt(w)[:, None]
-        C = int(cluster.max()) + 1
-        order = np.argsort(cluster, kind="stable")
-        bounds = np.searchsorted(cluster[order], np.arange(C + 1))
-        G = np.empty((C, A.shape[1], A.shape[1]))
-        for c in range(C):
-            Ac = A[order[bounds[c]:bounds[c + 1]]]
-            G[c] = Ac.T @ Ac
-        wt = np.bincount(cluster, weights=w, minlength=C)
-        n = np.bincount(cluster, minlength=C)
-        return cls(G=G, weight=wt, n=n)
-
-    @property
-    def m(self) -> int:
-        """Number of columns (without y)."""
-        return self.G.shape[1] - 1
+from ..core.gram import Gram, GramFit
+from ..core.solve import pinv_psd, solve_normal
 
 
-@dataclass(frozen=True, eq=False)
-class GramFit:
-    """A model fitted on a set of clusters.
-
-    Attributes
-    ----------
-    cols : numpy.ndarray of int
-        Column indices J.
-    phi : numpy.ndarray
-        Coefficients.
-    sse : float
-        Weighted sum of squared residuals.
-    wsum : float
-        Sum of weights (the weighted MSE is sse / wsum).
-    cov : numpy.ndarray or None
-        Cluster-robust covariance (when asked).
-    """
-
-    cols: np.ndarray
-    phi: np.ndarray
-    sse: float
-    wsum: float
-    cov: np.ndarray | None = None
-
-    @property
-    def mse(self) -> float:
-        """Weighted mean square of the residual (in noise variances when w = 1/sigma^2)."""
-        return self.sse / self.wsum
-
-
-def _solve(G, cols):
-    """phi for the columns ``cols`` of a summed Gram (scaled, small ridge)."""
-    y = G.shape[0] - 1
-    if cols.size == 0:
-        return np.zeros(0), None
-    A = G[np.ix_(cols, cols)]
-    b = G[cols, y]
-    d = np.sqrt(np.maximum(np.diag(A), 1e-300))
-    An = A / np.outer(d, d)
-    An[np.diag_indices_from(An)] += 1e-10
-    try:
-        sol = np.linalg.solve(An, b / d)
-    except np.linalg.LinAlgError:
-        sol = np.linalg.lstsq(An, b / d, rcond=None)[0]
-    return sol / d, (An, d)
+def _phi(G, cols):
+    """Coefficients of the columns ``cols`` of a summed Gram (:func:`~..core.solve.solve_normal`)."""
+    return solve_normal(G[np.ix_(cols, cols)], G[cols, -1]) if cols.size else np.zeros(0)
 
 
 def sse_of(G, cols, phi) -> float:
@@ -144,13 +57,13 @@ def sse_of(G, cols, phi) -> float:
     return float(G[y, y] - 2.0 * phi @ b + phi @ A @ phi)
 
 
-def fit(cg: ClusterGram, clusters, cols, *, robust: bool = False, Gsum=None) -> GramFit:
+def fit(cg: Gram, clusters, cols, *, robust: bool = False, Gsum=None) -> GramFit:
     """Fit the columns ``cols`` on the clusters ``clusters``.
 
     Parameters
     ----------
-    cg : ClusterGram
-        The per-cluster Grams.
+    cg : Gram
+        The per-cluster Grams (one channel).
     clusters : numpy.ndarray of int
         Clusters used.
     cols : array_like of int
@@ -158,39 +71,39 @@ def fit(cg: ClusterGram, clusters, cols, *, robust: bool = False, Gsum=None) -> 
     robust : bool, keyword-only
         Also compute the cluster-robust covariance.
     Gsum : numpy.ndarray, optional, keyword-only
-        ``cg.G[clusters].sum(0)`` if already known.
+        ``cg.G[clusters, 0].sum(0)`` if already known.
 
     Returns
     -------
     GramFit
     """
     cols = np.asarray(cols, int)
-    G = cg.G[clusters].sum(axis=0) if Gsum is None else Gsum
-    phi, fac = _solve(G, cols)
+    G = cg.G[clusters, 0].sum(axis=0) if Gsum is None else Gsum
+    phi = _phi(G, cols)
     sse = sse_of(G, cols, phi)
     wsum = float(cg.weight[clusters].sum())
     cov = None
     if robust and cols.size:
-        An, d = fac
-        inv = np.linalg.pinv(An) / np.outer(d, d)
+        inv = pinv_psd(G[np.ix_(cols, cols)])
         y = G.shape[0] - 1
         cl = np.asarray(clusters)
         # only the (cluster, J, J) and (cluster, J, y) blocks: copying every cluster's whole
         # Gram (hundreds of columns) dominated the selection's time
-        u = cg.G[np.ix_(cl, cols, [y])][..., 0] - np.einsum(
-            "cij,j->ci", cg.G[np.ix_(cl, cols, cols)], phi)
+        G1 = cg.G[:, 0]
+        u = G1[np.ix_(cl, cols, [y])][..., 0] - np.einsum(
+            "cij,j->ci", G1[np.ix_(cl, cols, cols)], phi)
         C = len(clusters)
         meat = u.T @ u * (C / max(C - 1, 1))
         cov = inv @ meat @ inv
-    return GramFit(cols=cols, phi=phi, sse=sse, wsum=wsum, cov=cov)
+    return GramFit(cols=cols, phi=phi, chi2=sse, wsum=wsum, cov=cov)
 
 
-def cv_mse(cg: ClusterGram, folds: list, cols) -> float:
+def cv_mse(cg: Gram, folds: list, cols) -> float:
     """Held-out weighted MSE of 2-fold cross-validation over cluster sets.
 
     Parameters
     ----------
-    cg : ClusterGram
+    cg : Gram
         The per-cluster Grams.
     folds : list of (numpy.ndarray, numpy.ndarray)
         Summed Grams (G_fold0, G_fold1) and their weight sums as
@@ -200,8 +113,7 @@ def cv_mse(cg: ClusterGram, folds: list, cols) -> float:
     """
     cols = np.asarray(cols, int)
     (G0, w0), (G1, w1) = folds
-    p0, _ = _solve(G0, cols)
-    p1, _ = _solve(G1, cols)
+    p0, p1 = _phi(G0, cols), _phi(G1, cols)
     return (sse_of(G1, cols, p0) + sse_of(G0, cols, p1)) / (w0 + w1)
 
 
@@ -219,14 +131,9 @@ def wald(phi, cov, block) -> tuple:
     """
     b = phi[block]
     V = cov[block][:, block] if not isinstance(block, slice) else cov[block, block]
-    d = np.sqrt(np.maximum(np.diag(V), 1e-300))
-    Vn = V / np.outer(d, d)
-    w, U = np.linalg.eigh(Vn)
-    keep = w > 1e-8 * max(w.max(), 1e-300)
-    z = U[:, keep].T @ (b / d)
-    stat = float(np.sum(z * z / w[keep]))
-    df = int(keep.sum())
+    Vi, df = pinv_psd(V, rank=True)
+    stat = float(b @ Vi @ b)
     return stat, df, float(special.chdtrc(max(df, 1), stat))
 
 
-__all__ = ["ClusterGram", "GramFit", "fit", "cv_mse", "wald", "sse_of"]
+__all__ = ["fit", "cv_mse", "wald", "sse_of"]

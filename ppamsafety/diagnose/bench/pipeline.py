@@ -33,11 +33,11 @@ import time
 
 import numpy as np
 import pandas as pd
-from scipy import stats
 
 from ..._validation import check_int, check_range
 from ..core.linear_selection import hac_covariance_linear
 from ..core.omitted import HINT_P, widened_interval
+from ..core.regions import region_rows, terciles, time_segments
 from ..core.result import Diagnosis
 from .candidates import ACTUATOR_VOCABULARY
 from .confounded import confounded_groups
@@ -47,49 +47,26 @@ from .design import (AMBIGUOUS_SIGMAS, LOCAL_WINDOW, NOISE_PLATEAU, PRESSURE_LEV
                      ActuatorRecord, actuator_design, actuator_record, contraction_rate,
                      motion_direction, residual_noise)
 from .detection import detection_limits, limit_ratio, omitted
-from .gates import CLEAR_RATIO, GATES, MIN_REVERSALS_HIGH, RHO_HIGH, gates, level, rho_high
+from ..core.gates import level
+from .gates import MIN_REVERSALS_HIGH, MUSCLE_RULE, gates
 from .selection import MIN_EFFECT_RMS, relinearised, select
 from .stability import (PAIRS, THRESHOLD, half_sample_covariance, inflated_covariance,
                         stability_selection)
 
 
-def _where(e, feats, rho_max):
+def _sample_regions(e, feats, rho_max):
     """Operating regions of significant residual (same columns as the arm's table)."""
-    zcrit = stats.norm.isf(0.0005)
-    rows = []
     d = feats["direction"]
     groups = {
         "direction of motion": {"contracting (d eps/dt > 0)": d > 0,
                                 "extending (d eps/dt < 0)": d < 0, "before any motion": d == 0},
-        "pressure level": _terciles(feats["pressure"], "p", 1e-5, "bar"),
-        "contraction level": _terciles(feats["eps"], "eps", 100.0, "%"),
-        "time segment": {f"t {a:.4g}-{b:.4g} s": m for a, b, m in _segments(feats["t"])},
+        "pressure level": terciles(feats["pressure"], "p", scale=1e-5, unit="bar",
+                                   merge_equal=True),
+        "contraction level": terciles(feats["eps"], "eps", scale=100.0, unit="%",
+                                      merge_equal=True),
+        "time segment": time_segments(feats["t"], digits=4),
     }
-    for region, gs in groups.items():
-        for g, m in gs.items():
-            n = int(m.sum())
-            if n == 0:
-                continue
-            mean = float(e[m].mean())
-            rms = float(np.sqrt(np.mean(e[m] ** 2)))
-            z = mean * math.sqrt(n)
-            rows.append({"channel": "force", "region": region, "group": g, "blocks": n,
-                         "mean": mean, "rms": rms, "z": z,
-                         "significant": bool(abs(z) > zcrit or rms > rho_max)})
-    return pd.DataFrame(rows)
-
-
-def _terciles(x, name, scale, unit):
-    a, b = np.quantile(x, [1 / 3, 2 / 3])
-    if a == b:
-        return {f"{name} = {a * scale:.3g} {unit}": np.ones(x.size, bool)}
-    return {f"{name} low (< {a * scale:.3g} {unit})": x < a, f"{name} mid": (x >= a) & (x < b),
-            f"{name} high (>= {b * scale:.3g} {unit})": x >= b}
-
-
-def _segments(t, n=8):
-    edges = np.linspace(t.min(), t.max() + 1e-12, n + 1)
-    return [(edges[i], edges[i + 1], (t >= edges[i]) & (t < edges[i + 1])) for i in range(n)]
+    return pd.DataFrame(region_rows(e, groups, "force", rho_max))
 
 
 def _widened(params: dict, ext, sl: slice, k: int, left_out: dict) -> dict:
@@ -258,7 +235,7 @@ def diagnose_actuator(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
     idx = des.idx
     feats = {"t": rec.t[idx], "direction": des.direction[idx], "pressure": rec.pressure[idx],
              "eps": rec.eps[idx]}
-    where = _where(fit.e, feats, rho_max)
+    where = _sample_regions(fit.e, feats, rho_max)
     bad = ["force"] if unexplained else []
     if unexplained:
         sigw = where[where["significant"]]
@@ -274,9 +251,10 @@ def diagnose_actuator(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
                              f"effect RMS >= {MIN_EFFECT_RMS} x noise; then a backward pass; "
                              "look-alikes (a member whose LR test given an outside candidate "
                              "is not significant) reported as confounded, not named",
-                "min_effect_rms": MIN_EFFECT_RMS, "rho_high": rho_high(des.m),
-                "high_confidence": {"rho_high_factor": RHO_HIGH, "gates": list(GATES),
-                                    "clear_ratio": CLEAR_RATIO,
+                "min_effect_rms": MIN_EFFECT_RMS, "rho_high": MUSCLE_RULE.rho_high(des.m),
+                "high_confidence": {"rho_high_factor": MUSCLE_RULE.rho_factor,
+                                    "gates": list(MUSCLE_RULE.gates),
+                                    "clear_ratio": MUSCLE_RULE.clear_ratio,
                                     "stability_threshold": THRESHOLD if stab is None
                                     else stab.threshold,
                                     "min_reversals": MIN_REVERSALS_HIGH},

@@ -15,7 +15,7 @@ columns, the nominal law of one of the four muscle groups of Table B.1 and an
 uncontracted length of 5-10 cm; then 0-3 effects of the muscle library with
 magnitudes log-uniform from below a typical detection limit to the top of the
 plausible range (:data:`LIBRARY_DRAWS`), and with probability
-:data:`P_PERTURBATION` one perturbation the library does not hold
+:data:`~..core.battery.P_PERTURBATION` one perturbation the library does not hold
 (:data:`PERTURBATIONS`: backlash, a leak, a drifting load-cell zero, a lagging
 pressure transducer, coloured noise, outliers).
 
@@ -45,7 +45,6 @@ from __future__ import annotations
 
 import math
 import time
-import traceback
 import warnings
 from dataclasses import dataclass, field
 
@@ -56,24 +55,14 @@ from ..._validation import check_int
 from ...data.measured import MeasuredDataWarning
 from ...params.muscles import TABLE_B1_N_PER_BAR
 from ...units import BAR
-from ..core.battery import coverage_entry, run_seeds
+from ..core.battery import P_COUNT, P_PERTURBATION, Battery, coverage_entry, logu, sgn
+from ..core.solve import lstsq
 from .candidates import ACTUATOR_VOCABULARY, force_function
 from .design import actuator_design, actuator_record
 from .detection import signature_ratio
 from .pipeline import diagnose_actuator
 from .synthesize import synthesize_actuator
 
-#: Seeds the bench gates were set on (the ``clear`` ratio) and the widened intervals were
-#: checked on (:mod:`..core.omitted`); never used to measure them.
-TUNING_SEEDS = range(0, 200)
-#: Seeds of the bench battery's measurement (shipped in ``calibration_data``), on which no
-#: rule was set (1000-1299 measured the gates with the fit's own intervals, which showed the
-#: intervals needed widening; ``docs/diagnose.md``).
-MEASURE_SEEDS = range(1300, 1600)
-#: Probabilities of 0, 1, 2, 3 hidden library effects (as the arm's battery).
-P_COUNT = (0.2, 0.4, 0.28, 0.12)
-#: Probability of an out-of-library perturbation in a scenario.
-P_PERTURBATION = 0.3
 #: Probability of a pressure sweep at fixed contraction (else a contraction sawtooth).
 P_SWEEP = 0.15
 #: Largest number of samples of a record (the sampling rate is lowered to keep below it).
@@ -82,28 +71,20 @@ MAX_SAMPLES = 40000
 LAW_FIT_RANGE = (0.03, 0.30)
 
 
-def _logu(rng, lo, hi):
-    return float(math.exp(rng.uniform(math.log(lo), math.log(hi))))
-
-
-def _sgn(rng):
-    return float(rng.choice([-1.0, 1.0]))
-
-
 # ----------------------------------------------------------------------------- library draws
 # Each draw returns (synthesize_actuator effects, true parameter values of the candidate in
 # the sensors' frame before any gain is applied: measured_truth() applies it).
 
 def _hysteresis(rng, law, protocol):
-    d = _logu(rng, 0.003, 0.3)
+    d = logu(rng, 0.003, 0.3)
     return {"hysteresis_delta": d}, {"delta": d}
 
 
 def _friction(rng, law, protocol):
-    c = _logu(rng, 0.2, 30.0)
+    c = logu(rng, 0.2, 30.0)
     fx, tr = {"friction_coulomb": c}, {"c": c, "b": 0.0}
     if protocol["cycles"] >= 2 and rng.random() < 0.3:
-        b = _logu(rng, 200.0, 2.0e4)
+        b = logu(rng, 200.0, 2.0e4)
         fx["friction_viscous"] = b
         tr["b"] = b
     return fx, tr
@@ -129,21 +110,21 @@ def law_change(a, s0: float, s1: float) -> np.ndarray:
 
 
 def _refit(rng, law, protocol):
-    s0 = _sgn(rng) * _logu(rng, 0.002, 0.08)
+    s0 = sgn(rng) * logu(rng, 0.002, 0.08)
     # a pure scale (30 %) is a force-sensor gain on the record: confounded by construction
-    s1 = _sgn(rng) * _logu(rng, 0.002, 0.05) if rng.random() < 0.7 else 0.0
+    s1 = sgn(rng) * logu(rng, 0.002, 0.05) if rng.random() < 0.7 else 0.0
     da = law_change(law, s0, s1)
     return {"force_law_delta": tuple(float(x) for x in da)}, {
         f"a{j}": float(law[j] + da[j]) for j in range(5)}
 
 
 def _force_offset(rng, law, protocol):
-    o = _sgn(rng) * _logu(rng, 0.1, 40.0)
+    o = sgn(rng) * logu(rng, 0.1, 40.0)
     return {"force_sensor_offset": o}, {"o": o}
 
 
 def _force_gain(rng, law, protocol):
-    g = _sgn(rng) * _logu(rng, 5e-4, 0.08)
+    g = sgn(rng) * logu(rng, 5e-4, 0.08)
     if rng.random() < 0.5:
         # a pressure-sensor gain: the same column, g = 1/(1 + g_p) - 1
         return {"pressure_sensor_gain": g}, {"g": 1.0 / (1.0 + g) - 1.0}
@@ -151,7 +132,7 @@ def _force_gain(rng, law, protocol):
 
 
 def _pressure_offset(rng, law, protocol):
-    o = _sgn(rng) * _logu(rng, 30.0, 2.0e4)
+    o = sgn(rng) * logu(rng, 30.0, 2.0e4)
     return {"pressure_sensor_offset": o}, {"o": o}
 
 
@@ -166,16 +147,16 @@ MOTION_EFFECTS = ("hysteresis", "actuator_friction")
 def _perturbation(rng) -> dict:
     kind = str(rng.choice(PERTURBATIONS))
     if kind == "backlash":
-        return {kind: _logu(rng, 1e-5, 1e-3)}
+        return {kind: logu(rng, 1e-5, 1e-3)}
     if kind == "leak_rate":
-        return {kind: _logu(rng, 3e-4, 1e-2)}
+        return {kind: logu(rng, 3e-4, 1e-2)}
     if kind == "force_sensor_drift":
-        return {kind: _sgn(rng) * _logu(rng, 2e-3, 0.2)}
+        return {kind: sgn(rng) * logu(rng, 2e-3, 0.2)}
     if kind == "pressure_sensor_lag":
-        return {kind: _logu(rng, 0.01, 0.5)}
+        return {kind: logu(rng, 0.01, 0.5)}
     if kind == "noise_correlation_time":
-        return {kind: _logu(rng, 0.02, 1.0)}
-    return {"outlier_rate": _logu(rng, 3e-4, 5e-3)}
+        return {kind: logu(rng, 0.02, 1.0)}
+    return {"outlier_rate": logu(rng, 3e-4, 5e-3)}
 
 
 #: Out-of-library perturbations (effects of :func:`~.synthesize.synthesize_actuator`).
@@ -250,14 +231,14 @@ def random_scenario(seed: int) -> BenchScenario:
         p = np.array([p[0], p[0] + 1.0])
     cycles = int(rng.choice([1, 2, 3, 4], p=[0.1, 0.3, 0.35, 0.25])) if not sweep else \
         int(rng.integers(2, 7))
-    period = _logu(rng, 6.0, 40.0)
+    period = logu(rng, 6.0, 40.0)
     lo = float(rng.uniform(0.03, 0.08))
     hi = float(rng.uniform(lo + 0.08, 0.25))
     group = int(rng.integers(0, len(TABLE_B1_N_PER_BAR)))
     law = tuple(c / BAR for c in TABLE_B1_N_PER_BAR[group])
     l0 = float(rng.uniform(0.05, 0.10))
     duration = (2.0 + cycles * period) * (1 if sweep else nlev)
-    rate = min(_logu(rng, 10.0, 400.0), MAX_SAMPLES / duration)
+    rate = min(logu(rng, 10.0, 400.0), MAX_SAMPLES / duration)
     jitter = float(rng.uniform(0.05, 0.5)) if rng.random() < 0.3 else 0.0
     position = bool(rng.random() < 0.5)
     options = {"protocol": "pressure-sweep" if sweep else "sawtooth",
@@ -351,10 +332,7 @@ def irreducible_gap(sc: BenchScenario, record, design) -> float | None:
     Z = np.concatenate([c for c in design.columns.values()], axis=1) if design.columns else \
         np.zeros((d.size, 0))
     if Z.shape[1]:
-        sc_ = np.sqrt(np.sum(Z ** 2, axis=0))
-        sc_[sc_ == 0] = 1.0
-        coef, *_ = np.linalg.lstsq(Z / sc_, d, rcond=1e-10)
-        d = d - (Z / sc_) @ coef
+        d = d - Z @ lstsq(Z, d)
     gamma = float(np.sqrt(np.mean(d ** 2)))
     return math.sqrt(1.0 + gamma * gamma)
 
@@ -434,33 +412,19 @@ def run_scenario(sc: BenchScenario) -> dict:
     return row
 
 
-def _worker(seed):
-    try:
-        return run_scenario(random_scenario(seed))
-    except Exception as exc:                     # a failure is a result of the battery
-        return {"seed": seed, "kind": "actuator", "error": f"{type(exc).__name__}: {exc}",
-                "traceback": traceback.format_exc()}
+def _muscle_row(seed):
+    """The row of ``random_scenario(seed)`` (the muscle bench's
+    :class:`~..core.battery.Battery`)."""
+    return run_scenario(random_scenario(seed))
 
 
-def run_battery(seeds, *, processes: int = 1, progress: bool = False) -> pd.DataFrame:
-    """Run :func:`run_scenario` on ``random_scenario(seed)`` for every seed.
-
-    Parameters
-    ----------
-    seeds : iterable of int
-    processes : int, keyword-only
-        Worker processes (1: in this process).
-    progress : bool, keyword-only
-        Print one line per finished scenario.
-
-    Returns
-    -------
-    pandas.DataFrame
-        One row per scenario, sorted by seed.
-    """
-    seeds = [check_int("seed", s, 0) for s in seeds]
-    processes = check_int("processes", processes, 1, 256)
-    return run_seeds(_worker, seeds, processes=processes, progress=progress)
+#: The muscle bench's battery: the gates were set (the ``clear`` ratio) and the widened
+#: intervals checked (:mod:`..core.omitted`) on seeds 0-199, never used to measure them; the
+#: measurement (shipped in ``calibration_data``) runs on 1300-1599 (1000-1299 measured the
+#: gates before the intervals were widened; the measurement since runs on seeds no earlier
+#: run has seen).
+MUSCLE_BATTERY = Battery(kind="actuator", tuning=range(0, 200), measure=range(1300, 1600),
+                         run=_muscle_row, error_row={"kind": "actuator"}, processes=1)
 
 
 def single_effect_outcomes(results: pd.DataFrame) -> pd.DataFrame:
@@ -474,7 +438,7 @@ def single_effect_outcomes(results: pd.DataFrame) -> pd.DataFrame:
     Parameters
     ----------
     results : pandas.DataFrame
-        :func:`run_battery`.
+        :func:`~..core.battery.run_battery` of :data:`MUSCLE_BATTERY`.
 
     Returns
     -------
@@ -486,7 +450,7 @@ def single_effect_outcomes(results: pd.DataFrame) -> pd.DataFrame:
     """
     if not isinstance(results, pd.DataFrame) or not {"hidden", "named", "high", "confounded",
                                                      "perturbation"} <= set(results.columns):
-        raise TypeError("results must be the DataFrame of run_battery()")
+        raise TypeError("results must be the DataFrame of run_battery(MUSCLE_BATTERY, ...)")
     df = results[(results["error"].fillna("") == "") & (results["perturbation"] == "")]
     df = df[df["hidden"].map(len) == 1]
     rows = {}
@@ -508,8 +472,7 @@ def single_effect_outcomes(results: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame.from_dict(rows, orient="index").sort_index()
 
 
-__all__ = ["BenchScenario", "random_scenario", "record_of", "run_scenario", "run_battery",
+__all__ = ["BenchScenario", "random_scenario", "record_of", "run_scenario", "MUSCLE_BATTERY",
            "single_effect_outcomes",
            "measured_truth", "irreducible_gap", "law_change", "LIBRARY_DRAWS", "PERTURBATIONS",
-           "P_COUNT", "P_PERTURBATION", "P_SWEEP", "MAX_SAMPLES", "TUNING_SEEDS",
-           "MEASURE_SEEDS"]
+           "P_SWEEP", "MAX_SAMPLES"]

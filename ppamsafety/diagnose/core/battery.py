@@ -1,18 +1,148 @@
 """Running a scenario battery: one result row per seed, here or in a pool of workers.
 
-The arm's battery (:mod:`ppamsafety.diagnose.scenarios`) and the muscle bench's
-(:mod:`ppamsafety.diagnose.bench.scenarios`) draw, synthesize and score their scenarios
-differently but run them the same way, through :func:`run_seeds`.
+Every record kind's battery -- the arm's (:mod:`ppamsafety.diagnose.scenarios`), the muscle
+bench's (:mod:`ppamsafety.diagnose.bench.scenarios`), the cylinder campaign's
+(:mod:`ppamsafety.diagnose.bench.calibration`) -- keeps only its draws: a :class:`Battery`
+names its seeds and the function turning one seed into a row.  They run through one
+:func:`run_battery` and share the draw helpers (:func:`logu`, :func:`sgn`), the required
+precision of "high" (:data:`HIGH_PRECISION`) and its Wilson bound (:func:`wilson_low`).
 """
 
 from __future__ import annotations
 
+import math
 import multiprocessing
+import os
+import traceback
+from dataclasses import dataclass, field
+from functools import partial
 
 import pandas as pd
 
+from ..._validation import check_int
+
 #: Scenarios a worker runs before it is replaced (bounds what a long battery can leak).
 TASKS_PER_WORKER = 50
+#: Required precision of "high", every record kind: of all effects named "high", at least
+#: this fraction are really there (measured on seeds never used to set the gates).
+HIGH_PRECISION = 0.97
+#: Probabilities of 0, 1, 2, 3 hidden library effects in a scenario (the arm's and the
+#: muscle bench's batteries).
+P_COUNT = (0.2, 0.4, 0.28, 0.12)
+#: Probability of an out-of-library perturbation in a scenario.
+P_PERTURBATION = 0.3
+
+
+def logu(rng, lo: float, hi: float) -> float:
+    """A log-uniform draw in [lo, hi] (a magnitude over decades).
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+    lo, hi : float
+        Bounds (> 0).
+    """
+    return float(math.exp(rng.uniform(math.log(lo), math.log(hi))))
+
+
+def sgn(rng) -> float:
+    """A random sign, -1.0 or 1.0.
+
+    Parameters
+    ----------
+    rng : numpy.random.Generator
+    """
+    return float(rng.choice([-1.0, 1.0]))
+
+
+def wilson_low(k: int, n: int, z: float = 1.96) -> float:
+    """Lower bound of the Wilson score interval of a proportion k / n (nan when n = 0).
+
+    Parameters
+    ----------
+    k, n : int
+        Successes and trials.
+    z : float
+        Normal quantile of the interval (1.96: 95 %).
+    """
+    if n == 0:
+        return math.nan
+    p = k / n
+    den = 1 + z * z / n
+    centre = p + z * z / (2 * n)
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n))
+    return max((centre - half) / den, 0.0)           # 0 of n: exactly 0, not -3e-18
+
+
+@dataclass(frozen=True)
+class Battery:
+    """A record kind's battery: its seeds and how one seed becomes a result row.
+
+    Attributes
+    ----------
+    kind : str
+        The record kind (the ``kind`` of a failed scenario's row when ``error_row`` has
+        none).
+    tuning : range
+        Seeds the gates were set on (never used to measure them).
+    measure : range
+        Seeds of the measurement.
+    run : callable
+        ``run(seed, **options) -> dict``: draw, synthesize, diagnose and score one scenario
+        (module level, so that worker processes can run it).
+    error_row : dict
+        Keys of the row of a scenario that raised (besides ``seed``, ``error``,
+        ``traceback``).
+    processes : int or None
+        Default worker processes (None: every core).
+    """
+
+    kind: str
+    tuning: range
+    measure: range
+    run: object
+    error_row: dict = field(default_factory=dict)
+    processes: int | None = 1
+
+
+def _scenario(seed, battery, options):
+    try:
+        return battery.run(seed, **options)
+    except Exception as exc:                     # a failure is a result of the battery
+        return {"seed": seed, **battery.error_row, "error": f"{type(exc).__name__}: {exc}",
+                "traceback": traceback.format_exc()}
+
+
+def run_battery(battery: Battery, seeds, *, processes: int | None = None,
+                progress: bool = False, **options) -> pd.DataFrame:
+    """One row per seed of a record kind's battery (a failed scenario is an error row).
+
+    Parameters
+    ----------
+    battery : Battery
+    seeds : iterable of int
+    processes : int, optional, keyword-only
+        Worker processes (default ``battery.processes``; 1: in this process).
+    progress : bool, keyword-only
+        Print one line per finished scenario.
+    **options
+        Keyword options of ``battery.run`` (the arm's ``arm``, ``declared``).
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per scenario, sorted by seed.
+    """
+    if not isinstance(battery, Battery):
+        raise TypeError(f"battery: {battery!r} is not a Battery (the kinds' ARM_BATTERY, "
+                        f"MUSCLE_BATTERY)")
+    seeds = [check_int("seed", s, 0) for s in seeds]
+    if processes is None:
+        processes = battery.processes
+    processes = (os.cpu_count() or 1) if processes is None else \
+        check_int("processes", processes, 1, 256)
+    return run_seeds(partial(_scenario, battery=battery, options=options), seeds,
+                     processes=processes, progress=progress)
 
 
 def progress_line(row: dict) -> str:
@@ -95,4 +225,5 @@ def run_seeds(work, seeds, *, processes: int, progress: bool = False) -> pd.Data
     return pd.DataFrame(rows).sort_values("seed").reset_index(drop=True)
 
 
-__all__ = ["run_seeds", "progress_line", "TASKS_PER_WORKER"]
+__all__ = ["Battery", "run_battery", "run_seeds", "progress_line", "coverage_entry", "logu", "sgn",
+           "wilson_low", "HIGH_PRECISION", "P_COUNT", "P_PERTURBATION", "TASKS_PER_WORKER"]

@@ -41,6 +41,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from .criteria import ALPHA, CV_SEGMENTS, Step, aicc, bic, _chi2_sf, rank_step
+from .gram import Gram
+from .solve import pinv_psd, solve_normal
 
 
 @dataclass(frozen=True, eq=False)
@@ -105,22 +107,17 @@ def fold_of(m: int, segments: int = CV_SEGMENTS) -> np.ndarray:
     return seg % 2
 
 
-#: Eigenvalues of the (unit-diagonal) normal matrix below this fraction of the largest are
-#: treated as zero: exactly nested candidates (a force gain inside a refitted force law) make
-#: it singular; the legitimate directions of the muscle library stay above 1e-10.
-EIGEN_CUTOFF = 1e-13
-
-
 class LinearGram:
-    """Per-fold Gram matrices of the whitened columns and residual: each fit is a k x k solve.
+    """Per-fold Gram matrices of the whitened columns and residual: each fit is a k x k solve
+    (the engine's :class:`~.gram.Gram`, one group per fold).
 
     ``[Z e0]^T [Z e0]`` summed over the equations of each cross-validation fold (and of
     ``mask``).  A fit of any subset of the candidates, its covariance and its held-out chi2
     follow from these small matrices, so a forward selection over K candidates costs two
     products of the data instead of one least-squares problem per candidate, step and fold.
-    The solve is a pseudo-inverse of the unit-diagonal normal matrix (eigenvalues below
-    :data:`EIGEN_CUTOFF` x the largest dropped): the minimum-norm solution when candidates
-    are nested.
+    The solve is the diagnosis's one rank rule (:mod:`ppamsafety.diagnose.core.solve`): the
+    minimum-norm solution when candidates are nested (a force gain inside a refitted force
+    law).
 
     Parameters
     ----------
@@ -152,8 +149,9 @@ class LinearGram:
         else:
             fold_used = np.asarray(fold)[used] if np.asarray(fold).size == m_all else \
                 np.asarray(fold)
-        X = np.concatenate([self.Z[used], self.e0[used, None]], axis=1)
-        self.G = [X[fold_used == f].T @ X[fold_used == f] for f in (0, 1)]
+        gram = Gram.from_samples(self.Z[used], self.e0[used], np.ones(self.m), fold_used,
+                                 groups=2)
+        self.G = [gram.G[0, 0], gram.G[1, 0]]
         self.G_all = self.G[0] + self.G[1]
 
     def _index(self, names):
@@ -170,14 +168,9 @@ class LinearGram:
             return np.zeros(0), max(yy, 0.0), np.zeros((0, 0))
         A = G[np.ix_(idx, idx)]
         b = G[idx, -1]
-        d = np.sqrt(np.maximum(np.diag(A), 0.0))
-        d[d == 0] = 1.0
-        w, V = np.linalg.eigh(A / np.outer(d, d))
-        keep = w > EIGEN_CUTOFF * max(float(w.max()), 1e-300)
-        inv = (V[:, keep] / w[keep]) @ V[:, keep].T
-        phi = (inv @ (b / d)) / d
+        phi = solve_normal(A, b)
         chi2 = max(yy - 2.0 * float(phi @ b) + float(phi @ A @ phi), 0.0)
-        return phi, chi2, inv / np.outer(d, d)
+        return phi, chi2, pinv_psd(A)
 
     @staticmethod
     def _chi2(G, idx, phi):
@@ -338,8 +331,9 @@ def forward_selection_linear(e0, columns: dict, admissible, *, alpha: float = AL
     return current, steps
 
 
-#: Subsets within this BIC of the best carry its inclusion probabilities (the weights of
-#: the others are below exp(-15) relative to the best), as the arm's ``subsets.CHECK_BIC``.
+#: Subsets within this BIC of the best carry its inclusion probabilities and are checked for
+#: admissibility (the weights of the others are below exp(-15) relative to the best), every
+#: record kind.
 CHECK_BIC = 30.0
 
 
@@ -500,12 +494,7 @@ def hac_covariance_linear(Z, e, *, lags: int | None = None) -> np.ndarray:
     for lag in range(1, min(L, m - 1) + 1):
         G = S[lag:].T @ S[:-lag]
         M += (1.0 - lag / (L + 1.0)) * (G + G.T)
-    B = Z.T @ Z
-    d = np.sqrt(np.maximum(np.diag(B), 0.0))
-    d[d == 0] = 1.0
-    w, V = np.linalg.eigh(B / np.outer(d, d))
-    keep = w > EIGEN_CUTOFF * max(float(w.max()), 1e-300)
-    Bi = ((V[:, keep] / w[keep]) @ V[:, keep].T) / np.outer(d, d)
+    Bi = pinv_psd(Z.T @ Z)
     return Bi @ M @ Bi * m / max(m - k, 1)
 
 
@@ -569,6 +558,6 @@ def backward_pass_linear(e0, columns: dict, names, *, alpha: float = ALPHA,
     return gram.fit([]), dropped
 
 
-__all__ = ["LinearFit", "LinearGram", "EIGEN_CUTOFF", "fit_linear", "cv_chi2_linear", "forward_selection_linear",
+__all__ = ["LinearFit", "LinearGram", "fit_linear", "cv_chi2_linear", "forward_selection_linear",
            "backward_pass_linear", "hac_covariance_linear", "subset_search_linear",
            "SubsetChoice", "CHECK_BIC", "fold_of"]

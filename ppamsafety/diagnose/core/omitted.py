@@ -41,6 +41,7 @@ import numpy as np
 from scipy import stats
 
 from .criteria import _normal_quantile
+from .solve import pinv_psd
 
 #: p-value of a candidate's likelihood-ratio test (against the final model) below which it
 #: has a *hint* in the record and widens the named effects' intervals (set on tuning seeds).
@@ -78,31 +79,6 @@ class OmittedEffect:
     def hinted(self) -> bool:
         """True if the record holds a hint of it (``p_value < HINT_P``)."""
         return self.p_value < HINT_P
-
-
-def pinv_psd(A) -> np.ndarray:
-    """Pseudo-inverse of a symmetric positive semi-definite matrix, column-scaled (the
-    candidates' columns differ by orders of magnitude).
-
-    Parameters
-    ----------
-    A : numpy.ndarray, shape (k, k)
-        Symmetric positive semi-definite; eigenvalues of the scaled matrix below 1e-12 of
-        the largest are treated as zero.
-
-    Returns
-    -------
-    numpy.ndarray, shape (k, k)
-    """
-    A = np.asarray(A, dtype=float)
-    if A.size == 0:
-        return np.zeros((0, 0))
-    d = np.sqrt(np.maximum(np.diag(A), 0.0))
-    d[d == 0] = 1.0
-    w, U = np.linalg.eigh(A / d[:, None] / d[None, :])
-    keep = w > 1e-12 * max(float(w[-1]), 1e-300)
-    Uk = U[:, keep]
-    return (Uk / w[keep]) @ Uk.T / d[:, None] / d[None, :]
 
 
 def omitted_effects(A, score, model, candidates: dict, *, rows=None) -> dict:
@@ -215,5 +191,4 @@ def widened_interval(value: float, se: float, gradient, omitted: dict, *,
     return lo, hi, tuple(sorted(reach, key=reach.get, reverse=True))
 
 
-__all__ = ["HINT_P", "COLLINEAR_TOL", "OmittedEffect", "omitted_effects", "widened_interval",
-           "pinv_psd"]
+__all__ = ["HINT_P", "COLLINEAR_TOL", "OmittedEffect", "omitted_effects", "widened_interval"]

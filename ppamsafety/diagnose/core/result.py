@@ -24,8 +24,6 @@ from ...plots.diagnose import (actuator_force_figure, actuator_residual_figure, 
 SCHEMA_VERSION = 1
 JSON_NAME, MD_NAME = "diagnosis.json", "diagnosis.md"
 FIG_REPLAY, FIG_BLOCKS = "diagnosis_replay.png", "diagnosis_blocks.png"
-#: BIC weight at or above which a named effect is reported with confidence "high".
-HIGH_CONFIDENCE = 0.95
 
 
 def _num(x):
@@ -311,4 +309,4 @@ def _md_table(df: pd.DataFrame) -> str:
     return "\n".join([head, rule] + body)
 
 
-__all__ = ["Diagnosis", "SCHEMA_VERSION", "HIGH_CONFIDENCE", "JSON_NAME", "MD_NAME"]
+__all__ = ["Diagnosis", "SCHEMA_VERSION", "JSON_NAME", "MD_NAME"]

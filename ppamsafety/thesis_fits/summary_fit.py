@@ -57,17 +57,17 @@ import numpy as np
 import pandas as pd
 from scipy.interpolate import RegularGridInterpolator
 
-from ..._validation import check_range
-from ...control import SensorConfig
-from ...experiments.case import ExperimentCase
-from ...experiments.catalog import thesis_reference, thesis_variants
-from ...experiments.closed_loop import run_batch
-from ...experiments.metrics import tracking_stats
-from ...experiments.thesis_data import table_5_2
-from ...params import thesis_arm
-from ...params.effects import Effects, MagnitudeAxis
-from ...plots.diagnose import plot_summary_profiles
-from .synthesize import plant_with
+from .._validation import check_range
+from ..control import SensorConfig
+from ..experiments.case import ExperimentCase
+from ..experiments.catalog import thesis_reference, thesis_variants
+from ..experiments.closed_loop import run_batch
+from ..experiments.metrics import tracking_stats
+from ..experiments.thesis_data import table_5_2
+from ..params import thesis_arm
+from ..params.effects import Effects, MagnitudeAxis
+from ..plots.diagnose import plot_summary_profiles
+from ..diagnose.arm.synthesize import plant_with
 
 #: Relative run-to-run reproducibility of a tracking statistic (our assumption, see above).
 REPRODUCIBILITY = 0.10

@@ -26,7 +26,7 @@ printed value (uniform over one printed step) and a relative run-to-run reproduc
 of the real arm.  The thesis gives no repeat measurements, so ``rep`` is **our assumption**,
 one per kind (:data:`REPRODUCIBILITY`):
 
-* tracking statistics 10 %, as :data:`~ppamsafety.diagnose.arm.summary_fit.REPRODUCIBILITY`
+* tracking statistics 10 %, as :data:`~ppamsafety.thesis_fits.summary_fit.REPRODUCIBILITY`
   (the three lambda rows of one Ki, which the thesis says hardly differ, spread by up to
   10 % in Table 5.2);
 * F_max 12 % and HIC 25 %: the thesis computed both from the recorded states with its impact
@@ -90,7 +90,7 @@ Fit
    otherwise (reported as not converged).
 4. *Intervals.*  95 % intervals from the posterior covariance
    ``s2 (J^T J + I / PRIOR_SD^2)^-1``, scaled by the residual variance s2 = max(1, chi2 /
-   (m - k)) as in :mod:`ppamsafety.diagnose.arm.summary_fit`, clipped to the axis.
+   (m - k)) as in :mod:`ppamsafety.thesis_fits.summary_fit`, clipped to the axis.
 5. *The gap that remains*: chi2 and the geometric-mean ratio per source, the part of the
    remaining residual that *no* candidate can reach (the component outside the span of all
    columns of J, linearised): a large part there means the library lacks the effect; and per
@@ -115,26 +115,26 @@ import pandas as pd
 import scipy.linalg
 from scipy.optimize import lsq_linear
 
-from ..._validation import check_int, check_range
-from ...control import GravityCompensation, SensorConfig
-from ...control.reference import REFERENCE_ROW
-from ...experiments.case import ExperimentCase
-from ...experiments.catalog import STEP_TIMES, SWITCH_TIME, thesis_reference, thesis_variants
-from ...experiments.closed_loop import run_batch
-from ...experiments.conclusions import (evaluate_conclusions, ki12_step_oscillatory,
+from .._validation import check_int, check_range
+from ..control import GravityCompensation, SensorConfig
+from ..control.reference import REFERENCE_ROW
+from ..experiments.case import ExperimentCase
+from ..experiments.catalog import STEP_TIMES, SWITCH_TIME, thesis_reference, thesis_variants
+from ..experiments.closed_loop import run_batch
+from ..experiments.conclusions import (evaluate_conclusions, ki12_step_oscillatory,
                                         lambda_slows_recovery, pid_violent_psmc_smooth)
-from ...experiments.metrics import response_table
-from ...experiments.thesis_data import table_5_2
-from ...experiments.trajectories import Reference
-from ...impact.instants import evaluate_experiment
-from ...impact.thesis_data import table_6_1_long
-from ...params import thesis_arm
-from ...params.effects import Effects, MagnitudeAxis
-from ...params.sensors import TABLE_3_2_VARIANCES
-from ...plant import geometry as geo
-from ...plots.diagnose import plot_as_built
+from ..experiments.metrics import response_table
+from ..experiments.thesis_data import table_5_2
+from ..experiments.trajectories import Reference
+from ..impact.instants import evaluate_experiment
+from ..impact.thesis_data import table_6_1_long
+from ..params import thesis_arm
+from ..params.effects import Effects, MagnitudeAxis
+from ..params.sensors import TABLE_3_2_VARIANCES
+from ..plant import geometry as geo
+from ..plots.diagnose import plot_as_built
 from .summary_fit import axis as effect_axis
-from .synthesize import plant_with, sawtooth_set_angles
+from ..diagnose.arm.synthesize import plant_with, sawtooth_set_angles
 
 #: Relative run-to-run reproducibility per kind of measurement (our assumptions, module
 #: docstring) [-].
