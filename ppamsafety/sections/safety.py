@@ -139,7 +139,7 @@ def _verdicts(df, head) -> pd.DataFrame:
         rows.append(t.assign(experiment=r.experiment, label=r.label))
     out = pd.concat(rows, ignore_index=True)
     return out[["experiment", "label", "head_model", "region", "criterion", "metric", "value",
-                "limit", "margin", "margin_pct", "passed", "confirmed"]]
+                "limit", "unit", "margin", "margin_pct", "passed", "confirmed"]]
 
 
 #: Variants whose worst step-response impact histories are plotted.
