@@ -1213,8 +1213,10 @@ def _more_cases():
         case("study-envelope", nm, SWEEP, setup=files(**{"s.toml": text}), names=nms)
 
     # ---- Ctrl-C: exit 130 at once, one line, nothing lost ---------------------------------------
+    # about 2 min of work on 2 cores (about 0.1 s a case), so that the Ctrl-C comes while cases
+    # run, also on a machine several times faster
     long_sweep = files(**{"s.toml": '[case]\nexperiment = "circle10"\n[grid]\n'
-                                    'duration = { linspace = [60.0, 90.0, 60] }\n'})
+                                    'duration = { linspace = [60.0, 90.0, 1200] }\n'})
     case("interrupt", "sweep-early", SWEEP + ["--processes", "2", "--no-progress"],
          setup=long_sweep, interrupt=3.0, expect="interrupt")
     case("interrupt", "sweep-running", SWEEP + ["--processes", "2", "--no-progress"],
