@@ -237,6 +237,7 @@ def test_report_section_quick(tmp_path):
 
 
 @pytest.mark.slow
+@pytest.mark.battery
 def test_full_declared_battery_reproduces_the_shipped_file(shipped_declared):
     """About 15-30 min on 2 cores: the battery of arms with declared effects, re-run."""
     seeds = sorted(int(s) for s in shipped_declared.seed)
