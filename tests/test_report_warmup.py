@@ -115,8 +115,8 @@ def test_dependent_tasks_reuse_the_compiled_steps(tmp_path):
                          capture_output=True, text=True, timeout=900).stdout
     compiled = {line.split()[0]: set(line.split()[1:]) for line in out.splitlines() if line}
     assert {"controller_step"} <= compiled["controller_kernels"]
-    assert {"rk4_step", "estimator_step", "plant_rhs"} <= compiled["plant_kernels"]
-    steps = {"controller_step", "rk4_step", "estimator_step", "plant_rhs"}
+    assert {"rk4_step", "estimator_step", "plant_rhs_at"} <= compiled["plant_kernels"]
+    steps = {"controller_step", "rk4_step", "estimator_step", "plant_rhs_at"}
     for task in ("closed_loop_kernels", "collision_kernels"):
         assert "_run_batch" in compiled["closed_loop_kernels"]
         assert not steps & compiled[task], (task, steps & compiled[task])

@@ -323,7 +323,7 @@ def _verdict_text(study) -> str:
         fails = g[~g.passed]
         c = g.iloc[0]
         unit = " N" if c.metric == "F_max" else ""
-        names = ", ".join(f"{r.experiment} {r.label} ({r.value:.0f}{unit})"
+        names = ", ".join(f"{r.experiment} {r.label} ({r.value:.1f}{unit})"
                           for r in fails.itertuples())
         lines.append(f"* `{crit}` ({c.limit:g}{unit}{'' if c.confirmed else ', unconfirmed'}): "
                      f"{len(fails)} of {len(g)} experiments exceed it"

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass, fields
+
 import pandas as pd
 
 from ..impact.summary import SafetySummary, safety_summary
@@ -19,8 +21,14 @@ SECTION = SectionInfo(
 QUICK_EVERY = 20
 
 
+@dataclass
+class SafetySummaryFindings(SafetySummary):
+    """What the section shows: the :class:`~ppamsafety.impact.summary.SafetySummary` of the
+    report's arm (the same fields)."""
+
+
 @checked_compute
-def compute(*, quick: bool = False, arm=None, head=None) -> SafetySummary:
+def compute(*, quick: bool = False, arm=None, head=None) -> SafetySummaryFindings:
     """The governing verdicts (:func:`ppamsafety.impact.summary.safety_summary`).
 
     Parameters
@@ -35,9 +43,10 @@ def compute(*, quick: bool = False, arm=None, head=None) -> SafetySummary:
 
     Returns
     -------
-    SafetySummary
+    SafetySummaryFindings
     """
-    return safety_summary(resolve_arm(arm), head=head, every=QUICK_EVERY if quick else 1)
+    s = safety_summary(resolve_arm(arm), head=head, every=QUICK_EVERY if quick else 1)
+    return SafetySummaryFindings(**{f.name: getattr(s, f.name) for f in fields(s)})
 
 
 def _unit(u):
@@ -64,12 +73,12 @@ def _screen(s: SafetySummary):
     return pd.DataFrame(rows)
 
 
-def render(s: SafetySummary) -> Section:
+def render(s: SafetySummaryFindings) -> Section:
     """The report's first section (formatting only).
 
     Parameters
     ----------
-    s : SafetySummary
+    s : SafetySummaryFindings
         Output of :func:`compute`.
 
     Returns
@@ -118,4 +127,4 @@ the other models of a head region's body (the Annex A spring, the head model `{s
     return Section("Safety summary", md, arts, dict(s.metrics))
 
 
-__all__ = ["compute", "render", "SECTION"]
+__all__ = ["compute", "render", "SECTION", "SafetySummaryFindings"]
