@@ -24,7 +24,32 @@ QUICK_EVERY = 20
 @dataclass
 class SafetySummaryFindings(SafetySummary):
     """What the section shows: the :class:`~ppamsafety.impact.summary.SafetySummary` of the
-    report's arm (the same fields)."""
+    report's arm (the same fields).
+
+    Attributes
+    ----------
+    table : pandas.DataFrame
+        One row per (experiment, controller family): the governing verdict and what it
+        depends on.
+    cases : pandas.DataFrame
+        One row per (experiment, variant).
+    verdicts : pandas.DataFrame
+        Every criterion at every case's worst impact.
+    head : str
+        The report's head model.
+    covering : Covering
+        The covering of the what-if.
+    arm_name : str
+        The arm.
+    every : int
+        Instant stride of the scan (1: every control period).
+    metrics : dict
+        Headline numbers.
+    worst_scan : WorstContact or None
+        The scan of the run with the smallest margin.
+    arm : ArmParameters or None
+        The arm (its figure).
+    """
 
 
 @checked_compute
