@@ -50,6 +50,16 @@ def plot_contact_history(hist, *, point: str = "", body: str = "", title: str = 
     return fig
 
 
+def _margin_scale(margins):
+    """(colormap, norm) of margins to a limit [%]: red below zero (the limit exceeded), green
+    above, symmetric about zero and at least +-1 %."""
+    from matplotlib import colormaps, colors
+
+    m = np.asarray(margins, dtype=float)
+    span = max(1.0, float(np.nanmax(np.abs(m)))) if np.isfinite(m).any() else 1.0
+    return colormaps["RdYlGn"], colors.TwoSlopeNorm(vmin=-span, vcenter=0.0, vmax=span)
+
+
 def plot_contact_margins(drawing: dict, *, title: str = ""):
     """The arm with each contact point's worst body region and its margin to the limit.
 
@@ -79,11 +89,8 @@ def plot_contact_margins(drawing: dict, *, title: str = ""):
     u = f" {unit}" if unit and unit != "-" else ""
     has_lim = bool(np.any(np.isfinite(pts["limit"].to_numpy(dtype=float))))
     if has_lim:
-        m = pts["margin_pct"].to_numpy(dtype=float)
-        span = max(1.0, float(np.nanmax(np.abs(m))))
-        norm = colors.TwoSlopeNorm(vmin=-span, vcenter=0.0, vmax=span)
-        cmap = colormaps["RdYlGn"]
-        cval = m
+        cval = pts["margin_pct"].to_numpy(dtype=float)
+        cmap, norm = _margin_scale(cval)
         clabel = "margin to the limit [%]"
     else:
         cval = pts["value"].to_numpy(dtype=float)
@@ -137,14 +144,11 @@ def plot_region_margins(grid, *, title: str = ""):
     matplotlib.figure.Figure
         Red: the limit is exceeded; green: below it; each cell annotated with its margin.
     """
-    from matplotlib import colormaps, colors
-
     cols = [c for c in grid.columns if c != "body_region"]
     m = grid[cols].to_numpy(dtype=float)
     fig, ax = new_figure(1, 1, figsize=(1.4 * len(cols) + 3.0, 0.42 * len(grid) + 2.2))
-    span = max(1.0, float(np.nanmax(np.abs(m)))) if np.isfinite(m).any() else 1.0
-    norm = colors.TwoSlopeNorm(vmin=-span, vcenter=0.0, vmax=span)
-    im = ax.imshow(m, cmap=colormaps["RdYlGn"], norm=norm, aspect="auto")
+    cmap, norm = _margin_scale(m)
+    im = ax.imshow(m, cmap=cmap, norm=norm, aspect="auto")
     for i in range(m.shape[0]):
         for j in range(m.shape[1]):
             if math.isfinite(m[i, j]):
