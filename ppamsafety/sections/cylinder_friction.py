@@ -100,21 +100,21 @@ class BenchCaseFindings(Result):
 def _fmt_params(params: dict) -> str:
     out = []
     for k, v in params.items():
-        val, unit = v["value"], v["unit"]
+        val, unit = v.value, v.unit
         if unit == "N/Pa":
             val, unit = val * 1e5, "N/bar"
-            ci = (v["ci_low"] * 1e5, v["ci_high"] * 1e5)
+            ci = (v.ci_low * 1e5, v.ci_high * 1e5)
         elif unit == "N/Pa^2":
             val, unit = val * 1e10, "N/bar^2"
-            ci = (v["ci_low"] * 1e10, v["ci_high"] * 1e10)
+            ci = (v.ci_low * 1e10, v.ci_high * 1e10)
         elif unit == "m" and k == "x_d":
             out.append(f"x_d = {1e3 * val:.3g} mm")
             continue
         elif unit == "N/s":
             val, unit = val * 60, "N/min"
-            ci = (v["ci_low"] * 60, v["ci_high"] * 60)
+            ci = (v.ci_low * 60, v.ci_high * 60)
         else:
-            ci = (v["ci_low"], v["ci_high"])
+            ci = (v.ci_low, v.ci_high)
         if k == "K":
             out.append(f"K = {int(val)}")
         elif ci[0] == ci[0]:
@@ -159,19 +159,19 @@ def compute(*, quick: bool = False, arm=None, calibration_runs: int | None = Non
             dg = diagnose(camp)
             dgs[seal] = dg
             for e in dg.effects:
-                eff.append({"seal": seal, "effect": e["name"], "status": "named",
-                            "confidence": e["confidence_level"],
-                            "stability": e["confidence"],
-                            "held_out_gain": e["evidence"]["cv_gain"],
-                            "parameters": _fmt_params(e["parameters"])})
+                eff.append({"seal": seal, "effect": e.name, "status": "named",
+                            "confidence": e.confidence_level,
+                            "stability": e.confidence,
+                            "held_out_gain": e.evidence["cv_gain"],
+                            "parameters": _fmt_params(e.parameters)})
             for g in dg.confounded:
-                first = g["members"][0]
-                eff.append({"seal": seal, "effect": " / ".join(g["members"]),
+                first = g.members[0]
+                eff.append({"seal": seal, "effect": " / ".join(g.members),
                             "status": "confounded", "confidence": "-",
-                            "stability": g["evidence"]["stability_frequency"],
-                            "held_out_gain": g["evidence"]["cv_gain"],
+                            "stability": g.evidence["stability_frequency"],
+                            "held_out_gain": g.evidence["cv_gain"],
                             "parameters": f"as {first}: "
-                                          + _fmt_params(g["interpretations"][first])})
+                                          + _fmt_params(g.interpretations[first])})
             r = dg.records.copy()
             r.insert(0, "seal", seal)
             r["pressure_bar"] = r["pressure_Pa"] / 1e5
@@ -199,7 +199,7 @@ def compute(*, quick: bool = False, arm=None, calibration_runs: int | None = Non
                   "high_precision": float(cal.loc["high", "precision"]),
                   "high_precision_required": HIGH_PRECISION})
     for seal, dg in dgs.items():
-        lev = {e["name"]: e["confidence_level"] for e in dg.effects}
+        lev = {e.name: e.confidence_level for e in dg.effects}
         m[f"{seal}_friction_high"] = lev.get("coulomb") == "high" or lev.get(
             "coulomb_pressure") == "high"
         m[f"{seal}_pressure_law"] = "+".join(n for n in ("coulomb_pressure",

@@ -32,7 +32,7 @@ from ...plant import layout as lay
 from ...plant import packing
 from ..core.omitted import HINT_P
 from ..core.regions import region_rows, terciles, time_segments
-from ..core.result import Diagnosis
+from ..core.result import ConfoundedGroup, Diagnosis, Effect
 from .candidates import REGISTRY, SensorFault, default_candidates, separating_experiment
 from .detection import detection_limits, omitted
 from ..core.gates import HIGH_WEIGHT, level
@@ -113,7 +113,7 @@ def after_row(arm, fit, params) -> np.ndarray:
     for n in fit.names:
         c = REGISTRY[n]
         if c.columns is not None and c.plant_effect is not None:
-            vals = np.array([p["value"] for p in params[n].values()])
+            vals = np.array([p.value for p in params[n].values()])
             over.update(c.plant_effect(vals, arm))
         if c.grid:
             d = [min(x, VALVE_DEAD_TIME_MAX) for x in changed_delays(declared_delays(arm),
@@ -140,23 +140,23 @@ def sensor_fault(fit, params) -> SensorFault:
     for n in fit.names:
         c = REGISTRY[n]
         if c.sensor_effect is not None:
-            out = out + c.sensor_effect(np.array([p["value"] for p in params[n].values()]))
+            out = out + c.sensor_effect(np.array([p.value for p in params[n].values()]))
     return out
 
 
 def _limit_ratio(e, limits) -> float:
     """The largest change of a parameter of named effect ``e`` over its detection limit."""
-    lim = limits.get(e["name"], {})
+    lim = limits.get(e.name, {})
     best = 0.0
-    for p, d in e["parameters"].items():
+    for p, d in e.parameters.items():
         L = lim.get(p, {}).get("limit", math.inf)
         if L > 0 and math.isfinite(L):
-            best = max(best, abs(d["value"] - d["nominal"]) / L)
+            best = max(best, abs(d.value - d.nominal) / L)
     return best
 
 
 def _entry(name, params, rho, sub, bootstrap, freq):
-    """The report entry of a named (or partial) effect and the largest residual ratio of its
+    """The :class:`Effect` of a named (or partial) effect and the largest residual ratio of its
     subsystem."""
     subsystem = REGISTRY[name].subsystem
     sub_rho = {CHANNELS[c]: float(rho[c]) for c in SUBSYSTEM[subsystem]}
@@ -167,12 +167,13 @@ def _entry(name, params, rho, sub, bootstrap, freq):
         ev["stability_frequency"] = freq.get(name, 0.0)
     if bootstrap is not None:
         ev["bootstrap_frequency"] = bootstrap.get(name, 0.0)
-    return {"name": name, "subsystem": subsystem, "parameters": params[name], "evidence": ev,
-            "confidence": sub.inclusion.get(name, 0.0)}, max(sub_rho.values())
+    return Effect(name=name, subsystem=subsystem, parameters=params[name], evidence=ev,
+                  confidence=sub.inclusion.get(name, 0.0)), max(sub_rho.values())
 
 
 def _confounded_group(fprob, fit, name, members, params, rho, sub, freq):
-    """The ``confounded`` entry of a member of the final model that look-alikes can replace."""
+    """The :class:`ConfoundedGroup` of a member of the final model that look-alikes can
+    replace."""
     others = [n for n in fit.names if n != name]
     interp = {name: params[name]}
     for m in members[1:]:
@@ -188,14 +189,14 @@ def _confounded_group(fprob, fit, name, members, params, rho, sub, freq):
             if e not in seps:
                 seps.append(e)
     dbic = dict(sub.lookalikes.get(name, []))
-    return {"members": list(members), "interpretations": interp,
-            "evidence": {m: {"inclusion_probability": sub.inclusion.get(m, 0.0),
-                             "delta_bic_vs_best": dbic.get(m, 0.0),
-                             **({"stability_frequency": freq.get(m, 0.0)}
-                                if freq is not None else {})}
-                         for m in members},
-            "separating_experiment": "; ".join(seps),
-            "subsystem_rho": {CHANNELS[c]: float(rho[c]) for c in range(len(CHANNELS))}}
+    return ConfoundedGroup(
+        members=tuple(members), interpretations=interp,
+        evidence={m: {"inclusion_probability": sub.inclusion.get(m, 0.0),
+                      "delta_bic_vs_best": dbic.get(m, 0.0),
+                      **({"stability_frequency": freq.get(m, 0.0)} if freq is not None else {})}
+                  for m in members},
+        separating_experiment="; ".join(seps),
+        subsystem_rho={CHANNELS[c]: float(rho[c]) for c in range(len(CHANNELS))})
 
 
 #: Encoder offset above which the encoder columns are re-linearised at the estimate [rad]
@@ -373,11 +374,8 @@ def diagnose_arm(data, *, arm=None, candidates=None, block_seconds: float = 0.05
         fprob, fit, candidates, shadows=shadows)) if fit.names else {})
     for table in (params, reported):
         if "encoder_offset" in table and np.any(enc_shift):
-            for j, d in enumerate(table["encoder_offset"].values()):
-                for k in ("value", "ci_low", "ci_high", "ci_low_raw", "ci_high_raw",
-                          "ci_low_noise", "ci_high_noise"):
-                    if k in d:
-                        d[k] += float(enc_shift[j])
+            table["encoder_offset"] = {k: d.shifted(float(enc_shift[j])) for j, (k, d)
+                                       in enumerate(table["encoder_offset"].items())}
     row_after = after_row(arm, fit, params)
     fault = sensor_fault(fit, params)
     rr = {}
@@ -447,7 +445,7 @@ def diagnose_arm(data, *, arm=None, candidates=None, block_seconds: float = 0.05
         if n in grouped:
             continue
         entry, sub_max = _entry(n, params, rho, sub, freq, sfreq)
-        if not moved_parameters(n, entry["parameters"]):
+        if not moved_parameters(n, entry.parameters):
             # significant in the selection's test, but with the block correlations (the HAC
             # interval) every parameter's interval still holds its nominal value: the record
             # does not show that the effect is there (measured on the scenario battery: 21 of
@@ -473,34 +471,33 @@ def diagnose_arm(data, *, arm=None, candidates=None, block_seconds: float = 0.05
     limits = (detection_limits(fprob, fit, candidates, alpha=alpha, shadows=shadows)
               if detection else {})
     comp = compensating(fprob, fit)
-    cons = {e["name"]: region_consistency(fprob, fit, e["name"]) for e in effects}
+    cons = {e.name: region_consistency(fprob, fit, e.name) for e in effects}
     bad_subsystems = {ch for n, c in cons.items() if min(c.values(), default=1.0)
                       < CONSTANCY_ALPHA for ch in SUBSYSTEM[REGISTRY[n].subsystem]}
+    judged = []
     for e in effects:
-        c = cons[e["name"]]
-        e["evidence"]["region_consistency_p"] = c
+        c = cons[e.name]
         own = min(c.values(), default=1.0)
-        if bad_subsystems & set(SUBSYSTEM[REGISTRY[e["name"]].subsystem]):
+        if bad_subsystems & set(SUBSYSTEM[REGISTRY[e.name].subsystem]):
             own = min(own, 0.0)
-        e["evidence"]["limit_ratio"] = _limit_ratio(e, limits)
-        if e["name"] in comp:
-            e["evidence"]["compensates"] = list(comp[e["name"]])
-        g = gates(e["name"], e["parameters"], weight=e["confidence"],
-                  stability=None if sfreq is None else sfreq.get(e["name"], 0.0),
+        ev = {**e.evidence, "region_consistency_p": c, "limit_ratio": _limit_ratio(e, limits)}
+        if e.name in comp:
+            ev["compensates"] = list(comp[e.name])
+        g = gates(e.name, e.parameters, weight=e.confidence,
+                  stability=None if sfreq is None else sfreq.get(e.name, 0.0),
                   stability_threshold=STABILITY_THRESHOLD if stab is None else stab.threshold,
                   rho=rho, unexplained=unexplained, confounded=False,
                   consistency=own, blocks=bs.nb,
-                  clear=e["evidence"]["limit_ratio"] if detection else math.inf,
-                  compensating=e["name"] in comp)
-        e["gates"] = g
-        e["confidence_level"] = level(g)
-    for e in partial:
-        e["confidence_level"] = "low"
-        e["gates"] = {}
-    for e in effects + partial:
-        e["parameters"] = reported[e["name"]]
-    for g in confounded:
-        g["interpretations"][g["members"][0]] = reported[g["members"][0]]
+                  clear=ev["limit_ratio"] if detection else math.inf,
+                  compensating=e.name in comp)
+        judged.append(replace(e, evidence=ev, gates=g, confidence_level=level(g),
+                              parameters=reported[e.name]))
+    effects = judged
+    partial = [replace(e, confidence_level="low", gates={}, parameters=reported[e.name])
+               for e in partial]
+    confounded = [replace(g, interpretations={**g.interpretations,
+                                              g.members[0]: reported[g.members[0]]})
+                  for g in confounded]
     nrho = nominal.rho()
     units = ("Pa/s",) * 4 + ("N m",) * 2 if static else CHANNEL_UNITS
     for c, ch in enumerate(CHANNELS):
@@ -524,9 +521,9 @@ def diagnose_arm(data, *, arm=None, candidates=None, block_seconds: float = 0.05
                      f"{replay_limit:g}): the model under test with the fitted effects does "
                      f"not reproduce the record")
     for g in confounded:
-        notes.append(f"{' and '.join(g['members'])} explain the same part of the residual on "
+        notes.append(f"{' and '.join(g.members)} explain the same part of the residual on "
                      f"this record: none is named; to separate them: "
-                     f"{g['separating_experiment']}")
+                     f"{g.separating_experiment}")
     t4 = time.perf_counter()
     settings = {"block_seconds": None if static else block_seconds, "alpha": alpha,
                 "rho_max": rho_max,

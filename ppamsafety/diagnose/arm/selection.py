@@ -83,6 +83,7 @@ from ..core.criteria import (ALPHA, CV_SEGMENTS, RHO_MAX, Step, _chi2_sf, _norma
                              bic, false_selection_bound, rank_step)
 from ..core.gates import CONSTANCY_ALPHA
 from ..core.omitted import widened_interval
+from ..core.result import Estimate
 from ...lstsq import step_scores
 from .candidates import DEAD_TIME_MAX, REGISTRY, identity_values, library
 from ..core.solve import lstsq, pinv_psd
@@ -1176,9 +1177,9 @@ def in_bounds(prob: Problem, fit: Fit, name: str) -> bool:
         One of ``fit.names``.
     """
     tab = parameter_table(prob, fit, truncate=False)[name]
-    return all(tab[p.name]["ci_high"] >= p.phys_lo and tab[p.name]["ci_low"] <= p.phys_hi
-               and tab[p.name]["ci_low"] >= p.lo - 0.5 * (p.hi - p.lo)
-               and tab[p.name]["ci_high"] <= p.hi + 0.5 * (p.hi - p.lo)
+    return all(tab[p.name].ci_high >= p.phys_lo and tab[p.name].ci_low <= p.phys_hi
+               and tab[p.name].ci_low >= p.lo - 0.5 * (p.hi - p.lo)
+               and tab[p.name].ci_high <= p.hi + 0.5 * (p.hi - p.lo)
                for p in REGISTRY[name].parameters)
 
 
@@ -1261,7 +1262,7 @@ def parameter_table(prob: Problem, fit: Fit, confidence: float = 0.95, *,
     Returns
     -------
     dict
-        name -> {parameter: {value, unit, ci_low, ci_high, std_error, nominal}}.
+        name -> {parameter: :class:`~ppamsafety.diagnose.core.result.Estimate`}.
     """
     D, slices, _, _ = _directions(prob, fit.names)
     z = _normal_quantile(0.5 + confidence / 2)
@@ -1303,25 +1304,17 @@ def parameter_table(prob: Problem, fit: Fit, confidence: float = 0.95, *,
             lo, hi = v - z * se, v + z * se
         entry = {}
         for i, p in enumerate(c.parameters):
-            d = {"value": float(v[i]), "unit": p.unit, "ci_low": float(lo[i]),
-                 "ci_high": float(hi[i]), "std_error": float(se[i]),
-                 "nominal": float(v_nom[i])}
-            if omitted is not None:
-                d["ci_low_noise"], d["ci_high_noise"], d["widened_by"] = lo[i], hi[i], []
-                if not c.grid:          # the dead time: its profile interval, as it is
-                    lo[i], hi[i], by = widened_interval(v[i], se[i], J[i], omitted,
-                                                        confidence=confidence)
-                    d.update(ci_low=float(lo[i]), ci_high=float(hi[i]), widened_by=list(by))
-                d["ci_low_noise"], d["ci_high_noise"] = (float(d["ci_low_noise"]),
-                                                         float(d["ci_high_noise"]))
-            if truncate and (lo[i] < p.phys_lo or hi[i] > p.phys_hi):
-                d["ci_low_raw"], d["ci_high_raw"] = d["ci_low"], d["ci_high"]
-                d["ci_low"] = float(min(max(lo[i], p.phys_lo), p.phys_hi))
-                d["ci_high"] = float(max(min(hi[i], p.phys_hi), p.phys_lo))
-            if truncate and "ci_low_noise" in d:     # cut the same way: still inside
-                d["ci_low_noise"] = float(min(max(d["ci_low_noise"], p.phys_lo), p.phys_hi))
-                d["ci_high_noise"] = float(max(min(d["ci_high_noise"], p.phys_hi), p.phys_lo))
-            entry[p.name] = d
+            est = Estimate(value=float(v[i]), unit=p.unit, ci_low=float(lo[i]),
+                           ci_high=float(hi[i]), std_error=float(se[i]),
+                           nominal=float(v_nom[i]))
+            if omitted is not None and not c.grid:
+                # the dead time keeps its profile interval, as it is
+                w_lo, w_hi, by = widened_interval(v[i], se[i], J[i], omitted,
+                                                  confidence=confidence)
+                est = est.widened(w_lo, w_hi, by)
+            elif omitted is not None:
+                est = est.widened(est.ci_low, est.ci_high, ())
+            entry[p.name] = est.cut(p.phys_lo, p.phys_hi) if truncate else est
         out[n] = entry
     return out
 

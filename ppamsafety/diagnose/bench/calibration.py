@@ -116,16 +116,16 @@ def score(scenario: dict, dg) -> list:
         truth.add("stroke_profile")
     rows = []
     for e in dg.effects:
-        ev = e["evidence"]
-        rows.append({"seed": scenario["seed"], "kind": "named", "name": e["name"],
-                     "level": e["confidence_level"], "right": e["name"] in truth,
+        ev = e.evidence
+        rows.append({"seed": scenario["seed"], "kind": "named", "name": e.name,
+                     "level": e.confidence_level, "right": e.name in truth,
                      "cv_gain": ev["cv_gain"], "p_value": ev["p_value"],
                      "stability": ev["stability_frequency"], "setting": ev["setting"],
                      "at_edge": bool(ev.get("at_grid_edge", False))})
     for g in dg.confounded:
         rows.append({"seed": scenario["seed"], "kind": "confounded",
-                     "name": "|".join(g["members"]), "level": "confounded",
-                     "right": bool(truth & set(g["members"]))})
+                     "name": "|".join(g.members), "level": "confounded",
+                     "right": bool(truth & set(g.members))})
     return rows
 
 
@@ -165,11 +165,10 @@ def run_calibration(seeds, *, diagnose_options=None) -> tuple:
         r = score(sc, dg)
         rows += r
         truth = sorted({LIBRARY_NAME[k] for k in sc["effects"] if k in LIBRARY_NAME})
-        named = {e["name"] for e in dg.effects} | {m for g in dg.confounded for m in g["members"]}
+        named = set(dg.names) | {m for g in dg.confounded for m in g.members}
         runs.append({"seed": s, "hidden": "+".join(truth),
-                     "named": "+".join(e["name"] for e in dg.effects),
-                     "high": "+".join(e["name"] for e in dg.effects
-                                      if e["confidence_level"] == "high"),
+                     "named": "+".join(dg.names),
+                     "high": "+".join(e.name for e in dg.effects if e.high),
                      "missed": "+".join(t for t in truth if t not in named),
                      "wrong_high": "+".join(x["name"] for x in r if x["level"] == "high"
                                             and not x["right"]),

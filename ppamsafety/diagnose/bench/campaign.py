@@ -82,6 +82,7 @@ from ..core.criteria import Step
 from ..core.gates import HighRule, judge, level
 from ..core.noise import interpolation_sigma
 from ..core.regions import region_rows
+from ..core.result import ConfoundedGroup, Effect
 from ..core.solve import pinv_psd
 from . import friction as fr
 from ..core.gram import Gram
@@ -579,9 +580,10 @@ def diagnose_campaign(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
                 sl = s2[mbr]
                 interp[mbr] = fr.parameters(lib.index[mbr][0][0], f2.phi[sl],
                                             f2.cov[sl, sl], ctx)
-            confounded.append({"members": members, "interpretations": interp, "evidence": ev,
-                               "separating_experiment": fr.separating_experiment(members),
-                               "signature": "; ".join(fr.SIGNATURE[m] for m in members)})
+            confounded.append(ConfoundedGroup(
+                members=tuple(members), interpretations=interp, evidence=ev,
+                separating_experiment=fr.separating_experiment(members),
+                signature="; ".join(fr.SIGNATURE[m] for m in members)))
             continue
         sl = slices[unit]
         params = fr.parameters(var, f.phi[sl], f.cov[sl, sl], ctx)
@@ -600,10 +602,9 @@ def diagnose_campaign(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
             mid_ok = ev["mid_stroke_rms"] >= MID_PROFILE_HIGH
         g = judge(CAMPAIGN_RULE, stability=freq if stability else None, p_value=row["p_value"],
                   cv_gain=row["cv_gain"], admissible=ok, not_at_edge=not edge, mid_stroke=mid_ok)
-        effects.append({"name": unit, "subsystem": "force", "parameters": params,
-                        "evidence": ev, "confidence": freq,
-                        "confidence_level": level(g),
-                        "signature": fr.SIGNATURE[unit]})
+        effects.append(Effect(name=unit, subsystem="force", parameters=params, evidence=ev,
+                              confidence=freq, confidence_level=level(g),
+                              signature=fr.SIGNATURE[unit]))
     # derived laws: friction level and presliding step against pressure
     laws = {}
     for key, terms in (("friction_level", fr.COULOMB_TERMS), ("stribeck_excess", fr.STRIBECK_TERMS),

@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import math
 import time
+from dataclasses import replace
 
 import numpy as np
 import pandas as pd
@@ -38,7 +39,7 @@ from ..._validation import check_int, check_range
 from ..core.linear_selection import hac_covariance_linear
 from ..core.omitted import HINT_P, widened_interval
 from ..core.regions import region_rows, terciles, time_segments
-from ..core.result import Diagnosis
+from ..core.result import Diagnosis, Effect
 from .candidates import ACTUATOR_VOCABULARY
 from .confounded import confounded_groups
 from .consistency import time_consistency
@@ -73,13 +74,12 @@ def _widened(params: dict, ext, sl: slice, k: int, left_out: dict) -> dict:
     """``params`` (:meth:`Extension.values`) with every interval widened by
     :func:`~ppamsafety.diagnose.core.omitted.widened_interval` (the fit's own kept as
     ``ci_low_noise``/``ci_high_noise``)."""
-    for i, d in enumerate(params.values()):
+    out = {}
+    for i, (n, d) in enumerate(params.items()):
         g = np.zeros(k)
         g[sl] = ext.T[i]
-        lo, hi, by = widened_interval(d["value"], d["std_error"], g, left_out)
-        d.update(ci_low_noise=d["ci_low"], ci_high_noise=d["ci_high"], ci_low=float(lo),
-                 ci_high=float(hi), widened_by=list(by))
-    return params
+        out[n] = d.widened(*widened_interval(d.value, d.std_error, g, left_out))
+    return out
 
 
 def diagnose_actuator(data, *, candidates=None, alpha: float = 0.01, rho_max: float = 1.5,
@@ -150,7 +150,7 @@ def diagnose_actuator(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
         notes.append(f"{pr['name']}: chosen on the way, dropped by the backward pass (LR "
                      f"p = {pr['p_value']:.2g} given the later effects): they explain its part")
     groups = confounded_groups(des, fit, alpha=alpha)
-    grouped = {m for g in groups for m in g["members"]}
+    grouped = {m for g in groups for m in g.members}
     t2 = time.perf_counter()
     stab = stability_selection(des, alpha=alpha, pairs=pairs, seed=seed) if pairs else None
     tb = time.perf_counter()
@@ -184,9 +184,9 @@ def diagnose_actuator(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
         ev["subsystem_rho"] = {"force": rho}
         if stab is not None:
             ev["stability_frequency"] = stab.frequency.get(name, 0.0)
-        entry = {"name": name, "subsystem": "force", "parameters": params, "evidence": ev,
-                 "confidence": sel.subsets.inclusion.get(name, 0.0),
-                 "signature": exts[name].signature}
+        entry = Effect(name=name, subsystem="force", parameters=params, evidence=ev,
+                       confidence=sel.subsets.inclusion.get(name, 0.0),
+                       signature=exts[name].signature)
         (effects if rho <= rho_max else partial).append(entry)
     if des.one_level and set(fit.names) & {"force_law_refit", "force_sensor_offset",
                                            "pressure_sensor_offset"}:
@@ -195,29 +195,27 @@ def diagnose_actuator(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
                      "a pressure-sensor offset are then nearly the same column and are reported "
                      "with low confidence at most; record several pressures to separate them")
     limits = detection_limits(des, fit.names, alpha=alpha) if detection else {}
+    judged = []
     for e in effects:
-        sl = fit.slices[e["name"]]
-        e["evidence"]["limit_ratio"] = (limit_ratio(des, fit.names, e["name"],
-                                                    max(e["evidence"]["lr_stat"], 0.0),
-                                                    alpha=alpha) if detection else None)
-        e["evidence"]["time_consistency_p"] = cons = time_consistency(des, fit.names,
-                                                                       e["name"])
-        g = gates(e["name"], exts[e["name"]], fit.phi[sl], cov[sl, sl],
-                  weight=e["confidence"],
-                  stability=None if stab is None else stab.frequency.get(e["name"], 0.0),
+        sl = fit.slices[e.name]
+        ratio = (limit_ratio(des, fit.names, e.name, max(e.evidence["lr_stat"], 0.0),
+                             alpha=alpha) if detection else None)
+        cons = time_consistency(des, fit.names, e.name)
+        ev = {**e.evidence, "limit_ratio": ratio, "time_consistency_p": cons}
+        g = gates(e.name, exts[e.name], fit.phi[sl], cov[sl, sl],
+                  weight=e.confidence,
+                  stability=None if stab is None else stab.frequency.get(e.name, 0.0),
                   stability_threshold=THRESHOLD if stab is None else stab.threshold,
                   rho=rho, m=des.m, unexplained=unexplained, turns=turns,
                   one_level=des.one_level, consistency=cons,
-                  clear=math.inf if not detection else e["evidence"]["limit_ratio"])
-        e["gates"] = g
-        e["confidence_level"] = level(g)
-    for e in partial:
-        e["confidence_level"] = "low"
-        e["gates"] = {}
+                  clear=math.inf if not detection else ratio)
+        judged.append(replace(e, evidence=ev, gates=g, confidence_level=level(g)))
+    effects = judged
+    partial = [replace(e, confidence_level="low", gates={}) for e in partial]
     for g in groups:
-        notes.append(f"{' and '.join(g['members'])} explain the same part of the residual on "
+        notes.append(f"{' and '.join(g.members)} explain the same part of the residual on "
                      f"this record: none is named; to separate them: "
-                     f"{g['separating_experiment']}")
+                     f"{g.separating_experiment}")
     # the diagnosed force on every sample (the fit's coefficients, all samples)
     f_nom = des.f_nom
     f_after = f_nom.copy()
