@@ -99,7 +99,7 @@ def after_row(arm, fit, params) -> np.ndarray:
     ----------
     arm : ArmParameters
         The model under test (with its declared effects).
-    fit : ppamsafety.diagnose.selection.Fit
+    fit : ppamsafety.diagnose.arm.selection._Fit
         The final fit.
     params : dict
         :func:`~ppamsafety.diagnose.arm.selection.parameter_table` of ``fit``.
@@ -132,7 +132,7 @@ def sensor_fault(fit, params) -> SensorFault:
 
     Parameters
     ----------
-    fit : ppamsafety.diagnose.selection.Fit
+    fit : ppamsafety.diagnose.arm.selection._Fit
     params : dict
         :func:`~ppamsafety.diagnose.arm.selection.parameter_table` of ``fit``.
     """

@@ -56,7 +56,7 @@ def lookalike_pairs(design, fit, *, alpha: float) -> list:
     Parameters
     ----------
     design : ActuatorDesign
-    fit : LinearFit
+    fit : _LinearFit
         The final model.
     alpha : float, keyword-only
         Level of the LR test before the Bonferroni division (over every applicable
@@ -139,7 +139,7 @@ def confounded_groups(design, fit, *, alpha: float) -> list:
     Parameters
     ----------
     design : ActuatorDesign
-    fit : LinearFit
+    fit : _LinearFit
         The final model.
     alpha : float, keyword-only
 

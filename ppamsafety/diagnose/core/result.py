@@ -17,6 +17,7 @@ import pandas as pd
 from ..._validation import check_bool
 from ..._version import __version__
 from ...output import OutputFolder
+from ...results import Result
 from ...plots.diagnose import (actuator_force_figure, actuator_residual_figure, arm_blocks_figure,
                                arm_replay_figure)
 
@@ -242,8 +243,14 @@ class ConfoundedGroup:
 
 
 @dataclass(frozen=True, eq=False)
-class Diagnosis:
+class Diagnosis(Result):
     """Result of :func:`ppamsafety.diagnose.diagnose`.
+
+    On the result protocol (:class:`ppamsafety.results.Result`): :meth:`to_pandas` (the
+    parameters of the named and partial effects), :meth:`plot` (the replay) and
+    :meth:`figures` (the replay and the block residuals), and a file format of its own:
+    :meth:`to_dict` is ``diagnosis.json`` (schema in ``docs/diagnose.md``) and :meth:`write`
+    writes it with ``diagnosis.md`` and the figures.
 
     Attributes
     ----------
@@ -386,6 +393,11 @@ class Diagnosis:
             return actuator_force_figure(self)
         return arm_replay_figure(self)
 
+    def figures(self) -> dict:
+        """``{name: Figure}``: the replay (:meth:`plot`) and the block residuals
+        (:meth:`plot_blocks`), under the names of their PNG files in :meth:`write`."""
+        return {FIG_REPLAY[:-4]: self.plot(), FIG_BLOCKS[:-4]: self.plot_blocks()}
+
     def plot_blocks(self):
         """Whitened block residuals per subsystem channel, before and after; a Figure."""
         if self.kind == "actuator":
@@ -473,7 +485,7 @@ class Diagnosis:
         check_bool("replace_kind", replace_kind)
         text = json.dumps(self.to_dict(), indent=1, allow_nan=False, ensure_ascii=False) + "\n"
         md = self.report_markdown()
-        figs = {FIG_REPLAY: self.plot(), FIG_BLOCKS: self.plot_blocks()}
+        figs = {f"{k}.png": fig for k, fig in self.figures().items()}
         folder = OutputFolder(outdir, kind="diagnose", overwrite=overwrite,
                               replace_kind=replace_kind)
         with folder as st:
