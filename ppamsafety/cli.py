@@ -365,8 +365,7 @@ def _cmd_sweep(args) -> int:
 def _cmd_diagnose(args) -> int:
 
     from .data import MeasuredDataWarning, load_campaign, load_measured
-    from .diagnose import diagnose
-    from .diagnose.diagnosis import other_arm
+    from .diagnose import diagnose, other_arm
 
     with _options(outdir="--out"):
         inspect_output_folder(args.out, overwrite=args.overwrite, kind="diagnose",

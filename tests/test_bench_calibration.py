@@ -16,8 +16,8 @@ from ppamsafety.diagnose import diagnose
 from ppamsafety.diagnose.bench import friction as fr
 from ppamsafety.diagnose.bench.calibration import (CAMPAIGN_MEASURE as MEASURE_SEEDS,
                                                    CAMPAIGN_TUNING as TUNING_SEEDS,
-                                                   HIGH_PRECISION, calibration_table,
-                                                   run_calibration)
+                                                   HIGH_PRECISION, campaign_calibration_table,
+                                                   run_campaign_calibration)
 from ppamsafety.diagnose.bench.campaign import diagnose_campaign
 from ppamsafety.diagnose.bench.cylinder_synth import synthesize_cylinder
 
@@ -93,7 +93,7 @@ def test_calibration_seeds_are_disjoint():
 
 @pytest.mark.slow
 def test_high_confidence_is_right_97_percent_on_unseen_seeds():
-    names, runs = run_calibration(list(MEASURE_SEEDS)[:200])
-    tab = calibration_table(names)
+    names, runs = run_campaign_calibration(list(MEASURE_SEEDS)[:200])
+    tab = campaign_calibration_table(names)
     assert tab.loc["high", "count"] >= 200
     assert tab.loc["high", "precision"] >= HIGH_PRECISION, tab

@@ -29,9 +29,8 @@ from .._validation import check_int
 from ..data.campaign import load_campaign
 from ..data.datasets import ZILLEN2021_SEALS, zillen2021_manifest
 from ..data.measured import MeasuredDataWarning
-from ..diagnose import diagnose
-from ..diagnose.bench.calibration import (CAMPAIGN_MEASURE, HIGH_PRECISION, calibration_table,
-                                          run_calibration)
+from ..diagnose import (CAMPAIGN_MEASURE, HIGH_PRECISION, campaign_calibration_table, diagnose,
+                        run_campaign_calibration)
 from ..markdown import markdown_table
 from ..plots.bench import seal_parameters_figure
 from . import Section, SectionInfo, checked_compute
@@ -189,8 +188,8 @@ def compute(*, quick: bool = False, arm=None, calibration_runs: int | None = Non
                 laws.append(row)
     t1 = time.perf_counter()
     seeds = list(CAMPAIGN_MEASURE)[:n_cal]
-    names, runs = run_calibration(seeds)            # no seeds: the two tables, empty
-    cal = calibration_table(names)
+    names, runs = run_campaign_calibration(seeds)   # no seeds: the two tables, empty
+    cal = campaign_calibration_table(names)
     records = pd.concat(recs, ignore_index=True)
     m = {"seals": len(dgs), "diagnosis_seconds": t1 - t0,
          "calibration_seconds": time.perf_counter() - t1, "calibration_campaigns": len(seeds)}

@@ -21,8 +21,7 @@ import numpy as np
 import pandas as pd
 
 from .._validation import check_range, check_seed
-from ..diagnose import diagnose, synthesize
-from ..diagnose.arm.static import static_record
+from ..diagnose import diagnose, static_record, synthesize
 from ..hysteresis import DELTA_25_FIBRES
 from ..markdown import markdown_table
 from ..plots.diagnose import plot_sawtooth_diagnosis
