@@ -228,6 +228,13 @@ class ArmSteps(Steps):
 
     Built with :func:`diagnose_arm`'s arguments (validated here); the stages keep the state
     on the instance.
+
+    Parameters
+    ----------
+    data, arm, candidates, block_seconds, alpha, rho_max : object
+        As :func:`diagnose_arm`.
+    experiment, seed, bootstrap, stability, detection : object
+        As :func:`diagnose_arm`.
     """
 
     def __init__(self, data, *, arm=None, candidates=None, block_seconds: float = 0.05,
@@ -550,7 +557,12 @@ class ArmSteps(Steps):
         self.where = where
 
     def result(self, seconds: dict) -> Diagnosis:
-        """The :class:`~ppamsafety.diagnose.core.result.Diagnosis` (settings and timings)."""
+        """The :class:`~ppamsafety.diagnose.core.result.Diagnosis` (settings and timings).
+        Parameters
+        ----------
+        seconds : dict
+            Stage -> wall time [s] (:func:`~ppamsafety.diagnose.core.pipeline.run_steps`).
+        """
         t0 = time.perf_counter()
         static, rec, data, stab, sub = self.static, self.rec, self.data, self.stab, self.sub
         settings = {"block_seconds": None if static else self.block_seconds,

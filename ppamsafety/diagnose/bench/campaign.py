@@ -467,6 +467,11 @@ class CampaignSteps(Steps):
 
     Built with :func:`diagnose_campaign`'s arguments (validated here); the stages keep the
     state on the instance.
+
+    Parameters
+    ----------
+    data, candidates, alpha, rho_max, stability : object
+        As :func:`diagnose_campaign`.
     """
 
     def __init__(self, data, *, candidates=None, alpha: float = 0.01, rho_max: float = 1.5,
@@ -707,7 +712,12 @@ class CampaignSteps(Steps):
                               f"explain; largest where {txt}")
 
     def result(self, seconds: dict) -> BenchDiagnosis:
-        """The :class:`~.result.BenchDiagnosis` (settings and timings)."""
+        """The :class:`~.result.BenchDiagnosis` (settings and timings).
+        Parameters
+        ----------
+        seconds : dict
+            Stage -> wall time [s] (:func:`~ppamsafety.diagnose.core.pipeline.run_steps`).
+        """
         t0 = time.perf_counter()
         rec, u, ctx, camp, candidates = self.rec, self.u, self.ctx, self.camp, self.candidates
         sig_sensor = float(np.sqrt(np.mean(rec["sigma_sensor_N"] ** 2)))

@@ -88,6 +88,11 @@ class MuscleSteps(Steps):
 
     Built with :func:`diagnose_actuator`'s arguments (validated here); the stages keep the
     state on the instance.
+
+    Parameters
+    ----------
+    data, candidates, alpha, rho_max, experiment, seed, stability, detection : object
+        As :func:`diagnose_actuator`.
     """
 
     def __init__(self, data, *, candidates=None, alpha: float = 0.01, rho_max: float = 1.5,
@@ -270,7 +275,12 @@ class MuscleSteps(Steps):
                               f"{where_txt}")
 
     def result(self, seconds: dict) -> Diagnosis:
-        """The :class:`~ppamsafety.diagnose.core.result.Diagnosis` (settings and timings)."""
+        """The :class:`~ppamsafety.diagnose.core.result.Diagnosis` (settings and timings).
+        Parameters
+        ----------
+        seconds : dict
+            Stage -> wall time [s] (:func:`~ppamsafety.diagnose.core.pipeline.run_steps`).
+        """
         t0 = time.perf_counter()
         des, fit, sel, stab, data = self.des, self.fit, self.sel, self.stab, self.data
         rec, sig, candidates = self.rec, des.sig, self.candidates

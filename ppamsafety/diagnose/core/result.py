@@ -101,14 +101,28 @@ class Estimate:
 
     def widened(self, ci_low: float, ci_high: float, by) -> "Estimate":
         """This estimate with the reported interval ``[ci_low, ci_high]``, widened for the
-        candidates ``by``; its own interval is kept as ``ci_*_noise``."""
+        candidates ``by``; its own interval is kept as ``ci_*_noise``.
+
+        Parameters
+        ----------
+        ci_low, ci_high : float
+            The widened interval, in ``unit``.
+        by : iterable of str
+            The candidates that widened it.
+        """
         return replace(self, ci_low_noise=self.ci_low, ci_high_noise=self.ci_high,
                        ci_low=float(ci_low), ci_high=float(ci_high), widened_by=tuple(by))
 
     def cut(self, lo: float, hi: float) -> "Estimate":
         """This estimate with its intervals intersected with the physical range
         ``[lo, hi]`` (prior knowledge); a reported interval that was cut keeps its raw
-        bounds as ``ci_*_raw``."""
+        bounds as ``ci_*_raw``.
+
+        Parameters
+        ----------
+        lo, hi : float
+            The physical range, in ``unit``.
+        """
         out = self
         if self.ci_low < lo or self.ci_high > hi:
             out = replace(out, ci_low_raw=self.ci_low, ci_high_raw=self.ci_high,
@@ -120,8 +134,14 @@ class Estimate:
         return out
 
     def shifted(self, offset: float) -> "Estimate":
-        """This estimate with ``offset`` (in ``unit``) added to the value and every interval
-        bound (a linearisation point the columns were built at)."""
+        """This estimate with ``offset`` added to the value and every interval bound (a
+        linearisation point the columns were built at).
+
+        Parameters
+        ----------
+        offset : float
+            In ``unit``.
+        """
         def add(x):
             return None if x is None else x + offset
         return replace(self, value=self.value + offset, ci_low=self.ci_low + offset,
