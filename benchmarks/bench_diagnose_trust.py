@@ -136,7 +136,7 @@ def main():
     dg = diagnose(data)
     ours = time.perf_counter() - t0
     print(f"ours: {ours:.2f} s; named {dg.names}, "
-          f"levels {[e['confidence_level'] for e in dg.effects]}; stages "
+          f"levels {[e.confidence_level for e in dg.effects]}; stages "
           f"{ {k: round(v, 2) for k, v in dg.timings.items()} }")
     with threadpool_limits(limits=1, user_api="blas"):
         rec, _ = arm_record(data)

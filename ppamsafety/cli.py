@@ -365,8 +365,7 @@ def _cmd_sweep(args) -> int:
 def _cmd_diagnose(args) -> int:
 
     from .data import MeasuredDataWarning, load_campaign, load_measured
-    from .diagnose import diagnose
-    from .diagnose.diagnosis import other_arm
+    from .diagnose import diagnose, other_arm
 
     with _options(outdir="--out"):
         inspect_output_folder(args.out, overwrite=args.overwrite, kind="diagnose",
@@ -421,11 +420,11 @@ def _cmd_diagnose(args) -> int:
     for w in dg.warnings:
         print(f"WARNING: {w}")
     for e in dg.effects:
-        ps = ", ".join(f"{n} = {p['value']:.4g} [{p['ci_low']:.4g}, {p['ci_high']:.4g}] "
-                       f"{p['unit']} (declared {p['nominal']:.4g})"
-                       for n, p in e["parameters"].items())
-        print(f"effect {e['name']} (confidence {e['confidence']:.3f}, "
-              f"{e['confidence_level']}): {ps}")
+        ps = ", ".join(f"{n} = {p.value:.4g} [{p.ci_low:.4g}, {p.ci_high:.4g}] "
+                       f"{p.unit} (declared {p.nominal:.4g})"
+                       for n, p in e.parameters.items())
+        print(f"effect {e.name} (confidence {e.confidence:.3f}, "
+              f"{e.confidence_level}): {ps}")
     if not dg.effects:
         print("no effect named")
     print(f"unexplained: {'yes (' + ', '.join(dg.unexplained_channels) + ')' if dg.unexplained else 'no'}")

@@ -16,8 +16,8 @@ from ppamsafety.diagnose import diagnose
 from ppamsafety.diagnose.bench import friction as fr
 from ppamsafety.diagnose.bench.calibration import (CAMPAIGN_MEASURE as MEASURE_SEEDS,
                                                    CAMPAIGN_TUNING as TUNING_SEEDS,
-                                                   HIGH_PRECISION, calibration_table,
-                                                   run_calibration)
+                                                   HIGH_PRECISION, campaign_calibration_table,
+                                                   run_campaign_calibration)
 from ppamsafety.diagnose.bench.campaign import diagnose_campaign
 from ppamsafety.diagnose.bench.cylinder_synth import synthesize_cylinder
 
@@ -30,7 +30,7 @@ def _quiet():
 
 
 def _lev(dg):
-    return {e["name"]: e for e in dg.effects}
+    return {e.name: e for e in dg.effects}
 
 
 def test_friction_pressure_law_presliding_recovered_and_gain_confounded():
@@ -39,18 +39,18 @@ def test_friction_pressure_law_presliding_recovered_and_gain_confounded():
     dg = diagnose(synthesize_cylinder(fx, seed=11, cycles=6))
     e = _lev(dg)
     for name in ("coulomb", "coulomb_pressure", "presliding"):
-        assert e[name]["confidence_level"] == "high", name
-    assert e["coulomb"]["parameters"]["c0"]["value"] == pytest.approx(4.0, rel=0.1)
-    assert e["coulomb_pressure"]["parameters"]["c1"]["value"] == pytest.approx(5e-6, rel=0.1)
-    xd = e["presliding"]["parameters"]["x_d"]["value"]
+        assert e[name].confidence_level == "high", name
+    assert e["coulomb"].parameters["c0"].value == pytest.approx(4.0, rel=0.1)
+    assert e["coulomb_pressure"].parameters["c1"].value == pytest.approx(5e-6, rel=0.1)
+    xd = e["presliding"].parameters["x_d"].value
     i = fr.XD_GRID.index(0.2e-3)
     assert fr.XD_GRID[i - 1] <= xd <= fr.XD_GRID[i + 1]
     # a force-sensor gain is never named: the group is reported with its separating experiment
     assert not {"force_sensor_gain", "pressure_sensor_gain", "force_law_refit"} & set(e)
-    g = next(g for g in dg.confounded if "force_sensor_gain" in g["members"])
-    assert g["interpretations"]["force_sensor_gain"]["g"]["value"] == pytest.approx(0.02,
+    g = next(g for g in dg.confounded if "force_sensor_gain" in g.members)
+    assert g.interpretations["force_sensor_gain"]["g"].value == pytest.approx(0.02,
                                                                                     abs=0.004)
-    assert "dead-weight" in g["separating_experiment"]
+    assert "dead-weight" in g.separating_experiment
     assert not dg.unexplained and dg.residual_rms["block_force"]["after"] < 1.2
 
 
@@ -61,7 +61,7 @@ def test_viscous_only_when_speeds_vary():
     assert any("viscous: not identifiable" in n for n in fixed.notes)
     varied = diagnose_campaign(synthesize_cylinder(fx, seed=4, cycles=6, pressures=(2e5, 5e5),
                                                    protocol="varied-speed"))
-    b = _lev(varied)["viscous"]["parameters"]["b"]["value"]
+    b = _lev(varied)["viscous"].parameters["b"].value
     assert b == pytest.approx(150.0, rel=0.3)
 
 
@@ -93,7 +93,7 @@ def test_calibration_seeds_are_disjoint():
 
 @pytest.mark.slow
 def test_high_confidence_is_right_97_percent_on_unseen_seeds():
-    names, runs = run_calibration(list(MEASURE_SEEDS)[:200])
-    tab = calibration_table(names)
+    names, runs = run_campaign_calibration(list(MEASURE_SEEDS)[:200])
+    tab = campaign_calibration_table(names)
     assert tab.loc["high", "count"] >= 200
     assert tab.loc["high", "precision"] >= HIGH_PRECISION, tab

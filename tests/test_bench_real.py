@@ -45,7 +45,7 @@ def test_doc_blocks_run_and_say_what_they_show(walkthrough):
 
 def test_oring_friction_named_high_with_its_pressure_law(walkthrough):
     dg = walkthrough["dg"]
-    lev = {e["name"]: e["confidence_level"] for e in dg.effects}
+    lev = {e.name: e.confidence_level for e in dg.effects}
     assert lev.get("coulomb") == "high" and lev.get("coulomb_pressure") == "high"
     law = dg.settings["laws"]["friction_level"]
     c = np.array(law["value_N"])
@@ -56,11 +56,11 @@ def test_oring_friction_named_high_with_its_pressure_law(walkthrough):
     # nothing of the sensor/area family is named: it is reported as confounded
     assert not {"force_sensor_offset", "force_sensor_gain", "pressure_sensor_gain",
                 "force_law_refit", "pressure_sensor_offset"} & set(lev)
-    groups = [set(g["members"]) for g in dg.confounded]
+    groups = [set(g.members) for g in dg.confounded]
     assert {"force_sensor_gain", "pressure_sensor_gain", "force_law_refit"} in groups
-    assert all(g["separating_experiment"] for g in dg.confounded)
-    assert "dead-weight" in next(g["separating_experiment"] for g in dg.confounded
-                                 if "force_sensor_gain" in g["members"])
+    assert all(g.separating_experiment for g in dg.confounded)
+    assert "dead-weight" in next(g.separating_experiment for g in dg.confounded
+                                 if "force_sensor_gain" in g.members)
     # residual against the honest noise: the repeatability, reported beside the sensor noise
     rr = dg.residual_rms["force"]
     assert rr["sensor_noise"] < rr["noise"]

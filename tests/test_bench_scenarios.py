@@ -99,9 +99,9 @@ def test_confounded_group_names_the_separating_experiment():
         warnings.simplefilter("ignore", MeasuredDataWarning)
         dg = diagnose_actuator(record_of(random_scenario(7)), seed=7)
     g = next(g for g in dg.confounded
-             if set(g["members"]) == {"force_sensor_gain", "force_law_refit"})
-    assert "dead-weight" in g["separating_experiment"]
-    assert set(g["interpretations"]) == {"force_sensor_gain", "force_law_refit"}
+             if set(g.members) == {"force_sensor_gain", "force_law_refit"})
+    assert "dead-weight" in g.separating_experiment
+    assert set(g.interpretations) == {"force_sensor_gain", "force_law_refit"}
     assert not {"force_sensor_gain", "force_law_refit"} & set(dg.names)
 
 

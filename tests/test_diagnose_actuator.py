@@ -98,11 +98,11 @@ def test_battery_fast_subset(case):
     if case in CONFOUNDED:
         # a uniform scale of the force law is a load-cell gain: reported as a pair with the
         # experiment that separates them, neither named
-        g = next(g for g in dg.confounded if set(g["members"]) == CONFOUNDED[case])
-        assert "dead-weight" in g["separating_experiment"]
+        g = next(g for g in dg.confounded if set(g.members) == CONFOUNDED[case])
+        assert "dead-weight" in g.separating_experiment
         assert not set(dg.names) & CONFOUNDED[case]
     if CASES[case][1]:
-        assert all(e["confidence_level"] == "high" for e in dg.effects)
+        assert all(e.confidence_level == "high" for e in dg.effects)
         rr = dg.residual_rms["force"]
         # all samples, including the few at reversals left out of the statistics
         assert rr["after"] < 0.5 * rr["before"] and rr["after"] < 2 * rr["noise"]
@@ -113,12 +113,12 @@ def test_battery_fast_subset(case):
 
 def test_hysteresis_delta_and_friction_values_and_intervals():
     dg = run("hysteresis+friction", seed=4)
-    p = {e["name"]: e["parameters"] for e in dg.effects}
+    p = {e.name: e.parameters for e in dg.effects}
     d, c = p["hysteresis"]["delta"], p["actuator_friction"]["c"]
-    assert d["unit"] == "-" and c["unit"] == "N"
-    assert d["ci_low"] < d["value"] < d["ci_high"] and abs(d["value"] - 0.139) < 0.007
-    assert abs(c["value"] - 10.0) < 1.0
-    assert all(e["confidence"] > 0.95 for e in dg.effects)
+    assert d.unit == "-" and c.unit == "N"
+    assert d.ci_low < d.value < d.ci_high and abs(d.value - 0.139) < 0.007
+    assert abs(c.value - 10.0) < 1.0
+    assert all(e.confidence > 0.95 for e in dg.effects)
 
 
 def test_where_points_at_the_direction_of_motion_for_hysteresis():
@@ -152,7 +152,7 @@ def test_jittered_sampling_is_accepted_and_diagnosed():
     assert dt.max() / dt.min() > 2 and "sample_rate" not in d.meta
     dg = diagnose(d)
     assert dg.names == ("hysteresis",) and abs(
-        dg.effects[0]["parameters"]["delta"]["value"] - 0.139) < 0.007
+        dg.effects[0].parameters["delta"].value - 0.139) < 0.007
 
 
 def test_few_reversals_name_with_low_confidence_only():
@@ -160,7 +160,7 @@ def test_few_reversals_name_with_low_confidence_only():
     dg = diagnose(d)
     assert dg.settings["reversals"] < 4
     assert dg.names == ("hysteresis",)
-    assert dg.effects[0]["confidence_level"] == "low"
+    assert dg.effects[0].confidence_level == "low"
     assert any("reversal" in n for n in dg.notes)
 
 
@@ -169,7 +169,7 @@ def test_single_pressure_level_does_not_trust_a_refit_against_a_sensor_offset():
     refit may be named, never with high confidence."""
     d = synthesize_actuator({"force_sensor_offset": 20.0}, seed=8, pressures=[1.5e5])
     dg = diagnose(d)
-    assert all(e["confidence_level"] == "low" for e in dg.effects)
+    assert all(e.confidence_level == "low" for e in dg.effects)
     assert dg.settings["pressure_one_level"]
 
 
@@ -178,8 +178,8 @@ def test_position_column_gives_the_same_diagnosis_as_contraction():
     a = diagnose(synthesize_actuator(fx, seed=9))
     b = diagnose(synthesize_actuator(fx, seed=9, position=True))
     assert a.names == b.names == ("actuator_friction",)
-    assert b.effects[0]["parameters"]["c"]["value"] == pytest.approx(
-        a.effects[0]["parameters"]["c"]["value"], rel=1e-6)
+    assert b.effects[0].parameters["c"].value == pytest.approx(
+        a.effects[0].parameters["c"].value, rel=1e-6)
 
 
 def test_cylinder_law_friction_and_area():
@@ -188,17 +188,17 @@ def test_cylinder_law_friction_and_area():
     law = dict(force_law=[0.0, A, 0.0, 0.0, 0.0], position=True)
     dg = diagnose(synthesize_actuator({"friction_coulomb": 15.0}, seed=10, **law))
     assert dg.names == ("actuator_friction",)
-    assert abs(dg.effects[0]["parameters"]["c"]["value"] - 15.0) < 1.5
+    assert abs(dg.effects[0].parameters["c"].value - 15.0) < 1.5
     # a 5 % area error scales the whole force: on this record it is a load-cell gain too,
     # so the pair is reported confounded (issue 19), the area read from its interpretation
     dg = diagnose(synthesize_actuator({"force_law_scale": 0.05}, seed=10, **law))
     assert dg.names == ()
     g = next(g for g in dg.confounded
-             if set(g["members"]) == {"force_law_refit", "force_sensor_gain"})
-    a1 = g["interpretations"]["force_law_refit"]["a1"]
-    assert abs(a1["value"] - 1.05 * A) < 0.005 * A and a1["ci_low"] > A
-    gain = g["interpretations"]["force_sensor_gain"]["g"]
-    assert abs(gain["value"] - 0.05) < 0.005
+             if set(g.members) == {"force_law_refit", "force_sensor_gain"})
+    a1 = g.interpretations["force_law_refit"]["a1"]
+    assert abs(a1.value - 1.05 * A) < 0.005 * A and a1.ci_low > A
+    gain = g.interpretations["force_sensor_gain"]["g"]
+    assert abs(gain.value - 0.05) < 0.005
 
 
 def test_pressure_sweep_at_fixed_contraction_names_nothing_spurious():

@@ -75,31 +75,31 @@ def check_parameters(case, dg):
     a polytropic exponent below "high" on the out-of-library record) is not compared with
     the truth of the case that hides it.
     """
-    p = {e["name"]: e["parameters"] for e in dg.effects}
+    p = {e.name: e.parameters for e in dg.effects}
     hidden = set(CASES[case][0])
     if "payload" in p and "payload_mass" in hidden:
-        assert abs(p["payload"]["M"]["value"] - 0.4) < 0.02
+        assert abs(p["payload"]["M"].value - 0.4) < 0.02
     if "valve_lag" in p and "valve_time_constant_factor" in hidden:
-        T = np.array([p["valve_lag"][f"T_{i}"]["value"] for i in range(1, 5)])
+        T = np.array([p["valve_lag"][f"T_{i}"].value for i in range(1, 5)])
         np.testing.assert_allclose(T, 1.5 * NOM_T, rtol=0.10)
     if "joint_friction" in p and "friction_coulomb_factor" in hidden:
-        c = np.array([p["joint_friction"]["c1"]["value"], p["joint_friction"]["c2"]["value"]])
+        c = np.array([p["joint_friction"]["c1"].value, p["joint_friction"]["c2"].value])
         np.testing.assert_allclose(c, 3 * NOM_C, rtol=0.35)
     if "polytropic_exponent" in p and "polytropic_n" in hidden:
-        assert abs(p["polytropic_exponent"]["n"]["value"] - 1.0) < 0.15
+        assert abs(p["polytropic_exponent"]["n"].value - 1.0) < 0.15
     if "valve_dead_time" in p and "valve_dead_time" in hidden:
-        assert abs(p["valve_dead_time"]["d"]["value"] - 0.02) <= 0.002
+        assert abs(p["valve_dead_time"]["d"].value - 0.02) <= 0.002
     if "hysteresis" in p and "hysteresis_delta" in hidden:
-        assert abs(p["hysteresis"]["delta"]["value"] - 0.139) <= DELTA_TOL
+        assert abs(p["hysteresis"]["delta"].value - 0.139) <= DELTA_TOL
     if "valve_offset_gain" in p and case == "valve_offset":
         for i in range(4):
             v = p["valve_offset_gain"][f"v1_{i + 1}"]
-            assert v["ci_low"] <= NOM_V1[i] + 5000 <= v["ci_high"]
+            assert v.ci_low <= NOM_V1[i] + 5000 <= v.ci_high
     if "valve_offset_gain" in p and case == "sawtooth:valve_offset":
         # 21 rest points, 8 intervals per record: the all-cover rule would fail one record in
         # three by chance; the offsets must be within 100 Pa (1 mbar, 2 % of the offset)
         for i in range(4):
-            v = p["valve_offset_gain"][f"v1_{i + 1}"]["value"]
+            v = p["valve_offset_gain"][f"v1_{i + 1}"].value
             assert abs(v - NOM_V1[i] - 5000) <= 100.0, (i, v)
 
 
@@ -108,7 +108,7 @@ def outcome(case, dg):
     named = set(dg.names)
     expected = CASES[case][1]
     if expected is None:
-        high = [e["name"] for e in dg.effects if e["confidence_level"] == "high"]
+        high = [e.name for e in dg.effects if e.confidence_level == "high"]
         return "refused" if not high else "named high: " + "+".join(sorted(high))
     return "correct" if named == expected else ("named: " + "+".join(sorted(named)) or "none")
 
@@ -128,7 +128,7 @@ def test_battery_fast_subset(case):
     assert outcome(case, dg) == "correct", (case, dg.names, dg.ranking().head())
     check_parameters(case, dg)
     if CASES[case][1]:
-        assert all(e["confidence_level"] == "high" for e in dg.effects)
+        assert all(e.confidence_level == "high" for e in dg.effects)
         # the gap shrinks in the full simulation
         assert dg.residual_rms["q2"]["after"] < dg.residual_rms["q2"]["before"] or \
             dg.residual_rms["p1"]["after"] < dg.residual_rms["p1"]["before"]

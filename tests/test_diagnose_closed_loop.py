@@ -88,20 +88,20 @@ def outcome(case, dg):
 
 def check_parameters(case, dg):
     """Fitted parameters within the tolerances of tests/test_diagnose_battery.py."""
-    p = {e["name"]: e["parameters"] for e in dg.effects}
+    p = {e.name: e.parameters for e in dg.effects}
     if "payload" in p:
-        assert abs(p["payload"]["M"]["value"] - 0.4) < 0.02
+        assert abs(p["payload"]["M"].value - 0.4) < 0.02
     if "valve_lag" in p:
-        T = np.array([p["valve_lag"][f"T_{i}"]["value"] for i in range(1, 5)])
+        T = np.array([p["valve_lag"][f"T_{i}"].value for i in range(1, 5)])
         np.testing.assert_allclose(T, 1.5 * NOM_T, rtol=0.10)
     if "joint_friction" in p:
-        c = np.array([p["joint_friction"]["c1"]["value"], p["joint_friction"]["c2"]["value"]])
+        c = np.array([p["joint_friction"]["c1"].value, p["joint_friction"]["c2"].value])
         np.testing.assert_allclose(c, 3 * np.array(ARM.plant_base.coulomb), rtol=0.35)
     if "polytropic_exponent" in p:
-        assert abs(p["polytropic_exponent"]["n"]["value"] - 1.0) < 0.15
+        assert abs(p["polytropic_exponent"]["n"].value - 1.0) < 0.15
     if "valve_dead_time" in p:
         # +-2 samples of 1 ms, compared in whole samples
-        assert abs(round(p["valve_dead_time"]["d"]["value"] / 1e-3) - 20) <= 2
+        assert abs(round(p["valve_dead_time"]["d"].value / 1e-3) - 20) <= 2
 
 
 @pytest.mark.parametrize("case", ["payload", "dead_time", "friction+dead_time"])

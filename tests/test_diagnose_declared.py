@@ -22,6 +22,7 @@ from ppamsafety.diagnose.arm.pipeline import REPLAY_RHO, after_row
 from ppamsafety.diagnose.arm.residuals import (arm_record, block_system, declared_torque,
                                                model_vector)
 from ppamsafety.diagnose.arm.synthesize import plant_with
+from ppamsafety.diagnose.core.result import Estimate
 from ppamsafety.params import thesis_arm
 from ppamsafety.params.arm_file import arm_fingerprint
 from ppamsafety.plant import layout as lay
@@ -45,7 +46,7 @@ def _strip(data):
 
 
 def _summary(dg):
-    return {e["name"]: {p: (d["value"], d["nominal"]) for p, d in e["parameters"].items()}
+    return {e.name: {p: (d.value, d.nominal) for p, d in e.parameters.items()}
             for e in dg.effects}
 
 
@@ -67,9 +68,9 @@ def test_without_the_declared_line_the_hysteresis_is_named_at_the_declared_delta
     # the record names HYST: the comparison with another arm is asked for on purpose
     dg = diagnose(hyst_record, arm=bare, seed=11, allow_other_arm=True)
     assert dg.names == ("hysteresis",), _summary(dg)
-    d = dg.effects[0]["parameters"]["delta"]
-    assert d["nominal"] == 0.0
-    assert abs(d["value"] - 0.25) < 0.01 and d["ci_low"] <= 0.25 <= d["ci_high"], d
+    d = dg.effects[0].parameters["delta"]
+    assert d.nominal == 0.0
+    assert abs(d.value - 0.25) < 0.01 and d.ci_low <= 0.25 <= d.ci_high, d
     # ... and the mismatch heads the result
     assert dg.warnings and "record came from arm 'test arm: 40-fibre muscles'" in dg.warnings[0]
     assert dg.report_markdown().splitlines()[2].startswith("> **Warning:** the record came")
@@ -79,8 +80,8 @@ def test_a_hidden_dead_time_beside_declared_hysteresis_names_only_the_dead_time(
     rec = synthesize("closed-loop", {"valve_dead_time": 0.02}, seed=12, duration=6.0, arm=HYST)
     dg = diagnose(rec, arm=HYST, seed=12)
     assert dg.names == ("valve_dead_time",), _summary(dg)
-    d = dg.effects[0]["parameters"]["d"]
-    assert d["nominal"] == 0.0 and abs(d["value"] - 0.02) <= 0.0025, d
+    d = dg.effects[0].parameters["d"]
+    assert d.nominal == 0.0 and abs(d.value - 0.02) <= 0.0025, d
 
 
 def test_declared_friction_plus_hidden_extra_friction_names_the_extra():
@@ -91,10 +92,10 @@ def test_declared_friction_plus_hidden_extra_friction_names_the_extra():
         .effects.friction_coulomb == pytest.approx(hidden)
     dg = diagnose(rec, arm=FRICTION, seed=13)
     assert dg.names == ("joint_friction",), _summary(dg)
-    p = dg.effects[0]["parameters"]
+    p = dg.effects[0].parameters
     # the declared friction is the nominal value; the fit says how much more there is
-    assert p["c1"]["nominal"] == pytest.approx(0.4) and p["c2"]["nominal"] == pytest.approx(0.25)
-    assert p["c1"]["ci_low"] > 0.4 and abs(p["c1"]["value"] - 1.2) < 0.25, p["c1"]
+    assert p["c1"].nominal == pytest.approx(0.4) and p["c2"].nominal == pytest.approx(0.25)
+    assert p["c1"].ci_low > 0.4 and abs(p["c1"].value - 1.2) < 0.25, p["c1"]
     # nothing hidden on that arm: nothing named (its own friction is not "missing")
     dg0 = diagnose(synthesize("open-loop", {}, seed=13, duration=8.0, arm=FRICTION),
                    arm=FRICTION, seed=13)
@@ -132,11 +133,11 @@ def test_declared_valves_and_polytropic_exponent_are_the_model():
                      arm=arm)
     dg = diagnose(rec, arm=arm, seed=19)
     assert dg.names == ("valve_lag",), _summary(dg)
-    p = dg.effects[0]["parameters"]
+    p = dg.effects[0].parameters
     for i in range(4):
         d = p[f"T_{i + 1}"]
-        assert d["nominal"] == pytest.approx(t[i])
-        assert abs(d["value"] / (1.6 * t[i]) - 1) < 0.1, d
+        assert d.nominal == pytest.approx(t[i])
+        assert abs(d.value / (1.6 * t[i]) - 1) < 0.1, d
 
 
 def test_declared_torque_bias_enters_the_equations_and_the_static_replay():
@@ -161,8 +162,8 @@ def test_the_fitted_model_is_the_replayed_model(hyst_record):
                      duration=6.0, arm=HYST)
     dg = diagnose(rec, arm=HYST, seed=16)
     assert set(dg.names) == {"hysteresis", "payload"}, _summary(dg)
-    delta = dg.effects[dg.names.index("hysteresis")]["parameters"]["delta"]
-    assert delta["nominal"] == pytest.approx(0.25) and abs(delta["value"] - 0.15) < 0.01
+    delta = dg.effects[dg.names.index("hysteresis")].parameters["delta"]
+    assert delta.nominal == pytest.approx(0.25) and abs(delta.value - 0.15) < 0.01
     assert max(dg.settings["replay"]["rho"].values()) <= REPLAY_RHO and not dg.unexplained
 
 
@@ -175,7 +176,9 @@ def test_after_row_carries_the_declared_effects_changed_by_the_fit():
         shift = -4
         mu = model_vector(packing.pack(arm))
 
-    row = after_row(arm, Fit, {"hysteresis": {"delta": {"value": 0.3}}})
+    delta = Estimate(value=0.3, unit="-", ci_low=0.29, ci_high=0.31, std_error=0.005,
+                     nominal=0.25)
+    row = after_row(arm, Fit, {"hysteresis": {"delta": delta}})
     # the common change +0.05 from the declared mean 0.25 on every group's own delta
     assert np.allclose(lay.PLANT.read(row, "hysteresis_delta"), [0.25, 0.35, 0.25, 0.35])
     assert np.array_equal(lay.PLANT.read(row, "dead_time"), [6, 6, 6, 6])
@@ -217,7 +220,7 @@ def test_the_replay_gate_flags_an_error_the_block_residuals_miss():
     assert max(blocks) < 1.5
     assert dg.unexplained and "replay qd2" in dg.unexplained_channels
     assert dg.settings["replay"]["rho"]["qd2"] > 5 * REPLAY_RHO
-    assert not any(e["confidence_level"] == "high" for e in dg.effects)
+    assert not any(e.confidence_level == "high" for e in dg.effects)
     assert any("replay of the fitted model" in n for n in dg.notes)
 
 

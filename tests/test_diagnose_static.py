@@ -38,9 +38,9 @@ def test_static_sawtooth_record_and_hysteresis_localised(tmp_path):
     assert rec.m == 7 and rec.F is not None and rec.u is not None
     dg = diagnose(back, bootstrap=10)
     assert dg.names == ("hysteresis",) and not dg.unexplained
-    d = dg.effects[0]["parameters"]["delta"]["value"]
+    d = dg.effects[0].parameters["delta"].value
     assert abs(d - 0.139) <= 0.007
-    assert dg.effects[0]["evidence"]["bootstrap_frequency"] >= 0.9
+    assert dg.effects[0].evidence["bootstrap_frequency"] >= 0.9
     f = dg.subsystems["forces"]
     # §3.5.1.6 localisation: the forces are wrong (>> noise), the valves are not
     assert min(f["rho_before"]) > 3 and max(f["rho_after"]) < 1.5
@@ -65,7 +65,7 @@ def test_cli_synthesize_static_sawtooth(tmp_path):
 
 def test_bootstrap_frequency_in_the_evidence():
     dg = diagnose(synthesize(effects={"payload_mass": 0.4}, seed=4, duration=6.0), bootstrap=8)
-    ev = dg.effects[0]["evidence"]
+    ev = dg.effects[0].evidence
     assert dg.names == ("payload",) and 0.0 <= ev["bootstrap_frequency"] <= 1.0
     assert ev["bootstrap_frequency"] >= 0.75
     with pytest.raises(ValueError, match="bootstrap"):

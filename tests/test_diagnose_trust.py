@@ -16,6 +16,7 @@ from ppamsafety.diagnose.arm.candidates import (REGISTRY, SENSOR_FAULTS, SensorF
 from ppamsafety.diagnose.arm.residuals import (ENCODER_OFFSET_COLUMNS, PRESSURE_GAIN_COLUMNS,
                                                PRESSURE_OFFSET_COLUMNS, arm_record, block_system,
                                                channel_noise, model_vector, noise_draws)
+from ppamsafety.diagnose.core.result import Estimate
 from ppamsafety.diagnose.arm.selection import (fit_model, gram_fit, make_problem,
                                                stability_selection)
 from ppamsafety.params import thesis_arm
@@ -93,10 +94,10 @@ def test_sensor_faults_are_named_with_their_values(effects, name):
     dg = diagnose(synthesize(effects=effects, seed=5, duration=15.0), seed=5)
     assert dg.names == (name,), (dg.names, dg.confounded)
     e = dg.effects[0]
-    assert e["confidence_level"] == "high", e["gates"]
+    assert e.confidence_level == "high", e.gates
     truth = list(effects.values())[0]
-    for (p, d), t in zip(e["parameters"].items(), truth):
-        assert d["ci_low"] <= t <= d["ci_high"], (p, d, t)
+    for (p, d), t in zip(e.parameters.items(), truth):
+        assert d.ci_low <= t <= d.ci_high, (p, d, t)
 
 
 def test_negative_payload_is_never_named():
@@ -105,38 +106,43 @@ def test_negative_payload_is_never_named():
     data = synthesize(effects={"link.m2": 0.8 * ARM.links.m2}, seed=2, duration=15.0)
     dg = diagnose(data, seed=2)
     for e in dg.effects:
-        if e["name"] == "payload":
-            assert e["parameters"]["M"]["ci_low"] >= 0.0
-            assert e["parameters"]["M"]["value"] > 0.0
-    assert all(e["confidence_level"] != "high" or e["name"] != "payload" for e in dg.effects)
+        if e.name == "payload":
+            assert e.parameters["M"].ci_low >= 0.0
+            assert e.parameters["M"].value > 0.0
+    assert all(e.confidence_level != "high" or e.name != "payload" for e in dg.effects)
+
+
+def _est(value, ci_low, ci_high, nominal, ci_low_raw=None, ci_high_raw=None):
+    return Estimate(value=value, unit="-", ci_low=ci_low, ci_high=ci_high, std_error=0.01,
+                    nominal=nominal, ci_low_raw=ci_low_raw, ci_high_raw=ci_high_raw)
 
 
 def test_gate_of_physical_admissibility():
     """The admissibility gate on parameter tables: a moved parameter needs its raw interval in
     the physical range; an unmoved one only must not be significantly outside it."""
-    ok = {"M": {"value": 0.4, "ci_low": 0.39, "ci_high": 0.41, "nominal": 0.0}}
-    neg = {"M": {"value": -0.3, "ci_low": -0.35, "ci_high": -0.25, "nominal": 0.0}}
-    straddle = {"M": {"value": 0.3, "ci_low": 0.0, "ci_high": 0.4, "ci_low_raw": -0.1,
-                      "ci_high_raw": 0.4, "nominal": 0.0}}
+    ok = {"M": _est(0.4, ci_low=0.39, ci_high=0.41, nominal=0.0)}
+    neg = {"M": _est(-0.3, ci_low=-0.35, ci_high=-0.25, nominal=0.0)}
+    straddle = {"M": _est(0.3, ci_low=0.0, ci_high=0.4, ci_low_raw=-0.1, ci_high_raw=0.4,
+                          nominal=0.0)}
     assert gates_mod.physically_admissible("payload", ok)
     assert not gates_mod.physically_admissible("payload", neg)
     assert gates_mod.physically_admissible("payload", straddle)        # not moved: consistent
-    n_low = {"n": {"value": 1.05, "ci_low": 1.0, "ci_high": 1.12, "ci_low_raw": 0.98,
-                   "ci_high_raw": 1.12, "nominal": 1.4}}
+    n_low = {"n": _est(1.05, ci_low=1.0, ci_high=1.12, ci_low_raw=0.98, ci_high_raw=1.12,
+                       nominal=1.4)}
     assert not gates_mod.physically_admissible("polytropic_exponent", n_low)   # moved, < 1
-    n_ok = {"n": {"value": 1.2, "ci_low": 1.15, "ci_high": 1.25, "nominal": 1.4}}
+    n_ok = {"n": _est(1.2, ci_low=1.15, ci_high=1.25, nominal=1.4)}
     assert gates_mod.physically_admissible("polytropic_exponent", n_ok)
-    fr = {"c1": {"value": 0.5, "ci_low": 0.45, "ci_high": 0.55, "nominal": 0.03},
-          "c2": {"value": 0.07, "ci_low": 0.06, "ci_high": 0.08, "nominal": 0.07},
-          "b1": {"value": 0.83, "ci_low": 0.8, "ci_high": 0.86, "nominal": 0.83},
-          "b2": {"value": -0.002, "ci_low": -0.01, "ci_high": 0.006, "nominal": 0.0037}}
+    fr = {"c1": _est(0.5, ci_low=0.45, ci_high=0.55, nominal=0.03),
+          "c2": _est(0.07, ci_low=0.06, ci_high=0.08, nominal=0.07),
+          "b1": _est(0.83, ci_low=0.8, ci_high=0.86, nominal=0.83),
+          "b2": _est(-0.002, ci_low=-0.01, ci_high=0.006, nominal=0.0037)}
     assert gates_mod.physically_admissible("joint_friction", fr)       # b2 = 0 within its CI
-    fr["b2"] = {"value": -0.2, "ci_low": -0.25, "ci_high": -0.15, "nominal": 0.0037}
+    fr["b2"] = _est(-0.2, ci_low=-0.25, ci_high=-0.15, nominal=0.0037)
     assert not gates_mod.physically_admissible("joint_friction", fr)
 
 
 def test_gates_all_needed_for_high():
-    table = {"M": {"value": 0.4, "ci_low": 0.39, "ci_high": 0.41, "nominal": 0.0}}
+    table = {"M": _est(0.4, ci_low=0.39, ci_high=0.41, nominal=0.0)}
     base = dict(weight=0.999, stability=0.95, stability_threshold=0.8, rho=np.ones(6),
                 unexplained=False, confounded=False, consistency=0.5, blocks=1000)
     assert gates_mod.level(gates_mod.gates("payload", table, **base)) == "high"
@@ -145,7 +151,7 @@ def test_gates_all_needed_for_high():
                    dict(confounded=True), dict(consistency=1e-5)):
         g = gates_mod.gates("payload", table, **{**base, **change})
         assert gates_mod.level(g) == "low", change
-    unmoved = {"M": {"value": 0.01, "ci_low": -0.02, "ci_high": 0.04, "nominal": 0.0}}
+    unmoved = {"M": _est(0.01, ci_low=-0.02, ci_high=0.04, nominal=0.0)}
     assert gates_mod.level(gates_mod.gates("payload", unmoved, **base)) == "low"
 
 
@@ -191,8 +197,8 @@ def test_confounded_pairs_are_reported_not_named():
                       effects={"valve_dead_time": 0.008}, seed=11, duration=12.0)
     dg = diagnose(data, seed=11)
     for g in dg.confounded:
-        assert len(g["members"]) >= 2 and g["separating_experiment"]
-        assert not set(g["members"]) & set(dg.names)
+        assert len(g.members) >= 2 and g.separating_experiment
+        assert not set(g.members) & set(dg.names)
     assert separating_experiment("valve_offset_gain", "pressure_sensor_offset") \
         == separating_experiment("pressure_sensor_offset", "valve_offset_gain")
 

@@ -96,11 +96,11 @@ def test_coverage_with_an_effect_left_out_of_the_model():
 def _check_reported(dg):
     assert dg.effects
     for e in dg.effects:
-        for d in e["parameters"].values():
-            assert "ci_low_noise" in d and isinstance(d["widened_by"], list)
+        for d in e.parameters.values():
+            assert d.ci_low_noise is not None and isinstance(d.widened_by, tuple)
             # the reported interval holds the fit's own (before the cut at the physical range)
-            assert d.get("ci_low_raw", d["ci_low"]) <= d["ci_low_noise"] + 1e-12
-            assert d.get("ci_high_raw", d["ci_high"]) >= d["ci_high_noise"] - 1e-12
+            assert d.raw_interval[0] <= d.ci_low_noise + 1e-12
+            assert d.raw_interval[1] >= d.ci_high_noise - 1e-12
     assert "hint" in dg.settings["intervals"]
 
 

@@ -8,7 +8,12 @@ is missing, its fitted parameters, and the gap shrinking.
   the candidate library, forward selection with its bootstrap, the pipeline;
 * :mod:`.bench` -- actuator records on the test bench (muscles) and cylinder campaigns;
 * :mod:`.core` -- what both share: noise levels, selection criteria and the naming
-  rule, linear selection, parameters and the :class:`Diagnosis` result.
+  rule, linear selection, parameters and the :class:`Diagnosis` result (its named
+  :class:`Effect` with each parameter an :class:`Estimate`, its :class:`ConfoundedGroup`);
+* :mod:`.scenarios` -- the randomized batteries that measure what "high" means.
+
+``__all__`` is the public face: a report section or a user's script reaches the diagnosis
+through it, never through the subpackages (the engine).
 
 Documentation: ``docs/diagnose.md``.
 """
@@ -17,11 +22,40 @@ import inspect
 import sys
 import types
 
-from .core.result import Diagnosis  # noqa: F401
+from .core.result import ConfoundedGroup, Diagnosis, Effect, Estimate
 from .diagnosis import diagnose
 from .synthesize import synthesize
+from .arm.kind import other_arm
+from .arm.pipeline import REPLAY_RHO, REPLAY_RHO_STATIC
+from .arm.static import static_record
+from .bench.calibration import (CAMPAIGN_MEASURE, campaign_calibration_table,
+                                run_campaign_calibration)
+from .bench.result import BenchDiagnosis
+from .bench.scenarios import single_effect_outcomes
+from .core.battery import HIGH_PRECISION
+from .core.omitted import HINT_P
+from .core.power import POWER
+from .scenarios import (ARM_BATTERY, BENCH_RESULTS_FILE, DECLARED_MEASURE_SEEDS,
+                        DECLARED_RESULTS_FILE, P_DECLARED_CHANGE, by_effect, calibration_table,
+                        declared_names, detection_curve, failures, interval_widening,
+                        load_results, run_battery, scores)
 
-__all__ = ["Diagnosis", "diagnose", "synthesize"]
+__all__ = [
+    # the front door and its results
+    "diagnose", "synthesize", "Diagnosis", "BenchDiagnosis", "Effect", "Estimate",
+    "ConfoundedGroup",
+    # the thresholds a reader of a diagnosis meets
+    "REPLAY_RHO", "REPLAY_RHO_STATIC", "HINT_P", "POWER", "HIGH_PRECISION",
+    # the arm a record names against the arm given; a static sawtooth's rest points
+    "other_arm", "static_record",
+    # the randomized batteries, their shipped rows and their scores
+    "ARM_BATTERY", "run_battery", "load_results", "scores", "calibration_table",
+    "detection_curve", "by_effect", "failures", "interval_widening", "declared_names",
+    "single_effect_outcomes", "BENCH_RESULTS_FILE", "DECLARED_RESULTS_FILE",
+    "DECLARED_MEASURE_SEEDS", "P_DECLARED_CHANGE",
+    # the calibration of a cylinder campaign's "high"
+    "CAMPAIGN_MEASURE", "run_campaign_calibration", "campaign_calibration_table",
+]
 
 
 class _FrontDoorPackage(types.ModuleType):

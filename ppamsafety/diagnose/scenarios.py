@@ -601,13 +601,12 @@ def run_scenario(sc: Scenario, *, gap: bool = True, arm=None) -> dict:
                        seconds=time.perf_counter() - t0)
             return row
     hidden = set(sc.hidden)
-    named = [e["name"] for e in dg.effects]
     row.update({
-        "named": tuple(named),
-        "high": tuple(e["name"] for e in dg.effects if e["confidence_level"] == "high"),
-        "low": tuple(e["name"] for e in dg.effects if e["confidence_level"] != "high"),
-        "partial": tuple(e["name"] for e in dg.partial),
-        "confounded": tuple(tuple(g["members"]) for g in dg.confounded),
+        "named": dg.names,
+        "high": tuple(e.name for e in dg.effects if e.high),
+        "low": tuple(e.name for e in dg.effects if not e.high),
+        "partial": tuple(e.name for e in dg.partial),
+        "confounded": tuple(tuple(g.members) for g in dg.confounded),
         "unexplained": bool(dg.unexplained),
         "rho_before": max(v["before"] for k, v in dg.residual_rms.items()
                           if k.startswith("block_")),
@@ -616,20 +615,20 @@ def run_scenario(sc: Scenario, *, gap: bool = True, arm=None) -> dict:
         "ratios": {h: _ratio(h, sc.truth[h], dg.detection_limits) for h in sc.hidden},
         "ratios_detected": {h: _ratio(h, sc.truth[h], dg.detection_limits, "limit")
                             for h in sc.hidden},
-        "gates": {e["name"]: e.get("gates", {}) for e in dg.effects},
-        "named_ratios": {e["name"]: e["evidence"].get("limit_ratio") for e in dg.effects},
+        "gates": {e.name: e.gates or {} for e in dg.effects},
+        "named_ratios": {e.name: e.evidence.get("limit_ratio") for e in dg.effects},
         "stability_bound": (dg.stability or {}).get("expected_false_selections_bound"),
         "replay_rho": dict(dg.settings.get("replay", {}).get("rho", {})),
     })
     cover = []
     for e in dg.effects:
-        if e["name"] not in hidden:
+        if e.name not in hidden:
             continue
-        for p, d in e["parameters"].items():
-            true = sc.truth[e["name"]].get(p)
+        for p, d in e.parameters.items():
+            true = sc.truth[e.name].get(p)
             if true is None:
                 continue
-            cover.append(coverage_entry(e["name"], p, true, d, e["confidence_level"]))
+            cover.append(coverage_entry(e.name, p, true, d, e.confidence_level))
     row["coverage"] = cover
     row["gap"] = (irreducible_gap(sc, rec, list(dg.settings["block_noise"].values()), arm=arm)
                   if gap and sc.perturbation else None)

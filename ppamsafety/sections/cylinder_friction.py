@@ -29,9 +29,8 @@ from .._validation import check_int
 from ..data.campaign import load_campaign
 from ..data.datasets import ZILLEN2021_SEALS, zillen2021_manifest
 from ..data.measured import MeasuredDataWarning
-from ..diagnose import diagnose
-from ..diagnose.bench.calibration import (CAMPAIGN_MEASURE, HIGH_PRECISION, calibration_table,
-                                          run_calibration)
+from ..diagnose import (CAMPAIGN_MEASURE, HIGH_PRECISION, campaign_calibration_table, diagnose,
+                        run_campaign_calibration)
 from ..markdown import markdown_table
 from ..plots.bench import seal_parameters_figure
 from . import Section, SectionInfo, checked_compute
@@ -100,21 +99,21 @@ class BenchCaseFindings(Result):
 def _fmt_params(params: dict) -> str:
     out = []
     for k, v in params.items():
-        val, unit = v["value"], v["unit"]
+        val, unit = v.value, v.unit
         if unit == "N/Pa":
             val, unit = val * 1e5, "N/bar"
-            ci = (v["ci_low"] * 1e5, v["ci_high"] * 1e5)
+            ci = (v.ci_low * 1e5, v.ci_high * 1e5)
         elif unit == "N/Pa^2":
             val, unit = val * 1e10, "N/bar^2"
-            ci = (v["ci_low"] * 1e10, v["ci_high"] * 1e10)
+            ci = (v.ci_low * 1e10, v.ci_high * 1e10)
         elif unit == "m" and k == "x_d":
             out.append(f"x_d = {1e3 * val:.3g} mm")
             continue
         elif unit == "N/s":
             val, unit = val * 60, "N/min"
-            ci = (v["ci_low"] * 60, v["ci_high"] * 60)
+            ci = (v.ci_low * 60, v.ci_high * 60)
         else:
-            ci = (v["ci_low"], v["ci_high"])
+            ci = (v.ci_low, v.ci_high)
         if k == "K":
             out.append(f"K = {int(val)}")
         elif ci[0] == ci[0]:
@@ -159,19 +158,19 @@ def compute(*, quick: bool = False, arm=None, calibration_runs: int | None = Non
             dg = diagnose(camp)
             dgs[seal] = dg
             for e in dg.effects:
-                eff.append({"seal": seal, "effect": e["name"], "status": "named",
-                            "confidence": e["confidence_level"],
-                            "stability": e["confidence"],
-                            "held_out_gain": e["evidence"]["cv_gain"],
-                            "parameters": _fmt_params(e["parameters"])})
+                eff.append({"seal": seal, "effect": e.name, "status": "named",
+                            "confidence": e.confidence_level,
+                            "stability": e.confidence,
+                            "held_out_gain": e.evidence["cv_gain"],
+                            "parameters": _fmt_params(e.parameters)})
             for g in dg.confounded:
-                first = g["members"][0]
-                eff.append({"seal": seal, "effect": " / ".join(g["members"]),
+                first = g.members[0]
+                eff.append({"seal": seal, "effect": " / ".join(g.members),
                             "status": "confounded", "confidence": "-",
-                            "stability": g["evidence"]["stability_frequency"],
-                            "held_out_gain": g["evidence"]["cv_gain"],
+                            "stability": g.evidence["stability_frequency"],
+                            "held_out_gain": g.evidence["cv_gain"],
                             "parameters": f"as {first}: "
-                                          + _fmt_params(g["interpretations"][first])})
+                                          + _fmt_params(g.interpretations[first])})
             r = dg.records.copy()
             r.insert(0, "seal", seal)
             r["pressure_bar"] = r["pressure_Pa"] / 1e5
@@ -189,8 +188,8 @@ def compute(*, quick: bool = False, arm=None, calibration_runs: int | None = Non
                 laws.append(row)
     t1 = time.perf_counter()
     seeds = list(CAMPAIGN_MEASURE)[:n_cal]
-    names, runs = run_calibration(seeds)            # no seeds: the two tables, empty
-    cal = calibration_table(names)
+    names, runs = run_campaign_calibration(seeds)   # no seeds: the two tables, empty
+    cal = campaign_calibration_table(names)
     records = pd.concat(recs, ignore_index=True)
     m = {"seals": len(dgs), "diagnosis_seconds": t1 - t0,
          "calibration_seconds": time.perf_counter() - t1, "calibration_campaigns": len(seeds)}
@@ -199,7 +198,7 @@ def compute(*, quick: bool = False, arm=None, calibration_runs: int | None = Non
                   "high_precision": float(cal.loc["high", "precision"]),
                   "high_precision_required": HIGH_PRECISION})
     for seal, dg in dgs.items():
-        lev = {e["name"]: e["confidence_level"] for e in dg.effects}
+        lev = {e.name: e.confidence_level for e in dg.effects}
         m[f"{seal}_friction_high"] = lev.get("coulomb") == "high" or lev.get(
             "coulomb_pressure") == "high"
         m[f"{seal}_pressure_law"] = "+".join(n for n in ("coulomb_pressure",

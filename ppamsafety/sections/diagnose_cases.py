@@ -176,13 +176,13 @@ def parameter_comparison(dg, hidden: dict) -> pd.DataFrame:
     """
     rows = []
     for e in dg.effects:
-        for pn, p in e["parameters"].items():
-            h = hidden.get(e["name"], {}).get(pn, np.nan)
-            rows.append({"effect": e["name"], "parameter": pn, "unit": p["unit"], "hidden": h,
-                         "fitted": p["value"], "ci_low": p["ci_low"], "ci_high": p["ci_high"],
-                         "covered": bool(p["ci_low"] <= h <= p["ci_high"])
+        for pn, p in e.parameters.items():
+            h = hidden.get(e.name, {}).get(pn, np.nan)
+            rows.append({"effect": e.name, "parameter": pn, "unit": p.unit, "hidden": h,
+                         "fitted": p.value, "ci_low": p.ci_low, "ci_high": p.ci_high,
+                         "covered": bool(p.ci_low <= h <= p.ci_high)
                          if np.isfinite(h) else False,
-                         "nominal": p["nominal"]})
+                         "nominal": p.nominal})
     return pd.DataFrame(rows, columns=["effect", "parameter", "unit", "hidden", "fitted",
                                        "ci_low", "ci_high", "covered", "nominal"])
 
@@ -364,7 +364,7 @@ def render(study: DiagnoseCasesFindings) -> Section:
              f"valve dead time 20 ms); {rec_len:g} s of `{CASE_C['reference']}` under "
              f"`{CASE_C['controller']}`, seed {CASE_C['seed']}. Named, in the order found: "
              f"**{', '.join(dg.names) or 'nothing'}**"
-             + (f"; partial: {', '.join(e['name'] for e in dg.partial)}" if dg.partial else "")
+             + (f"; partial: {', '.join(e.name for e in dg.partial)}" if dg.partial else "")
              + f"; unexplained: {'yes (' + ', '.join(dg.unexplained_channels) + ')' if dg.unexplained else 'no'}.")
     L.append("")
     if len(study.case_c_table):

@@ -21,8 +21,7 @@ import numpy as np
 import pandas as pd
 
 from .._validation import check_range, check_seed
-from ..diagnose import diagnose, synthesize
-from ..diagnose.arm.static import static_record
+from ..diagnose import diagnose, static_record, synthesize
 from ..hysteresis import DELTA_25_FIBRES
 from ..markdown import markdown_table
 from ..plots.diagnose import plot_sawtooth_diagnosis
@@ -170,14 +169,15 @@ def compute(*, quick: bool = False, arm=None, delta: float = HIDDEN_DELTA,
         loc.append({"subsystem": "muscle forces", "channel": f"F{k + 1}",
                     "rho_before": float(f["rho_before"][k]), "rho_after": float(f["rho_after"][k])})
     loc = pd.DataFrame(loc)
-    hyst = next((e for e in dg.effects if e["name"] == "hysteresis"), None)
-    d = hyst["parameters"]["delta"] if hyst else {"value": float("nan"), "ci_low": float("nan"),
-                                                  "ci_high": float("nan")}
+    hyst = next((e for e in dg.effects if e.name == "hysteresis"), None)
+    d = hyst.parameters["delta"] if hyst else None
+    nan = float("nan")
     m = {"named": "+".join(dg.names) or "nothing", "hysteresis_named": hyst is not None,
-         "delta_fit": d["value"], "delta_ci_low": d["ci_low"], "delta_ci_high": d["ci_high"],
+         "delta_fit": d.value if d else nan, "delta_ci_low": d.ci_low if d else nan,
+         "delta_ci_high": d.ci_high if d else nan,
          "delta_hidden": delta, "delta_thesis": THESIS_DELTA,
          "delta_forces": f["delta_forces"],
-         "bootstrap_frequency": hyst["evidence"].get("bootstrap_frequency") if hyst else 0.0,
+         "bootstrap_frequency": hyst.evidence.get("bootstrap_frequency") if hyst else 0.0,
          "unexplained": dg.unexplained, "rest_points": int(rec.m),
          "wall_time_s": wall}
     for j in (1, 2):

@@ -49,16 +49,11 @@ from dataclasses import dataclass, field
 import pandas as pd
 
 from .._validation import check_int
-from ..diagnose import diagnose, synthesize
-from ..diagnose.arm.detection import POWER
-from ..diagnose.bench.scenarios import single_effect_outcomes
-from ..diagnose.core.omitted import HINT_P
-from ..diagnose.arm.pipeline import REPLAY_RHO, REPLAY_RHO_STATIC
-from ..diagnose.scenarios import (BENCH_RESULTS_FILE, DECLARED_MEASURE_SEEDS,
-                                  DECLARED_RESULTS_FILE, HIGH_PRECISION, ARM_BATTERY,
-                                  P_DECLARED_CHANGE, declared_names,
-                                  by_effect, calibration_table, detection_curve, failures,
-                                  interval_widening, load_results, run_battery, scores)
+from ..diagnose import (ARM_BATTERY, BENCH_RESULTS_FILE, DECLARED_MEASURE_SEEDS,
+                        DECLARED_RESULTS_FILE, HIGH_PRECISION, HINT_P, P_DECLARED_CHANGE, POWER,
+                        REPLAY_RHO, REPLAY_RHO_STATIC, by_effect, calibration_table,
+                        declared_names, detection_curve, diagnose, failures, interval_widening,
+                        load_results, run_battery, scores, single_effect_outcomes, synthesize)
 from ..markdown import markdown_table
 from ..plots.diagnose import plot_calibration, plot_detection_curve
 from . import Section, SectionInfo, compares_to_thesis, other_arm_note, resolve_arm

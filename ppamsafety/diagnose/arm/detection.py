@@ -99,7 +99,7 @@ def detection_limits(prob: Problem, fit, candidates=None, *, alpha: float = 0.01
     ----------
     prob : Problem
         The problem at the final model's noise levels.
-    fit : Fit
+    fit : _Fit
         The final fit (its names form the model M).
     candidates : sequence of str, optional
         The library searched (default all).
@@ -166,7 +166,7 @@ def omitted(prob: Problem, fit, candidates=None, *, shadows=()) -> dict:
     ----------
     prob : Problem
         The problem at the final model's noise levels.
-    fit : Fit
+    fit : _Fit
         The final fit (its names form M; ``fit.e`` formed).
     candidates : sequence of str, optional
         The library searched (default all).

@@ -79,11 +79,11 @@ def moved_parameters(name: str, table: dict) -> tuple:
     name : str
         Candidate name.
     table : dict
-        Its parameter table ({parameter: {value, ci_low, ci_high, nominal, ...}}).
+        Its parameter table ({parameter: :class:`~ppamsafety.diagnose.core.result.Estimate`}).
     """
     if REGISTRY[name].grid:
-        return tuple(p for p, d in table.items() if d["ci_low"] > 0.0)
-    return tuple(p for p, d in table.items() if not d["ci_low"] <= d["nominal"] <= d["ci_high"])
+        return tuple(p for p, d in table.items() if d.ci_low > 0.0)
+    return tuple(p for p, d in table.items() if d.moved)
 
 
 def physically_admissible(name: str, table: dict) -> bool:
@@ -95,8 +95,8 @@ def physically_admissible(name: str, table: dict) -> bool:
     name : str
         Candidate name.
     table : dict
-        Its parameter table (raw intervals under ``ci_low_raw``/``ci_high_raw`` when the
-        reported ones were cut at the physical range).
+        Its parameter table ({parameter: :class:`~ppamsafety.diagnose.core.result.Estimate`},
+        with the raw intervals when the reported ones were cut at the physical range).
     """
     return core_admissible(REGISTRY[name].parameters, table, moved_parameters(name, table))
 

@@ -83,6 +83,7 @@ from ..core.criteria import (ALPHA, CV_SEGMENTS, RHO_MAX, Step, _chi2_sf, _norma
                              bic, false_selection_bound, rank_step)
 from ..core.gates import CONSTANCY_ALPHA
 from ..core.omitted import widened_interval
+from ..core.result import Estimate
 from ...lstsq import step_scores
 from .candidates import DEAD_TIME_MAX, REGISTRY, identity_values, library
 from ..core.solve import lstsq, pinv_psd
@@ -220,8 +221,12 @@ def at_model(prob: Problem, mu) -> Problem:
 
 
 @dataclass(frozen=True, eq=False)
-class Fit:
+class _Fit:
     """A fitted model (nominal + extensions ``names``).
+
+    An engine intermediate (the selection makes thousands per diagnosis), never handed to a
+    user: what a user receives is the :class:`~ppamsafety.diagnose.core.result.Diagnosis`.
+    So it is private and not a result object (no table, no figure of its own).
 
     Attributes
     ----------
@@ -357,11 +362,11 @@ def _scaled_cov(A_normal, chi2_channel, Zdiag_channels, m_per_channel):
     return sd[:, None] * pinv_psd(A_normal) * sd[None, :]
 
 
-def fit_model(prob: Problem, names, mask=None) -> Fit:
+def fit_model(prob: Problem, names, mask=None) -> _Fit:
     """Fit the nominal model extended by the candidates ``names`` on the full design.
 
     The dead time (if among ``names``) is profiled over every shift of the
-    grid; every whitened block residual is formed (``Fit.e``).
+    grid; every whitened block residual is formed (``_Fit.e``).
 
     Parameters
     ----------
@@ -373,7 +378,7 @@ def fit_model(prob: Problem, names, mask=None) -> Fit:
 
     Returns
     -------
-    Fit
+    _Fit
     """
     names = tuple(names)
     nb = prob.bs.nb
@@ -405,7 +410,7 @@ def fit_model(prob: Problem, names, mask=None) -> Fit:
         shift_ci = (int(grid_shifts[ok].min()), int(grid_shifts[ok].max()))
     else:
         shift_ci = (0, 0)
-    return Fit(names=names, k=k, m=m, chi2=chi2, phi=phi, cov=cov, slices=slices, shift=shift,
+    return _Fit(names=names, k=k, m=m, chi2=chi2, phi=phi, cov=cov, slices=slices, shift=shift,
                shift_ci=shift_ci, mu=prob.mu0 + D @ phi, e=e, chi2_channel=chi2_c)
 
 
@@ -449,7 +454,7 @@ def _gram_set(prob: Problem, names, shift: int) -> Gram:
 
 
 def gram_fit(prob: Problem, names, *, universe, shift: int = 0, chunks=None,
-             cov: bool = True) -> Fit:
+             cov: bool = True) -> _Fit:
     """Fit ``names`` from the Gram matrices (no block residuals formed).
 
     Parameters
@@ -470,7 +475,7 @@ def gram_fit(prob: Problem, names, *, universe, shift: int = 0, chunks=None,
 
     Returns
     -------
-    Fit
+    _Fit
         With ``e = None``.
     """
     names = tuple(names)
@@ -496,7 +501,7 @@ def gram_fit(prob: Problem, names, *, universe, shift: int = 0, chunks=None,
         slices[n] = slice(j, j + width)
         j += width
     mu = prob.mu0 + D_all[:, cols] @ gf.phi
-    return Fit(names=names, k=k, m=m, chi2=gf.chi2, phi=gf.phi, cov=cmat, slices=slices,
+    return _Fit(names=names, k=k, m=m, chi2=gf.chi2, phi=gf.phi, cov=cmat, slices=slices,
                shift=shift if grid else 0, shift_ci=(shift, shift) if grid else (0, 0), mu=mu,
                e=None, chi2_channel=gf.chi2_channel)
 
@@ -533,7 +538,7 @@ def forward_selection(prob: Problem, candidates=None, *, alpha: float = ALPHA,
                       confounding: bool = True, move_columns: bool = True) -> tuple:
     """Forward selection with refit (module docstring).
 
-    Returns the final Fit (full design, every block residual formed; on the
+    Returns the final fit (full design, every block residual formed; on the
     chunks selected), the list of Step and the Problem with the noise levels
     of the final model.  A backward pass at the end drops an effect that the
     later ones made redundant (no longer significant, or no longer lowering
@@ -604,7 +609,7 @@ def forward_selection(prob: Problem, candidates=None, *, alpha: float = ALPHA,
             if not (r["delta_bic"] < 0 and r["p_value"] < level and r["cv_gain"] > 0):
                 continue
             n = r["name"]
-            has_cov = isinstance(fits[n], Fit) and (fits[n].e is not None
+            has_cov = isinstance(fits[n], _Fit) and (fits[n].e is not None
                                                     or fits[n].chi2_channel is not None)
             if not has_cov:
                 fits[n] = gram_fit(prob, selected + [n], universe=universe,
@@ -627,7 +632,7 @@ def forward_selection(prob: Problem, candidates=None, *, alpha: float = ALPHA,
             shift = fits[chosen].shift
         # the noise level depends on the model (velocity noise enters through H qd):
         # re-evaluate it at the new model, refit, and compare the next step on that footing
-        if not isinstance(fits[chosen], Fit):
+        if not isinstance(fits[chosen], _Fit):
             fits[chosen] = gram_fit(prob, selected, universe=universe, shift=shift,
                                     chunks=chunks, cov=False)
         prob = _at(prob0, fits[chosen].mu, move_columns)
@@ -690,7 +695,7 @@ def refit(prob0: Problem, names, *, prob: Problem | None = None, shift: int | No
 
     Returns
     -------
-    (Fit, Problem)
+    (_Fit, Problem)
     """
     names = list(names)
     prob = prob0 if prob is None else prob
@@ -775,7 +780,7 @@ def confounded_with(prob: Problem, chosen: str, rows, fits, selected, *, univers
     rows : list of dict
         The step's ranking rows (with ``delta_bic``, ``p_value``, ``in_bounds``).
     fits : dict
-        Candidate -> Fit of ``selected + [candidate]``.
+        Candidate -> _Fit of ``selected + [candidate]``.
     selected : list of str
         Effects already in the model.
     universe : sequence of str, keyword-only
@@ -1060,7 +1065,7 @@ def stability_selection(prob: Problem, candidates=None, *, pairs: int = STABILIT
 
 # ----------------------------------------------------------------------------- consistency
 
-def region_consistency(prob: Problem, fit: Fit, name: str) -> dict:
+def region_consistency(prob: Problem, fit: _Fit, name: str) -> dict:
     """Are the parameters of effect ``name`` the same in different parts of the arm's motion?
 
     A real effect has one value wherever the arm moves; an effect that is standing in for
@@ -1075,7 +1080,7 @@ def region_consistency(prob: Problem, fit: Fit, name: str) -> dict:
     ----------
     prob : Problem
         At the final model.
-    fit : Fit
+    fit : _Fit
         The final fit (full design).
     name : str
         One of ``fit.names``.
@@ -1107,7 +1112,7 @@ def region_consistency(prob: Problem, fit: Fit, name: str) -> dict:
     return out
 
 
-def compensating(prob: Problem, fit: Fit, *, ratio: float = None) -> dict:
+def compensating(prob: Problem, fit: _Fit, *, ratio: float = None) -> dict:
     """Pairs of effects of ``fit`` that cancel each other in some channel.
 
     A model that explains a residual by two large contributions of opposite sign (a
@@ -1121,7 +1126,7 @@ def compensating(prob: Problem, fit: Fit, *, ratio: float = None) -> dict:
     Parameters
     ----------
     prob : Problem
-    fit : Fit
+    fit : _Fit
         The final fit.
     ratio : float, optional, keyword-only
         The cosine threshold (default :data:`COMPENSATION_COS`).
@@ -1162,7 +1167,7 @@ COMPENSATION_COS = -0.8
 
 # ----------------------------------------------------------------------------- parameters
 
-def in_bounds(prob: Problem, fit: Fit, name: str) -> bool:
+def in_bounds(prob: Problem, fit: _Fit, name: str) -> bool:
     """True if effect ``name`` of ``fit`` is admissible: no parameter significantly outside its
     physical range (its 95 % interval reaches into the range: a negative mass of -0.3 +- 0.05
     kg is a symptom, a viscous friction of -0.002 +- 0.01 N m s/rad is a zero) and every
@@ -1171,18 +1176,18 @@ def in_bounds(prob: Problem, fit: Fit, name: str) -> bool:
     Parameters
     ----------
     prob : Problem
-    fit : Fit
+    fit : _Fit
     name : str
         One of ``fit.names``.
     """
     tab = parameter_table(prob, fit, truncate=False)[name]
-    return all(tab[p.name]["ci_high"] >= p.phys_lo and tab[p.name]["ci_low"] <= p.phys_hi
-               and tab[p.name]["ci_low"] >= p.lo - 0.5 * (p.hi - p.lo)
-               and tab[p.name]["ci_high"] <= p.hi + 0.5 * (p.hi - p.lo)
+    return all(tab[p.name].ci_high >= p.phys_lo and tab[p.name].ci_low <= p.phys_hi
+               and tab[p.name].ci_low >= p.lo - 0.5 * (p.hi - p.lo)
+               and tab[p.name].ci_high <= p.hi + 0.5 * (p.hi - p.lo)
                for p in REGISTRY[name].parameters)
 
 
-def hac_covariance(prob: Problem, fit: Fit, *, lags: int | None = None) -> np.ndarray:
+def hac_covariance(prob: Problem, fit: _Fit, *, lags: int | None = None) -> np.ndarray:
     """Heteroskedasticity- and autocorrelation-consistent covariance of ``fit.phi``.
 
     The sandwich ``B^-1 M B^-1`` with ``B = Z^T Z`` (whitened columns) and the
@@ -1197,7 +1202,7 @@ def hac_covariance(prob: Problem, fit: Fit, *, lags: int | None = None) -> np.nd
     Parameters
     ----------
     prob : Problem
-    fit : Fit
+    fit : _Fit
         A full-design fit (``fit.e`` formed).
     lags : int, optional, keyword-only
         L; default the chunk length (ceil(nb^(1/3))).
@@ -1232,7 +1237,7 @@ def hac_covariance(prob: Problem, fit: Fit, *, lags: int | None = None) -> np.nd
     return d[:, None] * hac * d[None, :]
 
 
-def parameter_table(prob: Problem, fit: Fit, confidence: float = 0.95, *,
+def parameter_table(prob: Problem, fit: _Fit, confidence: float = 0.95, *,
                     cov: np.ndarray | None = None, truncate: bool = True,
                     omitted: dict | None = None) -> dict:
     """Reported parameters of every effect of ``fit`` with delta-method intervals.
@@ -1240,7 +1245,7 @@ def parameter_table(prob: Problem, fit: Fit, confidence: float = 0.95, *,
     Parameters
     ----------
     prob : Problem
-    fit : Fit
+    fit : _Fit
     confidence : float
         Level of the intervals.
     cov : numpy.ndarray, optional, keyword-only
@@ -1261,7 +1266,7 @@ def parameter_table(prob: Problem, fit: Fit, confidence: float = 0.95, *,
     Returns
     -------
     dict
-        name -> {parameter: {value, unit, ci_low, ci_high, std_error, nominal}}.
+        name -> {parameter: :class:`~ppamsafety.diagnose.core.result.Estimate`}.
     """
     D, slices, _, _ = _directions(prob, fit.names)
     z = _normal_quantile(0.5 + confidence / 2)
@@ -1303,25 +1308,17 @@ def parameter_table(prob: Problem, fit: Fit, confidence: float = 0.95, *,
             lo, hi = v - z * se, v + z * se
         entry = {}
         for i, p in enumerate(c.parameters):
-            d = {"value": float(v[i]), "unit": p.unit, "ci_low": float(lo[i]),
-                 "ci_high": float(hi[i]), "std_error": float(se[i]),
-                 "nominal": float(v_nom[i])}
-            if omitted is not None:
-                d["ci_low_noise"], d["ci_high_noise"], d["widened_by"] = lo[i], hi[i], []
-                if not c.grid:          # the dead time: its profile interval, as it is
-                    lo[i], hi[i], by = widened_interval(v[i], se[i], J[i], omitted,
-                                                        confidence=confidence)
-                    d.update(ci_low=float(lo[i]), ci_high=float(hi[i]), widened_by=list(by))
-                d["ci_low_noise"], d["ci_high_noise"] = (float(d["ci_low_noise"]),
-                                                         float(d["ci_high_noise"]))
-            if truncate and (lo[i] < p.phys_lo or hi[i] > p.phys_hi):
-                d["ci_low_raw"], d["ci_high_raw"] = d["ci_low"], d["ci_high"]
-                d["ci_low"] = float(min(max(lo[i], p.phys_lo), p.phys_hi))
-                d["ci_high"] = float(max(min(hi[i], p.phys_hi), p.phys_lo))
-            if truncate and "ci_low_noise" in d:     # cut the same way: still inside
-                d["ci_low_noise"] = float(min(max(d["ci_low_noise"], p.phys_lo), p.phys_hi))
-                d["ci_high_noise"] = float(max(min(d["ci_high_noise"], p.phys_hi), p.phys_lo))
-            entry[p.name] = d
+            est = Estimate(value=float(v[i]), unit=p.unit, ci_low=float(lo[i]),
+                           ci_high=float(hi[i]), std_error=float(se[i]),
+                           nominal=float(v_nom[i]))
+            if omitted is not None and not c.grid:
+                # the dead time keeps its profile interval, as it is
+                w_lo, w_hi, by = widened_interval(v[i], se[i], J[i], omitted,
+                                                  confidence=confidence)
+                est = est.widened(w_lo, w_hi, by)
+            elif omitted is not None:
+                est = est.widened(est.ci_low, est.ci_high, ())
+            entry[p.name] = est.cut(p.phys_lo, p.phys_hi) if truncate else est
         out[n] = entry
     return out
 
@@ -1338,7 +1335,7 @@ def subsystem_channels(name: str) -> tuple:
 
 
 __all__ = ["Problem", "make_problem", "at_model", "resample", "bootstrap_frequency",
-           "BOOTSTRAP_REPLICATES", "Fit", "fit_model", "cv_chi2", "gram_fit", "gram_cv", "Step",
+           "BOOTSTRAP_REPLICATES", "fit_model", "cv_chi2", "gram_fit", "gram_cv", "Step",
            "forward_selection", "refit", "confounded_with", "rank_step", "bic", "aicc",
            "parameter_table", "in_bounds", "hac_covariance", "Stability",
            "stability_selection", "STABILITY_PAIRS", "STABILITY_THRESHOLD",

@@ -56,8 +56,12 @@ LOOKALIKE_BIC = 6.0
 
 
 @dataclass(frozen=True)
-class SubsetResult:
-    """Result of :func:`search`.
+class _SubsetSearch:
+    """The outcome of :func:`search`.
+
+    An engine intermediate (the selection makes thousands per diagnosis), never handed to a
+    user: what a user receives is the :class:`~ppamsafety.diagnose.core.result.Diagnosis`.
+    So it is private and not a result object (no table, no figure of its own).
 
     Attributes
     ----------
@@ -91,7 +95,7 @@ class SubsetResult:
 
 
 def search(prob: Problem, universe, *, greedy, shift: int, alpha: float,
-           max_size: int = MAX_SIZE, shadows=()) -> SubsetResult:
+           max_size: int = MAX_SIZE, shadows=()) -> _SubsetSearch:
     """Fit every subset of ``universe`` up to ``max_size`` effects and pick the best (module
     docstring).
 
@@ -114,7 +118,7 @@ def search(prob: Problem, universe, *, greedy, shift: int, alpha: float,
 
     Returns
     -------
-    SubsetResult
+    _SubsetSearch
     """
     universe = tuple(universe)
     shadows = tuple(n for n in shadows if n not in universe)
@@ -209,7 +213,7 @@ def search(prob: Problem, universe, *, greedy, shift: int, alpha: float,
                            - cv_full}
     ranking = [{"subset": "+".join(s) or "nominal", "k": int(ks[s]), "chi2": chis[s],
                 "bic": bics[s], "admissible": admissible.get((s, universe))} for s in order[:20]]
-    return SubsetResult(names=best, bic=float(bics[best]), inclusion=inclusion, lookalikes=look,
+    return _SubsetSearch(names=best, bic=float(bics[best]), inclusion=inclusion, lookalikes=look,
                         evidence=evidence, evaluated=len(bics), greedy_bic=float(bics[g]),
                         ranking=ranking)
 
@@ -241,4 +245,4 @@ def _largest_k(universe) -> int:
     return max(len(REGISTRY[n].parameters) for n in universe) if universe else 0
 
 
-__all__ = ["SubsetResult", "search", "MAX_SIZE", "LOOKALIKE_BIC", "CHECK_BIC"]
+__all__ = ["search", "MAX_SIZE", "LOOKALIKE_BIC", "CHECK_BIC"]

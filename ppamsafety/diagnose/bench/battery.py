@@ -103,9 +103,9 @@ def outcome(case: str, dg) -> str:
     expected = CASES[case][1]
     named = set(dg.names)
     if expected is None:
-        high = sorted(e["name"] for e in dg.effects if e["confidence_level"] == "high")
+        high = sorted(e.name for e in dg.effects if e.high)
         return "refused" if not high else "named high: " + "+".join(high)
-    groups = [set(g["members"]) for g in dg.confounded]
+    groups = [set(g.members) for g in dg.confounded]
     want = CONFOUNDED.get(case)
     if named == expected and (want is None or want in groups):
         return "correct"
@@ -136,31 +136,31 @@ def parameter_failures(case: str, dg, force_law=None, eps_range=(0.05, 0.25)) ->
     """
     fx = CASES[case][0]
     pair = len([k for k in fx if k != "friction_viscous"]) > 1
-    p = {e["name"]: e["parameters"] for e in dg.effects}
+    p = {e.name: e.parameters for e in dg.effects}
     out = []
     if "hysteresis" in p and "hysteresis_delta" in fx:
-        d, tru = p["hysteresis"]["delta"]["value"], fx["hysteresis_delta"]
+        d, tru = p["hysteresis"]["delta"].value, fx["hysteresis_delta"]
         if abs(d - tru) > (0.10 if pair else 0.05) * tru:
             out.append(f"delta = {d:.4g}, true {tru}")
     if "actuator_friction" in p and "friction_coulomb" in fx:
-        c, tru = p["actuator_friction"]["c"]["value"], fx["friction_coulomb"]
+        c, tru = p["actuator_friction"]["c"].value, fx["friction_coulomb"]
         if "friction_viscous" in fx and "b" not in p["actuator_friction"]:
             pass                                    # c includes b |v| (see Notes)
         elif abs(c - tru) > (0.15 if pair else 0.10) * tru:
             out.append(f"c = {c:.4g} N, true {tru} N")
         if "friction_viscous" in fx:
             if "b" in p["actuator_friction"]:
-                b, tb = p["actuator_friction"]["b"]["value"], fx["friction_viscous"]
+                b, tb = p["actuator_friction"]["b"].value, fx["friction_viscous"]
                 if abs(b - tb) > 0.5 * tb:
                     out.append(f"b = {b:.4g} N s/m, true {tb} N s/m")
     for name in ("force_sensor_offset", "pressure_sensor_offset"):
         if name in p and name in fx:
-            o, tru = p[name]["o"]["value"], fx[name]
+            o, tru = p[name]["o"].value, fx[name]
             if abs(o - tru) > 0.05 * abs(tru):
                 out.append(f"{name} o = {o:.4g}, true {tru}")
     if "force_law_refit" in p and ("force_law_scale" in fx or "force_law_delta" in fx):
         a0 = np.asarray(DEFAULT_FORCE_LAW if force_law is None else force_law, float)
-        a_fit = np.array([p["force_law_refit"][f"a{j}"]["value"] for j in range(5)])
+        a_fit = np.array([p["force_law_refit"][f"a{j}"].value for j in range(5)])
         a_true = a0 * (1.0 + fx.get("force_law_scale", 0.0)) + np.asarray(
             fx.get("force_law_delta", np.zeros(5)), float)
         eps = np.linspace(eps_range[0], eps_range[1], 41)
@@ -213,7 +213,7 @@ def run_cases(cases=None, seeds=(1, 2, 3, 4, 5), **options) -> pd.DataFrame:
                          "expected": "outside" if exp is None else "+".join(sorted(exp))
                          or "nothing",
                          "named": "+".join(dg.names) or "nothing",
-                         "confidence_levels": "+".join(e["confidence_level"]
+                         "confidence_levels": "+".join(e.confidence_level
                                                        for e in dg.effects),
                          "outcome": o, "ok": o in ("correct", "refused"),
                          "parameter_failures": "; ".join(

@@ -8,8 +8,8 @@ one -- and each other library effect with a probability, magnitudes
 log-uniform over plausible ranges; sensor faults; out-of-library structure:
 stroke-to-stroke scatter, correlated force ripple, a time-based transient after
 the reversals, random per-record offsets; 1 to 7 pressure levels, 4 to 10
-cycles, sometimes several speeds), :func:`run_calibration` diagnoses each
-campaign blind and scores every named effect, :func:`calibration_table`
+cycles, sometimes several speeds), :func:`run_campaign_calibration` diagnoses each
+campaign blind and scores every named effect, :func:`campaign_calibration_table`
 gives the precision per claimed level.  The thresholds of the confidence rule
 (:data:`~.campaign.STABILITY_HIGH`, :data:`~.campaign.P_HIGH`,
 :data:`~.campaign.GAIN_HIGH`) were set on seeds 0-99 (:data:`CAMPAIGN_TUNING`);
@@ -116,26 +116,26 @@ def score(scenario: dict, dg) -> list:
         truth.add("stroke_profile")
     rows = []
     for e in dg.effects:
-        ev = e["evidence"]
-        rows.append({"seed": scenario["seed"], "kind": "named", "name": e["name"],
-                     "level": e["confidence_level"], "right": e["name"] in truth,
+        ev = e.evidence
+        rows.append({"seed": scenario["seed"], "kind": "named", "name": e.name,
+                     "level": e.confidence_level, "right": e.name in truth,
                      "cv_gain": ev["cv_gain"], "p_value": ev["p_value"],
                      "stability": ev["stability_frequency"], "setting": ev["setting"],
                      "at_edge": bool(ev.get("at_grid_edge", False))})
     for g in dg.confounded:
         rows.append({"seed": scenario["seed"], "kind": "confounded",
-                     "name": "|".join(g["members"]), "level": "confounded",
-                     "right": bool(truth & set(g["members"]))})
+                     "name": "|".join(g.members), "level": "confounded",
+                     "right": bool(truth & set(g.members))})
     return rows
 
 
-#: Columns of the second table of :func:`run_calibration` (one row per scenario), also when no
+#: Columns of the second table of :func:`run_campaign_calibration` (one row per scenario), also when no
 #: scenario ran: a table without columns is a CSV file no reader can parse.
 RUN_COLUMNS = ("seed", "hidden", "named", "high", "missed", "wrong_high", "records", "rho_after",
                "seconds")
 
 
-def run_calibration(seeds, *, diagnose_options=None) -> tuple:
+def run_campaign_calibration(seeds, *, diagnose_options=None) -> tuple:
     """Synthesize and diagnose one random campaign per seed; score every name.
 
     Parameters
@@ -165,11 +165,10 @@ def run_calibration(seeds, *, diagnose_options=None) -> tuple:
         r = score(sc, dg)
         rows += r
         truth = sorted({LIBRARY_NAME[k] for k in sc["effects"] if k in LIBRARY_NAME})
-        named = {e["name"] for e in dg.effects} | {m for g in dg.confounded for m in g["members"]}
+        named = set(dg.names) | {m for g in dg.confounded for m in g.members}
         runs.append({"seed": s, "hidden": "+".join(truth),
-                     "named": "+".join(e["name"] for e in dg.effects),
-                     "high": "+".join(e["name"] for e in dg.effects
-                                      if e["confidence_level"] == "high"),
+                     "named": "+".join(dg.names),
+                     "high": "+".join(e.name for e in dg.effects if e.high),
                      "missed": "+".join(t for t in truth if t not in named),
                      "wrong_high": "+".join(x["name"] for x in r if x["level"] == "high"
                                             and not x["right"]),
@@ -180,13 +179,13 @@ def run_calibration(seeds, *, diagnose_options=None) -> tuple:
         pd.DataFrame(runs, columns=list(RUN_COLUMNS))
 
 
-def calibration_table(names: pd.DataFrame) -> pd.DataFrame:
+def campaign_calibration_table(names: pd.DataFrame) -> pd.DataFrame:
     """Claimed level -> count, right, observed precision (and its 95 % Wilson lower bound).
 
     Parameters
     ----------
     names : pandas.DataFrame
-        From :func:`run_calibration`.
+        From :func:`run_campaign_calibration`.
 
     Returns
     -------
@@ -194,7 +193,7 @@ def calibration_table(names: pd.DataFrame) -> pd.DataFrame:
         Index level (``high``, ``low``, ``confounded``).
     """
     if not isinstance(names, pd.DataFrame) or not {"level", "right"} <= set(names.columns):
-        raise TypeError("names must be the first DataFrame of run_calibration()")
+        raise TypeError("names must be the first DataFrame of run_campaign_calibration()")
     out = []
     for lev in ("high", "low", "confounded"):
         g = names[names["level"] == lev]
@@ -207,5 +206,5 @@ def calibration_table(names: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(out).set_index("level")
 
 
-__all__ = ["random_scenario", "score", "run_calibration", "calibration_table", "RUN_COLUMNS",
+__all__ = ["random_scenario", "score", "run_campaign_calibration", "campaign_calibration_table", "RUN_COLUMNS",
            "CAMPAIGN_TUNING", "CAMPAIGN_MEASURE", "PRESSURE_FAMILY"]

@@ -81,7 +81,9 @@ from ...data.measured import MeasuredData
 from ..core.criteria import Step
 from ..core.gates import HighRule, judge, level
 from ..core.noise import interpolation_sigma
+from ..core.pipeline import Steps, run_steps
 from ..core.regions import region_rows
+from ..core.result import ConfoundedGroup, Effect
 from ..core.solve import pinv_psd
 from . import friction as fr
 from ..core.gram import Gram
@@ -459,6 +461,309 @@ def _stroke_regions(df, e_norm, rho_max):
                                     cluster=df["cluster"].to_numpy(), min_n=10))
 
 
+class CampaignSteps(Steps):
+    """The steps of :func:`diagnose_campaign` for one cylinder campaign
+    (:mod:`..core.pipeline`).
+
+    Built with :func:`diagnose_campaign`'s arguments (validated here); the stages keep the
+    state on the instance.
+
+    Parameters
+    ----------
+    data, candidates, alpha, rho_max, stability : object
+        As :func:`diagnose_campaign`.
+    """
+
+    def __init__(self, data, *, candidates=None, alpha: float = 0.01, rho_max: float = 1.5,
+                 stability: bool = True):
+        check_range("alpha", alpha, 0.0, 0.5, lo_open=True)
+        check_range("rho_max", rho_max, 1.0, 100.0)
+        if not isinstance(stability, bool):
+            raise TypeError(f"stability must be True or False, got {stability!r}")
+        self.camp, self.notes = _records(data)
+        camp = self.camp
+        if camp.actuator_type != "cylinder":
+            raise ValueError(f"{camp.name}: a campaign diagnosis is for cylinders "
+                             f"([actuator] type = 'cylinder'); this is a {camp.actuator_type} "
+                             f"(diagnose its records one by one)")
+        if candidates is not None:
+            if isinstance(candidates, str) or not all(isinstance(c, str) for c in candidates):
+                raise TypeError(f"candidates must be a sequence of names, got {candidates!r}")
+            bad = [c for c in candidates if c not in fr.VOCABULARY]
+            if bad:
+                raise ValueError(f"candidates = {list(candidates)}: {bad} not in the cylinder "
+                                 f"vocabulary {list(fr.VOCABULARY)}")
+        self.candidates, self.alpha, self.rho_max, self.rerun = (candidates, alpha, rho_max,
+                                                                 stability)
+
+    def design(self):
+        """Strokes, repeatability levels, the candidates' variants and the per-stroke Gram
+        matrices; the candidates whose terms coincide on this campaign."""
+        camp, notes = self.camp, self.notes
+        df, rec, levels, A, pnotes = _prepare(camp)
+        notes += pnotes
+        for d in camp.records:
+            notes += [f"{_file_name(d.source)}: {n}" for n in d.notes]
+        sig_rep = rec["sigma_repeat_N"].to_numpy()
+        df["sigma"] = sig_rep[df["rec"].to_numpy()]
+        df["label"] = np.asarray(rec["label"])[df["rec"].to_numpy()]
+        u = df[df["use"]].reset_index(drop=True)
+        ctx = _context(u, rec, levels, A)
+        variants, vnotes = fr.build_variants(ctx, self.candidates)
+        notes += vnotes
+        lib0 = _Library(variants, [])
+        w = 1.0 / u["sigma"].to_numpy() ** 2
+        clusters_all = u["cluster"].to_numpy()
+        cg = Gram.from_samples(lib0.Z, u["r"].to_numpy(), w, clusters_all)
+        C = cg.G.shape[0]
+        cl_rec = np.zeros(C, int)
+        cl_cycle = np.zeros(C, int)
+        cl_rec[clusters_all] = u["rec"].to_numpy()
+        cl_cycle[clusters_all] = u["cycle"].to_numpy()
+        groups = _confounded_groups(cg.G[:, 0].sum(axis=0), lib0.index)
+        lib = _Library(variants, groups)
+        for g in groups:
+            notes.append(f"confounded on this campaign (the same terms within "
+                         f"{CONFOUND_TOL:.0%}): {', '.join(g)}; selected together, never named")
+        self.df, self.rec, self.u, self.ctx, self.variants, self.A = df, rec, u, ctx, variants, A
+        self.cg, self.cl_rec, self.cl_cycle = cg, cl_rec, cl_cycle
+        self.groups, self.lib, self.allc = groups, lib, np.arange(C)
+
+    def selection(self):
+        """Forward selection by held-out gain with the Wald test, then the pruning."""
+        self.sel = _Selector(self.cg, self.lib, self.ctx, self.cl_rec, self.cl_cycle, self.alpha)
+        self.chosen, self.steps = self.sel.run(self.allc, record_steps=True)
+        self.main_pruned = self.sel.pruned
+
+    def stability(self):
+        """The selection rerun on the halves of the cycles and without each record."""
+        allc, cl_rec = self.allc, self.cl_rec
+        subsets = []
+        if self.rerun:
+            fo = _folds_for(allc, cl_rec, self.cl_cycle)
+            subsets += [("cycles, half 1", allc[fo == 0]), ("cycles, half 2", allc[fo == 1])]
+            if len(self.camp) >= 3:
+                for i, lab in enumerate(self.rec["label"]):
+                    subsets.append((f"without {lab}", allc[cl_rec != i]))
+        self.picks = {}
+        for nm, cs in subsets:
+            ch, _ = self.sel.run(cs)
+            self.picks[nm] = {c[0] for c in ch}
+        self.subsets = subsets
+
+    def covariance(self):
+        """The final fit with its cluster-robust (per stroke) covariance."""
+        self.model, self.cols, self.slices = self.sel._model(self.chosen)
+        self.f = fit(self.cg, self.allc, self.cols, robust=True)
+
+    def intervals(self):
+        """Each selected term's parameters (a confounded group's: each member's, refitted in
+        its place) and the friction laws against the pressure."""
+        chosen, lib, sel, ctx, f = self.chosen, self.lib, self.sel, self.ctx, self.f
+        self.params, self.interp = {}, {}
+        for unit, (var, c) in chosen:
+            if "|" in unit:
+                interp = {}
+                for mbr in unit.split("|"):
+                    alt = [(mbr if uu == unit else uu, (lib.index[mbr][0] if uu == unit
+                                                        else vc)) for uu, vc in chosen]
+                    m2, c2, s2 = sel._model(alt)
+                    f2 = fit(self.cg, self.allc, c2, robust=True)
+                    sl = s2[mbr]
+                    interp[mbr] = fr.parameters(lib.index[mbr][0][0], f2.phi[sl],
+                                                f2.cov[sl, sl], ctx)
+                self.interp[unit] = interp
+                continue
+            sl = self.slices[unit]
+            self.params[unit] = fr.parameters(var, f.phi[sl], f.cov[sl, sl], ctx)
+        # derived laws: friction level and presliding step against pressure
+        self.laws = {}
+        for key, terms in (("friction_level", fr.COULOMB_TERMS),
+                           ("stribeck_excess", fr.STRIBECK_TERMS),
+                           ("presliding_step", fr.DAHL_TERMS)):
+            lc = fr.level_curve(self.model, f.phi, f.cov, self.slices, ctx["levels"], terms)
+            if lc is not None:
+                self.laws[key] = {"pressure_Pa": list(map(float, ctx["levels"])),
+                                  "value_N": list(map(float, lc[0])),
+                                  "std_error_N": list(map(float, lc[1]))}
+
+    def explained(self):
+        """The residual over the repeatability before and after; each selected term's
+        evidence; a confounded group reported, never named."""
+        u, f, lib = self.u, self.f, self.lib
+        n_all = float(self.cg.n.sum())
+        self.rho_after = math.sqrt(f.chi2 / n_all)
+        pred = lib.Z[:, self.cols] @ f.phi if self.cols.size else np.zeros(len(u))
+        self.e_after = u["r"].to_numpy() - pred
+        self.rho_before = float(np.sqrt(np.mean((u["r"] / u["sigma"]) ** 2)))
+        self.unexplained = bool(self.rho_after > self.rho_max)
+        for pr in self.main_pruned:
+            self.notes.append(f"{pr['name']}: selected on the way, dropped at the end (held-out "
+                              f"loss without it {pr['held_out_loss']:.3g}, Wald p "
+                              f"{pr['p_value']:.2g} in the final model): later terms took its "
+                              f"part")
+        rowof = {s_.chosen: next(r for r in s_.table if r["name"] == s_.chosen)
+                 for s_ in self.steps if s_.chosen is not None}
+        picks = self.picks
+        self.rows, self.evidence, self.freq, self.edge = {}, {}, {}, {}
+        self.confounded = []
+        for unit, (var, c) in self.chosen:
+            row = rowof[unit]
+            fam = CLAIM_FAMILY.get(unit, {unit})
+            freq = (sum(bool(fam & p_) for p_ in picks.values()) / len(picks)) if picks else 0.0
+            edge = _at_grid_edge(lib.index.get(unit.split("|")[0], []), var)
+            ev = {"cv_gain": row["cv_gain"], "wald": row["wald"], "wald_df": row["lr_df"],
+                  "at_grid_edge": edge,
+                  "p_value": row["p_value"], "stability_frequency": freq,
+                  "stability_subsets": len(picks), "setting": var.label,
+                  "subsystem_rho": {"force": self.rho_after}}
+            if "|" in unit:
+                members = unit.split("|")
+                self.confounded.append(ConfoundedGroup(
+                    members=tuple(members), interpretations=self.interp[unit], evidence=ev,
+                    separating_experiment=fr.separating_experiment(members),
+                    signature="; ".join(fr.SIGNATURE[m] for m in members)))
+                continue
+            self.rows[unit], self.evidence[unit] = row, ev
+            self.freq[unit], self.edge[unit] = freq, edge
+
+    def detection(self):
+        """None: a campaign reports no detection limits (its stability reruns and the
+        held-out gain say what it would have seen)."""
+
+    def consistency(self):
+        """Leave one record out: the final model refitted without record i predicts record i
+        (the honest test of a pressure law; NaN for a single record)."""
+        cg, allc, cl_rec, cols = self.cg, self.allc, self.cl_rec, self.cols
+        self.left_out = []
+        for i in range(len(self.rec)):
+            tr_, te_ = allc[cl_rec != i], allc[cl_rec == i]
+            if len(self.camp) < 2 or te_.size == 0 or tr_.size == 0:
+                self.left_out.append(math.nan)
+                continue
+            ft = fit(cg, tr_, cols)
+            Gte = cg.G[te_, 0].sum(axis=0)
+            sse_te = sse_of(Gte, cols, ft.phi) if cols.size else float(Gte[-1, -1])
+            self.left_out.append(math.sqrt(max(sse_te, 0.0) / float(cg.n[te_].sum())))
+
+    def gates(self):
+        """The campaign's rule for "high" (:data:`CAMPAIGN_RULE`) on every selected term."""
+        f, ctx, u = self.f, self.ctx, self.u
+        self.effects = []
+        for unit, (var, c) in self.chosen:
+            if "|" in unit:
+                continue
+            sl = self.slices[unit]
+            row, ev = self.rows[unit], self.evidence[unit]
+            ok = fr.admissible(unit, self.model, f.phi, f.cov, self.slices, ctx)
+            mid_ok = True
+            if unit in ("stroke_profile", "stroke_profile_pressure"):
+                # structure along the bore must show where no reversal transient reaches: the
+                # middle half of the stroke (at fixed stroke ends, anything locked to the
+                # reversals is also a function of the position near the ends)
+                lo, hi = ctx["x_range"]
+                xx = u["x"].to_numpy()
+                mid = (xx >= lo + 0.25 * (hi - lo)) & (xx <= hi - 0.25 * (hi - lo))
+                contrib = (var.columns @ f.phi[sl]) / u["sigma"].to_numpy()
+                ev["mid_stroke_rms"] = float(np.sqrt(np.mean(contrib[mid] ** 2))) \
+                    if mid.any() else 0.0
+                mid_ok = ev["mid_stroke_rms"] >= MID_PROFILE_HIGH
+            g = judge(CAMPAIGN_RULE, stability=self.freq[unit] if self.rerun else None,
+                      p_value=row["p_value"], cv_gain=row["cv_gain"], admissible=ok,
+                      not_at_edge=not self.edge[unit], mid_stroke=mid_ok)
+            self.effects.append(Effect(name=unit, subsystem="force", parameters=self.params[unit],
+                                       evidence=ev, confidence=self.freq[unit],
+                                       confidence_level=level(g),
+                                       signature=fr.SIGNATURE[unit]))
+
+    def regions(self):
+        """The per-record table and curves, and where the final residual is significant."""
+        df, u, rec, e_after = self.df, self.u, self.rec, self.e_after
+        rrows, curves = [], {}
+        e_all_norm = e_after / u["sigma"].to_numpy()
+        for i, row in rec.iterrows():
+            m = (u["rec"] == i).to_numpy()
+            dr = df[df["rec"] == i]
+            # the residual after on the samples the statistics use; NaN on the others (before
+            # the first reversal, at a turning point: the friction state is not known there)
+            used = dr["use"].to_numpy()
+            after = np.full(used.size, np.nan)
+            after[used] = e_after[m]
+            rrows.append({**{k: row[k] for k in ("label", "pressure_Pa", "samples", "used",
+                                                 "strokes", "sigma_sensor_N",
+                                                 "sigma_repeat_N")},
+                          "rms_before_N": float(np.sqrt(np.mean(u["r"][m] ** 2))),
+                          "rms_after_N": float(np.sqrt(np.mean(e_after[m] ** 2))),
+                          "rho_after": float(np.sqrt(np.mean(e_all_norm[m] ** 2)))})
+            curves[row["label"]] = {"t": dr["t"].to_numpy(), "x": dr["x"].to_numpy(),
+                                    "s": dr["s"].to_numpy(), "before": dr["r"].to_numpy(),
+                                    "after": after, "used": used}
+        for row, left_out in zip(rrows, self.left_out):
+            row["rho_left_out"] = left_out
+        self.records, self.curves = pd.DataFrame(rrows), curves
+        self.where = where = _stroke_regions(u, e_all_norm, self.rho_max)
+        if self.unexplained:
+            sigw = where[where["significant"]]
+            worst = sigw.reindex(sigw["z"].abs().sort_values(ascending=False).index).head(3)
+            txt = "; ".join(f"{r_.region}: {r_.group} (mean {r_.mean:+.2f}, rms {r_.rms:.2f})"
+                            for r_ in worst.itertuples()) or "everywhere"
+            self.notes.append(f"residual {self.rho_after:.2f} x the repeatability (> "
+                              f"{self.rho_max}): structure remains that the library does not "
+                              f"explain; largest where {txt}")
+
+    def result(self, seconds: dict) -> BenchDiagnosis:
+        """The :class:`~.result.BenchDiagnosis` (settings and timings).
+        Parameters
+        ----------
+        seconds : dict
+            Stage -> wall time [s] (:func:`~ppamsafety.diagnose.core.pipeline.run_steps`).
+        """
+        t0 = time.perf_counter()
+        rec, u, ctx, camp, candidates = self.rec, self.u, self.ctx, self.camp, self.candidates
+        sig_sensor = float(np.sqrt(np.mean(rec["sigma_sensor_N"] ** 2)))
+        sig_r = float(np.sqrt(np.mean(rec["sigma_repeat_N"] ** 2)))
+        rr = {"force": {"unit": "N", "before": float(np.sqrt(np.mean(u["r"] ** 2))),
+                        "after": float(np.sqrt(np.mean(self.e_after ** 2))), "noise": sig_r,
+                        "sensor_noise": sig_sensor},
+              "block_force": {"unit": "residual / repeatability (RMS ratio)",
+                              "before": self.rho_before, "after": self.rho_after, "noise": 1.0}}
+        settings = {"kind": "actuator", "actuator_type": "cylinder", "campaign": camp.name,
+                    "records": len(camp), "alpha": self.alpha, "rho_max": self.rho_max,
+                    "criterion": "held-out gain (2-fold CV over alternate full cycles) >= "
+                                 f"{MIN_GAIN:g} repeatability variances per sample, "
+                                 "cluster-robust Wald test (strokes) p < alpha/K, admissible "
+                                 "parameters; the eligible candidate with the largest held-out "
+                                 "gain is added",
+                    "noise_definition": "repeatability: scatter of F - p A about its mean at "
+                                        "the same rod position and direction within a record "
+                                        f"({REPEAT_BINS} bins); sensor noise reported beside it",
+                    "confidence_rule": {"stability_high": STABILITY_HIGH, "p_high": P_HIGH,
+                                        "gain_high": GAIN_HIGH,
+                                        "mid_profile_high": MID_PROFILE_HIGH,
+                                        "profiled_scalar_inside_grid": True,
+                                        "stability_subsets": [nm for nm, _ in self.subsets]},
+                    "stability_picks": {k: sorted(v) for k, v in self.picks.items()},
+                    "pruned": self.main_pruned,
+                    "candidates": list(fr.VOCABULARY if candidates is None else candidates),
+                    "candidates_applicable": list(self.variants),
+                    "confounded_groups": [list(g) for g in self.groups],
+                    "area_m2": self.A, "stroke_speed_m_s": ctx["stroke_speed"],
+                    "speed_r2_record_direction": ctx["speed_r2"],
+                    "stroke_profile_range_m": list(ctx["x_range"]), "laws": self.laws,
+                    "noise_estimate": {"sensor_N": sig_sensor, "repeatability_N": sig_r}}
+        timings = {"preparation": seconds["design"],
+                   "selection_and_stability": seconds["selection"] + seconds["stability"],
+                   "total": sum(seconds.values()) + time.perf_counter() - t0}
+        unexplained = self.unexplained
+        return BenchDiagnosis(source=camp.name, effects=self.effects, partial=[],
+                              unexplained=unexplained,
+                              unexplained_channels=["force"] if unexplained else [],
+                              residual_rms=rr, where=self.where, steps=self.steps, replay={},
+                              settings=settings, timings=timings, notes=tuple(self.notes),
+                              blocks={}, kind="actuator", confounded=self.confounded,
+                              records=self.records, curves=self.curves)
+
+
 def diagnose_campaign(data, *, candidates=None, alpha: float = 0.01, rho_max: float = 1.5,
                       stability: bool = True) -> BenchDiagnosis:
     """Diagnose a bench campaign of a pneumatic cylinder (module docstring).
@@ -481,213 +786,8 @@ def diagnose_campaign(data, *, candidates=None, alpha: float = 0.01, rho_max: fl
     -------
     BenchDiagnosis
     """
-    t0 = time.perf_counter()
-    check_range("alpha", alpha, 0.0, 0.5, lo_open=True)
-    check_range("rho_max", rho_max, 1.0, 100.0)
-    if not isinstance(stability, bool):
-        raise TypeError(f"stability must be True or False, got {stability!r}")
-    camp, notes = _records(data)
-    if camp.actuator_type != "cylinder":
-        raise ValueError(f"{camp.name}: a campaign diagnosis is for cylinders "
-                         f"([actuator] type = 'cylinder'); this is a {camp.actuator_type} "
-                         f"(diagnose its records one by one)")
-    if candidates is not None:
-        if isinstance(candidates, str) or not all(isinstance(c, str) for c in candidates):
-            raise TypeError(f"candidates must be a sequence of names, got {candidates!r}")
-        bad = [c for c in candidates if c not in fr.VOCABULARY]
-        if bad:
-            raise ValueError(f"candidates = {list(candidates)}: {bad} not in the cylinder "
-                             f"vocabulary {list(fr.VOCABULARY)}")
-    df, rec, levels, A, pnotes = _prepare(camp)
-    notes += pnotes
-    for d in camp.records:
-        notes += [f"{_file_name(d.source)}: {n}" for n in d.notes]
-    sig_rep = rec["sigma_repeat_N"].to_numpy()
-    df["sigma"] = sig_rep[df["rec"].to_numpy()]
-    df["label"] = np.asarray(rec["label"])[df["rec"].to_numpy()]
-    u = df[df["use"]].reset_index(drop=True)
-    ctx = _context(u, rec, levels, A)
-    variants, vnotes = fr.build_variants(ctx, candidates)
-    notes += vnotes
-    lib0 = _Library(variants, [])
-    w = 1.0 / u["sigma"].to_numpy() ** 2
-    clusters_all = u["cluster"].to_numpy()
-    cg = Gram.from_samples(lib0.Z, u["r"].to_numpy(), w, clusters_all)
-    C = cg.G.shape[0]
-    cl_rec = np.zeros(C, int)
-    cl_cycle = np.zeros(C, int)
-    cl_rec[clusters_all] = u["rec"].to_numpy()
-    cl_cycle[clusters_all] = u["cycle"].to_numpy()
-    groups = _confounded_groups(cg.G[:, 0].sum(axis=0), lib0.index)
-    lib = _Library(variants, groups)
-    for g in groups:
-        notes.append(f"confounded on this campaign (the same terms within {CONFOUND_TOL:.0%}): "
-                     f"{', '.join(g)}; selected together, never named")
-    t1 = time.perf_counter()
-    sel = _Selector(cg, lib, ctx, cl_rec, cl_cycle, alpha)
-    allc = np.arange(C)
-    chosen, steps = sel.run(allc, record_steps=True)
-    main_pruned = sel.pruned
-    # stability reruns
-    subsets = []
-    if stability:
-        fo = _folds_for(allc, cl_rec, cl_cycle)
-        subsets += [("cycles, half 1", allc[fo == 0]), ("cycles, half 2", allc[fo == 1])]
-        if len(camp) >= 3:
-            for i, lab in enumerate(rec["label"]):
-                subsets.append((f"without {lab}", allc[cl_rec != i]))
-    picks = {}
-    for nm, cs in subsets:
-        ch, _ = sel.run(cs)
-        picks[nm] = {c[0] for c in ch}
-    t2 = time.perf_counter()
-    # final fit
-    model, cols, slices = sel._model(chosen)
-    f = fit(cg, allc, cols, robust=True)
-    n_all = float(cg.n.sum())
-    rho_after = math.sqrt(f.chi2 / n_all)
-    Zall = lib.Z
-    pred = Zall[:, cols] @ f.phi if cols.size else np.zeros(len(u))
-    e_after = u["r"].to_numpy() - pred
-    rho_before = float(np.sqrt(np.mean((u["r"] / u["sigma"]) ** 2)))
-    unexplained = bool(rho_after > rho_max)
-    effects, confounded = [], []
-    for pr in main_pruned:
-        notes.append(f"{pr['name']}: selected on the way, dropped at the end (held-out loss "
-                     f"without it {pr['held_out_loss']:.3g}, Wald p {pr['p_value']:.2g} in the "
-                     f"final model): later terms took its part")
-    rowof = {s_.chosen: next(r for r in s_.table if r["name"] == s_.chosen)
-             for s_ in steps if s_.chosen is not None}
-    for unit, (var, c) in chosen:
-        row = rowof[unit]
-        fam = CLAIM_FAMILY.get(unit, {unit})
-        freq = (sum(bool(fam & p_) for p_ in picks.values()) / len(picks)) if picks else 0.0
-        edge = _at_grid_edge(lib.index.get(unit.split("|")[0], []), var)
-        ev = {"cv_gain": row["cv_gain"], "wald": row["wald"], "wald_df": row["lr_df"],
-              "at_grid_edge": edge,
-              "p_value": row["p_value"], "stability_frequency": freq,
-              "stability_subsets": len(picks), "setting": var.label,
-              "subsystem_rho": {"force": rho_after}}
-        if "|" in unit:
-            members = unit.split("|")
-            interp = {}
-            for mbr in members:
-                alt = [(mbr if uu == unit else uu, (lib.index[mbr][0] if uu == unit else vc))
-                       for uu, vc in chosen]
-                m2, c2, s2 = sel._model(alt)
-                f2 = fit(cg, allc, c2, robust=True)
-                sl = s2[mbr]
-                interp[mbr] = fr.parameters(lib.index[mbr][0][0], f2.phi[sl],
-                                            f2.cov[sl, sl], ctx)
-            confounded.append({"members": members, "interpretations": interp, "evidence": ev,
-                               "separating_experiment": fr.separating_experiment(members),
-                               "signature": "; ".join(fr.SIGNATURE[m] for m in members)})
-            continue
-        sl = slices[unit]
-        params = fr.parameters(var, f.phi[sl], f.cov[sl, sl], ctx)
-        ok = fr.admissible(unit, model, f.phi, f.cov, slices, ctx)
-        mid_ok = True
-        if unit in ("stroke_profile", "stroke_profile_pressure"):
-            # structure along the bore must show where no reversal transient reaches: the
-            # middle half of the stroke (at fixed stroke ends, anything locked to the
-            # reversals is also a function of the position near the ends)
-            lo, hi = ctx["x_range"]
-            xx = u["x"].to_numpy()
-            mid = (xx >= lo + 0.25 * (hi - lo)) & (xx <= hi - 0.25 * (hi - lo))
-            contrib = (var.columns @ f.phi[sl]) / u["sigma"].to_numpy()
-            ev["mid_stroke_rms"] = float(np.sqrt(np.mean(contrib[mid] ** 2))) if mid.any() \
-                else 0.0
-            mid_ok = ev["mid_stroke_rms"] >= MID_PROFILE_HIGH
-        g = judge(CAMPAIGN_RULE, stability=freq if stability else None, p_value=row["p_value"],
-                  cv_gain=row["cv_gain"], admissible=ok, not_at_edge=not edge, mid_stroke=mid_ok)
-        effects.append({"name": unit, "subsystem": "force", "parameters": params,
-                        "evidence": ev, "confidence": freq,
-                        "confidence_level": level(g),
-                        "signature": fr.SIGNATURE[unit]})
-    # derived laws: friction level and presliding step against pressure
-    laws = {}
-    for key, terms in (("friction_level", fr.COULOMB_TERMS), ("stribeck_excess", fr.STRIBECK_TERMS),
-                       ("presliding_step", fr.DAHL_TERMS)):
-        lc = fr.level_curve(model, f.phi, f.cov, slices, ctx["levels"], terms)
-        if lc is not None:
-            laws[key] = {"pressure_Pa": list(map(float, ctx["levels"])),
-                         "value_N": list(map(float, lc[0])), "std_error_N": list(map(float, lc[1]))}
-    # per-record table, curves, where
-    rrows, curves = [], {}
-    e_all_norm = e_after / u["sigma"].to_numpy()
-    for i, row in rec.iterrows():
-        m = (u["rec"] == i).to_numpy()
-        dr = df[df["rec"] == i]
-        # the residual after on the samples the statistics use; NaN on the others (before
-        # the first reversal, at a turning point: the friction state is not known there)
-        used = dr["use"].to_numpy()
-        after = np.full(used.size, np.nan)
-        after[used] = e_after[m]
-        rrows.append({**{k: row[k] for k in ("label", "pressure_Pa", "samples", "used",
-                                             "strokes", "sigma_sensor_N", "sigma_repeat_N")},
-                      "rms_before_N": float(np.sqrt(np.mean(u["r"][m] ** 2))),
-                      "rms_after_N": float(np.sqrt(np.mean(e_after[m] ** 2))),
-                      "rho_after": float(np.sqrt(np.mean(e_all_norm[m] ** 2)))})
-        curves[row["label"]] = {"t": dr["t"].to_numpy(), "x": dr["x"].to_numpy(),
-                                "s": dr["s"].to_numpy(), "before": dr["r"].to_numpy(),
-                                "after": after, "used": used}
-    # leave-one-record-out: the final model refitted without record i predicts record i
-    # (the honest test of a pressure law; NaN for a single record)
-    for i, row in enumerate(rrows):
-        tr_, te_ = allc[cl_rec != i], allc[cl_rec == i]
-        if len(camp) < 2 or te_.size == 0 or tr_.size == 0:
-            row["rho_left_out"] = math.nan
-            continue
-        ft = fit(cg, tr_, cols)
-        Gte = cg.G[te_, 0].sum(axis=0)
-        sse_te = sse_of(Gte, cols, ft.phi) if cols.size else float(Gte[-1, -1])
-        row["rho_left_out"] = math.sqrt(max(sse_te, 0.0) / float(cg.n[te_].sum()))
-    records = pd.DataFrame(rrows)
-    where = _stroke_regions(u, e_all_norm, rho_max)
-    if unexplained:
-        sigw = where[where["significant"]]
-        worst = sigw.reindex(sigw["z"].abs().sort_values(ascending=False).index).head(3)
-        txt = "; ".join(f"{r_.region}: {r_.group} (mean {r_.mean:+.2f}, rms {r_.rms:.2f})"
-                        for r_ in worst.itertuples()) or "everywhere"
-        notes.append(f"residual {rho_after:.2f} x the repeatability (> {rho_max}): structure "
-                     f"remains that the library does not explain; largest where {txt}")
-    sig_sensor = float(np.sqrt(np.mean(rec["sigma_sensor_N"] ** 2)))
-    sig_r = float(np.sqrt(np.mean(rec["sigma_repeat_N"] ** 2)))
-    rr = {"force": {"unit": "N", "before": float(np.sqrt(np.mean(u["r"] ** 2))),
-                    "after": float(np.sqrt(np.mean(e_after ** 2))), "noise": sig_r,
-                    "sensor_noise": sig_sensor},
-          "block_force": {"unit": "residual / repeatability (RMS ratio)", "before": rho_before,
-                          "after": rho_after, "noise": 1.0}}
-    settings = {"kind": "actuator", "actuator_type": "cylinder", "campaign": camp.name,
-                "records": len(camp), "alpha": alpha, "rho_max": rho_max,
-                "criterion": "held-out gain (2-fold CV over alternate full cycles) >= "
-                             f"{MIN_GAIN:g} repeatability variances per sample, cluster-robust "
-                             "Wald test (strokes) p < alpha/K, admissible parameters; the "
-                             "eligible candidate with the largest held-out gain is added",
-                "noise_definition": "repeatability: scatter of F - p A about its mean at the "
-                                    "same rod position and direction within a record "
-                                    f"({REPEAT_BINS} bins); sensor noise reported beside it",
-                "confidence_rule": {"stability_high": STABILITY_HIGH, "p_high": P_HIGH,
-                                    "gain_high": GAIN_HIGH, "mid_profile_high": MID_PROFILE_HIGH,
-                                    "profiled_scalar_inside_grid": True,
-                                    "stability_subsets": [nm for nm, _ in subsets]},
-                "stability_picks": {k: sorted(v) for k, v in picks.items()},
-                "pruned": main_pruned,
-                "candidates": list(fr.VOCABULARY if candidates is None else candidates),
-                "candidates_applicable": list(variants), "confounded_groups": [list(g) for g in groups],
-                "area_m2": A, "stroke_speed_m_s": ctx["stroke_speed"],
-                "speed_r2_record_direction": ctx["speed_r2"],
-                "stroke_profile_range_m": list(ctx["x_range"]), "laws": laws,
-                "noise_estimate": {"sensor_N": sig_sensor, "repeatability_N": sig_r}}
-    timings = {"preparation": t1 - t0, "selection_and_stability": t2 - t1,
-               "total": time.perf_counter() - t0}
-    return BenchDiagnosis(source=camp.name, effects=effects, partial=[],
-                          unexplained=unexplained,
-                          unexplained_channels=["force"] if unexplained else [],
-                          residual_rms=rr, where=where, steps=steps, replay={},
-                          settings=settings, timings=timings, notes=tuple(notes), blocks={},
-                          kind="actuator", confounded=confounded, records=records,
-                          curves=curves)
+    return run_steps(CampaignSteps(data, candidates=candidates, alpha=alpha, rho_max=rho_max,
+                                   stability=stability))
 
 
 def _at_grid_edge(options, var) -> bool:
@@ -704,5 +804,5 @@ def _file_name(src: str) -> str:
     return src.replace("\\", "/").rsplit("/", 1)[-1]
 
 
-__all__ = ["diagnose_campaign", "repeatability", "MIN_GAIN", "STABILITY_HIGH", "P_HIGH",
+__all__ = ["diagnose_campaign", "CampaignSteps", "repeatability", "MIN_GAIN", "STABILITY_HIGH", "P_HIGH",
            "GAIN_HIGH", "CONFOUND_TOL", "MID_PROFILE_HIGH", "CLAIM_FAMILY"]

@@ -87,6 +87,7 @@ import numpy as np
 from ...hysteresis import EPS_MAX, preisach_response, scaled_input, w_fit
 from ..core.criteria import _normal_quantile
 from ..core.parameter import Parameter, physically_admissible
+from ..core.result import Estimate
 from .friction import GAIN_MAX, OFFSET_MAX_FRACTION
 from .friction import separating_experiment as friction_separating
 
@@ -227,14 +228,14 @@ class Extension:
         Returns
         -------
         dict
-            parameter name -> {value, unit, ci_low, ci_high, std_error, nominal}.
+            parameter name -> :class:`~ppamsafety.diagnose.core.result.Estimate`.
         """
         z = _normal_quantile(0.5 + confidence / 2)
         v = self.nominal + self.T @ phi
         se = np.sqrt(np.maximum(np.diag(self.T @ cov @ self.T.T), 0.0))
-        return {p.name: {"value": float(v[i]), "unit": p.unit, "ci_low": float(v[i] - z * se[i]),
-                         "ci_high": float(v[i] + z * se[i]), "std_error": float(se[i]),
-                         "nominal": float(self.nominal[i])}
+        return {p.name: Estimate(value=float(v[i]), unit=p.unit, ci_low=float(v[i] - z * se[i]),
+                                 ci_high=float(v[i] + z * se[i]), std_error=float(se[i]),
+                                 nominal=float(self.nominal[i]))
                 for i, p in enumerate(self.parameters)}
 
     def moved(self, phi, cov) -> bool:
@@ -249,8 +250,7 @@ class Extension:
         """
         if self.shift is not None:
             return bool(self.shift(phi, cov))
-        return any(not (p["ci_low"] <= p["nominal"] <= p["ci_high"])
-                   for p in self.values(phi, cov).values())
+        return any(p.moved for p in self.values(phi, cov).values())
 
     def physically_admissible(self, phi, cov) -> bool:
         """The fit is physically possible: the admissibility gate before "high".
@@ -270,7 +270,7 @@ class Extension:
         if self.physical is not None:
             return bool(self.physical(phi, cov))
         tab = self.values(phi, cov)
-        moved = [n for n, d in tab.items() if not d["ci_low"] <= d["nominal"] <= d["ci_high"]]
+        moved = [n for n, d in tab.items() if d.moved]
         return physically_admissible(self.parameters, tab, moved)
 
     def admissible(self, phi, cov) -> bool:
@@ -286,10 +286,10 @@ class Extension:
         if self.check is not None:
             return bool(self.check(phi, cov))
         tab = self.values(phi, cov)
-        if any(tab[n]["ci_high"] < 0 for n in self.nonnegative):
+        if any(tab[n].ci_high < 0 for n in self.nonnegative):
             return False
-        return all(tab[p.name]["ci_low"] >= p.lo - 0.5 * (p.hi - p.lo)
-                   and tab[p.name]["ci_high"] <= p.hi + 0.5 * (p.hi - p.lo)
+        return all(tab[p.name].ci_low >= p.lo - 0.5 * (p.hi - p.lo)
+                   and tab[p.name].ci_high <= p.hi + 0.5 * (p.hi - p.lo)
                    for p in self.parameters)
 
 

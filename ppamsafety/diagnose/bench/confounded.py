@@ -35,6 +35,7 @@ import math
 
 from ..core.criteria import _chi2_sf
 from ..core.linear_selection import fit_linear
+from ..core.result import ConfoundedGroup, Estimate
 from .candidates import separating_experiment
 from .selection import MIN_EFFECT_RMS, admissible_in
 
@@ -55,7 +56,7 @@ def lookalike_pairs(design, fit, *, alpha: float) -> list:
     Parameters
     ----------
     design : ActuatorDesign
-    fit : LinearFit
+    fit : _LinearFit
         The final model.
     alpha : float, keyword-only
         Level of the LR test before the Bonferroni division (over every applicable
@@ -125,11 +126,11 @@ def _gain_as_pressure_gain(table):
 
     def conv(g):
         return -g / (1.0 + g) if g > -1.0 else math.nan
-    lo, hi = conv(d["ci_high"]), conv(d["ci_low"])      # decreasing map
-    return {"value": conv(d["value"]), "unit": "-", "ci_low": lo, "ci_high": hi,
-            "std_error": d["std_error"] / (1.0 + d["value"]) ** 2 if d["value"] > -1 else
-            math.nan, "nominal": 0.0,
-            "note": "the pressure-sensor gain that gives the same column (g_p = -g/(1 + g))"}
+    lo, hi = conv(d.ci_high), conv(d.ci_low)      # decreasing map
+    return Estimate(value=conv(d.value), unit="-", ci_low=lo, ci_high=hi,
+                    std_error=d.std_error / (1.0 + d.value) ** 2 if d.value > -1 else math.nan,
+                    nominal=0.0,
+                    note="the pressure-sensor gain that gives the same column (g_p = -g/(1 + g))")
 
 
 def confounded_groups(design, fit, *, alpha: float) -> list:
@@ -138,13 +139,13 @@ def confounded_groups(design, fit, *, alpha: float) -> list:
     Parameters
     ----------
     design : ActuatorDesign
-    fit : LinearFit
+    fit : _LinearFit
         The final model.
     alpha : float, keyword-only
 
     Returns
     -------
-    list of dict
+    list of ConfoundedGroup
         ``members`` (model members first), ``interpretations`` (member -> its parameter
         table if it were the cause, with the other model members refitted), ``evidence``
         (``pairs``: the two likelihood-ratio tests of every pair), ``separating_experiment``
@@ -164,11 +165,11 @@ def confounded_groups(design, fit, *, alpha: float) -> list:
             if mbr == "force_sensor_gain":
                 tab = {**tab, "g_p": _gain_as_pressure_gain(tab)}
             interp[mbr] = tab
-        out.append({"members": members, "interpretations": interp,
-                    "evidence": {"pairs": [p for p in pairs if p["member"] in g]},
-                    "separating_experiment": separating_experiment(members),
-                    "signature": "; ".join(f"{m}: {design.extensions[m].signature}"
-                                           for m in members)})
+        out.append(ConfoundedGroup(
+            members=tuple(members), interpretations=interp,
+            evidence={"pairs": [p for p in pairs if p["member"] in g]},
+            separating_experiment=separating_experiment(members),
+            signature="; ".join(f"{m}: {design.extensions[m].signature}" for m in members)))
     return out
 
 

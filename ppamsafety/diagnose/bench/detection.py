@@ -170,7 +170,7 @@ def omitted(design, fit) -> dict:
     Parameters
     ----------
     design : ActuatorDesign
-    fit : LinearFit
+    fit : _LinearFit
         The final fit (``fit.e`` the whitened residual on the design's samples).
 
     Returns

@@ -55,6 +55,8 @@ import numpy as np
 from scipy import stats
 from scipy.interpolate import BSpline
 
+from ..core.result import Estimate
+
 VOCABULARY = ("coulomb", "coulomb_pressure", "coulomb_pressure2", "viscous", "stribeck",
               "presliding", "stroke_profile", "stroke_profile_pressure", "friction_drift",
               "force_sensor_offset", "pressure_sensor_offset", "force_sensor_gain",
@@ -298,13 +300,13 @@ def build_variants(ctx: dict, names=None) -> tuple:
 
 
 def _row(value, se, unit, nominal=0.0):
-    return {"value": float(value), "unit": unit, "ci_low": float(value - Z95 * se),
-            "ci_high": float(value + Z95 * se), "std_error": float(se), "nominal": nominal}
+    return Estimate(value=float(value), unit=unit, ci_low=float(value - Z95 * se),
+                    ci_high=float(value + Z95 * se), std_error=float(se), nominal=nominal)
 
 
 def _fixed(value, unit):
-    return {"value": float(value), "unit": unit, "ci_low": math.nan, "ci_high": math.nan,
-            "std_error": math.nan, "nominal": math.nan}
+    return Estimate(value=float(value), unit=unit, ci_low=math.nan, ci_high=math.nan,
+                    std_error=math.nan, nominal=math.nan)
 
 
 def parameters(var: Variant, phi, cov, ctx) -> dict:
@@ -327,7 +329,7 @@ def parameters(var: Variant, phi, cov, ctx) -> dict:
     Returns
     -------
     dict
-        name -> {value, unit, ci_low, ci_high, std_error, nominal}.
+        name -> :class:`~ppamsafety.diagnose.core.result.Estimate`.
     """
     out = {}
     if var.name in ("stroke_profile", "stroke_profile_pressure"):
@@ -348,7 +350,7 @@ def parameters(var: Variant, phi, cov, ctx) -> dict:
         out[nm] = _row(phi[i], math.sqrt(max(cov[i, i], 0.0)), unit)
     if var.name == "force_law_refit":
         A = ctx["area"]
-        out["A"] = {**_row(A + phi[0], math.sqrt(max(cov[0, 0], 0.0)), "m^2"), "nominal": A}
+        out["A"] = _row(A + phi[0], math.sqrt(max(cov[0, 0], 0.0)), "m^2", nominal=A)
     for key, unit in (("x_d", "m"), ("v_s", "m/s")):
         if key in var.setting:
             out[key] = _fixed(var.setting[key], unit)

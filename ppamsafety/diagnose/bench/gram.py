@@ -2,7 +2,7 @@
 
 The matrices are the engine's one :class:`~ppamsafety.diagnose.core.gram.Gram`, one group
 per cluster and one channel (:meth:`~ppamsafety.diagnose.core.gram.Gram.from_samples`); the
-fit is its :class:`~ppamsafety.diagnose.core.gram.GramFit`.
+fit is its :class:`~ppamsafety.diagnose.core.gram._GramFit`.
 
 A bench campaign has tens of thousands of samples and a few hundred candidate
 columns, and the selection fits thousands of small models (every candidate,
@@ -28,7 +28,7 @@ from __future__ import annotations
 import numpy as np
 from scipy import special
 
-from ..core.gram import Gram, GramFit
+from ..core.gram import Gram, _GramFit
 from ..core.solve import pinv_psd, solve_normal
 
 
@@ -57,7 +57,7 @@ def sse_of(G, cols, phi) -> float:
     return float(G[y, y] - 2.0 * phi @ b + phi @ A @ phi)
 
 
-def fit(cg: Gram, clusters, cols, *, robust: bool = False, Gsum=None) -> GramFit:
+def fit(cg: Gram, clusters, cols, *, robust: bool = False, Gsum=None) -> _GramFit:
     """Fit the columns ``cols`` on the clusters ``clusters``.
 
     Parameters
@@ -75,7 +75,7 @@ def fit(cg: Gram, clusters, cols, *, robust: bool = False, Gsum=None) -> GramFit
 
     Returns
     -------
-    GramFit
+    _GramFit
     """
     cols = np.asarray(cols, int)
     G = cg.G[clusters, 0].sum(axis=0) if Gsum is None else Gsum
@@ -95,7 +95,7 @@ def fit(cg: Gram, clusters, cols, *, robust: bool = False, Gsum=None) -> GramFit
         C = len(clusters)
         meat = u.T @ u * (C / max(C - 1, 1))
         cov = inv @ meat @ inv
-    return GramFit(cols=cols, phi=phi, chi2=sse, wsum=wsum, cov=cov)
+    return _GramFit(cols=cols, phi=phi, chi2=sse, wsum=wsum, cov=cov)
 
 
 def cv_mse(cg: Gram, folds: list, cols) -> float:

@@ -34,7 +34,7 @@ class BenchDiagnosis(Diagnosis):
     stability, detection_limits : dict
         As :class:`~ppamsafety.diagnose.core.result.Diagnosis` (a campaign reports its
         stability reruns in ``settings``; empty here).
-    confounded : list of dict
+    confounded : list of ConfoundedGroup
         As :class:`~ppamsafety.diagnose.core.result.Diagnosis`: groups selected as one
         (their terms coincide on this campaign).  Never named.
     warnings : tuple of str
@@ -74,18 +74,18 @@ class BenchDiagnosis(Diagnosis):
         if self.effects:
             L += ["| effect | confidence | parameters |", "|---|---|---|"]
             for e in self.effects:
-                ps = "; ".join(f"{k} = {v['value']:.4g} {v['unit']}"
-                               + (f" [{v['ci_low']:.4g}, {v['ci_high']:.4g}]"
-                                  if v["ci_low"] == v["ci_low"] else "")
-                               for k, v in e["parameters"].items())
-                L.append(f"| {e['name']} | {e['confidence_level']} "
-                         f"({e['confidence']:.2f}) | {ps} |")
+                ps = "; ".join(f"{k} = {v.value:.4g} {v.unit}"
+                               + (f" [{v.ci_low:.4g}, {v.ci_high:.4g}]"
+                                  if v.ci_low == v.ci_low else "")
+                               for k, v in e.parameters.items())
+                L.append(f"| {e.name} | {e.confidence_level} "
+                         f"({e.confidence:.2f}) | {ps} |")
         else:
             L.append("No effect is named.")
         if self.confounded:
             L += ["", "## Confounded (not named: the terms coincide on this campaign)", ""]
             for g in self.confounded:
-                L.append(f"* {' / '.join(g['members'])}: {g['separating_experiment']}")
+                L.append(f"* {' / '.join(g.members)}: {g.separating_experiment}")
         L += ["", f"**Unexplained:** {'yes' if self.unexplained else 'no'}", "",
               "## Records", "", _md_table(self.records) if len(self.records) else "",
               "", "## Ranking", ""]

@@ -340,13 +340,13 @@ def irreducible_gap(sc: BenchScenario, record, design) -> float | None:
 def _coverage(dg, sc, truth):
     out = []
     for e in dg.effects:
-        if e["name"] not in sc.hidden:
+        if e.name not in sc.hidden:
             continue
-        for p, d in e["parameters"].items():
-            if not (np.isfinite(d["std_error"]) and d["std_error"] > 0):
+        for p, d in e.parameters.items():
+            if not (np.isfinite(d.std_error) and d.std_error > 0):
                 continue                                 # not fitted (a fixed coefficient)
-            true = truth[e["name"]].get(p, d["nominal"])
-            out.append(coverage_entry(e["name"], p, true, d, e["confidence_level"]))
+            true = truth[e.name].get(p, d.nominal)
+            out.append(coverage_entry(e.name, p, true, d, e.confidence_level))
     return out
 
 
@@ -395,17 +395,17 @@ def run_scenario(sc: BenchScenario) -> dict:
     t = des.rec.t
     row.update({
         "dt": float(np.median(np.diff(t))), "duration": float(t[-1] - t[0]),
-        "named": tuple(e["name"] for e in dg.effects),
-        "high": tuple(e["name"] for e in dg.effects if e["confidence_level"] == "high"),
-        "low": tuple(e["name"] for e in dg.effects if e["confidence_level"] != "high"),
-        "partial": tuple(e["name"] for e in dg.partial),
-        "confounded": tuple(tuple(g["members"]) for g in dg.confounded),
+        "named": dg.names,
+        "high": tuple(e.name for e in dg.effects if e.high),
+        "low": tuple(e.name for e in dg.effects if not e.high),
+        "partial": tuple(e.name for e in dg.partial),
+        "confounded": tuple(tuple(g.members) for g in dg.confounded),
         "unexplained": bool(dg.unexplained),
         "rho_before": float(dg.residual_rms["block_force"]["before"]),
         "rho_after": float(dg.residual_rms["block_force"]["after"]),
         "ratios": ratios, "ratios_detected": detected,
-        "gates": {e["name"]: dict(e.get("gates", {})) for e in dg.effects},
-        "named_ratios": {e["name"]: e["evidence"].get("limit_ratio") for e in dg.effects},
+        "gates": {e.name: dict(e.gates or {}) for e in dg.effects},
+        "named_ratios": {e.name: e.evidence.get("limit_ratio") for e in dg.effects},
         "stability_bound": (dg.stability or {}).get("expected_false_selections_bound"),
         "coverage": _coverage(dg, sc, measured_truth(sc)), "gap": gap})
     row["seconds"] = time.perf_counter() - t0

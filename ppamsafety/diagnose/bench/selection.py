@@ -48,9 +48,9 @@ class Selection:
 
     Attributes
     ----------
-    fit : LinearFit
+    fit : _LinearFit
         The final model (after the backward pass).
-    nominal : LinearFit
+    nominal : _LinearFit
         The nominal model (no candidate).
     steps : list of Step
         The forward ranking at every step.
@@ -85,7 +85,7 @@ def fitted_law(design, fit) -> np.ndarray:
     Parameters
     ----------
     design : ActuatorDesign
-    fit : LinearFit
+    fit : _LinearFit
     """
     force = np.array(design.ctx["f_smooth"], dtype=float)
     for n in fit.names:
@@ -104,12 +104,12 @@ def relinearised(design, fit, *, rounds: int = 2) -> tuple:
     Parameters
     ----------
     design : ActuatorDesign
-    fit : LinearFit
+    fit : _LinearFit
     rounds : int, keyword-only
 
     Returns
     -------
-    (ActuatorDesign, LinearFit)
+    (ActuatorDesign, _LinearFit)
         Unchanged when the model holds no hysteresis or no law term.
     """
     if "hysteresis" not in fit.names or not set(LAW_TERMS) & set(fit.names):

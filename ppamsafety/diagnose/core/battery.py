@@ -168,8 +168,8 @@ def coverage_entry(effect: str, parameter: str, true: float, d: dict, level: str
     effect, parameter : str
     true : float
         The value the scenario hid (the nominal one for a parameter it did not change).
-    d : dict
-        The parameter's entry in the diagnosis (``ci_low``/``ci_high`` the reported
+    d : Estimate
+        The parameter's estimate in the diagnosis (``ci_low``/``ci_high`` the reported
         interval, ``ci_low_noise``/``ci_high_noise`` the fit's own).
     level : str
         The name's confidence level.
@@ -179,10 +179,10 @@ def coverage_entry(effect: str, parameter: str, true: float, d: dict, level: str
     dict
         ``covered`` for the reported interval, ``covered_noise`` for the fit's own.
     """
-    lo_n, hi_n = d["ci_low_noise"], d["ci_high_noise"]
+    lo_n, hi_n = d.ci_low_noise, d.ci_high_noise
     return {"effect": effect, "parameter": parameter, "true": float(true),
-            "value": d["value"], "ci_low": d["ci_low"], "ci_high": d["ci_high"],
-            "covered": bool(d["ci_low"] <= true <= d["ci_high"]),
+            "value": d.value, "ci_low": d.ci_low, "ci_high": d.ci_high,
+            "covered": bool(d.ci_low <= true <= d.ci_high),
             "ci_low_noise": lo_n, "ci_high_noise": hi_n,
             "covered_noise": bool(lo_n <= true <= hi_n), "level": level}
 

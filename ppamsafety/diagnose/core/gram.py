@@ -157,8 +157,12 @@ class Gram:
 
 
 @dataclass(frozen=True, eq=False)
-class GramFit:
+class _GramFit:
     """A least-squares fit from summed Gram matrices, every record kind.
+
+    An engine intermediate (the selection makes thousands per diagnosis), never handed to a
+    user: what a user receives is the :class:`~ppamsafety.diagnose.core.result.Diagnosis`.
+    So it is private and not a result object (no table, no figure of its own).
 
     Attributes
     ----------
@@ -193,7 +197,7 @@ class GramFit:
 
 
 def solve(Gs: np.ndarray, cols, sigma, Aw: np.ndarray | None = None, *,
-          per_channel: bool = True) -> GramFit:
+          per_channel: bool = True) -> _GramFit:
     """Weighted least squares of ``base`` on the columns ``cols`` from summed Grams ``Gs``.
 
     Channels are weighted by 1/sigma_c^2.  The normal equations are solved under the
@@ -215,14 +219,14 @@ def solve(Gs: np.ndarray, cols, sigma, Aw: np.ndarray | None = None, *,
 
     Returns
     -------
-    GramFit
+    _GramFit
     """
     cols = np.asarray(cols, dtype=int)
     K = Gs.shape[1] - 1
     w = 1.0 / np.asarray(sigma, dtype=float) ** 2
     bb_c = Gs[:, K, K] * w
     if cols.size == 0:
-        return GramFit(cols=cols, phi=np.zeros(0), chi2=float(bb_c.sum()), chi2_channel=bb_c,
+        return _GramFit(cols=cols, phi=np.zeros(0), chi2=float(bb_c.sum()), chi2_channel=bb_c,
                        A=np.zeros((0, 0)))
     if Aw is None:
         Aw = np.tensordot(w, Gs, axes=1)
@@ -231,12 +235,12 @@ def solve(Gs: np.ndarray, cols, sigma, Aw: np.ndarray | None = None, *,
     phi = solve_normal(A, b)
     if not per_channel:
         chi2 = float(max(Aw[K, K] - 2.0 * (b @ phi) + phi @ A @ phi, 0.0))
-        return GramFit(cols=cols, phi=phi, chi2=chi2, chi2_channel=None, A=A)
+        return _GramFit(cols=cols, phi=phi, chi2=chi2, chi2_channel=None, A=A)
     sub = Gs[:, cols][:, :, cols]                      # (nch, k, k)
     bc = Gs[:, cols, K]                                # (nch, k)
     chi2_c = bb_c - 2.0 * (bc @ phi) * w + np.einsum("i,cij,j->c", phi, sub, phi) * w
     chi2_c = np.maximum(chi2_c, 0.0)
-    return GramFit(cols=cols, phi=phi, chi2=float(chi2_c.sum()), chi2_channel=chi2_c, A=A)
+    return _GramFit(cols=cols, phi=phi, chi2=float(chi2_c.sum()), chi2_channel=chi2_c, A=A)
 
 
 def chi2_at(Gs: np.ndarray, cols, phi, sigma, Aw: np.ndarray | None = None) -> float:
@@ -261,4 +265,4 @@ def chi2_at(Gs: np.ndarray, cols, phi, sigma, Aw: np.ndarray | None = None) -> f
     return float(max(c, 0.0))
 
 
-__all__ = ["Gram", "GramFit", "solve", "chi2_at"]
+__all__ = ["Gram", "solve", "chi2_at"]

@@ -46,8 +46,12 @@ from .solve import pinv_psd, solve_normal
 
 
 @dataclass(frozen=True, eq=False)
-class LinearFit:
+class _LinearFit:
     """A fitted linear model (nominal + the columns of ``names``).
+
+    An engine intermediate (the selection makes thousands per diagnosis), never handed to a
+    user: what a user receives is the :class:`~ppamsafety.diagnose.core.result.Diagnosis`.
+    So it is private and not a result object (no table, no figure of its own).
 
     Attributes
     ----------
@@ -180,7 +184,7 @@ class LinearGram:
         b = G[idx, -1]
         return max(float(G[-1, -1]) - 2.0 * float(phi @ b) + float(phi @ A @ phi), 0.0)
 
-    def fit(self, names) -> LinearFit:
+    def fit(self, names) -> _LinearFit:
         """Least-squares fit of the residual by the columns of ``names`` (on ``mask``).
 
         Parameters
@@ -189,7 +193,7 @@ class LinearGram:
 
         Returns
         -------
-        LinearFit
+        _LinearFit
         """
         names = tuple(names)
         idx = self._index(names)
@@ -202,7 +206,7 @@ class LinearGram:
             slices[n] = slice(j, j + w)
             j += w
         e = self.e0 - self.Z[:, idx] @ phi if k else self.e0.copy()
-        return LinearFit(names=names, k=int(k), m=self.m, chi2=chi2, phi=phi, cov=cov,
+        return _LinearFit(names=names, k=int(k), m=self.m, chi2=chi2, phi=phi, cov=cov,
                          slices=slices, e=e)
 
     def cv_chi2(self, names) -> float:
@@ -220,7 +224,7 @@ class LinearGram:
         return total
 
 
-def fit_linear(e0, columns: dict, names, mask=None) -> LinearFit:
+def fit_linear(e0, columns: dict, names, mask=None) -> _LinearFit:
     """Least-squares fit of the nominal residual ``e0`` by the columns of ``names``.
 
     Parameters
@@ -236,7 +240,7 @@ def fit_linear(e0, columns: dict, names, mask=None) -> LinearFit:
 
     Returns
     -------
-    LinearFit
+    _LinearFit
     """
     names = tuple(names)
     return LinearGram(e0, {n: columns[n] for n in names}, mask=mask).fit(names)
@@ -288,7 +292,7 @@ def forward_selection_linear(e0, columns: dict, admissible, *, alpha: float = AL
 
     Returns
     -------
-    LinearFit
+    _LinearFit
         The final model.
     list of Step
         The ranking at every step.
@@ -528,7 +532,7 @@ def backward_pass_linear(e0, columns: dict, names, *, alpha: float = ALPHA,
 
     Returns
     -------
-    LinearFit
+    _LinearFit
         The model after the pass.
     list of dict
         The members dropped, in order: ``name``, ``lr_stat``, ``lr_df``, ``p_value``,
@@ -558,6 +562,6 @@ def backward_pass_linear(e0, columns: dict, names, *, alpha: float = ALPHA,
     return gram.fit([]), dropped
 
 
-__all__ = ["LinearFit", "LinearGram", "fit_linear", "cv_chi2_linear", "forward_selection_linear",
+__all__ = ["LinearGram", "fit_linear", "cv_chi2_linear", "forward_selection_linear",
            "backward_pass_linear", "hac_covariance_linear", "subset_search_linear",
            "SubsetChoice", "CHECK_BIC", "fold_of"]

@@ -61,8 +61,8 @@ def physically_admissible(parameters, table: dict, moved) -> bool:
     ----------
     parameters : iterable of Parameter
     table : dict
-        Parameter name -> {value, ci_low, ci_high, ...} (raw intervals under
-        ``ci_low_raw``/``ci_high_raw`` when the reported ones were cut at the range).
+        Parameter name -> :class:`~ppamsafety.diagnose.core.result.Estimate` (its raw
+        interval when the reported one was cut at the range).
     moved : collection of str
         Names of the parameters whose interval excludes the nominal value.
 
@@ -72,9 +72,7 @@ def physically_admissible(parameters, table: dict, moved) -> bool:
     """
     moved = set(moved)
     for p in parameters:
-        d = table[p.name]
-        lo = d.get("ci_low_raw", d["ci_low"])
-        hi = d.get("ci_high_raw", d["ci_high"])
+        lo, hi = table[p.name].raw_interval
         if p.name in moved:
             if not (p.phys_lo <= lo and hi <= p.phys_hi):
                 return False
