@@ -43,7 +43,7 @@ NOT_RESULTS = {
 
 #: The diagnosis' result classes follow the protocol in their own package; until they do,
 #: these cases are expected to fail (strict: the day they pass, they leave this set).
-DIAGNOSE_PENDING = ("ppamsafety.diagnose.", "ppamsafety.thesis_fits.")
+DIAGNOSE_PENDING = ("ppamsafety.diagnose.",)
 
 #: Results that are a table without a figure: plot() raises NotImplementedError naming it.
 TABLE_ONLY = {"ArmSummary", "Verdicts", "DropTest", "CoveringFit", "DeltaFit", "DirectionOptimum"}
@@ -143,6 +143,7 @@ def _builders(arm, pid_step):
     from ppamsafety.impact.verdicts import impact_verdicts
     from ppamsafety.identify.static import identify_muscle
     from ppamsafety.sweep import run_sweep
+    from ppamsafety.thesis_fits.as_built import identifiability
     t = np.linspace(0.0, 0.02, 201)
     eps = np.linspace(0.01, 0.2, 50)
     p = np.linspace(1e5, 3e5, 50)
@@ -162,6 +163,8 @@ def _builders(arm, pid_step):
         "MaxLoadMap": lambda: design.max_load_map(arm, n1=5, n2=5),
         "ArmSummary": lambda: design.arm_summary(arm, n=11),
         "SweepResult": lambda: run_sweep(_square, grid={"x": [1.0, 2.0, 3.0]}, progress=False),
+        "Identifiability": lambda: identifiability(
+            np.random.default_rng(0).normal(size=(20, 3)), ("a", "b", "c")),
     }
 
 
@@ -171,7 +174,8 @@ def _square(x):
 
 BUILT = ["HICResult", "ImpactResult", "WorstInstants", "ExperimentResult", "DirectionSweep",
          "ContactResult", "ClampingResult", "Verdicts", "DropTest", "LSQResult",
-         "TorqueFunctions", "StiffnessMap", "MaxLoadMap", "ArmSummary", "SweepResult"]
+         "TorqueFunctions", "StiffnessMap", "MaxLoadMap", "ArmSummary", "SweepResult",
+         "Identifiability"]
 
 
 def check_protocol(res, tmp_path):
@@ -222,7 +226,8 @@ def test_every_library_class_has_an_instance_check():
 #: Built in the slow protocol test (they run identifications, fits or sweeps of seconds).
 SLOW_BUILT = {"SafetySummary", "HeadFit", "Campaign", "SafetyEnvelope", "DirectionOptimum", "WorstDirection",
               "WorstContact", "CollisionResult", "CoveringFit", "DeltaFit", "DynamicResult",
-              "ConsistentResult", "ExcitationDesign", "Identification"}
+              "ConsistentResult", "ExcitationDesign", "Identification", "SummaryFit", "PairFit",
+              "AsBuiltFit"}
 
 
 @pytest.mark.parametrize("name", BUILT)
@@ -285,6 +290,8 @@ def _slow_builders(arm, pid_step):
     from ppamsafety.impact.summary import safety_summary
     from ppamsafety.impact.covering_fit import fit_covering
     from ppamsafety.impact.head_fit import fit_thesis_head
+    from ppamsafety.thesis_fits.as_built import Design, fit_as_built
+    from ppamsafety.thesis_fits.summary_fit import TableDesign, fit_pair, fit_summary
 
     def excitation_record():
         rng = np.random.default_rng(0)
@@ -316,7 +323,22 @@ def _slow_builders(arm, pid_step):
         rec = simulate_tensile_test(0.3, noise_std=5.0, seed=42, periods=2)
         return fit_delta(rec.eps, rec.force, rec.attrs["pressure"])
 
+    def summary_fit():
+        return fit_summary(arm, effects=("payload_mass", "valve_time_constant_factor"),
+                           design=TableDesign(variants=("PID",), periods=(5.0,), warmup=1.0,
+                                              window=5.0), fine=11)
+
+    def as_built_fit():
+        design = Design(variants=("PID",), periods=(5.0,), warmup=1.0, windows=(4.0,),
+                        step_duration=9.0, switch_duration=10.0, sawtooth_levels=4,
+                        impacts=False)
+        return fit_as_built(arm, candidates=("payload_mass",), design=design,
+                            max_evaluations=2)
+
     return {
+        "SummaryFit": summary_fit,
+        "PairFit": lambda: fit_pair(summary_fit(), arm, fine=5),
+        "AsBuiltFit": as_built_fit,
         "HeadFit": lambda: fit_thesis_head(arm),
         "Campaign": lambda: load_campaign(zillen2021_manifest("O-ring257")),
         "SafetyEnvelope": lambda: safety_envelope(
