@@ -2,7 +2,7 @@
 
 A study file names the cases of :func:`ppamsafety.sweep_cases.safety_case`
 (experiments, controller families and gains, impact settings) and the
-outputs.  Example (``studies/lambda_ki.toml``)::
+outputs.  Example (the shipped study ``lambda_ki``)::
 
     [study]
     name = "lambda-ki"                 # cache key part; default: the file name
@@ -14,7 +14,7 @@ outputs.  Example (``studies/lambda_ki.toml``)::
 
     [impact]                           # impact settings (shared by every case)
     instants = "heuristic"             # "heuristic", "all" (with every = N ms) or one heuristic
-    head = "thesis-frontal"
+    head = "thesis-frontal"            # default; a study that names none takes --head
     # stiffness = 43.0                 # override (2.18) [Nm/rad]: one value or [K1, K2]
 
     [grid]                             # every combination of these lists
@@ -75,6 +75,12 @@ controllers' limits (the controller of every case is built), stiffnesses the
 impact model cannot resolve, durations shorter than the experiment's events,
 and an empty study.
 
+Shipped studies: the studies the report's sweep sections run ship with the package
+(:data:`STUDY_DATA`, :func:`shipped_studies`): ``lambda_ki`` (the section ``lambda_sweep``) and
+``table_6_1`` (the experiments and controller variants of the section ``safety``).
+:func:`load_study` (and ``ppamsafety sweep NAME``) takes such a name where no file of that
+name exists, so the report and the command line run one definition.
+
 The cases are a :class:`CaseGrid`: generated one by one when read, never a
 list, so a study of 10^9 grid points loads at once and is costed by
 :func:`estimate_cases` (cases, time, memory) before anything runs.  A run
@@ -112,9 +118,9 @@ import pandas as pd
 
 from ._inputfiles import check_input_path, read_text
 from ._jit import available_cores
-from ._validation import MAX_BYTES, check_int
+from ._validation import MAX_BYTES, check_int, did_you_mean
 from .envelope import LIMITS, SCAN, check_bounds, resolve_limit, safety_envelope
-from .experiments.catalog import DEFAULT_DURATIONS
+from .experiments.catalog import DEFAULT_DURATIONS, ControllerVariant
 from .impact.head import HeadContactModel, load_head
 from .output import OutputError, OutputFolder, check_output_path, read_marker
 from .design import load_arm
@@ -125,8 +131,13 @@ from .plots.sweep import limit_lines, plot_sweep
 from .sweep import BACKENDS, SweepResult, run_sweep
 from .sweep_cases import (DEFAULTS, IMPACT_POSE_DEG, PARAMETERS, SPEED_MAX, add_verdicts,
                           case_arm, case_function, check_case, check_impact_case, column_unit,
-                          is_dotted)
+                          is_dotted, make_controller)
 from .units import si_factor
+
+#: Folder of the shipped studies (package data): the report's sweep sections run these files.
+STUDY_DATA = Path(__file__).parent / "study_data"
+#: Keys of a case that build its controller (:func:`~ppamsafety.sweep_cases.make_controller`).
+CONTROLLER_KEYS = ("lam", "kp_bar", "ki_bar", "kd_bar", "task_kp", "task_ki", "task_kd")
 
 #: Allowed keys per table of a study file.
 SCHEMA = {
@@ -1015,13 +1026,90 @@ def check_run_size(study, est: dict, *, confirm: bool = False) -> None:
             f"(confirm=True), or run it on a cluster (--backend dask --scheduler ADDRESS)")
 
 
+def shipped_studies() -> list:
+    """Names of the shipped studies (:data:`STUDY_DATA`), e.g. ``["lambda_ki", "table_6_1"]``."""
+    return sorted(p.stem for p in STUDY_DATA.glob("*.toml"))
+
+
+def shipped_study(name: str) -> Path:
+    """The file of a shipped study.
+
+    Parameters
+    ----------
+    name : str
+        One of :func:`shipped_studies`.
+
+    Returns
+    -------
+    pathlib.Path
+    """
+    names = shipped_studies()
+    if not isinstance(name, str) or name not in names:
+        raise ValueError(f"study = {name!r} is not a shipped study; shipped: {names}"
+                         f"{did_you_mean(name, names)}")
+    return STUDY_DATA / f"{name}.toml"
+
+
+def study_path(study) -> Path:
+    """The file a study argument names: a path, or the name of a shipped study.
+
+    A name without a folder or suffix that is no file in the working directory and is a
+    shipped study (:func:`shipped_studies`) gives that study's file; anything else is a path
+    (checked when read).
+
+    Parameters
+    ----------
+    study : str or os.PathLike
+        A study file or a shipped study's name.
+
+    Returns
+    -------
+    pathlib.Path
+    """
+    p = check_input_path("study", study)
+    if not p.exists() and p.suffix == "" and p.name == str(study):
+        names = shipped_studies()
+        if p.name in names:
+            return shipped_study(p.name)
+        raise StudyFileError(f"study = {str(study)!r}: no such file, and not a shipped study "
+                             f"(shipped: {names}){did_you_mean(p.name, names)}")
+    return p
+
+
+def controller_variants(study: Study) -> list:
+    """The controller variant of every ``[[variants]]`` entry of a study, in file order.
+
+    Each variant's controller is built by :func:`~ppamsafety.sweep_cases.make_controller`
+    from the entry's gains merged over ``[case]`` (as every case of the study builds it); the
+    label and the fields the thesis tables are keyed by follow from it
+    (:meth:`~ppamsafety.experiments.catalog.ControllerVariant.of`).
+
+    Parameters
+    ----------
+    study : Study
+        A loaded study whose cases come from a grid (not an ``[envelope]``).
+
+    Returns
+    -------
+    list of ControllerVariant
+    """
+    if not isinstance(study, Study) or not isinstance(study.cases, CaseGrid):
+        raise TypeError(f"study must be a Study of a grid, got {type(study).__name__}")
+    out = []
+    for var in study.cases.variants:
+        p = {**DEFAULTS, **study.cases.base, **var}
+        out.append(ControllerVariant.of(make_controller(
+            p["controller"], **{k: p[k] for k in CONTROLLER_KEYS})))
+    return out
+
+
 def load_study(path, *, arm=None, head=None) -> Study:
     """Read and check a study file (see the module docstring).
 
     Parameters
     ----------
     path : path-like
-        The ``.toml`` file.
+        The ``.toml`` file, or the name of a shipped study (:func:`study_path`).
     arm : ArmParameters, optional, keyword-only
         Replaces the study's ``[arm] file`` (``--arm``).
     head : HeadContactModel, optional, keyword-only
@@ -1032,7 +1120,7 @@ def load_study(path, *, arm=None, head=None) -> Study:
     Study
         The checked study (``path`` set).
     """
-    p, text = read_text(path, what="study file", error=StudyFileError)
+    p, text = read_text(study_path(path), what="study file", error=StudyFileError)
     st = parse_study(text, where=str(p), default_name=p.stem, base_dir=p.parent, arm=arm,
                      head=head)
     st.path = p
@@ -1078,7 +1166,8 @@ def run_study_file(study, outdir, *, backend: str = "local", scheduler=None,
     Parameters
     ----------
     study : Study or path-like
-        A :class:`Study` or the path of a study file.
+        A :class:`Study`, the path of a study file or a shipped study's name
+        (:func:`study_path`).
     outdir : path-like
         Output folder (kind ``"sweep"``).  New or empty; a previous sweep is
         reused with ``resume`` or replaced with ``overwrite``; a folder with
@@ -1346,4 +1435,5 @@ th{{background:#f3f3f3;text-align:left}}img{{max-width:100%}}
 __all__ = ["SCHEMA", "GENERATORS", "KIND", "MATERIALISE", "CHECK_ALL", "COST", "CONFIRM_HOURS",
            "Axis", "CaseGrid", "Study", "StudyFileError", "parse_study", "load_study",
            "estimate_cases", "describe_estimate", "check_run_size", "history_format",
-           "run_study_file", "summary_page", "display_table", "unit_label"]
+           "run_study_file", "summary_page", "display_table", "unit_label", "STUDY_DATA",
+           "shipped_studies", "shipped_study", "study_path", "controller_variants"]
