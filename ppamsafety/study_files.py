@@ -104,13 +104,14 @@ table), and the arm and head used (``arm.toml``, ``head.toml``).
 
 from __future__ import annotations
 
+import hashlib
 import html
 import importlib.util
 import itertools
 import math
 import tomllib
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -126,6 +127,7 @@ from .output import OutputError, OutputFolder, check_output_path, read_marker
 from .design import load_arm
 from .params import ArmParameters
 from .params.arm_file import ArmFileError, arm_key, arm_to_toml, read_value
+from .params.contact_files import is_contact_file
 from .plots.figure import save as save_figure
 from .plots.sweep import limit_lines, plot_sweep
 from .sweep import BACKENDS, SweepResult, run_sweep
@@ -367,6 +369,9 @@ class Study:
         The head of every case (``[head] file`` or ``--head``; None: the cases' own).
     envelope : dict or None
         The ``[envelope]`` search (parameter, bounds, limit, tolerance, case), if any.
+    files : dict
+        The covering and contact point files the cases name: the path a case holds (relative
+        to the study file's folder, made absolute) -> the text the study file gives.
 
     ``cases`` is a :class:`CaseGrid`: the cases are generated when they are read, so a
     study of any size loads at once; :meth:`estimate` says what running it costs.
@@ -382,6 +387,22 @@ class Study:
     arm: ArmParameters | None = None
     head: HeadContactModel | None = None
     envelope: dict | None = None
+    files: dict = field(default_factory=dict)
+
+    @property
+    def cache_name(self) -> str:
+        """The sweep name of the cache key: :attr:`name`, and the contents of the covering and
+        contact point files the cases name (an edited file is never served from the cache)."""
+        if not self.files:
+            return self.name
+        h = hashlib.sha1()
+        for f in sorted(self.files):
+            h.update(f.encode())
+            try:
+                h.update(Path(f).read_bytes())
+            except OSError:
+                h.update(b"missing")
+        return f"{self.name} [files {h.hexdigest()[:10]}]"
 
     @property
     def swept(self) -> list:
@@ -509,14 +530,33 @@ def _dotted_si(where: str, path: str, key: str, v):
     return list(si) if isinstance(si, tuple) else si
 
 
-def _check_value(where: str, path: str, key: str, v, arm=None) -> None:
+#: Case keys whose value may be a file (a string ending in ``.toml``), read relative to the
+#: study file: a covering file and a contact point file.
+FILE_KEYS = ("covering", "contact")
+
+
+def _file_value(key: str, v, base_dir, written: dict):
+    """A file value of a :data:`FILE_KEYS` key as a path relative to the study file's folder
+    (absolute as a string); ``written`` maps it back to the text of the study file."""
+    if key not in FILE_KEYS or not isinstance(v, str) or not is_contact_file(v):
+        return v
+    p = Path(v).expanduser()
+    if not p.is_absolute() and base_dir is not None:
+        p = Path(base_dir) / p
+    out = str(p.absolute()) if base_dir is not None or p.is_absolute() else v
+    written[out] = v
+    return out
+
+
+def _check_value(where: str, path: str, key: str, v, arm=None, shown=None) -> None:
     try:
         if is_dotted(key):
             case_arm(arm, changes={key: v})
         else:
             PARAMETERS[key][0](v)
     except (TypeError, ValueError) as exc:
-        raise _err(where, f"{path} = {v!r}: {exc}") from None
+        shown = v if shown is None else shown
+        raise _err(where, f"{path} = {shown!r}: {exc}") from None
 
 
 #: Keys of a generator or a value with its unit: such an inline table is one value.
@@ -808,6 +848,7 @@ def parse_study(text: str, *, where: str = "study file", default_name: str = "st
     if not isinstance(desc, str):
         raise _err(where, f"study.description = {desc!r} must be a string")
     origin = {}                                  # parameter -> dotted path where it is set
+    written = {}                                 # a file value -> as the study file gives it
     base = {}
     for table in ("case", "impact"):
         d = data.get(table, {})
@@ -819,7 +860,8 @@ def parse_study(text: str, *, where: str = "study file", default_name: str = "st
                 raise _err(where, f"{table}.head = {v!r} and the [head] file (or --head) both "
                                   f"set the head; set it in one place")
             v = _dotted_si(where, f"{table}.{k}", k, v) if is_dotted(k) else v
-            _check_value(where, f"{table}.{k}", k, v, arm)
+            given, v = v, _file_value(k, v, base_dir, written)
+            _check_value(where, f"{table}.{k}", k, v, arm, shown=given)
             origin[k], base[k] = f"{table}.{k}", v
     envelope = _envelope(where, data, base, arm, base_dir)
     grid = data.get("grid", {})
@@ -830,10 +872,14 @@ def parse_study(text: str, *, where: str = "study file", default_name: str = "st
             raise _err(where, f"grid.{k} is also set as {origin[k]}; set it in one place")
         if k == "head" and head is not None:
             raise _err(where, "grid.head and the [head] file (or --head) both set the head")
+        given = v
+        if k in FILE_KEYS and isinstance(v, list):
+            v = [_file_value(k, x, base_dir, written) for x in v]
         axis = _grid_values(where, k, v)
         idx = range(len(axis)) if axis.gen is None else axis.representatives()
         for i in idx:
-            _check_value(where, f"grid.{k}[{i}]", k, axis[i], arm)
+            _check_value(where, f"grid.{k}[{i}]", k, axis[i], arm,
+                         shown=given[i] if given is not v else None)
         gvals[k] = axis
     variants = data.get("variants", [{}])
     if not isinstance(variants, list) or not variants:
@@ -849,8 +895,9 @@ def parse_study(text: str, *, where: str = "study file", default_name: str = "st
                 raise _err(where, f"variants[{j}].head and the [head] file (or --head) both "
                                   f"set the head")
             v = _dotted_si(where, f"variants[{j}].{k}", k, v) if is_dotted(k) else v
+            given, v = v, _file_value(k, v, base_dir, written)
             var[k] = v
-            _check_value(where, f"variants[{j}].{k}", k, v, arm)
+            _check_value(where, f"variants[{j}].{k}", k, v, arm, shown=given)
     if not any(t in data for t in ("case", "impact", "grid", "variants", "envelope")):
         raise _err(where, "the study defines no case: give a [case] table, a [grid], "
                           "[[variants]] entries or an [envelope] (see studies/*.toml); an "
@@ -869,11 +916,11 @@ def parse_study(text: str, *, where: str = "study file", default_name: str = "st
         if hist:
             raise _err(where, "output.histories does not apply to an [envelope] study")
         return Study(name=name.strip(), description=desc, cases=[], csv=csv, histories=False,
-                     source=text, arm=arm, head=head, envelope=envelope)
+                     source=text, arm=arm, head=head, envelope=envelope, files=written)
     cases = CaseGrid(base, variants, gvals, hist)
     _check_combinations(where, cases, arm)
     return Study(name=name.strip(), description=desc, cases=cases, csv=csv, histories=hist,
-                 source=text, arm=arm, head=head)
+                 source=text, arm=arm, head=head, files=written)
 
 
 def _check_combinations(where: str, cases: CaseGrid, arm=None) -> None:
@@ -1249,7 +1296,8 @@ def run_study_file(study, outdir, *, backend: str = "local", scheduler=None,
             df.attrs["envelope_lines"] = env.lines()
         else:
             env = None
-            df = run_sweep(case_function(st.arm, st.head), cases, name=st.name, cache_dir=cache,
+            df = run_sweep(case_function(st.arm, st.head), cases, name=st.cache_name,
+                           cache_dir=cache,
                            processes=processes, progress=progress, on_error="record",
                            backend=backend, scheduler=scheduler).table
             df = add_verdicts(df, head=st.head)
@@ -1320,6 +1368,9 @@ def display_table(st: Study, df: pd.DataFrame) -> pd.DataFrame:
     """
     out = {}
     for col in df.columns:
+        if col in FILE_KEYS and st.files:                 # a file as the study file names it
+            out[col] = df[col].map(lambda v: st.files.get(v, v))
+            continue
         unit, factor = st.unit_of(col)
         label = (f"{st.envelope['parameter']} [{unit}]" if col == "value" and st.envelope
                  else unit_label(col, unit))
