@@ -44,9 +44,19 @@ Your arm, your head, effects and design parameters::
     arm.pneumatics.mean_pressure = { linspace = [1.2, 2.0, 5], unit = "bar" }
     effects.payload_mass = [0.0, 0.5, 1.0]        # one effect per axis
 
+A covering and a contact point (``covering``, ``contact``: a built-in name or a covering or
+contact point file, read relative to the study file) and the covering's layer
+(``covering_thickness``, ``covering_modulus``, ``covering_hysteresis``, with a unit too)::
+
+    [grid]
+    covering = ["bare metal", "foam.toml"]
+    contact = ["forearm", "gripper_edge.toml"]
+    covering_thickness = { values = [2, 8], unit = "mm" }
+
 Dotted keys (``arm.<key of an arm file>``, ``effects.<name>``) are validated like the
 arm file; a plain number is in the key's SI unit, ``{value = ..., unit = "..."}`` or a
-generator with ``unit`` converts (:mod:`ppamsafety.params.arm_file`).  ``--arm`` and
+generator with ``unit`` converts (:mod:`ppamsafety.params.arm_file`; the ``covering_*`` keys
+too), and the outputs show a value in the unit the study file wrote it in.  ``--arm`` and
 ``--head`` on the command line replace ``[arm]`` and ``[head]``.
 
 A safety envelope instead of a grid (:func:`ppamsafety.envelope.safety_envelope`)::
@@ -131,7 +141,8 @@ from .params.contact_files import is_contact_file
 from .plots.figure import save as save_figure
 from .plots.sweep import limit_lines, plot_sweep
 from .sweep import BACKENDS, SweepResult, run_sweep
-from .sweep_cases import (DEFAULTS, IMPACT_POSE_DEG, PARAMETERS, SPEED_MAX, add_verdicts,
+from .sweep_cases import (COVERING_RANGES, DEFAULTS, IMPACT_POSE_DEG, PARAMETERS, SPEED_MAX,
+                          add_verdicts,
                           case_arm, case_function, check_case, check_impact_case, column_unit,
                           is_dotted, make_controller)
 from .units import si_factor
@@ -372,6 +383,9 @@ class Study:
     files : dict
         The covering and contact point files the cases name: the path a case holds (relative
         to the study file's folder, made absolute) -> the text the study file gives.
+    units : dict
+        Key -> the unit ``[case]`` or ``[[variants]]`` write its value in (``{ value = 4,
+        unit = "mm" }``), for the outputs.
 
     ``cases`` is a :class:`CaseGrid`: the cases are generated when they are read, so a
     study of any size loads at once; :meth:`estimate` says what running it costs.
@@ -388,6 +402,7 @@ class Study:
     head: HeadContactModel | None = None
     envelope: dict | None = None
     files: dict = field(default_factory=dict)
+    units: dict = field(default_factory=dict)
 
     @property
     def cache_name(self) -> str:
@@ -430,6 +445,9 @@ class Study:
         axis = self.cases.axes.get(key) if isinstance(self.cases, CaseGrid) else None
         if axis is not None and axis.unit is not None:
             return axis.unit, axis.factor
+        if key in self.units and axis is None:
+            si = UNIT_KEYS.get(key) or arm_key(key).unit
+            return self.units[key], si_factor(self.units[key], si, name=key)
         if self.envelope is not None and key == "value":
             return column_unit(self.envelope["parameter"]), 1.0
         if self.envelope is not None and key == "margin":        # limit - metric: its unit
@@ -462,8 +480,17 @@ def _err(where: str, msg: str) -> StudyFileError:
     return StudyFileError(f"{where}: {msg}")
 
 
+#: Case keys (besides the dotted arm keys) whose values a study file may give with a unit
+#: (``{ value = 5, unit = "mm" }``, ``{ values = [...], unit = "mm" }``): key -> SI unit.
+UNIT_KEYS = {k: unit for k, (_, _, unit) in COVERING_RANGES.items()}
+
+
+def _has_unit(key: str) -> bool:
+    return is_dotted(key) or key in UNIT_KEYS
+
+
 def _grid_values(where: str, key: str, v) -> Axis:
-    if isinstance(v, dict) and "unit" in v and is_dotted(key):
+    if isinstance(v, dict) and "unit" in v and _has_unit(key):
         v = dict(v)
         unit = v.pop("unit")
         if len(v) == 1 and next(iter(v)) in GENERATORS:      # the ends in SI, then the grid
@@ -487,7 +514,7 @@ def _grid_values(where: str, key: str, v) -> Axis:
                               f"{{geomspace = [start, stop, num]}} or {{linspace = [start, stop, "
                               f"num]}}" + (" (with unit = \"...\" for a dotted arm key, or "
                                            "{values = [...], unit = \"...\"})"
-                                           if is_dotted(key) else ""))
+                                           if _has_unit(key) else ""))
         gen, args = next(iter(v.items()))
         ok = (isinstance(args, list) and len(args) == 3
               and all(isinstance(a, (int, float)) and not isinstance(a, bool) for a in args)
@@ -508,16 +535,27 @@ def _grid_values(where: str, key: str, v) -> Axis:
 
 def _with_unit(axis: Axis, key: str, unit: str) -> Axis:
     """``axis`` with the unit the study file gave its values in (already checked)."""
-    si = arm_key(key).unit
+    si = UNIT_KEYS.get(key) or arm_key(key).unit
     if si is not None:
         axis.unit, axis.factor = unit, si_factor(unit, si, name=f"grid.{key}.unit")
     return axis
 
 
 def _dotted_si(where: str, path: str, key: str, v):
-    """A dotted parameter's value in SI units (``{value, unit}`` converted; lists as lists)."""
+    """A dotted parameter's (or a :data:`UNIT_KEYS` key's) value in SI units (``{value,
+    unit}`` converted; lists as lists)."""
     if not isinstance(v, dict):
         return v
+    if key in UNIT_KEYS:
+        x = v.get("value")
+        if set(v) != {"value", "unit"} or isinstance(x, bool) or not isinstance(
+                x, (int, float)) or not math.isfinite(x):
+            raise _err(where, f"{path} = {v!r}: give a finite number with its unit, "
+                              f"{{ value = ..., unit = \"...\" }} (SI: {UNIT_KEYS[key]})")
+        try:
+            return float(x) * si_factor(v["unit"], UNIT_KEYS[key], name=f"{path}.unit")
+        except (TypeError, ValueError) as exc:
+            raise _err(where, f"{path} = {v!r}: {exc}") from None
     try:
         k = arm_key(key)
         if k.unit is None and k.kind != "float":
@@ -546,6 +584,17 @@ def _file_value(key: str, v, base_dir, written: dict):
     out = str(p.absolute()) if base_dir is not None or p.is_absolute() else v
     written[out] = v
     return out
+
+
+def _written_unit(units: dict, key: str, v) -> None:
+    """Record the unit a ``[case]`` or ``[[variants]]`` value of ``key`` is written in
+    (``{value, unit}``); None when two entries write the key in two units (shown in SI)."""
+    if not (_has_unit(key) and isinstance(v, dict) and isinstance(v.get("unit"), str)):
+        return
+    if key in units and units[key] != v["unit"]:
+        units[key] = None
+    else:
+        units.setdefault(key, v["unit"])
 
 
 def _check_value(where: str, path: str, key: str, v, arm=None, shown=None) -> None:
@@ -639,7 +688,8 @@ def _arm_and_head(where: str, data: dict, base_dir, arm, head) -> tuple:
 #: another unit of the same quantity, ``{ values = [low, high], unit = "mm/s" }``).
 ENVELOPE_UNITS = {"speed": "m/s", "lam": "s", "duration": "s", "stiffness": "N m/rad",
                   "task_kp": "N/m", "task_ki": "N/(m s)", "task_kd": "N s/m",
-                  "kp_bar": "bar/rad", "ki_bar": "bar/(rad s)", "kd_bar": "bar s/rad"}
+                  "kp_bar": "bar/rad", "ki_bar": "bar/(rad s)", "kd_bar": "bar s/rad",
+                  **UNIT_KEYS}
 
 
 def _envelope_range(where: str, par: str, rng) -> list:
@@ -849,6 +899,7 @@ def parse_study(text: str, *, where: str = "study file", default_name: str = "st
         raise _err(where, f"study.description = {desc!r} must be a string")
     origin = {}                                  # parameter -> dotted path where it is set
     written = {}                                 # a file value -> as the study file gives it
+    units = {}                                   # key -> the unit [case]/[[variants]] give
     base = {}
     for table in ("case", "impact"):
         d = data.get(table, {})
@@ -859,7 +910,8 @@ def parse_study(text: str, *, where: str = "study file", default_name: str = "st
             if k == "head" and head is not None:
                 raise _err(where, f"{table}.head = {v!r} and the [head] file (or --head) both "
                                   f"set the head; set it in one place")
-            v = _dotted_si(where, f"{table}.{k}", k, v) if is_dotted(k) else v
+            _written_unit(units, k, v)
+            v = _dotted_si(where, f"{table}.{k}", k, v) if _has_unit(k) else v
             given, v = v, _file_value(k, v, base_dir, written)
             _check_value(where, f"{table}.{k}", k, v, arm, shown=given)
             origin[k], base[k] = f"{table}.{k}", v
@@ -878,8 +930,9 @@ def parse_study(text: str, *, where: str = "study file", default_name: str = "st
         axis = _grid_values(where, k, v)
         idx = range(len(axis)) if axis.gen is None else axis.representatives()
         for i in idx:
-            _check_value(where, f"grid.{k}[{i}]", k, axis[i], arm,
-                         shown=given[i] if given is not v else None)
+            shown = (given[i] if given is not v else
+                     f"{axis[i] / axis.factor:g} {axis.unit}" if axis.unit else None)
+            _check_value(where, f"grid.{k}[{i}]", k, axis[i], arm, shown=shown)
         gvals[k] = axis
     variants = data.get("variants", [{}])
     if not isinstance(variants, list) or not variants:
@@ -894,7 +947,8 @@ def parse_study(text: str, *, where: str = "study file", default_name: str = "st
             if k == "head" and head is not None:
                 raise _err(where, f"variants[{j}].head and the [head] file (or --head) both "
                                   f"set the head")
-            v = _dotted_si(where, f"variants[{j}].{k}", k, v) if is_dotted(k) else v
+            _written_unit(units, k, v)
+            v = _dotted_si(where, f"variants[{j}].{k}", k, v) if _has_unit(k) else v
             given, v = v, _file_value(k, v, base_dir, written)
             var[k] = v
             _check_value(where, f"variants[{j}].{k}", k, v, arm, shown=given)
@@ -916,11 +970,13 @@ def parse_study(text: str, *, where: str = "study file", default_name: str = "st
         if hist:
             raise _err(where, "output.histories does not apply to an [envelope] study")
         return Study(name=name.strip(), description=desc, cases=[], csv=csv, histories=False,
-                     source=text, arm=arm, head=head, envelope=envelope, files=written)
+                     source=text, arm=arm, head=head, envelope=envelope, files=written,
+                     units=units)
     cases = CaseGrid(base, variants, gvals, hist)
     _check_combinations(where, cases, arm)
     return Study(name=name.strip(), description=desc, cases=cases, csv=csv, histories=hist,
-                 source=text, arm=arm, head=head, files=written)
+                 source=text, arm=arm, head=head, files=written,
+                 units={k: u for k, u in units.items() if u is not None})
 
 
 def _check_combinations(where: str, cases: CaseGrid, arm=None) -> None:

@@ -151,3 +151,33 @@ def test_an_edited_covering_file_is_not_served_from_the_cache(folder):
     assert before != after and before.startswith("s [files ")
     assert load_study(_study(folder, 'covering = ["bare metal"]\n', name="n.toml")).cache_name \
         == "n"
+
+
+def test_covering_values_with_units_are_shown_in_them(folder, tmp_path):
+    """covering_* values written with a unit run in SI and come back in that unit."""
+    path = _study(folder, 'covering_thickness = { values = [2, 8], unit = "mm" }\n')
+    path.write_text(path.read_text().replace(
+        '[impact]', 'covering_modulus = { value = 5, unit = "MPa" }\ncontact = "tool point"\n'
+                    '[impact]'))
+    st = load_study(path)
+    assert [c["covering_thickness"] for c in st.cases] == [0.002, 0.008]
+    assert all(c["covering_modulus"] == 5e6 for c in st.cases)
+    df = run_study_file(st, tmp_path / "u", processes=1, progress=False).table
+    assert df.F_max.iloc[1] < df.F_max.iloc[0]              # the thicker layer is softer
+    csv = pd.read_csv(tmp_path / "u" / "r.csv")
+    assert list(csv["covering_thickness [mm]"]) == [2.0, 8.0]
+    assert list(csv["covering_modulus [MPa]"]) == [5.0, 5.0]
+    assert "covering_thickness [mm]" in (tmp_path / "u" / "summary.html").read_text()
+
+
+@pytest.mark.parametrize("line, words", [
+    ('covering_thickness = { values = [2, 5], unit = "kg" }',
+     ["grid.covering_thickness[0]", "'kg' is not a unit of this quantity", "mm"]),
+    ('covering_thickness = { values = [2, 5000], unit = "mm" }',
+     ["grid.covering_thickness[1] = '5000 mm'", "beyond the physical limit 0.2 m"]),
+    ('covering_modulus = { values = [1], unit = "MPa", x = 1 }', ["grid.covering_modulus"]),
+])
+def test_covering_values_with_a_wrong_unit_are_refused(folder, line, words):
+    with pytest.raises(StudyFileError) as e:
+        load_study(_study(folder, line + "\n"))
+    assert all(w in str(e.value) for w in words), str(e.value)
