@@ -542,7 +542,7 @@ def _with_unit(axis: Axis, key: str, unit: str) -> Axis:
 
 
 def _dotted_si(where: str, path: str, key: str, v):
-    """A dotted parameter's (or a :data:`UNIT_KEYS` key's) value in SI units (``{value,
+    """A dotted parameter's (or a ``UNIT_KEYS`` key's) value in SI units (``{value,
     unit}`` converted; lists as lists)."""
     if not isinstance(v, dict):
         return v
@@ -1543,4 +1543,5 @@ __all__ = ["SCHEMA", "GENERATORS", "KIND", "MATERIALISE", "CHECK_ALL", "COST", "
            "Axis", "CaseGrid", "Study", "StudyFileError", "parse_study", "load_study",
            "estimate_cases", "describe_estimate", "check_run_size", "history_format",
            "run_study_file", "summary_page", "display_table", "unit_label", "STUDY_DATA",
-           "shipped_studies", "shipped_study", "study_path", "controller_variants"]
+           "shipped_studies", "shipped_study", "study_path", "controller_variants", "FILE_KEYS",
+           "UNIT_KEYS"]

@@ -127,7 +127,13 @@ def _covering_from_dict(data) -> Covering:
 
 def is_contact_file(value) -> bool:
     """``value`` names a covering or contact point file (a path, or a string ending in
-    ``.toml``), not a built-in name."""
+    ``.toml``), not a built-in name.
+
+    Parameters
+    ----------
+    value : object
+        A covering or contact point argument.
+    """
     return isinstance(value, Path) or (isinstance(value, str) and value.endswith(".toml"))
 
 
