@@ -55,7 +55,7 @@ BASE = '[case]\nexperiment = "step"\n'
                                       "(0, 100] kg"]),
     (BASE + 'arm.links.m3 = 1.0\n', ["case.arm.links.m3", "unknown arm parameter 'links.m3'"]),
     (BASE + '[grid]\narm.pneumatics.mean_pressure = { linspace = [1, 4, 2], unit = "bar" }\n',
-     ["grid.arm.pneumatics.mean_pressure[1] = 400000.0", "[0, 300000] Pa"]),
+     ["grid.arm.pneumatics.mean_pressure[1] = '4 bar'", "400000 Pa", "[0, 300000] Pa"]),
     (BASE + '[grid]\neffects.hysteresis_delta = [0.1, 2.0]\n',
      ["grid.effects.hysteresis_delta[1] = 2.0", "effects.hysteresis_delta[0] = 2", "[0, 1]"]),
     ('[arm]\nfile = "no_such_arm.toml"\n', ["arm.file = 'no_such_arm.toml'", "does not exist"]),
