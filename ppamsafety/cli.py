@@ -808,8 +808,9 @@ def build_parser() -> argparse.ArgumentParser:
 sweep folder: --resume reuses the finished cases of an interrupted sweep in OUT (allowed
 without --overwrite when OUT holds a previous sweep); --overwrite recomputes everything.
 """)
-    w.add_argument("study", type=_path, metavar="STUDY.toml",
-                   help="study file (see studies/*.toml)")
+    w.add_argument("study", type=_path, metavar="STUDY",
+                   help="study file (TOML), or the name of a study shipped with the "
+                        "package (the report's: an unknown name lists them)")
     w.add_argument("--out", type=_path, required=True, metavar="DIR", help="output folder")
     w.add_argument("--backend", choices=("local", "dask"), default="local",
                    help="local processes (default) or a dask.distributed cluster")

@@ -12,7 +12,7 @@ in :mod:`ppamsafety.plots.design` (``result.plot()`` delegates there).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from functools import lru_cache
 
 import numpy as np
@@ -28,7 +28,8 @@ from .plant import geometry as geo
 from .plant import pneumatics as pn
 from .plant import ppam_theory, torque
 from .plant.muscle import polynomial
-from .plots.design import plot_torque_functions, plot_stiffness_map, plot_max_load
+from .plots.design import (plot_arm_summary, plot_max_load, plot_stiffness_map,
+                           plot_torque_functions)
 from .units import BAR, DEG
 
 
@@ -393,6 +394,10 @@ class ArmSummary(Result):
         Joint stiffness (2.18) at the pose [N m/rad].
     data : pandas.DataFrame
         Every number: ``quantity``, ``value``, ``unit``.
+    stiffness_map : StiffnessMap
+        The stiffness over the working area the numbers come from.
+    max_load_map : MaxLoadMap
+        The maximum load over the working area the numbers come from.
     """
 
     name: str
@@ -401,10 +406,19 @@ class ArmSummary(Result):
     pose_holdable: bool
     stiffness: tuple
     data: pd.DataFrame
+    stiffness_map: "StiffnessMap" = field(default=None, repr=False)
+    max_load_map: "MaxLoadMap" = field(default=None, repr=False)
 
     def to_pandas(self) -> pd.DataFrame:
         """The numbers: ``quantity``, ``value``, ``unit``."""
         return self.data.copy()
+
+    def plot(self):
+        """K1, K2 and the maximum load over the working area, the pose marked; a Figure."""
+        if self.stiffness_map is None or self.max_load_map is None:
+            raise ValueError("this ArmSummary holds no maps to draw: make it with arm_summary()")
+        return plot_arm_summary(self.stiffness_map.data, self.max_load_map.data, pose=self.pose,
+                                stiffness_at_pose=self.stiffness, name=self.name)
 
     def lines(self) -> list:
         """The summary as text lines (what ``ppamsafety arm check`` prints).
@@ -454,7 +468,8 @@ def arm_summary(arm, *, q=None, n: int = 61) -> ArmSummary:
                              f", q2 in [{np.degrees(g.q2_min):.4g}, {np.degrees(g.q2_max):.4g}] deg")
     rest = rest_stiffness(arm, q)
     p, holdable, K = np.array(rest.pressures), rest.holdable, rest.stiffness
-    sm = stiffness_map(arm, n1=n, n2=n).data
+    smap = stiffness_map(arm, n1=n, n2=n)
+    sm = smap.data
     ml = max_load_map(arm, n1=2 * n, n2=2 * n)
     grid = _grid(arm, n, n)
     tcp = geo.forward_kinematics(grid, arm)
@@ -495,7 +510,8 @@ def arm_summary(arm, *, q=None, n: int = 61) -> ArmSummary:
     df = pd.DataFrame(rows, columns=["quantity", "value", "unit"])
     return ArmSummary(name=arm.name, pose=(float(q[0]), float(q[1])),
                       pose_pressures=tuple(float(v) for v in p), pose_holdable=holdable,
-                      stiffness=(float(K[0]), float(K[1])), data=df)
+                      stiffness=(float(K[0]), float(K[1])), data=df, stiffness_map=smap,
+                      max_load_map=ml)
 
 
 # ----------------------------------------------------------------------------- arm checks

@@ -2,7 +2,7 @@
 
 A study file names the cases of :func:`ppamsafety.sweep_cases.safety_case`
 (experiments, controller families and gains, impact settings) and the
-outputs.  Example (``studies/lambda_ki.toml``)::
+outputs.  Example (the shipped study ``lambda_ki``)::
 
     [study]
     name = "lambda-ki"                 # cache key part; default: the file name
@@ -14,7 +14,7 @@ outputs.  Example (``studies/lambda_ki.toml``)::
 
     [impact]                           # impact settings (shared by every case)
     instants = "heuristic"             # "heuristic", "all" (with every = N ms) or one heuristic
-    head = "thesis-frontal"
+    head = "thesis-frontal"            # default; a study that names none takes --head
     # stiffness = 43.0                 # override (2.18) [Nm/rad]: one value or [K1, K2]
 
     [grid]                             # every combination of these lists
@@ -44,9 +44,19 @@ Your arm, your head, effects and design parameters::
     arm.pneumatics.mean_pressure = { linspace = [1.2, 2.0, 5], unit = "bar" }
     effects.payload_mass = [0.0, 0.5, 1.0]        # one effect per axis
 
+A covering and a contact point (``covering``, ``contact``: a built-in name or a covering or
+contact point file, read relative to the study file) and the covering's layer
+(``covering_thickness``, ``covering_modulus``, ``covering_hysteresis``, with a unit too)::
+
+    [grid]
+    covering = ["bare metal", "foam.toml"]
+    contact = ["forearm", "gripper_edge.toml"]
+    covering_thickness = { values = [2, 8], unit = "mm" }
+
 Dotted keys (``arm.<key of an arm file>``, ``effects.<name>``) are validated like the
 arm file; a plain number is in the key's SI unit, ``{value = ..., unit = "..."}`` or a
-generator with ``unit`` converts (:mod:`ppamsafety.params.arm_file`).  ``--arm`` and
+generator with ``unit`` converts (:mod:`ppamsafety.params.arm_file`; the ``covering_*`` keys
+too), and the outputs show a value in the unit the study file wrote it in.  ``--arm`` and
 ``--head`` on the command line replace ``[arm]`` and ``[head]``.
 
 A safety envelope instead of a grid (:func:`ppamsafety.envelope.safety_envelope`)::
@@ -75,6 +85,12 @@ controllers' limits (the controller of every case is built), stiffnesses the
 impact model cannot resolve, durations shorter than the experiment's events,
 and an empty study.
 
+Shipped studies: the studies the report's sweep sections run ship with the package
+(:data:`STUDY_DATA`, :func:`shipped_studies`): ``lambda_ki`` (the section ``lambda_sweep``) and
+``table_6_1`` (the experiments and controller variants of the section ``safety``).
+:func:`load_study` (and ``ppamsafety sweep NAME``) takes such a name where no file of that
+name exists, so the report and the command line run one definition.
+
 The cases are a :class:`CaseGrid`: generated one by one when read, never a
 list, so a study of 10^9 grid points loads at once and is costed by
 :func:`estimate_cases` (cases, time, memory) before anything runs.  A run
@@ -98,13 +114,14 @@ table), and the arm and head used (``arm.toml``, ``head.toml``).
 
 from __future__ import annotations
 
+import hashlib
 import html
 import importlib.util
 import itertools
 import math
 import tomllib
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -112,21 +129,28 @@ import pandas as pd
 
 from ._inputfiles import check_input_path, read_text
 from ._jit import available_cores
-from ._validation import MAX_BYTES, check_int
+from ._validation import MAX_BYTES, check_int, did_you_mean
 from .envelope import LIMITS, SCAN, check_bounds, resolve_limit, safety_envelope
-from .experiments.catalog import DEFAULT_DURATIONS
+from .experiments.catalog import DEFAULT_DURATIONS, ControllerVariant
 from .impact.head import HeadContactModel, load_head
 from .output import OutputError, OutputFolder, check_output_path, read_marker
 from .design import load_arm
 from .params import ArmParameters
 from .params.arm_file import ArmFileError, arm_key, arm_to_toml, read_value
+from .params.contact_files import is_contact_file
 from .plots.figure import save as save_figure
 from .plots.sweep import limit_lines, plot_sweep
 from .sweep import BACKENDS, SweepResult, run_sweep
-from .sweep_cases import (DEFAULTS, IMPACT_POSE_DEG, PARAMETERS, SPEED_MAX, add_verdicts,
+from .sweep_cases import (COVERING_RANGES, DEFAULTS, IMPACT_POSE_DEG, PARAMETERS, SPEED_MAX,
+                          add_verdicts,
                           case_arm, case_function, check_case, check_impact_case, column_unit,
-                          is_dotted)
+                          is_dotted, make_controller)
 from .units import si_factor
+
+#: Folder of the shipped studies (package data): the report's sweep sections run these files.
+STUDY_DATA = Path(__file__).parent / "study_data"
+#: Keys of a case that build its controller (:func:`~ppamsafety.sweep_cases.make_controller`).
+CONTROLLER_KEYS = ("lam", "kp_bar", "ki_bar", "kd_bar", "task_kp", "task_ki", "task_kd")
 
 #: Allowed keys per table of a study file.
 SCHEMA = {
@@ -356,6 +380,12 @@ class Study:
         The head of every case (``[head] file`` or ``--head``; None: the cases' own).
     envelope : dict or None
         The ``[envelope]`` search (parameter, bounds, limit, tolerance, case), if any.
+    files : dict
+        The covering and contact point files the cases name: the path a case holds (relative
+        to the study file's folder, made absolute) -> the text the study file gives.
+    units : dict
+        Key -> the unit ``[case]`` or ``[[variants]]`` write its value in (``{ value = 4,
+        unit = "mm" }``), for the outputs.
 
     ``cases`` is a :class:`CaseGrid`: the cases are generated when they are read, so a
     study of any size loads at once; :meth:`estimate` says what running it costs.
@@ -371,6 +401,23 @@ class Study:
     arm: ArmParameters | None = None
     head: HeadContactModel | None = None
     envelope: dict | None = None
+    files: dict = field(default_factory=dict)
+    units: dict = field(default_factory=dict)
+
+    @property
+    def cache_name(self) -> str:
+        """The sweep name of the cache key: :attr:`name`, and the contents of the covering and
+        contact point files the cases name (an edited file is never served from the cache)."""
+        if not self.files:
+            return self.name
+        h = hashlib.sha1()
+        for f in sorted(self.files):
+            h.update(f.encode())
+            try:
+                h.update(Path(f).read_bytes())
+            except OSError:
+                h.update(b"missing")
+        return f"{self.name} [files {h.hexdigest()[:10]}]"
 
     @property
     def swept(self) -> list:
@@ -398,6 +445,9 @@ class Study:
         axis = self.cases.axes.get(key) if isinstance(self.cases, CaseGrid) else None
         if axis is not None and axis.unit is not None:
             return axis.unit, axis.factor
+        if key in self.units and axis is None:
+            si = UNIT_KEYS.get(key) or arm_key(key).unit
+            return self.units[key], si_factor(self.units[key], si, name=key)
         if self.envelope is not None and key == "value":
             return column_unit(self.envelope["parameter"]), 1.0
         if self.envelope is not None and key == "margin":        # limit - metric: its unit
@@ -430,8 +480,17 @@ def _err(where: str, msg: str) -> StudyFileError:
     return StudyFileError(f"{where}: {msg}")
 
 
+#: Case keys (besides the dotted arm keys) whose values a study file may give with a unit
+#: (``{ value = 5, unit = "mm" }``, ``{ values = [...], unit = "mm" }``): key -> SI unit.
+UNIT_KEYS = {k: unit for k, (_, _, unit) in COVERING_RANGES.items()}
+
+
+def _has_unit(key: str) -> bool:
+    return is_dotted(key) or key in UNIT_KEYS
+
+
 def _grid_values(where: str, key: str, v) -> Axis:
-    if isinstance(v, dict) and "unit" in v and is_dotted(key):
+    if isinstance(v, dict) and "unit" in v and _has_unit(key):
         v = dict(v)
         unit = v.pop("unit")
         if len(v) == 1 and next(iter(v)) in GENERATORS:      # the ends in SI, then the grid
@@ -455,7 +514,7 @@ def _grid_values(where: str, key: str, v) -> Axis:
                               f"{{geomspace = [start, stop, num]}} or {{linspace = [start, stop, "
                               f"num]}}" + (" (with unit = \"...\" for a dotted arm key, or "
                                            "{values = [...], unit = \"...\"})"
-                                           if is_dotted(key) else ""))
+                                           if _has_unit(key) else ""))
         gen, args = next(iter(v.items()))
         ok = (isinstance(args, list) and len(args) == 3
               and all(isinstance(a, (int, float)) and not isinstance(a, bool) for a in args)
@@ -476,16 +535,27 @@ def _grid_values(where: str, key: str, v) -> Axis:
 
 def _with_unit(axis: Axis, key: str, unit: str) -> Axis:
     """``axis`` with the unit the study file gave its values in (already checked)."""
-    si = arm_key(key).unit
+    si = UNIT_KEYS.get(key) or arm_key(key).unit
     if si is not None:
         axis.unit, axis.factor = unit, si_factor(unit, si, name=f"grid.{key}.unit")
     return axis
 
 
 def _dotted_si(where: str, path: str, key: str, v):
-    """A dotted parameter's value in SI units (``{value, unit}`` converted; lists as lists)."""
+    """A dotted parameter's (or a ``UNIT_KEYS`` key's) value in SI units (``{value,
+    unit}`` converted; lists as lists)."""
     if not isinstance(v, dict):
         return v
+    if key in UNIT_KEYS:
+        x = v.get("value")
+        if set(v) != {"value", "unit"} or isinstance(x, bool) or not isinstance(
+                x, (int, float)) or not math.isfinite(x):
+            raise _err(where, f"{path} = {v!r}: give a finite number with its unit, "
+                              f"{{ value = ..., unit = \"...\" }} (SI: {UNIT_KEYS[key]})")
+        try:
+            return float(x) * si_factor(v["unit"], UNIT_KEYS[key], name=f"{path}.unit")
+        except (TypeError, ValueError) as exc:
+            raise _err(where, f"{path} = {v!r}: {exc}") from None
     try:
         k = arm_key(key)
         if k.unit is None and k.kind != "float":
@@ -498,14 +568,44 @@ def _dotted_si(where: str, path: str, key: str, v):
     return list(si) if isinstance(si, tuple) else si
 
 
-def _check_value(where: str, path: str, key: str, v, arm=None) -> None:
+#: Case keys whose value may be a file (a string ending in ``.toml``), read relative to the
+#: study file: a covering file and a contact point file.
+FILE_KEYS = ("covering", "contact")
+
+
+def _file_value(key: str, v, base_dir, written: dict):
+    """A file value of a :data:`FILE_KEYS` key as a path relative to the study file's folder
+    (absolute as a string); ``written`` maps it back to the text of the study file."""
+    if key not in FILE_KEYS or not isinstance(v, str) or not is_contact_file(v):
+        return v
+    p = Path(v).expanduser()
+    if not p.is_absolute() and base_dir is not None:
+        p = Path(base_dir) / p
+    out = str(p.absolute()) if base_dir is not None or p.is_absolute() else v
+    written[out] = v
+    return out
+
+
+def _written_unit(units: dict, key: str, v) -> None:
+    """Record the unit a ``[case]`` or ``[[variants]]`` value of ``key`` is written in
+    (``{value, unit}``); None when two entries write the key in two units (shown in SI)."""
+    if not (_has_unit(key) and isinstance(v, dict) and isinstance(v.get("unit"), str)):
+        return
+    if key in units and units[key] != v["unit"]:
+        units[key] = None
+    else:
+        units.setdefault(key, v["unit"])
+
+
+def _check_value(where: str, path: str, key: str, v, arm=None, shown=None) -> None:
     try:
         if is_dotted(key):
             case_arm(arm, changes={key: v})
         else:
             PARAMETERS[key][0](v)
     except (TypeError, ValueError) as exc:
-        raise _err(where, f"{path} = {v!r}: {exc}") from None
+        shown = v if shown is None else shown
+        raise _err(where, f"{path} = {shown!r}: {exc}") from None
 
 
 #: Keys of a generator or a value with its unit: such an inline table is one value.
@@ -588,7 +688,8 @@ def _arm_and_head(where: str, data: dict, base_dir, arm, head) -> tuple:
 #: another unit of the same quantity, ``{ values = [low, high], unit = "mm/s" }``).
 ENVELOPE_UNITS = {"speed": "m/s", "lam": "s", "duration": "s", "stiffness": "N m/rad",
                   "task_kp": "N/m", "task_ki": "N/(m s)", "task_kd": "N s/m",
-                  "kp_bar": "bar/rad", "ki_bar": "bar/(rad s)", "kd_bar": "bar s/rad"}
+                  "kp_bar": "bar/rad", "ki_bar": "bar/(rad s)", "kd_bar": "bar s/rad",
+                  **UNIT_KEYS}
 
 
 def _envelope_range(where: str, par: str, rng) -> list:
@@ -797,6 +898,8 @@ def parse_study(text: str, *, where: str = "study file", default_name: str = "st
     if not isinstance(desc, str):
         raise _err(where, f"study.description = {desc!r} must be a string")
     origin = {}                                  # parameter -> dotted path where it is set
+    written = {}                                 # a file value -> as the study file gives it
+    units = {}                                   # key -> the unit [case]/[[variants]] give
     base = {}
     for table in ("case", "impact"):
         d = data.get(table, {})
@@ -807,8 +910,10 @@ def parse_study(text: str, *, where: str = "study file", default_name: str = "st
             if k == "head" and head is not None:
                 raise _err(where, f"{table}.head = {v!r} and the [head] file (or --head) both "
                                   f"set the head; set it in one place")
-            v = _dotted_si(where, f"{table}.{k}", k, v) if is_dotted(k) else v
-            _check_value(where, f"{table}.{k}", k, v, arm)
+            _written_unit(units, k, v)
+            v = _dotted_si(where, f"{table}.{k}", k, v) if _has_unit(k) else v
+            given, v = v, _file_value(k, v, base_dir, written)
+            _check_value(where, f"{table}.{k}", k, v, arm, shown=given)
             origin[k], base[k] = f"{table}.{k}", v
     envelope = _envelope(where, data, base, arm, base_dir)
     grid = data.get("grid", {})
@@ -819,10 +924,15 @@ def parse_study(text: str, *, where: str = "study file", default_name: str = "st
             raise _err(where, f"grid.{k} is also set as {origin[k]}; set it in one place")
         if k == "head" and head is not None:
             raise _err(where, "grid.head and the [head] file (or --head) both set the head")
+        given = v
+        if k in FILE_KEYS and isinstance(v, list):
+            v = [_file_value(k, x, base_dir, written) for x in v]
         axis = _grid_values(where, k, v)
         idx = range(len(axis)) if axis.gen is None else axis.representatives()
         for i in idx:
-            _check_value(where, f"grid.{k}[{i}]", k, axis[i], arm)
+            shown = (given[i] if given is not v else
+                     f"{axis[i] / axis.factor:g} {axis.unit}" if axis.unit else None)
+            _check_value(where, f"grid.{k}[{i}]", k, axis[i], arm, shown=shown)
         gvals[k] = axis
     variants = data.get("variants", [{}])
     if not isinstance(variants, list) or not variants:
@@ -837,9 +947,11 @@ def parse_study(text: str, *, where: str = "study file", default_name: str = "st
             if k == "head" and head is not None:
                 raise _err(where, f"variants[{j}].head and the [head] file (or --head) both "
                                   f"set the head")
-            v = _dotted_si(where, f"variants[{j}].{k}", k, v) if is_dotted(k) else v
+            _written_unit(units, k, v)
+            v = _dotted_si(where, f"variants[{j}].{k}", k, v) if _has_unit(k) else v
+            given, v = v, _file_value(k, v, base_dir, written)
             var[k] = v
-            _check_value(where, f"variants[{j}].{k}", k, v, arm)
+            _check_value(where, f"variants[{j}].{k}", k, v, arm, shown=given)
     if not any(t in data for t in ("case", "impact", "grid", "variants", "envelope")):
         raise _err(where, "the study defines no case: give a [case] table, a [grid], "
                           "[[variants]] entries or an [envelope] (see studies/*.toml); an "
@@ -858,11 +970,13 @@ def parse_study(text: str, *, where: str = "study file", default_name: str = "st
         if hist:
             raise _err(where, "output.histories does not apply to an [envelope] study")
         return Study(name=name.strip(), description=desc, cases=[], csv=csv, histories=False,
-                     source=text, arm=arm, head=head, envelope=envelope)
+                     source=text, arm=arm, head=head, envelope=envelope, files=written,
+                     units=units)
     cases = CaseGrid(base, variants, gvals, hist)
     _check_combinations(where, cases, arm)
     return Study(name=name.strip(), description=desc, cases=cases, csv=csv, histories=hist,
-                 source=text, arm=arm, head=head)
+                 source=text, arm=arm, head=head, files=written,
+                 units={k: u for k, u in units.items() if u is not None})
 
 
 def _check_combinations(where: str, cases: CaseGrid, arm=None) -> None:
@@ -1015,13 +1129,90 @@ def check_run_size(study, est: dict, *, confirm: bool = False) -> None:
             f"(confirm=True), or run it on a cluster (--backend dask --scheduler ADDRESS)")
 
 
+def shipped_studies() -> list:
+    """Names of the shipped studies (:data:`STUDY_DATA`), e.g. ``["lambda_ki", "table_6_1"]``."""
+    return sorted(p.stem for p in STUDY_DATA.glob("*.toml"))
+
+
+def shipped_study(name: str) -> Path:
+    """The file of a shipped study.
+
+    Parameters
+    ----------
+    name : str
+        One of :func:`shipped_studies`.
+
+    Returns
+    -------
+    pathlib.Path
+    """
+    names = shipped_studies()
+    if not isinstance(name, str) or name not in names:
+        raise ValueError(f"study = {name!r} is not a shipped study; shipped: {names}"
+                         f"{did_you_mean(name, names)}")
+    return STUDY_DATA / f"{name}.toml"
+
+
+def study_path(study) -> Path:
+    """The file a study argument names: a path, or the name of a shipped study.
+
+    A name without a folder or suffix that is no file in the working directory and is a
+    shipped study (:func:`shipped_studies`) gives that study's file; anything else is a path
+    (checked when read).
+
+    Parameters
+    ----------
+    study : str or os.PathLike
+        A study file or a shipped study's name.
+
+    Returns
+    -------
+    pathlib.Path
+    """
+    p = check_input_path("study", study)
+    if not p.exists() and p.suffix == "" and p.name == str(study):
+        names = shipped_studies()
+        if p.name in names:
+            return shipped_study(p.name)
+        raise StudyFileError(f"study = {str(study)!r}: no such file, and not a shipped study "
+                             f"(shipped: {names}){did_you_mean(p.name, names)}")
+    return p
+
+
+def controller_variants(study: Study) -> list:
+    """The controller variant of every ``[[variants]]`` entry of a study, in file order.
+
+    Each variant's controller is built by :func:`~ppamsafety.sweep_cases.make_controller`
+    from the entry's gains merged over ``[case]`` (as every case of the study builds it); the
+    label and the fields the thesis tables are keyed by follow from it
+    (:meth:`~ppamsafety.experiments.catalog.ControllerVariant.of`).
+
+    Parameters
+    ----------
+    study : Study
+        A loaded study whose cases come from a grid (not an ``[envelope]``).
+
+    Returns
+    -------
+    list of ControllerVariant
+    """
+    if not isinstance(study, Study) or not isinstance(study.cases, CaseGrid):
+        raise TypeError(f"study must be a Study of a grid, got {type(study).__name__}")
+    out = []
+    for var in study.cases.variants:
+        p = {**DEFAULTS, **study.cases.base, **var}
+        out.append(ControllerVariant.of(make_controller(
+            p["controller"], **{k: p[k] for k in CONTROLLER_KEYS})))
+    return out
+
+
 def load_study(path, *, arm=None, head=None) -> Study:
     """Read and check a study file (see the module docstring).
 
     Parameters
     ----------
     path : path-like
-        The ``.toml`` file.
+        The ``.toml`` file, or the name of a shipped study (:func:`study_path`).
     arm : ArmParameters, optional, keyword-only
         Replaces the study's ``[arm] file`` (``--arm``).
     head : HeadContactModel, optional, keyword-only
@@ -1032,7 +1223,7 @@ def load_study(path, *, arm=None, head=None) -> Study:
     Study
         The checked study (``path`` set).
     """
-    p, text = read_text(path, what="study file", error=StudyFileError)
+    p, text = read_text(study_path(path), what="study file", error=StudyFileError)
     st = parse_study(text, where=str(p), default_name=p.stem, base_dir=p.parent, arm=arm,
                      head=head)
     st.path = p
@@ -1078,7 +1269,8 @@ def run_study_file(study, outdir, *, backend: str = "local", scheduler=None,
     Parameters
     ----------
     study : Study or path-like
-        A :class:`Study` or the path of a study file.
+        A :class:`Study`, the path of a study file or a shipped study's name
+        (:func:`study_path`).
     outdir : path-like
         Output folder (kind ``"sweep"``).  New or empty; a previous sweep is
         reused with ``resume`` or replaced with ``overwrite``; a folder with
@@ -1160,7 +1352,8 @@ def run_study_file(study, outdir, *, backend: str = "local", scheduler=None,
             df.attrs["envelope_lines"] = env.lines()
         else:
             env = None
-            df = run_sweep(case_function(st.arm, st.head), cases, name=st.name, cache_dir=cache,
+            df = run_sweep(case_function(st.arm, st.head), cases, name=st.cache_name,
+                           cache_dir=cache,
                            processes=processes, progress=progress, on_error="record",
                            backend=backend, scheduler=scheduler).table
             df = add_verdicts(df, head=st.head)
@@ -1231,6 +1424,9 @@ def display_table(st: Study, df: pd.DataFrame) -> pd.DataFrame:
     """
     out = {}
     for col in df.columns:
+        if col in FILE_KEYS and st.files:                 # a file as the study file names it
+            out[col] = df[col].map(lambda v: st.files.get(v, v))
+            continue
         unit, factor = st.unit_of(col)
         label = (f"{st.envelope['parameter']} [{unit}]" if col == "value" and st.envelope
                  else unit_label(col, unit))
@@ -1346,4 +1542,6 @@ th{{background:#f3f3f3;text-align:left}}img{{max-width:100%}}
 __all__ = ["SCHEMA", "GENERATORS", "KIND", "MATERIALISE", "CHECK_ALL", "COST", "CONFIRM_HOURS",
            "Axis", "CaseGrid", "Study", "StudyFileError", "parse_study", "load_study",
            "estimate_cases", "describe_estimate", "check_run_size", "history_format",
-           "run_study_file", "summary_page", "display_table", "unit_label"]
+           "run_study_file", "summary_page", "display_table", "unit_label", "STUDY_DATA",
+           "shipped_studies", "shipped_study", "study_path", "controller_variants", "FILE_KEYS",
+           "UNIT_KEYS"]

@@ -54,7 +54,7 @@ from .impact.model import simulate_impacts, stiffness_limit
 from .params import ArmParameters, thesis_arm
 from .params.arm_file import ArmFileError, apply_arm_changes, arm_key, effects_from_dict
 from .params.contact import arm_contact_points, body_contact, body_contact_names, covering_names
-from .params.contact import covering as named_covering
+from .params.contact_files import is_contact_file, resolve_contact_point, resolve_covering
 from .params.effects import Effects
 from .plant import geometry as geo
 from .sweep import SweepResult, _check_cases, grid_cases, run_sweep
@@ -213,6 +213,22 @@ def _check_named(name, v, names):
     return v
 
 
+def _check_file_or_name(name, v, names, resolve, what):
+    """A name of ``names`` or a ``what`` file (a path ending in ``.toml``), read and validated
+    by ``resolve`` (as ``ppamsafety impact`` reads it); the value is returned as given."""
+    if v is None or not is_contact_file(v):
+        try:
+            return _check_named(name, v, names)
+        except ValueError as exc:
+            raise ValueError(f"{exc} or a {what} (.toml)") from None
+    try:
+        resolve(v)
+    except (TypeError, ValueError, OSError) as exc:
+        raise ValueError(f"{name} = {str(v)!r}: {exc}; allowed: {list(names)} or a {what} "
+                         f"(.toml)") from None
+    return str(v)
+
+
 def _check_covering_value(name):
     lo, hi, unit = COVERING_RANGES[name]
 
@@ -367,15 +383,21 @@ PARAMETERS = {
     "duration": (_check_duration,
                  "experiment length [s] (default: the catalog's), in [1, 1800] s and longer "
                  "than the experiment's events (step: 2 s, switch: 7.5 s)"),
-    "contact": (lambda v: _check_named("contact", v, CONTACT_POINTS),
+    "contact": (lambda v: _check_file_or_name("contact", v, CONTACT_POINTS,
+                                              lambda f: resolve_contact_point(f, None),
+                                              "contact point file"),
                 "contact point of the arm hitting the body: None = the tool point with the head "
-                f"model (thesis path); one of {list(CONTACT_POINTS)} (contact-point engine)"),
+                f"model (thesis path); one of {list(CONTACT_POINTS)} or a contact point file "
+                "(ppamsafety-contact/1, .toml; contact-point engine)"),
     "body": (lambda v: _check_named("body", v, body_contact_names()),
              "body region contact model (ppamsafety.params.contact.body_contact_names); "
              "default with a contact key: the head that passes the Hybrid III drop"),
-    "covering": (lambda v: _check_named("covering", v, covering_names()),
-                 "robot covering (ppamsafety.params.contact.covering_names); default with a "
-                 "contact key: bare metal, or 'thesis-implied' when a covering_* key is given"),
+    "covering": (lambda v: _check_file_or_name("covering", v, covering_names(),
+                                               resolve_covering, "covering file"),
+                 "robot covering (ppamsafety.params.contact.covering_names) or a covering file "
+                 "(ppamsafety-covering/1, .toml); default with a contact key: bare metal, or "
+                 "the contact point file's covering, or 'thesis-implied' when a covering_* key "
+                 "is given"),
     "covering_thickness": (_check_covering_value("covering_thickness"),
                            "thickness of the covering's layer [m]"),
     "covering_modulus": (_check_covering_value("covering_modulus"),
@@ -579,19 +601,26 @@ def make_controller(controller: str = "PID", *, lam=None, kp_bar=None, ki_bar=No
     return JointPSMC(**kw)
 
 
-def contact_covering(p: dict):
-    """The covering of a case with contact keys: the named covering (default bare metal, or
-    ``"thesis-implied"`` when a ``covering_*`` key is given) with its first layer's
-    thickness, modulus and hysteresis replaced by the case's ``covering_*`` values.
+def contact_covering(p: dict, point=None):
+    """The covering of a case with contact keys: the named covering or covering file (default
+    the contact point's own covering, bare metal for the arm's points, or ``"thesis-implied"``
+    when a ``covering_*`` key is given) with its first layer's thickness, modulus and
+    hysteresis replaced by the case's ``covering_*`` values.
 
     Parameters
     ----------
     p : dict
         The case's parameters (``covering`` and ``covering_*``).
+    point : ContactPoint, optional
+        The contact point (its covering is the default).
     """
     changes = {k[len("covering_"):]: p[k] for k in COVERING_RANGES if p.get(k) is not None}
-    name = p.get("covering") or ("thesis-implied" if changes else "bare metal")
-    cov = named_covering(name)
+    name = p.get("covering") or ("thesis-implied" if changes else None)
+    if name is None:
+        cov = point.covering if point is not None else resolve_covering("bare metal")
+        name = cov.name
+    else:
+        cov = resolve_covering(name)
     if not changes:
         return cov
     if cov.bare:
@@ -603,7 +632,7 @@ def contact_covering(p: dict):
         raise ValueError(f"covering_modulus: the layer of covering {name!r} is a 'power' law "
                          f"(no modulus)")
     label = ", ".join(f"{k} {v:g}" for k, v in changes.items())
-    return cov.replace(name=f"{name} ({label})",
+    return cov.replace(name=f"{cov.name} ({label})",
                        layers=(lay.replace(**changes),) + cov.layers[1:])
 
 
@@ -614,7 +643,7 @@ def _contact_impacts(result, arm, p):
     if p["contact"] == "all":
         runs = [_contact_impacts(result, arm, {**p, "contact": name}) for name in pts]
         return max(runs, key=lambda r: float(r[0].summary["F_max"].max()))
-    point = pts[p["contact"] or "tool point"]
+    point = resolve_contact_point(p["contact"] or "tool point", arm)
     body = body_contact(p["body"]) if p["body"] else body_contact()
     st = impact_states(result, arm)
     if p["instants"] == "all":
@@ -630,7 +659,7 @@ def _contact_impacts(result, arm, p):
     if p["stiffness"] is not None:
         K = np.broadcast_to(np.asarray(p["stiffness"], float), K.shape).copy()
     res = simulate_contacts(arm, sub[["q1", "q2"]].to_numpy(), sub[["qd1", "qd2"]].to_numpy(),
-                            K, point=point, body=body, covering=contact_covering(p))
+                            K, point=point, body=body, covering=contact_covering(p, point))
     s = res.summary
     s.insert(0, "t0", sub["t"].to_numpy())
     if names is not None:
@@ -710,7 +739,9 @@ def safety_case(experiment: str = "step", controller: str = "PID", *, lam=None, 
         Experiment length [s] (default: the catalog's, e.g. 12 s for the step).
     contact : str, optional
         A contact point of the arm (:data:`CONTACT_POINTS`; ``"all"``: every one, the
-        results of the point with the largest F_max).  With any of ``contact``,
+        results of the point with the largest F_max) or a contact point file
+        (``ppamsafety-contact/1``, a path ending in ``.toml``; a study file's path is relative
+        to the study file).  With any of ``contact``,
         ``body``, ``covering`` and ``covering_*`` the impacts go through the contact-point
         engine (:func:`ppamsafety.impact.anywhere.simulate_contacts`): the point (default the
         tool point) hits the body (default the head that passes the Hybrid III drop) through
@@ -718,8 +749,10 @@ def safety_case(experiment: str = "step", controller: str = "PID", *, lam=None, 
     body : str, optional
         A body contact model (:func:`ppamsafety.params.contact.body_contact_names`).
     covering : str, optional
-        A named covering (:func:`ppamsafety.params.contact.covering_names`; default bare
-        metal, or ``"thesis-implied"`` when a ``covering_*`` value is given).
+        A named covering (:func:`ppamsafety.params.contact.covering_names`) or a covering
+        file (``ppamsafety-covering/1``, a path ending in ``.toml``); default the contact
+        point's covering (bare metal for the arm's points), or ``"thesis-implied"`` when a
+        ``covering_*`` value is given.
     covering_thickness, covering_modulus, covering_hysteresis : float, optional
         Replace the thickness [m], modulus [Pa] and hysteresis factor [s/m] of the
         covering's (first) layer (:func:`contact_covering`): the covering as a design

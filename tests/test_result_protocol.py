@@ -41,13 +41,6 @@ NOT_RESULTS = {
     "ppamsafety.results.Result": "the protocol itself",
 }
 
-#: The fits of the thesis's own numbers follow the protocol in their own package; until they
-#: do, these cases are expected to fail (strict: the day they pass, they leave this set).
-DIAGNOSE_PENDING = ("ppamsafety.thesis_fits.",)
-
-#: Results that are a table without a figure: plot() raises NotImplementedError naming it.
-TABLE_ONLY = {"ArmSummary", "Verdicts", "DropTest", "CoveringFit", "DeltaFit", "DirectionOptimum"}
-
 
 def _public_modules():
     for m in pkgutil.walk_packages(ppamsafety.__path__, "ppamsafety."):
@@ -80,12 +73,6 @@ def result_classes():
 CLASSES = result_classes()
 
 
-def _marks(full):
-    if full.startswith(DIAGNOSE_PENDING):
-        return [pytest.mark.xfail(strict=True, reason="the diagnosis converts separately")]
-    return []
-
-
 def test_the_rule_finds_the_results():
     names = {k.rsplit(".", 1)[1] for k in CLASSES}
     for expected in ("ImpactResult", "WorstInstants", "HICResult", "HeadFit", "Campaign",
@@ -102,11 +89,11 @@ def test_names_are_singular_and_sections_are_not_studies():
         assert not name.endswith("Study"), full
 
 
-@pytest.mark.parametrize("full", [pytest.param(k, marks=_marks(k)) for k in sorted(CLASSES)])
+@pytest.mark.parametrize("full", [k for k in sorted(CLASSES)])
 def test_class_follows_the_protocol(full):
     cls = CLASSES[full]
     assert issubclass(cls, Result), f"{full} does not derive from ppamsafety.results.Result"
-    assert _defines(cls, "plot") or _defines(cls, "figures") or cls.__name__ in TABLE_ONLY, full
+    assert _defines(cls, "plot") or _defines(cls, "figures"), full
     assert "write" not in vars(cls) or "to_dict" in vars(cls), \
         f"{full}: a write() of its own comes with its own to_dict() schema"
 
@@ -146,6 +133,7 @@ def _builders(arm, pid_step):
     from ppamsafety.diagnose import diagnose
     from ppamsafety.diagnose.bench.cylinder_synth import synthesize_cylinder
     from ppamsafety.diagnose.bench.synthesize import synthesize_actuator
+    from ppamsafety.thesis_fits.as_built import identifiability
     t = np.linspace(0.0, 0.02, 201)
     eps = np.linspace(0.01, 0.2, 50)
     p = np.linspace(1e5, 3e5, 50)
@@ -169,6 +157,8 @@ def _builders(arm, pid_step):
                                                           cycles=1)),
         "BenchDiagnosis": lambda: diagnose(synthesize_cylinder({"coulomb": 5.0}, seed=1,
                                                                cycles=4, pressures=(3e5,))),
+        "Identifiability": lambda: identifiability(
+            np.random.default_rng(0).normal(size=(20, 3)), ("a", "b", "c")),
     }
 
 
@@ -179,7 +169,13 @@ def _square(x):
 BUILT = ["HICResult", "ImpactResult", "WorstInstants", "ExperimentResult", "DirectionSweep",
          "ContactResult", "ClampingResult", "Verdicts", "DropTest", "LSQResult",
          "TorqueFunctions", "StiffnessMap", "MaxLoadMap", "ArmSummary", "SweepResult",
-         "Diagnosis", "BenchDiagnosis"]
+         "Diagnosis", "BenchDiagnosis", "Identifiability"]
+
+
+#: Figures whose every axes with data shows a unit in brackets on an axis label (an image's
+#: quantity is on its colour bar).
+UNITS_ON_AXES = {"ArmSummary", "Verdicts", "DropTest", "CoveringFit", "DeltaFit",
+                 "DirectionOptimum", "Identifiability", "SummaryFit", "PairFit", "AsBuiltFit"}
 
 
 def check_protocol(res, tmp_path):
@@ -188,16 +184,17 @@ def check_protocol(res, tmp_path):
     assert isinstance(t, pd.DataFrame)
     assert res.table is t or res.table.equals(t)
     name = type(res).__name__
-    if name in TABLE_ONLY:
-        with pytest.raises(NotImplementedError, match=name):
-            res.plot()
-    else:
-        from matplotlib.figure import Figure
-        fig = res.plot()
-        assert isinstance(fig, Figure)
-        figs = res.figures()
-        assert figs and all(isinstance(k, str) and isinstance(f, Figure)
-                            for k, f in figs.items())
+    from matplotlib.figure import Figure
+    fig = res.plot()
+    assert isinstance(fig, Figure)
+    if name in UNITS_ON_AXES:
+        for ax in fig.axes:
+            if ax.has_data() and ax.get_label() != "<colorbar>" and not ax.images:
+                assert "[" in ax.get_xlabel() + ax.get_ylabel(), \
+                    f"{name}: axes {ax.get_title()!r} show no unit"
+    figs = res.figures()
+    assert figs and all(isinstance(k, str) and isinstance(f, Figure)
+                        for k, f in figs.items())
     d = res.to_dict()
     json.dumps(d, allow_nan=False)                 # JSON-ready, no NaN
     if "to_dict" not in vars(type(res)):
@@ -222,7 +219,7 @@ def check_protocol(res, tmp_path):
 
 def test_every_library_class_has_an_instance_check():
     lib = {k.rsplit(".", 1)[1] for k in CLASSES
-           if not k.startswith(("ppamsafety.sections.", *DIAGNOSE_PENDING))}
+           if not k.startswith("ppamsafety.sections.")}
     missing = lib - set(BUILT) - SLOW_BUILT
     assert not missing, f"add a builder for {sorted(missing)}"
 
@@ -230,7 +227,8 @@ def test_every_library_class_has_an_instance_check():
 #: Built in the slow protocol test (they run identifications, fits or sweeps of seconds).
 SLOW_BUILT = {"SafetySummary", "HeadFit", "Campaign", "SafetyEnvelope", "DirectionOptimum", "WorstDirection",
               "WorstContact", "CollisionResult", "CoveringFit", "DeltaFit", "DynamicResult",
-              "ConsistentResult", "ExcitationDesign", "Identification"}
+              "ConsistentResult", "ExcitationDesign", "Identification", "SummaryFit", "PairFit",
+              "AsBuiltFit"}
 
 
 @pytest.mark.parametrize("name", BUILT)
@@ -293,6 +291,8 @@ def _slow_builders(arm, pid_step):
     from ppamsafety.impact.summary import safety_summary
     from ppamsafety.impact.covering_fit import fit_covering
     from ppamsafety.impact.head_fit import fit_thesis_head
+    from ppamsafety.thesis_fits.as_built import Design, fit_as_built
+    from ppamsafety.thesis_fits.summary_fit import TableDesign, fit_pair, fit_summary
 
     def excitation_record():
         rng = np.random.default_rng(0)
@@ -324,7 +324,22 @@ def _slow_builders(arm, pid_step):
         rec = simulate_tensile_test(0.3, noise_std=5.0, seed=42, periods=2)
         return fit_delta(rec.eps, rec.force, rec.attrs["pressure"])
 
+    def summary_fit():
+        return fit_summary(arm, effects=("payload_mass", "valve_time_constant_factor"),
+                           design=TableDesign(variants=("PID",), periods=(5.0,), warmup=1.0,
+                                              window=5.0), fine=11)
+
+    def as_built_fit():
+        design = Design(variants=("PID",), periods=(5.0,), warmup=1.0, windows=(4.0,),
+                        step_duration=9.0, switch_duration=10.0, sawtooth_levels=4,
+                        impacts=False)
+        return fit_as_built(arm, candidates=("payload_mass",), design=design,
+                            max_evaluations=2)
+
     return {
+        "SummaryFit": summary_fit,
+        "PairFit": lambda: fit_pair(summary_fit(), arm, fine=5),
+        "AsBuiltFit": as_built_fit,
         "HeadFit": lambda: fit_thesis_head(arm),
         "Campaign": lambda: load_campaign(zillen2021_manifest("O-ring257")),
         "SafetyEnvelope": lambda: safety_envelope(

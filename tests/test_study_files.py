@@ -9,12 +9,12 @@ import pytest
 
 from ppamsafety.cli import main
 from ppamsafety.output import MARKER, OutputError
-from ppamsafety.study_files import (StudyFileError, history_format, load_study, parse_study,
-                                    run_study_file)
+from ppamsafety.study_files import (STUDY_DATA, StudyFileError, history_format, load_study,
+                                    parse_study, run_study_file, shipped_studies)
 from ppamsafety.sweep_cases import check_case, safety_case
 
 ROOT = Path(__file__).parent.parent
-STUDIES = ROOT / "studies"
+STUDIES = STUDY_DATA
 
 
 def test_the_example_study_files_load_and_expand():
@@ -23,13 +23,11 @@ def test_the_example_study_files_load_and_expand():
     assert {c["experiment"] for c in t.cases} == {"step", "switch"}
     labels = {(c["controller"], c.get("ki_bar"), c.get("lam")) for c in t.cases}
     assert len(labels) == 10                                         # Table 6.1's variants
-    f = load_study(STUDIES / "fig_6_3.toml")
-    from ppamsafety.impact.thesis_data import FIG_6_3
-    k = np.geomspace(FIG_6_3["k_min"], FIG_6_3["k_max"], 31)          # as the section stiffness
-    assert [c["stiffness"] for c in f.cases] == list(k)
-    assert all(c["instants"] == "max TCP speed" and c["controller"] == "PID" for c in f.cases)
     lk = load_study(STUDIES / "lambda_ki.toml")
     assert len(lk.cases) == 2 * 3 * 7 and lk.name == "lambda-ki"
+    # a shipped study is found by its name as well
+    assert load_study("lambda_ki").source == lk.source
+    assert shipped_studies() == ["lambda_ki", "table_6_1"]
 
 
 BASE = '[case]\nexperiment = "step"\n'
@@ -57,7 +55,7 @@ BASE = '[case]\nexperiment = "step"\n'
                                       "(0, 100] kg"]),
     (BASE + 'arm.links.m3 = 1.0\n', ["case.arm.links.m3", "unknown arm parameter 'links.m3'"]),
     (BASE + '[grid]\narm.pneumatics.mean_pressure = { linspace = [1, 4, 2], unit = "bar" }\n',
-     ["grid.arm.pneumatics.mean_pressure[1] = 400000.0", "[0, 300000] Pa"]),
+     ["grid.arm.pneumatics.mean_pressure[1] = '4 bar'", "400000 Pa", "[0, 300000] Pa"]),
     (BASE + '[grid]\neffects.hysteresis_delta = [0.1, 2.0]\n',
      ["grid.effects.hysteresis_delta[1] = 2.0", "effects.hysteresis_delta[0] = 2", "[0, 1]"]),
     ('[arm]\nfile = "no_such_arm.toml"\n', ["arm.file = 'no_such_arm.toml'", "does not exist"]),
@@ -95,7 +93,7 @@ def test_safety_case_parameters_are_checked_by_name():
 
 
 def test_cli_runs_table_6_1_reduced_and_reproduces_the_safety_study(tmp_path, capsys):
-    """Case 0 of studies/table_6_1.toml (PID, step) equals Table 6.1 of the safety study."""
+    """Case 0 of the shipped table_6_1 (PID, step) equals Table 6.1 of the safety study."""
     from ppamsafety.experiments.catalog import run_thesis_experiment
     from ppamsafety.impact.instants import evaluate_experiment
     from ppamsafety.params import thesis_arm
@@ -139,9 +137,10 @@ def test_cli_runs_table_6_1_reduced_and_reproduces_the_safety_study(tmp_path, ca
     assert "notes.txt" in capsys.readouterr().err and (out / "notes.txt").read_text() == "mine"
 
 
-def test_fig_6_3_case_reproduces_the_stiffness_study():
-    """studies/fig_6_3.toml at k = 1 Nm/rad: the stiffness study's first row."""
-    st = load_study(STUDIES / "fig_6_3.toml")
+def test_a_stiffness_override_case_reproduces_the_stiffness_section():
+    """A study of the PID step impact at k = 1 Nm/rad: the stiffness section's first row."""
+    st = parse_study('[case]\nexperiment = "step"\ncontroller = "PID"\n[impact]\n'
+                     'instants = "max TCP speed"\nstiffness = 1.0\n')
     r = safety_case(**st.cases[0])
     ref = pd.read_csv(ROOT / "reports" / "stiffness_sweep.csv")
     assert ref.k[0] == st.cases[0]["stiffness"] == 1.0

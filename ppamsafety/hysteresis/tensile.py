@@ -34,11 +34,12 @@ error sigma_r / sqrt(sum a^2).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
 
+from ..plots.identify import plot_delta_fit
 from ..results import Result
 from .._jit import kernel, leaf
 from .._validation import (as_float_array, check_int, check_nonnegative, check_positive,
@@ -241,6 +242,10 @@ class DeltaFit(Result):
         RMS force residual of the model without hysteresis (delta = 0) [N].
     n_samples : int
         Samples used.
+    record : pandas.DataFrame
+        The record and both models in time order: ``eps`` [-], ``force`` (measured),
+        ``force_nominal`` (the force law, no hysteresis) and ``force_fit`` (with the
+        fitted hysteresis) [N].
     """
 
     delta: float
@@ -248,6 +253,21 @@ class DeltaFit(Result):
     rms_residual: float
     rms_residual_nominal: float
     n_samples: int
+    record: pd.DataFrame = field(default=None, repr=False)
+
+    def to_pandas(self) -> pd.DataFrame:
+        """One row: ``delta``, ``std_error`` [-], ``rms_residual``, ``rms_residual_nominal``
+        [N], ``n_samples``."""
+        return pd.DataFrame([{"delta": self.delta, "std_error": self.std_error,
+                              "rms_residual": self.rms_residual,
+                              "rms_residual_nominal": self.rms_residual_nominal,
+                              "n_samples": self.n_samples}])
+
+    def plot(self):
+        """The record's force against contraction with both models, and the residuals."""
+        if self.record is None:
+            raise ValueError("this DeltaFit holds no record to draw: make it with fit_delta()")
+        return plot_delta_fit(self.record, delta=self.delta, std_error=self.std_error)
 
 
 def fit_delta(eps, force, pressure, *, force_law=DEFAULT_FORCE_LAW, eps_max: float = EPS_MAX,
@@ -310,7 +330,9 @@ def fit_delta(eps, force, pressure, *, force_law=DEFAULT_FORCE_LAW, eps_max: flo
     sigma = math.sqrt(float(res @ res) / (n - 1))
     return DeltaFit(delta=delta, std_error=sigma / math.sqrt(saa),
                     rms_residual=math.sqrt(float(res @ res) / n),
-                    rms_residual_nominal=math.sqrt(float(r @ r) / n), n_samples=n)
+                    rms_residual_nominal=math.sqrt(float(r @ r) / n), n_samples=n,
+                    record=pd.DataFrame({"eps": e, "force": f, "force_nominal": nominal,
+                                         "force_fit": nominal + delta * a}))
 
 
 __all__ = ["DEFAULT_FORCE_LAW", "DeltaFit", "TENSILE_AMPLITUDE", "TENSILE_OFFSET",

@@ -30,6 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from ..plots.impact import plot_drop_test
 from ..results import Result
 from .._validation import check_instance, check_range
 from ..params.contact import BodyContact, Layer
@@ -187,6 +188,19 @@ class DropTest(Result):
                               "corridor_low_g": lo, "corridor_high_g": hi,
                               "t_peak": self.t_peak, "restitution": self.restitution,
                               "after_pulse_share": self.unimodal, "passed": self.passed}])
+
+    def plot(self, *, title: str = ""):
+        """Head acceleration [g] against time, raw and CFC 1000, with the corridor; a Figure.
+
+        Parameters
+        ----------
+        title : str, keyword-only
+            Axes title (default names the test and the body).
+        """
+        return plot_drop_test(self.history, corridor_g=HYBRID3_CORRIDOR_G,
+                              peak_g_cfc=self.peak_g_cfc,
+                              title=title or f"Hybrid III head drop (49 CFR 572.32): "
+                                             f"{self.body.name}")
 
 
 def hybrid3_drop(body: BodyContact, *, mass: float = HYBRID3_HEAD_MASS,

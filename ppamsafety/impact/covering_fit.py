@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from ..plots.impact import plot_head_fit
 from ..results import Result
 from .._validation import as_float_array, check_choice, check_instance, check_range
 from ..params import ArmParameters, thesis_arm
@@ -133,6 +134,27 @@ class CoveringFit(Result):
     def to_pandas(self) -> pd.DataFrame:
         """The pairs of Table 6.1 with the fitted model's HIC (:attr:`pairs`)."""
         return self.pairs.copy()
+
+    def curve(self) -> pd.DataFrame:
+        """(F_max, HIC36) of the fitted covering on the head over impact speeds
+        (:func:`stack_curve`)."""
+        return stack_curve(series_contact(self.covering, self.body, radii=self.point.radii),
+                           arm_mass=self.arm_mass)
+
+    def plot(self, *, title: str = ""):
+        """The Table 6.1 pairs against the fitted covering's HIC(F_max) curve; a Figure.
+
+        Parameters
+        ----------
+        title : str, keyword-only
+            Axes title (default names the covering's modulus and the fit's RMS).
+        """
+        layer = self.covering.layers[0]
+        return plot_head_fit(
+            self.pairs, self.curve(),
+            label=f"{layer.thickness * 1e3:.3g} mm covering, E = {self.modulus / 1e6:.3g} MPa, "
+                  f"on {self.body.name}",
+            title=title or f"covering fitted to Table 6.1: RMS {self.rms_sigma:.2f} sd")
 
 
 def _cover(law, modulus, thickness, strain_limit, hysteresis):

@@ -75,7 +75,7 @@ from __future__ import annotations
 import functools
 import math
 import warnings
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 import pandas as pd
@@ -86,7 +86,7 @@ from .._validation import (MAX_BYTES, as_float_array, check_bool, check_int, che
 from ..plant import dynamics as dyn
 from ..plant import geometry as geo
 from ..plant import packing
-from ..plots.impact import plot_direction_polar
+from ..plots.impact import plot_direction_optimum, plot_direction_polar
 from ..units import G0
 from . import engine as eng
 from .bounds import impact_bounds
@@ -475,6 +475,8 @@ class DirectionOptimum(Result):
         Absolute direction of the TCP velocity [deg].
     evaluations : int
         Engine runs used.
+    evaluated : pandas.DataFrame
+        Every placement the search simulated: ``psi`` [rad], ``F_max`` [N], ``HIC36`` [-].
     """
 
     psi_F: float
@@ -485,6 +487,7 @@ class DirectionOptimum(Result):
     HIC_along_velocity: float
     velocity_deg: float
     evaluations: int
+    evaluated: pd.DataFrame = field(default=None, repr=False)
 
     def to_pandas(self) -> pd.DataFrame:
         """One row: the fields above, angles also in degrees (``psi_F_deg``, ``psi_HIC_deg``).
@@ -493,25 +496,26 @@ class DirectionOptimum(Result):
         -------
         pandas.DataFrame
         """
-        d = dict(self.__dict__)
+        d = {k: v for k, v in self.__dict__.items() if k != "evaluated"}
         d["psi_F_deg"], d["psi_HIC_deg"] = math.degrees(self.psi_F), math.degrees(self.psi_HIC)
         return pd.DataFrame([d])
 
-    def plot(self, **kwargs):
-        """Not a figure of its own: use :func:`direction_sweep` (its ``plot``) for the polar curve.
+    def plot(self, *, title: str = ""):
+        """F_max and HIC36 at every placement the search simulated, the worst starred.
+
+        The search samples the placements near the optima; the whole polar curve is
+        :func:`direction_sweep` (its ``plot``).
 
         Parameters
         ----------
-        **kwargs
-            Ignored.
-
-        Raises
-        ------
-        NotImplementedError
-            Always.
+        title : str, keyword-only
+            Figure title.
         """
-        raise NotImplementedError("DirectionOptimum holds two numbers per metric; plot the "
-                                  "polar curve of direction_sweep(...) instead")
+        if self.evaluated is None:
+            raise ValueError("this DirectionOptimum holds no evaluations to draw: make it "
+                             "with worst_direction_state()")
+        return plot_direction_optimum(self.evaluated, psi_F=self.psi_F, psi_HIC=self.psi_HIC,
+                                      title=title)
 
 
 def _search(en, q, qd, K, e, ep, psi0, col, xtol, seen):
@@ -593,7 +597,11 @@ def worst_direction_state(arm, q, qd, stiffness, *, head=None, dt: float = 2e-5,
                     seen)
     return DirectionOptimum(pf, ph, F, H, float(seen[0.0][eng.R_FMAX]),
                             float(seen[0.0][eng.R_HIC36]),
-                            math.degrees(math.atan2(e[0, 1], e[0, 0])), en.calls)
+                            math.degrees(math.atan2(e[0, 1], e[0, 0])), en.calls,
+                            pd.DataFrame({"psi": list(seen),
+                                          "F_max": [float(r[eng.R_FMAX]) for r in seen.values()],
+                                          "HIC36": [float(r[eng.R_HIC36])
+                                                    for r in seen.values()]}))
 
 
 # ---- every instant of an experiment -----------------------------------------------------------

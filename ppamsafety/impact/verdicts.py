@@ -42,6 +42,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from ..plots.impact import plot_verdicts
 from ..results import Result
 from .._validation import check_str, did_you_mean
 from ..params.injury import AIS_RISK, AIS_SOURCE, FRACTURE_FORCES, HIC36_LIMIT
@@ -269,6 +270,16 @@ class Verdicts(Result):
     def lines(self) -> list:
         """The verdicts as aligned text lines (the terminal's)."""
         return verdict_lines(self.table, self.risk, self.reason)
+
+    def plot(self, *, title: str = ""):
+        """Every verdict as value / limit [%], pass or fail; a matplotlib Figure.
+
+        Parameters
+        ----------
+        title : str, keyword-only
+            Axes title (default the region and contact point).
+        """
+        return plot_verdicts(self.table, title=title)
 
 
 def evaluate(values, criteria, *, head: str = "", contact_point: str = TOOL_POINT,

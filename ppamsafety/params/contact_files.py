@@ -125,7 +125,15 @@ def _covering_from_dict(data) -> Covering:
         raise ArmFileError(str(exc).replace("Covering.", "")) from None
 
 
-def _is_file(value) -> bool:
+def is_contact_file(value) -> bool:
+    """``value`` names a covering or contact point file (a path, or a string ending in
+    ``.toml``), not a built-in name.
+
+    Parameters
+    ----------
+    value : object
+        A covering or contact point argument.
+    """
     return isinstance(value, Path) or (isinstance(value, str) and value.endswith(".toml"))
 
 
@@ -155,7 +163,7 @@ def resolve_covering(value) -> Covering:
     """
     if isinstance(value, Covering):
         return value
-    if _is_file(value):
+    if is_contact_file(value):
         return load_covering(value)
     if isinstance(value, str):
         if value not in covering_names():
@@ -216,7 +224,7 @@ def _contact_from_dict(data, base: Path | None) -> ContactPoint:
         radius = _quantity("radius", data["radius"], "m")
     cov = data.get("covering", "bare metal")
     try:
-        if _is_file(cov) and base is not None and not Path(cov).is_absolute():
+        if is_contact_file(cov) and base is not None and not Path(cov).is_absolute():
             cov = base / cov
         cov = resolve_covering(cov)
     except (TypeError, ValueError, OSError) as exc:
@@ -259,7 +267,7 @@ def resolve_contact_point(value, arm) -> ContactPoint:
     """
     if isinstance(value, ContactPoint):
         return value
-    if _is_file(value):
+    if is_contact_file(value):
         return load_contact_point(value)
     if isinstance(value, str):
         pts = {p.name: p for p in arm_contact_points(arm)}
@@ -292,6 +300,6 @@ def contact_point_to_toml(point: ContactPoint, *, covering_file: str | None = No
     return "\n".join(lines) + "\n"
 
 
-__all__ = ["COVERING_FORMAT", "CONTACT_FORMAT", "load_covering", "resolve_covering",
+__all__ = ["COVERING_FORMAT", "CONTACT_FORMAT", "is_contact_file", "load_covering", "resolve_covering",
            "covering_to_toml", "load_contact_point", "resolve_contact_point",
            "contact_point_to_toml"]

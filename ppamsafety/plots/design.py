@@ -150,4 +150,57 @@ def plot_max_load(result, *, reference_kg: float | None = 2.0):
     return fig
 
 
-__all__ = ["plot_torque_functions", "plot_stiffness_map", "plot_max_load"]
+def plot_arm_summary(stiffness, max_load, *, pose, stiffness_at_pose, name: str = ""):
+    """An arm's key design numbers over its working area: K1, K2 and the maximum load.
+
+    Parameters
+    ----------
+    stiffness : pandas.DataFrame
+        ``ppamsafety.design.StiffnessMap.data`` (``q1_rad``, ``q2_rad``,
+        ``K1_Nm_per_rad``, ``K2_Nm_per_rad``, ``holdable``).
+    max_load : pandas.DataFrame
+        ``ppamsafety.design.MaxLoadMap.data`` (``q1_rad``, ``q2_rad``, ``M_max_kg``).
+    pose : (float, float)
+        Configuration of the stiffness numbers [rad] (starred).
+    stiffness_at_pose : (float, float)
+        K1, K2 at the pose [N m/rad].
+    name : str
+        The arm's name (title).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Three maps over (q1, q2) [deg]: K1 and K2 [N m/rad] (not holdable hatched) and the
+        maximum load [kg] (its minimum circled).
+    """
+    fig, axes = new_figure(1, 3, figsize=(14, 4))
+    pq = np.asarray(pose, float) / DEG
+    for j in range(2):
+        a = axes[j]
+        q1, q2, Z = _joint_grid(stiffness, f"K{j + 1}_Nm_per_rad")
+        cs = a.contourf(q1, q2, Z, levels=20, cmap="viridis")
+        fig.colorbar(cs, ax=a, label=f"$K_{j + 1}$ [N m/rad]")
+        _, _, H = _joint_grid(stiffness.assign(h=stiffness["holdable"].astype(float)), "h")
+        a.contourf(q1, q2, H, levels=[-0.5, 0.5], colors="none", hatches=["//"])
+        a.plot(*pq, "r*", ms=12, label=f"pose: {stiffness_at_pose[j]:.3g} N m/rad")
+        a.set_title(f"joint {j + 1} stiffness (hatched: not holdable)", fontsize=9)
+    q1, q2, Z = _joint_grid(max_load, "M_max_kg")
+    cs = axes[2].contourf(q1, q2, Z, levels=20, cmap="RdYlGn")
+    fig.colorbar(cs, ax=axes[2], label="max load [kg]")
+    k = int(np.argmin(max_load["M_max_kg"].to_numpy(float)))
+    r = max_load.iloc[k]
+    axes[2].plot(r["q1_rad"] / DEG, r["q2_rad"] / DEG, "ko", mfc="none", ms=12,
+                 label=f"minimum {r['M_max_kg']:.3g} kg")
+    axes[2].plot(*pq, "r*", ms=12, label="stiffness pose")
+    axes[2].set_title("maximum load", fontsize=9)
+    for a in axes:
+        a.set_xlabel("$q_1$ [deg]")
+        a.set_ylabel("$q_2$ [deg]")
+        a.legend(fontsize=7, loc="lower right")
+    fig.suptitle(f"{name}: design numbers over the working area" if name else
+                 "design numbers over the working area")
+    fig.tight_layout()
+    return fig
+
+
+__all__ = ["plot_torque_functions", "plot_stiffness_map", "plot_max_load", "plot_arm_summary"]

@@ -9,7 +9,8 @@ Each function takes computed data and returns a Figure; nothing here simulates.
   :func:`plot_summary_profiles`, :func:`plot_gap`, :func:`plot_confusion`;
 * case study (a), :mod:`ppamsafety.sections.diagnose_sawtooth`:
   :func:`plot_sawtooth_diagnosis`;
-* the as-built arm, :mod:`ppamsafety.sections.as_built`: :func:`plot_as_built`;
+* the as-built arm, :mod:`ppamsafety.sections.as_built`: :func:`plot_as_built`,
+  :func:`plot_identifiability`; two effects of Table 5.2 together: :func:`plot_pair_fit`;
 * trust in the diagnosis, :mod:`ppamsafety.sections.diagnose_trust`:
   :func:`plot_calibration`, :func:`plot_detection_curve`.
 """
@@ -392,8 +393,112 @@ def plot_as_built(cells, effects, *, sources):
     return fig
 
 
+def plot_identifiability(names, column_norm, cosines, selected, singular_values, *,
+                         rank_tol: float):
+    """What a sensitivity matrix can identify: column norms, singular values, |cos| map.
+
+    Parameters
+    ----------
+    names : sequence of str
+        Candidates (columns of the sensitivity matrix).
+    column_norm : array_like, shape (K,)
+        Change of the whitened residual vector per unit theta of each candidate [-].
+    cosines : array_like or pandas.DataFrame, shape (K, K)
+        |cos| between the columns [-].
+    selected : collection of str
+        The identifiable subset (drawn in colour, the others grey).
+    singular_values : array_like
+        Singular values divided by the largest [-].
+    rank_tol : float, keyword-only
+        Relative rank threshold (dotted line).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Left: column norm per candidate (log scale).  Middle: singular values relative to
+        the largest, the rank threshold dotted.  Right: |cos| between the candidates.
+    """
+    names = list(names)
+    norms = np.asarray(column_norm, float)
+    cos = np.asarray(cosines, float)
+    sv = np.asarray(singular_values, float)
+    fig, (a, b, c) = new_figure(1, 3, figsize=(13, 4.2),
+                                gridspec_kw={"width_ratios": [1.2, 0.8, 1.2]})
+    y = np.arange(len(names))
+    colours = ["C0" if n in selected else "0.6" for n in names]
+    a.barh(y, np.maximum(norms, 1e-12), color=colours)
+    a.set_yticks(y)
+    a.set_yticklabels(names, fontsize=7)
+    a.invert_yaxis()
+    a.set_xscale("log")
+    a.set_xlabel("|dr/dθ|: whitened residual per unit theta [-]", fontsize=8)
+    a.set_title("sensitivity per candidate (colour: identifiable)", fontsize=9)
+    a.grid(alpha=0.3)
+    b.semilogy(np.arange(1, sv.size + 1), np.maximum(sv, 1e-16), "o-")
+    b.axhline(rank_tol, color="0.5", ls=":", lw=0.8, label="rank threshold")
+    b.set_xlabel("singular value index [-]")
+    b.set_ylabel("s_i / s_1 [-]")
+    b.set_title(f"rank {int(np.sum(sv > rank_tol))} of {sv.size}", fontsize=9)
+    b.legend(fontsize=7)
+    b.grid(alpha=0.3)
+    im = c.imshow(cos, vmin=0.0, vmax=1.0, cmap="viridis")
+    c.set_xticks(y)
+    c.set_xticklabels(names, fontsize=6, rotation=60, ha="right")
+    c.set_yticks(y)
+    c.set_yticklabels(names, fontsize=6)
+    c.set_title("|cos| between candidates", fontsize=9)
+    fig.colorbar(im, ax=c, label="|cos| [-]")
+    fig.tight_layout()
+    return fig
+
+
+def plot_pair_fit(grid, names, best_theta, *, statistics: int, chi2_single: float):
+    """chi2 of two effects fitted together, over their theta plane.
+
+    Parameters
+    ----------
+    grid : pandas.DataFrame
+        ``theta_a``, ``theta_b``, ``chi2`` on a full rectangular grid
+        (``ppamsafety.thesis_fits.summary_fit.PairFit.grid``).
+    names : (str, str)
+        The two effects (axes a and b).
+    best_theta : (float, float)
+        The best point (marked).
+    statistics : int, keyword-only
+        Number of statistics (chi2 is drawn per statistic).
+    chi2_single : float, keyword-only
+        Best chi2 of either effect alone (the contour where the pair does as well).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Filled contours of log10(chi2 / statistic) over (theta_a, theta_b), the best point
+        and the contour of the best single effect.
+    """
+    ta = np.unique(grid.theta_a.to_numpy(float))
+    tb = np.unique(grid.theta_b.to_numpy(float))
+    g = grid.sort_values(["theta_a", "theta_b"])
+    z = g.chi2.to_numpy(float).reshape(ta.size, tb.size) / statistics
+    z = np.where(np.isfinite(z), z, np.nan)
+    fig, ax = new_figure(1, 1, figsize=(6.4, 5.0))
+    cs = ax.contourf(ta, tb, np.log10(np.maximum(z, 1e-12)).T, levels=20, cmap="viridis_r")
+    fig.colorbar(cs, ax=ax, label="log10(chi2 / statistic) [-]")
+    if np.nanmin(z) <= chi2_single / statistics <= np.nanmax(z):
+        ax.contour(ta, tb, z.T, levels=[chi2_single / statistics], colors="w",
+                   linestyles="--", linewidths=1.0)
+    ax.plot(*best_theta, "r*", ms=12, label="best pair")
+    ax.set_xlabel(f"theta of {names[0]} (0 nominal, 1 largest plausible) [-]", fontsize=8)
+    ax.set_ylabel(f"theta of {names[1]} [-]", fontsize=8)
+    ax.set_title("two effects together (dashed: as good as the best single effect)",
+                 fontsize=9)
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    return fig
+
+
 __all__ = ["actuator_force_figure", "actuator_residual_figure", "plot_summary_profiles", "plot_gap",
-           "plot_confusion", "plot_sawtooth_diagnosis", "plot_as_built"]
+           "plot_confusion", "plot_sawtooth_diagnosis", "plot_as_built", "plot_identifiability",
+           "plot_pair_fit"]
 
 
 def plot_calibration(table, *, required: float):

@@ -69,4 +69,48 @@ def plot_excitation(t, delta_p, *, condition_number: float):
     return fig
 
 
-__all__ = ["plot_fit", "plot_excitation"]
+def plot_delta_fit(record, *, delta: float, std_error: float):
+    """A tensile-test record against the force law without and with the fitted hysteresis.
+
+    Parameters
+    ----------
+    record : pandas.DataFrame
+        ``eps`` [-], ``force`` (measured), ``force_nominal`` (the force law (3.9), no
+        hysteresis) and ``force_fit`` (with the fitted (3.35)) [N], in time order
+        (``ppamsafety.hysteresis.tensile.DeltaFit.record``).
+    delta, std_error : float
+        The fitted hysteresis scale and its standard error [-].
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Left: force [N] against contraction [-], the measured loop and both models.
+        Right: the force residuals [N] of both models against time order.
+    """
+    eps = record["eps"].to_numpy(float)
+    f = record["force"].to_numpy(float)
+    fn = record["force_nominal"].to_numpy(float)
+    ff = record["force_fit"].to_numpy(float)
+    fig, (a, b) = new_figure(1, 2, figsize=(10, 3.8))
+    a.plot(eps, f, ".", ms=2, color="0.5", label="measured")
+    a.plot(eps, fn, "-", lw=1.0, color="tab:red", label="force law, no hysteresis")
+    a.plot(eps, ff, "-", lw=1.2, color="tab:blue",
+           label=f"fitted, delta = {delta:.3g} ± {std_error:.2g}")
+    a.set_xlabel("contraction eps [-]")
+    a.set_ylabel("muscle force [N]")
+    a.grid(alpha=0.3)
+    a.legend(fontsize=7)
+    k = np.arange(f.size)
+    b.plot(k, f - fn, lw=0.8, color="tab:red", label="no hysteresis")
+    b.plot(k, f - ff, lw=0.8, color="tab:blue", label="fitted")
+    b.axhline(0.0, color="k", lw=0.5)
+    b.set_xlabel("sample [-]")
+    b.set_ylabel("force residual [N]")
+    b.grid(alpha=0.3)
+    b.legend(fontsize=7)
+    fig.suptitle("hysteresis scale delta of (3.35) from a tensile test (§3.6.5)", fontsize=10)
+    fig.tight_layout()
+    return fig
+
+
+__all__ = ["plot_fit", "plot_excitation", "plot_delta_fit"]

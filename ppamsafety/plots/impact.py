@@ -279,7 +279,8 @@ def plot_stiffness_conventions(sweep, *, thesis=None, reference=None):
     return fig
 
 
-def plot_head_fit(pairs, curve, *, drop=None, title: str = ""):
+def plot_head_fit(pairs, curve, *, drop=None, title: str = "",
+                  label: str = "fitted Hunt-Crossley model"):
     """Table 6.1 (HIC, F_max) pairs against the fitted model's HIC(F_max) curve.
 
     Parameters
@@ -292,6 +293,8 @@ def plot_head_fit(pairs, curve, *, drop=None, title: str = ""):
         Reserved (drop-test marker); ignored.
     title : str
         Axes title (default "one contact model: HIC vs F_max").
+    label : str
+        Legend label of the model's curve.
 
     Returns
     -------
@@ -302,7 +305,7 @@ def plot_head_fit(pairs, curve, *, drop=None, title: str = ""):
     for exp, marker in (("step", "o"), ("switch", "s")):
         sub = pairs[pairs["experiment"] == exp]
         ax.loglog(sub["F_max"], sub["HIC"], marker, ls="none", label=f"Table 6.1, {exp}")
-    ax.loglog(curve["F_max"], curve["HIC36"], "k-", label="fitted Hunt-Crossley model")
+    ax.loglog(curve["F_max"], curve["HIC36"], "k-", label=label)
     ax.set_xlabel("F_max [N]")
     ax.set_ylabel("HIC36 [-]")
     ax.grid(alpha=0.3, which="both")
@@ -492,5 +495,135 @@ def plot_worst_instants(table, *, worst_F: float, worst_HIC: float, title: str =
     axes[0].legend(fontsize=7)
     axes[1].set_xlabel("impact instant t0 [ms]")
     axes[0].set_title(title or "worst impact instant")
+    fig.tight_layout()
+    return fig
+
+
+def plot_verdicts(table, *, title: str = ""):
+    """Every verdict as its value over its limit, one bar per criterion and head model.
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+        Verdict rows (``ppamsafety.impact.verdicts.VERDICT_COLUMNS``): ``criterion``,
+        ``value``, ``limit``, ``unit``, ``passed``, ``head_model``, ``region``.
+    title : str
+        Axes title (default: the region and contact point of the first row).
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Horizontal bars of value / limit [%] (green: passes, red: fails), the limit at
+        100 % dashed; each bar is labelled with its value and limit in their units.
+    """
+    t = table.reset_index(drop=True)
+    n = len(t)
+    fig, ax = new_figure(figsize=(8.5, 1.2 + 0.38 * max(n, 1)))
+    ratio = 100.0 * t["value"].to_numpy(float) / t["limit"].to_numpy(float)
+    y = np.arange(n)
+    heads = t["head_model"].astype(str)
+    several = heads.nunique() > 1
+    labels = [f"{c} ({h})" if several and h else str(c)
+              for c, h in zip(t["criterion"], heads)]
+    ax.barh(y, ratio, color=np.where(t["passed"].to_numpy(bool), "tab:green", "tab:red"),
+            alpha=0.8)
+    for k, r in t.iterrows():
+        unit = f" {r['unit']}" if str(r["unit"]) not in ("", "-") else ""
+        ax.text(max(ratio[k], 0.0) + 1.0, k, f"{r['value']:.4g}{unit} / {r['limit']:.4g}{unit}",
+                va="center", fontsize=7)
+    ax.axvline(100.0, color="k", ls="--", lw=1.0, label="limit")
+    ax.set_yticks(y)
+    ax.set_yticklabels(labels, fontsize=7)
+    ax.invert_yaxis()
+    ax.set_xlim(0.0, max(130.0, 1.25 * float(np.nanmax(ratio)) if n else 130.0))
+    ax.set_xlabel("value / limit [%]")
+    ax.grid(alpha=0.3, axis="x")
+    ax.legend(fontsize=7, loc="lower right")
+    if not title and n:
+        title = f"{t['region'].iloc[0]}, contact at {t['contact_point'].iloc[0]}"
+    ax.set_title(title, fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
+def plot_drop_test(history, *, corridor_g, peak_g_cfc: float, title: str = ""):
+    """The head drop's acceleration against time, raw and filtered, with the corridor.
+
+    Parameters
+    ----------
+    history : pandas.DataFrame
+        ``t`` [s], ``a_g`` and ``a_g_cfc`` [g] (``ppamsafety.impact.bodies.DropTest.history``).
+    corridor_g : (float, float)
+        The standard's corridor of the filtered peak [g]
+        (``ppamsafety.impact.bodies.HYBRID3_CORRIDOR_G``).
+    peak_g_cfc : float
+        The filtered peak [g] (marked).
+    title : str
+        Axes title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Resultant acceleration [g] against time after first touch [ms], the corridor shaded.
+    """
+    h = history
+    t_ms = 1e3 * h["t"].to_numpy(float)
+    a = h["a_g"].to_numpy(float)
+    af = h["a_g_cfc"].to_numpy(float)
+    lo, hi = corridor_g
+    k = int(np.argmax(af))
+    low = np.nonzero(np.abs(af[k:]) <= 0.01 * max(af[k], 1e-300))[0]
+    end = min(2.0 * t_ms[k + low[0]], t_ms[-1]) if low.size else t_ms[-1]
+    fig, ax = new_figure(figsize=(6.5, 4.2))
+    ax.axhspan(lo, hi, color="tab:green", alpha=0.15, label=f"corridor {lo:g}-{hi:g} g")
+    ax.plot(t_ms, a, color="0.6", lw=1.0, label="raw")
+    ax.plot(t_ms, af, color="tab:blue", lw=1.5, label="CFC 1000")
+    ax.plot(t_ms[k], af[k], "o", color="tab:red",
+            label=f"filtered peak {peak_g_cfc:.0f} g")
+    ax.set_xlim(0.0, end)
+    ax.set_xlabel("time after first touch [ms]")
+    ax.set_ylabel("resultant head acceleration [g]")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8)
+    ax.set_title(title or "Hybrid III head drop (49 CFR 572.32)", fontsize=9)
+    fig.tight_layout()
+    return fig
+
+
+def plot_direction_optimum(evaluated, *, psi_F: float, psi_HIC: float, title: str = ""):
+    """F_max and HIC36 at every head placement the search evaluated, the optima marked.
+
+    Parameters
+    ----------
+    evaluated : pandas.DataFrame
+        ``psi`` [rad from the TCP velocity], ``F_max`` [N], ``HIC36`` [-], one row per
+        engine run (``ppamsafety.impact.directions.DirectionOptimum.evaluated``).
+    psi_F, psi_HIC : float
+        Placements maximising F_max and HIC36 [rad].
+    title : str
+        Figure title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+        Two panels against psi [deg]: F_max [N] and HIC36 [-], psi = 0 (the head along
+        the TCP velocity, the thesis' placement) dotted, the worst placement starred.
+    """
+    e = evaluated.sort_values("psi")
+    deg = np.degrees(e["psi"].to_numpy(float))
+    fig, axes = new_figure(1, 2, figsize=(10, 3.8))
+    for ax, col, psi, unit in ((axes[0], "F_max", psi_F, "[N]"),
+                               (axes[1], "HIC36", psi_HIC, "[-]")):
+        v = e[col].to_numpy(float)
+        ax.plot(deg, v, "o-", ms=3, lw=0.8, label="evaluated placements")
+        k = int(np.argmin(np.abs(e["psi"].to_numpy(float) - psi)))
+        ax.plot(deg[k], v[k], "*", color="tab:red", ms=12,
+                label=f"worst: {v[k]:.4g} at {np.degrees(psi):.1f} deg")
+        ax.axvline(0.0, color="k", ls=":", lw=0.8, label="along the TCP velocity")
+        ax.set_xlabel("head placement psi from the TCP velocity [deg]")
+        ax.set_ylabel(f"{col} {unit}")
+        ax.grid(alpha=0.3)
+        ax.legend(fontsize=7)
+    fig.suptitle(title or "worst head placement of one impact state", fontsize=10)
     fig.tight_layout()
     return fig

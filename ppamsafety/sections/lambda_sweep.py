@@ -3,24 +3,26 @@
 The sweep users run all day: for each (lambda, Ki) the step response is
 simulated and crashed into the head at the four instants, and the circle
 (P = 10 s) is tracked, so the designer sees what safety costs in accuracy.
-Runs through :func:`ppamsafety.sweep.run_sweep` (progress bar, resumable,
-several processes).
+The cases are those of the shipped study ``lambda_ki``
+(``ppamsafety/study_data/lambda_ki.toml``, the one ``ppamsafety sweep lambda_ki`` runs),
+run by :func:`ppamsafety.sweep.run_sweep` on the sweep engine's case
+(:func:`ppamsafety.sweep_cases.case_function`).
 """
 
 from __future__ import annotations
 
-import functools
 import os
 from dataclasses import dataclass, field
 
 import pandas as pd
 
-from ..experiments.catalog import CIRCLE_WARMUP
+from ..experiments.catalog import CIRCLE_WARMUP, DEFAULT_DURATIONS
 from ..markdown import markdown_table
 from ..plots.impact import plot_lambda_sweep
+from ..study_files import load_study, shipped_study
 from ..sweep import run_sweep
 from ..params.head import MAXILLA_FRACTURE_N
-from ..sweep_cases import add_verdicts, safety_case
+from ..sweep_cases import add_verdicts, case_function
 from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
                resolve_arm, resolve_head_model)
 from ..results import Result
@@ -32,41 +34,56 @@ SECTION = SectionInfo(
     summary="lambda x Ki safety-versus-tracking sweep",
     thesis="(new)", typical_seconds=3.4)
 
+#: The shipped study whose cases this section runs.
+STUDY = "lambda_ki"
+#: The smoke test (``quick``): these lambdas [s] and Ki [bar/(rad s)] of the study, with
+#: circles of :data:`QUICK_CIRCLE_S`.
+QUICK_LAMBDAS = (0.1, 0.4, 1.5)
+QUICK_KIS = (2.0, 12.0)
+#: Length of the circles of the smoke test [s].
+QUICK_CIRCLE_S = 10.0
 
-def lambda_case(lam: float, ki_bar: float, circle_duration: float, *, arm=None,
-                head=None) -> dict:
-    """Worst step impact and circle tracking error of one joint PSMC tuning (sweep case).
 
-    Two cases of :func:`ppamsafety.sweep_cases.safety_case` (the sweep engine's case, so
-    that ``ppamsafety sweep studies/lambda_ki.toml`` gives the same numbers): the step
-    response crashed into the head at the four heuristic instants, and the circle
-    (P = 10 s), whose tracking error is taken after the warm-up.
+def study_cases(*, quick: bool = False) -> list:
+    """The cases this section runs: those of the shipped study :data:`STUDY`.
 
     Parameters
     ----------
-    lam : float
-        PSMC lambda [s].
-    ki_bar : float
-        Integral gain [bar/(rad s)].
-    circle_duration : float
-        Length of the circle run (P = 10 s) [s].
-    arm : ArmParameters, optional, keyword-only
-        The arm (default the thesis arm; bound with :func:`functools.partial`).
-    head : HeadContactModel, optional, keyword-only
-        The head (default ``thesis-frontal``).
+    quick : bool, keyword-only
+        Only :data:`QUICK_LAMBDAS` x :data:`QUICK_KIS`, circles of :data:`QUICK_CIRCLE_S`.
 
     Returns
     -------
-    dict
-        ``F_max`` [N], ``HIC36``, ``tcp_speed`` [m/s] of the worst step
-        impact, ``circle_err_mean`` and ``circle_err_max`` [m].
+    list of dict
+        :func:`~ppamsafety.sweep_cases.safety_case` keyword arguments, in the study's order.
     """
-    kw = {"controller": "PSMC joint", "lam": lam, "ki_bar": ki_bar, "arm": arm,
-          "head": "thesis-frontal" if head is None else head}
-    step = safety_case("step", **kw)
-    circle = safety_case("circle10", duration=circle_duration, **kw)
-    return {"F_max": step["F_max"], "HIC36": step["HIC36"], "tcp_speed": step["tcp_speed"],
-            "circle_err_mean": circle["track_mean"], "circle_err_max": circle["track_max"]}
+    cases = list(load_study(shipped_study(STUDY)).cases)
+    if not quick:
+        return cases
+    return [c if c["experiment"] == "step" else {**c, "duration": QUICK_CIRCLE_S}
+            for c in cases if c["lam"] in QUICK_LAMBDAS and c["ki_bar"] in QUICK_KIS]
+
+
+def _duration(case: dict) -> float:
+    """A case's experiment length [s] (the catalogue's default when the case sets none)."""
+    d = case.get("duration")
+    return float(DEFAULT_DURATIONS[case["experiment"]] if d is None else d)
+
+
+def _pivot(cases: list, table: pd.DataFrame) -> pd.DataFrame:
+    """One row per (Ki, lambda): the worst step impact beside the circle's tracking error."""
+    rows = {}
+    for c, r in zip(cases, table.to_dict("records")):
+        key = (float(c["ki_bar"]), float(c["lam"]))
+        row = rows.setdefault(key, {"lam": key[1], "Ki_bar": key[0]})
+        if c["experiment"] == "step":
+            row.update(F_max=r["F_max"], HIC36=r["HIC36"], tcp_speed=r["tcp_speed"])
+        else:
+            row.update(circle_duration=_duration(c), circle_err_mean=r["track_mean"],
+                       circle_err_max=r["track_max"])
+    return pd.DataFrame(list(rows.values()),
+                        columns=["lam", "Ki_bar", "circle_duration", "F_max", "HIC36",
+                                 "tcp_speed", "circle_err_mean", "circle_err_max"])
 
 
 @dataclass
@@ -134,7 +151,8 @@ def compute(*, quick: bool = False, arm=None, processes: int | None = None,
     Parameters
     ----------
     quick : bool
-        3 x 2 cases with 10 s circles instead of 7 x 3 with 45 s.
+        3 x 2 of the study's (lambda, Ki) with 10 s circles instead of all 7 x 3 with the
+        study's 45 s (:func:`study_cases`).
     arm : ppamsafety.params.ArmParameters, optional
         Arm (default: the thesis arm); the workers receive it with the case function.
     processes : int, optional
@@ -148,17 +166,17 @@ def compute(*, quick: bool = False, arm=None, processes: int | None = None,
         The sweep table and metrics.
     """
     note = "" if compares_to_thesis(arm, head) else other_arm_note(arm, head)
-    case = lambda_case if arm is None and head is None else functools.partial(
-        lambda_case, arm=resolve_arm(arm), head=resolve_head_model(head))
+    case = case_function(None if arm is None else resolve_arm(arm),
+                         None if head is None else resolve_head_model(head))
     head_name = resolve_head_model(head).name
-    lams = (0.1, 0.4, 1.5) if quick else (0.05, 0.1, 0.2, 0.4, 0.8, 1.5, 2.5)
-    kis = (2.0, 12.0) if quick else (2.0, 6.0, 12.0)
-    dur = 10.0 if quick else 45.0
-    cases = [{"lam": lam, "ki_bar": ki, "circle_duration": dur} for ki in kis for lam in lams]
+    cases = study_cases(quick=quick)
+    lams = tuple(dict.fromkeys(float(c["lam"]) for c in cases))
+    kis = tuple(dict.fromkeys(float(c["ki_bar"]) for c in cases))
+    dur = max(_duration(c) for c in cases if c["experiment"] != "step")
     procs = processes or min(2, os.cpu_count() or 1)
-    df = run_sweep(case, cases, name="lambda-sweep", processes=procs, progress=False,
-                   on_error="raise").table
-    df = add_verdicts(df.rename(columns={"ki_bar": "Ki_bar"}), head=resolve_head_model(head))
+    df = _pivot(cases, run_sweep(case, cases, name="lambda-sweep", processes=procs,
+                                 progress=False, on_error="raise").table)
+    df = add_verdicts(df, head=resolve_head_model(head))
     return LambdaSweepFindings(lambdas=lams, kis=kis, circle_duration=dur, processes=procs,
                                table=df, metrics={"cases": len(df)},
                                best_below_maxilla=_best_tracking(df[df.F_max <
@@ -194,8 +212,8 @@ def render(study: LambdaSweepFindings) -> Section:
     best, best_iso, lim_iso = study.best_below_maxilla, study.best_passing_iso, study.iso_limit
     md = (study.note + "\n\n" if study.note else "") + f"""Joint-space PSMC (Table 5.1 gains otherwise) for lambda in {list(lams)} s and Ki in {list(kis)}
 bar/(rad s): worst step-response impact (four instants, head `{study.head_name}`) and circle tracking
-(P = 10 s, {dur - min(CIRCLE_WARMUP, dur / 2):.0f} s evaluated). {len(df)} cases via `ppamsafety.sweep.run_sweep`
-on {procs} processes.
+(P = 10 s, {dur - min(CIRCLE_WARMUP, dur / 2):.0f} s evaluated). {len(df)} cases: those of the shipped study `{STUDY}`
+(`ppamsafety sweep {STUDY}` runs the same), via `ppamsafety.sweep.run_sweep` on {procs} processes.
 
 {markdown_table(show, digits=4)}
 

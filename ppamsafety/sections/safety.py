@@ -1,4 +1,9 @@
-"""Collision safety of the controllers: Table 6.1 and every impact instant (thesis §6.3.3)."""
+"""Collision safety of the controllers: Table 6.1 and every impact instant (thesis §6.3.3).
+
+The experiments and controller variants of Table 6.1 are those of the shipped study
+``table_6_1`` (``ppamsafety/study_data/table_6_1.toml``, the one ``ppamsafety sweep table_6_1``
+runs): :func:`table_6_1_definition`.
+"""
 
 from __future__ import annotations
 
@@ -10,7 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from ..experiments.catalog import run_thesis_experiment, thesis_variants, variant_family
+from ..experiments.catalog import run_thesis_experiment, variant_family
 from ..impact.instants import (HEURISTICS, evaluate_experiment, heuristic_instants, impact_states,
                                worst_instant)
 from ..impact.thesis_data import join_table_6_1
@@ -19,6 +24,7 @@ from ..markdown import markdown_table
 from ..params import thesis_arm
 from ..params.head import MAXILLA_FRACTURE_N
 from ..plots.impact import plot_fmax_over_time, plot_safety_table, plot_worst_histories
+from ..study_files import controller_variants, load_study, shipped_study
 from ..sweep import run_sweep
 from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
                resolve_arm, resolve_head_model)
@@ -31,9 +37,25 @@ SECTION = SectionInfo(
     summary="collision safety: Table 6.1 with ratios, every-instant scan",
     thesis="§6.3.3", typical_seconds=7.4)
 
-EXPERIMENTS = ("step", "switch")
+#: The shipped study whose experiments and controller variants make Table 6.1 here.
+STUDY = "table_6_1"
 #: Instants with a slower tool are skipped in the every-instant scan [m/s] (F < 1 N there).
 MIN_SPEED = 1e-3
+
+
+@functools.lru_cache(maxsize=None)
+def table_6_1_definition() -> tuple:
+    """The experiments and controller variants of Table 6.1: those of the study :data:`STUDY`.
+
+    Returns
+    -------
+    (tuple of str, tuple of ControllerVariant)
+        The experiments (``grid.experiment``) and the variants (``[[variants]]``, in file
+        order, built as every case of the study builds them:
+        :func:`ppamsafety.study_files.controller_variants`).
+    """
+    st = load_study(shipped_study(STUDY))
+    return tuple(st.cases.axes["experiment"]), tuple(controller_variants(st))
 
 
 def every_instant_case(experiment: str, index: int, every: int, *, arm=None,
@@ -45,7 +67,7 @@ def every_instant_case(experiment: str, index: int, every: int, *, arm=None,
     experiment : str
         Thesis experiment name (``"step"`` or ``"switch"``).
     index : int
-        Variant index in :func:`~ppamsafety.experiments.catalog.thesis_variants`.
+        Variant index in the variants of :func:`table_6_1_definition`.
     every : int
         Impact instant stride [ms of the 1 ms record].
     arm : ArmParameters, optional, keyword-only
@@ -63,8 +85,9 @@ def every_instant_case(experiment: str, index: int, every: int, *, arm=None,
         simulated and have NaN F_max/HIC; the maxima are those of the full scan).
     """
     arm = thesis_arm() if arm is None else arm
-    label, ctrl = thesis_variants()[index]
-    res = run_thesis_experiment(arm, experiment, [(label, ctrl)])[0]
+    variant = table_6_1_definition()[1][index]
+    label = variant.label
+    res = run_thesis_experiment(arm, experiment, [variant])[0]
     w = worst_instant(res, arm, every=every, min_speed=MIN_SPEED, head=head)
     return w.table[["t0", "tcp_speed", "F_bound", "HIC36_bound", "screened", "simulated",
                     "F_max", "HIC36", "HIC15"]].assign(label=label)
@@ -74,12 +97,14 @@ def _heuristic_table(arm, head, runs=None, *, thesis: bool = True):
     """Table 6.1: worst impacts of the thesis variants at the four heuristic instants.
 
     ``runs`` may hold already computed ``{experiment: list of ExperimentResult}``
-    (the ten thesis variants of :func:`run_thesis_experiment` on ``arm``) to reuse.
+    (the variants of :func:`table_6_1_definition` run by :func:`run_thesis_experiment` on
+    ``arm``) to reuse.
     ``thesis``: join the thesis values and ratios (the thesis arm and head only).
     """
     rows, states, worst = [], {}, {}
-    for exp in EXPERIMENTS:
-        res = run_thesis_experiment(arm, exp) if runs is None else runs[exp]
+    experiments, variants = table_6_1_definition()
+    for exp in experiments:
+        res = run_thesis_experiment(arm, exp, variants) if runs is None else runs[exp]
         for r in res:
             label = r.meta["label"]
             res_ev = evaluate_experiment(r, arm, head=head, history=True)
@@ -103,7 +128,7 @@ def _heuristic_table(arm, head, runs=None, *, thesis: bool = True):
 
 def _conclusions(df) -> pd.DataFrame:
     out = []
-    for exp in EXPERIMENTS:
+    for exp in table_6_1_definition()[0]:
         sub = df[df.experiment == exp]
         pid = sub[sub.family == "PID"].iloc[0]
         psmc = sub[sub.family != "PID"]
@@ -273,8 +298,9 @@ def compute(*, quick: bool = False, arm=None, processes: int | None = None,
 
     # every instant
     every = 20 if quick else 1
-    nvar = len(thesis_variants())
-    cases = [{"experiment": e, "index": i, "every": every} for e in EXPERIMENTS
+    experiments, variants = table_6_1_definition()
+    nvar = len(variants)
+    cases = [{"experiment": e, "index": i, "every": every} for e in experiments
              for i in range(nvar)]
     procs = processes or min(2, os.cpu_count() or 1)
     t1 = time.perf_counter()

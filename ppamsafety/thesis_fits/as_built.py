@@ -132,7 +132,8 @@ from ..params import thesis_arm
 from ..params.effects import Effects, MagnitudeAxis
 from ..params.sensors import TABLE_3_2_VARIANCES
 from ..plant import geometry as geo
-from ..plots.diagnose import plot_as_built
+from ..plots.diagnose import plot_as_built, plot_identifiability
+from ..results import Result
 from .summary_fit import axis as effect_axis
 from ..diagnose.arm.synthesize import plant_with, sawtooth_set_angles
 
@@ -774,7 +775,7 @@ def check_measurements(measurements) -> pd.DataFrame:
 
 
 @dataclass(eq=False)
-class Identifiability:
+class Identifiability(Result):
     """What the sensitivity matrix J (whitened, per unit theta) says the data can identify.
 
     Attributes
@@ -828,6 +829,17 @@ class Identifiability:
                          "abs_cos": float(c.max()) if len(c) else float("nan"),
                          "weakest_loading": float(self.weakest_direction[n])})
         return pd.DataFrame(rows)
+
+    def plot(self, *, rank_tol: float = RANK_TOL):
+        """Column norms, singular values and |cos| between the candidates; a Figure.
+
+        Parameters
+        ----------
+        rank_tol : float, keyword-only
+            Rank threshold drawn (default :data:`RANK_TOL`).
+        """
+        return plot_identifiability(self.names, self.column_norm, self.cosines, self.selected,
+                                    self.singular_values, rank_tol=rank_tol)
 
 
 def identifiability(J, names, *, rank_tol: float = RANK_TOL,
@@ -1165,7 +1177,7 @@ def posterior_intervals(J, theta, chi2, m, *, lower, upper, prior_sd: float = PR
 
 
 @dataclass(eq=False)
-class AsBuiltFit:
+class AsBuiltFit(Result):
     """Result of :func:`fit_as_built`.
 
     Attributes

@@ -66,7 +66,8 @@ from ..experiments.metrics import tracking_stats
 from ..experiments.thesis_data import table_5_2
 from ..params import thesis_arm
 from ..params.effects import Effects, MagnitudeAxis
-from ..plots.diagnose import plot_summary_profiles
+from ..plots.diagnose import plot_pair_fit, plot_summary_profiles
+from ..results import Result
 from ..diagnose.arm.synthesize import plant_with
 
 #: Relative run-to-run reproducibility of a tracking statistic (our assumption, see above).
@@ -254,7 +255,7 @@ def whitened(sim: np.ndarray, thesis: np.ndarray) -> np.ndarray:
 
 
 @dataclass(eq=False)
-class SummaryFit:
+class SummaryFit(Result):
     """Result of :func:`fit_summary`.
 
     Attributes
@@ -443,7 +444,7 @@ def fit_summary(arm=None, *, effects=None, thetas=(0.0, 0.5, 1.0), design=None,
 
 
 @dataclass(eq=False)
-class PairFit:
+class PairFit(Result):
     """Result of :func:`fit_pair`: two effects fitted together.
 
     Attributes
@@ -459,6 +460,8 @@ class PairFit:
         Best chi2 of either effect alone.
     grid : pandas.DataFrame
         theta_a, theta_b, chi2 on the fine grid.
+    m : int
+        Number of statistics.
     """
 
     names: tuple
@@ -468,6 +471,16 @@ class PairFit:
     chi2_per_stat: float
     chi2_single: float
     grid: pd.DataFrame
+    m: int = 1
+
+    def to_pandas(self) -> pd.DataFrame:
+        """chi2 on the fine grid: ``theta_a``, ``theta_b`` [-] and ``chi2`` [-]."""
+        return self.grid
+
+    def plot(self):
+        """chi2 per statistic over the two thetas, the best point marked; a Figure."""
+        return plot_pair_fit(self.grid, self.names, self.best_theta, statistics=self.m,
+                             chi2_single=self.chi2_single)
 
 
 def fit_pair(fit: SummaryFit, arm=None, names=None, *, fine: int = 41) -> PairFit:
@@ -527,7 +540,7 @@ def fit_pair(fit: SummaryFit, arm=None, names=None, *, fine: int = 41) -> PairFi
     return PairFit(names=names, best_theta=bt,
                    best_value=(axis(names[0]).value(bt[0]), axis(names[1]).value(bt[1])),
                    chi2_min=float(chi2[k]), chi2_per_stat=float(chi2[k] / fit.m),
-                   chi2_single=single,
+                   chi2_single=single, m=fit.m,
                    grid=pd.DataFrame({"theta_a": A.ravel(), "theta_b": B.ravel(),
                                       "chi2": chi2}))
 
