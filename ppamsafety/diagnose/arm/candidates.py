@@ -12,10 +12,14 @@ changes X itself.  Every extension maps back to a plant row
 (:func:`ppamsafety.diagnose.arm.residuals.row_from_mu`) so that its effect on
 the full simulation can be shown by a batched rollout.
 
-Adding a candidate = one :func:`register` call (see the entries at the end
-of this module).  An effect that is not a direction of mu (hysteresis)
-brings its own regression columns, built with the block system
-(``Candidate.columns``).
+Adding a candidate = one :func:`register` call of one object (see the entries
+at the end of this module): besides its parameters and columns it carries
+its battery draw (``draw``; ``declare`` for an arm that declares it), the
+gates it needs and the experiments that separate it from its look-alikes
+(:class:`ppamsafety.diagnose.core.candidate.Candidate`), which the battery
+(:mod:`ppamsafety.diagnose.scenarios`) and :func:`separating_experiment` read.
+An effect that is not a direction of mu (hysteresis) brings its own
+regression columns, built with the block system (``Candidate.columns``).
 
 Arm library (open/closed-loop arm records)
 ------------------------------------------

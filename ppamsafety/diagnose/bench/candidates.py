@@ -1,5 +1,9 @@
 """The library of candidate effects on a test bench (one actuator: force, pressure, contraction).
 
+Each candidate is one :class:`MuscleCandidate` of :data:`MUSCLE_LIBRARY`: how it builds its
+columns on a record, its battery draw, the gates it needs and the experiments that separate
+it from its look-alikes; the design, the gates, the battery and the confounded groups read it.
+
 The names are fixed (:data:`~.candidates.ACTUATOR_VOCABULARY`).  Every
 candidate extends the nominal force law (3.9)
 ``F_nom = p (a0/eps + a1 + a2 eps + a3 eps^2 + a4 eps^3)`` by a term linear
