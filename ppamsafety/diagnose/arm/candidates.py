@@ -348,6 +348,14 @@ def _some(rng, n):
     return m
 
 
+def _signed_some(rng, x, lo, hi):
+    """``x`` with a non-empty random subset of its entries set to +- a magnitude log-uniform
+    in [lo, hi] (each entry: its sign, then its magnitude)."""
+    on = _some(rng, x.size)
+    x[on] = [sgn(rng) * logu(rng, lo, hi) for _ in range(int(on.sum()))]
+    return x
+
+
 def _changed(rng, declared, lo, hi, small, large):
     """A hidden change of a declared value: ``declared`` +- a magnitude log-uniform in
     [small, large], kept inside [lo, hi] (the sign that fits when one does not)."""
@@ -689,10 +697,8 @@ def separating_experiment(a: str, b: str) -> str:
 
 
 def _draw_torque_bias(rng, arm, dt=1e-3):
-    b = np.zeros(2) if arm.effects.joint_torque_bias is None else np.array(
-        arm.effects.joint_torque_bias, float)
-    on = _some(rng, 2)
-    b[on] = [sgn(rng) * logu(rng, 0.01, 2.0) for _ in range(int(on.sum()))]
+    b = _signed_some(rng, np.zeros(2) if arm.effects.joint_torque_bias is None else np.array(
+        arm.effects.joint_torque_bias, float), 0.01, 2.0)
     return {"joint_torque_bias": tuple(b)}, {"b1": b[0], "b2": b[1]}
 
 
@@ -717,9 +723,7 @@ register(Candidate(
 
 
 def _draw_p_offset(rng, arm, dt=1e-3):
-    o = np.zeros(4)
-    on = _some(rng, 4)
-    o[on] = [sgn(rng) * logu(rng, 100.0, 2.0e4) for _ in range(int(on.sum()))]
+    o = _signed_some(rng, np.zeros(4), 100.0, 2.0e4)
     return {"pressure_sensor_offset": tuple(o)}, {f"o_{i + 1}": o[i] for i in range(4)}
 
 
@@ -740,9 +744,7 @@ register(Candidate(
 
 
 def _draw_p_gain(rng, arm, dt=1e-3):
-    g = np.zeros(4)
-    on = _some(rng, 4)
-    g[on] = [sgn(rng) * logu(rng, 5e-4, 0.1) for _ in range(int(on.sum()))]
+    g = _signed_some(rng, np.zeros(4), 5e-4, 0.1)
     return {"pressure_sensor_gain": tuple(g)}, {f"g_{i + 1}": g[i] for i in range(4)}
 
 
@@ -763,9 +765,7 @@ register(Candidate(
 
 
 def _draw_encoder_offset(rng, arm, dt=1e-3):
-    o = np.zeros(2)
-    on = _some(rng, 2)
-    o[on] = [sgn(rng) * logu(rng, 2e-4, 0.08) for _ in range(int(on.sum()))]
+    o = _signed_some(rng, np.zeros(2), 2e-4, 0.08)
     return {"encoder_offset": tuple(o)}, {"o_q1": o[0], "o_q2": o[1]}
 
 
