@@ -125,6 +125,8 @@ class MuscleCandidate(Candidate):
 
     Attributes
     ----------
+    name : str
+        The name written in ``diagnosis.json`` (:data:`ACTUATOR_VOCABULARY`).
     build : callable
         ``build(ctx) -> (Extension or None, why)``: its columns and parameters on one record
         (:func:`build_extensions`: the parameters' units, bounds and physical ranges, which
@@ -142,6 +144,9 @@ class MuscleCandidate(Candidate):
         Gates of :data:`~.gates.MUSCLE_RULE` that apply to it: ``reversals`` (a history
         effect, shows at the reversals of the motion: none on a pressure sweep),
         ``pressure_levels`` (told from its look-alikes only at several pressures).
+    separating : mapping, keyword-only
+        Look-alike -> the experiment that separates the two on a muscle record
+        (:data:`SEPARATING`, :func:`separating_experiment`).
     """
 
     build: object = field(default=None, repr=False)
