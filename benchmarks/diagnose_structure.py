@@ -89,11 +89,11 @@ def candidate_places(pkg: Path, names, *, exclude=()) -> dict:
 def candidate_names() -> dict:
     """Record kind -> (its candidate names, read from the package's own registries; the
     subpackages of the other kinds)."""
-    from ppamsafety.diagnose.arm.candidates import REGISTRY
-    from ppamsafety.diagnose.bench.candidates import ACTUATOR_VOCABULARY
+    import ppamsafety.diagnose  # noqa: F401  (registers every kind's candidate library)
     from ppamsafety.diagnose.bench.friction import VOCABULARY
-    return {"arm": (tuple(REGISTRY), ("bench",)),
-            "muscle bench": (tuple(ACTUATOR_VOCABULARY), ("arm",)),
+    from ppamsafety.diagnose.core.candidate import library
+    return {"arm": (tuple(library("arm")), ("bench",)),
+            "muscle bench": (tuple(library("muscle")), ("arm",)),
             "cylinder campaign": (tuple(VOCABULARY), ("arm",))}
 
 

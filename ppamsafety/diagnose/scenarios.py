@@ -71,7 +71,6 @@ from .core.battery import (HIGH_PRECISION, P_COUNT, P_PERTURBATION, Battery, cov
 from .core.solve import lstsq
 from .arm.residuals import arm_record, block_system, model_vector
 from .arm.selection import _directions, make_problem
-from .arm.synthesize import plant_vector
 from .arm.static import static_record, static_system
 from .diagnosis import diagnose
 from .synthesize import synthesize
@@ -93,212 +92,29 @@ KINDS = {"open-loop": 0.35, "closed-loop": 0.40, "static-sawtooth": 0.25}
 _ARM = thesis_arm()
 
 
-def _some(rng, n):
-    """A non-empty random subset of range(n) as a bool mask."""
-    m = rng.random(n) < 0.5
-    if not m.any():
-        m[rng.integers(n)] = True
-    return m
-
-
 # ----------------------------------------------------------------------------- library draws
-# Each draw returns (synthesize effects, true parameter values of the candidate).
+# A candidate's draw (a hidden effect) and its ``declare`` (an arm that declares it) are the
+# candidate's (:mod:`.arm.candidates`): the tables below are read from the library.
 
-def _changed(rng, declared, lo, hi, small, large):
-    """A hidden change of a declared value: ``declared`` +- a magnitude log-uniform in
-    [small, large], kept inside [lo, hi] (the sign that fits when one does not)."""
-    step = logu(rng, small, large)
-    up = sgn(rng) > 0
-    if declared + step > hi:
-        up = False
-    elif declared - step < lo:
-        up = True
-    return float(min(max(declared + step if up else declared - step, lo), hi))
-
-
-def _payload(rng, arm, dt=1e-3):
-    m0 = arm.effects.payload_mass
-    m = logu(rng, 0.01, 2.0) if m0 == 0.0 else _changed(rng, m0, 0.0, 2.5, 0.01, 1.0)
-    return {"payload_mass": m}, {"M": m}
-
-
-def _friction(rng, arm, dt=1e-3):
-    c = plant_vector(arm, "friction_coulomb")
-    b = plant_vector(arm, "friction_viscous")
-    on = _some(rng, 2)
-    c[on] = [logu(rng, 0.02, 1.5) for _ in range(int(on.sum()))]
-    fx = {"friction_coulomb": tuple(c)}
-    if rng.random() < 0.3:
-        on_b = _some(rng, 2)
-        b[on_b] = b[on_b] + np.array([logu(rng, 0.02, 1.0) for _ in range(int(on_b.sum()))])
-        fx["friction_viscous"] = tuple(b)
-    return fx, {"c1": c[0], "c2": c[1], "b1": b[0], "b2": b[1]}
-
-
-def _valve_offset_gain(rng, arm, dt=1e-3):
-    v1 = plant_vector(arm, "valve_offset")
-    v2 = plant_vector(arm, "valve_gain")
-    on = _some(rng, 4)
-    v1[on] += [sgn(rng) * logu(rng, 200.0, 3.0e4) for _ in range(int(on.sum()))]
-    fx = {"valve_offset": tuple(v1)}
-    if rng.random() < 0.5:
-        on_g = _some(rng, 4)
-        v2[on_g] *= [1.0 + sgn(rng) * logu(rng, 0.002, 0.15) for _ in range(int(on_g.sum()))]
-        fx["valve_gain"] = tuple(v2)
-    return fx, {**{f"v1_{i + 1}": v1[i] for i in range(4)},
-                **{f"v2_{i + 1}": v2[i] for i in range(4)}}
-
-
-def _valve_lag(rng, arm, dt=1e-3):
-    T = plant_vector(arm, "valve_time_constant")
-    on = _some(rng, 4)
-    f = [(logu(rng, 1.05, 3.0) if rng.random() < 0.7 else 1.0 / logu(rng, 1.05, 2.0))
-         for _ in range(int(on.sum()))]
-    T[on] *= f
-    return {"valve_time_constant": tuple(T)}, {f"T_{i + 1}": T[i] for i in range(4)}
-
-
-def _dead_time(rng, arm, dt=1e-3):
-    # a declared dead time counts control periods, one per sample of the record (dt)
-    d0 = arm.effects.valve_dead_time
-    if d0 is None:
-        d = logu(rng, 0.002, 0.05)
-    else:
-        d = _changed(rng, dt * float(np.mean(d0)), 0.0, 0.08, 0.002, 0.03)
-    return {"valve_dead_time": d}, {"d": d}
-
-
-def _polytropic(rng, arm, dt=1e-3):
-    if arm.effects.polytropic_n is None:
-        n = float(rng.uniform(1.0, 1.38))
-    else:
-        n = _changed(rng, arm.effects.polytropic_n, 1.0, 1.4, 0.02, 0.3)
-    return {"polytropic_n": n}, {"n": n}
-
-
-def _hysteresis(rng, arm, dt=1e-3):
-    d0 = arm.effects.hysteresis_delta
-    if d0 is None:
-        d = logu(rng, 0.005, 0.3)
-        return {"hysteresis_delta": d}, {"delta": d}
-    # a change common to the groups (the candidate's hypothesis), from their declared mean
-    m0 = float(np.mean(d0))
-    d = _changed(rng, m0, max(m0 - min(d0), 0.0), min(0.8, 1.0 - max(d0) + m0), 0.005, 0.2)
-    return {"hysteresis_delta": tuple(float(x) + d - m0 for x in d0)}, {"delta": d}
-
-
-def _torque_bias(rng, arm, dt=1e-3):
-    b = np.zeros(2) if arm.effects.joint_torque_bias is None else np.array(
-        arm.effects.joint_torque_bias, float)
-    on = _some(rng, 2)
-    b[on] = [sgn(rng) * logu(rng, 0.01, 2.0) for _ in range(int(on.sum()))]
-    return {"joint_torque_bias": tuple(b)}, {"b1": b[0], "b2": b[1]}
-
-
-def _p_offset(rng, arm, dt=1e-3):
-    o = np.zeros(4)
-    on = _some(rng, 4)
-    o[on] = [sgn(rng) * logu(rng, 100.0, 2.0e4) for _ in range(int(on.sum()))]
-    return {"pressure_sensor_offset": tuple(o)}, {f"o_{i + 1}": o[i] for i in range(4)}
-
-
-def _p_gain(rng, arm, dt=1e-3):
-    g = np.zeros(4)
-    on = _some(rng, 4)
-    g[on] = [sgn(rng) * logu(rng, 5e-4, 0.1) for _ in range(int(on.sum()))]
-    return {"pressure_sensor_gain": tuple(g)}, {f"g_{i + 1}": g[i] for i in range(4)}
-
-
-def _encoder_offset(rng, arm, dt=1e-3):
-    o = np.zeros(2)
-    on = _some(rng, 2)
-    o[on] = [sgn(rng) * logu(rng, 2e-4, 0.08) for _ in range(int(on.sum()))]
-    return {"encoder_offset": tuple(o)}, {"o_q1": o[0], "o_q2": o[1]}
-
-
-#: Library candidate -> its draw (magnitudes log-uniform from below a typical detection
-#: limit to the top of the plausible range).
-LIBRARY_DRAWS = {"payload": _payload, "joint_friction": _friction,
-                 "valve_offset_gain": _valve_offset_gain, "valve_lag": _valve_lag,
-                 "valve_dead_time": _dead_time, "polytropic_exponent": _polytropic,
-                 "hysteresis": _hysteresis, "joint_torque_bias": _torque_bias,
-                 "pressure_sensor_offset": _p_offset, "pressure_sensor_gain": _p_gain,
-                 "encoder_offset": _encoder_offset}
-
+#: Library candidate -> its draw (``Candidate.draw``: magnitudes log-uniform from below a
+#: typical detection limit to the top of the plausible range).
+LIBRARY_DRAWS = REGISTRY.draws()
 
 # ----------------------------------------------------------------------------- declared effects
-# An arm of the declared-effect battery declares some effects in its [effects] (what an arm
-# file can hold); each draw returns the Effects overrides, over the ranges an arm file
-# accepts (params.effects) where an arm can still make its records: a payload the valves can
-# hold, friction up to a stiff bearing, valves within the Table B.2 spread and twice slower,
-# any polytropic exponent, the 25/40-fibre hysteresis and beyond, a dead time up to three
-# 10 ms frames, a cable's drag.
-
-def _declare_payload(rng, arm):
-    return {"payload_mass": logu(rng, 0.05, 1.5)}
-
-
-def _declare_friction(rng, arm):
-    fx = {"friction_coulomb": tuple(logu(rng, 0.02, 1.0) for _ in range(2))}
-    if rng.random() < 0.5:
-        fx["friction_viscous"] = tuple(b * logu(rng, 1.0, 3.0)
-                                       for b in plant_vector(arm, "friction_viscous"))
-    return fx
-
-
-def _declare_valves(rng, arm):
-    fx = {}
-    if rng.random() < 0.6:
-        fx["valve_offset"] = tuple(v + sgn(rng) * logu(rng, 200.0, 1.0e4)
-                                   for v in plant_vector(arm, "valve_offset"))
-    if rng.random() < 0.6 or not fx:
-        fx["valve_gain"] = tuple(v * (1.0 + sgn(rng) * logu(rng, 0.005, 0.1))
-                                 for v in plant_vector(arm, "valve_gain"))
-    return fx
-
-
-def _declare_lag(rng, arm):
-    f = logu(rng, 0.6, 2.0)
-    return {"valve_time_constant": tuple(T * f * logu(rng, 0.9, 1.1)
-                                         for T in plant_vector(arm, "valve_time_constant"))}
-
-
-def _declare_polytropic(rng, arm):
-    return {"polytropic_n": float(rng.uniform(1.0, 1.4))}
-
-
-def _declare_hysteresis(rng, arm):
-    d = logu(rng, 0.03, 0.5)
-    if rng.random() < 0.25:                         # groups of different muscles
-        return {"hysteresis_delta": tuple(d * logu(rng, 0.7, 1.3) for _ in range(4))}
-    return {"hysteresis_delta": (d,) * 4}
-
-
-def _declare_dead_time(rng, arm):
-    return {"valve_dead_time": (int(rng.integers(1, 31)),) * 4}
-
-
-def _declare_torque_bias(rng, arm):
-    return {"joint_torque_bias": tuple(sgn(rng) * logu(rng, 0.02, 1.0) for _ in range(2))}
-
-
-#: Declarable effect (kind) -> its draw, and the library candidate a hidden change of it is
-#: named as (None: outside the default library).
-DECLARED_DRAWS = {"payload": (_declare_payload, "payload"),
-                  "friction": (_declare_friction, "joint_friction"),
-                  "valves": (_declare_valves, "valve_offset_gain"),
-                  "valve_lag": (_declare_lag, "valve_lag"),
-                  "polytropic": (_declare_polytropic, "polytropic_exponent"),
-                  "hysteresis": (_declare_hysteresis, "hysteresis"),
-                  "dead_time": (_declare_dead_time, "valve_dead_time"),
-                  "torque_bias": (_declare_torque_bias, None)}
-#: ``Effects`` field an arm declares -> the library candidate that names a change of it.
-DECLARED_CANDIDATE = {"payload_mass": "payload", "friction_coulomb": "joint_friction",
-                      "friction_viscous": "joint_friction", "valve_offset": "valve_offset_gain",
-                      "valve_gain": "valve_offset_gain", "valve_time_constant": "valve_lag",
-                      "polytropic_n": "polytropic_exponent", "hysteresis_delta": "hysteresis",
-                      "valve_dead_time": "valve_dead_time",
-                      "joint_torque_bias": "joint_torque_bias"}
+#: The order in which the declared-effect battery's shipped seeds draw the declarable
+#: candidates; a candidate with a ``declare`` that is not listed comes after them, in the
+#: library's order (so a new one keeps every shipped scenario).
+DECLARED_ORDER = ("payload", "joint_friction", "valve_offset_gain", "valve_lag",
+                  "polytropic_exponent", "hysteresis", "valve_dead_time", "joint_torque_bias")
+#: Declarable candidate -> its ``declare`` draw (an arm's declared effects, over the ranges an
+#: arm file accepts where an arm can still make its records), and the library candidate a
+#: hidden change of it is named as (None: outside the default library).
+DECLARED_DRAWS = {n: (REGISTRY[n].declare, n if REGISTRY[n].default else None)
+                  for n in DECLARED_ORDER + tuple(n for n in REGISTRY if n not in DECLARED_ORDER)
+                  if n in REGISTRY and REGISTRY[n].declare is not None}
+#: ``Effects`` field an arm declares -> the library candidate that names a change of it
+#: (``Candidate.declares``).
+DECLARED_CANDIDATE = {f: n for n, c in REGISTRY.items() for f in c.declares}
 #: Probabilities of 1, 2, 3, 4 declared effect kinds in an arm of that battery.
 P_DECLARED_COUNT = (0.35, 0.35, 0.2, 0.1)
 #: Probability that a scenario of that battery hides a change of one of its declared effects.
@@ -334,7 +150,7 @@ def _perturbation(rng, arm) -> dict:
                            "encoder_backlash", "valve_nonlinearity", "noise_correlation_time",
                            "outlier_rate", "joint_torque_bias"]))
     if kind == "joint_torque_bias":                 # opt-in, so outside the default library
-        return _torque_bias(rng, arm)[0]
+        return REGISTRY["joint_torque_bias"].draw(rng, arm)[0]
     if kind == "geometry":
         f = str(rng.choice(_GEOMETRY_FIELDS))
         v = getattr(arm.geometry, f)

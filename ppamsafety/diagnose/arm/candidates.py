@@ -12,10 +12,14 @@ changes X itself.  Every extension maps back to a plant row
 (:func:`ppamsafety.diagnose.arm.residuals.row_from_mu`) so that its effect on
 the full simulation can be shown by a batched rollout.
 
-Adding a candidate = one :func:`register` call (see the entries at the end
-of this module).  An effect that is not a direction of mu (hysteresis)
-brings its own regression columns, built with the block system
-(``Candidate.columns``).
+Adding a candidate = one :func:`register` call of one object (see the entries
+at the end of this module): besides its parameters and columns it carries
+its battery draw (``draw``; ``declare`` for an arm that declares it), the
+gates it needs and the experiments that separate it from its look-alikes
+(:class:`ppamsafety.diagnose.core.candidate.Candidate`), which the battery
+(:mod:`ppamsafety.diagnose.scenarios`) and :func:`separating_experiment` read.
+An effect that is not a direction of mu (hysteresis) brings its own
+regression columns, built with the block system (``Candidate.columns``).
 
 Arm library (open/closed-loop arm records)
 ------------------------------------------
@@ -74,11 +78,15 @@ import numpy as np
 from ...params import thesis_arm
 from ...params.effects import Effects
 from ...plant.packing import payload_theta
+from ..core.battery import logu, sgn
+from ..core.candidate import Candidate as CoreCandidate
+from ..core.candidate import Library, register_library
 from ..core.parameter import Parameter
 from .residuals import (ENCODER_OFFSET_COLUMNS, HYSTERESIS_COLUMNS, MU_A, MU_B, MU_COUL, MU_K,
                         MU_N, MU_THETA, MU_VISC, NMU, PRESSURE_GAIN_COLUMNS,
                         PRESSURE_OFFSET_COLUMNS, TORQUE_BIAS_COLUMNS, declared_delays,
                         declared_hysteresis, declared_torque_bias)
+from .synthesize import plant_vector
 
 #: Fixed vocabulary of effect names on an arm (the ``name`` field of ``diagnosis.json``).
 VOCABULARY = ("hysteresis", "joint_friction", "valve_offset_gain", "valve_lag",
@@ -91,8 +99,11 @@ DEAD_TIME_MAX = 0.06
 
 
 @dataclass(frozen=True, eq=False)
-class Candidate:
-    """A candidate effect (see the module docstring).
+class Candidate(CoreCandidate):
+    """A candidate effect of an arm record (see the module docstring): what every kind's
+    candidate carries (:class:`~ppamsafety.diagnose.core.candidate.Candidate`: its name, its
+    battery ``draw``, the gates it ``needs``, its ``separating`` experiments) and the arm's
+    own fields.
 
     Attributes
     ----------
@@ -138,9 +149,26 @@ class Candidate:
         ``physical(...) + declared(arm, dt)`` (:meth:`values`); None: the model vector
         carries the declared value already (valves, friction, polytropic exponent) or the
         arm cannot declare it (sensor faults).
+    draw : callable or None, keyword-only
+        ``draw(rng, arm, dt) -> (effects, truth)``: the battery's draw of a hidden effect on
+        ``arm`` for a record sampled every ``dt`` [s]: the :func:`~ppamsafety.diagnose.
+        synthesize` effects that hide it (its injection into the plant or the measurement)
+        and its true parameter values.  Magnitudes log-uniform from below a typical
+        detection limit to the top of the plausible range; a declared value is changed
+        around (``_changed``).
+    declare : callable or None, keyword-only
+        ``declare(rng, arm) -> dict``: the declared-effect battery's draw of an arm that
+        declares this effect (:class:`~ppamsafety.params.effects.Effects` overrides, within
+        what an arm file accepts and an arm can still make its records); None: no arm
+        declares it in that battery.
+    declares : tuple of str, keyword-only
+        The :class:`~ppamsafety.params.effects.Effects` fields whose declared values it
+        changes (a hidden change of one of them is this candidate's name).
+    needs, separating : keyword-only
+        See :class:`~ppamsafety.diagnose.core.candidate.Candidate`; the separating
+        experiments of a pair are read by :func:`separating_experiment`.
     """
 
-    name: str
     subsystem: str
     parameters: tuple
     signature: str
@@ -153,6 +181,8 @@ class Candidate:
     at_rest: bool = False
     default: bool = True
     declared: object = field(default=None, repr=False)
+    declare: object = field(default=None, repr=False, kw_only=True)
+    declares: tuple = field(default=(), kw_only=True)
 
     def values(self, mu, phi, shift_seconds, arm, dt) -> np.ndarray:
         """The reported parameter values: :attr:`physical` plus what the arm declares.
@@ -199,7 +229,9 @@ def identity_values(mu, phi, shift):
     return np.asarray(phi, dtype=float)
 
 
-REGISTRY: dict = {}
+#: The arm's candidate library (the record kind ``"arm"`` of
+#: :func:`ppamsafety.diagnose.core.candidate.library`), in registration order.
+REGISTRY = register_library(Library("arm", Candidate, VOCABULARY))
 
 
 def register(candidate: Candidate) -> Candidate:
@@ -209,18 +241,11 @@ def register(candidate: Candidate) -> Candidate:
     ----------
     candidate : Candidate
     """
-    if not isinstance(candidate, Candidate):
-        raise TypeError(f"candidate must be a Candidate, got {type(candidate).__name__}")
-    if candidate.name not in VOCABULARY:
-        raise ValueError(f"candidate name {candidate.name!r} is not in the vocabulary "
-                         f"{VOCABULARY}")
-    if candidate.name in REGISTRY:
-        raise ValueError(f"candidate {candidate.name!r} is already registered")
-    if candidate.subsystem not in ("pressure", "torque", "both"):
+    if isinstance(candidate, Candidate) and candidate.subsystem not in ("pressure", "torque",
+                                                                        "both"):
         raise ValueError(f"candidate {candidate.name!r}: subsystem {candidate.subsystem!r} is "
                          f"not 'pressure', 'torque' or 'both'")
-    REGISTRY[candidate.name] = candidate
-    return candidate
+    return REGISTRY.register(candidate)
 
 
 def default_candidates(*, static: bool = False) -> tuple:
@@ -309,6 +334,66 @@ def _dirs_payload(mu0, arm=None):
 
 BAR = 1e5
 
+
+# ----------------------------------------------------------------------------- battery draws
+# Each candidate's ``draw`` returns (synthesize effects, true parameter values); ``declare``
+# an arm's declared effects.  The shipped batteries reproduce only while every draw consumes
+# the generator in the same order.
+
+def _some(rng, n):
+    """A non-empty random subset of range(n) as a bool mask."""
+    m = rng.random(n) < 0.5
+    if not m.any():
+        m[rng.integers(n)] = True
+    return m
+
+
+def _signed_some(rng, x, lo, hi):
+    """``x`` with a non-empty random subset of its entries set to +- a magnitude log-uniform
+    in [lo, hi] (each entry: its sign, then its magnitude)."""
+    on = _some(rng, x.size)
+    x[on] = [sgn(rng) * logu(rng, lo, hi) for _ in range(int(on.sum()))]
+    return x
+
+
+def _changed(rng, declared, lo, hi, small, large):
+    """A hidden change of a declared value: ``declared`` +- a magnitude log-uniform in
+    [small, large], kept inside [lo, hi] (the sign that fits when one does not)."""
+    step = logu(rng, small, large)
+    up = sgn(rng) > 0
+    if declared + step > hi:
+        up = False
+    elif declared - step < lo:
+        up = True
+    return float(min(max(declared + step if up else declared - step, lo), hi))
+
+
+def _draw_valve_offset_gain(rng, arm, dt=1e-3):
+    v1 = plant_vector(arm, "valve_offset")
+    v2 = plant_vector(arm, "valve_gain")
+    on = _some(rng, 4)
+    v1[on] += [sgn(rng) * logu(rng, 200.0, 3.0e4) for _ in range(int(on.sum()))]
+    fx = {"valve_offset": tuple(v1)}
+    if rng.random() < 0.5:
+        on_g = _some(rng, 4)
+        v2[on_g] *= [1.0 + sgn(rng) * logu(rng, 0.002, 0.15) for _ in range(int(on_g.sum()))]
+        fx["valve_gain"] = tuple(v2)
+    return fx, {**{f"v1_{i + 1}": v1[i] for i in range(4)},
+                **{f"v2_{i + 1}": v2[i] for i in range(4)}}
+
+
+def _declare_valves(rng, arm):
+    # within the Table B.2 spread
+    fx = {}
+    if rng.random() < 0.6:
+        fx["valve_offset"] = tuple(v + sgn(rng) * logu(rng, 200.0, 1.0e4)
+                                   for v in plant_vector(arm, "valve_offset"))
+    if rng.random() < 0.6 or not fx:
+        fx["valve_gain"] = tuple(v * (1.0 + sgn(rng) * logu(rng, 0.005, 0.1))
+                                 for v in plant_vector(arm, "valve_gain"))
+    return fx
+
+
 register(Candidate(
     "valve_offset_gain", "pressure",
     tuple(Parameter(f"v1_{i}", "Pa", -0.5 * BAR, 0.5 * BAR, f"static offset of valve {i} (3.12)",
@@ -320,7 +405,25 @@ register(Candidate(
     "(offset: constant drift rate; gain: proportional to u), independent of the motion",
     _phys_offset_gain, _dirs_offset_gain,
     plant_effect=lambda v, arm: {"valve_offset": tuple(v[:4]), "valve_gain": tuple(v[4:])},
-    at_rest=True))
+    at_rest=True, draw=_draw_valve_offset_gain, declare=_declare_valves,
+    declares=("valve_offset", "valve_gain")))
+
+
+def _draw_valve_lag(rng, arm, dt=1e-3):
+    T = plant_vector(arm, "valve_time_constant")
+    on = _some(rng, 4)
+    f = [(logu(rng, 1.05, 3.0) if rng.random() < 0.7 else 1.0 / logu(rng, 1.05, 2.0))
+         for _ in range(int(on.sum()))]
+    T[on] *= f
+    return {"valve_time_constant": tuple(T)}, {f"T_{i + 1}": T[i] for i in range(4)}
+
+
+def _declare_lag(rng, arm):
+    # valves up to twice slower
+    f = logu(rng, 0.6, 2.0)
+    return {"valve_time_constant": tuple(T * f * logu(rng, 0.9, 1.1)
+                                         for T in plant_vector(arm, "valve_time_constant"))}
+
 
 register(Candidate(
     "valve_lag", "pressure",
@@ -331,7 +434,24 @@ register(Candidate(
     "pressure residual proportional to the valve error v1 + v2 u - p: largest when the set "
     "value moves fast (phase lag), zero in steady state",
     lambda mu, phi, shift: 1.0 / _kappa(mu), _dirs_lag,
-    plant_effect=lambda v, arm: {"valve_time_constant": tuple(v)}))
+    plant_effect=lambda v, arm: {"valve_time_constant": tuple(v)},
+    draw=_draw_valve_lag, declare=_declare_lag, declares=("valve_time_constant",)))
+
+
+def _draw_dead_time(rng, arm, dt=1e-3):
+    # a declared dead time counts control periods, one per sample of the record (dt)
+    d0 = arm.effects.valve_dead_time
+    if d0 is None:
+        d = logu(rng, 0.002, 0.05)
+    else:
+        d = _changed(rng, dt * float(np.mean(d0)), 0.0, 0.08, 0.002, 0.03)
+    return {"valve_dead_time": d}, {"d": d}
+
+
+def _declare_dead_time(rng, arm):
+    # up to three 10 ms frames
+    return {"valve_dead_time": (int(rng.integers(1, 31)),) * 4}
+
 
 register(Candidate(
     "valve_dead_time", "pressure",
@@ -340,7 +460,21 @@ register(Candidate(
     "delayed: the set value acts d later on all valves",
     lambda mu, phi, shift: np.array([shift]), None, grid=True,
     plant_effect=None,
-    declared=lambda arm, dt: np.array([float(np.mean(declared_delays(arm))) * dt])))
+    declared=lambda arm, dt: np.array([float(np.mean(declared_delays(arm))) * dt]),
+    draw=_draw_dead_time, declare=_declare_dead_time, declares=("valve_dead_time",)))
+
+
+def _draw_polytropic(rng, arm, dt=1e-3):
+    if arm.effects.polytropic_n is None:
+        n = float(rng.uniform(1.0, 1.38))
+    else:
+        n = _changed(rng, arm.effects.polytropic_n, 1.0, 1.4, 0.02, 0.3)
+    return {"polytropic_n": n}, {"n": n}
+
+
+def _declare_polytropic(rng, arm):
+    return {"polytropic_n": float(rng.uniform(1.0, 1.4))}
+
 
 register(Candidate(
     "polytropic_exponent", "pressure",
@@ -349,7 +483,31 @@ register(Candidate(
     "pressure residual proportional to the volume-change term (P_atm + p) m_tau qd / V: "
     "changes sign with the velocity of the joint, zero at rest",
     lambda mu, phi, shift: np.array([mu[MU_N]]), _dirs_poly,
-    plant_effect=lambda v, arm: {"polytropic_n": float(v[0])}))
+    plant_effect=lambda v, arm: {"polytropic_n": float(v[0])},
+    draw=_draw_polytropic, declare=_declare_polytropic, declares=("polytropic_n",)))
+
+
+def _draw_friction(rng, arm, dt=1e-3):
+    c = plant_vector(arm, "friction_coulomb")
+    b = plant_vector(arm, "friction_viscous")
+    on = _some(rng, 2)
+    c[on] = [logu(rng, 0.02, 1.5) for _ in range(int(on.sum()))]
+    fx = {"friction_coulomb": tuple(c)}
+    if rng.random() < 0.3:
+        on_b = _some(rng, 2)
+        b[on_b] = b[on_b] + np.array([logu(rng, 0.02, 1.0) for _ in range(int(on_b.sum()))])
+        fx["friction_viscous"] = tuple(b)
+    return fx, {"c1": c[0], "c2": c[1], "b1": b[0], "b2": b[1]}
+
+
+def _declare_friction(rng, arm):
+    # up to a stiff bearing
+    fx = {"friction_coulomb": tuple(logu(rng, 0.02, 1.0) for _ in range(2))}
+    if rng.random() < 0.5:
+        fx["friction_viscous"] = tuple(b * logu(rng, 1.0, 3.0)
+                                       for b in plant_vector(arm, "friction_viscous"))
+    return fx
+
 
 register(Candidate(
     "joint_friction", "torque",
@@ -365,7 +523,21 @@ register(Candidate(
                                      mu[MU_VISC + 1]]),
     _dirs_friction,
     plant_effect=lambda v, arm: {"friction_coulomb": (float(v[0]), float(v[1])),
-                                 "friction_viscous": (float(v[2]), float(v[3]))}))
+                                 "friction_viscous": (float(v[2]), float(v[3]))},
+    draw=_draw_friction, declare=_declare_friction,
+    declares=("friction_coulomb", "friction_viscous")))
+
+
+def _draw_payload(rng, arm, dt=1e-3):
+    m0 = arm.effects.payload_mass
+    m = logu(rng, 0.01, 2.0) if m0 == 0.0 else _changed(rng, m0, 0.0, 2.5, 0.01, 1.0)
+    return {"payload_mass": m}, {"M": m}
+
+
+def _declare_payload(rng, arm):
+    # a payload the valves can hold
+    return {"payload_mass": logu(rng, 0.05, 1.5)}
+
 
 
 def _payload_candidate():
@@ -377,7 +549,8 @@ def _payload_candidate():
         "largest with the forearm horizontal) plus inertia; independent of the velocity sign",
         identity_values, _dirs_payload,
         plant_effect=lambda v, arm: {"payload_mass": float(v[0])}, at_rest=True,
-        declared=lambda arm, dt: np.array([arm.effects.payload_mass]))
+        declared=lambda arm, dt: np.array([arm.effects.payload_mass]),
+        draw=_draw_payload, declare=_declare_payload, declares=("payload_mass",))
 
 
 register(_payload_candidate())
@@ -418,7 +591,29 @@ def _maybe_register_hysteresis():
         "extends (§3.5.1.6, fig. 3.2); rising angles settle low, falling ones high",
         identity_values, None, columns=HYSTERESIS_COLUMNS,
         plant_effect=_hysteresis_effect, at_rest=True,
-        declared=lambda arm, dt: np.array([float(np.mean(declared_hysteresis(arm)))])))
+        declared=lambda arm, dt: np.array([float(np.mean(declared_hysteresis(arm)))]),
+        draw=_draw_hysteresis, declare=_declare_hysteresis, declares=("hysteresis_delta",),
+        separating={"joint_friction": "a quasi-static sawtooth (§3.5.1.6): hysteresis keeps its "
+                                      "loop at rest, friction needs motion"}))
+
+
+def _draw_hysteresis(rng, arm, dt=1e-3):
+    d0 = arm.effects.hysteresis_delta
+    if d0 is None:
+        d = logu(rng, 0.005, 0.3)
+        return {"hysteresis_delta": d}, {"delta": d}
+    # a change common to the groups (the candidate's hypothesis), from their declared mean
+    m0 = float(np.mean(d0))
+    d = _changed(rng, m0, max(m0 - min(d0), 0.0), min(0.8, 1.0 - max(d0) + m0), 0.005, 0.2)
+    return {"hysteresis_delta": tuple(float(x) + d - m0 for x in d0)}, {"delta": d}
+
+
+def _declare_hysteresis(rng, arm):
+    # the 25/40-fibre hysteresis and beyond
+    d = logu(rng, 0.03, 0.5)
+    if rng.random() < 0.25:                         # groups of different muscles
+        return {"hysteresis_delta": tuple(d * logu(rng, 0.7, 1.3) for _ in range(4))}
+    return {"hysteresis_delta": (d,) * 4}
 
 
 def _hysteresis_effect(v, arm) -> dict:
@@ -483,28 +678,6 @@ class SensorFault:
         return x
 
 
-#: The experiment that separates a sensor fault from the plant effect it can look like on a
-#: record, keyed by the (sorted) pair of candidate names; the default for any other pair.
-SEPARATING_EXPERIMENTS = {
-    ("pressure_sensor_offset", "valve_offset_gain"):
-        "vent the muscles (valves closed to atmosphere) and read the pressure sensors: a "
-        "sensor offset reads non-zero at 0 bar gauge; or check against a reference gauge",
-    ("pressure_sensor_gain", "valve_offset_gain"):
-        "compare the pressure sensors with a reference gauge at two or more pressures",
-    ("pressure_sensor_gain", "pressure_sensor_offset"):
-        "calibrate the pressure sensors against a reference gauge at two or more pressures",
-    ("encoder_offset", "payload"):
-        "hold the arm at a known reference pose (a mechanical stop or a level) and read the "
-        "encoders; weigh the load",
-    ("encoder_offset", "joint_torque_bias"):
-        "read the encoders at a known reference pose (a mechanical stop or a level)",
-    ("joint_torque_bias", "payload"):
-        "repeat the record with the load removed (or weighed): a payload changes with it, a "
-        "bias does not",
-    ("hysteresis", "joint_friction"):
-        "a quasi-static sawtooth (§3.5.1.6): hysteresis keeps its loop at rest, friction "
-        "needs motion",
-}
 #: Separating experiment of a pair without an entry above.
 DEFAULT_SEPARATION = ("an experiment that moves the two apart: excite the arm where their "
                       "signatures differ (other poses, speeds, pressures), or measure one of "
@@ -512,7 +685,8 @@ DEFAULT_SEPARATION = ("an experiment that moves the two apart: excite the arm wh
 
 
 def separating_experiment(a: str, b: str) -> str:
-    """The experiment that tells candidates ``a`` and ``b`` apart (:data:`SEPARATING_EXPERIMENTS`).
+    """The experiment that tells candidates ``a`` and ``b`` apart (the ``separating`` of one of
+    them, :data:`SEPARATING_EXPERIMENTS`; :data:`DEFAULT_SEPARATION` for another pair).
 
     Parameters
     ----------
@@ -520,6 +694,17 @@ def separating_experiment(a: str, b: str) -> str:
         Candidate names.
     """
     return SEPARATING_EXPERIMENTS.get(tuple(sorted((a, b))), DEFAULT_SEPARATION)
+
+
+def _draw_torque_bias(rng, arm, dt=1e-3):
+    b = _signed_some(rng, np.zeros(2) if arm.effects.joint_torque_bias is None else np.array(
+        arm.effects.joint_torque_bias, float), 0.01, 2.0)
+    return {"joint_torque_bias": tuple(b)}, {"b1": b[0], "b2": b[1]}
+
+
+def _declare_torque_bias(rng, arm):
+    # a cable's drag
+    return {"joint_torque_bias": tuple(sgn(rng) * logu(rng, 0.02, 1.0) for _ in range(2))}
 
 
 register(Candidate(
@@ -531,7 +716,16 @@ register(Candidate(
     "velocity and the pressures",
     identity_values, None, columns=TORQUE_BIAS_COLUMNS,
     plant_effect=lambda v, arm: {"joint_torque_bias": (float(v[0]), float(v[1]))},
-    at_rest=True, default=False, declared=lambda arm, dt: declared_torque_bias(arm)))
+    at_rest=True, default=False, declared=lambda arm, dt: declared_torque_bias(arm),
+    draw=_draw_torque_bias, declare=_declare_torque_bias, declares=("joint_torque_bias",),
+    separating={"payload": "repeat the record with the load removed (or weighed): a payload "
+                           "changes with it, a bias does not"}))
+
+
+def _draw_p_offset(rng, arm, dt=1e-3):
+    o = _signed_some(rng, np.zeros(4), 100.0, 2.0e4)
+    return {"pressure_sensor_offset": tuple(o)}, {f"o_{i + 1}": o[i] for i in range(4)}
+
 
 register(Candidate(
     "pressure_sensor_offset", "both",
@@ -541,7 +735,18 @@ register(Candidate(
     "pressure residual like a valve offset (a constant drift rate kappa o) *and* a torque "
     "residual o m_tau(q) of the muscle's joint, following its lever arm",
     identity_values, None, columns=PRESSURE_OFFSET_COLUMNS,
-    sensor_effect=lambda v: SensorFault(p_offset=tuple(float(x) for x in v)), at_rest=True))
+    sensor_effect=lambda v: SensorFault(p_offset=tuple(float(x) for x in v)), at_rest=True,
+    draw=_draw_p_offset,
+    separating={"valve_offset_gain":
+                "vent the muscles (valves closed to atmosphere) and read the pressure sensors: "
+                "a sensor offset reads non-zero at 0 bar gauge; or check against a reference "
+                "gauge"}))
+
+
+def _draw_p_gain(rng, arm, dt=1e-3):
+    g = _signed_some(rng, np.zeros(4), 5e-4, 0.1)
+    return {"pressure_sensor_gain": tuple(g)}, {f"g_{i + 1}": g[i] for i in range(4)}
+
 
 register(Candidate(
     "pressure_sensor_gain", "both",
@@ -551,7 +756,18 @@ register(Candidate(
     "pressure residual proportional to the valve's drive (a + b u) and a torque residual "
     "g p m_tau(q): like a stronger or weaker muscle in the torques, but not in the valves",
     identity_values, None, columns=PRESSURE_GAIN_COLUMNS,
-    sensor_effect=lambda v: SensorFault(p_gain=tuple(float(x) for x in v)), at_rest=True))
+    sensor_effect=lambda v: SensorFault(p_gain=tuple(float(x) for x in v)), at_rest=True,
+    draw=_draw_p_gain,
+    separating={"valve_offset_gain": "compare the pressure sensors with a reference gauge at "
+                                     "two or more pressures",
+                "pressure_sensor_offset": "calibrate the pressure sensors against a reference "
+                                          "gauge at two or more pressures"}))
+
+
+def _draw_encoder_offset(rng, arm, dt=1e-3):
+    o = _signed_some(rng, np.zeros(2), 2e-4, 0.08)
+    return {"encoder_offset": tuple(o)}, {"o_q1": o[0], "o_q2": o[1]}
+
 
 register(Candidate(
     "encoder_offset", "both",
@@ -563,7 +779,16 @@ register(Candidate(
     "(the model evaluated at the wrong angle), and a small pressure residual through the "
     "muscle volumes",
     identity_values, None, columns=ENCODER_OFFSET_COLUMNS,
-    sensor_effect=lambda v: SensorFault(q_offset=tuple(float(x) for x in v)), at_rest=True))
+    sensor_effect=lambda v: SensorFault(q_offset=tuple(float(x) for x in v)), at_rest=True,
+    draw=_draw_encoder_offset,
+    separating={"payload": "hold the arm at a known reference pose (a mechanical stop or a "
+                           "level) and read the encoders; weigh the load",
+                "joint_torque_bias": "read the encoders at a known reference pose (a "
+                                     "mechanical stop or a level)"}))
+
+#: The experiment that separates a sensor fault from the plant effect it can look like on a
+#: record, keyed by the (sorted) pair of candidate names: the candidates' ``separating``.
+SEPARATING_EXPERIMENTS = {tuple(sorted(k)): v for k, v in REGISTRY.separating_table().items()}
 
 __all__ = ["Candidate", "Parameter", "REGISTRY", "register", "library", "default_candidates",
            "VOCABULARY",

@@ -55,6 +55,7 @@ class ArmKind(RecordKind):
 
     name = "arm record"
     rule = ARM_RULE
+    library = REGISTRY
 
     def accepts(self, data) -> bool:
         """True for an arm record (not a test-bench record, not a cylinder).
@@ -65,9 +66,6 @@ class ArmKind(RecordKind):
         """
         return (isinstance(data, MeasuredData) and data.kind != "actuator"
                 and data.actuator_type != "cylinder")
-
-    def candidates(self) -> tuple:
-        return tuple(REGISTRY)
 
     def diagnose(self, data, *, arm=None, candidates=None, block_seconds=0.05, alpha=0.01,
                  rho_max=1.5, experiment=None, seed=0, bootstrap=None, stability=None,

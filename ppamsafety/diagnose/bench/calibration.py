@@ -9,7 +9,8 @@ log-uniform over plausible ranges; sensor faults; out-of-library structure:
 stroke-to-stroke scatter, correlated force ripple, a time-based transient after
 the reversals, random per-record offsets; 1 to 7 pressure levels, 4 to 10
 cycles, sometimes several speeds), :func:`run_campaign_calibration` diagnoses each
-campaign blind and scores every named effect, :func:`campaign_calibration_table`
+campaign blind and scores every named effect (:data:`CAMPAIGN_BATTERY` on the one battery
+runner of every record kind, :func:`~..core.battery.run_battery`), :func:`campaign_calibration_table`
 gives the precision per claimed level.  The thresholds of the confidence rule
 (:data:`~.campaign.STABILITY_HIGH`, :data:`~.campaign.P_HIGH`,
 :data:`~.campaign.GAIN_HIGH`) were set on seeds 0-99 (:data:`CAMPAIGN_TUNING`);
@@ -35,7 +36,7 @@ import pandas as pd
 
 from ..._validation import check_seed
 from ...data.measured import MeasuredDataWarning
-from ..core.battery import HIGH_PRECISION, logu, sgn, wilson_low
+from ..core.battery import HIGH_PRECISION, Battery, logu, run_battery, sgn, wilson_low
 from .campaign import diagnose_campaign
 from .cylinder_synth import LIBRARY_NAME, synthesize_cylinder
 
@@ -135,8 +136,43 @@ RUN_COLUMNS = ("seed", "hidden", "named", "high", "missed", "wrong_high", "recor
                "seconds")
 
 
-def run_campaign_calibration(seeds, *, diagnose_options=None) -> tuple:
+def _campaign_row(seed, diagnose_options=None) -> dict:
+    """Synthesize, diagnose blind and score the campaign of ``seed`` (the row of
+    :data:`CAMPAIGN_BATTERY`): the scenario's :data:`RUN_COLUMNS` and its :func:`score`
+    rows under ``names``."""
+    sc = random_scenario(seed)
+    t0 = time.perf_counter()
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", MeasuredDataWarning)
+        camp = synthesize_cylinder(sc["effects"], seed=sc["seed"], nuisance=sc["nuisance"],
+                                   **sc["options"])
+        dg = diagnose_campaign(camp, **(diagnose_options or {}))
+    r = score(sc, dg)
+    truth = sorted({LIBRARY_NAME[k] for k in sc["effects"] if k in LIBRARY_NAME})
+    named = set(dg.names) | {m for g in dg.confounded for m in g.members}
+    return {"seed": seed, "hidden": "+".join(truth),
+            "named": "+".join(dg.names),
+            "high": "+".join(e.name for e in dg.effects if e.high),
+            "missed": "+".join(t for t in truth if t not in named),
+            "wrong_high": "+".join(x["name"] for x in r if x["level"] == "high"
+                                   and not x["right"]),
+            "records": len(camp), "rho_after": dg.residual_rms["block_force"]["after"],
+            "seconds": time.perf_counter() - t0, "names": r}
+
+
+#: The cylinder campaign's battery for the one runner of every record kind
+#: (:func:`~..core.battery.run_battery`); its option: ``diagnose_options``.
+CAMPAIGN_BATTERY = Battery(kind="cylinder", tuning=CAMPAIGN_TUNING, measure=CAMPAIGN_MEASURE,
+                           run=_campaign_row, processes=1)
+#: Columns of the first table of :func:`run_campaign_calibration` (one row per claim).
+NAME_COLUMNS = ("seed", "kind", "name", "level", "right", "cv_gain", "p_value", "stability",
+                "setting", "at_edge")
+
+
+def run_campaign_calibration(seeds, *, diagnose_options=None, processes: int = 1) -> tuple:
     """Synthesize and diagnose one random campaign per seed; score every name.
+
+    Runs :data:`CAMPAIGN_BATTERY` through :func:`~..core.battery.run_battery`.
 
     Parameters
     ----------
@@ -144,39 +180,36 @@ def run_campaign_calibration(seeds, *, diagnose_options=None) -> tuple:
         Scenario seeds.
     diagnose_options : dict, optional, keyword-only
         Keyword options of :func:`~.campaign.diagnose_campaign`.
+    processes : int, keyword-only
+        Worker processes (1: in this process).
 
     Returns
     -------
     names : pandas.DataFrame
         :func:`score` rows.
     runs : pandas.DataFrame
-        One row per scenario: ``seed``, ``hidden`` (library names),
+        One row per scenario, sorted by seed: ``seed``, ``hidden`` (library names),
         ``named``, ``high``, ``missed``, ``rho_after``, ``seconds``.
+
+    Raises
+    ------
+    RuntimeError
+        When a campaign could not be synthesized or diagnosed (naming its seed).
     """
-    rows, runs = [], []
-    for s in seeds:
-        sc = random_scenario(s)
-        t0 = time.perf_counter()
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", MeasuredDataWarning)
-            camp = synthesize_cylinder(sc["effects"], seed=sc["seed"], nuisance=sc["nuisance"],
-                                       **sc["options"])
-            dg = diagnose_campaign(camp, **(diagnose_options or {}))
-        r = score(sc, dg)
-        rows += r
-        truth = sorted({LIBRARY_NAME[k] for k in sc["effects"] if k in LIBRARY_NAME})
-        named = set(dg.names) | {m for g in dg.confounded for m in g.members}
-        runs.append({"seed": s, "hidden": "+".join(truth),
-                     "named": "+".join(dg.names),
-                     "high": "+".join(e.name for e in dg.effects if e.high),
-                     "missed": "+".join(t for t in truth if t not in named),
-                     "wrong_high": "+".join(x["name"] for x in r if x["level"] == "high"
-                                            and not x["right"]),
-                     "records": len(camp), "rho_after": dg.residual_rms["block_force"]["after"],
-                     "seconds": time.perf_counter() - t0})
-    return pd.DataFrame(rows, columns=["seed", "kind", "name", "level", "right", "cv_gain",
-                                       "p_value", "stability", "setting", "at_edge"]), \
-        pd.DataFrame(runs, columns=list(RUN_COLUMNS))
+    seeds = list(seeds)
+    if not seeds:
+        return pd.DataFrame(columns=list(NAME_COLUMNS)), pd.DataFrame(columns=list(RUN_COLUMNS))
+    res = run_battery(CAMPAIGN_BATTERY, seeds, processes=processes,
+                      diagnose_options=diagnose_options)
+    if "error" in res.columns:
+        bad = res[res["error"].notna()]
+        if len(bad):
+            r = bad.iloc[0]
+            raise RuntimeError(f"seed {int(r['seed'])}: the campaign failed: {r['error']}\n"
+                               f"{r.get('traceback', '')}")
+    names = [x for rows in res["names"] for x in rows]
+    return pd.DataFrame(names, columns=list(NAME_COLUMNS)), \
+        res[list(RUN_COLUMNS)].reset_index(drop=True)
 
 
 def campaign_calibration_table(names: pd.DataFrame) -> pd.DataFrame:
@@ -206,5 +239,6 @@ def campaign_calibration_table(names: pd.DataFrame) -> pd.DataFrame:
     return pd.DataFrame(out).set_index("level")
 
 
-__all__ = ["random_scenario", "score", "run_campaign_calibration", "campaign_calibration_table", "RUN_COLUMNS",
+__all__ = ["random_scenario", "score", "run_campaign_calibration", "CAMPAIGN_BATTERY", "NAME_COLUMNS",
+           "campaign_calibration_table", "RUN_COLUMNS",
            "CAMPAIGN_TUNING", "CAMPAIGN_MEASURE", "PRESSURE_FAMILY"]

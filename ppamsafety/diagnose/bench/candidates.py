@@ -1,5 +1,9 @@
 """The library of candidate effects on a test bench (one actuator: force, pressure, contraction).
 
+Each candidate is one :class:`MuscleCandidate` of :data:`MUSCLE_LIBRARY`: how it builds its
+columns on a record, its battery draw, the gates it needs and the experiments that separate
+it from its look-alikes; the design, the gates, the battery and the confounded groups read it.
+
 The names are fixed (:data:`~.candidates.ACTUATOR_VOCABULARY`).  Every
 candidate extends the nominal force law (3.9)
 ``F_nom = p (a0/eps + a1 + a2 eps + a3 eps^2 + a4 eps^3)`` by a term linear
@@ -85,44 +89,16 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ...hysteresis import EPS_MAX, preisach_response, scaled_input, w_fit
+from ..core.battery import logu, sgn
+from ..core.candidate import Candidate, Library, register_library
 from ..core.criteria import _normal_quantile
 from ..core.parameter import Parameter, physically_admissible
 from ..core.result import Estimate
 from .friction import GAIN_MAX, OFFSET_MAX_FRACTION
 from .friction import separating_experiment as friction_separating
 
-#: Fixed vocabulary of effect names on a tester (actuator records).
-ACTUATOR_VOCABULARY = ("actuator_friction", "hysteresis", "force_law_refit",
-                       "force_sensor_offset", "force_sensor_gain", "pressure_sensor_offset")
-#: The sensor faults of the library.
-SENSOR_FAULTS = ("force_sensor_offset", "force_sensor_gain", "pressure_sensor_offset")
 #: Largest hysteresis scale that keeps the factor 1 + delta (W - W_fit) of (3.35) positive.
 DELTA_PHYSICAL_MAX = 1.0
-#: The experiment that separates the members of a confounded group on a muscle record
-#: (looked up by :func:`separating_experiment`).
-SEPARATING = {
-    frozenset({"force_sensor_gain", "force_law_refit"}):
-        "a dead-weight check of the load cell (known masses hung from it: a gain error scales "
-        "their reading) and a calibrated reference gauge on the muscle's pressure port (a "
-        "pressure-sensor gain is the same column as a force gain on a muscle record: both scale "
-        "p f(eps)); if both sensors read true, the force law itself is off",
-    frozenset({"force_sensor_offset", "pressure_sensor_offset"}):
-        "vent the muscle and read both sensors at 0 bar with the load cell unloaded: a load-cell "
-        "zero error shows in the force, a pressure-sensor zero error in the pressure",
-    frozenset({"force_sensor_offset", "force_law_refit"}):
-        "record at several pressures (a constant force and one proportional to the pressure are "
-        "then distinct), and read the load cell unloaded with the muscle vented",
-    frozenset({"pressure_sensor_offset", "force_law_refit"}):
-        "record at several pressures and read the pressure sensor with the muscle vented "
-        "(0 bar)",
-    frozenset({"hysteresis", "force_law_refit"}):
-        "cycle the contraction at each pressure: hysteresis shows as a loop between contracting "
-        "and extending, a wrong force law does not",
-    frozenset({"actuator_friction", "hysteresis"}):
-        "loops of several amplitudes and speeds: friction jumps by 2c at every reversal whatever "
-        "the amplitude, hysteresis moves gradually from branch to branch and scales with the "
-        "force",
-}
 #: Text for a confounded group no entry of :data:`SEPARATING` covers.
 SEPARATING_DEFAULT = ("record more loops over a wider range (several pressures, contraction "
                       "amplitudes and speeds) and check the sensors against references (dead "
@@ -138,6 +114,55 @@ REFIT_MAX_RELATIVE = 0.5
 REFIT_MIN_SPAN_SIGMAS = 50.0
 #: Fastest/slowest run speed below which viscous friction is not separable from Coulomb.
 VISCOUS_SPEED_RATIO = 1.25
+#: Contraction range of the battery's force-law changes' least-squares projection [-].
+LAW_FIT_RANGE = (0.03, 0.30)
+
+
+@dataclass(frozen=True, eq=False)
+class MuscleCandidate(Candidate):
+    """A candidate effect of a muscle test-bench record: what every kind's candidate carries
+    (:class:`~ppamsafety.diagnose.core.candidate.Candidate`: its name, its battery ``draw``,
+    the gates it ``needs``, its ``separating`` experiments) and how it builds its columns.
+
+    Attributes
+    ----------
+    name : str
+        The name written in ``diagnosis.json`` (:data:`ACTUATOR_VOCABULARY`).
+    build : callable
+        ``build(ctx) -> (Extension or None, why)``: its columns and parameters on one record
+        (:func:`build_extensions`: the parameters' units, bounds and physical ranges, which
+        scale with the record's force, pressure and speed), or None and the reason it does
+        not apply to the record.
+    sensor_fault : bool
+        An error of the measurement rather than of the muscle.
+    draw : callable, keyword-only
+        ``draw(rng, law, protocol) -> (effects, truth)``: the battery's draw on a muscle of
+        force law ``law`` (5 coefficients [N/Pa]) under the scenario's ``protocol`` (the
+        options of :func:`~.synthesize.synthesize_actuator`): the generator's effects that
+        hide it and its true parameters (in the sensors' frame before any gain is applied,
+        :func:`~.scenarios.measured_truth`).
+    needs : tuple of str, keyword-only
+        Gates of :data:`~.gates.MUSCLE_RULE` that apply to it: ``reversals`` (a history
+        effect, shows at the reversals of the motion: none on a pressure sweep),
+        ``pressure_levels`` (told from its look-alikes only at several pressures).
+    separating : mapping, keyword-only
+        Look-alike -> the experiment that separates the two on a muscle record
+        (:data:`SEPARATING`, :func:`separating_experiment`).
+    """
+
+    build: object = field(default=None, repr=False)
+    sensor_fault: bool = False
+
+    def __post_init__(self):
+        super().__post_init__()
+        if not callable(self.build):
+            raise TypeError(f"candidate {self.name!r}: build must be callable")
+
+
+#: The muscle bench's candidate library (the record kind ``"muscle"`` of
+#: :func:`ppamsafety.diagnose.core.candidate.library`), in registration order.
+MUSCLE_LIBRARY = register_library(Library("muscle", MuscleCandidate))
+register = MUSCLE_LIBRARY.register
 
 
 @dataclass(frozen=True, eq=False)
@@ -459,9 +484,129 @@ def _pressure_offset(ctx):
         "in both directions of motion"), ""
 
 
-BUILDERS = {"actuator_friction": _friction, "hysteresis": _hysteresis,
-            "force_law_refit": _refit, "force_sensor_offset": _force_offset,
-            "force_sensor_gain": _force_gain, "pressure_sensor_offset": _pressure_offset}
+# ----------------------------------------------------------------------------- the library
+# Each candidate: its columns (``build``), its battery draw (the synthesizer's effects that
+# hide it, magnitudes log-uniform from below a typical detection limit to the top of the
+# plausible range), the gates it needs, the experiments that separate it from a look-alike.
+
+def law_change(a, s0: float, s1: float) -> np.ndarray:
+    """Coefficient changes [N/Pa] of a force function off by the relative amount
+    ``s0 + s1 (eps - 0.15) / 0.1`` (least squares over :data:`LAW_FIT_RANGE`).
+
+    Parameters
+    ----------
+    a : array_like, shape (5,)
+        Nominal coefficients [N/Pa].
+    s0, s1 : float
+        Relative level and tilt of the change.
+    """
+    e = np.linspace(*LAW_FIT_RANGE, 200)
+    target = force_function(a, e) * (s0 + s1 * (e - 0.15) / 0.1)
+    B = np.column_stack([1.0 / e, np.ones_like(e), e, e ** 2, e ** 3])
+    sc = np.sqrt(np.sum(B ** 2, axis=0))
+    coef, *_ = np.linalg.lstsq(B / sc, target, rcond=None)
+    return coef / sc
+
+
+def _draw_friction(rng, law, protocol):
+    c = logu(rng, 0.2, 30.0)
+    fx, tr = {"friction_coulomb": c}, {"c": c, "b": 0.0}
+    if protocol["cycles"] >= 2 and rng.random() < 0.3:
+        b = logu(rng, 200.0, 2.0e4)
+        fx["friction_viscous"] = b
+        tr["b"] = b
+    return fx, tr
+
+
+register(MuscleCandidate("actuator_friction", build=_friction, draw=_draw_friction,
+                         needs=("reversals",)))
+
+
+def _draw_hysteresis(rng, law, protocol):
+    d = logu(rng, 0.003, 0.3)
+    return {"hysteresis_delta": d}, {"delta": d}
+
+
+register(MuscleCandidate(
+    "hysteresis", build=_hysteresis, draw=_draw_hysteresis, needs=("reversals",),
+    separating={"actuator_friction":
+                "loops of several amplitudes and speeds: friction jumps by 2c at every reversal "
+                "whatever the amplitude, hysteresis moves gradually from branch to branch and "
+                "scales with the force"}))
+
+
+def _draw_refit(rng, law, protocol):
+    s0 = sgn(rng) * logu(rng, 0.002, 0.08)
+    # a pure scale (30 %) is a force-sensor gain on the record: confounded by construction
+    s1 = sgn(rng) * logu(rng, 0.002, 0.05) if rng.random() < 0.7 else 0.0
+    da = law_change(law, s0, s1)
+    return {"force_law_delta": tuple(float(x) for x in da)}, {
+        f"a{j}": float(law[j] + da[j]) for j in range(5)}
+
+
+register(MuscleCandidate(
+    "force_law_refit", build=_refit, draw=_draw_refit, needs=("pressure_levels",),
+    separating={"hysteresis":
+                "cycle the contraction at each pressure: hysteresis shows as a loop between "
+                "contracting and extending, a wrong force law does not"}))
+
+
+def _draw_force_offset(rng, law, protocol):
+    o = sgn(rng) * logu(rng, 0.1, 40.0)
+    return {"force_sensor_offset": o}, {"o": o}
+
+
+register(MuscleCandidate(
+    "force_sensor_offset", build=_force_offset, sensor_fault=True, draw=_draw_force_offset,
+    needs=("pressure_levels",),
+    separating={"force_law_refit":
+                "record at several pressures (a constant force and one proportional to the "
+                "pressure are then distinct), and read the load cell unloaded with the muscle "
+                "vented"}))
+
+
+def _draw_force_gain(rng, law, protocol):
+    g = sgn(rng) * logu(rng, 5e-4, 0.08)
+    if rng.random() < 0.5:
+        # a pressure-sensor gain: the same column, g = 1/(1 + g_p) - 1
+        return {"pressure_sensor_gain": g}, {"g": 1.0 / (1.0 + g) - 1.0}
+    return {"force_sensor_gain": g}, {"g": g}
+
+
+register(MuscleCandidate(
+    "force_sensor_gain", build=_force_gain, sensor_fault=True, draw=_draw_force_gain,
+    separating={"force_law_refit":
+                "a dead-weight check of the load cell (known masses hung from it: a gain error "
+                "scales their reading) and a calibrated reference gauge on the muscle's "
+                "pressure port (a pressure-sensor gain is the same column as a force gain on a "
+                "muscle record: both scale p f(eps)); if both sensors read true, the force law "
+                "itself is off"}))
+
+
+def _draw_pressure_offset(rng, law, protocol):
+    o = sgn(rng) * logu(rng, 30.0, 2.0e4)
+    return {"pressure_sensor_offset": o}, {"o": o}
+
+
+register(MuscleCandidate(
+    "pressure_sensor_offset", build=_pressure_offset, sensor_fault=True,
+    draw=_draw_pressure_offset, needs=("pressure_levels",),
+    separating={"force_sensor_offset":
+                "vent the muscle and read both sensors at 0 bar with the load cell unloaded: a "
+                "load-cell zero error shows in the force, a pressure-sensor zero error in the "
+                "pressure",
+                "force_law_refit": "record at several pressures and read the pressure sensor "
+                                   "with the muscle vented (0 bar)"}))
+
+#: Fixed vocabulary of effect names on a tester (actuator records): the library's names.
+ACTUATOR_VOCABULARY = tuple(MUSCLE_LIBRARY)
+#: The sensor faults of the library.
+SENSOR_FAULTS = tuple(n for n, c in MUSCLE_LIBRARY.items() if c.sensor_fault)
+#: Candidate -> its column builder (``MuscleCandidate.build``).
+BUILDERS = {n: c.build for n, c in MUSCLE_LIBRARY.items()}
+#: The experiment that separates the members of a confounded group on a muscle record
+#: (the candidates' ``separating``; looked up by :func:`separating_experiment`).
+SEPARATING = MUSCLE_LIBRARY.separating_table()
 
 
 def separating_experiment(members) -> str:
@@ -521,7 +666,8 @@ def build_extensions(ctx: dict, names=None) -> tuple:
     return out, notes
 
 
-__all__ = ["Extension", "build_extensions", "BUILDERS", "ACTUATOR_VOCABULARY", "SENSOR_FAULTS",
+__all__ = ["Extension", "MuscleCandidate", "MUSCLE_LIBRARY", "law_change", "LAW_FIT_RANGE",
+           "build_extensions", "BUILDERS", "ACTUATOR_VOCABULARY", "SENSOR_FAULTS",
            "SEPARATING", "SEPARATING_DEFAULT", "separating_experiment", "force_function",
            "DELTA_PHYSICAL_MAX", "FRICTION_MAX_FRACTION",
            "DELTA_BOUNDS", "REFIT_MAX_RELATIVE", "REFIT_MIN_SPAN_SIGMAS", "VISCOUS_SPEED_RATIO"]

@@ -34,10 +34,12 @@ residual_at_noise    the final residual/noise RMS ratio is <= ``MUSCLE_RULE.rho_
 consistent           its coefficients are the same in the first and the second half
                      of the record (:mod:`.consistency`: a drifting load-cell zero
                      taken for a refitted law fits different values early and late)
-reversals            friction and hysteresis (which show at reversals): at least
+reversals            the candidates that need it (``MuscleCandidate.needs``: friction and
+                     hysteresis, which show at reversals): at least
                      :data:`MIN_REVERSALS_HIGH` reversals of the motion (fewer
                      cannot tell them from a slow drift)
-pressure_levels      the refitted law and the sensor offsets: several pressure
+pressure_levels      the candidates that need it (the refitted law and the sensor
+                     offsets): several pressure
                      levels (at one level a constant force, a force -o f(eps) and
                      a refitted law p f(eps) are nearly one column)
 not_confounded       no other candidate explains the same part of the residual
@@ -50,13 +52,15 @@ from __future__ import annotations
 import math
 
 from ..core.gates import CONSTANCY_ALPHA, HighRule, judge, level
+from .candidates import MUSCLE_LIBRARY
 
 #: Fewest reversals of the motion for a history effect to be "high": two full loops.
 MIN_REVERSALS_HIGH = 4
-#: Effects that show at the reversals of the motion.
-HISTORY_EFFECTS = ("actuator_friction", "hysteresis")
-#: Effects that need several pressure levels to be told from one another.
-PRESSURE_EFFECTS = ("force_law_refit", "force_sensor_offset", "pressure_sensor_offset")
+#: Effects that show at the reversals of the motion (the candidates that need ``reversals``).
+HISTORY_EFFECTS = MUSCLE_LIBRARY.needing("reversals")
+#: Effects that need several pressure levels to be told from one another (the candidates that
+#: need ``pressure_levels``).
+PRESSURE_EFFECTS = MUSCLE_LIBRARY.needing("pressure_levels")
 #: The muscle record's rule for "high": its gates in the order they are reported; the largest
 #: final residual/noise RMS ratio as a factor of the 99.9 % point of the ratio under noise
 #: alone, 1.15 (x 1.02-1.06: the estimated noise level is good to a few per cent, a model
@@ -114,13 +118,14 @@ def gates(name: str, extension, phi, cov, *, weight: float, stability: float | N
     dict
         Gate -> bool, in the order of ``MUSCLE_RULE.gates``.
     """
+    needs = MUSCLE_LIBRARY[name].needs
     return judge(MUSCLE_RULE, weight=weight, stability=stability,
                  stability_threshold=stability_threshold,
                  admissible=extension.physically_admissible(phi, cov),
                  moved=extension.moved(phi, cov), clear=clear, rho=rho, m=m,
                  unexplained=unexplained, consistency=consistency,
-                 reversals=name not in HISTORY_EFFECTS or turns >= MIN_REVERSALS_HIGH,
-                 pressure_levels=name not in PRESSURE_EFFECTS or not one_level,
+                 reversals="reversals" not in needs or turns >= MIN_REVERSALS_HIGH,
+                 pressure_levels="pressure_levels" not in needs or not one_level,
                  confounded=confounded)
 
 

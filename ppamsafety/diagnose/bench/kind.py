@@ -11,7 +11,7 @@ from ...data.campaign import Campaign
 from ...data.measured import MeasuredData
 from ..core.kind import RecordKind, register_kind
 from .campaign import CAMPAIGN_RULE, diagnose_campaign
-from .candidates import ACTUATOR_VOCABULARY
+from .candidates import MUSCLE_LIBRARY
 from .friction import VOCABULARY
 from .gates import MUSCLE_RULE
 from .pipeline import diagnose_actuator
@@ -30,6 +30,7 @@ class MuscleKind(RecordKind):
 
     name = "muscle test-bench record"
     rule = MUSCLE_RULE
+    library = MUSCLE_LIBRARY
     refused = {"arm": _NO_ARM}
 
     def accepts(self, data) -> bool:
@@ -41,9 +42,6 @@ class MuscleKind(RecordKind):
         """
         return (isinstance(data, MeasuredData) and data.kind == "actuator"
                 and data.actuator_type != "cylinder")
-
-    def candidates(self) -> tuple:
-        return tuple(ACTUATOR_VOCABULARY)
 
     def diagnose(self, data, *, candidates=None, alpha=0.01, rho_max=1.5, experiment=None,
                  **_):

@@ -50,7 +50,7 @@ from .design import (AMBIGUOUS_SIGMAS, LOCAL_WINDOW, NOISE_PLATEAU, PRESSURE_LEV
                      motion_direction, residual_noise)
 from .detection import detection_limits, limit_ratio, omitted
 from ..core.gates import level
-from .gates import MIN_REVERSALS_HIGH, MUSCLE_RULE, gates
+from .gates import MIN_REVERSALS_HIGH, MUSCLE_RULE, PRESSURE_EFFECTS, gates
 from .selection import MIN_EFFECT_RMS, relinearised, select
 from .stability import (PAIRS, THRESHOLD, half_sample_covariance, inflated_covariance,
                         stability_selection)
@@ -200,9 +200,7 @@ class MuscleSteps(Steps):
                            confidence=sel.subsets.inclusion.get(name, 0.0),
                            signature=exts[name].signature)
             (self.effects if rho <= self.rho_max else self.partial).append(entry)
-        if self.des.one_level and set(self.fit.names) & {"force_law_refit",
-                                                         "force_sensor_offset",
-                                                         "pressure_sensor_offset"}:
+        if self.des.one_level and set(self.fit.names) & set(PRESSURE_EFFECTS):
             self.notes.append(
                 "the pressure takes essentially one level (95th/5th percentile ratio < "
                 f"{PRESSURE_LEVELS_RATIO}): a refitted force law, a force-sensor offset and "

@@ -57,7 +57,7 @@ from ...params.muscles import TABLE_B1_N_PER_BAR
 from ...units import BAR
 from ..core.battery import P_COUNT, P_PERTURBATION, Battery, coverage_entry, logu, sgn
 from ..core.solve import lstsq
-from .candidates import ACTUATOR_VOCABULARY, force_function
+from .candidates import ACTUATOR_VOCABULARY, MUSCLE_LIBRARY, law_change
 from .design import actuator_design, actuator_record
 from .detection import signature_ratio
 from .pipeline import diagnose_actuator
@@ -67,81 +67,16 @@ from .synthesize import synthesize_actuator
 P_SWEEP = 0.15
 #: Largest number of samples of a record (the sampling rate is lowered to keep below it).
 MAX_SAMPLES = 40000
-#: Contraction range of the force-law changes' least-squares projection [-].
-LAW_FIT_RANGE = (0.03, 0.30)
 
 
 # ----------------------------------------------------------------------------- library draws
-# Each draw returns (synthesize_actuator effects, true parameter values of the candidate in
-# the sensors' frame before any gain is applied: measured_truth() applies it).
-
-def _hysteresis(rng, law, protocol):
-    d = logu(rng, 0.003, 0.3)
-    return {"hysteresis_delta": d}, {"delta": d}
-
-
-def _friction(rng, law, protocol):
-    c = logu(rng, 0.2, 30.0)
-    fx, tr = {"friction_coulomb": c}, {"c": c, "b": 0.0}
-    if protocol["cycles"] >= 2 and rng.random() < 0.3:
-        b = logu(rng, 200.0, 2.0e4)
-        fx["friction_viscous"] = b
-        tr["b"] = b
-    return fx, tr
-
-
-def law_change(a, s0: float, s1: float) -> np.ndarray:
-    """Coefficient changes [N/Pa] of a force function off by the relative amount
-    ``s0 + s1 (eps - 0.15) / 0.1`` (least squares over :data:`LAW_FIT_RANGE`).
-
-    Parameters
-    ----------
-    a : array_like, shape (5,)
-        Nominal coefficients [N/Pa].
-    s0, s1 : float
-        Relative level and tilt of the change.
-    """
-    e = np.linspace(*LAW_FIT_RANGE, 200)
-    target = force_function(a, e) * (s0 + s1 * (e - 0.15) / 0.1)
-    B = np.column_stack([1.0 / e, np.ones_like(e), e, e ** 2, e ** 3])
-    sc = np.sqrt(np.sum(B ** 2, axis=0))
-    coef, *_ = np.linalg.lstsq(B / sc, target, rcond=None)
-    return coef / sc
-
-
-def _refit(rng, law, protocol):
-    s0 = sgn(rng) * logu(rng, 0.002, 0.08)
-    # a pure scale (30 %) is a force-sensor gain on the record: confounded by construction
-    s1 = sgn(rng) * logu(rng, 0.002, 0.05) if rng.random() < 0.7 else 0.0
-    da = law_change(law, s0, s1)
-    return {"force_law_delta": tuple(float(x) for x in da)}, {
-        f"a{j}": float(law[j] + da[j]) for j in range(5)}
-
-
-def _force_offset(rng, law, protocol):
-    o = sgn(rng) * logu(rng, 0.1, 40.0)
-    return {"force_sensor_offset": o}, {"o": o}
-
-
-def _force_gain(rng, law, protocol):
-    g = sgn(rng) * logu(rng, 5e-4, 0.08)
-    if rng.random() < 0.5:
-        # a pressure-sensor gain: the same column, g = 1/(1 + g_p) - 1
-        return {"pressure_sensor_gain": g}, {"g": 1.0 / (1.0 + g) - 1.0}
-    return {"force_sensor_gain": g}, {"g": g}
-
-
-def _pressure_offset(rng, law, protocol):
-    o = sgn(rng) * logu(rng, 30.0, 2.0e4)
-    return {"pressure_sensor_offset": o}, {"o": o}
-
-
-#: Library candidate -> its draw.
-LIBRARY_DRAWS = {"hysteresis": _hysteresis, "actuator_friction": _friction,
-                 "force_law_refit": _refit, "force_sensor_offset": _force_offset,
-                 "force_sensor_gain": _force_gain, "pressure_sensor_offset": _pressure_offset}
-#: Candidates that need a motion to show (left out of a pressure sweep's draws).
-MOTION_EFFECTS = ("hysteresis", "actuator_friction")
+#: Library candidate -> its draw (``MuscleCandidate.draw``: the synthesizer's effects and the
+#: true parameter values in the sensors' frame before any gain is applied, which
+#: :func:`measured_truth` applies).
+LIBRARY_DRAWS = MUSCLE_LIBRARY.draws()
+#: Candidates that need a motion to show (the history effects, gate ``reversals``): left out
+#: of a pressure sweep's draws.
+MOTION_EFFECTS = MUSCLE_LIBRARY.needing("reversals")
 
 
 def _perturbation(rng) -> dict:

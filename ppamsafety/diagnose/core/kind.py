@@ -7,8 +7,8 @@ every registered :class:`RecordKind` whether it takes the record (:meth:`RecordK
 exactly one must), lets that kind refuse the options that do not apply to it
 (:meth:`RecordKind.check_options`) and hands the record to :meth:`RecordKind.diagnose`.
 
-A kind holds, besides: its rule for "high" (:class:`~.gates.HighRule`) and the names of its
-candidate library (its battery of scenarios, a :class:`~.battery.Battery`, lives above the
+A kind holds, besides: its rule for "high" (:class:`~.gates.HighRule`) and its candidate
+library (:class:`~.candidate.Library`, one object per candidate; its battery of scenarios, a :class:`~.battery.Battery`, lives above the
 front door, in :mod:`ppamsafety.diagnose.scenarios` and the kinds' ``scenarios``).  The
 recipe for a new kind is in ``docs/architecture.md``; the muscle test bench
 (:class:`ppamsafety.diagnose.bench.kind.MuscleKind`) is its worked example.
@@ -29,6 +29,9 @@ class RecordKind:
         What the kind is called in messages ("arm record", "muscle test-bench record" ...).
     rule : HighRule
         Its gates and thresholds for "high".
+    library : Library or None
+        Its candidate library (:mod:`.candidate`; None: the kind lists its names itself,
+        :meth:`candidates`).
     refused : dict
         Front-door option -> the message (naming the option and why it does not apply) it
         is refused with when given (not None), never silently ignored.
@@ -36,6 +39,7 @@ class RecordKind:
 
     name: str = ""
     rule = None
+    library = None
     refused: dict = {}
 
     def accepts(self, data) -> bool:
@@ -49,7 +53,9 @@ class RecordKind:
 
     def candidates(self) -> tuple:
         """The names of the kind's candidate library, in its order."""
-        raise NotImplementedError
+        if self.library is None:
+            raise NotImplementedError
+        return tuple(self.library)
 
     def check_options(self, options: dict) -> None:
         """Refuse, with a ValueError naming it, an option that does not apply to this kind.
