@@ -589,6 +589,7 @@ def _impact_at_point(args, arm, region, q, stiffness, origin) -> int:
     from .impact.anywhere import simulate_contacts
     from .impact.summary import region_body
     from .impact.verdicts import Verdicts, ais_risk_table, criteria_for, evaluate
+    from .params.contact import covering_notes
     from .params.contact_files import resolve_contact_point, resolve_covering
 
     with _named("--contact", args.contact):
@@ -598,6 +599,9 @@ def _impact_at_point(args, arm, region, q, stiffness, origin) -> int:
     if args.covering is not None:
         with _named("--covering", args.covering):
             cov = resolve_covering(args.covering)
+    for note in covering_notes(point.covering if cov is None else cov):
+        print(f"ppamsafety: note: {args.covering if cov is not None else args.contact}: {note}",
+              file=sys.stderr)
     head = _head_of(args)
     body = region_body(region, head=head)
     model = (head.name if head is not None and region.head else
@@ -631,6 +635,11 @@ def _impact_at_point(args, arm, region, q, stiffness, origin) -> int:
         print(f"p_max           {s.p_max / 1e4:.4g} N/cm^2 (mean pressure over the contact area)")
     print(f"max compression {1e3 * s.delta_max:.4g} mm, peak body acceleration "
           f"{s.a_max_g:.4g} g")
+    if c.covering.layers:
+        print(f"covering use    {s.covering_use:.2f} of its strain limit"
+              + (": THE COVERING BOTTOMS OUT (compressed to its strain limit, it passes the "
+                 "force on as a rigid layer; a thicker or stiffer covering, or a lower speed, "
+                 "keeps it within its limit)" if s.covering_use >= 1.0 else ""))
     vals = {"F_max": float(s.F_max), "HIC36": float(s.HIC36), "HIC15": float(s.HIC15)}
     table = evaluate(vals, criteria_for(region), head=model, contact_point=point.name,
                      region=region.name)
@@ -639,7 +648,12 @@ def _impact_at_point(args, arm, region, q, stiffness, origin) -> int:
     for line in (Verdicts(table) if risk is None else Verdicts(table, risk)).lines():
         print(line)
     if args.history is not None:
-        hist = res.histories[0]
+        hist = res.histories[0].copy()
+        nc = len(c.covering.layers)
+        if nc:              # each sample's compression of the covering over its limit
+            lim = c.table()["limit"].to_numpy()[:nc]
+            hist["covering_use"] = np.max(
+                [hist[f"delta{i + 1}"].clip(lower=0.0) / lim[i] for i in range(nc)], axis=0)
         atomic_write(args.history, lambda tmp: hist.to_csv(tmp, index=False),
                      overwrite=args.overwrite, name="--history")
         print(f"time history written to {args.history}")

@@ -50,7 +50,7 @@ from ..results import Result
 from .._validation import (as_float_array, check_bool, check_choice, check_instance, check_int,
                            check_nonnegative, check_range, check_range_array, describe)
 from ..params.contact import (BARE, FOREHEAD, BodyContact, ContactPoint, Covering,
-                              arm_contact_points)
+                              arm_contact_points, check_point_on_arm)
 from ..plant import dynamics as dyn
 from ..plant import packing
 from ..plots.contacts import plot_contact_history, plot_contact_margins
@@ -116,6 +116,8 @@ def resolve_point(point, arm, covering=None) -> ContactPoint:
     elif not isinstance(point, ContactPoint):
         raise TypeError(f"point must be a contact point name or a ContactPoint, got "
                         f"{describe(point)}")
+    else:
+        check_point_on_arm(point, arm)
     if covering is not None:
         point = point.replace(covering=check_instance("covering", covering, Covering))
     return point
@@ -774,7 +776,8 @@ class WorstContact(Result):
         One row per contact point: its worst body region and instant (exact, the engine's
         summary row plus ``point``, ``body``, ``t0``, ``criterion``, ``value``, ``limit``,
         ``utilisation`` = value / limit, ``margin`` = limit - value, ``margin_pct`` =
-        100 (limit - value) / limit; NaN without limits).
+        100 (limit - value) / limit; NaN without limits); ``covering_use`` is 0 for a bare
+        point (no covering is compressed).
     criterion : str
         What was ranked (:data:`CRITERIA`).
     limits : dict or None
@@ -1032,7 +1035,8 @@ def worst_contact(result, arm, *, points=None, bodies=None, limits=None,
                 "utilisation": value / li if lim else np.nan,
                 "margin": li - value if lim else np.nan,
                 "margin_pct": 100.0 * (li - value) / li if lim else np.nan}
-        worst_rows.append({**head, **fr.to_dict()})
+        # covering_use of a bare point is 0 (no covering is compressed), as in the layout
+        worst_rows.append({**head, "covering_use": 0.0, **fr.to_dict()})
     if not worst_rows:
         raise ValueError("no contact point moves faster than min_speed at any instant")
     cols = {c: np.concatenate([t[c] for t in tables]) for c in tables[0] if c != "_name"}
