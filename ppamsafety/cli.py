@@ -102,6 +102,19 @@ def _positive_int(text: str) -> int:
     return v
 
 
+#: ``impact --dt`` range [s]: :data:`ppamsafety.impact.model.DT_RANGE` (not imported here, so
+#: that ``--help`` answers without loading the impact engine; a test keeps them equal).
+_DT_RANGE = (1e-8, 1e-3)
+
+
+def _impact_dt(text: str) -> float:
+    v = _finite(text)
+    if not _DT_RANGE[0] <= v <= _DT_RANGE[1]:
+        raise argparse.ArgumentTypeError(f"{v:g} s is outside [{_DT_RANGE[0]:g}, "
+                                         f"{_DT_RANGE[1]:g}] s (the integration step)")
+    return v
+
+
 def _nonnegative(text: str) -> float:
     v = _finite(text)
     if v < 0.0:
@@ -305,9 +318,10 @@ def _processes(text: str) -> int:
     try:
         v = int(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not an int") from None
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer (allowed: an integer "
+                                         f">= 1)") from None
     if v < 1:
-        raise argparse.ArgumentTypeError(f"{v} is not allowed (a positive number of processes)")
+        raise argparse.ArgumentTypeError(f"{v} is not allowed (allowed: an integer >= 1)")
     return v
 
 
@@ -454,23 +468,87 @@ def _effect_arg(text: str):
     return name, value
 
 
+#: A ``--effect`` VALUE with a unit: numbers (comma-separated) and then the unit.
+_VALUE_UNIT = re.compile(r"^\s*([-+0-9.eE]+(?:\s*,\s*[-+0-9.eE]+)*)\s*([^\s\d,.+-].*?)\s*$")
+
+
+def _effect_unit(kind: str, name: str):
+    """The SI unit of a ``--effect`` of ``kind`` (``"-"``: a plain number; None: unknown)."""
+    from .diagnose.arm.synthesize import MEASUREMENT_BOUNDS, RELATIVE
+    from .diagnose.bench.synthesize import EFFECT_BOUNDS
+    from .params.effects import Effects
+
+    if kind == "actuator":
+        return EFFECT_BOUNDS.get(name, (None, None, None))[2]
+    if name in RELATIVE:
+        return "-"
+    if name in MEASUREMENT_BOUNDS:
+        return MEASUREMENT_BOUNDS[name][2]
+    if name in ("valve_dead_time",):
+        return "s"
+    if name == "valve_offset_delta":
+        return "Pa"
+    f = Effects.__dataclass_fields__.get(name)
+    return None if f is None else (f.metadata.get("unit") or "-")
+
+
+def _effect_value(kind: str, name: str, value: str) -> str:
+    """``value`` of ``--effect NAME=VALUE`` in SI: a unit after the number(s) is converted by
+    :func:`ppamsafety.units.si_factor` (``payload_mass=400g`` is 0.4 kg)."""
+    from .units import si_factor
+
+    m = _VALUE_UNIT.match(value)
+    if m is None:
+        return value
+    numbers, unit = m.groups()
+    si = _effect_unit(kind, name)
+    if si is None:
+        return value                    # an unknown effect: refused by name below
+    if si == "-":
+        raise ValueError(f"--effect {name}={value}: {name} is a plain number (no unit); "
+                         f"give e.g. {name}={numbers}")
+    factor = si_factor(unit, si, name=f"--effect {name}={value}: the unit")
+    return ",".join(repr(float(x) * factor) for x in numbers.split(","))
+
+
+def _check_effect(kind: str, arm, name: str, value: str) -> None:
+    """Refuse a bad ``--effect NAME=VALUE`` naming ``--effect``, the value and the unit."""
+    from .diagnose.arm.synthesize import plant_with
+    from .diagnose.bench.synthesize import _check_effects
+    from .params import thesis_arm
+
+    try:
+        if kind == "actuator":
+            _check_effects({name: value})
+        else:
+            plant_with(thesis_arm() if arm is None else arm, {name: value})
+    except (TypeError, ValueError) as exc:
+        si = _effect_unit(kind, name)
+        unit = ("" if si is None else f"; {name} is a plain number" if si == "-" else
+                f"; {name} is a number in {si} (or with its unit after it, e.g. "
+                f"{name}=1{si.replace(' ', '')})")
+        raise ValueError(f"--effect {name}={value}: {exc}{unit}") from None
+
+
 def _cmd_synthesize(args) -> int:
     from .data.measured import check_save_path
     from .diagnose import synthesize
 
     with _options(path="--out", **{"measured data file": "--out"}):
         check_save_path(args.out, overwrite=args.overwrite)      # fail before simulating
+    arm = _arm_of(args)
     effects = {}
+    kind = "actuator" if args.kind == "actuator" else "arm"
     for name, value in args.effect or []:       # values are parsed (and named) by synthesize
         if name in effects:
             raise ValueError(f"--effect {name} is given twice ({name}={effects[name]} and "
                              f"{name}={value}); give each effect once")
-        effects[name] = value
+        effects[name] = _effect_value(kind, name, value)
+        _check_effect(kind, arm, name, effects[name])
     tester = ("protocol", "pressures", "cycles", "period", "sample_rate", "force_law", "jitter")
     names = {"experiment": "--experiment", "noise": "--noise", "seed": "--seed",
              "duration": "--duration", "controller": "--controller", "reference": "--reference",
              **{k: f"--{k.replace('_', '-')}" for k in tester}}
-    arm = _arm_of(args)
     _head_unused(args, "synthesize")
     if args.kind == "actuator":
         if arm is not None:
@@ -507,10 +585,7 @@ def _cmd_synthesize(args) -> int:
 
 
 def _cmd_impact(args) -> int:
-    from .design import rest_stiffness
     from .impact.head import head_model
-    from .impact.model import simulate_impacts
-    from .impact.verdicts import impact_verdicts
     from .params.iso_ts_15066 import resolve_region
     from .params import thesis_arm
 
@@ -521,6 +596,42 @@ def _cmd_impact(args) -> int:
     with _named("--region", args.region):
         region = resolve_region(args.region)
     q = np.array(args.q, dtype=float) * DEG
+    with warnings.catch_warnings():
+        if _pose_outside(args.q, arm):  # said once, in degrees, instead of the library's warning
+            warnings.filterwarnings("ignore", message=r"q: case\(s\)")
+        return _impact(args, arm, head, region, q)
+
+
+def _pose_outside(q_deg, arm) -> bool:
+    """Warn when ``--q`` (degrees) lies outside the arm's working area by more than the impact
+    model's margin, with the hint "looks like radians" when the numbers read as radians lie
+    inside it; True when it warned."""
+    from .impact.model import ANGLE_MARGIN
+
+    g = arm.geometry
+    lo, hi = np.array([g.q1_min, g.q2_min]), np.array([g.q1_max, g.q2_max])
+    given = np.array(q_deg, dtype=float)
+    if np.all((given * DEG >= lo - ANGLE_MARGIN) & (given * DEG <= hi + ANGLE_MARGIN)):
+        return False
+    area = (f"the working area q1 in [{g.q1_min / DEG:.0f}, {g.q1_max / DEG:.0f}] deg, q2 in "
+            f"[{g.q2_min / DEG:.0f}, {g.q2_max / DEG:.0f}] deg")
+    hint = ""
+    if np.all((given >= lo) & (given <= hi)):
+        deg = np.degrees(given)
+        hint = (f"; looks like radians: --q takes degrees, did you mean --q {deg[0]:.4g} "
+                f"{deg[1]:.4g} (inside the working area)?")
+    warnings.warn(f"--q {given[0]:g} {given[1]:g} deg lies outside {area} (by more than "
+                  f"{ANGLE_MARGIN / DEG:g} deg); the impact model is still evaluated{hint}",
+                  UserWarning, stacklevel=2)
+    return True
+
+
+def _impact(args, arm, head, region, q) -> int:
+    """``impact`` once the arm, head, region and pose are read."""
+    from .design import rest_stiffness
+    from .impact.model import simulate_impacts
+    from .impact.verdicts import impact_verdicts
+
     with _options(q="--q", qd="--qd", stiffness="--stiffness", head="--head", dt="--dt"):
         if args.stiffness is None:      # the arm's own stiffness at rest in this pose
             rest = rest_stiffness(arm, q)
@@ -561,7 +672,10 @@ def _cmd_impact(args) -> int:
     for line in verdicts.lines():
         print(line)
     if args.history is not None:
-        hist = res.histories[0]
+        from .impact.engine import HIST
+        from .results import layout_units, with_units
+
+        hist = with_units(res.histories[0], layout_units(HIST))
         atomic_write(args.history, lambda tmp: hist.to_csv(tmp, index=False),
                      overwrite=args.overwrite, name="--history")
         print(f"time history written to {args.history}")
@@ -648,12 +762,16 @@ def _impact_at_point(args, arm, region, q, stiffness, origin) -> int:
     for line in (Verdicts(table) if risk is None else Verdicts(table, risk)).lines():
         print(line)
     if args.history is not None:
+        from .impact.points import PHIST
+        from .results import layout_units, with_units
+
         hist = res.histories[0].copy()
         nc = len(c.covering.layers)
         if nc:              # each sample's compression of the covering over its limit
             lim = c.table()["limit"].to_numpy()[:nc]
             hist["covering_use"] = np.max(
                 [hist[f"delta{i + 1}"].clip(lower=0.0) / lim[i] for i in range(nc)], axis=0)
+        hist = with_units(hist, {**layout_units(PHIST), "covering_use": "-"})
         atomic_write(args.history, lambda tmp: hist.to_csv(tmp, index=False),
                      overwrite=args.overwrite, name="--history")
         print(f"time history written to {args.history}")
@@ -952,7 +1070,9 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
                    metavar=("K1", "K2"),
                    help="joint stiffnesses [Nm/rad], >= 0 (default: the arm's own at rest in "
                         "the pose --q, (2.18) with its static pressures)")
-    m.add_argument("--dt", type=_positive, default=2e-5, help="integration step [s], > 0")
+    m.add_argument("--dt", type=_impact_dt, default=2e-5,
+                   help=f"integration step [s], in [{_DT_RANGE[0]:g}, {_DT_RANGE[1]:g}] s "
+                        f"(default 2e-05)")
     m.add_argument("--history", type=_path, default=None, metavar="FILE",
                    help="write the time history to this new CSV file")
     m.add_argument("--region", default="skull/forehead", metavar="NAME|FILE",

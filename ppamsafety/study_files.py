@@ -450,6 +450,7 @@ def _grid_values(where: str, key: str, v) -> Axis:
                                            {"value": x, "unit": unit})
                                 for i, x in enumerate(vals)]), key, unit)
     if isinstance(v, dict):
+        _unit_refused(where, f"grid.{key}", key, v)
         if len(v) != 1 or next(iter(v)) not in GENERATORS:
             raise _err(where, f"grid.{key} = {v!r}: an inline table must be one of "
                               f"{{geomspace = [start, stop, num]}} or {{linspace = [start, stop, "
@@ -472,6 +473,35 @@ def _grid_values(where: str, key: str, v) -> Axis:
     if not v:
         raise _err(where, f"grid.{key} is an empty list; give at least one value")
     return Axis(v)
+
+
+def _unit_refused(where: str, path: str, key: str, v) -> None:
+    """Refuse a value with a unit (``{value, unit}``, ``{values, unit}``, a generator with a
+    unit) on a key that takes plain numbers, saying the rule and the value in its SI unit."""
+    if is_dotted(key) or not (isinstance(v, dict) and "unit" in v):
+        return
+    si = ENVELOPE_UNITS.get(key) or column_unit(key)
+    if si is None or si == "-":
+        raise _err(where, f"{path} = {v!r}: {key} takes no unit (only the dotted keys "
+                          f"arm.<key of the arm file> and effects.<name> take one)")
+    try:
+        f = si_factor(v["unit"], si, name="unit")
+    except (TypeError, ValueError):
+        f = None
+    rest = {k: x for k, x in v.items() if k != "unit"}
+    write = ""
+    if f is not None and len(rest) == 1:
+        (k, x), = rest.items()
+        num = lambda a: isinstance(a, (int, float)) and not isinstance(a, bool)  # noqa: E731
+        if k == "value" and num(x):
+            write = f"{key} = {x * f:.6g}"
+        elif k == "values" and isinstance(x, list) and x and all(map(num, x)):
+            write = f"{key} = [{', '.join(f'{a * f:.6g}' for a in x)}]"
+        elif k in GENERATORS and isinstance(x, list) and len(x) == 3 and all(map(num, x)):
+            write = f"{key} = {{ {k} = [{x[0] * f:.6g}, {x[1] * f:.6g}, {x[2]}] }}"
+    raise _err(where, f"{path} = {v!r}: only the dotted keys (arm.<key of the arm file>, "
+                      f"effects.<name>) take a unit; {key} is a plain number in {si}"
+                      + (f": write {write}" if write else f" (convert {v['unit']!r} to {si})"))
 
 
 def _with_unit(axis: Axis, key: str, unit: str) -> Axis:
@@ -499,6 +529,7 @@ def _dotted_si(where: str, path: str, key: str, v):
 
 
 def _check_value(where: str, path: str, key: str, v, arm=None) -> None:
+    _unit_refused(where, path, key, v)
     try:
         if is_dotted(key):
             case_arm(arm, changes={key: v})
@@ -577,8 +608,11 @@ def _arm_and_head(where: str, data: dict, base_dir, arm, head) -> tuple:
         try:
             out.append(load(path))
         except FileNotFoundError:
-            raise _err(where, f"{table}.file = {f!r}: {table} file '{path}' does not exist") \
-                from None
+            rel = ("" if base_dir is None or Path(f).is_absolute() else
+                   f" (a relative path is read relative to the study file's folder "
+                   f"'{base_dir}')")
+            raise _err(where, f"{table}.file = {f!r}: {table} file '{path.resolve()}' does not "
+                              f"exist{rel}") from None
         except ValueError as exc:
             raise _err(where, f"{table}.file = {f!r}: {exc}") from None
     return tuple(out)
@@ -1171,7 +1205,7 @@ def run_study_file(study, outdir, *, backend: str = "local", scheduler=None,
         display_table(st, df).to_csv(stage / st.csv, index=False)   # units in the header
         (stage / "study.toml").write_text(st.source, encoding="utf-8")
         _write_summary(st, df, stage, env)
-    return SweepResult(df, name=st.name)
+    return SweepResult(df, name=st.name, units={c: column_unit(c) for c in df.columns})
 
 
 def _run_envelope(st: Study, cache, processes, progress):

@@ -125,3 +125,178 @@ def test_worst_contact_covering_use_is_zero_for_bare_points_never_nan():
 
 def _step_record():
     return run_thesis_experiment(ARM, "step", [thesis_variants()[1]])[0]
+
+
+# ---- 2. error messages name the argument, its value and what is allowed ----------------------
+def _cli_error(argv, capsys) -> str:
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("ppamsafety: error:") and err.count("\n") == 1, err
+    return err
+
+
+@pytest.mark.parametrize("value", ["0", "-3", "abc"])
+def test_max_cases_names_option_value_and_range(value, capsys):
+    err = _cli_error(["sweep", "s.toml", "--out", "o", "--max-cases", value], capsys)
+    assert "--max-cases" in err and value in err and "integer >= 1" in err, err
+    assert "processes" not in err, err
+
+
+STUDY = '[case]\nexperiment = "step"\ncontroller = "PID"\n'
+
+
+@pytest.mark.parametrize("text, words", [
+    ('[grid]\nlam = { linspace = [200, 400, 2], unit = "ms" }\n',
+     ["grid.lam", "'ms'", "only the dotted keys", "in s", "lam = { linspace = [0.2, 0.4, 2] }"]),
+    ('[grid]\nlam = { values = [200, 400], unit = "ms" }\n',
+     ["grid.lam", "only the dotted keys", "lam = [0.2, 0.4]"]),
+    ('[grid]\nstiffness = { values = [20, 85], unit = "N mm/deg" }\n',
+     ["grid.stiffness", "'N mm/deg'", "only the dotted keys", "N m/rad"]),
+    ('covering_thickness = { value = 15, unit = "mm" }\n',
+     ["case.covering_thickness", "only the dotted keys", "in m", "covering_thickness = 0.015"]),
+    ('[grid]\nkp_bar = { values = [1, 3], unit = "mbar/rad" }\n',
+     ["grid.kp_bar", "only the dotted keys", "bar/rad"]),
+])
+def test_a_unit_on_a_key_that_takes_plain_numbers_says_the_rule_and_the_si_value(text, words):
+    from ppamsafety.study_files import StudyFileError, parse_study
+
+    text = STUDY + text if text.startswith("[") else STUDY.replace(
+        'controller = "PID"\n', 'controller = "PID"\n' + text)
+    with pytest.raises(StudyFileError) as e:
+        parse_study(text)
+    assert all(w in str(e.value) for w in words), str(e.value)
+    # a dotted key takes its unit, so the rule holds
+    ok = STUDY + '[grid]\narm.links.m2 = { values = [900, 1200], unit = "g" }\n'
+    assert [c["arm.links.m2"] for c in parse_study(ok).cases] == [0.9, 1.2]
+
+
+def test_a_missing_arm_file_of_a_study_says_where_relative_paths_are_read(tmp_path):
+    from ppamsafety.study_files import StudyFileError, load_study
+
+    sub = tmp_path / "studies"
+    sub.mkdir()
+    (sub / "s.toml").write_text('[arm]\nfile = "my_arms.toml"\n' + STUDY)
+    with pytest.raises(StudyFileError) as e:
+        load_study(sub / "s.toml")
+    msg = str(e.value)
+    assert "arm.file = 'my_arms.toml'" in msg and str((sub / "my_arms.toml").resolve()) in msg
+    assert "relative to the study file's folder" in msg, msg
+
+
+def test_effect_errors_name_the_option_and_the_unit(tmp_path, capsys):
+    out = str(tmp_path / "r.csv")
+    err = _cli_error(["synthesize", "--out", out, "--effect", "bogus=1"], capsys)
+    assert "--effect bogus=1" in err and "unknown effect 'bogus'" in err, err
+    err = _cli_error(["synthesize", "--out", out, "--effect", "payload_mass=abc"], capsys)
+    assert "--effect payload_mass=abc" in err and "in kg" in err, err
+    err = _cli_error(["synthesize", "--out", out, "--effect", "payload_mass=400furlong"], capsys)
+    assert "--effect payload_mass=400furlong" in err and "'g'" in err, err
+    err = _cli_error(["synthesize", "--out", out, "--effect", "valve_gain_factor=0.8g"], capsys)
+    assert "--effect valve_gain_factor=0.8g" in err and "plain number" in err, err
+    err = _cli_error(["synthesize", "--kind", "actuator", "--out", out, "--effect", "bogus=1"],
+                     capsys)
+    assert "--effect bogus=1" in err and "kind='actuator'" in err, err
+    assert not (tmp_path / "r.csv").exists()
+
+
+@pytest.mark.parametrize("text, si", [("400g", "0.4"), ("400 g", "0.4"), ("0.4", "0.4"),
+                                      ("0.4kg", "0.4")])
+def test_effect_values_with_a_unit_are_converted_to_si(text, si):
+    from ppamsafety.cli import _effect_value
+
+    assert float(_effect_value("arm", "payload_mass", text)) == pytest.approx(float(si))
+    assert float(_effect_value("arm", "valve_dead_time", "20ms")) == pytest.approx(0.02)
+    assert [float(x) for x in _effect_value("arm", "valve_offset_delta",
+                                            "10,20,0,0 kPa").split(",")] == [1e4, 2e4, 0, 0]
+
+
+def test_region_numbers_on_the_command_line_and_their_range(capsys):
+    from ppamsafety.params.iso_ts_15066 import body_region
+
+    assert body_region("8") == body_region(8) == body_region("chest/sternum")
+    err = _cli_error(["impact", "--q", "50", "-80", "--qd", "1", "0", "--region", "30"], capsys)
+    assert "--region 30" in err and "1-29" in err, err
+    err = _cli_error(["impact", "--q", "50", "-80", "--qd", "1", "0", "--region", "chst"],
+                     capsys)
+    assert "--region chst" in err and "1-29" in err and "chest/sternum" in err, err
+
+
+def test_impact_q_in_radians_gets_the_looks_like_radians_hint_with_the_value(capsys):
+    assert main(["impact", "--q", "0.87", "-1.4", "--qd", "1", "0"]) == 0
+    err = capsys.readouterr().err
+    warn = [ln for ln in err.splitlines() if "warning" in ln]
+    assert len(warn) == 1, err                          # said once, in the user's degrees
+    assert "--q 0.87 -1.4 deg" in warn[0] and "looks like radians" in warn[0], warn
+    assert f"--q {math.degrees(0.87):.4g} {math.degrees(-1.4):.4g}" in warn[0], warn
+    # outside the working area but not radians: the warning without the hint
+    assert main(["impact", "--q", "0", "-80", "--qd", "1", "0"]) == 0
+    err = capsys.readouterr().err
+    assert "--q 0 -80 deg lies outside" in err and "radians" not in err, err
+
+
+def test_dt_help_and_error_give_the_allowed_range(capsys):
+    from ppamsafety.cli import _DT_RANGE
+    from ppamsafety.impact.model import DT_RANGE
+
+    assert _DT_RANGE == DT_RANGE
+    assert main(["impact", "--help"]) == 0
+    out = " ".join(capsys.readouterr().out.split())
+    assert "--dt DT integration step [s], in [1e-08, 0.001] s" in out, out
+    err = _cli_error(["impact", "--q", "50", "-80", "--qd", "1", "0", "--dt", "0.01"], capsys)
+    assert "--dt" in err and "0.01 s" in err and "[1e-08, 0.001] s" in err, err
+
+
+# ---- 3. units in what a person reads ---------------------------------------------------------
+def _unit_of_every_numeric_column(csv) -> list:
+    """Numeric columns of a CSV file whose name carries no ``[unit]``."""
+    df = pd.read_csv(csv)
+    return [c for c in df.columns
+            if pd.api.types.is_numeric_dtype(df[c]) and not pd.api.types.is_bool_dtype(df[c])
+            and df[c].notna().any() and not c.rstrip().endswith("]")]
+
+
+def test_impact_history_csv_names_its_units(tmp_path, capsys):
+    h = tmp_path / "h.csv"
+    assert main(["impact", "--q", "50", "-80", "--qd", "1", "0", "--history", str(h)]) == 0
+    cols = list(pd.read_csv(h).columns)
+    assert cols[:3] == ["t [s]", "F [N]", "delta [m]"], cols
+    assert _unit_of_every_numeric_column(h) == []
+    h2 = tmp_path / "h2.csv"
+    assert main(["impact", "--q", "50", "-80", "--qd", "1", "0", "--contact", "forearm",
+                 "--covering", "thesis-implied", "--history", str(h2)]) == 0
+    cols = list(pd.read_csv(h2).columns)
+    assert "pressure [Pa]" in cols and "covering_use [-]" in cols, cols
+    assert _unit_of_every_numeric_column(h2) == []
+
+
+def test_result_tables_are_written_with_units(tmp_path):
+    from ppamsafety.impact.instants import worst_instant
+    from ppamsafety.results import strip_unit
+    from ppamsafety.sweep import SweepResult
+
+    run = _step_record()
+    run.write(tmp_path / "run")
+    csv = tmp_path / "run" / "table.csv"
+    assert _unit_of_every_numeric_column(csv) == []
+    cols = list(pd.read_csv(csv).columns)
+    assert {"t [s]", "q1 [rad]", "p1 [Pa]", "x_d [m]"} <= set(cols), cols
+    assert [strip_unit(c)[0] for c in cols] == list(run.to_pandas().columns)   # same order
+    wi = worst_instant(run, ARM, every=50)
+    wi.write(tmp_path / "wi")
+    assert _unit_of_every_numeric_column(tmp_path / "wi" / "table.csv") == []
+    assert "F_max [N]" in pd.read_csv(tmp_path / "wi" / "table.csv").columns
+    pts = ["tool point", ContactPoint("covered forearm", 2, 0.5 * L2, "cylinder", 0.03,
+                                      THESIS_COVERING)]
+    wc = worst_contact(run, ARM, points=pts, every=50, limits={"head (forehead)": 260.0})
+    wc.write(tmp_path / "wc")
+    for name in ("table", "worst", "candidates"):
+        assert _unit_of_every_numeric_column(tmp_path / "wc" / f"{name}.csv") == [], name
+    worst = pd.read_csv(tmp_path / "wc" / "worst.csv")
+    assert {"value [N]", "limit [N]", "p_max [Pa]", "covering_use [-]"} <= set(worst.columns)
+    # a generic sweep knows no units; a sweep with units writes them
+    sw = SweepResult(pd.DataFrame({"lam": [0.2, 0.4], "F_max": [1.0, 2.0]}),
+                     units={"lam": "s", "F_max": "N"})
+    sw.write(tmp_path / "sw")
+    assert list(pd.read_csv(tmp_path / "sw" / "table.csv").columns) == ["lam [s]", "F_max [N]"]
+    with pytest.raises(TypeError, match="units must be a dict"):
+        SweepResult(pd.DataFrame({"x": [1]}), units=["s"])

@@ -46,7 +46,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from ..results import Result
+from ..results import Result, layout_units
 from .._validation import (as_float_array, check_bool, check_choice, check_instance, check_int,
                            check_nonnegative, check_range, check_range_array, describe)
 from ..params.contact import (BARE, FOREHEAD, BodyContact, ContactPoint, Covering,
@@ -63,8 +63,8 @@ from .head import HeadContactModel
 from .instants import _check_result, impact_states
 from .layers import (NL, S_ALPHA, S_NL, SeriesContact, series_contact, stack_batch,
                      stack_force_bound)
-from .model import (ENERGY_TOL, MAX_JOINT_SPEED, MAX_SPEED, PLAUSIBLE_SPEED, STEPS_PER_PERIOD,
-                    _fmt_cases, _history_indices, _rows, _unit, check_angles, check_arm,
+from .model import (DT_RANGE, ENERGY_TOL, MAX_JOINT_SPEED, MAX_SPEED, PLAUSIBLE_SPEED,
+                    STEPS_PER_PERIOD, _fmt_cases, _history_indices, _rows, _unit, check_angles, check_arm,
                     check_stiffness)
 
 #: Contact steps of a screening run, in units of dt, by criterion: the HIC (coarser window
@@ -335,6 +335,10 @@ class ContactResult(Result):
         """A copy of :attr:`summary`."""
         return self.summary.copy()
 
+    def column_units(self) -> dict:
+        """The units of :attr:`summary`."""
+        return {**_INPUT_UNITS, **layout_units(pt.PSUMMARY)}
+
     @property
     def table(self) -> pd.DataFrame:
         """The summary table."""
@@ -460,7 +464,7 @@ def _prepare(arm, q, qd, stiffness, *, point, body, covering, direction, body_ve
     vb = None if body_velocity is None else as_float_array(
         "body_velocity", body_velocity, shape_tail=(2,), ndim=(1, 2))
     fixed_arm = check_bool("fixed_arm", fixed_arm)
-    dt = check_range("dt", dt, 1e-8, 1e-3, unit="s")
+    dt = check_range("dt", dt, *DT_RANGE, unit="s")
     duration = check_range("duration", duration, 1e-4, 10.0, unit="s")
     if duration < dt:
         raise ValueError(f"duration = {duration:g} s is shorter than dt = {dt:g} s")
@@ -597,6 +601,8 @@ def _screen(prep: _PointPrep, idx, criterion: str) -> tuple:
 
 
 _INPUTS = ["q1", "q2", "qd1", "qd2", "K1", "K2", "ux", "uy", "point_speed", "m_eff"]
+_INPUT_UNITS = {"q1": "rad", "q2": "rad", "qd1": "rad/s", "qd2": "rad/s", "K1": "N m/rad",
+                "K2": "N m/rad", "ux": "-", "uy": "-", "point_speed": "m/s", "m_eff": "kg"}
 
 
 def _frame(prep: _PointPrep, rows, SUM, *, stacklevel) -> pd.DataFrame:
@@ -803,6 +809,15 @@ class WorstContact(Result):
     def to_pandas(self) -> pd.DataFrame:
         """The worst case of each contact point (:attr:`worst`)."""
         return self.worst.copy()
+
+    def column_units(self) -> dict:
+        """The units of :attr:`worst` and :attr:`candidates` (``value``, ``limit``, ``margin``
+        and the bounds in the criterion's unit)."""
+        unit = CRITERIA[self.criterion]
+        return {**_INPUT_UNITS, **layout_units(pt.PSUMMARY), "t0": "s", "value": unit,
+                "limit": unit, "margin": unit, "margin_pct": "%", "utilisation": "-",
+                "bound": unit, "screen": unit,
+                "objective": "-" if self.limits else unit}
 
     @property
     def overall(self) -> pd.Series:
