@@ -398,6 +398,8 @@ class Study:
         axis = self.cases.axes.get(key) if isinstance(self.cases, CaseGrid) else None
         if axis is not None and axis.unit is not None:
             return axis.unit, axis.factor
+        if key in DISPLAY_UNITS:
+            return DISPLAY_UNITS[key]
         if self.envelope is not None and key == "value":
             return column_unit(self.envelope["parameter"]), 1.0
         if self.envelope is not None and key == "margin":        # limit - metric: its unit
@@ -424,6 +426,11 @@ class Study:
         n = len(self.cases) if max_cases is None else min(max_cases, len(self.cases))
         cases = self.cases.head(n) if isinstance(self.cases, CaseGrid) else self.cases[:n]
         return estimate_cases(cases, processes=processes, histories=self.histories)
+
+
+#: Result columns a person reads in another unit than SI: (unit, factor to SI).  The contact
+#: pressure in N/cm^2, the unit of ISO/TS 15066 Annex A's pressure limits and of ``impact``.
+DISPLAY_UNITS = {"p_max": ("N/cm^2", 1.0e4)}
 
 
 def _err(where: str, msg: str) -> StudyFileError:
@@ -1286,8 +1293,9 @@ def _write_summary(st: Study, df: pd.DataFrame, stage: Path, envelope=None) -> N
     else:       # what varies among the cases run (--max-cases may run fewer)
         swept = [k for k in st.swept if k in df.columns and df[k].map(repr).nunique() > 1]
         shown = df.copy()
-        for k in swept:                        # the swept values in the study file's unit
-            shown[k] = df[k].map(lambda v, f=st.unit_of(k)[1]: _in_unit(v, f))
+        for k in shown.columns:      # the swept values in the study file's unit, p_max in N/cm^2
+            if st.unit_of(k)[1] != 1.0:
+                shown[k] = df[k].map(lambda v, f=st.unit_of(k)[1]: _in_unit(v, f))
         fig = plot_sweep(shown, swept, title=title,
                          units={k: st.unit_of(k)[0] for k in [*swept, *shown.columns]})
         what = (f"{len(df)} cases, {int((df.get('status') == 'ok').sum())} ok"

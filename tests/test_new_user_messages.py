@@ -300,3 +300,34 @@ def test_result_tables_are_written_with_units(tmp_path):
     assert list(pd.read_csv(tmp_path / "sw" / "table.csv").columns) == ["lam [s]", "F_max [N]"]
     with pytest.raises(TypeError, match="units must be a dict"):
         SweepResult(pd.DataFrame({"x": [1]}), units=["s"])
+
+
+def test_sweep_figure_legend_and_axes_show_units_and_the_contact_points_speed():
+    from ppamsafety.plots.sweep import plot_sweep
+
+    df = pd.DataFrame({"arm.pneumatics.mean_pressure": [140.0, 140.0, 200.0, 200.0],
+                       "lam": [0.2, 0.4, 0.2, 0.4], "status": ["ok"] * 4,
+                       "F_max": [100.0, 90.0, 120.0, 110.0], "tcp_speed": [1.0, 0.9, 1.2, 1.1],
+                       "p_max": [10.0, 9.0, 12.0, 11.0], "contact_point": ["forearm"] * 4})
+    fig = plot_sweep(df, ["lam", "arm.pneumatics.mean_pressure"],
+                     units={"arm.pneumatics.mean_pressure": "kPa", "lam": "s",
+                            "p_max": "N/cm^2"})
+    legends = [t for ax in fig.axes for t in ax.get_legend_handles_labels()[1]]
+    assert "arm.pneumatics.mean_pressure = 140 kPa" in legends, legends
+    assert "lam = 0.2 s" in legends, legends
+    ylabels = {ax.get_ylabel() for ax in fig.axes}
+    assert "forearm speed at impact [m/s]" in ylabels, ylabels
+    assert "peak contact pressure [N/cm^2]" in ylabels, ylabels
+    assert not any("TCP speed" in y for y in ylabels)
+    # at the tool point the axis stays the TCP speed
+    fig = plot_sweep(df.assign(contact_point="tool point"), ["lam"])
+    assert "TCP speed at impact [m/s]" in {ax.get_ylabel() for ax in fig.axes}
+
+
+def test_a_study_shows_p_max_in_n_per_cm2_as_impact_does():
+    from ppamsafety.study_files import display_table, parse_study
+
+    st = parse_study(STUDY)
+    t = display_table(st, pd.DataFrame({"p_max": [1.837e6], "F_max": [100.0]}))
+    assert list(t.columns) == ["p_max [N/cm^2]", "F_max [N]"]
+    assert t.iloc[0, 0] == pytest.approx(183.7)
