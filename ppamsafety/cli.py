@@ -410,6 +410,13 @@ def _cmd_diagnose(args) -> int:
             raise ValueError(f"{', '.join(given)}: option(s) of an arm record; {args.data} is a "
                              f"test-bench (actuator) record, diagnosed against its nominal force "
                              f"law without them")
+    if getattr(data, "kind", "") == "arm" and "arm" not in getattr(data, "meta", {"arm": 0}):
+        from .diagnose.arm.kind import assumed_arm_note
+        from .params import thesis_arm
+
+        print(f"ppamsafety: note: {args.data}: "
+              f"{assumed_arm_note(thesis_arm() if arm is None else arm, given=arm is not None)[5:]}",
+              file=sys.stderr)
     mismatch = other_arm(data, arm)
     if mismatch is not None and not args.allow_other_arm:
         # refused before computing: a forgotten --arm would name every difference between
@@ -438,8 +445,7 @@ def _cmd_diagnose(args) -> int:
         ps = ", ".join(f"{n} = {p['value']:.4g} [{p['ci_low']:.4g}, {p['ci_high']:.4g}] "
                        f"{p['unit']} (declared {p['nominal']:.4g})"
                        for n, p in e["parameters"].items())
-        print(f"effect {e['name']} (confidence {e['confidence']:.3f}, "
-              f"{e['confidence_level']}): {ps}")
+        print(f"effect {e['name']} ({_confidence_text(e)}): {ps}")
     if not dg.effects:
         print("no effect named")
     print(f"unexplained: {'yes (' + ', '.join(dg.unexplained_channels) + ')' if dg.unexplained else 'no'}")
@@ -528,6 +534,15 @@ def _check_effect(kind: str, arm, name: str, value: str) -> None:
                 f"; {name} is a number in {si} (or with its unit after it, e.g. "
                 f"{name}=1{si.replace(' ', '')})")
         raise ValueError(f"--effect {name}={value}: {exc}{unit}") from None
+
+
+def _confidence_text(effect: dict) -> str:
+    """How sure a named effect is, in words: its inclusion probability (a number) and the
+    confidence level of the gates ("high" only when every gate passes; docs/diagnose.md)."""
+    failed = [g for g, ok in effect.get("gates", {}).items() if not ok]
+    level = effect["confidence_level"]
+    why = f" (gates not passed: {', '.join(failed)})" if level != "high" and failed else ""
+    return (f"inclusion probability {effect['confidence']:.3f}; confidence {level}{why}")
 
 
 def _cmd_synthesize(args) -> int:
@@ -1087,8 +1102,10 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
                         "region as --head when given); default: the tool point against --head")
     m.add_argument("--covering", default=None, metavar="NAME|FILE",
                    help="covering of the contact point: bare metal, thesis-implied, or a "
-                        "covering file (TOML); default bare metal (implies --contact tool point "
-                        "when --contact is not given)")
+                        "covering file (TOML); it replaces the point's own covering. Default: "
+                        "the covering a contact point file names (bare metal if it names none, "
+                        "and for the arm's named points). Implies --contact tool point when "
+                        "--contact is not given")
     m.add_argument("--overwrite", action="store_true",
                    help="allow --history to replace an existing file")
     _add_arm_head(m)

@@ -7,6 +7,7 @@ forearm, a foam modulus of 800 Pa meant as kPa, ...), rebuilt here on the thesis
 """
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -331,3 +332,70 @@ def test_a_study_shows_p_max_in_n_per_cm2_as_impact_does():
     t = display_table(st, pd.DataFrame({"p_max": [1.837e6], "F_max": [100.0]}))
     assert list(t.columns) == ["p_max [N/cm^2]", "F_max [N]"]
     assert t.iloc[0, 0] == pytest.approx(183.7)
+
+
+# ---- 4. docs ---------------------------------------------------------------------------------
+def _side(point, joint, along) -> float:
+    """> 0 when ``point`` lies left of the link (counter-clockwise side), < 0 right."""
+    r = np.asarray(point) - np.asarray(joint)
+    return float(along[0] * r[1] - along[1] * r[0])
+
+
+def test_the_documented_sides_of_the_perpendicular_offsets_hold_in_the_code():
+    """docs/arm_files.md: positive d12, d32, d33 left of their link; d22, d42, d43, dL, dG1,
+    dG2 right (looking from the joint along the link)."""
+    from ppamsafety.plant import dynamics as dyn
+    from ppamsafety.plant import packing
+    from ppamsafety.plant.geometry import attachment_points, load_point
+
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "arm_files.md").read_text()
+    assert "a positive `d12`, `d32` and `d33` lies on the **left**" in doc
+    g = ARM.geometry.replace(d12=0.02, d22=0.02, d32=0.02, d42=0.02, d33=0.02, d43=0.02,
+                             dL=0.02)
+    arm = ARM.replace(geometry=g)
+    q = np.array([0.7, -1.2])
+    e1 = np.array([math.cos(q[0]), math.sin(q[0])])
+    e2 = np.array([math.cos(q.sum()), math.sin(q.sum())])
+    O, S = np.zeros(2), ARM.geometry.L1 * e1
+    A = attachment_points(q, arm)          # A11, A12, A21, A22, A32, A33, A42, A43
+    assert _side(A[1], O, e1) > 0 and _side(A[4], O, e1) > 0 and _side(A[5], S, e2) > 0
+    assert _side(A[3], O, e1) < 0 and _side(A[6], O, e1) < 0 and _side(A[7], S, e2) < 0
+    assert _side(load_point(q[0], q[1], packing.pack(arm)), S, e2) < 0
+    # centres of gravity: a positive dG raises the gravity torque of a link pointing along +x
+    # only if it lies below the link, i.e. on its right (G = theta1 c1 + theta2 s1 + ...)
+    links = ARM.links.replace(dG1=0.05, dG2=0.05)
+    flat = np.array([0.0, 0.0])
+    g_pos = dyn.gravity(flat, ARM.replace(links=links))
+    g_zero = dyn.gravity(flat, ARM.replace(links=ARM.links.replace(dG1=0.0, dG2=0.0)))
+    assert np.allclose(g_pos, g_zero)      # along x, a perpendicular offset has no moment
+    up = np.array([math.pi / 2, 0.0])      # links pointing up (+y): right is +x
+    g_pos = dyn.gravity(up, ARM.replace(links=links))
+    g_zero = dyn.gravity(up, ARM.replace(links=ARM.links.replace(dG1=0.0, dG2=0.0)))
+    assert np.all(g_pos > g_zero)          # mass to the right (+x) of an upright link: +torque
+
+
+def test_a_record_without_arm_metadata_says_which_arm_it_is_diagnosed_against(tmp_path,
+                                                                               capsys):
+    from ppamsafety.data.measured import MeasuredData
+    from ppamsafety.diagnose import synthesize
+
+    rec = synthesize("open-loop", {}, noise="table-3.2", seed=3, duration=0.5)
+    meta = {k: v for k, v in rec.meta.items() if k != "arm"}
+    f = MeasuredData(meta, rec.frame).save(tmp_path / "rec.csv")
+    assert main(["diagnose", str(f), "--out", str(tmp_path / "d")]) in (0, 1)
+    out, err = capsys.readouterr()
+    note = [ln for ln in err.splitlines() if "names no arm" in ln]
+    assert len(note) == 1 and "'thesis arm' (sha256 " in note[0] and "--arm FILE" in note[0]
+    md = (tmp_path / "d" / "diagnosis.md").read_text()
+    assert "the record names no arm" in md and "'thesis arm'" in md
+
+
+def test_confidence_is_printed_as_a_probability_and_a_level_in_words():
+    from ppamsafety.cli import _confidence_text
+
+    e = {"confidence": 1.0, "confidence_level": "low",
+         "gates": {"weight": True, "stable": True, "consistent": False}}
+    text = _confidence_text(e)
+    assert text == "inclusion probability 1.000; confidence low (gates not passed: consistent)"
+    e = {"confidence": 0.99, "confidence_level": "high", "gates": {"weight": True}}
+    assert _confidence_text(e) == "inclusion probability 0.990; confidence high"

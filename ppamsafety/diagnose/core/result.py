@@ -214,8 +214,11 @@ class Diagnosis:
             L.append("Named effects, in the order found:")
             L.append("")
             for e in self.effects:
-                L.append(f"* **{e['name']}** (confidence {e['confidence']:.3f}, "
-                         f"{e['confidence_level']}; Delta BIC "
+                failed = [g for g, ok in e.get("gates", {}).items() if not ok]
+                why = (f" (gates not passed: {', '.join(failed)})"
+                       if e["confidence_level"] != "high" and failed else "")
+                L.append(f"* **{e['name']}** (inclusion probability {e['confidence']:.3f}; "
+                         f"confidence {e['confidence_level']}{why}; Delta BIC "
                          f"{e['evidence']['delta_bic']:.1f}, p = "
                          f"{e['evidence']['p_value']:.2g})")
                 for pn, p in e["parameters"].items():
