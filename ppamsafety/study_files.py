@@ -122,6 +122,7 @@ from .params import ArmParameters
 from .params.arm_file import ArmFileError, arm_key, arm_to_toml, read_value
 from .plots.figure import save as save_figure
 from .plots.sweep import limit_lines, plot_sweep
+from .results import unit_name
 from .sweep import BACKENDS, SweepResult, run_sweep
 from .sweep_cases import (DEFAULTS, IMPACT_POSE_DEG, PARAMETERS, SPEED_MAX, add_verdicts,
                           case_arm, case_function, check_case, check_impact_case, column_unit,
@@ -1251,7 +1252,7 @@ def unit_label(name: str, unit) -> str:
     unit : str or None
         Its unit (``"-"``: dimensionless; None: none).
     """
-    return name if unit is None else f"{name} [{unit}]"
+    return unit_name(name, unit)
 
 
 def display_table(st: Study, df: pd.DataFrame) -> pd.DataFrame:
