@@ -414,9 +414,8 @@ def _cmd_diagnose(args) -> int:
         from .diagnose.arm.kind import assumed_arm_note
         from .params import thesis_arm
 
-        print(f"ppamsafety: note: {args.data}: "
-              f"{assumed_arm_note(thesis_arm() if arm is None else arm, given=arm is not None)[5:]}",
-              file=sys.stderr)
+        note = assumed_arm_note(thesis_arm() if arm is None else arm, given=arm is not None)
+        print(f"ppamsafety: note: {args.data}: {note.removeprefix('arm: ')}", file=sys.stderr)
     mismatch = other_arm(data, arm)
     if mismatch is not None and not args.allow_other_arm:
         # refused before computing: a forgotten --arm would name every difference between
@@ -517,8 +516,9 @@ def _effect_value(kind: str, name: str, value: str) -> str:
     return ",".join(repr(float(x) * factor) for x in numbers.split(","))
 
 
-def _check_effect(kind: str, arm, name: str, value: str) -> None:
-    """Refuse a bad ``--effect NAME=VALUE`` naming ``--effect``, the value and the unit."""
+def _check_effect(kind: str, arm, name: str, value: str, written: str) -> None:
+    """Refuse a bad ``--effect NAME=VALUE`` (``value`` in SI, ``written`` as given) naming
+    ``--effect``, the value as written and the unit."""
     from .diagnose.arm.synthesize import plant_with
     from .diagnose.bench.synthesize import _check_effects
     from .params import thesis_arm
@@ -533,7 +533,7 @@ def _check_effect(kind: str, arm, name: str, value: str) -> None:
         unit = ("" if si is None else f"; {name} is a plain number" if si == "-" else
                 f"; {name} is a number in {si} (or with its unit after it, e.g. "
                 f"{name}=1{si.replace(' ', '')})")
-        raise ValueError(f"--effect {name}={value}: {exc}{unit}") from None
+        raise ValueError(f"--effect {name}={written}: {exc}{unit}") from None
 
 
 def _confidence_text(effect: dict) -> str:
@@ -559,7 +559,7 @@ def _cmd_synthesize(args) -> int:
             raise ValueError(f"--effect {name} is given twice ({name}={effects[name]} and "
                              f"{name}={value}); give each effect once")
         effects[name] = _effect_value(kind, name, value)
-        _check_effect(kind, arm, name, effects[name])
+        _check_effect(kind, arm, name, effects[name], value)
     tester = ("protocol", "pressures", "cycles", "period", "sample_rate", "force_law", "jitter")
     names = {"experiment": "--experiment", "noise": "--noise", "seed": "--seed",
              "duration": "--duration", "controller": "--controller", "reference": "--reference",

@@ -64,8 +64,8 @@ from .instants import _check_result, impact_states
 from .layers import (NL, S_ALPHA, S_NL, SeriesContact, series_contact, stack_batch,
                      stack_force_bound)
 from .model import (DT_RANGE, ENERGY_TOL, MAX_JOINT_SPEED, MAX_SPEED, PLAUSIBLE_SPEED,
-                    STEPS_PER_PERIOD, _fmt_cases, _history_indices, _rows, _unit, check_angles, check_arm,
-                    check_stiffness)
+                    STEPS_PER_PERIOD, _fmt_cases, _history_indices, _rows, _unit, check_angles,
+                    check_arm, check_stiffness)
 
 #: Contact steps of a screening run, in units of dt, by criterion: the HIC (coarser window
 #: ends) is within 0.5 % of the exact engine's at 4 dt (tests/test_anywhere.py).  For the

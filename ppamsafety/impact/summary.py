@@ -142,8 +142,8 @@ class SafetySummary(Result):
         (:data:`CASE_COLUMNS`), ``variants`` and ``variants_passing`` (variants that pass every
         criterion), and the dependence columns: ``head_alternatives`` (text: the governing
         criterion's value with its unit with each other body model of the region, '' for a
-        region without one), ``depends_on_head`` (the verdict changes with one of them), ``covered_value``
-        (the governing value with :attr:`covering` on the contact point) and
+        region without one), ``depends_on_head`` (the verdict changes with one of them),
+        ``covered_value`` (the governing value with :attr:`covering` on the contact point) and
         ``depends_on_covering``.
     cases : pandas.DataFrame
         One row per (experiment, variant): :data:`CASE_COLUMNS`.
