@@ -102,6 +102,19 @@ def _positive_int(text: str) -> int:
     return v
 
 
+#: ``impact --dt`` range [s]: :data:`ppamsafety.impact.model.DT_RANGE` (not imported here, so
+#: that ``--help`` answers without loading the impact engine; a test keeps them equal).
+_DT_RANGE = (1e-8, 1e-3)
+
+
+def _impact_dt(text: str) -> float:
+    v = _finite(text)
+    if not _DT_RANGE[0] <= v <= _DT_RANGE[1]:
+        raise argparse.ArgumentTypeError(f"{v:g} s is outside [{_DT_RANGE[0]:g}, "
+                                         f"{_DT_RANGE[1]:g}] s (the integration step)")
+    return v
+
+
 def _nonnegative(text: str) -> float:
     v = _finite(text)
     if v < 0.0:
@@ -305,9 +318,10 @@ def _processes(text: str) -> int:
     try:
         v = int(text)
     except ValueError:
-        raise argparse.ArgumentTypeError(f"{text!r} is not an int") from None
+        raise argparse.ArgumentTypeError(f"{text!r} is not an integer (allowed: an integer "
+                                         f">= 1)") from None
     if v < 1:
-        raise argparse.ArgumentTypeError(f"{v} is not allowed (a positive number of processes)")
+        raise argparse.ArgumentTypeError(f"{v} is not allowed (allowed: an integer >= 1)")
     return v
 
 
@@ -395,6 +409,12 @@ def _cmd_diagnose(args) -> int:
             raise ValueError(f"{', '.join(given)}: option(s) of an arm record; {args.data} is a "
                              f"test-bench (actuator) record, diagnosed against its nominal force "
                              f"law without them")
+    if getattr(data, "kind", "") == "arm" and "arm" not in getattr(data, "meta", {"arm": 0}):
+        from .diagnose import assumed_arm_note
+        from .params import thesis_arm
+
+        note = assumed_arm_note(thesis_arm() if arm is None else arm, given=arm is not None)
+        print(f"ppamsafety: note: {args.data}: {note.removeprefix('arm: ')}", file=sys.stderr)
     mismatch = other_arm(data, arm)
     if mismatch is not None and not args.allow_other_arm:
         # refused before computing: a forgotten --arm would name every difference between
@@ -423,8 +443,7 @@ def _cmd_diagnose(args) -> int:
         ps = ", ".join(f"{n} = {p.value:.4g} [{p.ci_low:.4g}, {p.ci_high:.4g}] "
                        f"{p.unit} (declared {p.nominal:.4g})"
                        for n, p in e.parameters.items())
-        print(f"effect {e.name} (confidence {e.confidence:.3f}, "
-              f"{e.confidence_level}): {ps}")
+        print(f"effect {e.name} ({e.confidence_text()}): {ps}")
     if not dg.effects:
         print("no effect named")
     print(f"unexplained: {'yes (' + ', '.join(dg.unexplained_channels) + ')' if dg.unexplained else 'no'}")
@@ -453,23 +472,65 @@ def _effect_arg(text: str):
     return name, value
 
 
+#: A ``--effect`` VALUE with a unit: numbers (comma-separated) and then the unit.
+_VALUE_UNIT = re.compile(r"^\s*([-+0-9.eE]+(?:\s*,\s*[-+0-9.eE]+)*)\s*([^\s\d,.+-].*?)\s*$")
+
+
+def _effect_value(kind: str, name: str, value: str) -> str:
+    """``value`` of ``--effect NAME=VALUE`` in SI: a unit after the number(s) is converted by
+    :func:`ppamsafety.units.si_factor` (``payload_mass=400g`` is 0.4 kg)."""
+    from .units import si_factor
+
+    m = _VALUE_UNIT.match(value)
+    if m is None:
+        return value
+    from .diagnose import effect_unit
+
+    numbers, unit = m.groups()
+    si = effect_unit(kind, name)
+    if si is None:
+        return value                    # an unknown effect: refused by name below
+    if si == "-":
+        raise ValueError(f"--effect {name}={value}: {name} is a plain number (no unit); "
+                         f"give e.g. {name}={numbers}")
+    factor = si_factor(unit, si, name=f"--effect {name}={value}: the unit")
+    return ",".join(repr(float(x) * factor) for x in numbers.split(","))
+
+
+def _check_effect(kind: str, arm, name: str, value: str, written: str) -> None:
+    """Refuse a bad ``--effect NAME=VALUE`` (``value`` in SI, ``written`` as given) naming
+    ``--effect``, the value as written and the unit."""
+    from .diagnose import check_effect, effect_unit
+
+    try:
+        check_effect(kind, name, value, arm=arm)
+    except (TypeError, ValueError) as exc:
+        si = effect_unit(kind, name)
+        unit = ("" if si is None else f"; {name} is a plain number" if si == "-" else
+                f"; {name} is a number in {si} (or with its unit after it, e.g. "
+                f"{name}=1{si.replace(' ', '')})")
+        raise ValueError(f"--effect {name}={written}: {exc}{unit}") from None
+
+
 def _cmd_synthesize(args) -> int:
     from .data.measured import check_save_path
     from .diagnose import synthesize
 
     with _options(path="--out", **{"measured data file": "--out"}):
         check_save_path(args.out, overwrite=args.overwrite)      # fail before simulating
+    arm = _arm_of(args)
     effects = {}
+    kind = "actuator" if args.kind == "actuator" else "arm"
     for name, value in args.effect or []:       # values are parsed (and named) by synthesize
         if name in effects:
             raise ValueError(f"--effect {name} is given twice ({name}={effects[name]} and "
                              f"{name}={value}); give each effect once")
-        effects[name] = value
+        effects[name] = _effect_value(kind, name, value)
+        _check_effect(kind, arm, name, effects[name], value)
     tester = ("protocol", "pressures", "cycles", "period", "sample_rate", "force_law", "jitter")
     names = {"experiment": "--experiment", "noise": "--noise", "seed": "--seed",
              "duration": "--duration", "controller": "--controller", "reference": "--reference",
              **{k: f"--{k.replace('_', '-')}" for k in tester}}
-    arm = _arm_of(args)
     _head_unused(args, "synthesize")
     if args.kind == "actuator":
         if arm is not None:
@@ -506,10 +567,7 @@ def _cmd_synthesize(args) -> int:
 
 
 def _cmd_impact(args) -> int:
-    from .design import rest_stiffness
     from .impact.head import head_model
-    from .impact.model import simulate_impacts
-    from .impact.verdicts import impact_verdicts
     from .params.iso_ts_15066 import resolve_region
     from .params import thesis_arm
 
@@ -520,6 +578,42 @@ def _cmd_impact(args) -> int:
     with _named("--region", args.region):
         region = resolve_region(args.region)
     q = np.array(args.q, dtype=float) * DEG
+    with warnings.catch_warnings():
+        if _pose_outside(args.q, arm):  # said once, in degrees, instead of the library's warning
+            warnings.filterwarnings("ignore", message=r"q: case\(s\)")
+        return _impact(args, arm, head, region, q)
+
+
+def _pose_outside(q_deg, arm) -> bool:
+    """Warn when ``--q`` (degrees) lies outside the arm's working area by more than the impact
+    model's margin, with the hint "looks like radians" when the numbers read as radians lie
+    inside it; True when it warned."""
+    from .impact.model import ANGLE_MARGIN
+
+    g = arm.geometry
+    lo, hi = np.array([g.q1_min, g.q2_min]), np.array([g.q1_max, g.q2_max])
+    given = np.array(q_deg, dtype=float)
+    if np.all((given * DEG >= lo - ANGLE_MARGIN) & (given * DEG <= hi + ANGLE_MARGIN)):
+        return False
+    area = (f"the working area q1 in [{g.q1_min / DEG:.0f}, {g.q1_max / DEG:.0f}] deg, q2 in "
+            f"[{g.q2_min / DEG:.0f}, {g.q2_max / DEG:.0f}] deg")
+    hint = ""
+    if np.all((given >= lo) & (given <= hi)):
+        deg = np.degrees(given)
+        hint = (f"; looks like radians: --q takes degrees, did you mean --q {deg[0]:.4g} "
+                f"{deg[1]:.4g} (inside the working area)?")
+    warnings.warn(f"--q {given[0]:g} {given[1]:g} deg lies outside {area} (by more than "
+                  f"{ANGLE_MARGIN / DEG:g} deg); the impact model is still evaluated{hint}",
+                  UserWarning, stacklevel=2)
+    return True
+
+
+def _impact(args, arm, head, region, q) -> int:
+    """``impact`` once the arm, head, region and pose are read."""
+    from .design import rest_stiffness
+    from .impact.model import simulate_impacts
+    from .impact.verdicts import impact_verdicts
+
     with _options(q="--q", qd="--qd", stiffness="--stiffness", head="--head", dt="--dt"):
         if args.stiffness is None:      # the arm's own stiffness at rest in this pose
             rest = rest_stiffness(arm, q)
@@ -560,7 +654,10 @@ def _cmd_impact(args) -> int:
     for line in verdicts.lines():
         print(line)
     if args.history is not None:
-        hist = res.histories[0]
+        from .impact.engine import HIST
+        from .results import layout_units, with_units
+
+        hist = with_units(res.histories[0], layout_units(HIST))
         atomic_write(args.history, lambda tmp: hist.to_csv(tmp, index=False),
                      overwrite=args.overwrite, name="--history")
         print(f"time history written to {args.history}")
@@ -588,6 +685,7 @@ def _impact_at_point(args, arm, region, q, stiffness, origin) -> int:
     from .impact.anywhere import simulate_contacts
     from .impact.summary import region_body
     from .impact.verdicts import Verdicts, ais_risk_table, criteria_for, evaluate
+    from .params.contact import covering_notes
     from .params.contact_files import resolve_contact_point, resolve_covering
 
     with _named("--contact", args.contact):
@@ -597,6 +695,9 @@ def _impact_at_point(args, arm, region, q, stiffness, origin) -> int:
     if args.covering is not None:
         with _named("--covering", args.covering):
             cov = resolve_covering(args.covering)
+    for note in covering_notes(point.covering if cov is None else cov):
+        print(f"ppamsafety: note: {args.covering if cov is not None else args.contact}: {note}",
+              file=sys.stderr)
     head = _head_of(args)
     body = region_body(region, head=head)
     model = (head.name if head is not None and region.head else
@@ -630,6 +731,11 @@ def _impact_at_point(args, arm, region, q, stiffness, origin) -> int:
         print(f"p_max           {s.p_max / 1e4:.4g} N/cm^2 (mean pressure over the contact area)")
     print(f"max compression {1e3 * s.delta_max:.4g} mm, peak body acceleration "
           f"{s.a_max_g:.4g} g")
+    if c.covering.layers:
+        print(f"covering use    {s.covering_use:.2f} of its strain limit"
+              + (": THE COVERING BOTTOMS OUT (compressed to its strain limit, it passes the "
+                 "force on as a rigid layer; a thicker or stiffer covering, or a lower speed, "
+                 "keeps it within its limit)" if s.covering_use >= 1.0 else ""))
     vals = {"F_max": float(s.F_max), "HIC36": float(s.HIC36), "HIC15": float(s.HIC15)}
     table = evaluate(vals, criteria_for(region), head=model, contact_point=point.name,
                      region=region.name)
@@ -638,7 +744,16 @@ def _impact_at_point(args, arm, region, q, stiffness, origin) -> int:
     for line in (Verdicts(table) if risk is None else Verdicts(table, risk)).lines():
         print(line)
     if args.history is not None:
-        hist = res.histories[0]
+        from .impact.points import PHIST
+        from .results import layout_units, with_units
+
+        hist = res.histories[0].copy()
+        nc = len(c.covering.layers)
+        if nc:              # each sample's compression of the covering over its limit
+            lim = c.table()["limit"].to_numpy()[:nc]
+            hist["covering_use"] = np.max(
+                [hist[f"delta{i + 1}"].clip(lower=0.0) / lim[i] for i in range(nc)], axis=0)
+        hist = with_units(hist, {**layout_units(PHIST), "covering_use": "-"})
         atomic_write(args.history, lambda tmp: hist.to_csv(tmp, index=False),
                      overwrite=args.overwrite, name="--history")
         print(f"time history written to {args.history}")
@@ -938,7 +1053,9 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
                    metavar=("K1", "K2"),
                    help="joint stiffnesses [Nm/rad], >= 0 (default: the arm's own at rest in "
                         "the pose --q, (2.18) with its static pressures)")
-    m.add_argument("--dt", type=_positive, default=2e-5, help="integration step [s], > 0")
+    m.add_argument("--dt", type=_impact_dt, default=2e-5,
+                   help=f"integration step [s], in [{_DT_RANGE[0]:g}, {_DT_RANGE[1]:g}] s "
+                        f"(default 2e-05)")
     m.add_argument("--history", type=_path, default=None, metavar="FILE",
                    help="write the time history to this new CSV file")
     m.add_argument("--region", default="skull/forehead", metavar="NAME|FILE",
@@ -953,8 +1070,10 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
                         "region as --head when given); default: the tool point against --head")
     m.add_argument("--covering", default=None, metavar="NAME|FILE",
                    help="covering of the contact point: bare metal, thesis-implied, or a "
-                        "covering file (TOML); default bare metal (implies --contact tool point "
-                        "when --contact is not given)")
+                        "covering file (TOML); it replaces the point's own covering. Default: "
+                        "the covering a contact point file names (bare metal if it names none, "
+                        "and for the arm's named points). Implies --contact tool point when "
+                        "--contact is not given")
     m.add_argument("--overwrite", action="store_true",
                    help="allow --history to replace an existing file")
     _add_arm_head(m)

@@ -38,7 +38,9 @@ Schema ``ppamsafety-result/1`` of ``to_dict()`` (and of ``result.json``)::
 ``values`` holds the attributes that are scalars (numbers, strings, flags; non-finite numbers
 become ``null``), short sequences of scalars and flat mappings of them (at most
 :data:`MAX_LIST` entries); arrays, tables and nested objects are left out of it (tables are
-under ``tables``, written as CSV by ``write``).
+under ``tables``, written as CSV by ``write``).  The CSV files name a column with a unit
+``"column [unit]"`` (:meth:`Result.column_units`; ``[-]``: dimensionless), and ``columns``
+lists the names the files hold; :func:`strip_unit` gives the name and unit back.
 """
 
 from __future__ import annotations
@@ -57,7 +59,8 @@ from ._validation import check_bool
 from ._version import __version__
 from .output import OutputFolder
 
-__all__ = ["Result", "SCHEMA", "MAX_LIST", "JSON_NAME"]
+__all__ = ["Result", "SCHEMA", "MAX_LIST", "JSON_NAME", "unit_name", "strip_unit", "with_units",
+           "layout_units"]
 
 #: Schema name of :meth:`Result.to_dict`.
 SCHEMA = "ppamsafety-result/1"
@@ -131,6 +134,63 @@ def _attributes(obj) -> dict:
     return {k: v for k, v in vars(obj).items() if not k.startswith("_")}
 
 
+#: A column name that already says its unit: ``"F_max [N]"``.
+_HAS_UNIT = re.compile(r"\[[^\]]*\]\s*$")
+
+
+def unit_name(column: str, unit) -> str:
+    """``"column [unit]"`` (``column`` unchanged without a unit or when it names one).
+
+    Parameters
+    ----------
+    column : str
+        A column name.
+    unit : str or None
+        Its unit (``"-"``: dimensionless; None or ``""``: none).
+    """
+    if not unit or _HAS_UNIT.search(str(column)):
+        return str(column)
+    return f"{column} [{unit}]"
+
+
+def strip_unit(column: str) -> tuple:
+    """``(name, unit)`` of a column name ``"name [unit]"`` (unit None without one).
+
+    Parameters
+    ----------
+    column : str
+        A column name as a CSV file of the toolkit holds it.
+    """
+    m = re.fullmatch(r"(.*?)\s*\[([^\]]*)\]\s*", str(column))
+    return (m.group(1), m.group(2)) if m else (str(column), None)
+
+
+def with_units(table: pd.DataFrame, units: dict) -> pd.DataFrame:
+    """``table`` with its columns named ``"column [unit]"`` by ``units`` (a copy; columns
+    without a unit keep their name).
+
+    Parameters
+    ----------
+    table : pandas.DataFrame
+    units : dict
+        ``{column: unit}``.
+    """
+    if not units:
+        return table
+    return table.rename(columns={c: unit_name(c, units.get(c)) for c in table.columns})
+
+
+def layout_units(*layouts) -> dict:
+    """``{column: unit}`` of the columns of declared layouts
+    (:class:`ppamsafety.layouts.Layout`).
+
+    Parameters
+    ----------
+    *layouts : Layout
+    """
+    return {c: f.unit for lay in layouts for f in lay.fields for c in f.column_names()}
+
+
 class Result:
     """Base of every public result class: the protocol of the module docstring.
 
@@ -188,6 +248,17 @@ class Result:
                 out[k] = v
         return out
 
+    def column_units(self) -> dict:
+        """``{column: unit}`` of the columns of :meth:`tables` (``"-"``: a dimensionless
+        number); :meth:`write` names them ``"column [unit]"`` in the CSV files.  The default
+        knows none: a subclass whose columns have units says them."""
+        return {}
+
+    def _written_tables(self) -> dict:
+        """:meth:`tables` as the CSV files hold them: numeric columns with their units."""
+        units = self.column_units()
+        return {name: with_units(t, units) for name, t in self.tables().items()}
+
     def to_dict(self) -> dict:
         """A JSON-ready dict, schema :data:`SCHEMA` (module docstring)."""
         values = {}
@@ -197,7 +268,7 @@ class Result:
                 values[k] = j
         tables = {name: {"file": f"{name}.csv", "rows": int(len(t)),
                          "columns": [str(c) for c in t.columns]}
-                  for name, t in self.tables().items()}
+                  for name, t in self._written_tables().items()}
         return {"schema": SCHEMA, "tool": "ppamsafety", "version": __version__,
                 "kind": type(self).__name__, "values": values, "tables": tables}
 
@@ -228,7 +299,7 @@ class Result:
         check_bool("overwrite", overwrite)
         check_bool("replace_kind", replace_kind)
         text = json.dumps(self.to_dict(), indent=1, allow_nan=False, ensure_ascii=False) + "\n"
-        tables = self.tables()
+        tables = self._written_tables()
         figs = self.figures() if figures else {}
         out = OutputFolder(folder, kind="result", overwrite=overwrite, replace_kind=replace_kind)
         with out as st:

@@ -140,6 +140,7 @@ from .params.arm_file import ArmFileError, arm_key, arm_to_toml, read_value
 from .params.contact_files import is_contact_file
 from .plots.figure import save as save_figure
 from .plots.sweep import limit_lines, plot_sweep
+from .results import unit_name
 from .sweep import BACKENDS, SweepResult, run_sweep
 from .sweep_cases import (COVERING_RANGES, DEFAULTS, IMPACT_POSE_DEG, PARAMETERS, SPEED_MAX,
                           add_verdicts,
@@ -448,6 +449,8 @@ class Study:
         if key in self.units and axis is None:
             si = UNIT_KEYS.get(key) or arm_key(key).unit
             return self.units[key], si_factor(self.units[key], si, name=key)
+        if key in DISPLAY_UNITS:
+            return DISPLAY_UNITS[key]
         if self.envelope is not None and key == "value":
             return column_unit(self.envelope["parameter"]), 1.0
         if self.envelope is not None and key == "margin":        # limit - metric: its unit
@@ -474,6 +477,11 @@ class Study:
         n = len(self.cases) if max_cases is None else min(max_cases, len(self.cases))
         cases = self.cases.head(n) if isinstance(self.cases, CaseGrid) else self.cases[:n]
         return estimate_cases(cases, processes=processes, histories=self.histories)
+
+
+#: Result columns a person reads in another unit than SI: (unit, factor to SI).  The contact
+#: pressure in N/cm^2, the unit of ISO/TS 15066 Annex A's pressure limits and of ``impact``.
+DISPLAY_UNITS = {"p_max": ("N/cm^2", 1.0e4)}
 
 
 def _err(where: str, msg: str) -> StudyFileError:
@@ -509,6 +517,7 @@ def _grid_values(where: str, key: str, v) -> Axis:
                                            {"value": x, "unit": unit})
                                 for i, x in enumerate(vals)]), key, unit)
     if isinstance(v, dict):
+        _unit_refused(where, f"grid.{key}", key, v)
         if len(v) != 1 or next(iter(v)) not in GENERATORS:
             raise _err(where, f"grid.{key} = {v!r}: an inline table must be one of "
                               f"{{geomspace = [start, stop, num]}} or {{linspace = [start, stop, "
@@ -531,6 +540,37 @@ def _grid_values(where: str, key: str, v) -> Axis:
     if not v:
         raise _err(where, f"grid.{key} is an empty list; give at least one value")
     return Axis(v)
+
+
+def _unit_refused(where: str, path: str, key: str, v) -> None:
+    """Refuse a value with a unit (``{value, unit}``, ``{values, unit}``, a generator with a
+    unit) on a key that takes plain numbers, saying the rule and the value in its SI unit."""
+    if _has_unit(key) or not (isinstance(v, dict) and "unit" in v):
+        return
+    si = ENVELOPE_UNITS.get(key) or column_unit(key)
+    if si is None or si == "-":
+        raise _err(where, f"{path} = {v!r}: {key} takes no unit (only the dotted keys "
+                          f"arm.<key of the arm file> and effects.<name>, and "
+                          f"{', '.join(UNIT_KEYS)} take one)")
+    try:
+        f = si_factor(v["unit"], si, name="unit")
+    except (TypeError, ValueError):
+        f = None
+    rest = {k: x for k, x in v.items() if k != "unit"}
+    write = ""
+    if f is not None and len(rest) == 1:
+        (k, x), = rest.items()
+        num = lambda a: isinstance(a, (int, float)) and not isinstance(a, bool)  # noqa: E731
+        if k == "value" and num(x):
+            write = f"{key} = {x * f:.6g}"
+        elif k == "values" and isinstance(x, list) and x and all(map(num, x)):
+            write = f"{key} = [{', '.join(f'{a * f:.6g}' for a in x)}]"
+        elif k in GENERATORS and isinstance(x, list) and len(x) == 3 and all(map(num, x)):
+            write = f"{key} = {{ {k} = [{x[0] * f:.6g}, {x[1] * f:.6g}, {x[2]}] }}"
+    raise _err(where, f"{path} = {v!r}: only the dotted keys (arm.<key of the arm file>, "
+                      f"effects.<name>) and {', '.join(UNIT_KEYS)} take a unit; {key} is a "
+                      f"plain number in {si}"
+                      + (f": write {write}" if write else f" (convert {v['unit']!r} to {si})"))
 
 
 def _with_unit(axis: Axis, key: str, unit: str) -> Axis:
@@ -598,6 +638,7 @@ def _written_unit(units: dict, key: str, v) -> None:
 
 
 def _check_value(where: str, path: str, key: str, v, arm=None, shown=None) -> None:
+    _unit_refused(where, path, key, v)
     try:
         if is_dotted(key):
             case_arm(arm, changes={key: v})
@@ -677,8 +718,11 @@ def _arm_and_head(where: str, data: dict, base_dir, arm, head) -> tuple:
         try:
             out.append(load(path))
         except FileNotFoundError:
-            raise _err(where, f"{table}.file = {f!r}: {table} file '{path}' does not exist") \
-                from None
+            rel = ("" if base_dir is None or Path(f).is_absolute() else
+                   f" (a relative path is read relative to the study file's folder "
+                   f"'{base_dir}')")
+            raise _err(where, f"{table}.file = {f!r}: {table} file '{path.resolve()}' does not "
+                              f"exist{rel}") from None
         except ValueError as exc:
             raise _err(where, f"{table}.file = {f!r}: {exc}") from None
     return tuple(out)
@@ -1364,7 +1408,7 @@ def run_study_file(study, outdir, *, backend: str = "local", scheduler=None,
         display_table(st, df).to_csv(stage / st.csv, index=False)   # units in the header
         (stage / "study.toml").write_text(st.source, encoding="utf-8")
         _write_summary(st, df, stage, env)
-    return SweepResult(df, name=st.name)
+    return SweepResult(df, name=st.name, units={c: column_unit(c) for c in df.columns})
 
 
 def _run_envelope(st: Study, cache, processes, progress):
@@ -1403,7 +1447,7 @@ def unit_label(name: str, unit) -> str:
     unit : str or None
         Its unit (``"-"``: dimensionless; None: none).
     """
-    return name if unit is None else f"{name} [{unit}]"
+    return unit_name(name, unit)
 
 
 def display_table(st: Study, df: pd.DataFrame) -> pd.DataFrame:
@@ -1448,8 +1492,9 @@ def _write_summary(st: Study, df: pd.DataFrame, stage: Path, envelope=None) -> N
     else:       # what varies among the cases run (--max-cases may run fewer)
         swept = [k for k in st.swept if k in df.columns and df[k].map(repr).nunique() > 1]
         shown = df.copy()
-        for k in swept:                        # the swept values in the study file's unit
-            shown[k] = df[k].map(lambda v, f=st.unit_of(k)[1]: _in_unit(v, f))
+        for k in shown.columns:      # the swept values in the study file's unit, p_max in N/cm^2
+            if st.unit_of(k)[1] != 1.0:
+                shown[k] = df[k].map(lambda v, f=st.unit_of(k)[1]: _in_unit(v, f))
         fig = plot_sweep(shown, swept, title=title,
                          units={k: st.unit_of(k)[0] for k in [*swept, *shown.columns]})
         what = (f"{len(df)} cases, {int((df.get('status') == 'ok').sum())} ok"

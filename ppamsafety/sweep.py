@@ -521,13 +521,20 @@ class SweepResult(Result):
     swept : sequence of str, optional
         The case parameters that vary (default: the leading columns before ``status``
         that take more than one value).
+    units : dict, optional
+        ``{column: unit}`` of the table's columns (:meth:`column_units`; ``write()`` names
+        the CSV columns ``"column [unit]"``); a generic sweep knows none.
     """
 
-    def __init__(self, table: pd.DataFrame, *, name: str = "sweep", swept=None):
+    def __init__(self, table: pd.DataFrame, *, name: str = "sweep", swept=None, units=None):
         if not isinstance(table, pd.DataFrame):
             raise TypeError(f"table must be a pandas DataFrame, got {type(table).__name__}")
+        if units is not None and not isinstance(units, dict):
+            raise TypeError(f"units must be a dict {{column: unit}} or None, got "
+                            f"{type(units).__name__}")
         self._table = table
         self.name = str(name)
+        self.units = {} if units is None else {str(k): v for k, v in units.items() if v}
         if swept is None:
             cols = list(table.columns)
             lead = cols[:cols.index("status")] if "status" in cols else []
@@ -540,6 +547,10 @@ class SweepResult(Result):
 
     def tables(self) -> dict:
         return {"table": self._table}
+
+    def column_units(self) -> dict:
+        """``{column: unit}`` given at construction (a safety sweep's columns)."""
+        return dict(self.units)
 
     def plot(self, **kwargs):
         """Each result against each swept parameter, with the safety limits; a matplotlib

@@ -1107,7 +1107,8 @@ def safety_sweep(cases=None, *, grid=None, name: str = "safety", cache_dir=None,
             raise type(exc)(f"case {i} {c!r}: {exc}") from None
     df = run_sweep(func, all_cases, name=name, cache_dir=cache_dir, processes=processes,
                    progress=progress, on_error=on_error, backend=backend, scheduler=scheduler)
-    return SweepResult(add_verdicts(df.table, head=head), name=name)
+    table = add_verdicts(df.table, head=head)
+    return SweepResult(table, name=name, units={c: column_unit(c) for c in table.columns})
 
 
 __all__ = ["EXPERIMENTS", "CONTROLLERS", "INSTANTS", "MIN_SPEED", "PARAMETERS", "DEFAULTS",

@@ -95,7 +95,8 @@ def test_negative_scientific_angle_gives_a_clear_error(capsys):
 @pytest.mark.parametrize("argv, words", [
     (["--q", "nan", "0", "--qd", "0", "0"], ["--q", "'nan'", "finite"]),
     (["--q", "0", "0", "--qd", "inf", "0"], ["--qd", "'inf'", "finite"]),
-    (["--q", "0", "0", "--qd", "0", "0", "--dt", "-1e-5"], ["--dt", "-1e-05", "> 0"]),
+    (["--q", "0", "0", "--qd", "0", "0", "--dt", "-1e-5"],
+     ["--dt", "-1e-05", "[1e-08, 0.001] s"]),
     (["--q", "0", "0", "--qd", "0", "0", "--stiffness", "-1", "27"], ["--stiffness", ">= 0"]),
     (["--q", "abc", "0", "--qd", "0", "0"], ["--q", "'abc'", "not a number"]),
 ])

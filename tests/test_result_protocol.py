@@ -20,7 +20,7 @@ import pandas as pd
 import pytest
 
 import ppamsafety
-from ppamsafety.results import SCHEMA, Result
+from ppamsafety.results import SCHEMA, Result, strip_unit, unit_name
 
 RESULT_NAME = re.compile(r"(Results?|Fit|Map|Diagnosis|Sweep|Envelope|Instants|Findings|"
                          r"Verdicts)$")
@@ -199,7 +199,10 @@ def check_protocol(res, tmp_path):
     json.dumps(d, allow_nan=False)                 # JSON-ready, no NaN
     if "to_dict" not in vars(type(res)):
         assert d["schema"] == SCHEMA and d["kind"] == name
-        assert d["tables"]["table"]["columns"] == [str(c) for c in t.columns]
+        units = res.column_units()              # the CSV names: "column [unit]"
+        assert d["tables"]["table"]["columns"] == [unit_name(c, units.get(c)) for c in t.columns]
+        assert [strip_unit(c)[0] for c in d["tables"]["table"]["columns"]] == \
+            [strip_unit(c)[0] for c in t.columns]
     out = tmp_path / "res"
     files = res.write(out)
     assert (out / "result.json").exists() or _defines(type(res), "write")

@@ -24,8 +24,8 @@ import types
 
 from .core.result import ConfoundedGroup, Diagnosis, Effect, Estimate
 from .diagnosis import diagnose
-from .synthesize import synthesize
-from .arm.kind import other_arm
+from .synthesize import check_effect, effect_unit, synthesize
+from .arm.kind import assumed_arm_note, other_arm
 from .arm.pipeline import REPLAY_RHO, REPLAY_RHO_STATIC
 from .arm.static import static_record
 from .bench.calibration import (CAMPAIGN_MEASURE, campaign_calibration_table,
@@ -46,8 +46,10 @@ __all__ = [
     "ConfoundedGroup",
     # the thresholds a reader of a diagnosis meets
     "REPLAY_RHO", "REPLAY_RHO_STATIC", "HINT_P", "POWER", "HIGH_PRECISION",
-    # the arm a record names against the arm given; a static sawtooth's rest points
-    "other_arm", "static_record",
+    # the effects synthesize makes: their units and their check
+    "effect_unit", "check_effect",
+    # the arm a record names against the arm given (or assumed); a static sawtooth's rest points
+    "other_arm", "assumed_arm_note", "static_record",
     # the randomized batteries, their shipped rows and their scores
     "ARM_BATTERY", "run_battery", "load_results", "scores", "calibration_table",
     "detection_curve", "by_effect", "failures", "interval_widening", "declared_names",

@@ -11,8 +11,10 @@ from .._validation import check_choice
 from ..data.measured import MeasuredData, MeasuredDataError
 from ..params import thesis_arm
 from ..params.arm_file import arm_fingerprint
-from .arm.synthesize import DEFAULT_CONTROLLER, DEFAULT_REFERENCE, synthesize_arm
-from .bench.synthesize import synthesize_actuator
+from ..params.effects import Effects
+from .arm.synthesize import (DEFAULT_CONTROLLER, DEFAULT_REFERENCE, MEASUREMENT_BOUNDS,
+                             RELATIVE, plant_with, synthesize_arm)
+from .bench.synthesize import EFFECT_BOUNDS, _check_effects, synthesize_actuator
 
 
 def arm_record(arm) -> dict:
@@ -133,4 +135,59 @@ def _synthesize(experiment, effects, *, noise, seed, duration, dt, arm, controll
     return MeasuredData({**data.meta, "arm": arm_record(arm)}, data.frame, source=data.source)
 
 
-__all__ = ["synthesize", "arm_record"]
+def effect_unit(kind: str, name: str):
+    """The SI unit of a hidden effect ``name`` of :func:`synthesize` for a record ``kind``.
+
+    Parameters
+    ----------
+    kind : {"arm", "actuator"}
+        The record kind.
+    name : str
+        The effect's name.
+
+    Returns
+    -------
+    str or None
+        Its SI unit; ``"-"`` for a plain number (a factor); None for a name the kind does
+        not know.
+    """
+    if kind == "actuator":
+        return EFFECT_BOUNDS.get(name, (None, None, None))[2]
+    if name in RELATIVE:
+        return "-"
+    if name in MEASUREMENT_BOUNDS:
+        return MEASUREMENT_BOUNDS[name][2]
+    if name == "valve_dead_time":
+        return "s"
+    if name == "valve_offset_delta":
+        return "Pa"
+    f = Effects.__dataclass_fields__.get(name)
+    return None if f is None else (f.metadata.get("unit") or "-")
+
+
+def check_effect(kind: str, name: str, value, *, arm=None) -> None:
+    """Refuse a hidden effect :func:`synthesize` could not make, before simulating.
+
+    Parameters
+    ----------
+    kind : {"arm", "actuator"}
+        The record kind.
+    name : str
+        The effect's name.
+    value : float, str or sequence
+        Its value in SI units (:func:`effect_unit`).
+    arm : ArmParameters, optional
+        The nominal arm of an arm record (default: the thesis arm).
+
+    Raises
+    ------
+    ValueError, TypeError
+        Naming the effect, its value and what is allowed.
+    """
+    if kind == "actuator":
+        _check_effects({name: value})
+    else:
+        plant_with(thesis_arm() if arm is None else arm, {name: value})
+
+
+__all__ = ["synthesize", "arm_record", "effect_unit", "check_effect"]

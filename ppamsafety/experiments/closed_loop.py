@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from ..results import Result
+from ..results import Result, layout_units
 from .._jit import nogil_kernel, run_threaded
 from .._validation import UnknownNameError, check_int, check_range, check_size, did_you_mean
 from ..control import CONTROLLER_CLASSES
@@ -38,7 +38,7 @@ from ..plant.pneumatics import delta_p_to_set_values
 from ..plots.control import plot_experiment
 from .case import ExperimentCase, as_cases
 from .interaction import EXTERNAL_INPUT, external_joint_torque, external_rows
-from .trajectories import REF_COLUMNS, Reference
+from .trajectories import REF_COLUMNS, REFERENCE_ROW, Reference
 
 
 #: One row of the closed-loop log, written by ``_run_batch`` once per control period.
@@ -334,6 +334,14 @@ class ExperimentResult(Result):
         if self.interaction_names:
             parts.insert(1, pd.DataFrame({c: self.signal(c) for c in self.interaction_names}))
         return pd.concat(parts, axis=1)
+
+    def column_units(self) -> dict:
+        """The units of :meth:`to_pandas`' columns (from the declared layouts of the log, the
+        controller's internals, the interaction log and the reference row)."""
+        cls = CONTROLLER_CLASSES.get(self.controller.get("kind"))
+        lays = [LOG, INTERACTION_LOG, ESTIMATOR_INTERNALS, REFERENCE_ROW]
+        units = layout_units(*lays, *([cls.INTERNALS] if cls is not None else []))
+        return {c: u for c, u in units.items() if c not in _UNNAMED}
 
     @property
     def t(self) -> np.ndarray:

@@ -46,11 +46,11 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
-from ..results import Result
+from ..results import Result, layout_units
 from .._validation import (as_float_array, check_bool, check_choice, check_instance, check_int,
                            check_nonnegative, check_range, check_range_array, describe)
 from ..params.contact import (BARE, FOREHEAD, BodyContact, ContactPoint, Covering,
-                              arm_contact_points)
+                              arm_contact_points, check_point_on_arm)
 from ..plant import dynamics as dyn
 from ..plant import packing
 from ..plots.contacts import plot_contact_history, plot_contact_margins
@@ -63,9 +63,9 @@ from .head import HeadContactModel
 from .instants import _check_result, impact_states
 from .layers import (NL, S_ALPHA, S_NL, SeriesContact, series_contact, stack_batch,
                      stack_force_bound)
-from .model import (ENERGY_TOL, MAX_JOINT_SPEED, MAX_SPEED, PLAUSIBLE_SPEED, STEPS_PER_PERIOD,
-                    _fmt_cases, _history_indices, _rows, _unit, check_angles, check_arm,
-                    check_stiffness)
+from .model import (DT_RANGE, ENERGY_TOL, MAX_JOINT_SPEED, MAX_SPEED, PLAUSIBLE_SPEED,
+                    STEPS_PER_PERIOD, _fmt_cases, _history_indices, _rows, _unit, check_angles,
+                    check_arm, check_stiffness)
 
 #: Contact steps of a screening run, in units of dt, by criterion: the HIC (coarser window
 #: ends) is within 0.5 % of the exact engine's at 4 dt (tests/test_anywhere.py).  For the
@@ -116,6 +116,8 @@ def resolve_point(point, arm, covering=None) -> ContactPoint:
     elif not isinstance(point, ContactPoint):
         raise TypeError(f"point must be a contact point name or a ContactPoint, got "
                         f"{describe(point)}")
+    else:
+        check_point_on_arm(point, arm)
     if covering is not None:
         point = point.replace(covering=check_instance("covering", covering, Covering))
     return point
@@ -333,6 +335,10 @@ class ContactResult(Result):
         """A copy of :attr:`summary`."""
         return self.summary.copy()
 
+    def column_units(self) -> dict:
+        """The units of :attr:`summary`."""
+        return {**_INPUT_UNITS, **layout_units(pt.PSUMMARY)}
+
     @property
     def table(self) -> pd.DataFrame:
         """The summary table."""
@@ -458,7 +464,7 @@ def _prepare(arm, q, qd, stiffness, *, point, body, covering, direction, body_ve
     vb = None if body_velocity is None else as_float_array(
         "body_velocity", body_velocity, shape_tail=(2,), ndim=(1, 2))
     fixed_arm = check_bool("fixed_arm", fixed_arm)
-    dt = check_range("dt", dt, 1e-8, 1e-3, unit="s")
+    dt = check_range("dt", dt, *DT_RANGE, unit="s")
     duration = check_range("duration", duration, 1e-4, 10.0, unit="s")
     if duration < dt:
         raise ValueError(f"duration = {duration:g} s is shorter than dt = {dt:g} s")
@@ -595,6 +601,8 @@ def _screen(prep: _PointPrep, idx, criterion: str) -> tuple:
 
 
 _INPUTS = ["q1", "q2", "qd1", "qd2", "K1", "K2", "ux", "uy", "point_speed", "m_eff"]
+_INPUT_UNITS = {"q1": "rad", "q2": "rad", "qd1": "rad/s", "qd2": "rad/s", "K1": "N m/rad",
+                "K2": "N m/rad", "ux": "-", "uy": "-", "point_speed": "m/s", "m_eff": "kg"}
 
 
 def _frame(prep: _PointPrep, rows, SUM, *, stacklevel) -> pd.DataFrame:
@@ -774,7 +782,8 @@ class WorstContact(Result):
         One row per contact point: its worst body region and instant (exact, the engine's
         summary row plus ``point``, ``body``, ``t0``, ``criterion``, ``value``, ``limit``,
         ``utilisation`` = value / limit, ``margin`` = limit - value, ``margin_pct`` =
-        100 (limit - value) / limit; NaN without limits).
+        100 (limit - value) / limit; NaN without limits); ``covering_use`` is 0 for a bare
+        point (no covering is compressed).
     criterion : str
         What was ranked (:data:`CRITERIA`).
     limits : dict or None
@@ -800,6 +809,15 @@ class WorstContact(Result):
     def to_pandas(self) -> pd.DataFrame:
         """The worst case of each contact point (:attr:`worst`)."""
         return self.worst.copy()
+
+    def column_units(self) -> dict:
+        """The units of :attr:`worst` and :attr:`candidates` (``value``, ``limit``, ``margin``
+        and the bounds in the criterion's unit)."""
+        unit = CRITERIA[self.criterion]
+        return {**_INPUT_UNITS, **layout_units(pt.PSUMMARY), "t0": "s", "value": unit,
+                "limit": unit, "margin": unit, "margin_pct": "%", "utilisation": "-",
+                "bound": unit, "screen": unit,
+                "objective": "-" if self.limits else unit}
 
     @property
     def overall(self) -> pd.Series:
@@ -1032,7 +1050,8 @@ def worst_contact(result, arm, *, points=None, bodies=None, limits=None,
                 "utilisation": value / li if lim else np.nan,
                 "margin": li - value if lim else np.nan,
                 "margin_pct": 100.0 * (li - value) / li if lim else np.nan}
-        worst_rows.append({**head, **fr.to_dict()})
+        # covering_use of a bare point is 0 (no covering is compressed), as in the layout
+        worst_rows.append({**head, "covering_use": 0.0, **fr.to_dict()})
     if not worst_rows:
         raise ValueError("no contact point moves faster than min_speed at any instant")
     cols = {c: np.concatenate([t[c] for t in tables]) for c in tables[0] if c != "_name"}

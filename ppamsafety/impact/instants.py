@@ -222,6 +222,11 @@ class WorstInstants(Result):
         """The candidate instants (:attr:`table`): bounds, screening and exact values."""
         return self.table
 
+    def column_units(self) -> dict:
+        """The units of :attr:`table` (the attributes above)."""
+        return {"t0": "s", "tcp_speed": "m/s", "F_bound": "N", "HIC36_bound": "-",
+                "F_screen": "N", "HIC36_screen": "-", "F_max": "N", "HIC36": "-", "HIC15": "-"}
+
     def plot(self, **kwargs):
         """F_max and HIC36 over the impact instant: bounds, screening values and the
         simulated instants, the worst marked; a matplotlib Figure.

@@ -38,6 +38,9 @@ MAX_ANGLE = 2.0 * math.pi
 #: Tolerance [rad] of the working-area warning: closed-loop records (e.g. the step
 #: response of fig. 5.17) overshoot the limits (2.6)-(2.7) by a fraction of a degree.
 ANGLE_MARGIN = math.radians(5.0)
+#: Allowed RK4 step of an impact [s]: below 1e-8 s the steps of a 50 ms impact exceed 1e6,
+#: above 1e-3 s (the control period) a contact of a few ms is not resolved.
+DT_RANGE = (1e-8, 1e-3)
 #: Joint speeds beyond this magnitude [rad/s] are refused (about 10^4 rpm: no robot arm;
 #: the arithmetic would only overflow).
 MAX_JOINT_SPEED = 1.0e3
@@ -901,7 +904,7 @@ def _prepare_impacts(arm, q, qd, stiffness, *, head, direction, head_velocity, f
         raise ValueError(f"fixed_arm = True holds the arm still, so joint_model = "
                          f"{jm.name.lower().replace('_', '-')!r} has no meaning; use "
                          f"joint_model 'frozen-equilibrium' (the default) with fixed_arm")
-    dt = check_range("dt", dt, 1e-8, 1e-3, unit="s")
+    dt = check_range("dt", dt, *DT_RANGE, unit="s")
     duration = check_range("duration", duration, 1e-4, 10.0, unit="s")
     if duration < dt:
         raise ValueError(f"duration = {duration:g} s is shorter than dt = {dt:g} s")

@@ -46,7 +46,7 @@ from .anywhere import simulate_contacts, worst_contact
 from .bodies import body_from_head, body_from_region
 from .head import resolve_head
 from .instants import heuristic_instants, impact_states
-from .verdicts import annex_a_head, criteria_for, evaluate
+from .verdicts import METRICS, annex_a_head, criteria_for, evaluate
 
 #: The experiments of Table 6.1.
 EXPERIMENTS = ("step", "switch")
@@ -141,9 +141,9 @@ class SafetySummary(Result):
         One row per (experiment, controller family): the worst variant's governing verdict
         (:data:`CASE_COLUMNS`), ``variants`` and ``variants_passing`` (variants that pass every
         criterion), and the dependence columns: ``head_alternatives`` (text: the governing
-        criterion's value with each other body model of the region, '' for a region without
-        one), ``depends_on_head`` (the verdict changes with one of them), ``covered_value``
-        (the governing value with :attr:`covering` on the contact point) and
+        criterion's value with its unit with each other body model of the region, '' for a
+        region without one), ``depends_on_head`` (the verdict changes with one of them),
+        ``covered_value`` (the governing value with :attr:`covering` on the contact point) and
         ``depends_on_covering``.
     cases : pandas.DataFrame
         One row per (experiment, variant): :data:`CASE_COLUMNS`.
@@ -311,11 +311,12 @@ def safety_summary(arm=None, *, head=None, covering=None, experiments=EXPERIMENT
             alts.append((f"head model {hm.name}", body_from_head(hm)))
         body = dict((b.name, b) for b in bodies)[r["body_region"]]
         alt_vals = [(name, _again(arm, r, b, None, crit)) for name, b in alts]
+        unit = f" {METRICS[crit.metric]}" if METRICS.get(crit.metric) else ""
         covered = _again(arm, r, body, cov, crit)
         b_row = g.loc[g["margin [%]"].idxmax()]
         r.update(variants=len(g), variants_passing=int(g["all_passed"].sum()),
                  best_variant=b_row["variant"], **{"best_margin [%]": b_row["margin [%]"]},
-                 head_alternatives="; ".join(f"{n}: {val:.4g}" for n, val in alt_vals),
+                 head_alternatives="; ".join(f"{n}: {val:.4g}{unit}" for n, val in alt_vals),
                  depends_on_head=any((val < crit.limit) != r["passed"] for _, val in alt_vals),
                  covered_value=covered,
                  depends_on_covering=bool((covered < crit.limit) != r["passed"]))

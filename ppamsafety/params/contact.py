@@ -39,6 +39,7 @@ import math
 from dataclasses import dataclass, field, replace
 
 from .._validation import check_choice, check_int, check_range, check_str, did_you_mean
+from .arm import LINK_EXTENT_FACTOR
 
 #: Elastic laws of a :class:`Layer` (module docstring).
 LAWS = ("thin-layer", "hertz", "power")
@@ -521,6 +522,96 @@ def arm_contact_points(arm, covering: Covering = BARE) -> tuple:
             ContactPoint("upper arm", 1, 0.5 * g.L1, "cylinder", r1, covering, src))
 
 
+#: How far from its link's joint a contact point may lie, in link lengths: as far as the arm's
+#: own parts (:data:`~ppamsafety.params.arm.LINK_EXTENT_FACTOR`), which leaves room for a tool,
+#: a bracket or a covering past the link's end and refuses what a unit slip gives (a position
+#: in mm read as cm is 10 times too far).
+POINT_EXTENT_FACTOR = LINK_EXTENT_FACTOR
+
+_LINK_NAMES = {1: ("upper arm", "base joint O"), 2: ("forearm", "elbow S")}
+
+
+def check_point_on_arm(point: ContactPoint, arm) -> ContactPoint:
+    """Refuse a contact point that does not lie on its link of ``arm``.
+
+    A point lies at most :data:`POINT_EXTENT_FACTOR` link lengths (L1 for link 1, L2 for link
+    2) from its link's joint: the margin is for a tool, a bracket or a covering that reaches
+    past the link's end.
+
+    Parameters
+    ----------
+    point : ContactPoint
+        The point.
+    arm : ArmParameters
+        The arm it belongs to.
+
+    Returns
+    -------
+    ContactPoint
+        ``point``, unchanged.
+
+    Raises
+    ------
+    ValueError
+        Naming the point, its position (m and mm), the link length and the allowed range.
+    """
+    length = getattr(arm.geometry, f"L{point.link}")
+    hi = POINT_EXTENT_FACTOR * length
+    if point.position > hi:
+        name, joint = _LINK_NAMES[point.link]
+        raise ValueError(
+            f"contact point {point.name!r}: position = {point.position:.4g} m "
+            f"({1e3 * point.position:.4g} mm) along link {point.link} lies beyond the {name}: "
+            f"{point.position / length:.3g} times its length L{point.link} = {length:.4g} m "
+            f"({1e3 * length:.4g} mm); allowed [0, {hi:.4g}] m ([0, {1e3 * hi:.4g}] mm) from the "
+            f"{joint}, i.e. up to {POINT_EXTENT_FACTOR:g} L{point.link} for a tool or covering "
+            f"past the link's end; check the value, its unit and link")
+    return point
+
+
+#: A thin-layer or Hertz layer softer than this [Pa] gets a note: the softest coverings and
+#: skin-like elastomers have a compressive modulus of some 10 kPa (silicone gels such as
+#: Ecoflex 00-10: about 55 kPa; low-density polyurethane foams: 10-100 kPa, Gibson & Ashby,
+#: Cellular Solids, 1997); a modulus in kPa or MPa written as Pa lands below it.
+SOFT_LAYER_MODULUS = 1.0e4
+#: Unit slips of a layer's modulus: the factor to the value meant, and the slip (the first whose
+#: corrected value lies within :data:`PLAUSIBLE_LAYER_MODULUS` is named).
+_MODULUS_SLIPS = ((1.0e3, "kPa"), (1.0e6, "MPa"))
+#: Moduli a covering layer plausibly has [Pa]: soft gels to hard plastics.
+PLAUSIBLE_LAYER_MODULUS = (SOFT_LAYER_MODULUS, 5.0e9)
+
+
+def covering_notes(cov: Covering) -> tuple:
+    """What is possible in a covering but likely a unit slip: one line each.
+
+    * a layer (thin-layer or Hertz) softer than :data:`SOFT_LAYER_MODULUS`: the likely slip
+      (kPa or MPa written as Pa) and the value it would mean.
+
+    Parameters
+    ----------
+    cov : Covering
+        Any covering.
+
+    Returns
+    -------
+    tuple of str
+        The notes (empty for the named coverings).
+    """
+    notes = []
+    for i, lay in enumerate(cov.layers):
+        if lay.law == "power" or not lay.modulus < SOFT_LAYER_MODULUS:
+            continue
+        lo, hi = PLAUSIBLE_LAYER_MODULUS
+        hint = next((f"; did you mean {lay.modulus:.4g} {unit} ({lay.modulus * f:.4g} Pa: a "
+                     f"unit slip, a value in {unit} given in Pa)?"
+                     for f, unit in _MODULUS_SLIPS if lo <= lay.modulus * f <= hi), "")
+        notes.append(f"layer[{i}].modulus = {lay.modulus:.4g} Pa ({lay.name!r}) is softer than "
+                     f"any covering material (gels and soft foams: {lo / 1e3:g} kPa and more); "
+                     f"such a layer bottoms out at low speed{hint}")
+    return tuple(notes)
+
+
 __all__ = ["Layer", "Covering", "BodyContact", "ContactPoint", "LAWS", "SHAPES", "MAX_LAYERS",
            "BARE", "FOREHEAD", "THESIS_COVERING", "body_contact", "body_contact_names",
-           "covering", "covering_names", "arm_contact_points"]
+           "covering", "covering_names", "arm_contact_points", "check_point_on_arm",
+           "covering_notes", "POINT_EXTENT_FACTOR", "SOFT_LAYER_MODULUS"]

@@ -42,8 +42,8 @@ from .._inputfiles import read_text
 from .._validation import did_you_mean
 from ..units import si_factor
 from .arm_file import ArmFileError, _literal, parse_document
-from .contact import (SHAPES, ContactPoint, Covering, Layer, arm_contact_points, covering,
-                      covering_names)
+from .contact import (SHAPES, ContactPoint, Covering, Layer, arm_contact_points,
+                      check_point_on_arm, covering, covering_names)
 
 COVERING_FORMAT = "ppamsafety-covering/1"
 CONTACT_FORMAT = "ppamsafety-contact/1"
@@ -262,13 +262,22 @@ def resolve_contact_point(value, arm) -> ContactPoint:
     Parameters
     ----------
     value : str, path-like or ContactPoint
-    arm : ArmParameters
-        The arm whose default points are meant.
+    arm : ArmParameters or None
+        The arm whose default points are meant, and on whose links a point must lie
+        (:func:`~ppamsafety.params.contact.check_point_on_arm`).  None (a study file read
+        before its cases name their arm) reads and validates a file alone; the point is
+        checked on the arm when a case is built.
     """
     if isinstance(value, ContactPoint):
-        return value
+        return value if arm is None else check_point_on_arm(value, arm)
     if is_contact_file(value):
-        return load_contact_point(value)
+        point = load_contact_point(value)
+        if arm is None:
+            return point
+        try:
+            return check_point_on_arm(point, arm)
+        except ValueError as exc:
+            raise ArmFileError(f"{value}: {exc}") from None
     if isinstance(value, str):
         pts = {p.name: p for p in arm_contact_points(arm)}
         if value not in pts:

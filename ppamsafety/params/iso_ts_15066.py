@@ -635,20 +635,25 @@ def body_region(name) -> BodyRegion:
     ----------
     name : str or int
         A location name (``"skull/forehead"``, ``"chest/sternum"``, ``"hand/back D"``) or
-        its Annex A number 1-29.
+        its Annex A number 1-29 (an int, or a string of digits as a command line gives it).
 
     Returns
     -------
     BodyRegion
     """
+    if isinstance(name, str) and name.strip().lstrip("+-").isdigit():
+        name = int(name)                    # "12" on a command line is location 12
     if isinstance(name, int) and not isinstance(name, bool):
         if not 1 <= name <= len(LOCATIONS):
-            raise ValueError(f"name = {name}: an Annex A body location number is 1-29")
+            raise ValueError(f"name = {name}: an Annex A body location number is 1-"
+                             f"{len(LOCATIONS)} (or give a name such as 'chest/sternum', or a "
+                             f"region file, .toml)")
         return _REGIONS[LOCATIONS[name - 1][3]]
     check_str("name", name)
     if name not in _REGIONS:
         raise ValueError(f"name = {name!r}: unknown body region{did_you_mean(name, list(_REGIONS))}"
-                         f"; choose from {list(_REGIONS)} (or a region file, .toml)")
+                         f"; choose from {list(_REGIONS)}, an Annex A location number 1-"
+                         f"{len(LOCATIONS)} (or a region file, .toml)")
     return _REGIONS[name]
 
 

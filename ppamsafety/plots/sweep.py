@@ -47,9 +47,29 @@ def limit_lines(column: str) -> list:
 
 
 def _label(v, unit=None) -> str:
+    """A swept value with its unit (``"140 kPa"``); a number given as text (a group key) too."""
+    if isinstance(v, str):
+        try:
+            v = float(v)
+        except ValueError:
+            return v
     if isinstance(v, (int, float, np.integer, np.floating)):
         return f"{v:g}" + ("" if unit in (None, "-") else f" {unit}")
     return str(v)
+
+
+def _result_label(col: str, lab: str, unit, ok: pd.DataFrame) -> str:
+    """The axis label of a result: the unit it is shown in, and for ``tcp_speed`` of a sweep at
+    another contact point, that point's speed."""
+    if col == "tcp_speed" and "contact_point" in ok.columns:
+        pts = sorted({str(p) for p in ok["contact_point"].dropna()} - {"", "tool point"})
+        if pts:
+            lab = (f"{pts[0]} speed at impact [m/s]" if len(pts) == 1 and
+                   set(map(str, ok["contact_point"].dropna())) == {pts[0]}
+                   else "contact point speed at impact [m/s]")
+    if unit and unit != "-" and lab.endswith("]"):
+        lab = lab[:lab.rindex("[")] + f"[{unit}]"
+    return lab
 
 
 def _with_unit(name: str, unit) -> str:
@@ -94,7 +114,8 @@ def plot_sweep(df: pd.DataFrame, swept, *, title: str = "", units=None,
         Figure title (wrapped when it is wider than the figure).
     units : dict, optional
         Column -> unit shown on the axes and in the legends (``"-"`` dimensionless, None
-        none); default: the SI units of :data:`RESULTS` only.
+        none; the values are in these units); default: the SI units of :data:`RESULTS` only.
+        With a ``contact_point`` column, ``tcp_speed`` is labelled as that point's speed.
     region_limits : dict, optional
         Body region name -> {result column: limit} (e.g. ``{"face": {"F_max": 130.0}}``):
         each region that appears in the table's ``body_region`` column gets its limit line
@@ -146,7 +167,7 @@ def plot_sweep(df: pd.DataFrame, swept, *, title: str = "", units=None,
                                label=f"{region}: {lims[col]:g}")
             if col.startswith("HIC") and (ok[col] > 0).all():
                 ax.set_yscale("log")
-            ax.set_ylabel(lab)
+            ax.set_ylabel(_result_label(col, lab, units.get(col), ok))
             ax.set_xlabel(_with_unit(x, units.get(x)))
             if cats is not None:
                 ax.set_xticks(range(len(cats)), cats, rotation=20, fontsize=7)

@@ -117,7 +117,7 @@ def render(s: SafetySummaryFindings) -> Section:
     dep_head = s.table[s.table["depends_on_head"]]
     dep_cov = s.table[s.table["depends_on_covering"]]
     heads = s.table[s.table["head_alternatives"] != ""]
-    head_text = ("; ".join(f"{r.experiment} {r.family}: {r.head_alternatives}{_unit(r.unit)} "
+    head_text = ("; ".join(f"{r.experiment} {r.family}: {r.head_alternatives} "
                            f"against {r.limit:.4g}{_unit(r.unit)}" for r in dep_head.itertuples())
                  if len(dep_head) else "no row's verdict changes")
     cov_text = ("; ".join(f"{r.experiment} {r.family}: {r.covered_value:.4g}{_unit(r.unit)} "

@@ -50,6 +50,21 @@ def other_arm(data, arm) -> str | None:
             f"diagnosed against arm {_label(used.name, fp)}")
 
 
+def assumed_arm_note(arm, *, given: bool) -> str:
+    """The note of a record that names no arm: which arm it is diagnosed against.
+
+    Parameters
+    ----------
+    arm : ArmParameters
+        The model under test.
+    given : bool
+        Whether the caller gave it (else it is the thesis arm, the default).
+    """
+    how = "given" if given else "the default: give the record's arm with --arm FILE (arm=)"
+    return (f"arm: the record names no arm (no [arm] in its metadata); it is diagnosed against "
+            f"arm {_label(arm.name, arm_fingerprint(arm))} ({how})")
+
+
 class ArmKind(RecordKind):
     """Arm records (:func:`~.pipeline.diagnose_arm`)."""
 
@@ -87,10 +102,10 @@ class ArmKind(RecordKind):
                           alpha=alpha, rho_max=rho_max, experiment=experiment, seed=seed,
                           bootstrap=bootstrap, stability=stability)
         made = data.meta.get("arm")
-        if made is None:
-            return dg
         used = thesis_arm() if arm is None else arm
         fp = arm_fingerprint(used)
+        if made is None:
+            return replace(dg, notes=(*dg.notes, assumed_arm_note(used, given=arm is not None)))
         warnings = dg.warnings
         if mismatch is None:
             note = (f"arm: the record came from the arm it is diagnosed against, "
@@ -106,4 +121,4 @@ class ArmKind(RecordKind):
 
 ARM = register_kind(ArmKind())
 
-__all__ = ["ArmKind", "ARM", "other_arm"]
+__all__ = ["ArmKind", "ARM", "other_arm", "assumed_arm_note"]

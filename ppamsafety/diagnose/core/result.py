@@ -210,6 +210,16 @@ class Effect:
         """The effect is named with high confidence."""
         return self.confidence_level == "high"
 
+    def confidence_text(self) -> str:
+        """How sure the effect is, in words: its inclusion probability (a number) and the
+        confidence level of the gates ("high" only when every gate passes; the gates not
+        passed are listed), so that a probability near 1 beside "low" reads as what it is."""
+        failed = [g for g, ok in (self.gates or {}).items() if not ok]
+        why = (f" (gates not passed: {', '.join(failed)})"
+               if not self.high and failed else "")
+        return (f"inclusion probability {self.confidence:.3f}; "
+                f"confidence {self.confidence_level}{why}")
+
     def to_dict(self) -> dict:
         """The effect's entry of ``diagnosis.json`` (``docs/diagnose.md``)."""
         d = {"name": self.name, "parameters": _parameters_dict(self.parameters),
@@ -433,8 +443,7 @@ class Diagnosis(Result):
             L.append("Named effects, in the order found:")
             L.append("")
             for e in self.effects:
-                L.append(f"* **{e.name}** (confidence {e.confidence:.3f}, "
-                         f"{e.confidence_level}; Delta BIC "
+                L.append(f"* **{e.name}** ({e.confidence_text()}; Delta BIC "
                          f"{e.evidence['delta_bic']:.1f}, p = "
                          f"{e.evidence['p_value']:.2g})")
                 for pn, p in e.parameters.items():
