@@ -972,47 +972,73 @@ def add_verdicts(df: pd.DataFrame, criteria=None, *, region=None, head=None) -> 
     Parameters
     ----------
     df : pandas.DataFrame
-        Result rows with ``F_max``/``HIC36``/``HIC15`` (failed rows get no verdict).
+        Result rows with ``F_max``/``HIC36``/``HIC15`` and, where the contact geometry gives
+        one, ``p_max`` [Pa] (failed rows get no verdict).  A ``region`` column (the case's
+        body region) sets each row's region; a ``body_model`` column names the body each
+        case was simulated with.
     criteria : sequence of Criterion, optional
-        Default :func:`~ppamsafety.impact.verdicts.criteria_for` the region.
+        Default :func:`~ppamsafety.impact.verdicts.criteria_for` each row's region.
     region : optional
-        The body region of the criteria (default ``"skull/forehead"``).
+        The body region of rows without a ``region`` (default ``"skull/forehead"``).
     head : str or HeadContactModel, optional
-        The head model of cases without a ``head`` column (default ``"thesis-frontal"``).
+        The body model of rows without ``body_model`` or ``head`` (default
+        ``"thesis-frontal"``).
 
     Returns
     -------
     pandas.DataFrame
-        ``df`` with ``head_model``, ``verdict`` (``"pass"``/``"fail"``), ``governing`` (the
-        criterion with the smallest relative margin), ``governing_margin_pct`` and per
-        criterion ``<name>_margin`` (limit - value, in the limit's unit: N or HIC) and
-        ``<name>_pass``.
+        ``df`` with ``head_model`` (the body model simulated), ``verdict``
+        (``"pass"``/``"fail"``), ``governing`` (the criterion with the smallest relative
+        margin), ``governing_margin_pct`` and per criterion judged in at least one row
+        ``<name>_margin`` (limit - value, in the limit's unit: N, Pa or HIC) and
+        ``<name>_pass``.  A criterion is judged where its result exists (``p_max`` only
+        with a contact geometry; its columns only when some case has it).
     """
-    crit = criteria_for(region) if criteria is None else tuple(criteria)
     out = df.copy()
     default = head.name if isinstance(head, HeadContactModel) else (head or "thesis-frontal")
-    names = (out["head"].map(lambda h: h.name if isinstance(h, HeadContactModel) else str(h))
-             if "head" in out.columns else pd.Series(default, index=out.index))
+    if "body_model" in out.columns:
+        names = out["body_model"].where(out["body_model"].notna(), default).map(str)
+    elif "head" in out.columns:
+        names = out["head"].map(lambda h: h.name if isinstance(h, HeadContactModel) else str(h))
+    else:
+        names = pd.Series(default, index=out.index)
+    regions = (out["region"] if "region" in out.columns
+               else pd.Series([None] * len(out), index=out.index, dtype=object))
+    by_region = {}
     cols = {"head_model": [], "verdict": [], "governing": [], "governing_margin_pct": []}
-    for c in crit:
-        cols[f"{c.name}_margin"], cols[f"{c.name}_pass"] = [], []
+    judged = {}
     for i, r in out.iterrows():
-        ok = r.get("status", "ok") == "ok" and all(
-            m in r and pd.notna(r[m]) for m in {c.metric for c in crit})
-        t = evaluate({c.metric: r[c.metric] for c in crit}, crit, head=names[i]) if ok else None
+        reg = regions[i] if regions[i] is not None and not (
+            isinstance(regions[i], float) and math.isnan(regions[i])) else region
+        key = reg if isinstance(reg, (str, int, type(None))) else id(reg)
+        if key not in by_region:
+            by_region[key] = criteria_for(reg) if criteria is None else tuple(criteria)
+        crit = by_region[key]
+        vals = {m: r[m] for m in {c.metric for c in crit}
+                if m in r and r[m] is not None and pd.notna(r[m])}
+        ok = r.get("status", "ok") == "ok" and "F_max" in vals
+        t = evaluate(vals, crit, head=names[i]) if ok else None
         cols["head_model"].append(names[i])
         if t is None or not len(t):
-            for k in cols:
-                if k != "head_model":
-                    cols[k].append(None)
+            for k in ("verdict", "governing", "governing_margin_pct"):
+                cols[k].append(None)
+            judged[i] = {}
             continue
         g = t.loc[t["margin_pct"].idxmin()]
         cols["verdict"].append("pass" if t["passed"].all() else "fail")
         cols["governing"].append(g.criterion)
         cols["governing_margin_pct"].append(float(g.margin_pct))
-        for row in t.itertuples():
-            cols[f"{row.criterion}_margin"].append(float(row.margin))
-            cols[f"{row.criterion}_pass"].append(bool(row.passed))
+        judged[i] = {row.criterion: (float(row.margin), bool(row.passed))
+                     for row in t.itertuples()}
+    names_judged = []
+    for crit in by_region.values():
+        for c in crit:
+            if c.name not in names_judged and (c.metric != "p_max" or any(
+                    c.name in j for j in judged.values())):
+                names_judged.append(c.name)
+    for n in names_judged:
+        cols[f"{n}_margin"] = [judged[i].get(n, (None, None))[0] for i in out.index]
+        cols[f"{n}_pass"] = [judged[i].get(n, (None, None))[1] for i in out.index]
     for k, v in cols.items():
         out[k] = v
     return out
