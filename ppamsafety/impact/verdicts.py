@@ -566,8 +566,15 @@ def impact_verdicts(arm, q, qd, stiffness, *, head=None, region=None, dt: float 
                     disagreement(table, heads) if len(heads) == 2 else "")
 
 
-def _model_kind(region: str) -> str:
-    """"head model" for a head region (and a region not of Annex A), else "body model"."""
+def model_kind(region) -> str:
+    """What the body of a region is called: ``"head model"`` for a head region, else
+    ``"body model"``.
+
+    Parameters
+    ----------
+    region : str, int, path-like or BodyRegion
+        The region (one that cannot be resolved: ``"body model"``).
+    """
     try:
         return "head model" if resolve_region(region).head else "body model"
     except (TypeError, ValueError, OSError):
@@ -590,7 +597,7 @@ def verdict_lines(table: pd.DataFrame, risk: pd.DataFrame | None = None,
     out = []
     for h, g in table.groupby("head_model", sort=False):
         gov = g.loc[g["margin_pct"].idxmin()]
-        out.append(f"verdicts with {_model_kind(g['region'].iloc[0])} {h} (body region "
+        out.append(f"verdicts with {model_kind(g['region'].iloc[0])} {h} (body region "
                    f"{g['region'].iloc[0]}, contact "
                    f"at the {g['contact_point'].iloc[0]}): "
                    f"{'PASS' if g['passed'].all() else 'FAIL'}, governed by {gov.criterion}")
@@ -616,5 +623,5 @@ def verdict_lines(table: pd.DataFrame, risk: pd.DataFrame | None = None,
 __all__ = ["Criterion", "Verdicts", "METRICS", "VERDICT_COLUMNS", "TOOL_POINT", "ALIASES",
            "criteria_for", "criterion", "criterion_names", "evaluate", "ais_risk",
            "ais_risk_table", "annex_a_head", "region_head", "check_head_for_region",
-           "SHOWN_UNITS", "describe_head", "disagreement", "impact_verdicts",
+           "SHOWN_UNITS", "model_kind", "describe_head", "disagreement", "impact_verdicts",
            "verdict_lines", "SKULL_FOREHEAD", "BodyRegion"]
