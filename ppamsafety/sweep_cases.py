@@ -1090,8 +1090,8 @@ def add_verdicts(df: pd.DataFrame, criteria=None, *, region=None, head=None) -> 
     """
     out = df.copy()
     default = head.name if isinstance(head, HeadContactModel) else (head or "thesis-frontal")
-    if "body_model" in out.columns:
-        names = out["body_model"].where(out["body_model"].notna(), default).map(str)
+    if "body_model" in out.columns:            # a failed case simulated no body
+        names = out["body_model"].map(lambda b: None if b is None or b != b else str(b))
     elif "head" in out.columns:
         names = out["head"].map(lambda h: h.name if isinstance(h, HeadContactModel) else str(h))
     else:
@@ -1136,6 +1136,103 @@ def add_verdicts(df: pd.DataFrame, criteria=None, *, region=None, head=None) -> 
     for k, v in cols.items():
         out[k] = v
     return out
+
+
+#: Columns of :func:`verdict_limits`.
+LIMIT_COLUMNS = ("metric", "criterion", "region", "limit", "unit", "label", "confirmed",
+                 "governs", "fails")
+
+
+def verdict_limits(df: pd.DataFrame, criteria=None, *, region=None) -> pd.DataFrame:
+    """The limits of a sweep's verdicts that a reader must see: each criterion that governs
+    or fails at least one case (:func:`add_verdicts`'s columns), and for a result judged
+    but decided by none, its tightest criterion.
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        A table with :func:`add_verdicts`'s columns (``governing``, ``<name>_pass``) and,
+        optionally, the cases' ``region``.
+    criteria : sequence of Criterion, optional
+        The criteria the verdicts used (default: each row's region's, as :func:`add_verdicts`).
+    region : optional
+        The region of rows without a ``region`` (default ``"skull/forehead"``).
+
+    Returns
+    -------
+    pandas.DataFrame
+        :data:`LIMIT_COLUMNS`, one row per (region, criterion): the result column it bounds
+        (``F_max``, ``HIC36``, ``p_max``), the limit (SI) and its unit, its label, whether a
+        public source confirms it, how many cases it governs and how many fail it; ordered
+        by metric, then limit.  Empty for a table without verdicts.
+    """
+    if "governing" not in df.columns:
+        return pd.DataFrame(columns=list(LIMIT_COLUMNS))
+    regs = (df["region"] if "region" in df.columns
+            else pd.Series([None] * len(df), index=df.index, dtype=object))
+    rows, judged = {}, {}
+    for i, r in df.iterrows():
+        reg = regs[i] if regs[i] is not None and not (
+            isinstance(regs[i], float) and math.isnan(regs[i])) else region
+        crit = criteria_for(reg) if criteria is None else tuple(criteria)
+        for c in crit:
+            passed = r.get(f"{c.name}_pass")
+            if passed is None or (isinstance(passed, float) and math.isnan(passed)):
+                continue
+            key = (c.region, c.name)
+            row = {"metric": c.metric, "criterion": c.name, "region": c.region,
+                   "limit": c.limit, "unit": c.unit, "label": c.label,
+                   "confirmed": c.confirmed, "governs": 0, "fails": 0}
+            if c.metric not in judged or c.limit < judged[c.metric]["limit"]:
+                judged[c.metric] = row
+            gov, fail = r.get("governing") == c.name, not bool(passed)
+            if not (gov or fail):
+                continue
+            rows.setdefault(key, dict(row))
+            rows[key]["governs"] += int(gov)
+            rows[key]["fails"] += int(fail)
+    for metric, row in judged.items():       # a result judged but decided by no limit: its
+        if not any(v["metric"] == metric for v in rows.values()):     # tightest criterion
+            rows[(row["region"], row["criterion"])] = row
+    out = pd.DataFrame(list(rows.values()), columns=list(LIMIT_COLUMNS))
+    return out.sort_values(["metric", "limit"], kind="stable").reset_index(drop=True)
+
+
+def failed_criteria(df: pd.DataFrame, metric: str, criteria=None, *, region=None) -> pd.Series:
+    """The criteria on one result that each case fails (:func:`add_verdicts`'s
+    ``<name>_pass``).
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        A table with :func:`add_verdicts`'s columns.
+    metric : str
+        The result (``"F_max"``, ``"HIC36"``, ``"p_max"``).
+    criteria : sequence of Criterion, optional
+        The criteria of the verdicts (default: each row's region's).
+    region : optional
+        The region of rows without a ``region`` column.
+
+    Returns
+    -------
+    pandas.Series of str
+        Aligned with ``df``: the labels of the failed criteria (``"; "``-separated, an
+        unconfirmed limit marked ``[unconfirmed]``), ``""`` where the case fails none.
+    """
+    regs = (df["region"] if "region" in df.columns
+            else pd.Series([None] * len(df), index=df.index, dtype=object))
+    out = []
+    for i, r in df.iterrows():
+        reg = regs[i] if regs[i] is not None and not (
+            isinstance(regs[i], float) and math.isnan(regs[i])) else region
+        crit = criteria_for(reg) if criteria is None else tuple(criteria)
+        out.append("; ".join(c.label + ("" if c.confirmed else " [unconfirmed]")
+                             for c in crit if c.metric == metric
+                             and r.get(f"{c.name}_pass") is not None
+                             and not (isinstance(r.get(f"{c.name}_pass"), float)
+                                      and math.isnan(r.get(f"{c.name}_pass")))
+                             and not bool(r.get(f"{c.name}_pass"))))
+    return pd.Series(out, index=df.index, dtype=object)
 
 
 def safety_sweep(cases=None, *, grid=None, name: str = "safety", cache_dir=None,
@@ -1202,4 +1299,4 @@ __all__ = ["EXPERIMENTS", "CONTROLLERS", "INSTANTS", "MIN_SPEED", "PARAMETERS", 
            "CONTACT_KEYS", "CONTACT_POINTS", "contact_covering",
            "safety_sweep", "case_arm", "case_function", "is_dotted", "impact_case",
            "check_impact_case", "SPEED_MAX", "IMPACT_POSE_DEG", "add_verdicts", "COLUMN_UNITS",
-           "column_unit"]
+           "column_unit", "verdict_limits", "failed_criteria", "LIMIT_COLUMNS", "chosen_head"]
