@@ -617,7 +617,7 @@ def _impact_at_point(args, arm, region, q, stiffness, origin) -> int:
     a covering into the body region, judged against the region's limits."""
     from .impact.anywhere import simulate_contacts
     from .impact.summary import body_model_name, region_body
-    from .impact.verdicts import Verdicts, ais_risk_table, criteria_for, evaluate
+    from .impact.verdicts import Verdicts, ais_risk_table, annex_a_head, criteria_for, evaluate
     from .params.contact_files import resolve_contact_point, resolve_covering
 
     with _named("--contact", args.contact):
@@ -650,7 +650,8 @@ def _impact_at_point(args, arm, region, q, stiffness, origin) -> int:
           f"{point.shape}{radius}")
     print(f"covering        {c.covering.name}"
           + (f": {_layers_text(c.covering.layers)}" if c.covering.layers else ""))
-    print(f"body region     {region.name} ({model}): m = {body.mass:g} kg, R = {1e3 * body.radius:.4g} mm, "
+    kind = "Annex A two-body model " if model == annex_a_head(region).name else ""
+    print(f"body region     {region.name} ({kind}{model}): m = {body.mass:g} kg, R = {1e3 * body.radius:.4g} mm, "
           f"{_layers_text(body.layers)}")
     print(f"point speed     {s.point_speed:.4g} m/s (effective mass {s.m_eff:.4g} kg)")
     print(f"F_max           {s.F_max:.4g} N at {1e3 * s.t_Fmax:.3g} ms")
