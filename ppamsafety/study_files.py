@@ -1252,15 +1252,7 @@ def _write_summary(st: Study, df: pd.DataFrame, stage: Path, envelope=None) -> N
         swept, what = [envelope.parameter], " ".join(envelope.lines())
     else:       # what varies among the cases run (--max-cases may run fewer)
         swept = [k for k in st.swept if k in df.columns and df[k].map(repr).nunique() > 1]
-        shown = df.copy()
-        for k in swept:                        # the swept values in the study file's unit
-            shown[k] = df[k].map(lambda v, f=st.unit_of(k)[1]: _in_unit(v, f))
-        limits, failed = _verdict_marks(df)
-        fig = plot_sweep(shown, swept, title=title,
-                         units={k: st.unit_of(k)[0] for k in [*swept, *shown.columns]},
-                         limits={m: [(v, _legend_text(r)) for v, _, r in ls]
-                                 for m, ls in limits.items()} or None,
-                         failed={m: (f != "").to_numpy() for m, f in failed.items()} or None)
+        fig = sweep_figure(st, df, swept, title)
         what = (f"{len(df)} cases, {int((df.get('status') == 'ok').sum())} ok"
                 if "status" in df.columns else f"{len(df)} cases")
     save_figure(fig, stage / SUMMARY_FIGURE)
@@ -1272,6 +1264,36 @@ def _limit_text(r) -> str:
     decided."""
     return (f"{r.label}{'' if r.confirmed else ' [unconfirmed: not in the TS or no public source]'}"
             f": governs {r.governs}, fails {r.fails} of the cases")
+
+
+def sweep_figure(st: Study, df: pd.DataFrame, swept, title: str = ""):
+    """The figure of a finished sweep: its results against the swept parameters (in the study
+    file's units), the limits that decide the verdicts and the failing cases ringed.
+
+    Parameters
+    ----------
+    st : Study
+        The study.
+    df : pandas.DataFrame
+        Its result table in SI units, with the verdict columns.
+    swept : sequence of str
+        The parameters that vary.
+    title : str
+        The figure's title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    shown = df.copy()
+    for k in swept:                            # the swept values in the study file's unit
+        shown[k] = df[k].map(lambda v, f=st.unit_of(k)[1]: _in_unit(v, f))
+    limits, failed = _verdict_marks(df)
+    return plot_sweep(shown, swept, title=title,
+                      units={k: st.unit_of(k)[0] for k in [*swept, *shown.columns]},
+                      limits={m: [(v, _legend_text(r)) for v, _, r in ls]
+                              for m, ls in limits.items()} or None,
+                      failed={m: (f != "").to_numpy() for m, f in failed.items()} or None)
 
 
 def _legend_text(r) -> str:
@@ -1422,4 +1444,4 @@ th{{background:#f3f3f3;text-align:left}}img{{max-width:100%}}
 __all__ = ["SCHEMA", "GENERATORS", "KIND", "MATERIALISE", "CHECK_ALL", "COST", "CONFIRM_HOURS",
            "Axis", "CaseGrid", "Study", "StudyFileError", "parse_study", "load_study",
            "estimate_cases", "describe_estimate", "check_run_size", "history_format",
-           "run_study_file", "summary_page", "display_table", "unit_label"]
+           "run_study_file", "summary_page", "sweep_figure", "display_table", "unit_label"]

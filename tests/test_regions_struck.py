@@ -229,3 +229,56 @@ def test_annex_a_head_models_carry_the_annex_a_mass():
     # the named Annex A head and the region's Annex A body model are one model
     a = annex_a_head(SKULL_FOREHEAD)
     assert (a.mass, a.stiffness, a.exponent, a.damping) == (fh.mass, fh.stiffness, 1.0, 0.0)
+
+
+def test_the_sweep_page_and_figure_show_the_limit_that_decides(tmp_path):
+    from ppamsafety.study_files import parse_study, run_study_file
+
+    # the user's arm, a joint PSMC step (lambda 0.4 s), the forearm into the forehead (the
+    # validated head), bare and behind the implied covering: the quasi-static 130 N
+    # (Table A.2, the TS reading for a head region) governs both; the bare case fails it and
+    # the forehead's 130 N/cm^2 pressure too
+    text = """[study]
+name = "decides"
+[case]
+experiment = "step"
+controller = "PSMC joint"
+contact = "forearm"
+lam = 0.4
+duration = 3.0
+[impact]
+instants = "max TCP speed"
+[grid]
+covering = ["bare metal", "thesis-implied"]
+"""
+    st = parse_study(text, arm=USER_ARM)
+    out = tmp_path / "out"
+    df = run_study_file(st, out, processes=1, progress=False).table
+    assert list(df["head_model"]) == ["validated head"] * 2           # the body simulated
+    assert list(df["governing"]) == ["iso_ts_15066_qs"] * 2
+    fails = df["verdict"] == "fail"
+    assert list(fails) == [True, False]
+    assert df.loc[0, "p_max"] > 1.3e6 > df.loc[1, "p_max"]            # 130 N/cm^2
+    page = (out / "summary.html").read_text()
+    assert "validated head (2 cases)" in page and "default thesis-frontal" not in page
+    decided = page.split("limits that decide the verdicts</th><td>")[1].split("</td>")[0]
+    assert "quasi-static force, the TS reading for a head region 130 N: governs 2" in decided
+    assert "(Annex A)" not in page
+    if (df["F_max"] > 260).any():        # the transient 260 N is not in the TS: said so
+        assert "260 N (2 x 130 N; not in the TS for this region) [unconfirmed" in decided
+    assert page.count('title="fails: ') == 2                # the bare case's F_max and p_max
+    assert '<span class="above">fail</span>' in page
+    # the figure draws the deciding line and rings the failing cases
+    from ppamsafety.plots.sweep import ABOVE
+    from ppamsafety.study_files import sweep_figure
+    fig = sweep_figure(st, df, ["covering"])
+    ax = fig.axes[0]
+    labels = ax.get_legend_handles_labels()[1]
+    assert any("skull/forehead iso_ts_15066_qs 130 N (governs 2, fails 1)" in t
+               for t in labels)
+    assert "fails its verdict" in labels
+    ringed = [ln for ln in ax.get_lines() if ln.get_marker() == ABOVE["marker"]
+              and ln.get_markerfacecolor() == "none" and len(ln.get_xdata())]
+    assert len(ringed) == 1 and list(ringed[0].get_xdata()) == [0]      # the bare case
+    assert any("iso_ts_15066_p_qs 1.3e+06 Pa (governs 0, fails 1)" in t for t in
+               sum((a.get_legend_handles_labels()[1] for a in fig.axes), []))
