@@ -118,7 +118,7 @@ from .experiments.catalog import DEFAULT_DURATIONS
 from .impact.head import HeadContactModel, load_head
 from .output import OutputError, OutputFolder, check_output_path, read_marker
 from .design import load_arm
-from .params import ArmParameters
+from .params import ArmParameters, is_thesis_arm
 from .params.arm_file import ArmFileError, arm_key, arm_to_toml, read_value
 from .plots.figure import save as save_figure
 from .plots.sweep import limit_lines, plot_sweep
@@ -1404,6 +1404,9 @@ def summary_page(st: Study, df: pd.DataFrame, what: str, swept) -> str:
     if "head_model" in df.columns and df["head_model"].notna().any():
         used = df["head_model"].dropna().map(str).value_counts(sort=False)
         head = "; ".join(f"{n} ({c} case{'s' if c > 1 else ''})" for n, c in used.items())
+        if "thesis-frontal" in used.index and st.arm is not None and not is_thesis_arm(st.arm):
+            head += ("; thesis-frontal is a contact fitted to the thesis arm's Table 6.1 "
+                     "impacts, not to this arm")
     else:
         head = st.head.name if st.head is not None else "per case (see the table)"
     decided, failed = _verdict_marks(df)

@@ -177,7 +177,7 @@ def plot_sweep(df: pd.DataFrame, swept, *, title: str = "", units=None,
 
 
 #: Units of the results an envelope limits (its ``metric``).
-METRIC_UNITS = {"F_max": "N", "HIC36": "-", "HIC15": "-"}
+METRIC_UNITS = {"F_max": "N", "HIC36": "-", "HIC15": "-", "p_max": "Pa"}
 
 
 def plot_envelope(envelope, *, title: str = "", unit=None):
