@@ -58,7 +58,8 @@ A safety envelope instead of a grid (:func:`ppamsafety.envelope.safety_envelope`
     limit = "F_max"                    # a criterion: "F_max" (maxilla 660 N), "HIC36" (650),
                                        # "iso_ts_15066" (transient), "iso_ts_15066_qs" ...
     # limit_value = 200.0              # another value of that limit [N] (or {value, unit})
-    # region = "skull/forehead"        # body region of the criteria (or a region file)
+    # region = "skull/forehead"        # body region struck and judged (or a region file):
+                                       #   a region not of the head on its Annex A body
     tolerance = 0.01                   # relative width of a final bracket
     scan = 9                           # values evaluated first (every crossing bracketed)
     # pose = [50.0, -80.0]             # "speed" only: link angles q1, q2 at impact [deg]
