@@ -1057,6 +1057,22 @@ def case_function(arm=None, head=None, *, kind: str = "safety"):
     return functools.partial(func, **kw) if kw else func
 
 
+def _row_criteria(df: pd.DataFrame, criteria=None, region=None):
+    """(index, row, criteria) of every row of a sweep table: the row's ``region`` column, or
+    ``region``, decides its criteria (:func:`~ppamsafety.impact.verdicts.criteria_for`)
+    unless ``criteria`` are given."""
+    regs = (df["region"] if "region" in df.columns
+            else pd.Series([None] * len(df), index=df.index, dtype=object))
+    cache = {}
+    for i, r in df.iterrows():
+        reg = regs[i] if regs[i] is not None and not (
+            isinstance(regs[i], float) and math.isnan(regs[i])) else region
+        key = reg if isinstance(reg, (str, int, type(None))) else id(reg)
+        if key not in cache:
+            cache[key] = criteria_for(reg) if criteria is None else tuple(criteria)
+        yield i, r, cache[key]
+
+
 def add_verdicts(df: pd.DataFrame, criteria=None, *, region=None, head=None) -> pd.DataFrame:
     """A sweep's result table with the verdict of every case against the criteria.
 
@@ -1096,18 +1112,10 @@ def add_verdicts(df: pd.DataFrame, criteria=None, *, region=None, head=None) -> 
         names = out["head"].map(lambda h: h.name if isinstance(h, HeadContactModel) else str(h))
     else:
         names = pd.Series(default, index=out.index)
-    regions = (out["region"] if "region" in out.columns
-               else pd.Series([None] * len(out), index=out.index, dtype=object))
-    by_region = {}
     cols = {"head_model": [], "verdict": [], "governing": [], "governing_margin_pct": []}
-    judged = {}
-    for i, r in out.iterrows():
-        reg = regions[i] if regions[i] is not None and not (
-            isinstance(regions[i], float) and math.isnan(regions[i])) else region
-        key = reg if isinstance(reg, (str, int, type(None))) else id(reg)
-        if key not in by_region:
-            by_region[key] = criteria_for(reg) if criteria is None else tuple(criteria)
-        crit = by_region[key]
+    judged, used = {}, {}
+    for i, r, crit in _row_criteria(out, criteria, region):
+        used[id(crit)] = crit
         vals = {m: r[m] for m in {c.metric for c in crit}
                 if m in r and r[m] is not None and pd.notna(r[m])}
         ok = r.get("status", "ok") == "ok" and "F_max" in vals
@@ -1125,7 +1133,7 @@ def add_verdicts(df: pd.DataFrame, criteria=None, *, region=None, head=None) -> 
         judged[i] = {row.criterion: (float(row.margin), bool(row.passed))
                      for row in t.itertuples()}
     names_judged = []
-    for crit in by_region.values():
+    for crit in used.values():
         for c in crit:
             if c.name not in names_judged and (c.metric != "p_max" or any(
                     c.name in j for j in judged.values())):
@@ -1168,13 +1176,8 @@ def verdict_limits(df: pd.DataFrame, criteria=None, *, region=None) -> pd.DataFr
     """
     if "governing" not in df.columns:
         return pd.DataFrame(columns=list(LIMIT_COLUMNS))
-    regs = (df["region"] if "region" in df.columns
-            else pd.Series([None] * len(df), index=df.index, dtype=object))
     rows, judged = {}, {}
-    for i, r in df.iterrows():
-        reg = regs[i] if regs[i] is not None and not (
-            isinstance(regs[i], float) and math.isnan(regs[i])) else region
-        crit = criteria_for(reg) if criteria is None else tuple(criteria)
+    for i, r, crit in _row_criteria(df, criteria, region):
         for c in crit:
             passed = r.get(f"{c.name}_pass")
             if passed is None or (isinstance(passed, float) and math.isnan(passed)):
@@ -1219,13 +1222,8 @@ def failed_criteria(df: pd.DataFrame, metric: str, criteria=None, *, region=None
         Aligned with ``df``: the labels of the failed criteria (``"; "``-separated, an
         unconfirmed limit marked ``[unconfirmed]``), ``""`` where the case fails none.
     """
-    regs = (df["region"] if "region" in df.columns
-            else pd.Series([None] * len(df), index=df.index, dtype=object))
     out = []
-    for i, r in df.iterrows():
-        reg = regs[i] if regs[i] is not None and not (
-            isinstance(regs[i], float) and math.isnan(regs[i])) else region
-        crit = criteria_for(reg) if criteria is None else tuple(criteria)
+    for i, r, crit in _row_criteria(df, criteria, region):
         out.append("; ".join(c.label + ("" if c.confirmed else " [unconfirmed]")
                              for c in crit if c.metric == metric
                              and r.get(f"{c.name}_pass") is not None
