@@ -567,21 +567,25 @@ def _cmd_synthesize(args) -> int:
 
 
 def _cmd_impact(args) -> int:
-    from .impact.head import head_model
+    from .impact.verdicts import check_head_for_region
     from .params.iso_ts_15066 import resolve_region
     from .params import thesis_arm
 
     if args.history is not None:        # fail before simulating, not after
         check_new_file(args.history, overwrite=args.overwrite, name="--history")
     arm = _arm_of(args) or thesis_arm()
-    head = _head_of(args) or head_model()
+    chosen = _head_of(args)             # None: no --head given
     with _named("--region", args.region):
         region = resolve_region(args.region)
+    try:
+        check_head_for_region(region, chosen)
+    except ValueError as exc:
+        raise ValueError(f"--head {args.head} --region {args.region}: {exc}") from None
     q = np.array(args.q, dtype=float) * DEG
     with warnings.catch_warnings():
         if _pose_outside(args.q, arm):  # said once, in degrees, instead of the library's warning
             warnings.filterwarnings("ignore", message=r"q: case\(s\)")
-        return _impact(args, arm, head, region, q)
+        return _impact(args, arm, chosen, region, q)
 
 
 def _pose_outside(q_deg, arm) -> bool:
@@ -608,11 +612,13 @@ def _pose_outside(q_deg, arm) -> bool:
     return True
 
 
-def _impact(args, arm, head, region, q) -> int:
-    """``impact`` once the arm, head, region and pose are read."""
+def _impact(args, arm, chosen, region, q) -> int:
+    """``impact`` once the arm, the head chosen by ``--head`` (None: none given), the region
+    and the pose are read."""
     from .design import rest_stiffness
     from .impact.model import simulate_impacts
-    from .impact.verdicts import impact_verdicts
+    from .impact.verdicts import impact_verdicts, region_head
+    from .params import is_thesis_arm
 
     with _options(q="--q", qd="--qd", stiffness="--stiffness", head="--head", dt="--dt"):
         if args.stiffness is None:      # the arm's own stiffness at rest in this pose
@@ -626,30 +632,50 @@ def _impact(args, arm, head, region, q) -> int:
             stiffness, origin = tuple(args.stiffness), "given by --stiffness"
     if args.contact is not None or args.covering is not None:
         return _impact_at_point(args, arm, region, q, stiffness, origin)
+    body = region_head(region, chosen)  # the region's own body (a head region: the head model)
     with _options(q="--q", qd="--qd", stiffness="--stiffness", head="--head", dt="--dt"):
-        res = simulate_impacts(arm, q, args.qd, stiffness, head=head, dt=args.dt,
+        res = simulate_impacts(arm, q, args.qd, stiffness, head=body, dt=args.dt,
                                history=args.history is not None)
     s = res.summary.iloc[0]
+    what = "the head" if region.head else f"the {region.name}"
     if not s.tcp_speed >= 1e-3:
         raise ValueError(f"--qd {args.qd[0]:g} {args.qd[1]:g} rad/s at --q {args.q[0]:g} "
                          f"{args.q[1]:g} deg gives a tool speed of {s.tcp_speed:.3g} m/s: the "
-                         f"arm does not move, so nothing hits the head; give joint speeds "
+                         f"arm does not move, so nothing hits {what}; give joint speeds "
                          f"(e.g. --qd 1 0)")
     h = res.head
     print(f"arm             {arm.name or args.arm}")
     print(f"pose            q = {args.q[0]:g}, {args.q[1]:g} deg, qd = {args.qd[0]:g}, "
           f"{args.qd[1]:g} rad/s")
     print(f"joint stiffness K1 = {stiffness[0]:.4g}, K2 = {stiffness[1]:.4g} N m/rad ({origin})")
-    print(f"head model      {h.name}: m = {h.mass:g} kg, R = {h.radius:g} m, Hunt-Crossley "
-          f"k = {h.stiffness:.4g} N/m^n, n = {h.exponent:g}, lambda = {h.damping:.4g} "
-          f"N s/m^(n+1)")
+    if region.head:
+        print(f"head model      {h.name}: m = {h.mass:g} kg, R = {h.radius:g} m, Hunt-Crossley "
+              f"k = {h.stiffness:.4g} N/m^n, n = {h.exponent:g}, lambda = {h.damping:.4g} "
+              f"N s/m^(n+1)")
+        if chosen is None:
+            print(f"                no --head: the thesis' head, a contact fitted to the "
+                  f"thesis arm's Table 6.1 impacts (that arm's surface and the head lumped)"
+                  f"{'' if is_thesis_arm(arm) else ', not to this arm'}; the head validated on "
+                  f"its own (Hybrid III drop) is --contact 'tool point'; --head chooses another")
+    else:
+        print(f"body model      {h.name}: the ISO/TS 15066 Annex A body model of "
+              f"{region.name}, m_H = {h.mass:g} kg, linear spring K = "
+              f"{h.stiffness / 1e3:g} N/mm, undamped (Table A.3)")
     print(f"tool speed      {s.tcp_speed:.4g} m/s")
     print(f"F_max           {s.F_max:.4g} N at {1e3 * s.t_Fmax:.3g} ms")
-    print(f"HIC36           {s.HIC36:.4g}  window [{1e3 * s.HIC36_t1:.3g}, {1e3 * s.HIC36_t2:.3g}] ms")
-    print(f"HIC15           {s.HIC15:.4g}  window [{1e3 * s.HIC15_t1:.3g}, {1e3 * s.HIC15_t2:.3g}] ms")
-    print(f"max penetration {1e3 * s.delta_max:.4g} mm, peak head acceleration {s.a_max_g:.4g} g")
-    print(f"energy to head  {s.E_head_final:.4g} J of {s.E_initial:.4g} J")
-    verdicts = impact_verdicts(arm, q, args.qd, stiffness, head=head, dt=args.dt,
+    if region.head:
+        print(f"HIC36           {s.HIC36:.4g}  window [{1e3 * s.HIC36_t1:.3g}, "
+              f"{1e3 * s.HIC36_t2:.3g}] ms")
+        print(f"HIC15           {s.HIC15:.4g}  window [{1e3 * s.HIC15_t1:.3g}, "
+              f"{1e3 * s.HIC15_t2:.3g}] ms")
+        print(f"max penetration {1e3 * s.delta_max:.4g} mm, peak head acceleration "
+              f"{s.a_max_g:.4g} g")
+        print(f"energy to head  {s.E_head_final:.4g} J of {s.E_initial:.4g} J")
+    else:
+        print(f"max compression {1e3 * s.delta_max:.4g} mm (HIC and the AIS risk are head "
+              f"criteria: not judged for {region.name})")
+        print(f"energy to body  {s.E_head_final:.4g} J of {s.E_initial:.4g} J")
+    verdicts = impact_verdicts(arm, q, args.qd, stiffness, head=chosen, dt=args.dt,
                                region=region)
     for line in verdicts.lines():
         print(line)
@@ -679,12 +705,18 @@ def _layers_text(layers) -> str:
     return "; ".join(out)
 
 
+def _lumped_spring(body) -> bool:
+    """The body is one linear undamped spring (an Annex A body model, no material law)."""
+    return (len(body.layers) == 1 and body.layers[0].law == "power"
+            and body.layers[0].exponent == 1.0)
+
+
 def _impact_at_point(args, arm, region, q, stiffness, origin) -> int:
     """``impact --contact POINT --covering NAME|FILE``: one impact of any contact point through
     a covering into the body region, judged against the region's limits."""
     from .impact.anywhere import simulate_contacts
-    from .impact.summary import region_body
-    from .impact.verdicts import Verdicts, ais_risk_table, criteria_for, evaluate
+    from .impact.summary import body_model_name, region_body
+    from .impact.verdicts import Verdicts, ais_risk_table, annex_a_head, criteria_for, evaluate
     from .params.contact import covering_notes
     from .params.contact_files import resolve_contact_point, resolve_covering
 
@@ -700,8 +732,7 @@ def _impact_at_point(args, arm, region, q, stiffness, origin) -> int:
               file=sys.stderr)
     head = _head_of(args)
     body = region_body(region, head=head)
-    model = (head.name if head is not None and region.head else
-             "validated head" if region.name == "skull/forehead" else "Annex A two-body model")
+    model = body_model_name(region, head=head)
     with _options(q="--q", qd="--qd", stiffness="--stiffness", dt="--dt", point="--contact",
                   covering="--covering"):
         res = simulate_contacts(arm, q, args.qd, stiffness, point=point, body=body,
@@ -722,21 +753,30 @@ def _impact_at_point(args, arm, region, q, stiffness, origin) -> int:
           f"{point.shape}{radius}")
     print(f"covering        {c.covering.name}"
           + (f": {_layers_text(c.covering.layers)}" if c.covering.layers else ""))
-    print(f"body region     {region.name} ({model}): m = {body.mass:g} kg, R = {1e3 * body.radius:.4g} mm, "
+    kind = "Annex A two-body model " if model == annex_a_head(region).name else ""
+    print(f"body region     {region.name} ({kind}{model}): m = {body.mass:g} kg, R = {1e3 * body.radius:.4g} mm, "
           f"{_layers_text(body.layers)}")
     print(f"point speed     {s.point_speed:.4g} m/s (effective mass {s.m_eff:.4g} kg)")
     print(f"F_max           {s.F_max:.4g} N at {1e3 * s.t_Fmax:.3g} ms")
-    print(f"HIC36           {s.HIC36:.4g}, HIC15 {s.HIC15:.4g}")
+    if region.head:
+        print(f"HIC36           {s.HIC36:.4g}, HIC15 {s.HIC15:.4g}")
     if math.isfinite(s.p_max):
         print(f"p_max           {s.p_max / 1e4:.4g} N/cm^2 (mean pressure over the contact area)")
+        if _lumped_spring(body) and not c.covering.layers:
+            print(f"                the Annex A spring is the whole region's compliance: its "
+                  f"footprint gives p = K / (pi R_e), the same at every speed, a lower bound "
+                  f"of the mean pressure (docs/impact_models.md)")
     print(f"max compression {1e3 * s.delta_max:.4g} mm, peak body acceleration "
-          f"{s.a_max_g:.4g} g")
+          f"{s.a_max_g:.4g} g" + ("" if region.head else f" (HIC and the AIS risk are head "
+                                                       f"criteria: not judged for {region.name})"))
     if c.covering.layers:
         print(f"covering use    {s.covering_use:.2f} of its strain limit"
               + (": THE COVERING BOTTOMS OUT (compressed to its strain limit, it passes the "
                  "force on as a rigid layer; a thicker or stiffer covering, or a lower speed, "
                  "keeps it within its limit)" if s.covering_use >= 1.0 else ""))
     vals = {"F_max": float(s.F_max), "HIC36": float(s.HIC36), "HIC15": float(s.HIC15)}
+    if math.isfinite(s.p_max):          # a contact geometry with an area: its pressure judged
+        vals["p_max"] = float(s.p_max)
     table = evaluate(vals, criteria_for(region), head=model, contact_point=point.name,
                      region=region.name)
     risk = ais_risk_table(vals["HIC15"], head=model, hic_name="HIC15") if region.head \

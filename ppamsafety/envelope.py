@@ -44,7 +44,7 @@ from ._jit import available_cores
 from .results import Result
 from ._validation import check_int, check_range, check_str
 from .impact.head import HeadContactModel, head_model
-from .impact.verdicts import Criterion, criterion, criterion_names
+from .impact.verdicts import Criterion, criterion, criterion_names, model_kind
 from .params.iso_ts_15066 import resolve_region
 from .plots.sweep import plot_envelope
 from .sweep import run_sweep
@@ -208,7 +208,8 @@ class SafetyEnvelope(Result):
         """One sentence: the envelope found, the limit, the head model and the margin."""
         lo, hi = self.bounds
         u = f" {self.unit}" if self.unit else ""
-        with_head = f" with head model {self.head}" if self.head else ""
+        with_head = (f" with {model_kind(self.region or 'skull/forehead')} {self.head}"
+                     if self.head else "")
         if self.direction == "all safe":
             return (f"{self.metric} stays below {self.limit_label} over {self.parameter} in "
                     f"[{lo:.4g}, {hi:.4g}]{with_head}; smallest margin "
@@ -397,11 +398,17 @@ def safety_envelope(parameter: str, bounds, *, limit: str = "F_max", limit_value
         raise ValueError(f"case sets {parameter!r}, the parameter searched; leave it out")
     if "arm" in base or "histories" in base:
         raise ValueError("case must not set 'arm' (pass arm=...) or 'histories'")
+    if region is not None:              # the region is struck on its own body, and judged
+        if base.get("region") is not None and base["region"] != region:
+            raise ValueError(f"case region = {base['region']!r} and region = {region!r}: the "
+                             f"envelope's region is the one struck and judged; give one")
+        base["region"] = region
     func = case_function(arm, head, kind=kind)
     check_bounds(parameter, (lo, hi), base, arm=arm, head=head)   # both ends, before running
     hname = (head.name if isinstance(head, HeadContactModel) else
              base["head"].name if isinstance(base.get("head"), HeadContactModel) else
              str(base.get("head", head_model().name)))
+    bodies = []                         # the body model the cases were simulated with
 
     def evaluate(values):
         cases = [{**base, parameter: float(v)} for v in values]
@@ -411,12 +418,15 @@ def safety_envelope(parameter: str, bounds, *, limit: str = "F_max", limit_value
             df = run_sweep(func, cases, name=f"{name}-{parameter}-{lim.metric}",
                            processes=procs, progress=progress, on_error="record",
                            cache_dir=cache_dir).table
+        bodies.extend(str(b) for b in df.get("body_model", pd.Series(dtype=object)).dropna())
         return [(r.get("status", "ok"), r.get("error", ""),
                  float(r[lim.metric]) if r.get("status", "ok") == "ok" else math.nan)
                 for _, r in df.iterrows()]
 
     found = _search(evaluate, lo, hi, lim.value, lim.metric, parameter=parameter,
                     tolerance=tolerance, scan=scan, max_rounds=max_rounds, points=procs)
+    if bodies:
+        hname = bodies[0]
     return SafetyEnvelope(parameter=parameter, limit=limit, metric=lim.metric,
                           limit_value=lim.value, limit_label=lim.label, bounds=(lo, hi),
                           tolerance=tolerance, head=hname, region=reg.name, **found)

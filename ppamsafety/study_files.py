@@ -68,7 +68,8 @@ A safety envelope instead of a grid (:func:`ppamsafety.envelope.safety_envelope`
     limit = "F_max"                    # a criterion: "F_max" (maxilla 660 N), "HIC36" (650),
                                        # "iso_ts_15066" (transient), "iso_ts_15066_qs" ...
     # limit_value = 200.0              # another value of that limit [N] (or {value, unit})
-    # region = "skull/forehead"        # body region of the criteria (or a region file)
+    # region = "skull/forehead"        # body region struck and judged (or a region file):
+                                       #   a region not of the head on its Annex A body
     tolerance = 0.01                   # relative width of a final bracket
     scan = 9                           # values evaluated first (every crossing bracketed)
     # pose = [50.0, -80.0]             # "speed" only: link angles q1, q2 at impact [deg]
@@ -130,12 +131,12 @@ import pandas as pd
 from ._inputfiles import check_input_path, read_text
 from ._jit import available_cores
 from ._validation import MAX_BYTES, check_int, did_you_mean
-from .envelope import LIMITS, SCAN, check_bounds, resolve_limit, safety_envelope
+from .envelope import SCAN, check_bounds, resolve_limit, safety_envelope
 from .experiments.catalog import DEFAULT_DURATIONS, ControllerVariant
 from .impact.head import HeadContactModel, load_head
 from .output import OutputError, OutputFolder, check_output_path, read_marker
 from .design import load_arm
-from .params import ArmParameters
+from .params import ArmParameters, is_thesis_arm
 from .params.arm_file import ArmFileError, arm_key, arm_to_toml, read_value
 from .params.contact_files import is_contact_file
 from .plots.figure import save as save_figure
@@ -145,7 +146,8 @@ from .sweep import BACKENDS, SweepResult, run_sweep
 from .sweep_cases import (COVERING_RANGES, DEFAULTS, IMPACT_POSE_DEG, PARAMETERS, SPEED_MAX,
                           add_verdicts,
                           case_arm, case_function, check_case, check_impact_case, column_unit,
-                          is_dotted, make_controller)
+                          failed_criteria, is_dotted, make_controller, verdict_limits)
+from .impact.verdicts import METRICS
 from .units import si_factor
 
 #: Folder of the shipped studies (package data): the report's sweep sections run these files.
@@ -1491,44 +1493,134 @@ def _write_summary(st: Study, df: pd.DataFrame, stage: Path, envelope=None) -> N
         swept, what = [envelope.parameter], " ".join(envelope.lines())
     else:       # what varies among the cases run (--max-cases may run fewer)
         swept = [k for k in st.swept if k in df.columns and df[k].map(repr).nunique() > 1]
-        shown = df.copy()
-        for k in shown.columns:      # the swept values in the study file's unit, p_max in N/cm^2
-            if st.unit_of(k)[1] != 1.0:
-                shown[k] = df[k].map(lambda v, f=st.unit_of(k)[1]: _in_unit(v, f))
-        fig = plot_sweep(shown, swept, title=title,
-                         units={k: st.unit_of(k)[0] for k in [*swept, *shown.columns]})
+        fig = sweep_figure(st, df, swept, title)
         what = (f"{len(df)} cases, {int((df.get('status') == 'ok').sum())} ok"
                 if "status" in df.columns else f"{len(df)} cases")
     save_figure(fig, stage / SUMMARY_FIGURE)
     (stage / SUMMARY_PAGE).write_text(summary_page(st, df, what, swept), encoding="utf-8")
 
 
-def _mark_above(shown: pd.DataFrame) -> tuple:
-    """The displayed table as HTML cell texts, the values above a limit line of the figure
-    marked (red, ``▲``, the limits exceeded in the tooltip); and the sentence that says so."""
+def _limit_text(r) -> str:
+    """A limit as a legend or page shows it: its label, whether it is confirmed, what it
+    decided."""
+    return (f"{r.label}{'' if r.confirmed else ' [unconfirmed: not in the TS or no public source]'}"
+            f": governs {r.governs}, fails {r.fails} of the cases")
+
+
+def sweep_figure(st: Study, df: pd.DataFrame, swept, title: str = ""):
+    """The figure of a finished sweep: its results against the swept parameters (in the study
+    file's units), the limits that decide the verdicts and the failing cases ringed.
+
+    Parameters
+    ----------
+    st : Study
+        The study.
+    df : pandas.DataFrame
+        Its result table in SI units, with the verdict columns.
+    swept : sequence of str
+        The parameters that vary.
+    title : str
+        The figure's title.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    shown = df.copy()
+    for k in shown.columns:      # the swept values in the study file's unit, p_max in N/cm^2
+        if st.unit_of(k)[1] != 1.0:
+            shown[k] = df[k].map(lambda v, f=st.unit_of(k)[1]: _in_unit(v, f))
+    limits, failed = _verdict_marks(df)
+    return plot_sweep(shown, swept, title=title,
+                      units={k: st.unit_of(k)[0] for k in [*swept, *shown.columns]},
+                      limits={m: [(_in_unit(v, st.unit_of(m)[1]), _legend_text(r))
+                                  for v, _, r in ls]
+                              for m, ls in limits.items()} or None,
+                      failed={m: (f != "").to_numpy() for m, f in failed.items()} or None)
+
+
+def _legend_text(r) -> str:
+    """A limit as a figure's legend shows it: short, with what it decided."""
+    u = f" {r.unit}" if r.unit else ""
+    return (f"{r.region} {r.criterion} {r.limit:g}{u}"
+            f"{'' if r.confirmed else ' [unconfirmed]'} (governs {r.governs}, fails {r.fails})")
+
+
+def _verdict_marks(df: pd.DataFrame) -> tuple:
+    """The limits that decide a sweep's verdicts and the cases that fail them.
+
+    Returns
+    -------
+    tuple
+        ``({metric: [(limit, text, row)]}, {metric: Series of failed criteria per case})``,
+        both empty for a table without verdicts (the fixed limit lines are drawn then).
+    """
+    lims = verdict_limits(df)
+    if not len(lims) and "governing" not in df.columns:
+        return {}, {}
+    limits = {}
+    for r in lims.itertuples():
+        limits.setdefault(r.metric, []).append((r.limit, _limit_text(r), r))
+    for m in METRICS:                    # a result no criterion of the regions judges: no line
+        if m in df.columns and m not in limits:
+            limits[m] = []
+    failed = {m: failed_criteria(df, m) for m in METRICS if m in df.columns}
+    return limits, failed
+
+
+def _mark_above(shown: pd.DataFrame, failed=None) -> tuple:
+    """The displayed table as HTML cell texts, the cases that fail a verdict marked (red,
+    ``▲``, the limits failed in the tooltip) -- without verdicts, the values above a limit
+    line of the figure --; and the sentence that says so.
+
+    Parameters
+    ----------
+    shown : pandas.DataFrame
+        The displayed table (:func:`display_table`).
+    failed : dict, optional
+        Result -> the failed criteria of each case (:func:`_verdict_marks`).
+    """
     out = shown.copy()
     count = [0]
 
-    def cell(v, lines):
+    def number(v):
         if v is None or isinstance(v, (bool, np.bool_, str)):
-            return html.escape("" if v is None else str(v))
+            return None, html.escape("" if v is None else str(v))
         if not isinstance(v, (int, float, np.integer, np.floating)):
-            return html.escape(str(v))
+            return None, html.escape(str(v))
         if not np.isfinite(v):
-            return ""
-        over = [text for lim, text, *_ in lines if v > lim]
-        if not over:
-            return f"{v:.4g}"
+            return None, ""
+        return v, f"{v:.4g}"
+
+    def marked(text, why):
         count[0] += 1
-        return (f'<span class="above" title="above: {html.escape("; ".join(over))}">{v:.4g} '
-                f"▲</span>")
+        return f'<span class="above" title="{html.escape(why)}">{text} ▲</span>'
+
+    def cell(v, lines):
+        x, text = number(v)
+        over = [t for lim, t, *_ in lines if x is not None and x > lim]
+        return marked(text, "above: " + "; ".join(over)) if over else text
 
     for col in shown.columns:
-        lines = limit_lines(col.split(" [")[0])
-        out[col] = shown[col].map(lambda v, lines=lines: cell(v, lines))
-    note = (f'<p><span class="above">▲</span> {count[0]} values above a limit line of the '
-            f"figure (hover over a value for the limit).</p>" if count[0] else
-            "<p>No value above a limit line of the figure.</p>")
+        base = col.split(" [")[0]
+        if failed is not None and base in failed:
+            why = failed[base].to_numpy()
+            out[col] = [marked(number(v)[1], f"fails: {w}") if w else number(v)[1]
+                        for v, w in zip(shown[col], why)]
+        elif failed is not None and base == "verdict":
+            out[col] = [f'<span class="above">{html.escape(str(v))}</span>' if v == "fail"
+                        else number(v)[1] for v in shown[col]]
+        else:
+            lines = [] if failed is not None else limit_lines(base)
+            out[col] = shown[col].map(lambda v, lines=lines: cell(v, lines))
+    if failed is not None:
+        note = (f'<p><span class="above">▲</span> {count[0]} values fail a verdict (hover over '
+                f"a value for the limits it fails).</p>" if count[0] else
+                "<p>No value fails a verdict.</p>")
+    else:
+        note = (f'<p><span class="above">▲</span> {count[0]} values above a limit line of the '
+                f"figure (hover over a value for the limit).</p>" if count[0] else
+                "<p>No value above a limit line of the figure.</p>")
     return out, note
 
 
@@ -1552,20 +1644,31 @@ def summary_page(st: Study, df: pd.DataFrame, what: str, swept) -> str:
         A self-contained page (the figure is ``summary.png`` beside it).
     """
     arm = (st.arm.name or "unnamed arm") if st.arm is not None else "the thesis arm"
-    head = st.head.name if st.head is not None else "per case (default thesis-frontal)"
-    limits = ("660 N maxilla fracture (Haddadin et al. 2007a, thesis §6.3.3); HIC36 650 (5 % "
-              "risk of AIS 3+, thesis §6.3.3); ISO/TS 15066 skull/forehead transient contact "
-              f"{LIMITS['iso_ts_15066'].value:g} N (Annex A)")
+    if "head_model" in df.columns and df["head_model"].notna().any():
+        used = df["head_model"].dropna().map(str).value_counts(sort=False)
+        head = "; ".join(f"{n} ({c} case{'s' if c > 1 else ''})" for n, c in used.items())
+        if "thesis-frontal" in used.index and st.arm is not None and not is_thesis_arm(st.arm):
+            head += ("; thesis-frontal is a contact fitted to the thesis arm's Table 6.1 "
+                     "impacts, not to this arm")
+    else:
+        head = st.head.name if st.head is not None else "per case (see the table)"
+    decided, failed = _verdict_marks(df)
+    if decided:
+        limits = "; ".join(t for ls in decided.values() for _, t, _ in ls) or "none judged"
+    else:
+        fixed = [t for c in ("F_max", "HIC36") for _, t, *_ in limit_lines(c)]
+        limits = "; ".join(fixed)
     shown = display_table(st, df.drop(columns=[c for c in ("error",) if c in df.columns
                                                and not df[c].any()]))
     rows = [("study", st.name), ("description", st.description or "-"),
             ("arm", arm + (" (arm.toml)" if st.arm is not None else "")),
-            ("head", head + (" (head.toml)" if st.head is not None else "")),
+            ("body model simulated", head + (" (head.toml)" if st.head is not None else "")),
             ("swept", ", ".join(unit_label(k, st.unit_of(k)[0]) for k in swept) or "-"),
-            ("result", what), ("limits drawn", limits)]
+            ("result", what),
+            ("limits that decide the verdicts" if decided else "limits drawn", limits)]
     meta = "".join(f"<tr><th>{html.escape(k)}</th><td>{html.escape(str(v))}</td></tr>"
                    for k, v in rows)
-    marked, note = _mark_above(shown)
+    marked, note = _mark_above(shown, failed or None)
     table = marked.to_html(index=False, na_rep="", escape=False, border=0, classes="results")
     return f"""<!DOCTYPE html>
 <html lang="en"><head><meta charset="utf-8"><title>{html.escape(st.name)}: ppamsafety sweep</title>
@@ -1587,6 +1690,6 @@ th{{background:#f3f3f3;text-align:left}}img{{max-width:100%}}
 __all__ = ["SCHEMA", "GENERATORS", "KIND", "MATERIALISE", "CHECK_ALL", "COST", "CONFIRM_HOURS",
            "Axis", "CaseGrid", "Study", "StudyFileError", "parse_study", "load_study",
            "estimate_cases", "describe_estimate", "check_run_size", "history_format",
-           "run_study_file", "summary_page", "display_table", "unit_label", "STUDY_DATA",
+           "run_study_file", "summary_page", "sweep_figure", "display_table", "unit_label", "STUDY_DATA",
            "shipped_studies", "shipped_study", "study_path", "controller_variants", "FILE_KEYS",
            "UNIT_KEYS"]

@@ -45,17 +45,20 @@ from .design import rest_stiffness
 from .experiments.catalog import (CIRCLE_PERIODS, CIRCLE_WARMUP, DEFAULT_DURATIONS, STEP_TIMES,
                                   SWITCH_TIME, run_thesis_experiment, ControllerVariant)
 from .experiments.metrics import tracking_stats
-from .impact.anywhere import simulate_contacts
+from .impact.anywhere import point_jacobian, simulate_contacts
 from .impact.head import HeadContactModel, head_model_names, head_model
 from .impact.instants import HEURISTICS, evaluate_experiment, heuristic_instants, impact_states
 from .impact.engine import FREE_STRIDE
-from .impact.verdicts import METRICS, criteria_for, criterion, evaluate
+from .impact.summary import body_model_name, region_body
+from .impact.verdicts import (METRICS, check_head_for_region, criteria_for, criterion, evaluate,
+                              region_head)
 from .impact.model import simulate_impacts, stiffness_limit
 from .params import ArmParameters, thesis_arm
 from .params.arm_file import ArmFileError, apply_arm_changes, arm_key, effects_from_dict
 from .params.contact import arm_contact_points, body_contact, body_contact_names, covering_names
 from .params.contact_files import is_contact_file, resolve_contact_point, resolve_covering
 from .params.effects import Effects
+from .params.iso_ts_15066 import resolve_region
 from .plant import geometry as geo
 from .sweep import SweepResult, _check_cases, grid_cases, run_sweep
 from .units import BAR
@@ -190,6 +193,34 @@ def _check_head(v):
         raise ValueError(f"head = {v!r} is not a head model name; allowed: {names} (a head "
                          f"file: the study file's [head] file, or a HeadContactModel)")
     return v
+
+
+def _check_region(v):
+    """A case's body region: None (the skull/forehead of the thesis), an Annex A name or
+    number, a region file (``.toml``) or a BodyRegion."""
+    if v is None:
+        return v
+    if isinstance(v, float) and v.is_integer():
+        v = int(v)
+    try:
+        resolve_region(v)
+    except (TypeError, ValueError, OSError) as exc:
+        raise ValueError(f"region = {v!r}: {exc}") from None
+    return v
+
+
+def chosen_head(head):
+    """The head model a case *chose*: None for the default (``"thesis-frontal"`` by name).
+
+    A non-head region is struck on its own body unless a head model is chosen, which is
+    then refused (:func:`~ppamsafety.impact.verdicts.check_head_for_region`).
+
+    Parameters
+    ----------
+    head : str or HeadContactModel
+        A case's ``head``.
+    """
+    return None if isinstance(head, str) and head == DEFAULTS["head"] else head
 
 
 #: Contact points a case can name (the defaults of every arm,
@@ -369,6 +400,11 @@ PARAMETERS = {
                   "at the instant, a number for both joints or a pair [K1, K2]"),
     "head": (_check_head, "head contact model name (ppamsafety.impact.head.head_model_names; a "
                           "head file: the study file's [head] table)"),
+    "region": (_check_region,
+               "body region struck and judged (ISO/TS 15066 Annex A name or number 1-29, or a "
+               "region file): a head region on the head model (head, or with a contact key the "
+               "head that passes the Hybrid III drop), any other region on its Annex A body "
+               "model (effective mass and spring constant, Table A.3); default skull/forehead"),
     "effects": (_check_effects, "plant effects {name = value} (ppamsafety.params.effects."
                                 "Effects; one number sets every entry of a vector effect); "
                                 "or one effect per key: effects.<name>"),
@@ -423,7 +459,8 @@ COLUMN_UNITS = {
     "instant_HIC36": None, "tcp_speed": "m/s", "K1": "Nm/rad", "K2": "Nm/rad",
     "n_impacts": "-", "track_mean": "m", "track_max": "m", "track_rms": "m", "diverged": None,
     "status": None, "error": None, "value": None,
-    "contact": None, "body": None, "covering": None, "covering_thickness": "m",
+    "contact": None, "body": None, "region": None, "body_model": None, "covering": None,
+    "covering_thickness": "m",
     "covering_modulus": "Pa", "covering_hysteresis": "s/m", "contact_point": None,
     "body_region": None, "covering_name": None, "p_max": "Pa", "covering_use": "-",
 }
@@ -496,6 +533,11 @@ def _checked(case: dict) -> tuple:
         given = [k for k in _TASK_GAINS if full[k] is not None]
         if given:
             raise ValueError(f"{given} apply only to controller = 'PSMC task', not {ctrl!r}")
+    if full["region"] is not None:
+        if full["body"] is not None:
+            raise ValueError(f"body = {full['body']!r} and region = {full['region']!r}: the "
+                             f"region sets the body struck; give one of them")
+        check_head_for_region(full["region"], chosen_head(full["head"]))
     if any(full[k] is not None for k in CONTACT_KEYS):
         contact_covering(full)                       # the covering can be built
         if full["head"] != DEFAULTS["head"]:
@@ -555,7 +597,8 @@ DEFAULTS = {"experiment": "step", "controller": "PID", "lam": None, "kp_bar": No
             "ki_bar": None, "kd_bar": None, "task_kp": None, "task_ki": None, "task_kd": None,
             "stiffness": None, "head": "thesis-frontal", "effects": None,
             "instants": "heuristic", "every": None, "noise_seed": None, "duration": None,
-            "contact": None, "body": None, "covering": None, "covering_thickness": None,
+            "contact": None, "body": None, "region": None, "covering": None,
+            "covering_thickness": None,
             "covering_modulus": None, "covering_hysteresis": None, "histories": False}
 """Default parameters of :func:`safety_case`."""
 
@@ -644,7 +687,8 @@ def _contact_impacts(result, arm, p):
         runs = [_contact_impacts(result, arm, {**p, "contact": name}) for name in pts]
         return max(runs, key=lambda r: float(r[0].summary["F_max"].max()))
     point = resolve_contact_point(p["contact"] or "tool point", arm)
-    body = body_contact(p["body"]) if p["body"] else body_contact()
+    body = (body_contact(p["body"]) if p["body"] else region_body(p["region"])
+            if p["region"] is not None else body_contact())
     st = impact_states(result, arm)
     if p["instants"] == "all":
         idx = np.arange(0, len(st), p["every"] or 1)
@@ -666,6 +710,10 @@ def _contact_impacts(result, arm, p):
         s.insert(0, "instant", names)
     s["tcp_speed"] = s["point_speed"]
     return res, body, point
+
+
+#: Names of the body models of the named body contacts (the body column of a sweep).
+_BODY_MODELS = {"head (forehead)": "validated head"}
 
 
 def _impacts(result, arm, instants, every, head, stiffness):
@@ -698,7 +746,7 @@ def safety_case(experiment: str = "step", controller: str = "PID", *, lam=None, 
                 ki_bar=None, kd_bar=None, task_kp=None, task_ki=None, task_kd=None,
                 stiffness=None, head="thesis-frontal", effects=None,
                 instants: str = "heuristic", every: int | None = None, noise_seed=None,
-                duration=None, contact=None, body=None, covering=None,
+                duration=None, contact=None, body=None, region=None, covering=None,
                 covering_thickness=None, covering_modulus=None, covering_hysteresis=None,
                 histories: bool = False, arm=None, **dotted) -> dict:
     """One experiment with one controller, crashed into a head: a compact result row.
@@ -748,6 +796,14 @@ def safety_case(experiment: str = "step", controller: str = "PID", *, lam=None, 
         the covering in series; ``head`` is then not used.
     body : str, optional
         A body contact model (:func:`ppamsafety.params.contact.body_contact_names`).
+    region : str, int, path-like or BodyRegion, optional
+        The body region struck (ISO/TS 15066 Annex A, or a region file): a head region on
+        the head model (``head``; with contact keys the head that passes the Hybrid III
+        drop), any other region on its Annex A body model (its effective mass and spring
+        constant, Table A.3; :func:`~ppamsafety.impact.verdicts.region_head`,
+        :func:`~ppamsafety.impact.summary.region_body`).  A head model chosen (``head``
+        other than the default) for a region that is not part of the head is refused.
+        Default: the skull/forehead (``body`` with contact keys).
     covering : str, optional
         A named covering (:func:`ppamsafety.params.contact.covering_names`) or a covering
         file (``ppamsafety-covering/1``, a path ending in ``.toml``); default the contact
@@ -776,7 +832,8 @@ def safety_case(experiment: str = "step", controller: str = "PID", *, lam=None, 
     dict
         ``label``; ``F_max`` [N], ``HIC36``, ``HIC15`` (worst over the
         impacts), ``t0_F_max``, ``t0_HIC36`` [s] (their instants),
-        ``instant_HIC36`` (heuristic name or ""), ``tcp_speed`` [m/s] (largest
+        ``instant_HIC36`` (heuristic name or ""), ``body_model`` (the name of the body
+        model the impacts were simulated with), ``tcp_speed`` [m/s] (largest
         at impact), ``K1``, ``K2`` [Nm/rad] (stiffness of the worst-HIC
         impact), ``n_impacts``; ``track_mean``, ``track_max``, ``track_rms``
         [m] (task-space tracking error; circles after the 5 s warm-up, NaN if
@@ -790,11 +847,12 @@ def safety_case(experiment: str = "step", controller: str = "PID", *, lam=None, 
                            task_ki=task_ki, task_kd=task_kd, stiffness=stiffness, head=head,
                            effects=effects, instants=instants, every=every,
                            noise_seed=noise_seed, duration=duration, contact=contact,
-                           body=body, covering=covering, covering_thickness=covering_thickness,
+                           body=body, region=region, covering=covering,
+                           covering_thickness=covering_thickness,
                            covering_modulus=covering_modulus,
                            covering_hysteresis=covering_hysteresis, histories=histories,
                            arm=arm, **dotted))
-    hm = p["head"] if isinstance(p["head"], HeadContactModel) else head_model(p["head"])
+    hm = region_head(p["region"], chosen_head(p["head"]))   # the region's own body
     ctrl = make_controller(p["controller"], lam=p["lam"], kp_bar=p["kp_bar"], ki_bar=p["ki_bar"],
                            kd_bar=p["kd_bar"], task_kp=p["task_kp"], task_ki=p["task_ki"],
                            task_kd=p["task_kd"])
@@ -820,7 +878,9 @@ def safety_case(experiment: str = "step", controller: str = "PID", *, lam=None, 
            "instant_HIC36": str(w.instant) if "instant" in s.columns else "",
            "tcp_speed": float(s["tcp_speed"].max()), "K1": float(w.K1), "K2": float(w.K2),
            "n_impacts": int(len(s)), "track_mean": tr["mean"], "track_max": tr["max"],
-           "track_rms": tr["rms"], "diverged": bool(res.diverged)}
+           "track_rms": tr["rms"], "diverged": bool(res.diverged),
+           "body_model": (hm.name if not contact else body_model_name(p["region"])
+                          if p["region"] is not None else _BODY_MODELS.get(body.name, body.name))}
     if contact:
         out.update({"contact_point": point.name, "body_region": body.name,
                     "covering_name": ev.point.covering.name,
@@ -854,8 +914,9 @@ IMPACT_POSE_DEG = (50.0, -80.0)
 
 def impact_case(speed: float, *, q1_deg: float = IMPACT_POSE_DEG[0],
                 q2_deg: float = IMPACT_POSE_DEG[1], direction=(1.0, 0.0), stiffness=None,
-                head="thesis-frontal", effects=None, arm=None, **dotted) -> dict:
-    """One impact of the arm moving at a given tool speed (the ``speed`` of an envelope).
+                head="thesis-frontal", region=None, contact=None, effects=None, arm=None,
+                **dotted) -> dict:
+    """One impact of the arm moving at a given speed (the ``speed`` of an envelope).
 
     The arm is at rest-state pressures in pose ``q`` and moves along the joint-space
     ``direction`` with its tool point at ``speed``; it hits the head along its tool
@@ -873,7 +934,14 @@ def impact_case(speed: float, *, q1_deg: float = IMPACT_POSE_DEG[0],
     stiffness : None, float or pair, keyword-only
         Joint stiffness [Nm/rad]: None = (2.18) with the static pressures of the pose.
     head : str or HeadContactModel, keyword-only
-        Head model.
+        Head model of a head region (a chosen one is refused for another region).
+    region : optional, keyword-only
+        The body region struck (as :func:`safety_case`; default the skull/forehead).
+    contact : str, optional, keyword-only
+        A contact point of the arm (:data:`CONTACT_POINTS` but ``"all"``): the impact goes
+        through the contact-point engine (bare, as ``ppamsafety impact --contact``) into the
+        region's body (:func:`~ppamsafety.impact.summary.region_body`) and ``speed`` is that
+        point's speed.
     effects : dict, optional, keyword-only
         Plant effects (as :func:`safety_case`).
     arm : ArmParameters, optional, keyword-only
@@ -884,29 +952,44 @@ def impact_case(speed: float, *, q1_deg: float = IMPACT_POSE_DEG[0],
     Returns
     -------
     dict
-        ``F_max`` [N], ``HIC36``, ``HIC15``, ``tcp_speed`` [m/s], ``K1``, ``K2``
-        [Nm/rad].
+        ``F_max`` [N], ``HIC36``, ``HIC15``, ``tcp_speed`` [m/s] (with ``contact``: the
+        point's speed), ``K1``, ``K2`` [Nm/rad], ``body_model`` (the body struck); with
+        ``contact`` also ``contact_point``, ``body_region`` and ``p_max`` [Pa].
     """
     v, q, d, st, hm, arm = _impact_inputs(speed, q1_deg, q2_deg, direction, stiffness, head,
-                                          effects, arm, dotted)
-    tcp = geo.jacobian(q, arm) @ d
-    qd = d * (v / float(np.hypot(*tcp)))
+                                          effects, arm, dotted, region, contact)
     if st is None:
         K = np.array(rest_stiffness(arm, q).stiffness)
     else:
         K = np.broadcast_to(np.asarray(st, float), (2,)).copy()
-    s = simulate_impacts(arm, q, qd, K, head=hm).summary.iloc[0]
+    if contact is None:
+        tcp = geo.jacobian(q, arm) @ d
+        qd = d * (v / float(np.hypot(*tcp)))
+        s = simulate_impacts(arm, q, qd, K, head=hm).summary.iloc[0]
+        return {"F_max": float(s.F_max), "HIC36": float(s.HIC36), "HIC15": float(s.HIC15),
+                "tcp_speed": float(s.tcp_speed), "K1": float(K[0]), "K2": float(K[1]),
+                "body_model": hm.name}
+    point = {c.name: c for c in arm_contact_points(arm)}[contact]
+    pv = point_jacobian(q, arm, point) @ d
+    qd = d * (v / float(np.hypot(*pv)))
+    chosen = chosen_head(head)
+    body = region_body(region, head=chosen if resolve_region(region).head else None)
+    s = simulate_contacts(arm, q, qd, K, point=point, body=body).summary.iloc[0]
     return {"F_max": float(s.F_max), "HIC36": float(s.HIC36), "HIC15": float(s.HIC15),
-            "tcp_speed": float(s.tcp_speed), "K1": float(K[0]), "K2": float(K[1])}
+            "tcp_speed": float(s.point_speed), "K1": float(K[0]), "K2": float(K[1]),
+            "body_model": body_model_name(region, head=chosen if resolve_region(region).head
+                                          else None),
+            "contact_point": point.name, "body_region": body.name, "p_max": float(s.p_max)}
 
 
 #: Largest tool speed of :func:`impact_case` [m/s].
 SPEED_MAX = 10.0
 
 
-def _impact_inputs(speed, q1_deg, q2_deg, direction, stiffness, head, effects, arm, dotted):
+def _impact_inputs(speed, q1_deg, q2_deg, direction, stiffness, head, effects, arm, dotted,
+                   region=None, contact=None):
     """The checked arguments of :func:`impact_case` (speed, q [rad], direction, stiffness,
-    head model, arm)."""
+    the body struck at the tool point (:func:`~ppamsafety.impact.verdicts.region_head`), arm)."""
     v = _number("speed", speed, lo_open=True, unit="m/s")
     if v > SPEED_MAX:
         raise ValueError(f"speed = {v:g} m/s is outside (0, {SPEED_MAX:g}] m/s")
@@ -920,8 +1003,13 @@ def _impact_inputs(speed, q1_deg, q2_deg, direction, stiffness, head, effects, a
     if d.size != 2 or not np.any(d):
         raise ValueError(f"direction = {direction!r} must be a non-zero pair (qd1, qd2)")
     st = _check_stiffness(stiffness)
-    hm = _check_head(head)
-    hm = hm if isinstance(hm, HeadContactModel) else head_model(hm)
+    _check_head(head)
+    _check_region(region)
+    hm = region_head(region, chosen_head(head))     # refuses a head model for another region
+    if contact is not None and (not isinstance(contact, str) or contact not in CONTACT_POINTS
+                                or contact == "all"):
+        raise ValueError(f"contact = {contact!r}: one of {list(CONTACT_POINTS[:-1])} (one "
+                         f"impact has one contact point)")
     _check_effects(effects)
     arm = case_arm(arm, effects=effects or {}, changes=dotted)
     if not bool(geo.in_working_area(q, arm)):
@@ -931,7 +1019,8 @@ def _impact_inputs(speed, q1_deg, q2_deg, direction, stiffness, head, effects, a
 
 def check_impact_case(speed: float, *, q1_deg: float = IMPACT_POSE_DEG[0],
                       q2_deg: float = IMPACT_POSE_DEG[1], direction=(1.0, 0.0), stiffness=None,
-                      head="thesis-frontal", effects=None, arm=None, **dotted) -> None:
+                      head="thesis-frontal", region=None, contact=None, effects=None,
+                      arm=None, **dotted) -> None:
     """Check the arguments of :func:`impact_case` without simulating.
 
     Parameters
@@ -946,6 +1035,10 @@ def check_impact_case(speed: float, *, q1_deg: float = IMPACT_POSE_DEG[0],
         Joint stiffness [Nm/rad].
     head : str or HeadContactModel, keyword-only
         Head model.
+    region : optional, keyword-only
+        The body region struck.
+    contact : str, optional, keyword-only
+        A contact point of the arm.
     effects : dict, optional, keyword-only
         Plant effects.
     arm : ArmParameters, optional, keyword-only
@@ -958,7 +1051,8 @@ def check_impact_case(speed: float, *, q1_deg: float = IMPACT_POSE_DEG[0],
     TypeError, ValueError
         Naming the parameter, its value and what is allowed.
     """
-    _impact_inputs(speed, q1_deg, q2_deg, direction, stiffness, head, effects, arm, dotted)
+    _impact_inputs(speed, q1_deg, q2_deg, direction, stiffness, head, effects, arm, dotted,
+                   region, contact)
 
 
 def case_function(arm=None, head=None, *, kind: str = "safety"):
@@ -996,6 +1090,22 @@ def case_function(arm=None, head=None, *, kind: str = "safety"):
     return functools.partial(func, **kw) if kw else func
 
 
+def _row_criteria(df: pd.DataFrame, criteria=None, region=None):
+    """(index, row, criteria) of every row of a sweep table: the row's ``region`` column, or
+    ``region``, decides its criteria (:func:`~ppamsafety.impact.verdicts.criteria_for`)
+    unless ``criteria`` are given."""
+    regs = (df["region"] if "region" in df.columns
+            else pd.Series([None] * len(df), index=df.index, dtype=object))
+    cache = {}
+    for i, r in df.iterrows():
+        reg = regs[i] if regs[i] is not None and not (
+            isinstance(regs[i], float) and math.isnan(regs[i])) else region
+        key = reg if isinstance(reg, (str, int, type(None))) else id(reg)
+        if key not in cache:
+            cache[key] = criteria_for(reg) if criteria is None else tuple(criteria)
+        yield i, r, cache[key]
+
+
 def add_verdicts(df: pd.DataFrame, criteria=None, *, region=None, head=None) -> pd.DataFrame:
     """A sweep's result table with the verdict of every case against the criteria.
 
@@ -1005,50 +1115,155 @@ def add_verdicts(df: pd.DataFrame, criteria=None, *, region=None, head=None) -> 
     Parameters
     ----------
     df : pandas.DataFrame
-        Result rows with ``F_max``/``HIC36``/``HIC15`` (failed rows get no verdict).
+        Result rows with ``F_max``/``HIC36``/``HIC15`` and, where the contact geometry gives
+        one, ``p_max`` [Pa] (failed rows get no verdict).  A ``region`` column (the case's
+        body region) sets each row's region; a ``body_model`` column names the body each
+        case was simulated with.
     criteria : sequence of Criterion, optional
-        Default :func:`~ppamsafety.impact.verdicts.criteria_for` the region.
+        Default :func:`~ppamsafety.impact.verdicts.criteria_for` each row's region.
     region : optional
-        The body region of the criteria (default ``"skull/forehead"``).
+        The body region of rows without a ``region`` (default ``"skull/forehead"``).
     head : str or HeadContactModel, optional
-        The head model of cases without a ``head`` column (default ``"thesis-frontal"``).
+        The body model of rows without ``body_model`` or ``head`` (default
+        ``"thesis-frontal"``).
 
     Returns
     -------
     pandas.DataFrame
-        ``df`` with ``head_model``, ``verdict`` (``"pass"``/``"fail"``), ``governing`` (the
-        criterion with the smallest relative margin), ``governing_margin_pct`` and per
-        criterion ``<name>_margin`` (limit - value, in the limit's unit: N or HIC) and
-        ``<name>_pass``.
+        ``df`` with ``head_model`` (the body model simulated), ``verdict``
+        (``"pass"``/``"fail"``), ``governing`` (the criterion with the smallest relative
+        margin), ``governing_margin_pct`` and per criterion judged in at least one row
+        ``<name>_margin`` (limit - value, in the limit's unit: N, Pa or HIC) and
+        ``<name>_pass``.  A criterion is judged where its result exists (``p_max`` only
+        with a contact geometry; its columns only when some case has it).
     """
-    crit = criteria_for(region) if criteria is None else tuple(criteria)
     out = df.copy()
     default = head.name if isinstance(head, HeadContactModel) else (head or "thesis-frontal")
-    names = (out["head"].map(lambda h: h.name if isinstance(h, HeadContactModel) else str(h))
-             if "head" in out.columns else pd.Series(default, index=out.index))
+    if "body_model" in out.columns:            # a failed case simulated no body
+        names = out["body_model"].map(lambda b: None if b is None or b != b else str(b))
+    elif "head" in out.columns:
+        names = out["head"].map(lambda h: h.name if isinstance(h, HeadContactModel) else str(h))
+    else:
+        names = pd.Series(default, index=out.index)
     cols = {"head_model": [], "verdict": [], "governing": [], "governing_margin_pct": []}
-    for c in crit:
-        cols[f"{c.name}_margin"], cols[f"{c.name}_pass"] = [], []
-    for i, r in out.iterrows():
-        ok = r.get("status", "ok") == "ok" and all(
-            m in r and pd.notna(r[m]) for m in {c.metric for c in crit})
-        t = evaluate({c.metric: r[c.metric] for c in crit}, crit, head=names[i]) if ok else None
+    judged, used = {}, {}
+    for i, r, crit in _row_criteria(out, criteria, region):
+        used[id(crit)] = crit
+        vals = {m: r[m] for m in {c.metric for c in crit}
+                if m in r and r[m] is not None and pd.notna(r[m])}
+        ok = r.get("status", "ok") == "ok" and "F_max" in vals
+        t = evaluate(vals, crit, head=names[i]) if ok else None
         cols["head_model"].append(names[i])
         if t is None or not len(t):
-            for k in cols:
-                if k != "head_model":
-                    cols[k].append(None)
+            for k in ("verdict", "governing", "governing_margin_pct"):
+                cols[k].append(None)
+            judged[i] = {}
             continue
         g = t.loc[t["margin_pct"].idxmin()]
         cols["verdict"].append("pass" if t["passed"].all() else "fail")
         cols["governing"].append(g.criterion)
         cols["governing_margin_pct"].append(float(g.margin_pct))
-        for row in t.itertuples():
-            cols[f"{row.criterion}_margin"].append(float(row.margin))
-            cols[f"{row.criterion}_pass"].append(bool(row.passed))
+        judged[i] = {row.criterion: (float(row.margin), bool(row.passed))
+                     for row in t.itertuples()}
+    names_judged = []
+    for crit in used.values():
+        for c in crit:
+            if c.name not in names_judged and (c.metric != "p_max" or any(
+                    c.name in j for j in judged.values())):
+                names_judged.append(c.name)
+    for n in names_judged:
+        cols[f"{n}_margin"] = [judged[i].get(n, (None, None))[0] for i in out.index]
+        cols[f"{n}_pass"] = [judged[i].get(n, (None, None))[1] for i in out.index]
     for k, v in cols.items():
         out[k] = v
     return out
+
+
+#: Columns of :func:`verdict_limits`.
+LIMIT_COLUMNS = ("metric", "criterion", "region", "limit", "unit", "label", "confirmed",
+                 "governs", "fails")
+
+
+def verdict_limits(df: pd.DataFrame, criteria=None, *, region=None) -> pd.DataFrame:
+    """The limits of a sweep's verdicts that a reader must see: each criterion that governs
+    or fails at least one case (:func:`add_verdicts`'s columns), and for a result judged
+    but decided by none, its tightest criterion.
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        A table with :func:`add_verdicts`'s columns (``governing``, ``<name>_pass``) and,
+        optionally, the cases' ``region``.
+    criteria : sequence of Criterion, optional
+        The criteria the verdicts used (default: each row's region's, as :func:`add_verdicts`).
+    region : optional
+        The region of rows without a ``region`` (default ``"skull/forehead"``).
+
+    Returns
+    -------
+    pandas.DataFrame
+        :data:`LIMIT_COLUMNS`, one row per (region, criterion): the result column it bounds
+        (``F_max``, ``HIC36``, ``p_max``), the limit (SI) and its unit, its label, whether a
+        public source confirms it, how many cases it governs and how many fail it; ordered
+        by metric, then limit.  Empty for a table without verdicts.
+    """
+    if "governing" not in df.columns:
+        return pd.DataFrame(columns=list(LIMIT_COLUMNS))
+    rows, judged = {}, {}
+    for i, r, crit in _row_criteria(df, criteria, region):
+        for c in crit:
+            passed = r.get(f"{c.name}_pass")
+            if passed is None or (isinstance(passed, float) and math.isnan(passed)):
+                continue
+            key = (c.region, c.name)
+            row = {"metric": c.metric, "criterion": c.name, "region": c.region,
+                   "limit": c.limit, "unit": c.unit, "label": c.label,
+                   "confirmed": c.confirmed, "governs": 0, "fails": 0}
+            if c.metric not in judged or c.limit < judged[c.metric]["limit"]:
+                judged[c.metric] = row
+            gov, fail = r.get("governing") == c.name, not bool(passed)
+            if not (gov or fail):
+                continue
+            rows.setdefault(key, dict(row))
+            rows[key]["governs"] += int(gov)
+            rows[key]["fails"] += int(fail)
+    for metric, row in judged.items():       # a result judged but decided by no limit: its
+        if not any(v["metric"] == metric for v in rows.values()):     # tightest criterion
+            rows[(row["region"], row["criterion"])] = row
+    out = pd.DataFrame(list(rows.values()), columns=list(LIMIT_COLUMNS))
+    return out.sort_values(["metric", "limit"], kind="stable").reset_index(drop=True)
+
+
+def failed_criteria(df: pd.DataFrame, metric: str, criteria=None, *, region=None) -> pd.Series:
+    """The criteria on one result that each case fails (:func:`add_verdicts`'s
+    ``<name>_pass``).
+
+    Parameters
+    ----------
+    df : pandas.DataFrame
+        A table with :func:`add_verdicts`'s columns.
+    metric : str
+        The result (``"F_max"``, ``"HIC36"``, ``"p_max"``).
+    criteria : sequence of Criterion, optional
+        The criteria of the verdicts (default: each row's region's).
+    region : optional
+        The region of rows without a ``region`` column.
+
+    Returns
+    -------
+    pandas.Series of str
+        Aligned with ``df``: the labels of the failed criteria (``"; "``-separated, an
+        unconfirmed limit marked ``[unconfirmed]``), ``""`` where the case fails none.
+    """
+    out = []
+    for i, r, crit in _row_criteria(df, criteria, region):
+        out.append("; ".join(c.label + ("" if c.confirmed else " [unconfirmed]")
+                             for c in crit if c.metric == metric
+                             and r.get(f"{c.name}_pass") is not None
+                             and not (isinstance(r.get(f"{c.name}_pass"), float)
+                                      and math.isnan(r.get(f"{c.name}_pass")))
+                             and not bool(r.get(f"{c.name}_pass"))))
+    return pd.Series(out, index=df.index, dtype=object)
 
 
 def safety_sweep(cases=None, *, grid=None, name: str = "safety", cache_dir=None,
@@ -1116,4 +1331,4 @@ __all__ = ["EXPERIMENTS", "CONTROLLERS", "INSTANTS", "MIN_SPEED", "PARAMETERS", 
            "CONTACT_KEYS", "CONTACT_POINTS", "contact_covering",
            "safety_sweep", "case_arm", "case_function", "is_dotted", "impact_case",
            "check_impact_case", "SPEED_MAX", "IMPACT_POSE_DEG", "add_verdicts", "COLUMN_UNITS",
-           "column_unit"]
+           "column_unit", "verdict_limits", "failed_criteria", "LIMIT_COLUMNS", "chosen_head"]

@@ -235,7 +235,7 @@ def test_head_file_units_and_errors(tmp_path):
     text = face.to_toml().replace('unit = "N/m^n"', 'unit = "N/mm"').replace("75000.0", "75")
     assert HeadContactModel.from_toml(text) == face
     p = tmp_path / "h.toml"
-    p.write_text(text.replace('mass = { value = 5.0, unit = "kg" }',
+    p.write_text(text.replace('mass = { value = 4.4, unit = "kg" }',     # Annex A m_H
                               'mass = { value = -5.0, unit = "kg" }'))
     with pytest.raises(ArmFileError, match=r"h.toml: mass = -5 kg: must be in \(0, 100\] kg"):
         load_head(p)

@@ -99,7 +99,7 @@ def test_region_files_round_trip_and_carry_measured_pain_thresholds(tmp_path):
     back = load_region(f)
     assert back == mine and resolve_region(str(f)) == mine
     names = [c.name for c in criteria_for(back)]
-    assert names == ["iso_ts_15066", "pain_lab2026_p25", "pain_lab2026_p50", "pain_lab2026_p75"]
+    assert names == ["iso_ts_15066", "iso_ts_15066_p", "pain_lab2026_p25", "pain_lab2026_p50", "pain_lab2026_p75"]
     # a user's unit: N/mm and N/cm^2 are converted
     text = mine.to_toml().replace('value = 40000.0, unit = "N/m"', 'value = 40.0, unit = "N/mm"')
     assert BodyRegion.from_toml(text).spring_constant == 40e3
@@ -146,8 +146,8 @@ def test_bad_pain_thresholds_name_the_entry():
 
 def test_head_criteria_carry_iso_fracture_and_hic_limits_with_sources():
     crit = {c.name: c for c in criteria_for()}
-    assert list(crit) == ["iso_ts_15066", "iso_ts_15066_qs", "maxilla", "mandible",
-                          "frontal_bone", "HIC36"]
+    assert list(crit) == ["iso_ts_15066", "iso_ts_15066_qs", "iso_ts_15066_p",
+                          "iso_ts_15066_p_qs", "maxilla", "mandible", "frontal_bone", "HIC36"]
     assert crit["iso_ts_15066"].limit == 260.0 and not crit["iso_ts_15066"].confirmed
     assert crit["iso_ts_15066_qs"].limit == 130.0 and crit["iso_ts_15066_qs"].confirmed
     assert (crit["maxilla"].limit, crit["mandible"].limit, crit["frontal_bone"].limit) == (
@@ -156,7 +156,7 @@ def test_head_criteria_carry_iso_fracture_and_hic_limits_with_sources():
     assert all(c.source for c in crit.values())
     assert FRACTURE_FORCES["maxilla"].confirmed and not FRACTURE_FORCES["mandible"].confirmed
     # a region of the body below the head: its ISO transient limit only
-    assert [c.name for c in criteria_for("chest/sternum")] == ["iso_ts_15066"]
+    assert [c.name for c in criteria_for("chest/sternum")] == ["iso_ts_15066", "iso_ts_15066_p"]
     assert criterion("iso_ts_15066", "chest/sternum").limit == 280.0
     assert criterion("F_max") == crit["maxilla"] and "F_max" in criterion_names()
     t = evaluate({"F_max": 250.0, "HIC36": 0.1}, criteria_for())

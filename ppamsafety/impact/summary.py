@@ -46,7 +46,7 @@ from .anywhere import simulate_contacts, worst_contact
 from .bodies import body_from_head, body_from_region
 from .head import resolve_head
 from .instants import heuristic_instants, impact_states
-from .verdicts import METRICS, annex_a_head, criteria_for, evaluate
+from .verdicts import METRICS, annex_a_head, check_head_for_region, criteria_for, evaluate
 
 #: The experiments of Table 6.1.
 EXPERIMENTS = ("step", "switch")
@@ -92,7 +92,9 @@ def region_body(region, *, head_body: BodyContact = FOREHEAD, head=None) -> Body
     head_body : BodyContact
         The skull and forehead's body (default the head that passes the Hybrid III drop).
     head : HeadContactModel, str or path-like, optional
-        A head model to hit a head region with instead (its one-layer body).
+        A head model to hit a head region with instead (its one-layer body); refused for a
+        region that is not a head region
+        (:func:`~ppamsafety.impact.verdicts.check_head_for_region`).
 
     Returns
     -------
@@ -101,11 +103,36 @@ def region_body(region, *, head_body: BodyContact = FOREHEAD, head=None) -> Body
         else the region's Annex A two-body model.
     """
     r = resolve_region(region)
-    if head is not None and r.head:
+    check_head_for_region(r, head)
+    if head is not None:
         return body_from_head(head).replace(name=r.name)
     if r.name == "skull/forehead":
         return check_instance("head_body", head_body, BodyContact).replace(name=r.name)
     return body_from_region(r, radius=annex_a_head(r).radius)
+
+
+def body_model_name(region, *, head=None) -> str:
+    """The name of the body model :func:`region_body` strikes a region with.
+
+    Parameters
+    ----------
+    region : BodyRegion, str, int or path-like
+        The region.
+    head : HeadContactModel, str or path-like, optional
+        A head model chosen for a head region.
+
+    Returns
+    -------
+    str
+        The head model's name; ``"validated head"`` (the skull and forehead, the head that
+        passes the Hybrid III drop); else the Annex A body model's name
+        (:func:`~ppamsafety.impact.verdicts.annex_a_head`, e.g. ``iso15066-chest-40kg``).
+    """
+    r = resolve_region(region)
+    check_head_for_region(r, head)
+    if head is not None:
+        return resolve_head(head).name
+    return "validated head" if r.name == "skull/forehead" else annex_a_head(r).name
 
 
 def ranking_limit(region):
@@ -402,5 +429,6 @@ def region_point_verdicts(arm=None, *, covering=None, experiments=EXPERIMENTS,
     return pd.DataFrame(rows)
 
 
-__all__ = ["safety_summary", "region_point_verdicts", "region_body", "SafetySummary",
+__all__ = ["safety_summary", "region_point_verdicts", "region_body", "body_model_name",
+           "SafetySummary",
            "region_bodies", "ranking_limit", "EXPERIMENTS", "CASE_COLUMNS", "WHAT_IF_COVERING"]

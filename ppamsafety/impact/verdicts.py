@@ -15,14 +15,25 @@ Criteria (:class:`Criterion`, built by :func:`criteria_for` from a
   :mod:`ppamsafety.params.iso_ts_15066`);
 * ``iso_ts_15066_qs`` -- the quasi-static force (for a head region: the TS reading, since
   the TS allows no transient contact with the head);
-* ``pain_<study>_p<percentile>`` -- measured pain-onset forces of the location (region
-  files, e.g. Behrens et al. 2022);
-* for a head region: ``maxilla`` (660 N, the thesis's line), ``mandible`` (1.78 kN),
-  ``frontal_bone`` (about 4 kN) fracture forces and ``HIC36`` (650);
+* ``iso_ts_15066_p`` and ``iso_ts_15066_p_qs`` -- the same two readings for the peak mean
+  contact pressure ``p_max`` (Table A.2: the location's quasi-static pressure, and footnote
+  c: 2 x for transient contact), judged where the contact geometry gives a pressure (a
+  contact point with a radius or an area: :func:`ppamsafety.impact.anywhere.simulate_contacts`);
+* ``pain_<study>_p<percentile>`` -- measured pain-onset forces and pressures of the location
+  (region files, e.g. Behrens et al. 2022);
+* for a head region only: ``maxilla`` (660 N, the thesis's line), ``mandible`` (1.78 kN),
+  ``frontal_bone`` (about 4 kN) fracture forces and ``HIC36`` (650) -- head criteria, never
+  applied to another region;
 
 each with its source and whether it is confirmed.  The HIC is also turned into the
 probability of AIS >= 2, 3, 4 (:func:`ais_risk`, the NHTSA lognormal curves), shown beside
 the verdicts, never as a pass/fail line.
+
+**The body struck.** A region is struck on its own body (:func:`region_head`): a head
+region (skull, temple, face) on the head model given, any other region on its Annex A body
+model (:func:`annex_a_head`: its effective mass and spring constant, Table A.3).  A head model
+is a model of the head: given for a region that is not a head region it is refused, naming
+both.
 
 The head model decides the force: the thesis head (``thesis-frontal``, a Hunt-Crossley
 contact fitted to Table 6.1) and the Annex A body model of the region (a linear spring K
@@ -47,11 +58,14 @@ from ..results import Result
 from .._validation import check_str, did_you_mean
 from ..params.injury import AIS_RISK, AIS_SOURCE, FRACTURE_FORCES, HIC36_LIMIT
 from ..params.iso_ts_15066 import SKULL_FOREHEAD, BodyRegion, resolve_region
-from .head import HeadContactModel, head_model
+from .head import HeadContactModel, head_model, resolve_head
 from .model import simulate_impacts
 
-#: What a criterion can bound: the result column -> its unit.
-METRICS = {"F_max": "N", "HIC36": "", "HIC15": ""}
+#: What a criterion can bound: the result column -> its unit (SI).
+METRICS = {"F_max": "N", "HIC36": "", "HIC15": "", "p_max": "Pa"}
+#: How a verdict line shows a unit to a reader: SI unit -> (unit shown, SI per shown unit).
+#: Pressures in N/cm^2, the unit of ISO/TS 15066 Table A.2.
+SHOWN_UNITS = {"Pa": ("N/cm^2", 1.0e4)}
 #: Columns of a verdict table (:meth:`Verdicts.to_pandas`).
 VERDICT_COLUMNS = ("region", "contact_point", "criterion", "metric", "value", "limit", "unit",
                    "margin", "margin_pct", "passed", "kind", "head_model", "label", "source",
@@ -143,32 +157,44 @@ def criteria_for(region=None, *, contact: str = "transient") -> tuple:
     r = resolve_region(region)
     if contact not in ("transient", "quasi-static"):
         raise ValueError(f"contact = {contact!r}: must be 'transient' or 'quasi-static'")
-    ok_f = r.confirmed("force_quasi_static")
     out = []
-    if contact == "transient":
-        fac = r.transient_factor
-        note = "" if r.transient_in_ts else "; not in the TS for this region"
-        out.append(Criterion(
-            "iso_ts_15066", "F_max", r.force_transient, "pain onset",
-            f"ISO/TS 15066 {r.name} transient contact {r.force_transient:g} N "
-            f"({fac:g} x {r.force_quasi_static:g} N{note})",
-            f"{r.source_of('force_quasi_static')}; multiplier: {r.source_of('transient_factor')}",
-            ok_f and r.confirmed("transient_factor"), r.name))
-    if contact == "quasi-static" or not r.transient_in_ts:
-        what = ("quasi-static contact" if contact == "quasi-static" or r.transient_in_ts else
-                "quasi-static force, the TS reading for a head region")
-        out.append(Criterion(
-            "iso_ts_15066_qs", "F_max", r.force_quasi_static, "pain onset",
-            f"ISO/TS 15066 {r.name} {what} {r.force_quasi_static:g} N",
-            r.source_of("force_quasi_static"), ok_f, r.name))
+    for metric, qs, tr, fac_name, what in (
+            ("F_max", "force_quasi_static", "force_transient", "transient_factor", "force"),
+            ("p_max", "pressure_quasi_static", "pressure_transient",
+             "pressure_transient_factor", "pressure")):
+        suffix, tag = ("", "") if metric == "F_max" else ("_p", " pressure")
+        unit, per = SHOWN_UNITS.get(METRICS[metric], (METRICS[metric], 1.0))
+        v_qs, v_tr = getattr(r, qs), getattr(r, tr)
+        ok = r.confirmed(qs)
+        if contact == "transient":
+            fac = getattr(r, fac_name)
+            note = "" if r.transient_in_ts else "; not in the TS for this region"
+            out.append(Criterion(
+                f"iso_ts_15066{suffix}", metric, v_tr, "pain onset",
+                f"ISO/TS 15066 {r.name} transient contact{tag} {v_tr / per:g} {unit} "
+                f"({fac:g} x {v_qs / per:g} {unit}{note})",
+                f"{r.source_of(qs)}; multiplier: {r.source_of(fac_name)}",
+                ok and r.confirmed(fac_name), r.name))
+        if contact == "quasi-static" or not r.transient_in_ts:
+            reading = ("quasi-static contact" if contact == "quasi-static" or r.transient_in_ts
+                       else f"quasi-static {what}, the TS reading for a head region")
+            out.append(Criterion(
+                f"iso_ts_15066{suffix}_qs", metric, v_qs, "pain onset",
+                f"ISO/TS 15066 {r.name} {reading} {v_qs / per:g} {unit}"
+                + ("" if metric == "F_max" or reading.startswith("quasi-static " + what)
+                   else f" ({what})"),
+                r.source_of(qs), ok, r.name))
     for p in r.pain:
-        if p.quantity != "force" or p.contact != contact:
+        if p.contact != contact:
             continue
+        metric = "F_max" if p.quantity == "force" else "p_max"
+        unit, per = SHOWN_UNITS.get(p.unit, (p.unit, 1.0))
         for pct, v in p.percentiles:
             out.append(Criterion(
-                f"pain_{p.study}_p{pct:g}", "F_max", v, "pain onset",
-                f"pain onset {p.study} {pct:g}th percentile {v:g} N ({p.contact})", p.source,
-                p.confirmed, r.name))
+                f"pain_{p.study}{'' if metric == 'F_max' else '_pressure'}_p{pct:g}", metric,
+                v, "pain onset",
+                f"pain onset {p.study} {pct:g}th percentile {v / per:g} {unit} ({p.contact})",
+                p.source, p.confirmed, r.name))
     if r.head and contact == "transient":
         for key in ("maxilla", "mandible", "frontal bone"):
             t = FRACTURE_FORCES[key]
@@ -402,6 +428,67 @@ def annex_a_head(region=None) -> HeadContactModel:
                 *base.checks[1:]))
 
 
+def check_head_for_region(region, head) -> None:
+    """Refuse a head model for a body region that is not part of the head.
+
+    A head model (``thesis-frontal``, the validated head, a head file) is a model of the head:
+    its mass and contact law are the head's.  Striking the chest with it gives the head's
+    force, judged on the chest's limits.
+
+    Parameters
+    ----------
+    region : BodyRegion, str, int or path-like
+        The body region (:func:`~ppamsafety.params.iso_ts_15066.resolve_region`).
+    head : HeadContactModel, BodyContact, str or None
+        The head model chosen (None: none chosen).
+
+    Raises
+    ------
+    ValueError
+        Naming the head model and the region, when the region is not a head region.
+    """
+    r = resolve_region(region)
+    if head is None or r.head:
+        return
+    name = getattr(head, "name", head)
+    raise ValueError(f"head model {name!r} with body region {r.name!r}: a head model is a model "
+                     f"of the head, and {r.name!r} is not a head region; {r.name!r} is struck "
+                     f"as its ISO/TS 15066 Annex A body model (effective mass "
+                     f"{r.effective_mass:g} kg, spring constant {r.spring_constant / 1e3:g} "
+                     f"N/mm, Table A.3): leave out the head model, or choose a head region "
+                     f"(skull/forehead, skull/temple, face)")
+
+
+def region_head(region=None, head=None) -> HeadContactModel:
+    """The body a region is struck on at the tool point (the thesis' impact engine).
+
+    Parameters
+    ----------
+    region : optional
+        The body region (default ``"skull/forehead"``).
+    head : HeadContactModel or str, optional
+        A head model chosen by the user (:func:`~ppamsafety.impact.head.resolve_head`).
+
+    Returns
+    -------
+    HeadContactModel
+        For a head region the head model given (default ``thesis-frontal``, the thesis'
+        head: a contact fitted to the thesis arm's Table 6.1); for any other region its Annex
+        A body model (:func:`annex_a_head`).
+
+    Raises
+    ------
+    ValueError
+        A head model given for a region that is not a head region
+        (:func:`check_head_for_region`).
+    """
+    r = resolve_region(region)
+    check_head_for_region(r, head)
+    if not r.head:
+        return annex_a_head(r)
+    return head_model() if head is None else resolve_head(head)
+
+
 def describe_head(h: HeadContactModel) -> str:
     """One phrase: the contact law and mass of a head model.
 
@@ -447,7 +534,7 @@ def disagreement(table: pd.DataFrame, heads) -> str:
 
 def impact_verdicts(arm, q, qd, stiffness, *, head=None, region=None, dt: float = 2e-5,
                     criteria=None) -> Verdicts:
-    """Verdicts of one impact with the given head and with the region's Annex A body model.
+    """Verdicts of one impact at the tool point, struck on the region's body.
 
     Parameters
     ----------
@@ -458,9 +545,10 @@ def impact_verdicts(arm, q, qd, stiffness, *, head=None, region=None, dt: float 
     stiffness : array_like (2,)
         Joint stiffness [N m/rad].
     head : HeadContactModel, optional
-        The head model (default ``thesis-frontal``).
+        The head model of a head region (default ``thesis-frontal``); refused for another
+        region (:func:`region_head`).
     region : optional
-        The body region of the criteria (default ``"skull/forehead"``).
+        The body region struck and judged (default ``"skull/forehead"``).
     dt : float
         Integration step [s].
     criteria : sequence of Criterion, optional
@@ -469,21 +557,39 @@ def impact_verdicts(arm, q, qd, stiffness, *, head=None, region=None, dt: float 
     Returns
     -------
     Verdicts
-        Rows for both heads (the given one first), the AIS risk of each head's HIC and,
-        when they disagree, the reason.
+        For a head region: rows for both heads (the given one first), the AIS risk of each
+        head's HIC and, when they disagree, the reason.  For any other region: the rows of
+        its Annex A body model alone, no AIS risk (a head criterion).
     """
     r = resolve_region(region)
-    h1 = head_model() if head is None else head
-    h2 = annex_a_head(r)
+    h1 = region_head(r, head)
+    heads = (h1, annex_a_head(r)) if r.head else (h1,)
     crit = criteria_for(r) if criteria is None else tuple(criteria)
     rows, risk = [], []
-    for h in (h1, h2):
+    for h in heads:
         s = simulate_impacts(arm, q, qd, stiffness, head=h, dt=dt).summary.iloc[0]
         vals = {"F_max": float(s.F_max), "HIC36": float(s.HIC36), "HIC15": float(s.HIC15)}
         rows.append(evaluate(vals, crit, head=h.name, region=r.name))
-        risk.append(ais_risk_table(vals["HIC15"], head=h.name, hic_name="HIC15"))
+        if r.head:                    # the AIS curves are head injury risks
+            risk.append(ais_risk_table(vals["HIC15"], head=h.name, hic_name="HIC15"))
     table = pd.concat(rows, ignore_index=True)
-    return Verdicts(table, pd.concat(risk, ignore_index=True), disagreement(table, (h1, h2)))
+    return Verdicts(table, pd.concat(risk, ignore_index=True) if risk else pd.DataFrame(),
+                    disagreement(table, heads) if len(heads) == 2 else "")
+
+
+def model_kind(region) -> str:
+    """What the body of a region is called: ``"head model"`` for a head region, else
+    ``"body model"``.
+
+    Parameters
+    ----------
+    region : str, int, path-like or BodyRegion
+        The region (one that cannot be resolved: ``"body model"``).
+    """
+    try:
+        return "head model" if resolve_region(region).head else "body model"
+    except (TypeError, ValueError, OSError):
+        return "body model"
 
 
 def verdict_lines(table: pd.DataFrame, risk: pd.DataFrame | None = None,
@@ -502,13 +608,16 @@ def verdict_lines(table: pd.DataFrame, risk: pd.DataFrame | None = None,
     out = []
     for h, g in table.groupby("head_model", sort=False):
         gov = g.loc[g["margin_pct"].idxmin()]
-        out.append(f"verdicts with head model {h} (body region {g['region'].iloc[0]}, contact "
+        out.append(f"verdicts with {model_kind(g['region'].iloc[0])} {h} (body region "
+                   f"{g['region'].iloc[0]}, contact "
                    f"at the {g['contact_point'].iloc[0]}): "
                    f"{'PASS' if g['passed'].all() else 'FAIL'}, governed by {gov.criterion}")
         for _, r in g.iterrows():
-            u = f" {r.unit}" if r.unit else ""
+            unit, per = SHOWN_UNITS.get(r.unit, (r.unit, 1.0))
+            u = f" {unit}" if unit else ""
             out.append(f"  {'pass' if r.passed else 'FAIL'}  {r.criterion:<16} {r.metric} "
-                       f"{r.value:8.4g}{u} vs limit {r.limit:8.4g}{u}: margin {r.margin:+.4g}{u} "
+                       f"{r.value / per:8.4g}{u} vs limit {r.limit / per:8.4g}{u}: margin "
+                       f"{r.margin / per:+.4g}{u} "
                        f"({r.margin_pct:+.1f} %){'' if r.confirmed else '  [limit unconfirmed]'}"
                        f"  -- {r.label}")
     if risk is not None and len(risk):
@@ -524,5 +633,6 @@ def verdict_lines(table: pd.DataFrame, risk: pd.DataFrame | None = None,
 
 __all__ = ["Criterion", "Verdicts", "METRICS", "VERDICT_COLUMNS", "TOOL_POINT", "ALIASES",
            "criteria_for", "criterion", "criterion_names", "evaluate", "ais_risk",
-           "ais_risk_table", "annex_a_head", "describe_head", "disagreement", "impact_verdicts",
+           "ais_risk_table", "annex_a_head", "region_head", "check_head_for_region",
+           "SHOWN_UNITS", "model_kind", "describe_head", "disagreement", "impact_verdicts",
            "verdict_lines", "SKULL_FOREHEAD", "BodyRegion"]

@@ -29,7 +29,9 @@ and pages; :data:`TRANSCRIPTIONS`):
   the skull, forehead and face* (transient contact with them is not
   permissible, clause A.3.2);
 * **C** -- a cobot-safety reference page prints K of the skull/forehead
-  (150 N/mm) and the face (75 N/mm).
+  (150 N/mm) and the face (75 N/mm);
+* **D** -- a power-and-force-limiting calculator applies footnote c to the
+  pressure as to the force (transient p_T = 2 x p_qs).
 
 So the transient limits of the two head regions are *not* in the TS: the
 factor 2 used for them (260 N at the forehead, the limit the report
@@ -75,6 +77,11 @@ TRANSCRIPTIONS = {
          "the TS text (text search of public code, 2026-11)",
     "C": "a public cobot-safety reference page (inmotion, 'ISO/TS 15066 body region force "
          "limits'): effective spring constants of the skull/forehead and face",
+    "D": "a public power-and-force-limiting calculator (STIMBA Safety, 'PFL calculator -- "
+         "transient contact', safety.stimba.sk/en/pfl, read 2026-11): Table A.2 note c, "
+         "transient limits 2 x the quasi-static values for the pressure as for the force, "
+         "and the pressure's speed limit v = p_T A / sqrt(mu K) with A the smaller contact "
+         "area of the robot's part and the body (A.3.5)",
 }
 
 #: Total moving mass of the thesis arm [kg]: "its total mass of around 2.5 kg" (thesis §6.3.5;
@@ -604,13 +611,16 @@ def _annex_location(number, region, location, name, p, p_by) -> BodyRegion:
         note = (f"{SOURCE}, Table A.2 footnote c: transient limits are 2 x the quasi-static "
                 f"values (confirmed by transcription B)")
         unconfirmed = ()
+        p_note = (f"{SOURCE}, Table A.2 footnote c: transient limits are 2 x the quasi-static "
+                  f"values, the pressure's as the force's (confirmed by transcriptions B, D)")
     else:
         note = ("not in the TS: Table A.2 gives no transient multiplier for the skull, "
                 "forehead and face (footnote c, transcription B; transient contact with them "
                 "is not permissible, A.3.2); 2 by analogy with the other regions (the 260 N "
                 "forehead limit the report quotes); the quasi-static force is the TS reading")
         unconfirmed = ("transient_factor", "pressure_transient_factor")
-    sources += [("transient_factor", note), ("pressure_transient_factor", note)]
+        p_note = note
+    sources += [("transient_factor", note), ("pressure_transient_factor", p_note)]
     return BodyRegion(name=name, force_quasi_static=F, pressure_quasi_static=p * N_PER_CM2,
                       transient_factor=2.0, spring_constant=K * N_PER_MM, effective_mass=m,
                       source=where, unconfirmed=unconfirmed, region=region, location=number,

@@ -39,7 +39,8 @@ def limit_lines(column: str) -> list:
     if column == "F_max":
         return [(MAXILLA_FRACTURE_N, f"maxilla fracture {MAXILLA_FRACTURE_N:g} N", "r", "--"),
                 (SKULL_FOREHEAD.force_transient,
-                 f"ISO/TS 15066 forehead, transient {SKULL_FOREHEAD.force_transient:g} N",
+                 f"ISO/TS 15066 forehead, transient {SKULL_FOREHEAD.force_transient:g} N"
+                 + ("" if SKULL_FOREHEAD.transient_in_ts else " (not in the TS: 2 x F_qs)"),
                  "darkorange", ":")]
     if column.startswith("HIC"):
         return [(HIC_SERIOUS_5PCT, f"HIC {HIC_SERIOUS_5PCT:g} (5 % AIS 3+)", "r", "--")]
@@ -100,7 +101,7 @@ def mark_above(ax, x, y, column: str) -> bool:
 
 
 def plot_sweep(df: pd.DataFrame, swept, *, title: str = "", units=None,
-               region_limits=None):
+               region_limits=None, limits=None, failed=None):
     """Each result of a sweep against each swept parameter, with the safety limits.
 
     Parameters
@@ -120,6 +121,14 @@ def plot_sweep(df: pd.DataFrame, swept, *, title: str = "", units=None,
         Body region name -> {result column: limit} (e.g. ``{"face": {"F_max": 130.0}}``):
         each region that appears in the table's ``body_region`` column gets its limit line
         on the panels of that result.
+    limits : dict, optional
+        Result column -> list of ``(value, label)``: the limit lines of that panel, in the
+        unit of the column (e.g. the limits that decide the verdicts,
+        :func:`ppamsafety.sweep_cases.verdict_limits`); replaces :func:`limit_lines` for
+        the columns it names.
+    failed : dict, optional
+        Result column -> boolean array aligned with ``df``: the cases that fail a criterion
+        on that result, ringed red (in place of the points above the lowest line).
 
     Returns
     -------
@@ -156,9 +165,18 @@ def plot_sweep(df: pd.DataFrame, swept, *, title: str = "", units=None,
                     others, key if isinstance(key, tuple) else (key,))) if others else None
                 ax.plot(g["_x"], g[col], "o-" if lines else "o", ms=3, lw=1,
                         label=name if lines else None)
-            for v, text, color, style in limit_lines(col):
+            drawn = (limit_lines(col) if col not in (limits or {}) else
+                     [(v, text, "r" if k == 0 else f"C{(k + 5) % 10}", "--" if k == 0 else ":")
+                      for k, (v, text) in enumerate(limits[col])])
+            for v, text, color, style in drawn:
                 ax.axhline(v, color=color, ls=style, lw=1, label=text)
-            if mark_above(ax, xv, ok[col], col):
+            if col in (failed or {}):
+                bad = np.asarray(failed[col], dtype=bool)[
+                    np.asarray(ok.index.map(df.index.get_loc), dtype=int)]
+                if bad.any():
+                    ax.plot(np.asarray(xv)[bad], ok[col].to_numpy(float)[bad], **ABOVE)
+                    ax.plot([], [], label="fails its verdict", **ABOVE)
+            elif mark_above(ax, xv, ok[col], col):
                 ax.plot([], [], label="above a limit", **ABOVE)
             present = set(ok["body_region"]) if "body_region" in ok.columns else set()
             for k, (region, lims) in enumerate(sorted((region_limits or {}).items())):
@@ -172,7 +190,7 @@ def plot_sweep(df: pd.DataFrame, swept, *, title: str = "", units=None,
             if cats is not None:
                 ax.set_xticks(range(len(cats)), cats, rotation=20, fontsize=7)
             ax.grid(alpha=0.3)
-            if i == 0 or limit_lines(col):
+            if i == 0 or drawn:
                 ax.legend(fontsize=6)
     if title:
         fig.suptitle(title)
@@ -180,7 +198,7 @@ def plot_sweep(df: pd.DataFrame, swept, *, title: str = "", units=None,
 
 
 #: Units of the results an envelope limits (its ``metric``).
-METRIC_UNITS = {"F_max": "N", "HIC36": "-", "HIC15": "-"}
+METRIC_UNITS = {"F_max": "N", "HIC36": "-", "HIC15": "-", "p_max": "Pa"}
 
 
 def plot_envelope(envelope, *, title: str = "", unit=None):
