@@ -201,9 +201,9 @@ The thesis arm's links are bare aluminium (§2.3.3.4): such a covering is what t
 numbers need, not what the arm has."""
     else:
         covering_text = ""
-    quick_exps = (f" ({', '.join(r.experiment.unique())} only: the quick report)"
+    quick_exps = (f"the quick report: {', '.join(r.experiment.unique())} only; "
                   if study.quick else "")
-    quick_env = " (the first family only: the quick report)" if study.quick else ""
+    quick_env = "; the quick report: the first family only" if study.quick else ""
     md = ("" if not study.note else study.note + "\n\n") + f"""The head the other impact sections hit by default is the thesis' lumped contact (`thesis-frontal`,
 fitted to Table 6.1). Here the person is modelled in layers: the robot's covering (or bare
 metal) in series with the body's soft tissue and bone (docs/impact_models.md).
@@ -215,7 +215,7 @@ a rigid plate, 225-275 g required); thesis-frontal does not:
 
 {covering_text}
 
-**Every body region at every contact point** on the Table 6.1 experiments{quick_exps} (the four impact
+**Every body region at every contact point** on the Table 6.1 experiments ({quick_exps}the four impact
 instants of §6.3.3 per run, each of the 12 ISO/TS 15066 Annex A body regions -- the skull and
 forehead as the validated head, the others as their Annex A two-body models --, judged on every
 criterion of the region; the margin of the governing criterion of the worst run; bare metal and
@@ -227,7 +227,7 @@ bare metal). Every row with its governing criterion, worst run and runs passing 
 
 **The covering envelope**: the thinnest implied covering (its material, thickness searched) that
 keeps each PSMC family at λ = 0.4 s in the step experiment below the forehead's transient limit
-at every contact point (the worst of the four, heuristic instants, tolerance 2 %){quick_env}:
+at every contact point (the worst of the four, heuristic instants, tolerance 2 %{quick_env}):
 
 {markdown_table(study.envelope, digits=3)}
 """
