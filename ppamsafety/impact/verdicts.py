@@ -304,7 +304,21 @@ def verdict_rows(values, criteria, *, head: str = "", contact_point: str = TOOL_
 
     For a caller that judges thousands of impacts and keeps only the governing row of each
     (:func:`~ppamsafety.impact.summary.region_point_verdicts`): building a table per impact
-    costs more than the verdicts.  Parameters as :func:`evaluate`.
+    costs more than the verdicts.
+
+    Parameters
+    ----------
+    values : mapping
+        The results by metric name (``{"F_max": 250.7, "HIC36": 0.13}``); a missing
+        metric leaves its criteria out.
+    criteria : sequence of Criterion
+        The criteria.
+    head : str
+        Name of the head model the values were computed with.
+    contact_point : str
+        The arm's contact point.
+    region : str
+        The region name (default: each criterion's).
 
     Returns
     -------
