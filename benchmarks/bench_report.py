@@ -7,8 +7,14 @@ For the git revision ``--baseline REV`` and for the working tree, alternately (`
   machine adds their download to both versions alike);
 * *cold report*: ``ppamsafety report --outdir <temporary folder>`` with an empty kernel cache
   (``PPAMSAFETY_CACHE_DIR`` a new folder): what a fresh clone pays, compilation included;
-* *warm report*: the same again with that cache (the kernels cached);
+* *warm report*: the same again with that cache (the kernels cached); with ``--skip-cold``
+  the user's own kernel cache (``~/.cache/ppamsafety``, one folder per kernel-source key, so
+  that two versions with the same kernels share it), which a report run before has filled;
 * *quick report*: ``ppamsafety report --quick`` with the warm cache.
+
+Each report is the README's main job, ``report --overwrite`` over the version's own
+``reports/`` folder (copied), so it orders its sections by the times of that previous report
+as a user's run does.
 
 Each is timed (wall) with the CPU time of the process tree (children's rusage); the warm and
 cold reports also give every section's wall time (``metrics.json``) and CPU time (where the
@@ -22,6 +28,7 @@ Absolute times mean something only on a quiet machine (the load averages are pri
 and after each run); the ratios are measured side by side.
 
 Run:  python benchmarks/bench_report.py --baseline REV [--rounds N] [--skip-cold]
+      [--skip-install]
       python benchmarks/bench_report.py --baseline REV --sections
 """
 
@@ -59,9 +66,14 @@ def _timed(cmd, env, cwd) -> tuple:
     return wall, cpu, out.stdout
 
 
-def _report(tree: Path, outdir: Path, cache: Path, quick: bool = False) -> dict:
-    env = dict(os.environ, PYTHONPATH=str(tree), PPAMSAFETY_CACHE_DIR=str(cache))
+def _report(tree: Path, outdir: Path, cache: Path | None, quick: bool = False) -> dict:
+    env = dict(os.environ, PYTHONPATH=str(tree))
+    env.pop("PPAMSAFETY_CACHE_DIR", None)
+    if cache is not None:
+        env["PPAMSAFETY_CACHE_DIR"] = str(cache)
     env.pop("NUMBA_CACHE_DIR", None)
+    if not outdir.exists() and (tree / "reports" / "metrics.json").exists():
+        shutil.copytree(tree / "reports", outdir)     # the main job: over the previous report
     cmd = [sys.executable, "-c", CLI, "report", "--outdir", str(outdir), "--overwrite"]
     if quick:
         cmd.append("--quick")
@@ -160,7 +172,9 @@ def main(argv=None):
     p.add_argument("--baseline", metavar="REV",
                    help="the earlier version (a git revision)")
     p.add_argument("--rounds", type=int, default=1, help="alternating rounds")
-    p.add_argument("--skip-cold", action="store_true", help="no cold reports")
+    p.add_argument("--skip-cold", action="store_true",
+                   help="no cold reports; the warm ones use the user's kernel cache")
+    p.add_argument("--skip-install", action="store_true", help="no install step")
     p.add_argument("--keep", metavar="DIR", help="keep the reports in DIR/<version>")
     p.add_argument("--sections", action="store_true",
                    help="CPU time of each section run alone, per version")
@@ -185,8 +199,8 @@ def main(argv=None):
     try:
         for r in range(args.rounds):
             for name, tree in trees.items():
-                cache = work / f"cache-{name}-{r}"
-                out = {"install": _install(tree, work)}
+                cache = None if args.skip_cold else work / f"cache-{name}-{r}"
+                out = {} if args.skip_install else {"install": _install(tree, work)}
                 if not args.skip_cold:
                     out["cold"] = _report(tree, work / f"cold-{name}", cache)
                 out["warm"] = _report(tree, work / f"warm-{name}", cache)

@@ -331,6 +331,37 @@ def evaluate(values, criteria, *, head: str = "", contact_point: str = TOOL_POIN
     pandas.DataFrame
         :data:`VERDICT_COLUMNS`, one row per criterion.
     """
+    return pd.DataFrame(verdict_rows(values, criteria, head=head, contact_point=contact_point,
+                                     region=region), columns=list(VERDICT_COLUMNS))
+
+
+def verdict_rows(values, criteria, *, head: str = "", contact_point: str = TOOL_POINT,
+                 region: str = "") -> list:
+    """The rows of :func:`evaluate` as dicts (:data:`VERDICT_COLUMNS`), without the table.
+
+    For a caller that judges thousands of impacts and keeps only the governing row of each
+    (:func:`~ppamsafety.impact.summary.region_point_verdicts`): building a table per impact
+    costs more than the verdicts.
+
+    Parameters
+    ----------
+    values : mapping
+        The results by metric name (``{"F_max": 250.7, "HIC36": 0.13}``); a missing
+        metric leaves its criteria out.
+    criteria : sequence of Criterion
+        The criteria.
+    head : str
+        Name of the head model the values were computed with.
+    contact_point : str
+        The arm's contact point.
+    region : str
+        The region name (default: each criterion's).
+
+    Returns
+    -------
+    list of dict
+        One per criterion whose metric is in ``values``, in the order of ``criteria``.
+    """
     rows = []
     for c in criteria:
         if c.metric not in values:
@@ -344,7 +375,7 @@ def evaluate(values, criteria, *, head: str = "", contact_point: str = TOOL_POIN
                      "margin_pct": 100.0 * (c.limit - v) / c.limit, "passed": bool(v < c.limit),
                      "kind": c.kind, "head_model": head, "label": c.label, "source": c.source,
                      "confirmed": c.confirmed})
-    return pd.DataFrame(rows, columns=list(VERDICT_COLUMNS))
+    return rows
 
 
 def ais_risk(hic, level: int):
@@ -632,7 +663,7 @@ def verdict_lines(table: pd.DataFrame, risk: pd.DataFrame | None = None,
 
 
 __all__ = ["Criterion", "Verdicts", "METRICS", "VERDICT_COLUMNS", "TOOL_POINT", "ALIASES",
-           "criteria_for", "criterion", "criterion_names", "evaluate", "ais_risk",
+           "criteria_for", "criterion", "criterion_names", "evaluate", "verdict_rows", "ais_risk",
            "ais_risk_table", "annex_a_head", "region_head", "check_head_for_region",
            "SHOWN_UNITS", "model_kind", "describe_head", "disagreement", "impact_verdicts",
            "verdict_lines", "SKULL_FOREHEAD", "BodyRegion"]

@@ -11,7 +11,7 @@ files ppamsafety did not write is never used.
 
 **Parallel sections.**  Sections are independent (each computes, renders and
 writes its own artifacts), so with ``processes > 1`` they run in that many
-worker processes, longest first (the wall times of the previous report in the
+worker processes, longest first (the CPU times of the previous report in the
 folder's ``metrics.json``, else each section's ``SECTION.typical_seconds``; sections never timed
 before go first), and the report is assembled in the order of the sections (``only``, or
 :data:`~ppamsafety.sections.REGISTRY`) whatever the completion order.  A new
@@ -157,12 +157,17 @@ def _one_blas_thread() -> None:
 
 
 def _previous_times(out: Path) -> dict:
-    """Study wall times [s] of the previous report in ``out`` (empty if none or unreadable)."""
+    """Section times [s] of the previous report in ``out`` (empty if none or unreadable).
+
+    The CPU time where it was recorded, else the wall time: the CPU time is the section's
+    work, whatever else ran on the machine (on a loaded machine a section's wall time was
+    measured at 2.3 x its CPU time, and the sections' order by wall time was the load's).
+    """
     try:
         prev = json.loads((out / "metrics.json").read_text())
-        return {k: float(v["wall_time_s"]) for k, v in prev.items()
+        return {k: float(v.get("cpu_time_s", v["wall_time_s"])) for k, v in prev.items()
                 if isinstance(v, dict) and "wall_time_s" in v}
-    except (OSError, ValueError, TypeError, KeyError):
+    except (OSError, ValueError, TypeError, KeyError, AttributeError):
         return {}
 
 

@@ -67,7 +67,7 @@ SECTION = SectionInfo(
     thesis="(new)", typical_seconds=45.0)
 
 #: Live scenarios re-run by the report (full / quick): the first seeds of the measurement.
-LIVE_RUNS, LIVE_RUNS_QUICK = 8, 2
+LIVE_RUNS, LIVE_RUNS_QUICK = 8, 1
 #: ... and of the battery of arms with declared effects.
 LIVE_DECLARED, LIVE_DECLARED_QUICK = 3, 1
 #: The standard records whose detection limits are tabulated: experiment, options.

@@ -36,6 +36,8 @@ ENVELOPE_CASES = (("PSMC joint Ki=2 λ=0.4", {"controller": "PSMC joint", "ki_ba
                   ("PSMC task λ=0.4", {"controller": "PSMC task"}))
 #: Covering thicknesses searched [m].
 ENVELOPE_RANGE = (0.5e-3, 30e-3)
+#: The quick report's share: the step experiment's impacts and the first family's envelope.
+QUICK_EXPERIMENTS, QUICK_ENVELOPE_CASES = ("step",), ENVELOPE_CASES[:1]
 
 
 @dataclass
@@ -56,7 +58,9 @@ class PersonFindings(Result):
         The thinnest implied covering that keeps each PSMC family (lambda = 0.4 s, step)
         below the forehead's transient limit at every contact point.
     quick : bool
-        The fit was not run again.
+        The quick report's share: the fit was not run again, the regions were judged on the
+        impacts of :data:`QUICK_EXPERIMENTS`, the envelope searched for
+        :data:`QUICK_ENVELOPE_CASES`.
     metrics : dict
         Headline numbers.
     note : str
@@ -101,7 +105,9 @@ def compute(*, quick: bool = False, arm=None) -> PersonFindings:
     Parameters
     ----------
     quick : bool
-        Do not fit the covering again (use the shipped one).
+        Do not fit the covering again (use the shipped one); judge the regions on the
+        impacts of :data:`QUICK_EXPERIMENTS` and search the envelope of
+        :data:`QUICK_ENVELOPE_CASES` only.
     arm : ArmParameters, optional
         The arm (the thesis arm: Table 6.1 is its).
 
@@ -137,12 +143,13 @@ def compute(*, quick: bool = False, arm=None) -> PersonFindings:
                          "modulus [MPa]": fit.modulus / 1e6,
                          "hysteresis [s/m]": fit.hysteresis, "rms_sigma": fit.rms_sigma,
                          "reproduced": fit.reproduced})
-    runs = {e: run_thesis_experiment(arm, e) for e in EXPERIMENTS}
-    regions = pd.concat([region_point_verdicts(arm, runs=runs),
-                         region_point_verdicts(arm, covering=THESIS_COVERING, runs=runs)],
-                        ignore_index=True)
+    exps = QUICK_EXPERIMENTS if quick else EXPERIMENTS
+    runs = {e: run_thesis_experiment(arm, e) for e in exps}
+    regions = pd.concat([region_point_verdicts(arm, runs=runs, experiments=exps),
+                         region_point_verdicts(arm, covering=THESIS_COVERING, runs=runs,
+                                               experiments=exps)], ignore_index=True)
     env_rows = []
-    for label, case in ENVELOPE_CASES:
+    for label, case in (QUICK_ENVELOPE_CASES if quick else ENVELOPE_CASES):
         env = safety_envelope("covering_thickness", ENVELOPE_RANGE, limit="iso_ts_15066",
                               case={**case, "experiment": "step", "lam": 0.4,
                                     "contact": "all"}, arm=arm, tolerance=0.02)
@@ -194,6 +201,9 @@ The thesis arm's links are bare aluminium (§2.3.3.4): such a covering is what t
 numbers need, not what the arm has."""
     else:
         covering_text = ""
+    quick_exps = (f"the quick report: {', '.join(r.experiment.unique())} only; "
+                  if study.quick else "")
+    quick_env = "; the quick report: the first family only" if study.quick else ""
     md = ("" if not study.note else study.note + "\n\n") + f"""The head the other impact sections hit by default is the thesis' lumped contact (`thesis-frontal`,
 fitted to Table 6.1). Here the person is modelled in layers: the robot's covering (or bare
 metal) in series with the body's soft tissue and bone (docs/impact_models.md).
@@ -205,7 +215,7 @@ a rigid plate, 225-275 g required); thesis-frontal does not:
 
 {covering_text}
 
-**Every body region at every contact point** on the Table 6.1 experiments (the four impact
+**Every body region at every contact point** on the Table 6.1 experiments ({quick_exps}the four impact
 instants of §6.3.3 per run, each of the 12 ISO/TS 15066 Annex A body regions -- the skull and
 forehead as the validated head, the others as their Annex A two-body models --, judged on every
 criterion of the region; the margin of the governing criterion of the worst run; bare metal and
@@ -217,7 +227,7 @@ bare metal). Every row with its governing criterion, worst run and runs passing 
 
 **The covering envelope**: the thinnest implied covering (its material, thickness searched) that
 keeps each PSMC family at λ = 0.4 s in the step experiment below the forehead's transient limit
-at every contact point (the worst of the four, heuristic instants, tolerance 2 %):
+at every contact point (the worst of the four, heuristic instants, tolerance 2 %{quick_env}):
 
 {markdown_table(study.envelope, digits=3)}
 """
