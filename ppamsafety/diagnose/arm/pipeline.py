@@ -47,6 +47,7 @@ from .selection import (BOOTSTRAP_REPLICATES, CONSTANCY_ALPHA, STABILITY_PAIRS,
                         hac_covariance, in_bounds, make_problem, parameter_table,
                         compensating, profiled_shift, refit, region_consistency,
                         stability_selection)
+from .replay_limit import REPLAY_CALIBRATED_SECONDS, start_spread, widened_limit
 from .subsets import MAX_SIZE, search
 from .static import (force_residuals, static_equilibria, static_floor,
                      static_noise, static_noise_draws, static_record, static_system)
@@ -382,6 +383,7 @@ def diagnose_arm(data, *, arm=None, candidates=None, block_seconds: float = 0.05
     fault = sensor_fault(fit, params)
     rr = {}
     forces = None
+    spread = None
     if static:
         Q, Pm = static_equilibria(rec, np.array([row0, row_after]))
         qm, pm = rec.means(rec.q), rec.means(rec.p)
@@ -400,11 +402,16 @@ def diagnose_arm(data, *, arm=None, candidates=None, block_seconds: float = 0.05
                     forces["residual_before"][:, k] ** 2))), "after": float(np.sqrt(np.mean(
                         forces["residual_after"][:, k] ** 2))), "noise": float(forces["sigma"][k])}
     else:
+        seconds = len(rec) * rec.dt
         try:
             x0_after = fault.true_state(rec.x0())
             X0 = replay(rec, np.array([row0]), shifts=[0])
             X1 = replay(rec, np.array([row_after]), shifts=[0], x0=x0_after)
             before, after = X0[0], fault.measure(X1[0])
+            if seconds < REPLAY_CALIBRATED_SECONDS:
+                # a record shorter than the calibration's: its noisy starting state's share
+                spread = start_spread(rec, row_after, x0_after, np.concatenate(
+                    [noise["q"], noise["qd"], noise["p"]]), measure=fault.measure, seed=seed)
         except ValueError as exc:
             # a model with every fitted effect (partial ones too: e.g. a negative payload
             # absorbing an error outside the library) may leave the model's valid range
@@ -428,8 +435,10 @@ def diagnose_arm(data, *, arm=None, candidates=None, block_seconds: float = 0.05
     replay_rho = {ch: rr[ch]["after"] / rr[ch]["noise"] for ch in REPLAY_CHANNELS if ch in rr
                   and rr[ch]["noise"] > 0}
     replay_limit = REPLAY_RHO_STATIC if static else REPLAY_RHO
+    channel_limits = {ch: replay_limit if spread is None else widened_limit(
+        replay_limit, spread[REPLAY_CHANNELS.index(ch)], seconds) for ch in replay_rho}
     replay_bad = [f"replay {ch}" for ch, v in replay_rho.items()
-                  if not (math.isfinite(v) and v <= replay_limit)]
+                  if not (math.isfinite(v) and v <= channel_limits[ch])]
     sfreq = None if stab is None else stab.frequency
     effects, partial, confounded = [], [], []
     if static and rec.u is None:
@@ -521,8 +530,8 @@ def diagnose_arm(data, *, arm=None, candidates=None, block_seconds: float = 0.05
         notes.append(f"the replay of the fitted model stays above the noise on "
                      f"{', '.join(b[7:] for b in replay_bad)} (RMS over the noise "
                      f"{', '.join(f'{replay_rho[b[7:]]:.3g}' for b in replay_bad)} > "
-                     f"{replay_limit:g}): the model under test with the fitted effects does "
-                     f"not reproduce the record")
+                     f"{', '.join(f'{channel_limits[b[7:]]:.3g}' for b in replay_bad)}): the "
+                     f"model under test with the fitted effects does not reproduce the record")
     for g in confounded:
         notes.append(f"{' and '.join(g['members'])} explain the same part of the residual on "
                      f"this record: none is named; to separate them: "
@@ -538,9 +547,15 @@ def diagnose_arm(data, *, arm=None, candidates=None, block_seconds: float = 0.05
                              "within BIC 6 reported as confounded, not named",
                 "subsets": {"evaluated": sub.evaluated, "best": list(sub.names),
                             "forward_path": list(gfit.names), "top": sub.ranking},
-                "replay": {"rho": replay_rho, "limit": replay_limit,
+                "replay": {"rho": replay_rho, "limit": replay_limit, "limits": channel_limits,
+                           "start_spread": None if spread is None else dict(zip(
+                               REPLAY_CHANNELS, (float(v) for v in spread))),
+                           "calibrated_seconds": REPLAY_CALIBRATED_SECONDS,
                            "statistic": "RMS(after - measured) / sample noise per replay "
-                                        "channel; at the noise when every one is <= limit",
+                                        "channel; at the noise when every one is <= its "
+                                        "limit (the calibrated limit, widened on a record "
+                                        "shorter than calibrated_seconds by the start_spread "
+                                        "share of its noisy starting state)",
                            "at_noise": not replay_bad},
                 "high_confidence": {"inclusion_probability": HIGH_WEIGHT, "rho_high": ARM_RULE.rho_factor,
                                     "stability_threshold": STABILITY_THRESHOLD if stab is None
