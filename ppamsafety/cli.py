@@ -334,6 +334,7 @@ def _cmd_sweep(args) -> int:
           f"{f' (first {n:,} of {len(study.cases):,})' if n < len(study.cases) else ''} on "
           f"{args.backend}{' (' + args.scheduler + ')' if args.scheduler else ''} -> {args.out}",
           flush=True)
+    print(f"experiment reference: {study.references_text()}", flush=True)
     with _options(outdir="--out", max_cases="--max-cases", processes="--processes",
                   scheduler="--scheduler", confirm="--yes", replace_kind="--replace-other-kind"):
         df = run_study_file(study, args.out, backend=args.backend, scheduler=args.scheduler,

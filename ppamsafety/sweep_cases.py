@@ -45,6 +45,7 @@ from .design import rest_stiffness
 from .experiments.catalog import (CIRCLE_PERIODS, CIRCLE_WARMUP, DEFAULT_DURATIONS, STEP_TIMES,
                                   SWITCH_TIME, run_thesis_experiment, ControllerVariant)
 from .experiments.metrics import tracking_stats
+from .experiments.trajectories import ExperimentReferences, experiment_references
 from .impact.anywhere import simulate_contacts
 from .impact.head import HeadContactModel, head_model_names, head_model
 from .impact.instants import HEURISTICS, evaluate_experiment, heuristic_instants, impact_states
@@ -382,6 +383,19 @@ PARAMETERS = {
                          "modulus (stiffness) of the covering's layer [Pa]"),
     "covering_hysteresis": (_check_covering_value("covering_hysteresis"),
                             "Hunt-Crossley hysteresis factor of the covering's layer [s/m]"),
+    "step_low_deg": (lambda v: None if v is None else _number("step_low_deg", v, lo=-180.0,
+                                                               hi=180.0, unit="deg"),
+                     "step only: q1_d before and after the up-step [deg]; default the arm's "
+                     "(the thesis' 30 deg at the same fraction of the arm's q1 range); inside "
+                     "the arm's working area"),
+    "step_high_deg": (lambda v: None if v is None else _number("step_high_deg", v, lo=-180.0,
+                                                                 hi=180.0, unit="deg"),
+                      "step only: q1_d after the up-step [deg]; default the arm's (the thesis' "
+                      "70 deg at the same fraction of the arm's q1 range)"),
+    "step_q2_deg": (lambda v: None if v is None else _number("step_q2_deg", v, lo=-180.0,
+                                                               hi=180.0, unit="deg"),
+                    "step only: q2_d [deg]; default the arm's (the thesis' -80 deg at the same "
+                    "fraction of the arm's q2 range)"),
     "histories": (lambda v: _check_bool("histories", v),
                   "return the full time histories (closed loop and worst impact)"),
 }
@@ -395,7 +409,8 @@ COLUMN_UNITS = {
     "lam": "s", "kp_bar": "bar/rad", "ki_bar": "bar/(rad s)", "kd_bar": "bar s/rad",
     "task_kp": "N/m", "task_ki": "N/(m s)", "task_kd": "N s/m", "stiffness": "Nm/rad",
     "every": "ms", "duration": "s", "noise_seed": "-", "speed": "m/s", "q1_deg": "deg",
-    "q2_deg": "deg", "direction": None, "experiment": None, "controller": None, "head": None,
+    "q2_deg": "deg", "step_low_deg": "deg", "step_high_deg": "deg", "step_q2_deg": "deg",
+    "direction": None, "experiment": None, "controller": None, "head": None,
     "instants": None, "effects": None, "histories": None,
     "label": None, "F_max": "N", "HIC36": "-", "HIC15": "-", "t0_F_max": "s", "t0_HIC36": "s",
     "instant_HIC36": None, "tcp_speed": "m/s", "K1": "Nm/rad", "K2": "Nm/rad",
@@ -480,6 +495,11 @@ def _checked(case: dict) -> tuple:
             raise ValueError(f"head = {full['head']!r} with a contact key "
                              f"({[k for k in CONTACT_KEYS if full[k] is not None]}): the body "
                              f"is set by body (a body contact model), not head")
+    step_given = [k for k in STEP_KEYS if full[k] is not None]
+    if step_given and full["experiment"] != "step":
+        raise ValueError(f"{step_given} apply only to experiment = 'step', not "
+                         f"{full['experiment']!r}")
+    case_references(the_arm, full)                   # the step inside the arm's working area
     if full["every"] is not None and full["instants"] != "all":
         raise ValueError(f"every = {full['every']} applies only to instants = 'all', not "
                          f"{full['instants']!r}")
@@ -504,6 +524,39 @@ def _checked(case: dict) -> tuple:
         raise ValueError(f"controller = {ctrl!r} with {given or 'the Table 5.1 gains'}: "
                          f"{exc}") from None
     return full, the_arm
+
+
+#: The case keys that move the step (:func:`case_references`).
+STEP_KEYS = ("step_low_deg", "step_high_deg", "step_q2_deg")
+
+
+def case_references(arm, case: dict) -> ExperimentReferences:
+    """Where a case's experiment runs on its arm: the arm's references, the step moved by the
+    case's ``step_*_deg`` keys.
+
+    Parameters
+    ----------
+    arm : ArmParameters
+        The case's arm (:func:`case_arm`).
+    case : dict
+        Checked case parameters (:func:`check_case`).
+
+    Returns
+    -------
+    ExperimentReferences
+        :func:`~ppamsafety.experiments.trajectories.experiment_references` of the arm.
+
+    Raises
+    ------
+    ValueError
+        A step level outside the arm's working area, naming the key, its value and the arm's
+        ``geometry.q*_min``/``q*_max``.
+    """
+    refs = experiment_references(arm)
+    if all(case.get(k) is None for k in STEP_KEYS):
+        return refs
+    return refs.with_step(arm, low=case.get("step_low_deg"), high=case.get("step_high_deg"),
+                          q2=case.get("step_q2_deg"), names=STEP_KEYS, unit="deg")
 
 
 def check_case(**case) -> dict:
@@ -534,7 +587,8 @@ DEFAULTS = {"experiment": "step", "controller": "PID", "lam": None, "kp_bar": No
             "stiffness": None, "head": "thesis-frontal", "effects": None,
             "instants": "heuristic", "every": None, "noise_seed": None, "duration": None,
             "contact": None, "body": None, "covering": None, "covering_thickness": None,
-            "covering_modulus": None, "covering_hysteresis": None, "histories": False}
+            "covering_modulus": None, "covering_hysteresis": None, "step_low_deg": None,
+            "step_high_deg": None, "step_q2_deg": None, "histories": False}
 """Default parameters of :func:`safety_case`."""
 
 
@@ -671,6 +725,7 @@ def safety_case(experiment: str = "step", controller: str = "PID", *, lam=None, 
                 instants: str = "heuristic", every: int | None = None, noise_seed=None,
                 duration=None, contact=None, body=None, covering=None,
                 covering_thickness=None, covering_modulus=None, covering_hysteresis=None,
+                step_low_deg=None, step_high_deg=None, step_q2_deg=None,
                 histories: bool = False, arm=None, **dotted) -> dict:
     """One experiment with one controller, crashed into a head: a compact result row.
 
@@ -724,6 +779,11 @@ def safety_case(experiment: str = "step", controller: str = "PID", *, lam=None, 
         Replace the thickness [m], modulus [Pa] and hysteresis factor [s/m] of the
         covering's (first) layer (:func:`contact_covering`): the covering as a design
         parameter, in sweeps and envelopes.
+    step_low_deg, step_high_deg, step_q2_deg : float, optional
+        The step only: q1_d before/after the up-step and q2_d [deg], each inside the arm's
+        working area; default the arm's references
+        (:func:`~ppamsafety.experiments.trajectories.experiment_references`: the thesis arm's
+        30 -> 70 deg, -80 deg; another arm's at the same fractions of its joint ranges).
     histories : bool
         Also return the full time histories under the key ``"time_histories"`` (a result
         may not take a parameter's name, :func:`ppamsafety.sweep.run_sweep`):
@@ -759,8 +819,9 @@ def safety_case(experiment: str = "step", controller: str = "PID", *, lam=None, 
                            noise_seed=noise_seed, duration=duration, contact=contact,
                            body=body, covering=covering, covering_thickness=covering_thickness,
                            covering_modulus=covering_modulus,
-                           covering_hysteresis=covering_hysteresis, histories=histories,
-                           arm=arm, **dotted))
+                           covering_hysteresis=covering_hysteresis, step_low_deg=step_low_deg,
+                           step_high_deg=step_high_deg, step_q2_deg=step_q2_deg,
+                           histories=histories, arm=arm, **dotted))
     hm = p["head"] if isinstance(p["head"], HeadContactModel) else head_model(p["head"])
     ctrl = make_controller(p["controller"], lam=p["lam"], kp_bar=p["kp_bar"], ki_bar=p["ki_bar"],
                            kd_bar=p["kd_bar"], task_kp=p["task_kp"], task_ki=p["task_ki"],
@@ -769,7 +830,7 @@ def safety_case(experiment: str = "step", controller: str = "PID", *, lam=None, 
     sensors = (None if p["noise_seed"] is None
                else SensorConfig.for_arm(arm, noise=True, seed=p["noise_seed"]))
     res = run_thesis_experiment(arm, p["experiment"], [variant], sensors=sensors,
-                                duration=p["duration"])[0]
+                                duration=p["duration"], references=case_references(arm, p))[0]
     contact = any(p[k] is not None for k in CONTACT_KEYS)
     if contact:
         ev, body, point = _contact_impacts(res, arm, p)
@@ -1078,6 +1139,7 @@ def safety_sweep(cases=None, *, grid=None, name: str = "safety", cache_dir=None,
 
 
 __all__ = ["EXPERIMENTS", "CONTROLLERS", "INSTANTS", "MIN_SPEED", "PARAMETERS", "DEFAULTS",
+           "STEP_KEYS", "case_references",
            "DOTTED", "RESULT_COLUMNS", "check_case", "make_controller", "safety_case",
            "CONTACT_KEYS", "CONTACT_POINTS", "contact_covering",
            "safety_sweep", "case_arm", "case_function", "is_dotted", "impact_case",

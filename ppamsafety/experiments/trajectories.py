@@ -330,6 +330,8 @@ class ExperimentReferences:
     thesis : bool
         True: the thesis arm's working area, the thesis values exactly; False: derived from
         the arm's working area.
+    given : tuple of str
+        The step levels given instead (:meth:`with_step`), as ``"name = value unit"``.
     """
 
     step_low: float
@@ -340,6 +342,7 @@ class ExperimentReferences:
     sawtooth_q1: tuple
     sawtooth_q2: tuple
     thesis: bool
+    given: tuple = ()
 
     def with_step(self, arm, *, low=None, high=None, q2=None,
                   names=("step_low", "step_high", "step_q2"), unit: str = "rad"):
@@ -370,7 +373,7 @@ class ExperimentReferences:
         if unit not in ("rad", "deg"):
             raise ValueError(f"unit = {unit!r}: allowed 'rad', 'deg'")
         f = DEG if unit == "deg" else 1.0
-        vals = {}
+        vals, given = {}, []
         for nm, j, v, cur in ((names[0], 1, low, self.step_low), (names[1], 1, high, self.step_high),
                               (names[2], 2, q2, self.step_q2)):
             if v is None:
@@ -382,12 +385,13 @@ class ExperimentReferences:
                 raise ValueError(f"{nm} = {v:g} {unit} is outside the working area of joint {j} "
                                  f"of the arm ({working_area_keys(arm, j)})")
             vals[nm] = x
+            given.append(f"{nm} = {v:g} {unit}")
         lo_, hi_, q2_ = (vals[n] for n in names)
         if lo_ == hi_:
             raise ValueError(f"{names[0]} = {names[1]} = {np.degrees(lo_):g} deg: the reference "
                              f"would not step")
         return replace(self, step_low=lo_, step_high=hi_, step_q2=q2_, thesis=self.thesis and (
-            (lo_, hi_, q2_) == (STEP_LOW, STEP_HIGH, STEP_Q2)))
+            (lo_, hi_, q2_) == (STEP_LOW, STEP_HIGH, STEP_Q2)), given=self.given + tuple(given))
 
     def sawtooth_levels(self, teeth: int) -> np.ndarray:
         """The sawtooth's set angles, ``teeth`` teeth closed at the start level [rad], (m, 2)."""
@@ -414,6 +418,8 @@ class ExperimentReferences:
                f"{max(np.degrees(self.sawtooth_q1)):.4g} deg, q2_d "
                f"{min(np.degrees(self.sawtooth_q2)):.4g} .. "
                f"{max(np.degrees(self.sawtooth_q2)):.4g} deg")
+        if self.given:
+            step += f" (given: {', '.join(self.given)})"
         parts = {"step": step, "circle": circ, "sawtooth": saw}
         if which == "all":
             return f"{step}; {circ}; {saw} ({src})"
