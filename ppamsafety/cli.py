@@ -903,8 +903,11 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
     y.add_argument("--effect", type=_effect_arg, action="append", metavar="NAME=VALUE",
                    help="hidden effect, repeatable (e.g. payload_mass=0.4, "
                         "valve_time_constant_factor=1.5, valve_dead_time=0.02)")
-    y.add_argument("--noise", choices=("table-3.2", "tester", "none"), default=None,
-                   help="table-3.2 (arm default), tester (actuator default) or none")
+    y.add_argument("--noise", choices=("arm", "table-3.2", "tester", "none"), default=None,
+                   help="arm: the noise variances the arm file declares in [sensors] (arm "
+                        "default; the thesis arm: Table 3.2); table-3.2: the thesis' Table 3.2 "
+                        "variances whatever the arm declares (a warning names both); tester "
+                        "(actuator default); none")
     y.add_argument("--seed", type=_seed, default=0, help="seed of the excitation and the noise")
     y.add_argument("--duration", type=_positive, default=None,
                    help="record length [s] (arm; default 10 s, the whole sawtooth)")

@@ -363,8 +363,8 @@ PARAMETERS = {
     "every": (lambda v: _check_optional_int("every", v, 1, 10 ** 6),
               "stride of instants='all' [ms]"),
     "noise_seed": (lambda v: _check_optional_int("noise_seed", v, 0, 2 ** 63 - 1),
-                   "None: no sensor noise (thesis tables); an int: Table 3.2 sensor noise "
-                   "with this seed"),
+                   "None: no sensor noise (thesis tables); an int: the arm's declared sensor "
+                   "noise ([sensors]; the thesis arm: Table 3.2) with this seed"),
     "duration": (_check_duration,
                  "experiment length [s] (default: the catalog's), in [1, 1800] s and longer "
                  "than the experiment's events (step: 2 s, switch: 7.5 s)"),
@@ -760,7 +760,8 @@ def safety_case(experiment: str = "step", controller: str = "PID", *, lam=None, 
         Stride of ``instants="all"`` [ms] (default 1).
     noise_seed : int, optional
         None: no sensor noise (as the thesis tables).  An int: Gaussian
-        sensor noise of Table 3.2 with this seed.
+        sensor noise of the arm's declared variances (``[sensors]``; the thesis arm: Table
+        3.2) with this seed.
     duration : float, optional
         Experiment length [s] (default: the catalog's, e.g. 12 s for the step).
     contact : str, optional

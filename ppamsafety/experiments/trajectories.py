@@ -399,6 +399,13 @@ class ExperimentReferences:
         q2 = self.sawtooth_q2 * teeth + self.sawtooth_q2[:1]
         return np.stack([q1, q2], 1)
 
+    @property
+    def origin(self) -> str:
+        """Where the references come from, in words."""
+        return ("the thesis' references" if self.thesis else
+                "derived from the arm's working area: the thesis' references at the same "
+                "fractions of each joint's range")
+
     def describe(self, which: str = "all") -> str:
         """The references in words, with units, e.g. for an output's header.
 
@@ -406,9 +413,7 @@ class ExperimentReferences:
         ----------
         which : {"all", "step", "circle", "sawtooth"}
         """
-        src = ("the thesis' references" if self.thesis else
-               "derived from the arm's working area: the thesis' references at the same "
-               "fractions of each joint's range")
+        src = self.origin
         step = (f"step q1_d {np.degrees(self.step_low):.4g} -> {np.degrees(self.step_high):.4g}"
                 f" -> {np.degrees(self.step_low):.4g} deg, q2_d "
                 f"{np.degrees(self.step_q2):.4g} deg")
@@ -432,6 +437,31 @@ def _mapped(q_thesis, j, area, thesis_area) -> float:
     """A thesis joint angle at the same fraction of joint ``j``'s range of ``area``."""
     (a, b), (ta, tb) = area[j], thesis_area[j]
     return float(a + (q_thesis - ta) / (tb - ta) * (b - a))
+
+
+def arm_pose(arm, q) -> np.ndarray:
+    """A pose chosen on the thesis arm, at the same fractions of ``arm``'s joint ranges.
+
+    The construction of :func:`experiment_references` for any pose of an experiment (e.g. a
+    hold configuration or a waypoint): unchanged on the thesis arm's working area.
+
+    Parameters
+    ----------
+    arm : ArmParameters
+    q : array_like, shape (2,)
+        Joint angles on the thesis arm [rad].
+
+    Returns
+    -------
+    numpy.ndarray, shape (2,)
+        Joint angles on ``arm`` [rad].
+    """
+    _arm(arm)
+    q = np.asarray(check_vector("q", q, 2, -math.pi, math.pi, unit="rad"), dtype=float)
+    tarea, area = _area(thesis_arm()), _area(arm)
+    if np.allclose(area, tarea, rtol=0.0, atol=1e-12):
+        return q.copy()
+    return np.array([_mapped(q[0], 0, area, tarea), _mapped(q[1], 1, area, tarea)])
 
 
 def experiment_references(arm) -> ExperimentReferences:
