@@ -504,7 +504,31 @@ def _cmd_synthesize(args) -> int:
     with _options(**{"measured data file": "--out"}):
         path = data.save(args.out, overwrite=args.overwrite)
     print(f"record written to {path} ({len(data)} rows)")
+    if args.kind != "actuator":
+        _print_synthesized(args, arm)
     return EXIT_OK
+
+
+def _print_synthesized(args, arm) -> None:
+    """What an arm record was made with: the experiment's reference and the noise."""
+    from .diagnose.arm.synthesize import noise_variances
+    from .experiments.trajectories import experiment_references
+    from .params import thesis_arm
+
+    a = thesis_arm() if arm is None else arm
+    exp = args.experiment or "open-loop"
+    refs = experiment_references(a)
+    if exp == "closed-loop":
+        which = "step" if args.reference == "step" else "circle"
+        print(f"reference: {args.reference}: {refs.describe(which)}")
+    elif exp == "static-sawtooth":
+        print(f"reference: {refs.describe('sawtooth')}")
+    noise = args.noise or "arm"
+    var = noise_variances(a, noise)
+    origin = "the arm's [sensors]" if noise == "arm" else "thesis Table 3.2"
+    print("noise: none" if var is None else
+          f"noise: {noise}: q {list(var[0])} rad^2, qd {list(var[1])} rad^2/s^2 ({origin}), "
+          f"p 500 Pa standard deviation")
 
 
 def _cmd_impact(args) -> int:
