@@ -104,6 +104,19 @@ def test_the_study_keys_move_the_step_and_an_impossible_one_names_the_arms_keys(
     check_case(experiment="step", arm=thesis_arm())
 
 
+def test_a_sweep_case_and_a_closed_loop_record_run_on_the_arm(q40):
+    """The trial's failures: sweep and synthesize --experiment closed-loop on q1_min = 40 deg."""
+    from ppamsafety.sweep_cases import safety_case
+    row = safety_case("step", "PSMC joint", duration=3.0, arm=q40)
+    assert row["F_max"] > 0 and not row["diverged"]
+    r = experiment_references(q40)
+    rec = synthesize("closed-loop", seed=1, duration=3.0, arm=q40, reference="step").frame
+    late = rec[rec.t > 2.5]
+    # the PSMC leaves the low level toward the high one after the up-step at 2 s
+    assert late.q1.mean() > r.step_low + 0.1 * (r.step_high - r.step_low)
+    assert rec[rec.t < 1.9].q1.sub(r.step_low).abs().max() < 5 * DEG
+
+
 def test_an_arm_whose_area_cannot_hold_the_circle_is_told_with_its_keys(tmp_path):
     narrow = _write_arm(tmp_path, "narrow",
                         q1_min='q1_min = { value = 46, unit = "deg" }',
