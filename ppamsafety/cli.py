@@ -923,7 +923,9 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
                         "'PSMC joint Ki=2 λ=0.4'; e.g. 'PID', 'PSMC task λ=0.8')")
     y.add_argument("--reference", default=_SYN_REFERENCE,
                    choices=("step", "switch", "circle5", "circle10", "circle20"),
-                   help="closed loop: thesis experiment (default circle10)")
+                   help="closed loop: thesis experiment (default circle10), placed in the "
+                        "arm's working area (the thesis arm: the thesis' references; another "
+                        "arm: at the same fractions of its joint ranges; printed)")
     y.add_argument("--effect", type=_effect_arg, action="append", metavar="NAME=VALUE",
                    help="hidden effect, repeatable (e.g. payload_mass=0.4, "
                         "valve_time_constant_factor=1.5, valve_dead_time=0.02)")
