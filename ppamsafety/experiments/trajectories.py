@@ -394,7 +394,18 @@ class ExperimentReferences:
             (lo_, hi_, q2_) == (STEP_LOW, STEP_HIGH, STEP_Q2)), given=self.given + tuple(given))
 
     def sawtooth_levels(self, teeth: int) -> np.ndarray:
-        """The sawtooth's set angles, ``teeth`` teeth closed at the start level [rad], (m, 2)."""
+        """The sawtooth's set angles [rad], one row (q1_d, q2_d) per level.
+
+        Parameters
+        ----------
+        teeth : int
+            Teeth of :attr:`sawtooth_q1` / :attr:`sawtooth_q2`; the last level closes the
+            sawtooth at the start level.
+
+        Returns
+        -------
+        numpy.ndarray, shape (10 teeth + 1, 2)
+        """
         q1 = self.sawtooth_q1 * teeth + self.sawtooth_q1[:1]
         q2 = self.sawtooth_q2 * teeth + self.sawtooth_q2[:1]
         return np.stack([q1, q2], 1)
