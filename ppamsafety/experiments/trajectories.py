@@ -563,10 +563,10 @@ def _circle_segment(arm, t0, t1, dt, what, **circle):
     """``_segment`` of a circle; unreachable or out-of-area circles refused naming ``what``."""
     refs = experiment_references(arm)
     circle = {"center": refs.circle_center, "radius": refs.circle_radius, **circle}
-    own = (tuple(circle["center"]) == tuple(refs.circle_center)
-           and circle["radius"] == refs.circle_radius)
-    path = circle_path(**circle)
+    path = circle_path(**circle)                # validates center and radius first
     c = circle
+    own = (tuple(np.asarray(c["center"], dtype=float)) == tuple(refs.circle_center)
+           and float(c["radius"]) == refs.circle_radius)
     desc = (f"center={tuple(round(float(x), 6) for x in c['center'])!r} m, "
             f"radius={float(c['radius']):.6g} m")
     if own and not refs.thesis:
