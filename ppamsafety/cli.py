@@ -348,6 +348,7 @@ def _cmd_sweep(args) -> int:
           f"{f' (first {n:,} of {len(study.cases):,})' if n < len(study.cases) else ''} on "
           f"{args.backend}{' (' + args.scheduler + ')' if args.scheduler else ''} -> {args.out}",
           flush=True)
+    print(f"experiment reference: {study.references_text()}", flush=True)
     with _options(outdir="--out", max_cases="--max-cases", processes="--processes",
                   scheduler="--scheduler", confirm="--yes", replace_kind="--replace-other-kind"):
         df = run_study_file(study, args.out, backend=args.backend, scheduler=args.scheduler,
@@ -563,7 +564,31 @@ def _cmd_synthesize(args) -> int:
     with _options(**{"measured data file": "--out"}):
         path = data.save(args.out, overwrite=args.overwrite)
     print(f"record written to {path} ({len(data)} rows)")
+    if args.kind != "actuator":
+        _print_synthesized(args, arm)
     return EXIT_OK
+
+
+def _print_synthesized(args, arm) -> None:
+    """What an arm record was made with: the experiment's reference and the noise."""
+    from .diagnose import noise_variances
+    from .experiments.trajectories import experiment_references
+    from .params import thesis_arm
+
+    a = thesis_arm() if arm is None else arm
+    exp = args.experiment or "open-loop"
+    refs = experiment_references(a)
+    if exp == "closed-loop":
+        which = "step" if args.reference == "step" else "circle"
+        print(f"reference: {args.reference}: {refs.describe(which)}")
+    elif exp == "static-sawtooth":
+        print(f"reference: {refs.describe('sawtooth')}")
+    noise = args.noise or "arm"
+    var = noise_variances(a, noise)
+    origin = "the arm's [sensors]" if noise == "arm" else "thesis Table 3.2"
+    print("noise: none" if var is None else
+          f"noise: {noise}: q {list(var[0])} rad^2, qd {list(var[1])} rad^2/s^2 ({origin}), "
+          f"p 500 Pa standard deviation")
 
 
 def _cmd_impact(args) -> int:
@@ -1053,12 +1078,17 @@ without --overwrite when OUT holds a previous sweep); --overwrite recomputes eve
                         "'PSMC joint Ki=2 λ=0.4'; e.g. 'PID', 'PSMC task λ=0.8')")
     y.add_argument("--reference", default=_SYN_REFERENCE,
                    choices=("step", "switch", "circle5", "circle10", "circle20"),
-                   help="closed loop: thesis experiment (default circle10)")
+                   help="closed loop: thesis experiment (default circle10), placed in the "
+                        "arm's working area (the thesis arm: the thesis' references; another "
+                        "arm: at the same fractions of its joint ranges; printed)")
     y.add_argument("--effect", type=_effect_arg, action="append", metavar="NAME=VALUE",
                    help="hidden effect, repeatable (e.g. payload_mass=0.4, "
                         "valve_time_constant_factor=1.5, valve_dead_time=0.02)")
-    y.add_argument("--noise", choices=("table-3.2", "tester", "none"), default=None,
-                   help="table-3.2 (arm default), tester (actuator default) or none")
+    y.add_argument("--noise", choices=("arm", "table-3.2", "tester", "none"), default=None,
+                   help="arm: the noise variances the arm file declares in [sensors] (arm "
+                        "default; the thesis arm: Table 3.2); table-3.2: the thesis' Table 3.2 "
+                        "variances whatever the arm declares (a warning names both); tester "
+                        "(actuator default); none")
     y.add_argument("--seed", type=_seed, default=0, help="seed of the excitation and the noise")
     y.add_argument("--duration", type=_positive, default=None,
                    help="record length [s] (arm; default 10 s, the whole sawtooth)")

@@ -435,6 +435,20 @@ class ArmSummary(Result):
         return out
 
 
+def _payload_rows(arm, ml) -> list:
+    """The maximum load's rows about the payload: what it counts, and what is left.
+
+    The maximum load (A.43)-(A.45) is the largest point mass at the load point A_L with the
+    links alone (:func:`max_load_map`), so a declared payload (``[effects] payload_mass``, a
+    point mass at A_L) is part of it; the load beyond it is the maximum less the payload.
+    """
+    pay = arm.effects.payload_mass
+    if not pay:
+        return [("  of which a declared payload", "none declared", "")]
+    return [("  of which the declared payload_mass", float(pay), "kg"),
+            ("  left beyond the declared payload (min)", ml.minimum - float(pay), "kg")]
+
+
 def arm_summary(arm, *, q=None, n: int = 61) -> ArmSummary:
     """An arm's key design numbers: stiffness at a pose, maximum load, working area.
 
@@ -491,9 +505,10 @@ def arm_summary(arm, *, q=None, n: int = 61) -> ArmSummary:
         ("K2 over the working area", f"{sm.K2_Nm_per_rad.min():.4g} .. "
                                      f"{sm.K2_Nm_per_rad.max():.4g}", "N m/rad"),
         ("holdable share of the working area (Delta-p)", 100.0 * float(sm.holdable.mean()), "%"),
-        ("maximum load (min over the working area)", ml.minimum, "kg"),
+        ("maximum load at A_L, min over the working area", ml.minimum, "kg"),
         ("  where (q1, q2)", ", ".join(f"{np.degrees(v):.4g}" for v in ml.argmin), "deg"),
-        ("maximum load, median over the working area", float(ml.data.M_max_kg.median()), "kg"),
+        *_payload_rows(arm, ml),
+        ("maximum load at A_L, median over the area", float(ml.data.M_max_kg.median()), "kg"),
         ("joint 1 range", f"{np.degrees(g.q1_min):.4g} .. {np.degrees(g.q1_max):.4g}", "deg"),
         ("joint 2 range", f"{np.degrees(g.q2_min):.4g} .. {np.degrees(g.q2_max):.4g}", "deg"),
         ("TCP distance from joint 1", f"{r.min():.4g} .. {r.max():.4g}", "m"),

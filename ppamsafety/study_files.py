@@ -136,16 +136,16 @@ from .experiments.catalog import DEFAULT_DURATIONS, ControllerVariant
 from .impact.head import HeadContactModel, load_head
 from .output import OutputError, OutputFolder, check_output_path, read_marker
 from .design import load_arm
-from .params import ArmParameters, is_thesis_arm
+from .params import ArmParameters, is_thesis_arm, thesis_arm
 from .params.arm_file import ArmFileError, arm_key, arm_to_toml, read_value
 from .params.contact_files import is_contact_file
 from .plots.figure import save as save_figure
 from .plots.sweep import limit_lines, plot_sweep
 from .results import unit_name
 from .sweep import BACKENDS, SweepResult, run_sweep
-from .sweep_cases import (COVERING_RANGES, DEFAULTS, IMPACT_POSE_DEG, PARAMETERS, SPEED_MAX,
-                          add_verdicts,
-                          case_arm, case_function, check_case, check_impact_case, column_unit,
+from .sweep_cases import (COVERING_RANGES, DEFAULTS, EXPERIMENTS, IMPACT_POSE_DEG, PARAMETERS,
+                          SPEED_MAX, STEP_KEYS, add_verdicts, case_arm, case_function,
+                          case_references, check_case, check_impact_case, column_unit,
                           failed_criteria, is_dotted, make_controller, verdict_limits)
 from .impact.verdicts import METRICS
 from .units import si_factor
@@ -421,6 +421,28 @@ class Study:
             except OSError:
                 h.update(b"missing")
         return f"{self.name} [files {h.hexdigest()[:10]}]"
+
+    def references_text(self) -> str:
+        """The reference the study's experiment runs on its arm, in words with units.
+
+        The first case's experiment and ``step_*_deg`` keys on the study's arm
+        (:func:`~ppamsafety.sweep_cases.case_references`); a swept working area or experiment
+        is said.
+        """
+        case = dict(self.cases[0]) if len(self.cases) else {}
+        arm = self.arm if self.arm is not None else thesis_arm()
+        exp = case.get("experiment") or DEFAULTS["experiment"]
+        if exp not in EXPERIMENTS:
+            return "-"
+        refs = case_references(arm, {k: case.get(k) for k in STEP_KEYS})
+        text = f"{exp}: {refs.describe('step' if exp == 'step' else 'circle')}"
+        swept = self.swept
+        if "experiment" in swept:
+            text += "; the experiment is swept: this is the first case's"
+        if any(k.startswith("arm.geometry.") for k in swept) or any(k in swept
+                                                                      for k in STEP_KEYS):
+            text += "; swept per case (the working area or the step keys vary)"
+        return text
 
     @property
     def swept(self) -> list:
@@ -1663,6 +1685,7 @@ def summary_page(st: Study, df: pd.DataFrame, what: str, swept) -> str:
     rows = [("study", st.name), ("description", st.description or "-"),
             ("arm", arm + (" (arm.toml)" if st.arm is not None else "")),
             ("body model simulated", head + (" (head.toml)" if st.head is not None else "")),
+            ("experiment reference", st.references_text()),
             ("swept", ", ".join(unit_label(k, st.unit_of(k)[0]) for k in swept) or "-"),
             ("result", what),
             ("limits that decide the verdicts" if decided else "limits drawn", limits)]

@@ -45,6 +45,7 @@ from .design import rest_stiffness
 from .experiments.catalog import (CIRCLE_PERIODS, CIRCLE_WARMUP, DEFAULT_DURATIONS, STEP_TIMES,
                                   SWITCH_TIME, run_thesis_experiment, ControllerVariant)
 from .experiments.metrics import tracking_stats
+from .experiments.trajectories import ExperimentReferences, experiment_references
 from .impact.anywhere import point_jacobian, simulate_contacts
 from .impact.head import HeadContactModel, head_model_names, head_model
 from .impact.instants import HEURISTICS, evaluate_experiment, heuristic_instants, impact_states
@@ -414,8 +415,8 @@ PARAMETERS = {
     "every": (lambda v: _check_optional_int("every", v, 1, 10 ** 6),
               "stride of instants='all' [ms]"),
     "noise_seed": (lambda v: _check_optional_int("noise_seed", v, 0, 2 ** 63 - 1),
-                   "None: no sensor noise (thesis tables); an int: Table 3.2 sensor noise "
-                   "with this seed"),
+                   "None: no sensor noise (thesis tables); an int: the arm's declared sensor "
+                   "noise ([sensors]; the thesis arm: Table 3.2) with this seed"),
     "duration": (_check_duration,
                  "experiment length [s] (default: the catalog's), in [1, 1800] s and longer "
                  "than the experiment's events (step: 2 s, switch: 7.5 s)"),
@@ -440,6 +441,19 @@ PARAMETERS = {
                          "modulus (stiffness) of the covering's layer [Pa]"),
     "covering_hysteresis": (_check_covering_value("covering_hysteresis"),
                             "Hunt-Crossley hysteresis factor of the covering's layer [s/m]"),
+    "step_low_deg": (lambda v: None if v is None else _number("step_low_deg", v, lo=-180.0,
+                                                               hi=180.0, unit="deg"),
+                     "step only: q1_d before and after the up-step [deg]; default the arm's "
+                     "(the thesis' 30 deg at the same fraction of the arm's q1 range); inside "
+                     "the arm's working area"),
+    "step_high_deg": (lambda v: None if v is None else _number("step_high_deg", v, lo=-180.0,
+                                                                 hi=180.0, unit="deg"),
+                      "step only: q1_d after the up-step [deg]; default the arm's (the thesis' "
+                      "70 deg at the same fraction of the arm's q1 range)"),
+    "step_q2_deg": (lambda v: None if v is None else _number("step_q2_deg", v, lo=-180.0,
+                                                               hi=180.0, unit="deg"),
+                    "step only: q2_d [deg]; default the arm's (the thesis' -80 deg at the same "
+                    "fraction of the arm's q2 range)"),
     "histories": (lambda v: _check_bool("histories", v),
                   "return the full time histories (closed loop and worst impact)"),
 }
@@ -453,7 +467,8 @@ COLUMN_UNITS = {
     "lam": "s", "kp_bar": "bar/rad", "ki_bar": "bar/(rad s)", "kd_bar": "bar s/rad",
     "task_kp": "N/m", "task_ki": "N/(m s)", "task_kd": "N s/m", "stiffness": "Nm/rad",
     "every": "ms", "duration": "s", "noise_seed": "-", "speed": "m/s", "q1_deg": "deg",
-    "q2_deg": "deg", "direction": None, "experiment": None, "controller": None, "head": None,
+    "q2_deg": "deg", "step_low_deg": "deg", "step_high_deg": "deg", "step_q2_deg": "deg",
+    "direction": None, "experiment": None, "controller": None, "head": None,
     "instants": None, "effects": None, "histories": None,
     "label": None, "F_max": "N", "HIC36": "-", "HIC15": "-", "t0_F_max": "s", "t0_HIC36": "s",
     "instant_HIC36": None, "tcp_speed": "m/s", "K1": "Nm/rad", "K2": "Nm/rad",
@@ -544,6 +559,11 @@ def _checked(case: dict) -> tuple:
             raise ValueError(f"head = {full['head']!r} with a contact key "
                              f"({[k for k in CONTACT_KEYS if full[k] is not None]}): the body "
                              f"is set by body (a body contact model), not head")
+    step_given = [k for k in STEP_KEYS if full[k] is not None]
+    if step_given and full["experiment"] != "step":
+        raise ValueError(f"{step_given} apply only to experiment = 'step', not "
+                         f"{full['experiment']!r}")
+    case_references(the_arm, full)                   # the step inside the arm's working area
     if full["every"] is not None and full["instants"] != "all":
         raise ValueError(f"every = {full['every']} applies only to instants = 'all', not "
                          f"{full['instants']!r}")
@@ -568,6 +588,39 @@ def _checked(case: dict) -> tuple:
         raise ValueError(f"controller = {ctrl!r} with {given or 'the Table 5.1 gains'}: "
                          f"{exc}") from None
     return full, the_arm
+
+
+#: The case keys that move the step (:func:`case_references`).
+STEP_KEYS = ("step_low_deg", "step_high_deg", "step_q2_deg")
+
+
+def case_references(arm, case: dict) -> ExperimentReferences:
+    """Where a case's experiment runs on its arm: the arm's references, the step moved by the
+    case's ``step_*_deg`` keys.
+
+    Parameters
+    ----------
+    arm : ArmParameters
+        The case's arm (:func:`case_arm`).
+    case : dict
+        Checked case parameters (:func:`check_case`).
+
+    Returns
+    -------
+    ExperimentReferences
+        :func:`~ppamsafety.experiments.trajectories.experiment_references` of the arm.
+
+    Raises
+    ------
+    ValueError
+        A step level outside the arm's working area, naming the key, its value and the arm's
+        ``geometry.q*_min``/``q*_max``.
+    """
+    refs = experiment_references(arm)
+    if all(case.get(k) is None for k in STEP_KEYS):
+        return refs
+    return refs.with_step(arm, low=case.get("step_low_deg"), high=case.get("step_high_deg"),
+                          q2=case.get("step_q2_deg"), names=STEP_KEYS, unit="deg")
 
 
 def check_case(**case) -> dict:
@@ -599,7 +652,8 @@ DEFAULTS = {"experiment": "step", "controller": "PID", "lam": None, "kp_bar": No
             "instants": "heuristic", "every": None, "noise_seed": None, "duration": None,
             "contact": None, "body": None, "region": None, "covering": None,
             "covering_thickness": None,
-            "covering_modulus": None, "covering_hysteresis": None, "histories": False}
+            "covering_modulus": None, "covering_hysteresis": None, "step_low_deg": None,
+            "step_high_deg": None, "step_q2_deg": None, "histories": False}
 """Default parameters of :func:`safety_case`."""
 
 
@@ -748,6 +802,7 @@ def safety_case(experiment: str = "step", controller: str = "PID", *, lam=None, 
                 instants: str = "heuristic", every: int | None = None, noise_seed=None,
                 duration=None, contact=None, body=None, region=None, covering=None,
                 covering_thickness=None, covering_modulus=None, covering_hysteresis=None,
+                step_low_deg=None, step_high_deg=None, step_q2_deg=None,
                 histories: bool = False, arm=None, **dotted) -> dict:
     """One experiment with one controller, crashed into a head: a compact result row.
 
@@ -782,7 +837,8 @@ def safety_case(experiment: str = "step", controller: str = "PID", *, lam=None, 
         Stride of ``instants="all"`` [ms] (default 1).
     noise_seed : int, optional
         None: no sensor noise (as the thesis tables).  An int: Gaussian
-        sensor noise of Table 3.2 with this seed.
+        sensor noise of the arm's declared variances (``[sensors]``; the thesis arm: Table
+        3.2) with this seed.
     duration : float, optional
         Experiment length [s] (default: the catalog's, e.g. 12 s for the step).
     contact : str, optional
@@ -813,6 +869,11 @@ def safety_case(experiment: str = "step", controller: str = "PID", *, lam=None, 
         Replace the thickness [m], modulus [Pa] and hysteresis factor [s/m] of the
         covering's (first) layer (:func:`contact_covering`): the covering as a design
         parameter, in sweeps and envelopes.
+    step_low_deg, step_high_deg, step_q2_deg : float, optional
+        The step only: q1_d before/after the up-step and q2_d [deg], each inside the arm's
+        working area; default the arm's references
+        (:func:`~ppamsafety.experiments.trajectories.experiment_references`: the thesis arm's
+        30 -> 70 deg, -80 deg; another arm's at the same fractions of its joint ranges).
     histories : bool
         Also return the full time histories under the key ``"time_histories"`` (a result
         may not take a parameter's name, :func:`ppamsafety.sweep.run_sweep`):
@@ -850,8 +911,9 @@ def safety_case(experiment: str = "step", controller: str = "PID", *, lam=None, 
                            body=body, region=region, covering=covering,
                            covering_thickness=covering_thickness,
                            covering_modulus=covering_modulus,
-                           covering_hysteresis=covering_hysteresis, histories=histories,
-                           arm=arm, **dotted))
+                           covering_hysteresis=covering_hysteresis, step_low_deg=step_low_deg,
+                           step_high_deg=step_high_deg, step_q2_deg=step_q2_deg,
+                           histories=histories, arm=arm, **dotted))
     hm = region_head(p["region"], chosen_head(p["head"]))   # the region's own body
     ctrl = make_controller(p["controller"], lam=p["lam"], kp_bar=p["kp_bar"], ki_bar=p["ki_bar"],
                            kd_bar=p["kd_bar"], task_kp=p["task_kp"], task_ki=p["task_ki"],
@@ -860,7 +922,7 @@ def safety_case(experiment: str = "step", controller: str = "PID", *, lam=None, 
     sensors = (None if p["noise_seed"] is None
                else SensorConfig.for_arm(arm, noise=True, seed=p["noise_seed"]))
     res = run_thesis_experiment(arm, p["experiment"], [variant], sensors=sensors,
-                                duration=p["duration"])[0]
+                                duration=p["duration"], references=case_references(arm, p))[0]
     contact = any(p[k] is not None for k in CONTACT_KEYS)
     if contact:
         ev, body, point = _contact_impacts(res, arm, p)
@@ -1327,6 +1389,7 @@ def safety_sweep(cases=None, *, grid=None, name: str = "safety", cache_dir=None,
 
 
 __all__ = ["EXPERIMENTS", "CONTROLLERS", "INSTANTS", "MIN_SPEED", "PARAMETERS", "DEFAULTS",
+           "STEP_KEYS", "case_references",
            "DOTTED", "RESULT_COLUMNS", "check_case", "make_controller", "safety_case",
            "CONTACT_KEYS", "CONTACT_POINTS", "contact_covering",
            "safety_sweep", "case_arm", "case_function", "is_dotted", "impact_case",

@@ -74,8 +74,8 @@ def test_arm_check(work):
     assert 0 < k2 < k1 < 200                          # N m/rad; the thesis arm: 43 and 27
     assert 0 < _number(out, "holdable share of the working area (Delta-p)") <= 100
     # kg; the heavier forearm cannot carry itself at p_max everywhere (a negative minimum)
-    assert -20 < _number(out, "maximum load (min over the working area)") < 20
-    assert 0 < _number(out, "maximum load, median over the working area") < 20
+    assert -20 < _number(out, "maximum load at A_L, min over the working area") < 20
+    assert 0 < _number(out, "maximum load at A_L, median over the area") < 20
 
 
 def test_impact(work):

@@ -25,6 +25,7 @@ import types
 from .core.result import ConfoundedGroup, Diagnosis, Effect, Estimate
 from .diagnosis import diagnose
 from .synthesize import check_effect, effect_unit, synthesize
+from .arm.synthesize import noise_variances
 from .arm.kind import assumed_arm_note, other_arm
 from .arm.pipeline import REPLAY_RHO, REPLAY_RHO_STATIC
 from .arm.static import static_record
@@ -46,8 +47,8 @@ __all__ = [
     "ConfoundedGroup",
     # the thresholds a reader of a diagnosis meets
     "REPLAY_RHO", "REPLAY_RHO_STATIC", "HINT_P", "POWER", "HIGH_PRECISION",
-    # the effects synthesize makes: their units and their check
-    "effect_unit", "check_effect",
+    # the effects synthesize makes: their units and their check; the noise it adds
+    "effect_unit", "check_effect", "noise_variances",
     # the arm a record names against the arm given (or assumed); a static sawtooth's rest points
     "other_arm", "assumed_arm_note", "static_record",
     # the randomized batteries, their shipped rows and their scores

@@ -60,9 +60,13 @@ def synthesize(experiment: str | None = None, effects=None, *, noise: str | None
     effects : dict, optional
         ``{name: value}``; default none (the nominal plant).  Actuator effects:
         :data:`ppamsafety.diagnose.bench.synthesize.EFFECTS`.
-    noise : {"table-3.2", "none"} or {"tester", "none"}, optional, keyword-only
-        Arm default ``"table-3.2"`` (the sawtooth's forces then get
-        :data:`~ppamsafety.diagnose.arm.synthesize.FORCE_NOISE_STD`); actuator default ``"tester"``.
+    noise : {"arm", "table-3.2", "none"} or {"tester", "none"}, optional, keyword-only
+        Arm default ``"arm"``: the noise variances the arm declares for its sensors (the
+        thesis arm: Table 3.2); ``"table-3.2"``: the thesis' whatever the arm declares (a
+        warning names both when they differ); the sawtooth's forces get
+        :data:`~ppamsafety.diagnose.arm.synthesize.FORCE_NOISE_STD`
+        (:func:`~ppamsafety.diagnose.arm.synthesize.noise_variances`).  Actuator default
+        ``"tester"``.
     seed : int, keyword-only
         Seed of the excitation and of the noise.
     duration : float, optional, keyword-only
@@ -129,7 +133,7 @@ def _synthesize(experiment, effects, *, noise, seed, duration, dt, arm, controll
         raise TypeError(f"synthesize() got option(s) {sorted(tester)} that exist only for "
                         f"kind = 'actuator'")
     data = synthesize_arm("open-loop" if experiment is None else experiment, effects,
-                          noise="table-3.2" if noise is None else noise, seed=seed,
+                          noise="arm" if noise is None else noise, seed=seed,
                           duration=duration, dt=dt, arm=arm, controller=controller,
                           reference=reference)
     return MeasuredData({**data.meta, "arm": arm_record(arm)}, data.frame, source=data.source)

@@ -327,7 +327,8 @@ def thesis_variants(*, lambdas=THESIS_LAMBDAS) -> list:
     return [ControllerVariant.of(c) for c in out]
 
 
-def thesis_reference(arm, name: str, *, duration: float | None = None, dt: float = 1e-3):
+def thesis_reference(arm, name: str, *, duration: float | None = None, dt: float = 1e-3,
+                     references: tr.ExperimentReferences | None = None):
     """Reference trajectory of the named thesis experiment.
 
     Parameters
@@ -341,6 +342,11 @@ def thesis_reference(arm, name: str, *, duration: float | None = None, dt: float
         than 2 s, the switch more than 7.5 s (the discontinuity must occur).
     dt : float
         Sample period [s].
+    references : ExperimentReferences, optional, keyword-only
+        Where the experiment runs (the step's levels, the circle's centre and radius);
+        default :func:`~ppamsafety.experiments.trajectories.experiment_references` of the
+        arm (the thesis arm: the thesis' references; another arm: derived from its working
+        area).
 
     Returns
     -------
@@ -348,23 +354,28 @@ def thesis_reference(arm, name: str, *, duration: float | None = None, dt: float
     """
     _check_arm(arm)
     name = _check_name(name)
+    refs = tr.experiment_references(arm) if references is None else check_instance(
+        "references", references, tr.ExperimentReferences)
     d = DEFAULT_DURATIONS[name] if duration is None else check_range(
         "duration", duration, 0.0, 1e5, lo_open=True, unit="s")
     if name == "step":
         if d <= STEP_TIMES[0]:
             raise ValueError(f"step experiment: duration = {d:g} s must exceed the up-step at "
                              f"{STEP_TIMES[0]} s")
-        return tr.step(arm, t_up=STEP_TIMES[0], t_down=STEP_TIMES[1], duration=d, dt=dt)
+        return tr.step(arm, low=refs.step_low, high=refs.step_high, q2=refs.step_q2,
+                       t_up=STEP_TIMES[0], t_down=STEP_TIMES[1], duration=d, dt=dt)
+    circle = {"center": refs.circle_center, "radius": refs.circle_radius}
     if name == "switch":
         if d <= SWITCH_TIME:
             raise ValueError(f"switch experiment: duration = {d:g} s must exceed {SWITCH_TIME} s")
-        return tr.trajectory_switch(arm, t_switch=SWITCH_TIME, duration=d, dt=dt)
-    return tr.circle(arm, period=CIRCLE_PERIODS[name], duration=d, dt=dt)
+        return tr.trajectory_switch(arm, t_switch=SWITCH_TIME, duration=d, dt=dt, **circle)
+    return tr.circle(arm, period=CIRCLE_PERIODS[name], duration=d, dt=dt, **circle)
 
 
 def run_thesis_experiment(arm, name: str, variants=None, *, sensors: SensorConfig | None = None,
                           duration: float | None = None, dt: float = 1e-3,
-                          substeps: int = 1) -> list:
+                          substeps: int = 1,
+                          references: tr.ExperimentReferences | None = None) -> list:
     """Run one named thesis experiment for many controller variants (one batch).
 
     Parameters
@@ -386,6 +397,8 @@ def run_thesis_experiment(arm, name: str, variants=None, *, sensors: SensorConfi
         Control period [s].
     substeps : int
         RK4 steps per control period.
+    references : ExperimentReferences, optional
+        Where the experiment runs (:func:`thesis_reference`; default derived from the arm).
 
     Returns
     -------
@@ -409,7 +422,7 @@ def run_thesis_experiment(arm, name: str, variants=None, *, sensors: SensorConfi
         raise ValueError("variants must not be empty")
     sens = SensorConfig.for_arm(arm) if sensors is None else check_instance(
         "sensors", sensors, SensorConfig)
-    ref = thesis_reference(arm, name, duration=duration, dt=dt)
+    ref = thesis_reference(arm, name, duration=duration, dt=dt, references=references)
     cases = [ExperimentCase(arm, v.controller, ref, sensors=sens, name=f"{name}: {v.label}",
                             meta={"label": v.label, "experiment": name, "family": v.group,
                                   "lambda_s": v.lambda_s, "ki_bar": v.ki_bar,

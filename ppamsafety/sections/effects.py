@@ -38,9 +38,12 @@ from ..experiments import catalog
 from ..experiments.case import ExperimentCase
 from ..experiments.closed_loop import run_batch
 from ..experiments.conclusions import conclusions_table, evaluate_conclusions
-from ..experiments.trajectories import REFERENCE_ROW, Reference, check_reference_size
+from ..experiments.trajectories import (REFERENCE_ROW, SAWTOOTH_Q1_DEG,  # noqa: F401
+                                         SAWTOOTH_Q2_DEG, Reference, check_reference_size,
+                                         experiment_references)
 from ..hysteresis import DELTA_25_FIBRES
 from ..markdown import markdown_table
+from ..params import thesis_arm
 from ..params.effects import Effects
 from ..plant import geometry as geo
 from ..plant.model import hysteresis_factors
@@ -70,8 +73,6 @@ SETTLE_S = 3.0
 #: Data window after the pause [s] (§3.5.1.6).
 WINDOW_S = 1.0
 #: One tooth of the set-angle sawtooth [deg] (our choice, see the module docstring).
-SAWTOOTH_Q1_DEG = (30.0, 40.0, 50.0, 60.0, 70.0, 80.0, 70.0, 60.0, 50.0, 40.0)
-SAWTOOTH_Q2_DEG = (-95.0, -85.0, -75.0, -65.0, -55.0, -45.0, -55.0, -65.0, -75.0, -85.0)
 #: Teeth of the full sawtooth.
 TEETH = 2
 #: Variant whose limit cycle at P = 20 s is followed (see :mod:`.tracking`).
@@ -98,7 +99,7 @@ def hysteresis_arm(arm, delta: float = HYSTERESIS_DELTA):
     return arm.replace(effects=replace(arm.effects, hysteresis_delta=(float(delta),) * 4))
 
 
-def sawtooth_levels(*, quick: bool = False) -> np.ndarray:
+def sawtooth_levels(*, quick: bool = False, arm=None) -> np.ndarray:
     """Set angles of the sawtooth, one row per level (start level first) [rad].
 
     Parameters
@@ -106,6 +107,10 @@ def sawtooth_levels(*, quick: bool = False) -> np.ndarray:
     quick : bool
         One short tooth (30-55-80-55-30 deg on q1) instead of :data:`TEETH`
         teeth of 10 deg steps.
+    arm : ArmParameters, optional
+        The arm whose working area places the levels (default the thesis arm: the values
+        above; another arm: the same fractions of its joint ranges,
+        :func:`~ppamsafety.experiments.trajectories.experiment_references`).
 
     Returns
     -------
@@ -113,6 +118,13 @@ def sawtooth_levels(*, quick: bool = False) -> np.ndarray:
         (q1_d, q2_d) per level [rad]; the last level closes the sawtooth at
         the start level.
     """
+    refs = experiment_references(thesis_arm() if arm is None else arm)
+    if not refs.thesis:
+        if not quick:
+            return refs.sawtooth_levels(TEETH)
+        (a1, b1), (a2, b2) = ((min(v), max(v)) for v in (refs.sawtooth_q1, refs.sawtooth_q2))
+        return np.array([[a1, a2], [(a1 + b1) / 2, (a2 + b2) / 2], [b1, b2],
+                         [(a1 + b1) / 2, (a2 + b2) / 2], [a1, a2]])
     if quick:
         q1 = (30.0, 55.0, 80.0, 55.0, 30.0)
         q2 = (-95.0, -70.0, -45.0, -70.0, -95.0)
@@ -336,7 +348,7 @@ def run_sawtooth(arms: dict, *, quick: bool = False):
         Data windows (:func:`sawtooth_reference`).
     """
     first = next(iter(arms.values()))
-    ref, windows = sawtooth_reference(first, sawtooth_levels(quick=quick))
+    ref, windows = sawtooth_reference(first, sawtooth_levels(quick=quick, arm=first))
     cases = [ExperimentCase(a, GravityCompensation(at="desired"), ref, name=f"sawtooth: {lab}",
                             meta={"label": lab}) for lab, a in arms.items()]
     return dict(zip(arms, run_batch(cases))), windows

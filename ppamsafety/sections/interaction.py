@@ -59,15 +59,18 @@ SECTION = SectionInfo(
     summary="force estimation (RLS, momentum observer), admittance control, the release hazard",
     thesis="§5.4, figs. 5.21-5.22, §6.3", typical_seconds=4.2)
 
-Q_A = np.radians([50.0, -80.0])        #: hold configuration A [rad]
-Q_B = np.radians([70.0, -60.0])        #: waypoint B [rad]
-Q_C = np.radians([35.0, -100.0])       #: waypoint C [rad]
+#: Hold configuration A and waypoints B, C on the thesis arm [rad]; another arm's at the same
+#: fractions of its joint ranges (:func:`~ppamsafety.experiments.trajectories.arm_pose`).
+Q_A = np.radians([50.0, -80.0])
+Q_B = np.radians([70.0, -60.0])
+Q_C = np.radians([35.0, -100.0])
 F_STEP = np.array([10.0, -5.0])        #: force step of experiments 1-2 [N]
 T_STEP = 1.0                           #: its time [s]
 PAYLOAD = 0.5                          #: payload of experiment 3 [kg]
 
 
-def _hold(arm, duration, q=Q_A, name="hold"):
+def _hold(arm, duration, q=None, name="hold"):
+    q = tr.arm_pose(arm, Q_A) if q is None else q
     return tr.joint_steps(arm, q_levels=[q], t_changes=[], duration=duration, name=name)
 
 
@@ -254,7 +257,7 @@ def compute(*, quick: bool = False, arm=None, head=None) -> InteractionFindings:
         prow.append(row)
     ph_table = pd.DataFrame(prow)
     # -- 4: admittance with a hand A -> B -> C ------------------------------------------
-    wp = geo.forward_kinematics(np.array([Q_A, Q_B, Q_C]), arm)
+    wp = geo.forward_kinematics(np.array([tr.arm_pose(arm, q) for q in (Q_A, Q_B, Q_C)]), arm)
     adur = 10.0
     aref = _hold(arm, adur, name="admittance")
     ta = aref.t

@@ -39,6 +39,7 @@ import pandas as pd
 
 from ..control import PID, JointPSMC, TaskPSMC
 from ..experiments import trajectories as tr
+from ..experiments.trajectories import experiment_references
 from ..experiments.case import ExperimentCase
 from ..experiments.catalog import ControllerVariant, run_thesis_experiment, thesis_variants
 from ..experiments.closed_loop import run_batch
@@ -102,7 +103,7 @@ ASSUMPTIONS = (
     "tool velocity (worst orientation); wall contact = skull spring 150 N/mm (ISO heads) or the "
     "{head}.",
     "Quasi-static clamping, closed loop: the tool is held where it passes at its largest speed in "
-    "the 30->70 deg step by an isotropic spring-damper (75 N/mm = two 150 N/mm skull springs in "
+    "the {step} step by an isotropic spring-damper (75 N/mm = two 150 N/mm skull springs in "
     "series, 300 N s/m; head mass neglected) until the end of the 12 s run; the contact force is its magnitude "
     "(normal and tangential parts listed). Transient peaks of this run are not used (massless "
     "head, 1 ms zero-order hold of the force).",
@@ -138,8 +139,11 @@ def assumptions(arm=None, head=None) -> list:
                                                      a.pneumatics.p_mean) + " bar")
     hd = ("thesis Hunt-Crossley fit (checked on the Hybrid III drop onto a rigid plate)"
           if hc == head_model() else f"Hunt-Crossley contact of head model `{hc.name}`")
+    refs = experiment_references(a)
+    step = (f"{np.degrees(refs.step_low):.4g}->{np.degrees(refs.step_high):.4g} deg"
+            + ("" if refs.thesis else f" (q2_d {np.degrees(refs.step_q2):.4g} deg; {refs.origin})"))
     return [t.format(mass=mass, head=hd, p_max=f"{a.pneumatics.p_max / BAR:g} bar",
-                     mean_pressures=means) for t in ASSUMPTIONS]
+                     mean_pressures=means, step=step) for t in ASSUMPTIONS]
 
 
 def _robot_mass(arm) -> float:

@@ -15,7 +15,7 @@ import pandas as pd
 
 from ..experiments import catalog
 from ..experiments.metrics import response_table
-from ..experiments.trajectories import CIRCLE_CENTER, CIRCLE_RADIUS
+from ..experiments.trajectories import experiment_references
 from ..markdown import markdown_table
 from ..plots.control import plot_lambda_recovery, plot_step_comparison, plot_switch
 from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
@@ -118,9 +118,11 @@ def _figures(study) -> dict:
     by_label = catalog.results_by_label(step)
     main = [by_label[k] for k in MAIN_VARIANTS if k in by_label]
     ev = catalog.STEP_TIMES
+    refs = experiment_references(resolve_arm(study.arm))
+    lo, hi, q2 = (float(np.degrees(v)) for v in (refs.step_low, refs.step_high, refs.step_q2))
     figs["responses_step.png"] = plot_step_comparison(
-        main, events=ev, title="Step response (cf. figs. 5.17, 5.18): q1_d 30° → 70° → 30°, "
-        "q2_d = -80°, realistic sensors")
+        main, events=ev, title=f"Step response (cf. figs. 5.17, 5.18): q1_d {lo:.4g}° → "
+        f"{hi:.4g}° → {lo:.4g}°, q2_d = {q2:.4g}°, realistic sensors")
     ki12 = [r for r in step if r.meta["family"] == "PSMC joint Ki=12"]
     figs["responses_step_ki12.png"] = plot_step_comparison(
         ki12, events=ev, title="Step response, joint PSMC with Ki = 12 bar/(rad s), "
@@ -131,8 +133,8 @@ def _figures(study) -> dict:
     by_label = catalog.results_by_label(switch)
     main = [by_label[k] for k in MAIN_VARIANTS if k in by_label]
     figs["responses_switch.png"] = plot_switch(
-        main, t_switch=catalog.SWITCH_TIME, circle_center=CIRCLE_CENTER,
-        circle_radius=CIRCLE_RADIUS, t_range=(catalog.SWITCH_TIME - 2.5, switch[0].t[-1]),
+        main, t_switch=catalog.SWITCH_TIME, circle_center=refs.circle_center,
+        circle_radius=refs.circle_radius, t_range=(catalog.SWITCH_TIME - 2.5, switch[0].t[-1]),
         title="Trajectory switch (cf. fig. 5.15): 3.33 s circle → 10 s circle at "
               f"t = {catalog.SWITCH_TIME:g} s (half a turn ahead)")
     figs["responses_switch_lambda.png"] = plot_lambda_recovery(
@@ -243,7 +245,7 @@ def render(study: ResponsesFindings) -> Section:
                   "the high integral gain's oscillatory response.")
     md = f"""{'' if study.thesis else other_arm_note(study.arm) + chr(10) + chr(10)}All ten controller variants of Table 6.1 (Table 5.1 gains; joint PSMC with
 Ki = 2 and 12 bar/(rad s); λ = 0.4, 0.8, 1.5 s) with the realistic sensors (encoder
-quantisation, inter-pulse-timing velocity). Peaks are taken over the record from the first
+quantisation, inter-pulse-timing velocity). {'' if study.thesis else 'Experiment references: ' + experiment_references(study.arm).describe('all') + '. '}Peaks are taken over the record from the first
 discontinuity on; overshoot, reach and settling times are for the upward q1 step
 (window {catalog.STEP_TIMES[0]:g}-{catalog.STEP_TIMES[1]:g} s) and, for the switch, for the TCP error after
 t = {catalog.SWITCH_TIME:g} s. "> x" means not within the band before the window ends. Data:

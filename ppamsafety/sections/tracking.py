@@ -24,7 +24,7 @@ from ..experiments import catalog
 from ..experiments.conclusions import conclusions_table, evaluate_conclusions
 from ..experiments.metrics import peak_speeds, step_metrics, tracking_stats
 from ..experiments.thesis_data import join_thesis, table_5_2
-from ..experiments.trajectories import CIRCLE_CENTER
+from ..experiments.trajectories import CIRCLE_CENTER, experiment_references
 from ..markdown import markdown_table
 from ..plots.control import plot_error_traces, plot_experiment, plot_tracking_comparison
 from ..units import BAR
@@ -643,9 +643,10 @@ def _render_other(study: TrackingFindings) -> Section:
     quick, warmup, evaluate = study.quick, study.warmup, study.evaluate
     cmp, sab, gc, gcp = study.comparison, study.sensor_ablation, study.gc_ablation, study.gc_periods
     ct = conclusions_table(study.conclusions)
+    refs = experiment_references(study.arm)
     md = f"""{other_arm_note(study.arm)}
 
-Circle of 20 cm diameter (centre ({CIRCLE_CENTER[0]:g}, {CIRCLE_CENTER[1]:g}) m), periods 5, 10 and 20 s,
+Circle of {200 * refs.circle_radius:.3g} cm diameter (centre ({refs.circle_center[0]:.4g}, {refs.circle_center[1]:.4g}) m, {refs.origin}), periods 5, 10 and 20 s,
 the ten controller variants of Table 6.1 with Table 5.1 gains and the arm's sensors (encoder
 quantisation, inter-pulse-timing velocity). Error ||r_d − r|| after a {warmup:g} s warm-up, over
 {evaluate:g} s.{' (quick mode: short windows)' if quick else ''}

@@ -48,6 +48,7 @@ from .selection import (BOOTSTRAP_REPLICATES, CONSTANCY_ALPHA, STABILITY_PAIRS,
                         hac_covariance, in_bounds, make_problem, parameter_table,
                         compensating, profiled_shift, refit, region_consistency,
                         stability_selection)
+from .replay_limit import REPLAY_CALIBRATED_SECONDS, start_spread, widened_limit
 from .subsets import MAX_SIZE, search
 from .static import (force_residuals, static_equilibria, static_floor,
                      static_noise, static_noise_draws, static_record, static_system)
@@ -384,6 +385,7 @@ class ArmSteps(Steps):
         fault = sensor_fault(fit, params)
         rr = {}
         forces = None
+        spread = seconds = None
         if static:
             Q, Pm = static_equilibria(rec, np.array([self.row0, row_after]))
             qm, pm = rec.means(rec.q), rec.means(rec.p)
@@ -403,11 +405,17 @@ class ArmSteps(Steps):
                             forces["residual_after"][:, k] ** 2))),
                         "noise": float(forces["sigma"][k])}
         else:
+            seconds = len(rec) * rec.dt
             try:
                 x0_after = fault.true_state(rec.x0())
                 X0 = replay(rec, np.array([self.row0]), shifts=[0])
                 X1 = replay(rec, np.array([row_after]), shifts=[0], x0=x0_after)
                 before, after = X0[0], fault.measure(X1[0])
+                if seconds < REPLAY_CALIBRATED_SECONDS:
+                    # a record shorter than the calibration's: its noisy starting state's share
+                    spread = start_spread(rec, row_after, x0_after, np.concatenate(
+                        [noise["q"], noise["qd"], noise["p"]]), measure=fault.measure,
+                        seed=self.seed)
             except ValueError as exc:
                 # a model with every fitted effect (partial ones too: e.g. a negative payload
                 # absorbing an error outside the library) may leave the model's valid range
@@ -430,8 +438,10 @@ class ArmSteps(Steps):
         replay_rho = {ch: rr[ch]["after"] / rr[ch]["noise"] for ch in REPLAY_CHANNELS
                       if ch in rr and rr[ch]["noise"] > 0}
         replay_limit = REPLAY_RHO_STATIC if static else REPLAY_RHO
+        channel_limits = {ch: replay_limit if spread is None else widened_limit(
+            replay_limit, spread[REPLAY_CHANNELS.index(ch)], seconds) for ch in replay_rho}
         replay_bad = [f"replay {ch}" for ch, v in replay_rho.items()
-                      if not (math.isfinite(v) and v <= replay_limit)]
+                      if not (math.isfinite(v) and v <= channel_limits[ch])]
         self.sfreq = None if self.stab is None else self.stab.frequency
         effects, partial, confounded = [], [], []
         if static and rec.u is None:
@@ -476,6 +486,7 @@ class ArmSteps(Steps):
             (effects if sub_max <= rho_max else partial).append(entry)
         self.rr, self.forces, self.meas, self.before, self.after = rr, forces, meas, before, after
         self.t_rep, self.replay_rho, self.replay_limit = t_rep, replay_rho, replay_limit
+        self.channel_limits, self.spread = channel_limits, spread
         self.replay_bad, self.bad, self.unexplained = replay_bad, bad, unexplained
         self.effects, self.partial, self.confounded = effects, partial, confounded
 
@@ -548,8 +559,9 @@ class ArmSteps(Steps):
             notes.append(f"the replay of the fitted model stays above the noise on "
                          f"{', '.join(b[7:] for b in self.replay_bad)} (RMS over the noise "
                          f"{', '.join(f'{self.replay_rho[b[7:]]:.3g}' for b in self.replay_bad)}"
-                         f" > {self.replay_limit:g}): the model under test with the fitted "
-                         f"effects does not reproduce the record")
+                         f" > {', '.join(f'{self.channel_limits[b[7:]]:.3g}' for b in self.replay_bad)}"
+                         f"): the model under test with the fitted effects does not reproduce "
+                         f"the record")
         for g in self.confounded:
             notes.append(f"{' and '.join(g.members)} explain the same part of the residual on "
                          f"this record: none is named; to separate them: "
@@ -576,8 +588,15 @@ class ArmSteps(Steps):
                     "subsets": {"evaluated": sub.evaluated, "best": list(sub.names),
                                 "forward_path": list(self.gfit.names), "top": sub.ranking},
                     "replay": {"rho": self.replay_rho, "limit": self.replay_limit,
+                               "limits": self.channel_limits,
+                               "start_spread": None if self.spread is None else dict(zip(
+                                   REPLAY_CHANNELS, (float(v) for v in self.spread))),
+                               "calibrated_seconds": REPLAY_CALIBRATED_SECONDS,
                                "statistic": "RMS(after - measured) / sample noise per replay "
-                                            "channel; at the noise when every one is <= limit",
+                                            "channel; at the noise when every one is <= its "
+                                            "limit (the calibrated limit, widened on a record "
+                                            "shorter than calibrated_seconds by the start_spread "
+                                            "share of its noisy starting state)",
                                "at_noise": not self.replay_bad},
                     "high_confidence": {"inclusion_probability": HIGH_WEIGHT,
                                         "rho_high": ARM_RULE.rho_factor,

@@ -43,11 +43,13 @@ replaces a declared dead time:
   same variance), ``outlier_rate`` [-] (that fraction of samples of one
   channel each carry a spike of 10-50 noise levels).
 
-Noise ``"table-3.2"``: white Gaussian noise with the Table 3.2 variances on
-q (3.46e-6, 2.59e-6 rad^2) and qd (1.63e-4, 2.32e-5 rad^2/s^2) and 500 Pa
-standard deviation on p (our choice, see
-:data:`ppamsafety.identify.static.PRESSURE_NOISE_STD`); ``"none"``: exact
-samples.
+Noise ``"arm"`` (the default): white Gaussian noise with the variances the arm declares for
+its sensors (``[sensors] angle_noise_variance``, ``velocity_noise_variance``; the thesis arm:
+Table 3.2, 3.46e-6, 2.59e-6 rad^2 on q and 1.63e-4, 2.32e-5 rad^2/s^2 on qd) and 500 Pa
+standard deviation on p (our choice, see :data:`ppamsafety.identify.static.PRESSURE_NOISE_STD`;
+an arm file declares no pressure-sensor noise); ``"table-3.2"``: the thesis' Table 3.2
+variances whatever the arm declares (a deliberate choice for another arm: a warning names
+both); ``"none"``: exact samples.
 
 Experiments
 -----------
@@ -64,7 +66,7 @@ Experiments
     (:func:`ppamsafety.experiments.closed_loop.run_batch`) on the plant
     with the hidden effects while the controller keeps the nominal model.
     The record holds what the controller saw and sent: the angles and
-    velocities it measured (exact sensors plus the Table 3.2 noise, drawn by
+    velocities it measured (exact sensors plus the chosen noise, drawn by
     :class:`~ppamsafety.control.sensors.SensorConfig` with the seed, so the
     measurement noise is *fed back* into the set values, as on the real
     arm), the pressures (+ 500 Pa noise, an independent seeded stream) and
@@ -77,6 +79,7 @@ Experiments
 from __future__ import annotations
 
 import math
+import warnings
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -91,6 +94,8 @@ from ...data.synthetic import VELOCITY_NOISE_VARIANCES, _arm, default_excitation
 from ...experiments.case import ExperimentCase
 from ...experiments.catalog import EXPERIMENTS as NAMED, thesis_reference, thesis_variants
 from ...experiments.closed_loop import run_batch
+from ...experiments.trajectories import (SAWTOOTH_Q1_DEG, SAWTOOTH_Q2_DEG,  # noqa: F401
+                                         experiment_references)
 from ...identify.excitation import equilibrium_for
 from ...identify.static import ANGLE_NOISE_VARIANCES, PRESSURE_NOISE_STD
 from ...params.effects import EffectKind, Effects
@@ -104,11 +109,6 @@ EXPERIMENTS = ("open-loop", "closed-loop", "static-sawtooth")
 #: Defaults of the closed-loop record: controller variant label and catalogue reference.
 DEFAULT_CONTROLLER = "PSMC joint Ki=2 λ=0.4"
 DEFAULT_REFERENCE = "circle10"
-#: One tooth of the sawtooth set angles [deg] (the text does not give the sequence of fig. 3.1;
-#: the same choice as :mod:`ppamsafety.sections.effects`: both joints up and down together in
-#: 10 deg steps over the part of the working area the arm can hold).
-SAWTOOTH_Q1_DEG = (30.0, 40.0, 50.0, 60.0, 70.0, 80.0, 70.0, 60.0, 50.0, 40.0)
-SAWTOOTH_Q2_DEG = (-95.0, -85.0, -75.0, -65.0, -55.0, -45.0, -55.0, -65.0, -75.0, -85.0)
 #: Teeth of the default sawtooth.
 SAWTOOTH_TEETH = 2
 #: Gradual change, pause and data window per level [s] (§3.5.1.6: "a 3 second pause ...
@@ -117,7 +117,7 @@ SAWTOOTH_RAMP_S, SAWTOOTH_SETTLE_S, SAWTOOTH_WINDOW_S = 1.0, 3.0, 1.0
 #: Standard deviation of the synthetic muscle-force noise [N] (our choice; the thesis gives
 #: no force-sensor noise).
 FORCE_NOISE_STD = 2.0
-NOISES = ("table-3.2", "none")
+NOISES = ("arm", "table-3.2", "none")
 #: Relative effect forms: ``<field>_factor`` multiplies the nominal value of the field (the
 #: magnitude axes that declare one, ``Effects.axes()``).
 RELATIVE = {a.name: (a.name[:-len("_factor")], Effects.length(a.name[:-len("_factor")]))
@@ -444,7 +444,8 @@ def sawtooth_set_angles(levels=None, *, dt: float = 1e-3, ramp: float = SAWTOOTH
     ----------
     levels : array_like, shape (m, 2), optional
         Set angles per level [rad], m >= 3; default :data:`SAWTOOTH_TEETH`
-        teeth of :data:`SAWTOOTH_Q1_DEG` / :data:`SAWTOOTH_Q2_DEG`, closed at
+        teeth of :data:`SAWTOOTH_Q1_DEG` / :data:`SAWTOOTH_Q2_DEG` (the thesis arm's; another
+        arm's: ``experiment_references(arm).sawtooth_levels(SAWTOOTH_TEETH)``), closed at
         the start level.
     dt : float, keyword-only
         Sample time [s].
@@ -526,7 +527,9 @@ def _logged_for(meas, u):
 
 def _sawtooth(plant, arm, noise, seed, duration, dt, dead, meas):
     """Samples of the data windows of the static sawtooth (see :func:`synthesize`)."""
-    t, qd_set, windows = sawtooth_set_angles(dt=dt)
+    # the thesis arm's levels, or the same fractions of another arm's working area
+    t, qd_set, windows = sawtooth_set_angles(
+        experiment_references(arm).sawtooth_levels(SAWTOOTH_TEETH), dt=dt)
     if duration is not None:
         keep = int(np.sum(t[windows[:, 1] - 1] < duration))
         if keep < 3:
@@ -551,16 +554,17 @@ def _sawtooth(plant, arm, noise, seed, duration, dt, dead, meas):
     # sensor faults (backlash needs the whole history) on every sample, then the windows
     qa, qda, pa = meas.sensors(X[:, :2], X[:, 2:4], X[:, 4:8])
     q, qd, p, F = qa[idx].copy(), qda[idx].copy(), pa[idx].copy(), F[idx]
-    if noise == "table-3.2":
+    std = noise_std(arm, noise)
+    if std is not None:
         rng = np.random.default_rng(seed)
-        q += meas.noise(q.shape, np.sqrt(ANGLE_NOISE_VARIANCES), dt, rng)
-        qd += meas.noise(qd.shape, np.sqrt(VELOCITY_NOISE_VARIANCES), dt, rng)
+        q += meas.noise(q.shape, std[0], dt, rng)
+        qd += meas.noise(qd.shape, std[1], dt, rng)
         p += meas.noise(p.shape, PRESSURE_NOISE_STD, dt, rng)
         F += rng.normal(size=F.shape) * FORCE_NOISE_STD
         if meas.outlier_rate > 0.0:
             x = meas.outliers(np.concatenate([q, qd, p], axis=1), np.concatenate([
-                np.sqrt(ANGLE_NOISE_VARIANCES), np.sqrt(VELOCITY_NOISE_VARIANCES),
-                np.full(4, PRESSURE_NOISE_STD)]), np.random.default_rng([seed, 7]))
+                std[0], std[1], np.full(4, PRESSURE_NOISE_STD)]),
+                np.random.default_rng([seed, 7]))
             q, qd, p = x[:, :2], x[:, 2:4], x[:, 4:8]
     cols = {"t": t[idx], "q1": q[:, 0], "q2": q[:, 1], "qd1": qd[:, 0], "qd2": qd[:, 1]}
     for name, arr in (("p", p), ("u", u[idx]), ("F", F)):
@@ -574,7 +578,54 @@ def _sawtooth(plant, arm, noise, seed, duration, dt, dead, meas):
     return meta, pd.DataFrame(cols)
 
 
-def synthesize_arm(experiment: str = "open-loop", effects=None, *, noise: str = "table-3.2",
+def noise_variances(arm, noise: str, *, warn: bool = False):
+    """Variances of the measurement noise of q [rad^2] and qd [rad^2/s^2] of a record.
+
+    Parameters
+    ----------
+    arm : ArmParameters
+        The nominal arm (its ``sensors``).
+    noise : {"arm", "table-3.2", "none"}
+        The arm's declared sensor noise, the thesis' Table 3.2 or none.
+    warn : bool, keyword-only
+        Warn (``UserWarning``) when ``"table-3.2"`` differs from what the arm declares.
+
+    Returns
+    -------
+    tuple of 2 tuples of 2 float, or None
+        (q, qd) variances; None for ``"none"``.
+    """
+    noise = check_choice("noise", noise, NOISES)
+    if noise == "none":
+        return None
+    hw = arm.sensors
+    if noise == "table-3.2":
+        if warn and (tuple(hw.angle_noise_variances), tuple(hw.velocity_noise_variances)) != (
+                tuple(ANGLE_NOISE_VARIANCES), tuple(VELOCITY_NOISE_VARIANCES)):
+            warnings.warn(
+                f"noise = 'table-3.2': the thesis' Table 3.2 variances (q "
+                f"{list(ANGLE_NOISE_VARIANCES)} rad^2, qd {list(VELOCITY_NOISE_VARIANCES)} "
+                f"rad^2/s^2), not the arm's declared [sensors] (q "
+                f"{list(hw.angle_noise_variances)} rad^2, qd "
+                f"{list(hw.velocity_noise_variances)} rad^2/s^2); noise = 'arm' (the default) "
+                f"uses the arm's", UserWarning, stacklevel=4)
+        return tuple(ANGLE_NOISE_VARIANCES), tuple(VELOCITY_NOISE_VARIANCES)
+    return tuple(hw.angle_noise_variances), tuple(hw.velocity_noise_variances)
+
+
+def noise_std(arm, noise: str):
+    """(q [rad], qd [rad/s]) standard deviations of :func:`noise_variances`, or None.
+
+    Parameters
+    ----------
+    arm : ArmParameters
+    noise : {"arm", "table-3.2", "none"}
+    """
+    var = noise_variances(arm, noise)
+    return None if var is None else (np.sqrt(var[0]), np.sqrt(var[1]))
+
+
+def synthesize_arm(experiment: str = "open-loop", effects=None, *, noise: str = "arm",
                    seed: int = 0, duration: float | None = None, dt: float = 1e-3, arm=None,
                    controller: str = DEFAULT_CONTROLLER, reference: str = DEFAULT_REFERENCE):
     """An arm record of ``experiment`` on a plant with hidden ``effects``.
@@ -592,8 +643,9 @@ def synthesize_arm(experiment: str = "open-loop", effects=None, *, noise: str = 
         windows are recorded, ``t`` jumps between windows).
     effects : dict, optional
         ``{name: value}`` of hidden plant effects; default none (the nominal plant).
-    noise : {"table-3.2", "none"}, keyword-only
-        Measurement noise (the sawtooth's forces then get :data:`FORCE_NOISE_STD`).
+    noise : {"arm", "table-3.2", "none"}, keyword-only
+        Measurement noise (:func:`noise_variances`; default the arm's declared sensor noise; the
+        sawtooth's forces then get :data:`FORCE_NOISE_STD`).
     seed : int, keyword-only
         Seed of the excitation and of the noise.
     duration : float, optional, keyword-only
@@ -617,6 +669,7 @@ def synthesize_arm(experiment: str = "open-loop", effects=None, *, noise: str = 
     experiment = check_choice("experiment", experiment, EXPERIMENTS)
     noise = check_choice("noise", noise, NOISES)
     seed = check_seed("seed", seed)
+    noise_variances(_arm(arm), noise, warn=True)
     if duration is not None:
         duration = check_range("duration", duration, 0.5, 3600.0, unit="s")
     dt = check_range("dt", dt, 1e-4, 0.01, unit="s")
@@ -639,17 +692,18 @@ def synthesize_arm(experiment: str = "open-loop", effects=None, *, noise: str = 
                       dt=dt, p_std=PRESSURE_NOISE_STD)
 
 
-def _recorded(meas, q, qd, p, *, noise, seed, dt, p_std, qnoise=True, rng_p=None):
+def _recorded(meas, q, qd, p, *, std, seed, dt, p_std, qnoise=True, rng_p=None):
     """The recorded q, qd, p: sensor faults, then measurement noise, then outliers.
 
     The noise streams do not depend on the measurement effects (a record and its twin
     without them carry the same noise): q, qd and p from ``default_rng(seed)`` in that order,
-    or p from ``rng_p`` when given; outliers from their own stream.
+    or p from ``rng_p`` when given; outliers from their own stream.  ``std``: the (q, qd)
+    standard deviations of :func:`noise_std`, None without noise.
     """
     q, qd, p = meas.sensors(q, qd, p)
-    if noise == "table-3.2":
+    if std is not None:
         rng = np.random.default_rng(seed)
-        sq, sqd = np.sqrt(ANGLE_NOISE_VARIANCES), np.sqrt(VELOCITY_NOISE_VARIANCES)
+        sq, sqd = std
         if qnoise:
             q = q + meas.noise(q.shape, sq, dt, rng)
             qd = qd + meas.noise(qd.shape, sqd, dt, rng)
@@ -674,8 +728,8 @@ def _open_loop(arm, plant, dead, meas, *, noise, seed, duration, dt, p_std):
     substeps = max(2, int(math.ceil(dt / min(1e-3, 0.5 * min(
         v.time_constant for v in arm.valves.valves)))))
     X = simulate(plant, x0, delayed(meas.valve_input(u), shift), dt=dt, substeps=substeps)[:n]
-    q, qd, p = _recorded(meas, X[:, :2], X[:, 2:4], X[:, 4:8], noise=noise, seed=seed, dt=dt,
-                         p_std=p_std)
+    q, qd, p = _recorded(meas, X[:, :2], X[:, 2:4], X[:, 4:8], std=noise_std(arm, noise),
+                         seed=seed, dt=dt, p_std=p_std)
     meta = {"kind": "arm", "experiment": "open-loop", "sample_rate": 1.0 / dt,
             "description": "synthetic open-loop Fourier excitation record",
             "source": f"ppamsafety synthesize (seed {seed}, noise {noise})"}
@@ -693,7 +747,7 @@ def _record(meta, t, q, qd, p, u, extra=None):
 
 def closed_loop_case(arm, plant, *, controller: str = DEFAULT_CONTROLLER,
                      reference: str = DEFAULT_REFERENCE, duration: float = 10.0,
-                     dt: float = 1e-3, noise: bool = True, seed: int = 0, dead_time: float = 0.0):
+                     dt: float = 1e-3, noise=True, seed: int = 0, dead_time: float = 0.0):
     """The closed-loop case a synthetic closed-loop record is made of (see :func:`synthesize`).
 
     Parameters
@@ -710,8 +764,9 @@ def closed_loop_case(arm, plant, *, controller: str = DEFAULT_CONTROLLER,
         Length [s].
     dt : float, keyword-only
         Control period [s].
-    noise : bool, keyword-only
-        Table 3.2 noise on the measured q, qd (fed back).
+    noise : bool or {"arm", "table-3.2", "none"}, keyword-only
+        Noise on the measured q, qd (fed back): True or ``"arm"`` the arm's declared sensor
+        noise, ``"table-3.2"`` the thesis' (:func:`noise_variances`), False or ``"none"`` none.
     seed : int, keyword-only
         Seed of that noise.
     dead_time : float, keyword-only
@@ -731,7 +786,9 @@ def closed_loop_case(arm, plant, *, controller: str = DEFAULT_CONTROLLER,
     k = int(round(check_range("dead_time", dead_time, 0.0, 0.1, unit="s") / dt))
     if k:
         plant = plant.replace(effects=plant.effects.replace(valve_dead_time=(k,) * 4))
-    sens = SensorConfig(encoder=False, velocity="ideal", noise=bool(noise), seed=seed)
+    var = noise_variances(arm, "arm" if noise is True else "none" if noise is False else noise)
+    sens = SensorConfig(encoder=False, velocity="ideal", noise=var is not None, seed=seed,
+                        **({} if var is None else {"noise_variances": var[0] + var[1]}))
     return ExperimentCase(plant, variants[controller].controller, ref, sensors=sens,
                           name=f"{reference}: {controller}")
 
@@ -740,14 +797,14 @@ def _closed_loop(arm, plant, dead, meas, *, noise, seed, duration, dt, controlle
                  reference, p_std):
     """The closed-loop record (see :func:`synthesize`).
 
-    The controller sees the plant's angles and velocities with the Table 3.2 noise (fed
+    The controller sees the plant's angles and velocities with the chosen noise (fed
     back); the recorded ones also carry the measurement effects (sensor faults, coloured
     noise, outliers), added afterwards: the diagnosis replays the logged set values, so
     what the controller saw does not enter it.  A valve nonlinearity is realised on the
     log (the set values written are those whose distorted value the valves received).
     """
     case = closed_loop_case(arm, plant, controller=controller, reference=reference,
-                            duration=duration, dt=dt, noise=noise == "table-3.2", seed=seed,
+                            duration=duration, dt=dt, noise=noise, seed=seed,
                             dead_time=dead)
     res = run_batch([case], dt=dt)[0]
     if res.diverged:
@@ -764,7 +821,8 @@ def _closed_loop(arm, plant, dead, meas, *, noise, seed, duration, dt, controlle
     # the controller's noise is already in q, qd (white, fed back); add the faults, the
     # pressure noise (its own stream, the same whatever the measurement effects) and, for
     # coloured noise, a coloured part on q, qd
-    q, qd, p = _recorded(meas, q, qd, p, noise=noise, seed=seed + 1, dt=dt, p_std=p_std,
+    q, qd, p = _recorded(meas, q, qd, p, std=noise_std(arm, noise), seed=seed + 1, dt=dt,
+                         p_std=p_std,
                          qnoise=meas.noise_correlation_time > 0.0,
                          rng_p=np.random.default_rng([seed, 1]))
     meta = {"kind": "arm", "experiment": "closed-loop", "sample_rate": 1.0 / dt,
@@ -777,4 +835,5 @@ def _closed_loop(arm, plant, dead, meas, *, noise, seed, duration, dt, controlle
 __all__ = ["synthesize_arm", "plant_with", "plant_vector", "hidden_effects", "Measurement",
            "MEASUREMENT_EFFECTS", "closed_loop_case", "sawtooth_set_angles",
            "gravity_compensation_set_values", "EXPERIMENTS", "NOISES", "FORCE_NOISE_STD",
+           "noise_std", "noise_variances",
            "DEFAULT_CONTROLLER", "DEFAULT_REFERENCE"]
