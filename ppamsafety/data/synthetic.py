@@ -24,7 +24,7 @@ import pandas as pd
 from .._validation import check_bool, check_int, check_range, check_seed, check_size, check_vector
 from ..identify.excitation import FourierExcitation, default_offset, equilibrium_for
 from ..identify.static import (equilibrium_configurations, static_experiment, FORCE_NOISE_VARIANCES,
-                               PRESSURE_NOISE_STD, ANGLE_NOISE_VARIANCES)
+                               PRESSURE_NOISE_STD)
 from ..params import thesis_arm
 from ..params.arm import ArmParameters
 from ..plant.model import rest_state, simulate
@@ -190,12 +190,13 @@ EXCITATION_RECORD_BYTES = 600
 
 def synthetic_excitation(arm=None, excitation=None, *, periods: float = 1.0, dt: float = 1e-3,
                          substeps: int = 2, seed: int = 0, noise: bool = True,
-                         velocity_noise_var=VELOCITY_NOISE_VARIANCES) -> MeasuredData:
+                         velocity_noise_var=None) -> MeasuredData:
     """Open-loop excitation record (§3.5.2.4): q, qd, p, u sampled at ``dt``.
 
     The simulation of :func:`ppamsafety.identify.excitation.simulate_excitation`
     (start at rest at the equilibrium of Delta p(0), set values held over each
-    interval); noise: q and qd with the Table 3.2 variances, p with 500 Pa.
+    interval); noise: q and qd with the variances the arm's sensors declare
+    (``arm.sensors``; the thesis arm's are Table 3.2), p with 500 Pa.
 
     Parameters
     ----------
@@ -214,7 +215,8 @@ def synthetic_excitation(arm=None, excitation=None, *, periods: float = 1.0, dt:
     noise : bool, keyword-only
         Add measurement noise.
     velocity_noise_var : sequence of 2 float, keyword-only
-        Variances of the qd1, qd2 noise [rad^2/s^2] (Table 3.2).  White
+        Variances of the qd1, qd2 noise [rad^2/s^2]; default the arm's declared
+        ``sensors.velocity_noise_variances`` (the thesis arm: Table 3.2).  White
         velocity noise passes the high-pass omega (W1 - <W1>_F) of the
         filtered regressor unattenuated and biases the inertia estimates
         (errors in variables); (0, 0) leaves the velocities exact.
@@ -234,6 +236,8 @@ def synthetic_excitation(arm=None, excitation=None, *, periods: float = 1.0, dt:
     substeps = check_int("substeps", substeps, 1, 1000)
     seed = check_seed("seed", seed)
     noise = check_bool("noise", noise)
+    if velocity_noise_var is None:
+        velocity_noise_var = arm.sensors.velocity_noise_variances
     vvar = np.array(check_vector("velocity_noise_var", velocity_noise_var, 2, 0.0,
                                  unit="rad^2/s^2"))
     n = int(round(periods * exc.period / dt))
@@ -247,7 +251,7 @@ def synthetic_excitation(arm=None, excitation=None, *, periods: float = 1.0, dt:
     q, qd, p = X[:, :2].copy(), X[:, 2:4].copy(), X[:, 4:8].copy()
     if noise:
         rng = np.random.default_rng(seed)
-        q += rng.normal(size=q.shape) * np.sqrt(ANGLE_NOISE_VARIANCES)
+        q += rng.normal(size=q.shape) * np.sqrt(np.asarray(arm.sensors.angle_noise_variances))
         qd += rng.normal(size=qd.shape) * np.sqrt(vvar)
         p += rng.normal(size=p.shape) * PRESSURE_NOISE_STD
     cols = {"t": t, "q1": q[:, 0], "q2": q[:, 1], "qd1": qd[:, 0], "qd2": qd[:, 1]}
