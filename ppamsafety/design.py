@@ -24,6 +24,7 @@ from .params import ArmParameters
 from .params.arm_file import ArmFileError
 from .params.effects import Effects
 from .params.inertia import LINK_PRIORS, RADIUS_OF_GYRATION, LinkInertia
+from .experiments.trajectories import arm_pose
 from .plant import geometry as geo
 from .plant import pneumatics as pn
 from .plant import ppam_theory, torque
@@ -457,8 +458,9 @@ def arm_summary(arm, *, q=None, n: int = 61) -> ArmSummary:
     arm : ArmParameters
         Any valid arm.
     q : sequence of 2 float, optional, keyword-only
-        Pose of the stiffness numbers [rad] (default :data:`SUMMARY_POSE` if in the
-        working area, else its centre); must lie in the working area.
+        Pose of the stiffness numbers [rad] (default :data:`SUMMARY_POSE` at the same
+        fractions of the arm's joint ranges, :func:`~ppamsafety.experiments.trajectories.arm_pose`,
+        if in the working area, else its centre); must lie in the working area.
     n : int, keyword-only
         Grid points per joint for the maps, in [5, 2000].
 
@@ -469,8 +471,8 @@ def arm_summary(arm, *, q=None, n: int = 61) -> ArmSummary:
     arm = _arm(arm)
     n = check_int("n", n, 5, 2000)
     g = arm.geometry
-    if q is None:
-        q = np.array(SUMMARY_POSE)
+    if q is None:         # the thesis pose at the same fractions of the arm's joint ranges
+        q = arm_pose(arm, np.array(SUMMARY_POSE))
         if not bool(geo.in_working_area(q, arm)):
             q = np.array([0.5 * (g.q1_min + g.q1_max), 0.5 * (g.q2_min + g.q2_max)])
     else:

@@ -146,7 +146,8 @@ from .sweep import BACKENDS, SweepResult, run_sweep
 from .sweep_cases import (COVERING_RANGES, DEFAULTS, EXPERIMENTS, IMPACT_POSE_DEG, PARAMETERS,
                           SPEED_MAX, STEP_KEYS, add_verdicts, case_arm, case_function,
                           case_references, check_case, check_impact_case, column_unit,
-                          failed_criteria, is_dotted, make_controller, verdict_limits)
+                          failed_criteria, impact_pose_deg, is_dotted, make_controller,
+                          verdict_limits)
 from .impact.verdicts import METRICS
 from .units import si_factor
 
@@ -878,7 +879,13 @@ def _envelope(where: str, data: dict, base: dict, arm, base_dir=None) -> dict | 
             raise _err(where, f"envelope.parameter = 'speed' is one impact at a pose: "
                               f"{extra} do not apply (set envelope.pose, envelope.direction, "
                               f"[impact] stiffness/head, effects and arm.<key>)")
-        pose = env.get("pose", list(IMPACT_POSE_DEG))
+        pose = env.get("pose")
+        if pose is None:        # the arm's own: the thesis pose at the fractions of its ranges
+            try:
+                pose = list(impact_pose_deg(case_arm(arm, changes={
+                    k: v for k, v in case.items() if k.startswith("arm.")})))
+            except (TypeError, ValueError):
+                pose = list(IMPACT_POSE_DEG)       # the case's own error is said below
         direction = env.get("direction", [1.0, 0.0])
         for k, v in (("pose", pose), ("direction", direction)):
             if not (isinstance(v, list) and len(v) == 2 and all(

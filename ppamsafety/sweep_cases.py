@@ -45,7 +45,7 @@ from .design import rest_stiffness
 from .experiments.catalog import (CIRCLE_PERIODS, CIRCLE_WARMUP, DEFAULT_DURATIONS, STEP_TIMES,
                                   SWITCH_TIME, run_thesis_experiment, ControllerVariant)
 from .experiments.metrics import tracking_stats
-from .experiments.trajectories import ExperimentReferences, experiment_references
+from .experiments.trajectories import ExperimentReferences, arm_pose, experiment_references
 from .impact.anywhere import point_jacobian, simulate_contacts
 from .impact.head import HeadContactModel, head_model_names, head_model
 from .impact.instants import HEURISTICS, evaluate_experiment, heuristic_instants, impact_states
@@ -974,8 +974,30 @@ def _impacts_one(result, arm, row, head) -> pd.DataFrame:
 IMPACT_POSE_DEG = (50.0, -80.0)
 
 
-def impact_case(speed: float, *, q1_deg: float = IMPACT_POSE_DEG[0],
-                q2_deg: float = IMPACT_POSE_DEG[1], direction=(1.0, 0.0), stiffness=None,
+def impact_pose_deg(arm=None) -> tuple:
+    """The default impact pose of ``arm`` [deg]: :data:`IMPACT_POSE_DEG` (thesis §6.3.3) at
+    the same fractions of the arm's joint ranges
+    (:func:`~ppamsafety.experiments.trajectories.arm_pose`; the thesis arm's is unchanged).
+
+    Parameters
+    ----------
+    arm : ArmParameters, optional
+        The arm (default the thesis arm).
+
+    Returns
+    -------
+    tuple of 2 float
+        (q1, q2) [deg].
+    """
+    arm = thesis_arm() if arm is None else arm
+    q = np.radians(IMPACT_POSE_DEG)
+    mapped = arm_pose(arm, q)
+    if np.array_equal(mapped, q):           # the thesis arm's area: the thesis numbers exactly
+        return IMPACT_POSE_DEG
+    return tuple(float(x) for x in np.degrees(mapped))
+
+
+def impact_case(speed: float, *, q1_deg=None, q2_deg=None, direction=(1.0, 0.0), stiffness=None,
                 head="thesis-frontal", region=None, contact=None, effects=None, arm=None,
                 **dotted) -> dict:
     """One impact of the arm moving at a given speed (the ``speed`` of an envelope).
@@ -989,7 +1011,8 @@ def impact_case(speed: float, *, q1_deg: float = IMPACT_POSE_DEG[0],
     speed : float
         Tool (TCP) speed at impact [m/s], in (0, 10].
     q1_deg, q2_deg : float, keyword-only
-        Pose at impact [deg] (default (50, -80), thesis §6.3.3); in the working area.
+        Pose at impact [deg]; in the working area.  Default :func:`impact_pose_deg`: the
+        thesis pose (50, -80) deg (§6.3.3) at the same fractions of the arm's joint ranges.
     direction : pair of float, keyword-only
         Joint-space velocity direction (qd1, qd2) (default (1, 0): the arm swinging
         about joint 1); scaled so that the tool moves at ``speed``.
@@ -1055,8 +1078,6 @@ def _impact_inputs(speed, q1_deg, q2_deg, direction, stiffness, head, effects, a
     v = _number("speed", speed, lo_open=True, unit="m/s")
     if v > SPEED_MAX:
         raise ValueError(f"speed = {v:g} m/s is outside (0, {SPEED_MAX:g}] m/s")
-    q = np.radians([_number("q1_deg", q1_deg, lo=-360.0, hi=360.0, unit="deg"),
-                    _number("q2_deg", q2_deg, lo=-360.0, hi=360.0, unit="deg")])
     if isinstance(direction, np.ndarray) and direction.ndim == 1:
         direction = direction.tolist()
     d = np.asarray([_number(f"direction[{i}]", x, lo=-math.inf) for i, x in
@@ -1074,13 +1095,18 @@ def _impact_inputs(speed, q1_deg, q2_deg, direction, stiffness, head, effects, a
                          f"impact has one contact point)")
     _check_effects(effects)
     arm = case_arm(arm, effects=effects or {}, changes=dotted)
+    default = impact_pose_deg(arm)
+    q1_deg = default[0] if q1_deg is None else q1_deg
+    q2_deg = default[1] if q2_deg is None else q2_deg
+    q = np.radians([_number("q1_deg", q1_deg, lo=-360.0, hi=360.0, unit="deg"),
+                    _number("q2_deg", q2_deg, lo=-360.0, hi=360.0, unit="deg")])
     if not bool(geo.in_working_area(q, arm)):
         raise ValueError(f"q = ({q1_deg:g}, {q2_deg:g}) deg is outside the arm's working area")
     return v, q, d, st, hm, arm
 
 
-def check_impact_case(speed: float, *, q1_deg: float = IMPACT_POSE_DEG[0],
-                      q2_deg: float = IMPACT_POSE_DEG[1], direction=(1.0, 0.0), stiffness=None,
+def check_impact_case(speed: float, *, q1_deg=None, q2_deg=None, direction=(1.0, 0.0),
+                      stiffness=None,
                       head="thesis-frontal", region=None, contact=None, effects=None,
                       arm=None, **dotted) -> None:
     """Check the arguments of :func:`impact_case` without simulating.
@@ -1090,7 +1116,7 @@ def check_impact_case(speed: float, *, q1_deg: float = IMPACT_POSE_DEG[0],
     speed : float
         Tool (TCP) speed at impact [m/s], in (0, :data:`SPEED_MAX`].
     q1_deg, q2_deg : float, keyword-only
-        Pose at impact [deg], in the working area.
+        Pose at impact [deg], in the working area (default :func:`impact_pose_deg`).
     direction : pair of float, keyword-only
         Joint-space velocity direction (qd1, qd2), not zero.
     stiffness : None, float or pair, keyword-only
@@ -1393,5 +1419,5 @@ __all__ = ["EXPERIMENTS", "CONTROLLERS", "INSTANTS", "MIN_SPEED", "PARAMETERS", 
            "DOTTED", "RESULT_COLUMNS", "check_case", "make_controller", "safety_case",
            "CONTACT_KEYS", "CONTACT_POINTS", "contact_covering",
            "safety_sweep", "case_arm", "case_function", "is_dotted", "impact_case",
-           "check_impact_case", "SPEED_MAX", "IMPACT_POSE_DEG", "add_verdicts", "COLUMN_UNITS",
+           "check_impact_case", "SPEED_MAX", "IMPACT_POSE_DEG", "impact_pose_deg", "add_verdicts", "COLUMN_UNITS",
            "column_unit", "verdict_limits", "failed_criteria", "LIMIT_COLUMNS", "chosen_head"]

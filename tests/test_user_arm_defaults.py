@@ -238,3 +238,22 @@ def test_the_maximum_load_says_it_counts_the_declared_payload(tmp_path):
     assert bare["  of which a declared payload"] == "none declared"
     # the payload is a point mass at A_L: the map (links only) is the same with or without it
     assert bare["maximum load at A_L, min over the working area"] == pytest.approx(total)
+
+
+# --- the default impact and summary pose ----------------------------------------------------
+
+def test_the_default_impact_pose_follows_the_arm(tmp_path):
+    from ppamsafety.sweep_cases import IMPACT_POSE_DEG, impact_case, impact_pose_deg
+
+    assert impact_pose_deg() == IMPACT_POSE_DEG == (50.0, -80.0)   # thesis §6.3.3, exactly
+    arm = _write_arm(tmp_path, "q55", q1_min='q1_min = { value = 55, unit = "deg" }')
+    pose = impact_pose_deg(arm)
+    # q1 at the thesis fraction (50 - 20) / (105 - 20) of the arm's range [55, 105] deg
+    assert pose[0] == pytest.approx(55.0 + (50.0 - 20.0) / 85.0 * 50.0, abs=1e-9)
+    assert pose[1] == pytest.approx(-80.0, abs=1e-9)
+    # the thesis pose (50 deg) lies outside this arm's area: the default still runs
+    row = impact_case(1.0, arm=arm)
+    assert row["F_max"] > 0.0 and row["tcp_speed"] == pytest.approx(1.0, rel=1e-6)
+    with pytest.raises(ValueError, match="outside the arm's working area"):
+        impact_case(1.0, q1_deg=50.0, q2_deg=-80.0, arm=arm)
+    assert arm_summary(arm, n=11).pose[0] == pytest.approx(pose[0] * DEG, abs=1e-9)

@@ -13,7 +13,7 @@ from ..plant import geometry as geo
 from ..plant import pneumatics as pn
 from ..plant.muscle import force_function, force_polynomial
 from ..plant.ppam_theory import theoretical_muscles
-from ..sweep_cases import IMPACT_POSE_DEG
+from ..sweep_cases import impact_pose_deg
 from ..units import BAR, DEG, MM
 from . import (Section, SectionInfo, checked_compute, compares_to_thesis, other_arm_note,
                resolve_arm)
@@ -129,7 +129,7 @@ def compute(*, quick: bool = False, arm=None, head=None) -> DesignFindings:
     n = 41 if quick else 121
     tf = design.torque_function_curves(arm)
     sm = design.stiffness_map(arm, n1=n, n2=n)
-    q_step = np.array(IMPACT_POSE_DEG) * DEG
+    q_step = np.array(impact_pose_deg(arm)) * DEG
     K_step = pn.joint_stiffness(q_step, pn.static_pressures(q_step, arm), arm)
     ml = design.max_load_map(arm, n1=2 * n, n2=2 * n)
     if thesis:     # the thesis arm's design-time data: CAD links, theoretical force function
@@ -252,7 +252,7 @@ def _render_other(study: DesignFindings) -> Section:
     lim, kr = ml.limits, sm.ranges
     qmin = np.array(ml.argmin) / DEG
     pm = study.p_mean / BAR
-    q = IMPACT_POSE_DEG
+    q = impact_pose_deg(study.arm)
     md = f"""{other_arm_note(study.arm)}
 
 **Muscle group lengths and connection lengths** (as Table A.1; connection lengths by the design
