@@ -27,7 +27,7 @@ from ppamsafety.impact.instants import worst_instant
 from ppamsafety.params import iso_ts_15066 as iso
 from ppamsafety.params import thesis_arm
 from ppamsafety.params.contact import FOREHEAD
-from ppamsafety.sections.safety import EXPERIMENTS, MIN_SPEED
+from ppamsafety.sections.safety import MIN_SPEED, table_6_1_definition
 
 
 def _cpu(f):
@@ -53,7 +53,7 @@ def main(experiments=None, repeats=1, verbose=True):
               body_from_region(iso.FACE, radius=0.08)]
     limits = {iso.SKULL_FOREHEAD.name: iso.SKULL_FOREHEAD.force_transient,
               iso.FACE.name: iso.FACE.force_transient}
-    runs = [(e, i) for e in EXPERIMENTS for i in range(len(thesis_variants()))]
+    runs = [(e, i) for e in table_6_1_definition()[0] for i in range(len(thesis_variants()))]
     runs = runs[:experiments] if experiments else runs
     r0 = run_thesis_experiment(arm, "step", [thesis_variants()[0]])[0]
     worst_instant(r0, arm, every=500, min_speed=MIN_SPEED)                 # compile both

@@ -21,7 +21,7 @@ import numpy as np
 from ppamsafety.experiments.catalog import run_thesis_experiment, thesis_variants
 from ppamsafety.impact.instants import evaluate_experiment, worst_instant
 from ppamsafety.params import thesis_arm
-from ppamsafety.sections.safety import EXPERIMENTS, MIN_SPEED
+from ppamsafety.sections.safety import MIN_SPEED, table_6_1_definition
 
 
 def _timed(f):
@@ -45,7 +45,7 @@ def main(every=1, experiments=None, repeats=1, verbose=True):
         Print one line per experiment.
     """
     arm = thesis_arm()
-    runs = [(e, i) for e in EXPERIMENTS for i in range(len(thesis_variants()))]
+    runs = [(e, i) for e in table_6_1_definition()[0] for i in range(len(thesis_variants()))]
     runs = runs[:experiments] if experiments else runs
     # compile both paths on a short scan first
     r0 = run_thesis_experiment(arm, "step", [thesis_variants()[0]])[0]
