@@ -36,6 +36,7 @@ from .bench.scenarios import single_effect_outcomes
 from .core.battery import HIGH_PRECISION
 from .core.omitted import HINT_P
 from .core.power import POWER
+from .core.regions import largest_regions
 from .scenarios import (ARM_BATTERY, BENCH_RESULTS_FILE, DECLARED_MEASURE_SEEDS,
                         DECLARED_RESULTS_FILE, P_DECLARED_CHANGE, by_effect, calibration_table,
                         declared_names, detection_curve, failures, interval_widening,
@@ -51,6 +52,8 @@ __all__ = [
     "effect_unit", "check_effect", "noise_variances",
     # the arm a record names against the arm given (or assumed); a static sawtooth's rest points
     "other_arm", "assumed_arm_note", "static_record",
+    # the regions where a diagnosis' remaining residual is largest
+    "largest_regions",
     # the randomized batteries, their shipped rows and their scores
     "ARM_BATTERY", "run_battery", "load_results", "scores", "calibration_table",
     "detection_curve", "by_effect", "failures", "interval_widening", "declared_names",

@@ -30,7 +30,7 @@ from ..data.campaign import load_campaign
 from ..data.datasets import ZILLEN2021_SEALS, zillen2021_manifest
 from ..data.measured import MeasuredDataWarning
 from ..diagnose import (CAMPAIGN_MEASURE, HIGH_PRECISION, campaign_calibration_table, diagnose,
-                        run_campaign_calibration)
+                        largest_regions, run_campaign_calibration)
 from ..markdown import markdown_table
 from ..plots.bench import seal_parameters_figure
 from . import Section, SectionInfo, checked_compute
@@ -219,14 +219,8 @@ def compute(*, quick: bool = False, arm=None, calibration_runs: int | None = Non
     return BenchCaseFindings(diagnoses=dgs, effects=pd.DataFrame(eff), records=records,
                              laws=pd.DataFrame(laws), calibration=cal.reset_index(),
                              calibration_runs=runs, metrics=m,
-                             largest_where={seal: _largest_where(dg) for seal, dg in dgs.items()
+                             largest_where={seal: largest_regions(dg.where) for seal, dg in dgs.items()
                                             if dg.unexplained})
-
-
-def _largest_where(dg) -> pd.DataFrame:
-    """The three significant regions of a diagnosis' remaining residual with the largest |z|."""
-    sig = dg.where[dg.where["significant"]]
-    return sig.reindex(sig["z"].abs().sort_values(ascending=False).index).head(3)
 
 
 def render(study: BenchCaseFindings) -> Section:

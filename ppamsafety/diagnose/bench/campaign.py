@@ -82,7 +82,7 @@ from ..core.criteria import Step
 from ..core.gates import HighRule, judge, level
 from ..core.noise import interpolation_sigma
 from ..core.pipeline import Steps, run_steps
-from ..core.regions import region_rows
+from ..core.regions import largest_regions, region_rows
 from ..core.result import ConfoundedGroup, Effect
 from ..core.solve import pinv_psd
 from . import friction as fr
@@ -703,8 +703,7 @@ class CampaignSteps(Steps):
         self.records, self.curves = pd.DataFrame(rrows), curves
         self.where = where = _stroke_regions(u, e_all_norm, self.rho_max)
         if self.unexplained:
-            sigw = where[where["significant"]]
-            worst = sigw.reindex(sigw["z"].abs().sort_values(ascending=False).index).head(3)
+            worst = largest_regions(where)
             txt = "; ".join(f"{r_.region}: {r_.group} (mean {r_.mean:+.2f}, rms {r_.rms:.2f})"
                             for r_ in worst.itertuples()) or "everywhere"
             self.notes.append(f"residual {self.rho_after:.2f} x the repeatability (> "

@@ -39,7 +39,7 @@ from ..._validation import check_int, check_range
 from ..core.linear_selection import hac_covariance_linear
 from ..core.omitted import HINT_P, widened_interval
 from ..core.pipeline import STAGES, Steps, run_steps
-from ..core.regions import region_rows, terciles, time_segments
+from ..core.regions import largest_regions, region_rows, terciles, time_segments
 from ..core.result import Diagnosis, Effect
 from .candidates import ACTUATOR_VOCABULARY
 from .confounded import confounded_groups
@@ -264,8 +264,7 @@ class MuscleSteps(Steps):
                  "pressure": rec.pressure[idx], "eps": rec.eps[idx]}
         self.where = where = _sample_regions(fit.e, feats, self.rho_max)
         if self.unexplained:
-            sigw = where[where["significant"]]
-            worst = sigw.reindex(sigw["z"].abs().sort_values(ascending=False).index).head(3)
+            worst = largest_regions(where)
             where_txt = "; ".join(f"{r_.region}: {r_.group} (mean {r_.mean:+.2f} noise)"
                                   for r_ in worst.itertuples()) or "everywhere"
             self.notes.append(f"force residual {rho:.2f} x the noise (> {self.rho_max}): no "

@@ -103,4 +103,23 @@ def region_rows(e, groups: dict, channel: str, rho_max: float, *, cluster=None,
     return rows
 
 
-__all__ = ["terciles", "time_segments", "region_rows", "Z_CRIT"]
+def largest_regions(where: pd.DataFrame, n: int = 3) -> pd.DataFrame:
+    """The ``n`` significant rows of a residual-by-region table with the largest |z|.
+
+    Parameters
+    ----------
+    where : pandas.DataFrame
+        Rows of :func:`region_rows` (columns ``significant`` and ``z``).
+    n : int
+        How many rows at most.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Those rows, largest |z| first (empty when none is significant).
+    """
+    sig = where[where["significant"]]
+    return sig.reindex(sig["z"].abs().sort_values(ascending=False).index).head(n)
+
+
+__all__ = ["terciles", "time_segments", "region_rows", "largest_regions", "Z_CRIT"]
